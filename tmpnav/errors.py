@@ -1,0 +1,106 @@
+"""Typed exceptions raised by library code.
+
+Only :mod:`tmpnav.cli` turns them into messages and exit codes; nothing below the CLI
+prints to the terminal or exits. Each class carries the exit code the CLI uses, so the
+table in the README and the code cannot drift apart (see ``EXIT_CODES``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One thing wrong with an input file, reported on one line.
+
+    ``path`` is the key path inside the file (``robots.r2.covariance``), empty for the
+    whole file; ``line`` is the 1-based line in the file when known.
+    """
+
+    file: str
+    path: str
+    message: str
+    line: int | None = None
+
+    def __str__(self) -> str:
+        where = self.file
+        if self.line is not None:
+            where += f":{self.line}"
+        key = f" {self.path}:" if self.path else ""
+        return f"{where}:{key} {self.message}"
+
+
+class TmpnavError(Exception):
+    """Base class of every error tmpnav reports to a user."""
+
+    exit_code = 1
+
+
+class InputError(TmpnavError):
+    """Bad input: a scenario, a map, a command-line value (exit code 2)."""
+
+    exit_code = 2
+
+
+class ScenarioError(InputError):
+    """A scenario (or a map it names) has one or more problems; all are listed."""
+
+    def __init__(self, problems: list[Problem]):
+        self.problems = list(problems)
+        super().__init__("\n".join(str(p) for p in self.problems))
+
+
+class RoadmapError(InputError):
+    """The roadmap cannot serve the scenario (a room's instantiations do not connect)."""
+
+
+class PlannerError(TmpnavError):
+    """The task planner failed; subclasses say how."""
+
+    exit_code = 3
+
+
+class PlannerUnavailableError(PlannerError):
+    """The planner cannot run here (no Java 17+, unknown or unsuitable engine)."""
+
+    exit_code = 4
+
+
+class PlannerTimeoutError(PlannerError):
+    """The planner did not finish within the time limit."""
+
+    exit_code = 5
+
+
+class UnsolvableError(PlannerError):
+    """The planner proved that no plan reaches the goals."""
+
+    exit_code = 6
+
+
+class PlannerCrashError(PlannerError):
+    """The planner process crashed or returned an unreadable answer."""
+
+    exit_code = 7
+
+
+class CacheError(TmpnavError):
+    """The cache directory cannot be used at all (not a directory, not writable)."""
+
+    exit_code = 8
+
+
+#: exit code -> meaning, printed in the README and in ``tmpnav --help``.
+EXIT_CODES: dict[int, str] = {
+    0: "success",
+    1: "unexpected internal error (a bug: please report it)",
+    InputError.exit_code: "bad input: scenario, map or command-line value",
+    PlannerError.exit_code: "the planner failed for another reason",
+    PlannerUnavailableError.exit_code: "no usable planner: Java 17+ missing, or unknown engine",
+    PlannerTimeoutError.exit_code: "the planner timed out",
+    UnsolvableError.exit_code: "no plan exists for the goals (proved by the planner)",
+    PlannerCrashError.exit_code: "the planner process crashed",
+    CacheError.exit_code: "the cache directory is unusable",
+    130: "interrupted (Ctrl-C)",
+}

@@ -1,0 +1,334 @@
+"""Plain values shared by the pipeline's stages.
+
+Every stage takes and returns these frozen dataclasses (or numpy arrays), never objects of a
+third-party library, so each stage can be tested without the others' dependencies.
+Units are SI throughout: metres, radians, seconds.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+Point = tuple[float, float]
+Polygon = tuple[Point, ...]
+
+
+# --------------------------------------------------------------------------- scenario
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Robot pose x = (x, y, theta): metres, metres, radians."""
+
+    x: float
+    y: float
+    theta: float
+
+    def as_array(self) -> np.ndarray:
+        return np.array([self.x, self.y, self.theta], dtype=float)
+
+
+@dataclass(frozen=True)
+class PolygonMap:
+    """A bounded plane with polygonal obstacles and thick wall polylines."""
+
+    bounds: tuple[float, float, float, float]  # xmin, ymin, xmax, ymax
+    resolution: float  # grid cell size used for collision checks (m)
+    wall_thickness: float  # m
+    walls: tuple[tuple[Point, ...], ...]  # polylines
+    obstacles: tuple[Polygon, ...]  # filled polygons
+
+
+@dataclass(frozen=True)
+class RosMap:
+    """A ROS map_server map: YAML metadata plus an image (PGM/PNG)."""
+
+    yaml_path: Path
+    image_path: Path
+    resolution: float
+    origin: tuple[float, float, float]
+    negate: bool
+    occupied_thresh: float
+    free_thresh: float
+    mode: str  # trinary | scale | raw
+
+
+MapSpec = PolygonMap | RosMap
+
+
+@dataclass(frozen=True)
+class Room:
+    name: str
+    polygon: Polygon
+
+
+@dataclass(frozen=True)
+class Door:
+    """A door across a wall gap; a closed door is a wall, an open one is free space."""
+
+    name: str
+    segment: tuple[Point, Point]
+    open: bool
+    thickness: float  # m
+
+
+@dataclass(frozen=True)
+class Landmark:
+    name: str
+    position: Point
+    kind: str = "landmark"
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    name: str
+    pose: Pose
+    covariance: tuple[tuple[float, float, float], ...]  # 3x3, (m², m², rad²)
+    radius: float  # m
+    speed: float  # m/s, driving speed along roadmap edges
+    turn_rate: float  # rad/s, turning speed when aligning with the next edge
+
+    @property
+    def cov(self) -> np.ndarray:
+        return np.array(self.covariance, dtype=float)
+
+
+@dataclass(frozen=True)
+class RangeBearingSensor:
+    """Range-bearing sensor: detection range (m), field of view (rad), noise std devs."""
+
+    range: float
+    fov: float
+    sigma_range: float  # m
+    sigma_bearing: float  # rad
+
+    @property
+    def Q(self) -> np.ndarray:  # noqa: N802 - the paper's name for the observation noise
+        return np.diag([self.sigma_range**2, self.sigma_bearing**2])
+
+
+class ObservationMode(str, enum.Enum):
+    """How future observations are simulated while planning."""
+
+    NOISY = "noisy"  # the paper: nominal observation corrupted by seeded noise
+    MAX_LIKELIHOOD = "max-likelihood"  # BRM: the observation equals its prediction
+
+
+@dataclass(frozen=True)
+class Models:
+    """Motion and sensing models of the EKF (see docs/models.md)."""
+
+    dt: float  # s, control time step
+    motion_noise: tuple[float, float, float, float]  # alpha1..alpha4 of W(u)
+    landmark_sensor: RangeBearingSensor
+    mutual_sensor: RangeBearingSensor
+    mutual_observations: bool
+    observations: ObservationMode
+    seed: int  # seed of the simulated observation noise
+
+
+@dataclass(frozen=True)
+class CostWeights:
+    """c = M_u*c_u + M_G*c_G + M_Sigma*c_Sigma (paper, section Approach)."""
+
+    M_u: float
+    M_G: float
+    M_Sigma: float
+
+
+@dataclass(frozen=True)
+class RoadmapParams:
+    samples: int  # PRM milestones grown by OMPL (excluding instantiations and starts)
+    instantiations: int  # pose instantiations sampled per room
+    seed: int
+    neighbors: int  # k of the k-nearest connection strategy
+
+
+@dataclass(frozen=True)
+class Goals:
+    visit: tuple[str, ...]  # rooms that some robot must visit
+    per_robot: tuple[tuple[str, tuple[str, ...]], ...]  # (robot, rooms it must visit)
+
+    def for_robot(self, robot: str) -> tuple[str, ...]:
+        return dict(self.per_robot).get(robot, ())
+
+    @property
+    def all_rooms(self) -> tuple[str, ...]:
+        rooms = list(self.visit)
+        for _, targets in self.per_robot:
+            rooms.extend(t for t in targets if t not in rooms)
+        return tuple(dict.fromkeys(rooms))
+
+
+@dataclass(frozen=True)
+class PlannerOptions:
+    name: str  # a unified-planning engine name
+    encoding: str  # paper | single | mixed
+    timeout: float  # s
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    source: Path  # the YAML file; relative paths inside it are relative to its folder
+    map: MapSpec
+    rooms: tuple[Room, ...]
+    doors: tuple[Door, ...]
+    landmarks: tuple[Landmark, ...]
+    robots: tuple[RobotSpec, ...]
+    models: Models
+    cost: CostWeights
+    roadmap: RoadmapParams
+    goals: Goals
+    planner: PlannerOptions
+    description: str = ""
+    #: display key path -> line in the YAML file, for messages of later checks
+    key_lines: dict[str, int] = field(default_factory=dict, compare=False, repr=False)
+
+    def line_of(self, path: str) -> int | None:
+        """The YAML line of a key path, or of its nearest ancestor."""
+        while path:
+            if path in self.key_lines:
+                return self.key_lines[path]
+            path = path.rpartition(".")[0]
+        return None
+
+    def robot(self, name: str) -> RobotSpec:
+        return next(r for r in self.robots if r.name == name)
+
+    def room(self, name: str) -> Room:
+        return next(r for r in self.rooms if r.name == name)
+
+
+# --------------------------------------------------------------------------- roadmap
+
+
+@dataclass(frozen=True, eq=False)
+class Roadmap:
+    """A probabilistic roadmap as plain arrays (nothing downstream imports OMPL).
+
+    ``nodes`` (N, 2) are positions in metres; ``edges`` (E, 2) index pairs of an
+    undirected graph with Euclidean ``weights`` (E,); ``instantiations`` maps a room to
+    the node indices of its pose instantiations; ``starts`` maps a robot to its start node.
+    """
+
+    nodes: np.ndarray
+    edges: np.ndarray
+    weights: np.ndarray
+    instantiations: dict[str, tuple[int, ...]]
+    starts: dict[str, int]
+    fingerprint: str = ""  # content hash: equal fingerprints, identical roadmaps
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.nodes.shape[0])
+
+
+# --------------------------------------------------------------------------- belief
+
+
+@dataclass(frozen=True, eq=False)
+class Belief:
+    """A Gaussian belief b[x] ~ N(mean, cov) over one robot (3) or several (3n)."""
+
+    mean: np.ndarray
+    cov: np.ndarray
+
+    @property
+    def dim(self) -> int:
+        return int(self.mean.shape[0])
+
+    def marginal(self, i: int) -> Belief:
+        """The belief of the i-th robot of a joint belief."""
+        s = slice(3 * i, 3 * i + 3)
+        return Belief(self.mean[s].copy(), self.cov[s, s].copy())
+
+
+@dataclass(frozen=True)
+class CostTerms:
+    """The three terms of one robot's motion cost, before weighting."""
+
+    c_u: float
+    c_G: float
+    c_Sigma: float
+
+    def total(self, w: CostWeights) -> float:
+        return w.M_u * self.c_u + w.M_G * self.c_G + w.M_Sigma * self.c_Sigma
+
+
+# --------------------------------------------------------------------------- oracle / task
+
+
+@dataclass(frozen=True)
+class Move:
+    """One robot's part of a task action: from a location to a target room."""
+
+    robot: str
+    origin: str  # location name (a room, or "<robot>-start")
+    target: str  # room name
+
+
+@dataclass(frozen=True)
+class MotionResult:
+    """The oracle's answer for one action: min cost over goal instantiations.
+
+    ``goal_nodes`` and ``paths`` are per robot of the action (roadmap node indices);
+    ``terms`` per robot; ``final`` is the belief of the robots of the action at the end
+    (joint when two robots moved together).
+    """
+
+    cost: float
+    robots: tuple[str, ...]
+    goal_nodes: tuple[int, ...]
+    paths: tuple[tuple[int, ...], ...]
+    terms: tuple[CostTerms, ...]
+    final_mean: tuple[float, ...]
+    final_cov: tuple[tuple[float, ...], ...]
+    mutual_steps: int = 0  # steps with at least one mutual observation
+
+    @property
+    def final(self) -> Belief:
+        return Belief(np.array(self.final_mean), np.array(self.final_cov))
+
+
+class PlanStatus(str, enum.Enum):
+    SOLVED_OPTIMALLY = "solved-optimally"
+    SOLVED_SATISFICING = "solved-satisficing"
+
+
+@dataclass(frozen=True)
+class TrajectoryStep:
+    """One control step of a robot in the re-simulated plan."""
+
+    t: float
+    mean: tuple[float, float, float]
+    cov: tuple[tuple[float, float, float], ...]
+    node: int | None = None  # roadmap node reached at this step, if any
+
+
+@dataclass(frozen=True)
+class PlannedAction:
+    """A step of the task-motion plan: the action and each robot's optimal path."""
+
+    index: int
+    name: str  # the PDDL action name
+    moves: tuple[Move, ...]
+    planner_cost: float  # from the cost table, as the planner saw it
+    resimulated_cost: float  # with beliefs carried over from the previous actions
+    goal_nodes: tuple[int, ...]
+    paths: tuple[tuple[int, ...], ...]
+    goal_poses: tuple[tuple[float, float, float], ...]
+
+
+@dataclass
+class StageTimes:
+    """Seconds spent in each stage of a run, filled in by the pipeline."""
+
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    def add(self, stage: str, dt: float) -> None:
+        self.seconds[stage] = self.seconds.get(stage, 0.0) + dt
