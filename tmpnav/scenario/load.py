@@ -1,0 +1,274 @@
+"""Load a scenario YAML file into a validated :class:`~tmpnav.types.Scenario`.
+
+Everything wrong with the file is collected and raised at once as a
+:class:`~tmpnav.errors.ScenarioError`, one line per problem naming the file, the line,
+the key path, the bad value and what is expected. Only ``yaml.safe_load`` reads data;
+the node tree used for line numbers comes from ``yaml.compose`` with the safe loader,
+which builds no Python objects.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from tmpnav.errors import Problem, ScenarioError
+from tmpnav.scenario.format import ROS_MAP, SCENARIO
+from tmpnav.scenario.schema import MISSING, Ctx, Issue
+from tmpnav.types import (
+    CostWeights,
+    Door,
+    Goals,
+    Landmark,
+    Models,
+    ObservationMode,
+    PlannerOptions,
+    PolygonMap,
+    RangeBearingSensor,
+    RoadmapParams,
+    RobotSpec,
+    Room,
+    RosMap,
+    Scenario,
+    Pose,
+)
+
+
+def display_path(path: Path) -> str:
+    """A path as users typed it: relative to the working directory when possible."""
+    try:
+        return str(path.resolve().relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
+
+
+class YamlDoc:
+    """A YAML file's data (from safe_load) and the line of every key path in it."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.name = display_path(path)
+        self.lines: dict[tuple[Any, ...], int] = {}
+        self.duplicates: list[tuple[tuple[Any, ...], int]] = []
+        try:
+            text = path.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise ScenarioError([Problem(self.name, "", "file not found")]) from None
+        except (OSError, UnicodeDecodeError) as err:
+            raise ScenarioError([Problem(self.name, "", f"cannot be read: {err}")]) from None
+        try:
+            self.data = yaml.safe_load(text)
+            node = yaml.compose(text, Loader=yaml.SafeLoader)
+        except yaml.YAMLError as err:
+            mark = getattr(err, "problem_mark", None)
+            line = mark.line + 1 if mark is not None else None
+            reason = getattr(err, "problem", None) or str(err).splitlines()[0]
+            context = getattr(err, "context", None)
+            message = f"YAML syntax error: {reason}" + (f" ({context})" if context else "")
+            raise ScenarioError([Problem(self.name, "", message, line)]) from None
+        if node is not None:
+            self._index(node, ())
+
+    def _index(self, node: yaml.Node, raw: tuple[Any, ...]) -> None:
+        self.lines[raw] = node.start_mark.line + 1
+        if isinstance(node, yaml.MappingNode):
+            seen: set[Any] = set()
+            for key_node, value_node in node.value:
+                key = key_node.value
+                if key in seen:
+                    self.duplicates.append(((*raw, key), key_node.start_mark.line + 1))
+                seen.add(key)
+                self.lines[(*raw, key)] = key_node.start_mark.line + 1
+                self._index(value_node, (*raw, key))
+                self.lines[(*raw, key)] = key_node.start_mark.line + 1
+        elif isinstance(node, yaml.SequenceNode):
+            for i, item in enumerate(node.value):
+                self._index(item, (*raw, i))
+
+    def line(self, raw: tuple[Any, ...]) -> int | None:
+        """The line of a raw key path, or of its nearest ancestor that exists."""
+        while raw:
+            if raw in self.lines:
+                return self.lines[raw]
+            raw = raw[:-1]
+        return self.lines.get(())
+
+    def problem(self, issue: Issue) -> Problem:
+        return Problem(self.name, issue.path, issue.message, self.line(issue.raw))
+
+    def duplicate_problems(self) -> list[Problem]:
+        return [
+            Problem(self.name, ".".join(str(k) for k in raw), "duplicate key; a key may appear once", line)
+            for raw, line in self.duplicates
+        ]
+
+
+def load(path: str | Path) -> Scenario:
+    """Load and validate a scenario file; raise ScenarioError listing every problem."""
+    scenario, problems = load_partial(path)
+    if problems or scenario is None:
+        raise ScenarioError(problems)
+    return scenario
+
+
+def load_partial(path: str | Path) -> tuple[Scenario | None, list[Problem]]:
+    """Load as much as possible: the scenario (None if it cannot be built) and its problems.
+
+    Optional keys with bad values are replaced by their defaults so that later checks
+    (geometry, reachability) can still run and report everything in one go.
+    """
+    doc = YamlDoc(Path(path))
+    if not isinstance(doc.data, dict):
+        kind = "empty" if doc.data is None else f"a {type(doc.data).__name__}"
+        return None, [Problem(doc.name, "", f"is {kind}; expected a mapping with keys {', '.join(SCENARIO.fields)}", 1)]
+    ctx = Ctx()
+    data = SCENARIO.check(doc.data, ctx, "", ())
+    problems = doc.duplicate_problems() + [doc.problem(i) for i in ctx.issues]
+    if data is MISSING or any(data.get(k) is MISSING for k in ("map", "rooms", "robots", "goals")):
+        return None, problems
+    ros, ros_problems = _ros_map(doc, data["map"])
+    problems += ros_problems
+    problems += _cross_references(doc, data)
+    if data["map"].get("ros") is not None and ros is None:
+        return None, problems
+    return _build(doc, data, ros), problems
+
+
+def _ros_map(doc: YamlDoc, section: dict[str, Any]) -> tuple[RosMap | None, list[Problem]]:
+    """Read the ROS map_server YAML named by map.ros (the image is read by the world stage)."""
+    if section.get("ros") is None:
+        return None, []
+    map_path = (doc.path.parent / section["ros"]).resolve()
+    if not map_path.is_file():
+        return None, [Problem(doc.name, "map.ros", f"{section['ros']!r}: map file not found ({display_path(map_path)})", doc.line(("map", "ros")))]
+    try:
+        map_doc = YamlDoc(map_path)
+    except ScenarioError as err:
+        return None, err.problems
+    if not isinstance(map_doc.data, dict):
+        return None, [Problem(map_doc.name, "", "is not a mapping; expected a ROS map_server YAML file", 1)]
+    ctx = Ctx()
+    meta = ROS_MAP.check(map_doc.data, ctx, "", ())
+    problems = [map_doc.problem(i) for i in ctx.issues]
+    if problems:
+        return None, problems
+    if abs(meta["origin"][2]) > 1e-9:
+        return None, [Problem(map_doc.name, "origin", f"yaw {meta['origin'][2]:g} is not supported; expected 0 (an axis-aligned map)", map_doc.line(("origin",)))]
+    if meta["free_thresh"] >= meta["occupied_thresh"]:
+        return None, [Problem(map_doc.name, "free_thresh", f"{meta['free_thresh']:g} is not below occupied_thresh {meta['occupied_thresh']:g}; expected free_thresh < occupied_thresh", map_doc.line(("free_thresh",)))]
+    return (
+        RosMap(
+            yaml_path=map_path,
+            image_path=(map_path.parent / meta["image"]).resolve(),
+            resolution=meta["resolution"],
+            origin=meta["origin"],
+            negate=bool(meta["negate"]),
+            occupied_thresh=meta["occupied_thresh"],
+            free_thresh=meta["free_thresh"],
+            mode=meta["mode"],
+        ),
+        [],
+    )
+
+
+def _cross_references(doc: YamlDoc, data: dict[str, Any]) -> list[Problem]:
+    """Names must be unique across rooms and robots (both are PDDL objects); goals must
+    name defined rooms and robots."""
+    problems = []
+    rooms = {r["name"] for r in data["rooms"]}
+    robots = [r["name"] for r in data["robots"]]
+    for i, robot in enumerate(doc.data.get("robots") or []):
+        name = robot.get("name") if isinstance(robot, dict) else None
+        if name in rooms:
+            problems.append(Problem(doc.name, f"robots.{name}.name", f"{name!r} is also a room name; expected names unique among rooms and robots", doc.line(("robots", i, "name"))))
+    for robot in robots:
+        if f"{robot}-start" in rooms:
+            problems.append(Problem(doc.name, "rooms", f"room name '{robot}-start' is reserved for the start location of robot {robot!r}", doc.line(("rooms",))))
+    goals = data["goals"]
+    if goals is MISSING:
+        return problems
+    for i, room in enumerate(goals.get("visit") or ()):
+        if room not in rooms:
+            problems.append(Problem(doc.name, f"goals.visit[{i}]", f"{room!r} is not a room{_hint(room, rooms)}; expected one of {', '.join(sorted(rooms))}", doc.line(("goals", "visit", i))))
+    for robot, targets in (goals.get("robots") or {}).items():
+        if robot not in robots:
+            problems.append(Problem(doc.name, f"goals.robots.{robot}", f"{robot!r} is not a robot{_hint(robot, robots)}; expected one of {', '.join(robots)}", doc.line(("goals", "robots", robot))))
+        for i, room in enumerate(targets):
+            if room not in rooms:
+                problems.append(Problem(doc.name, f"goals.robots.{robot}[{i}]", f"{room!r} is not a room{_hint(room, rooms)}; expected one of {', '.join(sorted(rooms))}", doc.line(("goals", "robots", robot, i))))
+    return problems
+
+
+def _hint(word: str, options: Any) -> str:
+    import difflib
+
+    close = difflib.get_close_matches(word, list(options), n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
+    m = d["map"]
+    map_spec = ros or PolygonMap(
+        bounds=m["bounds"],
+        resolution=m["resolution"],
+        wall_thickness=m["wall_thickness"],
+        walls=m["walls"],
+        obstacles=m["obstacles"],
+    )
+    default_thickness = m["wall_thickness"] if ros is None else 0.15
+    models = d["models"]
+    noise = models["motion_noise"]
+
+    def sensor(s: dict[str, Any]) -> RangeBearingSensor:
+        return RangeBearingSensor(s["range"], s["fov"], s["sigma_range"], s["sigma_bearing"])
+
+    return Scenario(
+        name=d["name"] or doc.path.stem,
+        source=doc.path.resolve(),
+        description=d["description"],
+        map=map_spec,
+        rooms=tuple(Room(r["name"], r["polygon"]) for r in d["rooms"]),
+        doors=tuple(
+            Door(x["name"], x["segment"], x["state"] == "open", x["thickness"] or default_thickness)
+            for x in d["doors"]
+        ),
+        landmarks=tuple(Landmark(x["name"], x["position"], x["kind"]) for x in d["landmarks"]),
+        robots=tuple(
+            RobotSpec(r["name"], Pose(*r["pose"]), r["covariance"], r["radius"], r["speed"], r["turn_rate"])
+            for r in d["robots"]
+        ),
+        models=Models(
+            dt=models["dt"],
+            motion_noise=(noise["alpha1"], noise["alpha2"], noise["alpha3"], noise["alpha4"]),
+            landmark_sensor=sensor(models["landmark_sensor"]),
+            mutual_sensor=sensor(models["mutual_sensor"]),
+            mutual_observations=models["mutual_observations"],
+            observations=ObservationMode(models["observations"]),
+            seed=models["seed"],
+        ),
+        cost=CostWeights(d["cost"]["M_u"], d["cost"]["M_G"], d["cost"]["M_Sigma"]),
+        roadmap=RoadmapParams(**d["roadmap"]),
+        goals=Goals(
+            visit=tuple(d["goals"]["visit"]),
+            per_robot=tuple((k, tuple(v)) for k, v in d["goals"]["robots"].items()),
+        ),
+        planner=PlannerOptions(**d["planner"]),
+        key_lines={_display(raw, doc): line for raw, line in doc.lines.items()},
+    )
+
+
+def _display(raw: tuple[Any, ...], doc: YamlDoc) -> str:
+    """Turn a raw key path into the display path used in messages (list items by name)."""
+    out, node = "", doc.data
+    for key in raw:
+        if isinstance(key, int) and isinstance(node, list) and key < len(node):
+            item = node[key]
+            name = item.get("name") if isinstance(item, dict) else None
+            out = f"{out}.{name}" if isinstance(name, str) else f"{out}[{key}]"
+            node = item
+        else:
+            out = f"{out}.{key}" if out else str(key)
+            node = node.get(key) if isinstance(node, dict) else None
+    return out.lstrip(".")
