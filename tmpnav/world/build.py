@@ -1,0 +1,95 @@
+"""Stage 2: a scenario -> the :class:`World` (occupancy grid, clearance, rooms, landmarks)."""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from tmpnav.types import Landmark, PolygonMap, Room, Scenario
+from tmpnav.world.grid import OccupancyGrid, clearance, fill_polygon, fill_segment, line_of_sight
+from tmpnav.world.geometry import points_in_polygon
+from tmpnav.world.rosmap import load_ros_map
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    """Everything geometric the later stages need, as plain arrays."""
+
+    grid: OccupancyGrid
+    clearance: np.ndarray  # (rows, cols) m
+    rooms: tuple[Room, ...]
+    landmarks: tuple[Landmark, ...]
+    landmark_xy: np.ndarray  # (L, 2)
+    fingerprint: str  # content hash of the grid, rooms and landmarks
+
+    def is_free(self, points: np.ndarray, radius: float) -> np.ndarray:
+        """Whether a disc of ``radius`` centred at each point (..., 2) is collision-free."""
+        i, j, inside = self.grid.cells(points)
+        return inside & (self.clearance[i, j] >= radius + self.grid.resolution)
+
+    def line_of_sight(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return line_of_sight(self.grid, a, b)
+
+    def room_polygon(self, name: str) -> np.ndarray:
+        return np.array(next(r.polygon for r in self.rooms if r.name == name), dtype=float)
+
+    def room_of(self, point: np.ndarray) -> str | None:
+        """The name of the first room containing ``point`` (2,), or None."""
+        for room in self.rooms:
+            if points_in_polygon(np.atleast_2d(point), np.array(room.polygon))[0]:
+                return room.name
+        return None
+
+    def free_cells_in_room(self, name: str, radius: float) -> np.ndarray:
+        """Centres (m, 2) of the cells of a room where a robot of ``radius`` fits."""
+        polygon = self.room_polygon(name)
+        xs, ys = self.grid.cell_centers()
+        cols = np.nonzero((xs >= polygon[:, 0].min()) & (xs <= polygon[:, 0].max()))[0]
+        rows = np.nonzero((ys >= polygon[:, 1].min()) & (ys <= polygon[:, 1].max()))[0]
+        gx, gy = np.meshgrid(xs[cols], ys[rows])
+        pts = np.column_stack([gx.ravel(), gy.ravel()])
+        keep = points_in_polygon(pts, polygon)
+        pts = pts[keep]
+        return pts[self.is_free(pts, radius)]
+
+
+def rasterize(spec: PolygonMap) -> OccupancyGrid:
+    """A polygonal map as a grid: walls (thick polylines) and obstacles are occupied."""
+    xmin, ymin, xmax, ymax = spec.bounds
+    r = spec.resolution
+    cols, rows = int(np.ceil((xmax - xmin) / r)), int(np.ceil((ymax - ymin) / r))
+    grid = OccupancyGrid(np.zeros((rows, cols), dtype=bool), (xmin, ymin), r)
+    xs, ys = grid.cell_centers()
+    for wall in spec.walls:
+        pts = np.array(wall, dtype=float)
+        for a, b in zip(pts[:-1], pts[1:], strict=True):
+            fill_segment(grid.occupied, xs, ys, a, b, spec.wall_thickness, True)
+    for obstacle in spec.obstacles:
+        fill_polygon(grid.occupied, xs, ys, np.array(obstacle, dtype=float), True)
+    return grid
+
+
+def build(scenario: Scenario) -> World:
+    """Build the world of a scenario; ROS map images are read here (may raise MapImageError)."""
+    grid = rasterize(scenario.map) if isinstance(scenario.map, PolygonMap) else load_ros_map(scenario.map)
+    xs, ys = grid.cell_centers()
+    for door in scenario.doors:
+        a, b = (np.array(p, dtype=float) for p in door.segment)
+        # an open door is carved through whatever the map drew; a closed one is a wall
+        fill_segment(grid.occupied, xs, ys, a, b, door.thickness + (2 * grid.resolution if door.open else 0.0), not door.open)
+    landmark_xy = np.array([lm.position for lm in scenario.landmarks], dtype=float).reshape(-1, 2)
+    h = hashlib.sha256()
+    h.update(np.packbits(grid.occupied).tobytes())
+    h.update(repr((grid.shape, grid.origin, grid.resolution)).encode())
+    h.update(repr([(r.name, r.polygon) for r in scenario.rooms]).encode())
+    h.update(landmark_xy.tobytes())
+    return World(
+        grid=grid,
+        clearance=clearance(grid),
+        rooms=scenario.rooms,
+        landmarks=scenario.landmarks,
+        landmark_xy=landmark_xy,
+        fingerprint=h.hexdigest(),
+    )
