@@ -1,0 +1,115 @@
+"""Drawing primitives shared by every figure (the only code that imports matplotlib).
+
+Figures are drawn with the non-interactive Agg backend and written atomically.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+from matplotlib.patches import Ellipse, Polygon  # noqa: E402
+
+from tmpnav.types import Scenario  # noqa: E402
+from tmpnav.world import World  # noqa: E402
+
+ROBOT_COLORS = ("#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
+LANDMARK_MARKERS = ("*", "P", "X", "D", "p", "h", "s", "^")
+
+
+def robot_color(index: int) -> str:
+    return ROBOT_COLORS[index % len(ROBOT_COLORS)]
+
+
+def new_axes(world: World, width: float = 12.0) -> tuple[Any, Any]:
+    """A figure sized to the map's aspect ratio, with axes in metres."""
+    xmin, ymin, xmax, ymax = world.grid.extent
+    aspect = (ymax - ymin) / max(xmax - xmin, 1e-9)
+    fig, ax = plt.subplots(figsize=(width, max(3.0, width * aspect + 1.2)))
+    ax.set_xlim(xmin, xmax)
+    ax.set_ylim(ymin, ymax)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    return fig, ax
+
+
+def draw_map(ax: Any, world: World) -> None:
+    """Occupied cells in dark grey on white."""
+    xmin, ymin, xmax, ymax = world.grid.extent
+    ax.imshow(
+        world.grid.occupied,
+        origin="lower",
+        extent=(xmin, xmax, ymin, ymax),
+        cmap="Greys",
+        vmin=0,
+        vmax=1.25,
+        interpolation="nearest",
+        zorder=0,
+    )
+
+
+def draw_rooms(ax: Any, scenario: Scenario) -> None:
+    for room in scenario.rooms:
+        poly = np.array(room.polygon)
+        ax.add_patch(Polygon(poly, closed=True, facecolor="#fdf6e3", edgecolor="#b58900", lw=0.8, alpha=0.55, zorder=1))
+        # the label sits in the room's top-left corner, away from robots and paths
+        ax.text(poly[:, 0].min() + 0.25, poly[:, 1].max() - 0.25, room.name, ha="left", va="top", fontsize=11, color="#7a5c00", weight="bold", zorder=2)
+
+
+def draw_doors(ax: Any, scenario: Scenario) -> None:
+    for door in scenario.doors:
+        (x0, y0), (x1, y1) = door.segment
+        style = {"color": "#268bd2", "lw": 2.0, "ls": ":"} if door.open else {"color": "#dc322f", "lw": 3.0}
+        ax.plot([x0, x1], [y0, y1], zorder=3, solid_capstyle="butt", **style)
+
+
+def draw_landmarks(ax: Any, scenario: Scenario, sensor_range: float | None = None) -> None:
+    kinds = list(dict.fromkeys(lm.kind for lm in scenario.landmarks))
+    for lm in scenario.landmarks:
+        k = kinds.index(lm.kind)
+        color = plt.get_cmap("tab10")(k % 10)
+        label = lm.kind if lm is next(x for x in scenario.landmarks if x.kind == lm.kind) else None
+        ax.plot(*lm.position, marker=LANDMARK_MARKERS[k % len(LANDMARK_MARKERS)], ms=13, color=color, mec="black", mew=0.6, ls="none", zorder=6, label=label)
+        if sensor_range:
+            ax.add_patch(Ellipse(lm.position, 2 * sensor_range, 2 * sensor_range, fill=False, ls="--", lw=0.5, ec=color, alpha=0.6, zorder=2))
+
+
+def covariance_ellipse(mean: np.ndarray, cov: np.ndarray, n_sigma: float = 2.0, **style: Any) -> Ellipse:
+    """The n-sigma ellipse of the (x, y) block of a pose covariance."""
+    vals, vecs = np.linalg.eigh(np.asarray(cov)[:2, :2])
+    vals = np.clip(vals, 0.0, None)
+    angle = float(np.degrees(np.arctan2(vecs[1, 1], vecs[0, 1])))
+    width, height = 2 * n_sigma * np.sqrt(vals[1]), 2 * n_sigma * np.sqrt(vals[0])
+    return Ellipse((float(mean[0]), float(mean[1])), width, height, angle=angle, **style)
+
+
+def draw_robot_start(ax: Any, scenario: Scenario, index: int) -> None:
+    robot = scenario.robots[index]
+    color = robot_color(index)
+    x, y, th = robot.pose.x, robot.pose.y, robot.pose.theta
+    ax.add_patch(plt.Circle((x, y), robot.radius, color=color, alpha=0.85, zorder=7))
+    ax.arrow(x, y, 0.8 * np.cos(th), 0.8 * np.sin(th), width=0.06, color=color, zorder=7, length_includes_head=True)
+    ax.add_patch(covariance_ellipse(np.array([x, y]), robot.cov, 2.0, fill=False, ec=color, lw=1.5, zorder=7))
+    ax.annotate(robot.name, (x, y), xytext=(8, 8), textcoords="offset points", color=color, fontsize=11, weight="bold", zorder=8)
+
+
+def save(fig: Any, path: Path, dpi: int = 110) -> None:
+    """Write the figure atomically (a temporary file renamed over the target)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png")
+        os.replace(tmp, path)
+    finally:
+        plt.close(fig)
+        if os.path.exists(tmp):
+            os.unlink(tmp)

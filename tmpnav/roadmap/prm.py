@@ -1,0 +1,176 @@
+"""Stage 3: the probabilistic roadmap, grown by OMPL (the only module that imports ompl).
+
+The roadmap lives in the plane (x, y): the robots are discs, so orientation does not
+affect collisions, and headings along a path follow from the controls (turn, then drive).
+One roadmap serves the whole team, built for the largest robot radius, as the paper's pose
+instantiations are shared by all robots.
+
+Determinism: OMPL's seed is set before any draw, and the PRM grows in the calling thread
+(``growRoadmapPtc``) until it holds ``samples`` milestones; a time limit would make the
+roadmap depend on the machine's speed.
+"""
+
+from __future__ import annotations
+
+import gc
+import hashlib
+import math
+
+import numpy as np
+
+from tmpnav.errors import RoadmapError
+from tmpnav.types import RoadmapParams, RobotSpec, Roadmap
+from tmpnav.world import World
+
+
+def sample_instantiations(world: World, room: str, radius: float, k: int, rng: np.random.Generator) -> np.ndarray:
+    """k collision-free positions (k, 2) drawn uniformly in a room's free space."""
+    cells = world.free_cells_in_room(room, radius)
+    if cells.shape[0] == 0:
+        raise RoadmapError(f"room {room!r} has no free space for a robot of radius {radius:g} m")
+    half = world.grid.resolution / 2.0
+    out: list[np.ndarray] = []
+    for _ in range(100 * k):
+        p = cells[rng.integers(cells.shape[0])] + rng.uniform(-half, half, size=2)
+        if world.is_free(p[None, :], radius)[0]:
+            out.append(p)
+            if len(out) == k:
+                break
+    return np.array(out)
+
+
+def reachable_free_space(world: World, radius: float, starts: np.ndarray) -> np.ndarray:
+    """Cells (rows, cols) where a robot fits and that connect to some robot's start.
+
+    Sampling only there keeps OMPL's milestones off islands no robot can reach (the
+    space behind a building's outer walls, sealed rooms).
+    """
+    from scipy import ndimage
+
+    free = world.clearance >= radius + world.grid.resolution
+    labels, _ = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))
+    i, j, _ = world.grid.cells(starts)
+    keep = np.setdiff1d(np.unique(labels[i, j]), [0])
+    return np.isin(labels, keep)
+
+
+def _validity_checker(world: World, free_cells: np.ndarray):  # type: ignore[no-untyped-def]
+    """A fast scalar validity check for OMPL's callback (called ~10^6 times)."""
+    free = free_cells.tolist()
+    x0, y0 = world.grid.origin
+    inv = 1.0 / world.grid.resolution
+    rows, cols = world.grid.shape
+
+    def is_valid(state) -> bool:  # type: ignore[no-untyped-def]
+        i = int(math.floor((state[1] - y0) * inv))
+        j = int(math.floor((state[0] - x0) * inv))
+        return 0 <= i < rows and 0 <= j < cols and free[i][j]
+
+    return is_valid
+
+
+def _grow(world: World, free_cells: np.ndarray, params: RoadmapParams, specials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Grow the PRM with OMPL and add ``specials`` (instantiations, starts) as milestones.
+
+    Returns the vertices (N, 2) and undirected edges (E, 2) of the roadmap.
+    """
+    from ompl import base as ob
+    from ompl import geometric as og
+    from ompl import util as ou
+
+    ou.setLogLevel(ou.LogLevel.LOG_NONE)
+    ou.RNG.setSeed(params.seed + 1)  # OMPL treats seed 0 as "pick one at random"
+    xmin, ymin, xmax, ymax = world.grid.extent
+    space = ob.RealVectorStateSpace(2)
+    bounds = ob.RealVectorBounds(2)
+    bounds.setLow(0, xmin)
+    bounds.setLow(1, ymin)
+    bounds.setHigh(0, xmax)
+    bounds.setHigh(1, ymax)
+    space.setBounds(bounds)
+    si = ob.SpaceInformation(space)
+    si.setStateValidityChecker(_validity_checker(world, free_cells))
+    # check edges every half cell: fine enough for the narrowest door the grid can show
+    si.setStateValidityCheckingResolution(0.5 * world.grid.resolution / space.getMaximumExtent())
+    si.setup()
+
+    pdef = ob.ProblemDefinition(si)
+    for x, y in specials[:-1]:
+        s = si.allocState()
+        s[0], s[1] = float(x), float(y)
+        pdef.addStartState(s)
+    goal = si.allocState()
+    goal[0], goal[1] = float(specials[-1, 0]), float(specials[-1, 1])
+    pdef.setGoalState(goal)
+
+    prm = og.PRM(si)
+    prm.setMaxNearestNeighbors(params.neighbors)
+    prm.setProblemDefinition(pdef)  # PRM needs it before growing (it segfaults otherwise)
+    prm.setup()
+    prm.growRoadmapPtc(ob.PlannerTerminationCondition(lambda: prm.milestoneCount() >= params.samples))
+    # solve() adds the start and goal states as milestones, connected by PRM's own strategy;
+    # the always-true termination condition stops it from growing the roadmap any further
+    prm.solve(ob.plannerAlwaysTerminatingCondition())
+    data = ob.PlannerData(si)
+    prm.getPlannerData(data)
+    n = data.numVertices()
+    nodes = np.empty((n, 2))
+    edges = []
+    for i in range(n):
+        st = data.getVertex(i).getState()
+        nodes[i] = st[0], st[1]
+        edges.extend((i, j) for j in data.getEdges(i) if i < j)
+    del data, prm, pdef, si, space, goal
+    gc.collect()  # release the OMPL objects now, not at interpreter exit
+    return nodes, np.array(edges, dtype=np.int64).reshape(-1, 2)
+
+
+def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapParams) -> Roadmap:
+    """The roadmap with k pose instantiations per room and a node at every robot's start.
+
+    Instantiations that end up in no component holding a robot start are dropped; a room
+    left with none is an error naming it.
+    """
+    radius = max(r.radius for r in robots)
+    rng = np.random.default_rng(params.seed)
+    inst = {room.name: sample_instantiations(world, room.name, radius, params.instantiations, rng) for room in world.rooms}
+    starts = np.array([[r.pose.x, r.pose.y] for r in robots])
+    specials = np.vstack([*inst.values(), starts])
+    nodes, edges = _grow(world, reachable_free_space(world, radius, starts), params, specials)
+
+    index = {(float(x), float(y)): i for i, (x, y) in enumerate(nodes)}
+    special_ids = np.array([index[(float(x), float(y))] for x, y in specials])
+    labels = _components(nodes.shape[0], edges)
+    start_ids = special_ids[-len(robots):]
+    reachable = set(labels[start_ids].tolist())
+    instantiations: dict[str, tuple[int, ...]] = {}
+    offset = 0
+    for name, pts in inst.items():
+        ids = special_ids[offset: offset + len(pts)]
+        offset += len(pts)
+        kept = tuple(int(i) for i in ids if labels[i] in reachable)
+        if not kept:
+            raise RoadmapError(
+                f"room {name!r}: none of its {len(pts)} pose instantiations connects to a robot's start "
+                f"through the roadmap; increase roadmap.samples (now {params.samples}) or widen the passage"
+            )
+        instantiations[name] = kept
+    weights = np.linalg.norm(nodes[edges[:, 0]] - nodes[edges[:, 1]], axis=1)
+    digest = hashlib.sha256(nodes.tobytes() + edges.tobytes() + repr(sorted(instantiations.items())).encode()).hexdigest()
+    return Roadmap(
+        nodes=nodes,
+        edges=edges,
+        weights=weights,
+        instantiations=instantiations,
+        starts={r.name: int(i) for r, i in zip(robots, start_ids, strict=True)},
+        fingerprint=digest,
+    )
+
+
+def _components(n: int, edges: np.ndarray) -> np.ndarray:
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    return labels
