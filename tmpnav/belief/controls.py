@@ -1,0 +1,105 @@
+"""A roadmap path (a polyline of positions) turned into unicycle controls.
+
+The robot follows a path point by point: it turns on the spot towards the next point,
+then drives straight to it. Its nominal poses are obtained by applying the motion model
+(:func:`tmpnav.belief.models.motion`) exactly, so the belief layer and the nominal
+trajectory agree to rounding error.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from tmpnav.belief.models import motion, wrap_angle
+
+#: below these a turn or an edge is treated as already done (rad, m)
+ANGLE_EPS = 1e-9
+LENGTH_EPS = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class PathControls:
+    """Controls along a path and the nominal poses they produce.
+
+    ``controls`` (T, 2): (v m/s, omega rad/s) per step; ``poses`` (T+1, 3): nominal pose
+    before step 0 up to after step T-1; ``node_steps`` (P,): the step index at which each
+    path point is reached (0 for the first point).
+    """
+
+    controls: np.ndarray
+    poses: np.ndarray
+    node_steps: np.ndarray
+
+    @property
+    def n_steps(self) -> int:
+        """T, the number of motion steps."""
+        return int(self.controls.shape[0])
+
+
+def _steps(amount: float, rate: float, dt: float) -> int:
+    """Smallest number of steps covering ``amount`` at no more than ``rate`` per second."""
+    return max(1, math.ceil(amount / (rate * dt)))
+
+
+def path_controls(
+    points: np.ndarray, start_theta: float, speed: float, turn_rate: float, dt: float
+) -> PathControls:
+    """Turn-then-drive controls that take a robot through ``points`` (P, 2), in metres.
+
+    For each next point: turn on the spot with constant omega = dtheta / (n_turn dt),
+    n_turn = ceil(|dtheta| / (turn_rate dt)) (skipped when |dtheta| < 1e-9 rad), then drive
+    straight with v = length / (n_drive dt), n_drive = ceil(length / (speed dt)).
+    Heading and length are measured from the current nominal pose, so rounding does not
+    accumulate along the path; a skipped turn below 1e-9 rad can miss the next point by at
+    most 1e-9 x the edge length. Repeated points (zero-length edges) produce no steps.
+    speed (m/s), turn_rate (rad/s) and dt (s) must be positive.
+    """
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    if pts.shape[0] == 0:
+        raise ValueError("path_controls needs at least one point")
+    if speed <= 0 or turn_rate <= 0 or dt <= 0:
+        raise ValueError("speed, turn_rate and dt must be positive")
+    pose = np.array([pts[0, 0], pts[0, 1], float(wrap_angle(start_theta))])
+    controls: list[tuple[float, float]] = []
+    poses = [pose]
+    node_steps = [0]
+    for target in pts[1:]:
+        delta = target - pose[:2]
+        length = math.hypot(delta[0], delta[1])
+        if length >= LENGTH_EPS:
+            dtheta = float(wrap_angle(math.atan2(delta[1], delta[0]) - pose[2]))
+            segments = []
+            if abs(dtheta) >= ANGLE_EPS:
+                n_turn = _steps(abs(dtheta), turn_rate, dt)
+                segments.append((n_turn, (0.0, dtheta / (n_turn * dt))))
+            n_drive = _steps(length, speed, dt)
+            segments.append((n_drive, (length / (n_drive * dt), 0.0)))
+            for n, u in segments:
+                for _ in range(n):
+                    pose = motion(pose, np.array(u), dt)
+                    controls.append(u)
+                    poses.append(pose)
+        node_steps.append(len(controls))
+    return PathControls(
+        controls=np.array(controls, dtype=float).reshape(-1, 2),
+        poses=np.array(poses),
+        node_steps=np.array(node_steps, dtype=int),
+    )
+
+
+def pad(controls: np.ndarray, poses: np.ndarray, T_total: int) -> tuple[np.ndarray, np.ndarray]:
+    """Extend a robot that arrived early to ``T_total`` steps.
+
+    It waits at its final pose with u = 0 (and keeps observing). controls (T, 2) ->
+    (T_total, 2); poses (T+1, 3) -> (T_total+1, 3). T_total must be at least T.
+    """
+    T = controls.shape[0]
+    if T_total < T:
+        raise ValueError(f"cannot pad {T} steps to {T_total}")
+    extra = T_total - T
+    padded_controls = np.concatenate([controls, np.zeros((extra, 2))], axis=0)
+    padded_poses = np.concatenate([poses, np.repeat(poses[-1:], extra, axis=0)], axis=0)
+    return padded_controls, padded_poses

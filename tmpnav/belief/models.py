@@ -1,0 +1,231 @@
+"""The EKF's model equations, one function per equation of the paper.
+
+Equation numbers are those of the paper's source as compiled (Thomas, Mastrogiovanni,
+Baglietto, "Towards Multi-Robot Task-Motion Planning for Navigation in Belief Space"):
+(4) motion model, (5) observation model, (8) EKF prediction, (9) EKF update,
+(11)-(12) joint prediction of two robots, (14) mutual range-bearing observation,
+(15) its Jacobian. docs/models.md derives every Jacobian and lists the paper's labels.
+
+Every function is vectorised: poses may carry leading batch dimensions, ``x`` of shape
+(..., 3), controls (..., 2), landmark positions (..., 2), all broadcast against each other
+with numpy rules. The batched fast path (:mod:`tmpnav.belief.batch`) and the filterpy
+reference (:mod:`tmpnav.belief.ekf`) call these same functions, so each equation has one
+implementation. Units: metres, radians, seconds; u = (v, omega) in m/s and rad/s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+TWO_PI = 2.0 * np.pi
+
+
+def wrap_angle(a: np.ndarray | float) -> np.ndarray:
+    """Angle(s) ``a`` (rad, any shape) wrapped to [-pi, pi).
+
+    Angles already in range are returned bit-for-bit unchanged, so wrapping is idempotent;
+    every difference of two angles in tmpnav goes through this helper.
+    """
+    a = np.asarray(a, dtype=float)
+    inside = (a >= -np.pi) & (a < np.pi)
+    if inside.all():  # the common case, and the cheap one
+        return a.copy()
+    wrapped = np.mod(a + np.pi, TWO_PI) - np.pi
+    # (a + pi) mod 2pi rounds up to exactly 2pi for a a hair below -pi
+    wrapped = np.where(wrapped >= np.pi, -np.pi, wrapped)
+    return np.where(inside, a, wrapped)
+
+
+# --------------------------------------------------------------------------- motion
+
+
+def motion(x: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
+    """Unicycle motion model, paper eq. (4) with w = 0 (Euler step of length dt).
+
+    f(x, u) = [x + v dt cos(theta), y + v dt sin(theta), wrap(theta + omega dt)]
+
+    x: (..., 3) pose (m, m, rad); u: (..., 2) control (v m/s, omega rad/s); dt: s.
+    Returns the next pose, shape broadcast(x, u)[..., 3].
+    """
+    x = np.asarray(x, dtype=float)
+    u = np.asarray(u, dtype=float)
+    theta, v, omega = x[..., 2], u[..., 0], u[..., 1]
+    out = np.empty((*np.broadcast_shapes(x.shape[:-1], u.shape[:-1]), 3))
+    out[..., 0] = x[..., 0] + v * dt * np.cos(theta)
+    out[..., 1] = x[..., 1] + v * dt * np.sin(theta)
+    out[..., 2] = wrap_angle(theta + omega * dt)
+    return out
+
+
+def motion_jacobians(x: np.ndarray, u: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Jacobians of :func:`motion` for the EKF prediction, paper eq. (8).
+
+    F = df/dx = [[1, 0, -v dt sin(theta)],      V = df/du = [[dt cos(theta), 0 ],
+                 [0, 1,  v dt cos(theta)],                   [dt sin(theta), 0 ],
+                 [0, 0,  1              ]]                   [0,             dt]]
+
+    x: (..., 3); u: (..., 2). Returns F (..., 3, 3) and V (..., 3, 2).
+    """
+    x = np.asarray(x, dtype=float)
+    u = np.asarray(u, dtype=float)
+    shape = np.broadcast_shapes(x.shape[:-1], u.shape[:-1])
+    c, s = np.cos(x[..., 2]), np.sin(x[..., 2])
+    v = u[..., 0]
+    F = np.zeros((*shape, 3, 3))
+    F[..., 0, 0] = F[..., 1, 1] = F[..., 2, 2] = 1.0
+    F[..., 0, 2] = -v * dt * s
+    F[..., 1, 2] = v * dt * c
+    V = np.zeros((*shape, 3, 2))
+    V[..., 0, 0] = dt * c
+    V[..., 1, 0] = dt * s
+    V[..., 2, 1] = dt
+    return F, V
+
+
+def motion_noise_cov(u: np.ndarray, alphas: Sequence[float]) -> np.ndarray:
+    """Covariance W(u) of the noise on the control (Thrun et al., table 5.3), paper eq. (4).
+
+    W = diag(a1 v² + a2 omega², a3 v² + a4 omega²)   in (m/s)², (rad/s)²
+
+    A robot standing still (u = 0) gets no noise. The linearised process noise of the
+    prediction, paper eq. (8), is R = V W Vᵀ. u: (..., 2); returns (..., 2, 2).
+    """
+    u = np.asarray(u, dtype=float)
+    a1, a2, a3, a4 = alphas
+    v2, w2 = u[..., 0] ** 2, u[..., 1] ** 2
+    W = np.zeros((*u.shape[:-1], 2, 2))
+    W[..., 0, 0] = a1 * v2 + a2 * w2
+    W[..., 1, 1] = a3 * v2 + a4 * w2
+    return W
+
+
+def process_noise(x: np.ndarray, u: np.ndarray, dt: float, alphas: Sequence[float]) -> np.ndarray:
+    """Linearised process noise R = V W Vᵀ of paper eq. (8). x: (..., 3); u: (..., 2).
+
+    Returns (..., 3, 3) in m², m², rad² (per step).
+    """
+    _, V = motion_jacobians(x, u, dt)
+    W = motion_noise_cov(u, alphas)
+    return V @ W @ np.swapaxes(V, -1, -2)
+
+
+def joint_block_diag(blocks: np.ndarray) -> np.ndarray:
+    """Block-diagonal joint matrix of n robots, the structure of paper eq. (12).
+
+    blocks: (..., n, 3, 3), one per robot (F_i or R_i); returns (..., 3n, 3n).
+    """
+    blocks = np.asarray(blocks, dtype=float)
+    n = blocks.shape[-3]
+    out = np.zeros((*blocks.shape[:-3], 3 * n, 3 * n))
+    for i in range(n):
+        out[..., 3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = blocks[..., i, :, :]
+    return out
+
+
+# --------------------------------------------------------------------------- observations
+
+
+def _range_bearing(dx: np.ndarray, dy: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    out = np.empty((*np.broadcast_shapes(dx.shape, theta.shape), 2))
+    out[..., 0] = np.hypot(dx, dy)
+    out[..., 1] = wrap_angle(np.arctan2(dy, dx) - theta)
+    return out
+
+
+def landmark_obs(x: np.ndarray, lm: np.ndarray) -> np.ndarray:
+    """Range and bearing of a landmark seen from pose x, paper eq. (5) without noise.
+
+    h(x) = [d, wrap(atan2(ly - y, lx - x) - theta)],   d = ||lm - x[:2]||
+
+    x: (..., 3) pose; lm: (..., 2) landmark position (m). Returns (..., 2): m, rad.
+    """
+    x = np.asarray(x, dtype=float)
+    lm = np.asarray(lm, dtype=float)
+    return _range_bearing(lm[..., 0] - x[..., 0], lm[..., 1] - x[..., 1], x[..., 2])
+
+
+def landmark_obs_jacobian(x: np.ndarray, lm: np.ndarray) -> np.ndarray:
+    """H = dh/dx of :func:`landmark_obs`, used in the EKF update, paper eq. (9).
+
+    With dx = lx - x, dy = ly - y, d² = dx² + dy²:
+
+    H = [[-dx/d,  -dy/d,   0],
+         [ dy/d², -dx/d², -1]]
+
+    Singular at d = 0. x: (..., 3); lm: (..., 2); returns (..., 2, 3).
+    """
+    x = np.asarray(x, dtype=float)
+    lm = np.asarray(lm, dtype=float)
+    dx, dy = lm[..., 0] - x[..., 0], lm[..., 1] - x[..., 1]
+    d2 = dx * dx + dy * dy
+    d = np.sqrt(d2)
+    H = np.zeros((*dx.shape, 2, 3))
+    H[..., 0, 0] = -dx / d
+    H[..., 0, 1] = -dy / d
+    H[..., 1, 0] = dy / d2
+    H[..., 1, 1] = -dx / d2
+    H[..., 1, 2] = -1.0
+    return H
+
+
+def mutual_obs(x_r: np.ndarray, x_s: np.ndarray) -> np.ndarray:
+    """Robot r measures range and bearing of robot s, paper eq. (14).
+
+    zeta = [d, wrap(atan2(ys - yr, xs - xr) - theta_r)],   d = ||x_s[:2] - x_r[:2]||
+
+    x_r, x_s: (..., 3) poses. Returns (..., 2): m, rad. Robot s's heading is not observed.
+    """
+    x_r = np.asarray(x_r, dtype=float)
+    x_s = np.asarray(x_s, dtype=float)
+    return _range_bearing(x_s[..., 0] - x_r[..., 0], x_s[..., 1] - x_r[..., 1], x_r[..., 2])
+
+
+def mutual_obs_jacobian(x_r: np.ndarray, x_s: np.ndarray) -> np.ndarray:
+    """H = d zeta / d[x_r, x_s] of :func:`mutual_obs`, paper eq. (15) corrected.
+
+    With dx = xs - xr, dy = ys - yr, d² = dx² + dy²:
+
+    H = [[-dx/d,  -dy/d,   0,  dx/d,   dy/d,  0],
+         [ dy/d², -dx/d², -1, -dy/d²,  dx/d², 0]]
+
+    The paper prints -dx/d² and dy/d² for the bearing row's x_s, y_s entries (dx and dy
+    swapped); the entries above are the derivatives (docs/models.md).
+    x_r, x_s: (..., 3); returns (..., 2, 6), columns ordered (x_r, y_r, th_r, x_s, y_s, th_s).
+    """
+    x_r = np.asarray(x_r, dtype=float)
+    x_s = np.asarray(x_s, dtype=float)
+    dx, dy = x_s[..., 0] - x_r[..., 0], x_s[..., 1] - x_r[..., 1]
+    d2 = dx * dx + dy * dy
+    d = np.sqrt(d2)
+    H = np.zeros((*dx.shape, 2, 6))
+    H[..., 0, 0] = -dx / d
+    H[..., 0, 1] = -dy / d
+    H[..., 0, 3] = dx / d
+    H[..., 0, 4] = dy / d
+    H[..., 1, 0] = dy / d2
+    H[..., 1, 1] = -dx / d2
+    H[..., 1, 2] = -1.0
+    H[..., 1, 3] = -dy / d2
+    H[..., 1, 4] = dx / d2
+    return H
+
+
+def noisy_observation(z_nominal: np.ndarray, chol_Q: np.ndarray, noise: np.ndarray) -> np.ndarray:
+    """A simulated range-bearing measurement z = h(x) + v, v ~ N(0, Q), paper eq. (5).
+
+    v = chol(Q) @ noise, with ``noise`` standard-normal draws (..., 2); the bearing is
+    wrapped. z_nominal: (..., 2) noise-free observation h(x); chol_Q: (2, 2) lower
+    Cholesky factor of Q (``np.linalg.cholesky(Q)``, Q in m², rad²).
+    """
+    z = np.asarray(z_nominal, dtype=float) + np.asarray(noise, dtype=float) @ np.asarray(chol_Q).T
+    z[..., 1] = wrap_angle(z[..., 1])
+    return z
+
+
+def observation_residual(z: np.ndarray, z_pred: np.ndarray) -> np.ndarray:
+    """Innovation z - h(mean) of a range-bearing observation, bearing wrapped. (..., 2)."""
+    y = np.asarray(z, dtype=float) - np.asarray(z_pred, dtype=float)
+    y[..., 1] = wrap_angle(y[..., 1])
+    return y
