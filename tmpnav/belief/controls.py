@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tmpnav.belief.models import motion, wrap_angle
+from tmpnav.belief.kernel import integrate_poses
+from tmpnav.belief.models import wrap_angle
 
 #: below these a turn or an edge is treated as already done (rad, m)
 ANGLE_EPS = 1e-9
@@ -44,9 +45,7 @@ def _steps(amount: float, rate: float, dt: float) -> int:
     return max(1, math.ceil(amount / (rate * dt)))
 
 
-def path_controls(
-    points: np.ndarray, start_theta: float, speed: float, turn_rate: float, dt: float
-) -> PathControls:
+def path_controls(points: np.ndarray, start_theta: float, speed: float, turn_rate: float, dt: float) -> PathControls:
     """Turn-then-drive controls that take a robot through ``points`` (P, 2), in metres.
 
     For each next point: turn on the spot with constant omega = dtheta / (n_turn dt),
@@ -63,9 +62,10 @@ def path_controls(
     if speed <= 0 or turn_rate <= 0 or dt <= 0:
         raise ValueError("speed, turn_rate and dt must be positive")
     pose = np.array([pts[0, 0], pts[0, 1], float(wrap_angle(start_theta))])
-    controls: list[tuple[float, float]] = []
-    poses = [pose]
+    controls: list[np.ndarray] = []
+    poses = [pose[None, :]]
     node_steps = [0]
+    steps = 0
     for target in pts[1:]:
         delta = target - pose[:2]
         length = math.hypot(delta[0], delta[1])
@@ -78,14 +78,16 @@ def path_controls(
             n_drive = _steps(length, speed, dt)
             segments.append((n_drive, (length / (n_drive * dt), 0.0)))
             for n, u in segments:
-                for _ in range(n):
-                    pose = motion(pose, np.array(u), dt)
-                    controls.append(u)
-                    poses.append(pose)
-        node_steps.append(len(controls))
+                seg = np.tile(np.array(u, dtype=float), (n, 1))
+                seg_poses = integrate_poses(pose, seg, dt)  # paper eq. (4), step by step
+                controls.append(seg)
+                poses.append(seg_poses[1:])
+                pose = seg_poses[-1]
+                steps += n
+        node_steps.append(steps)
     return PathControls(
-        controls=np.array(controls, dtype=float).reshape(-1, 2),
-        poses=np.array(poses),
+        controls=np.concatenate(controls).reshape(-1, 2) if controls else np.zeros((0, 2)),
+        poses=np.concatenate(poses),
         node_steps=np.array(node_steps, dtype=int),
     )
 
