@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from tmpnav.errors import RoadmapError
-from tmpnav.types import RoadmapParams, RobotSpec, Roadmap
+from tmpnav.types import Roadmap, RoadmapParams, RobotSpec
 from tmpnav.world import World
 
 
@@ -62,14 +62,16 @@ def _validity_checker(world: World, free_cells: np.ndarray):  # type: ignore[no-
     rows, cols = world.grid.shape
 
     def is_valid(state) -> bool:  # type: ignore[no-untyped-def]
-        i = int(math.floor((state[1] - y0) * inv))
-        j = int(math.floor((state[0] - x0) * inv))
+        i = math.floor((state[1] - y0) * inv)
+        j = math.floor((state[0] - x0) * inv)
         return 0 <= i < rows and 0 <= j < cols and free[i][j]
 
     return is_valid
 
 
-def _grow(world: World, free_cells: np.ndarray, params: RoadmapParams, specials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _grow(
+    world: World, free_cells: np.ndarray, params: RoadmapParams, specials: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Grow the PRM with OMPL and add ``specials`` (instantiations, starts) as milestones.
 
     Returns the vertices (N, 2) and undirected edges (E, 2) of the roadmap.
@@ -107,7 +109,8 @@ def _grow(world: World, free_cells: np.ndarray, params: RoadmapParams, specials:
     prm.setMaxNearestNeighbors(params.neighbors)
     prm.setProblemDefinition(pdef)  # PRM needs it before growing (it segfaults otherwise)
     prm.setup()
-    prm.growRoadmapPtc(ob.PlannerTerminationCondition(lambda: prm.milestoneCount() >= params.samples))
+    milestones = prm.milestoneCount
+    prm.growRoadmapPtc(ob.PlannerTerminationCondition(lambda: milestones() >= params.samples))
     # solve() adds the start and goal states as milestones, connected by PRM's own strategy;
     # the always-true termination condition stops it from growing the roadmap any further
     prm.solve(ob.plannerAlwaysTerminatingCondition())
@@ -133,7 +136,9 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
     """
     radius = max(r.radius for r in robots)
     rng = np.random.default_rng(params.seed)
-    inst = {room.name: sample_instantiations(world, room.name, radius, params.instantiations, rng) for room in world.rooms}
+    inst = {
+        room.name: sample_instantiations(world, room.name, radius, params.instantiations, rng) for room in world.rooms
+    }
     starts = np.array([[r.pose.x, r.pose.y] for r in robots])
     specials = np.vstack([*inst.values(), starts])
     nodes, edges = _grow(world, reachable_free_space(world, radius, starts), params, specials)
@@ -141,12 +146,12 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
     index = {(float(x), float(y)): i for i, (x, y) in enumerate(nodes)}
     special_ids = np.array([index[(float(x), float(y))] for x, y in specials])
     labels = _components(nodes.shape[0], edges)
-    start_ids = special_ids[-len(robots):]
+    start_ids = special_ids[-len(robots) :]
     reachable = set(labels[start_ids].tolist())
     instantiations: dict[str, tuple[int, ...]] = {}
     offset = 0
     for name, pts in inst.items():
-        ids = special_ids[offset: offset + len(pts)]
+        ids = special_ids[offset : offset + len(pts)]
         offset += len(pts)
         kept = tuple(int(i) for i in ids if labels[i] in reachable)
         if not kept:
@@ -156,7 +161,9 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
             )
         instantiations[name] = kept
     weights = np.linalg.norm(nodes[edges[:, 0]] - nodes[edges[:, 1]], axis=1)
-    digest = hashlib.sha256(nodes.tobytes() + edges.tobytes() + repr(sorted(instantiations.items())).encode()).hexdigest()
+    digest = hashlib.sha256(
+        nodes.tobytes() + edges.tobytes() + repr(sorted(instantiations.items())).encode()
+    ).hexdigest()
     return Roadmap(
         nodes=nodes,
         edges=edges,

@@ -3,13 +3,21 @@
 from __future__ import annotations
 
 import hashlib
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
 
 from tmpnav.types import Landmark, PolygonMap, Room, Scenario
-from tmpnav.world.grid import OccupancyGrid, clearance, fill_polygon, fill_segment, line_of_sight
 from tmpnav.world.geometry import points_in_polygon
+from tmpnav.world.grid import (
+    OccupancyGrid,
+    clearance,
+    fill_polygon,
+    fill_segment,
+    line_of_sight,
+    line_of_sight_traced,
+)
 from tmpnav.world.rosmap import load_ros_map
 
 
@@ -30,6 +38,11 @@ class World:
         return inside & (self.clearance[i, j] >= radius + self.grid.resolution)
 
     def line_of_sight(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Whether segments a[k]-b[k] cross no occupied cell (sphere tracing)."""
+        return line_of_sight_traced(self.grid, self.clearance, a, b)
+
+    def line_of_sight_sampled(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """The same test by sampling every half cell (the reference for tests)."""
         return line_of_sight(self.grid, a, b)
 
     def room_polygon(self, name: str) -> np.ndarray:
@@ -64,7 +77,7 @@ def rasterize(spec: PolygonMap) -> OccupancyGrid:
     xs, ys = grid.cell_centers()
     for wall in spec.walls:
         pts = np.array(wall, dtype=float)
-        for a, b in zip(pts[:-1], pts[1:], strict=True):
+        for a, b in itertools.pairwise(pts):
             fill_segment(grid.occupied, xs, ys, a, b, spec.wall_thickness, True)
     for obstacle in spec.obstacles:
         fill_polygon(grid.occupied, xs, ys, np.array(obstacle, dtype=float), True)
@@ -78,7 +91,9 @@ def build(scenario: Scenario) -> World:
     for door in scenario.doors:
         a, b = (np.array(p, dtype=float) for p in door.segment)
         # an open door is carved through whatever the map drew; a closed one is a wall
-        fill_segment(grid.occupied, xs, ys, a, b, door.thickness + (2 * grid.resolution if door.open else 0.0), not door.open)
+        fill_segment(
+            grid.occupied, xs, ys, a, b, door.thickness + (2 * grid.resolution if door.open else 0.0), not door.open
+        )
     landmark_xy = np.array([lm.position for lm in scenario.landmarks], dtype=float).reshape(-1, 2)
     h = hashlib.sha256()
     h.update(np.packbits(grid.occupied).tobytes())

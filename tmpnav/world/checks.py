@@ -34,25 +34,47 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
         path = f"rooms.{room.name}.polygon"
         outside = [p for p in room.polygon if not inside(p)]
         if outside:
-            problems.append(problem(path, f"point {list(outside[0])} is outside the map {extent}; expected a room inside the map"))
+            problems.append(
+                problem(path, f"point {list(outside[0])} is outside the map {extent}; expected a room inside the map")
+            )
         elif abs(polygon_area(np.array(room.polygon))) < world.grid.resolution**2:
             problems.append(problem(path, "has (almost) zero area; expected a polygon enclosing a region"))
     for lm in scenario.landmarks:
         if not inside(lm.position):
-            problems.append(problem(f"landmarks.{lm.name}.position", f"{list(lm.position)} is outside the map {extent}; expected a point inside the map"))
+            problems.append(
+                problem(
+                    f"landmarks.{lm.name}.position",
+                    f"{list(lm.position)} is outside the map {extent}; expected a point inside the map",
+                )
+            )
     for door in scenario.doors:
         for p in door.segment:
             if not inside(p):
-                problems.append(problem(f"doors.{door.name}.segment", f"point {list(p)} is outside the map {extent}; expected a door inside the map"))
+                problems.append(
+                    problem(
+                        f"doors.{door.name}.segment",
+                        f"point {list(p)} is outside the map {extent}; expected a door inside the map",
+                    )
+                )
                 break
     starts_ok = []
     for robot in scenario.robots:
         path = f"robots.{robot.name}.pose"
         xy = np.array([robot.pose.x, robot.pose.y])
         if not inside((robot.pose.x, robot.pose.y)):
-            problems.append(problem(path, f"{[robot.pose.x, robot.pose.y]} is outside the map {extent}; expected a start inside the map"))
+            problems.append(
+                problem(
+                    path, f"{[robot.pose.x, robot.pose.y]} is outside the map {extent}; expected a start inside the map"
+                )
+            )
         elif not world.is_free(xy[None, :], robot.radius)[0]:
-            problems.append(problem(path, f"{[robot.pose.x, robot.pose.y]} is in collision (a disc of radius {robot.radius:g} m overlaps a wall or obstacle); expected a free start"))
+            problems.append(
+                problem(
+                    path,
+                    f"{[robot.pose.x, robot.pose.y]} is in collision (a disc of radius {robot.radius:g} m overlaps "
+                    "a wall or obstacle); expected a free start",
+                )
+            )
         else:
             starts_ok.append(robot)
     if any(p.path.startswith("rooms.") for p in problems):
@@ -93,11 +115,28 @@ def _reachability(scenario: Scenario, world: World, robots: list, problem) -> li
         if reach[room.name]:
             continue
         if len(cramped[room.name]) == len(robots):
-            problems.append(problem(f"rooms.{room.name}", "has no free space large enough for any robot; expected a room a robot fits in"))
+            problems.append(
+                problem(
+                    f"rooms.{room.name}",
+                    "has no free space large enough for any robot; expected a room a robot fits in",
+                )
+            )
         else:
-            problems.append(problem(f"rooms.{room.name}", "no robot can reach this room through free space (closed door or too narrow passage?); expected a room connected to some robot's start"))
+            problems.append(
+                problem(
+                    f"rooms.{room.name}",
+                    "no robot can reach this room through free space (closed door or too narrow passage?); "
+                    "expected a room connected to some robot's start",
+                )
+            )
     for robot_name, targets in scenario.goals.per_robot:
         for i, room in enumerate(targets):
             if room in reach and reach[room] and robot_name not in reach[room]:
-                problems.append(problem(f"goals.robots.{robot_name}[{i}]", f"robot {robot_name!r} cannot reach room {room!r} through free space; expected a room the robot can reach"))
+                problems.append(
+                    problem(
+                        f"goals.robots.{robot_name}[{i}]",
+                        f"robot {robot_name!r} cannot reach room {room!r} through free space; "
+                        "expected a room the robot can reach",
+                    )
+                )
     return problems

@@ -65,7 +65,9 @@ def fill_polygon(grid: np.ndarray, xs: np.ndarray, ys: np.ndarray, polygon: np.n
     grid[np.ix_(rows, cols)] = block
 
 
-def fill_segment(grid: np.ndarray, xs: np.ndarray, ys: np.ndarray, a: np.ndarray, b: np.ndarray, thickness: float, value: bool) -> None:
+def fill_segment(
+    grid: np.ndarray, xs: np.ndarray, ys: np.ndarray, a: np.ndarray, b: np.ndarray, thickness: float, value: bool
+) -> None:
     """Set the cells within thickness/2 of the segment a-b to ``value`` (in place)."""
     half = thickness / 2.0
     lo, hi = np.minimum(a, b) - half, np.maximum(a, b) + half
@@ -105,3 +107,29 @@ def line_of_sight(grid: OccupancyGrid, a: np.ndarray, b: np.ndarray) -> np.ndarr
     interior = (dist_along > margin) & (dist_along < length[:, None] - margin)
     blocked = grid.is_occupied(pts) & interior
     return ~blocked.any(axis=1)
+
+
+def line_of_sight_traced(grid: OccupancyGrid, clear: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Line of sight by sphere tracing on the clearance map: same answer as
+    :func:`line_of_sight` up to the grid, in a dozen steps per segment instead of one per
+    half cell. From a point whose cell has clearance c, every point closer than c - 1.5 r lies
+    in a free cell, so the walk may jump that far; near walls it falls back to half cells.
+    """
+    a, b = np.atleast_2d(a).astype(float), np.atleast_2d(b).astype(float)
+    d = b - a
+    length = np.hypot(d[:, 0], d[:, 1])
+    unit = d / np.where(length > 0, length, 1.0)[:, None]
+    margin = 1.5 * grid.resolution
+    t = np.full(length.shape, margin)
+    visible = np.ones(length.shape, dtype=bool)
+    active = np.nonzero(t < length - margin)[0]
+    while active.size:
+        p = a[active] + t[active, None] * unit[active]
+        i, j, inside = grid.cells(p)
+        hit = ~inside | grid.occupied[i, j]
+        visible[active[hit]] = False
+        step = np.maximum(clear[i, j] - 1.5 * grid.resolution, 0.5 * grid.resolution)
+        t[active] += step
+        keep = ~hit & (t[active] < length[active] - margin)
+        active = active[keep]
+    return visible

@@ -39,7 +39,9 @@ def read_image(spec: RosMap) -> np.ndarray:
             has_alpha = img.mode in ("RGBA", "LA") or (img.mode == "P" and "transparency" in img.info)
             rgba = np.asarray(img.convert("RGBA" if has_alpha else "RGB"), dtype=float)
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as err:
-        raise MapImageError(Problem(where, "image", f"cannot read image {display_path(spec.image_path)}: {err}")) from None
+        raise MapImageError(
+            Problem(where, "image", f"cannot read image {display_path(spec.image_path)}: {err}")
+        ) from None
     grey = rgba[..., :3].mean(axis=2)
     if has_alpha:
         grey[rgba[..., 3] == 0] = np.nan

@@ -1,0 +1,212 @@
+"""Where oracle evaluations run: in this process, in local worker processes, or on Ray.
+
+The requests are cut into the same blocks whatever the executor, and each result depends
+only on its own request, so every executor returns bit-identical results. Ray stays an
+optional dependency (``pip install tmpnav[ray]``) and is imported only here.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from typing import Any
+
+from tmpnav.errors import InputError
+from tmpnav.oracle.evaluate import EvalStats, Request, evaluate
+from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.types import MotionResult, Roadmap, Scenario
+from tmpnav.world import World
+
+Progress = Callable[[int, int], None]
+Outcome = tuple[list[MotionResult | None], EvalStats]
+
+#: requests per block: large enough that per-task overhead (Ray: ~1 ms) is negligible
+BLOCK = 64
+
+
+@dataclass(frozen=True, eq=False)
+class OracleContext:
+    """Everything an evaluation needs, picklable for worker processes and Ray."""
+
+    scenario: Scenario
+    world: World
+    roadmap: Roadmap
+
+
+_LIBRARIES: dict[tuple[str, ...], MotionLibrary] = {}
+
+
+def library(ctx: OracleContext) -> MotionLibrary:
+    """The per-process motion library of a context (nominal motions are memoised in it).
+
+    Keyed by content, so a Ray worker that receives the same context again reuses it.
+    """
+    key = (ctx.world.fingerprint, ctx.roadmap.fingerprint, repr(ctx.scenario.models), repr(ctx.scenario.robots))
+    if key not in _LIBRARIES:
+        _LIBRARIES.clear()
+        _LIBRARIES[key] = MotionLibrary(ctx.scenario, ctx.world, ctx.roadmap)
+    return _LIBRARIES[key]
+
+
+def blocks(requests: list[Request], size: int = BLOCK) -> tuple[list[list[Request]], list[int]]:
+    """Cut requests into blocks of whole start groups (about ``size`` requests each).
+
+    Requests whose robots start from the same states share their simulations' prefixes,
+    so a group is never split. Returns the blocks and the permutation that restores the
+    requests' order (``order[k]`` is the original index of the k-th request in the blocks).
+    """
+    groups: dict[tuple, list[int]] = {}
+    for i, r in enumerate(requests):
+        groups.setdefault((r.robots, r.starts, r.joint_cov), []).append(i)
+    out: list[list[Request]] = []
+    order: list[int] = []
+    current: list[int] = []
+    for members in groups.values():
+        current.extend(members)
+        if len(current) >= size:
+            out.append([requests[i] for i in current])
+            order.extend(current)
+            current = []
+    if current:
+        out.append([requests[i] for i in current])
+        order.extend(current)
+    return out, order
+
+
+def _merge(parts: list[Outcome], order: list[int]) -> Outcome:
+    results: list[MotionResult | None] = [None] * len(order)
+    stats = EvalStats()
+    k = 0
+    for res, st in parts:
+        for r in res:
+            results[order[k]] = r
+            k += 1
+        stats.add(st)
+    return results, stats
+
+
+class SerialExecutor:
+    name = "serial"
+    workers = 1
+
+    def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome:
+        lib = library(ctx)
+        parts = []
+        todo, order = blocks(requests)
+        for k, block in enumerate(todo):
+            parts.append(evaluate(lib, block))
+            if progress:
+                progress(k + 1, len(todo))
+        return _merge(parts, order)
+
+    def close(self) -> None:
+        return None
+
+
+_WORKER_CTX: OracleContext | None = None
+
+
+def _init_worker(ctx: OracleContext) -> None:
+    global _WORKER_CTX
+    _WORKER_CTX = ctx
+
+
+def _work(block: list[Request]) -> Outcome:
+    assert _WORKER_CTX is not None
+    return evaluate(library(_WORKER_CTX), block)
+
+
+class ProcessExecutor:
+    """Local worker processes (``--workers N``); the context is sent once per worker."""
+
+    name = "processes"
+
+    def __init__(self, workers: int):
+        self.workers = workers
+
+    def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome:
+        todo, order = blocks(requests)
+        if len(todo) <= 1:
+            return SerialExecutor().run(ctx, requests, progress)
+        method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+        mp = multiprocessing.get_context(method)
+        with ProcessPoolExecutor(
+            max_workers=self.workers, mp_context=mp, initializer=_init_worker, initargs=(ctx,)
+        ) as pool:
+            parts = []
+            for k, part in enumerate(pool.map(_work, todo)):
+                parts.append(part)
+                if progress:
+                    progress(k + 1, len(todo))
+        return _merge(parts, order)
+
+    def close(self) -> None:
+        return None
+
+
+class RayExecutor:
+    """The same blocks as Ray tasks on a local or remote cluster (``--executor ray``)."""
+
+    name = "ray"
+
+    def __init__(self, address: str | None = None, num_cpus: int | None = None):
+        try:
+            import ray
+        except ImportError:
+            raise InputError("--executor ray needs Ray: pip install 'tmpnav[ray]'") from None
+        self._ray = ray
+        self._started = False
+        if not ray.is_initialized():
+            kwargs: dict[str, Any] = {"ignore_reinit_error": True, "log_to_driver": False, "include_dashboard": False}
+            if address:
+                kwargs["address"] = address
+            else:
+                kwargs["num_cpus"] = num_cpus or os.cpu_count() or 1
+            try:
+                ray.init(**kwargs)
+            except (ConnectionError, RuntimeError, ValueError) as err:
+                raise InputError(f"cannot start or reach Ray at {address or 'a new local instance'}: {err}") from None
+            self._started = True
+        self.workers = int(ray.cluster_resources().get("CPU", 1))
+        self._remote = ray.remote(_ray_work)
+
+    def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome:
+        ray = self._ray
+        ctx_ref = ray.put(ctx)
+        todo, order = blocks(requests)
+        pending = [self._remote.remote(ctx_ref, block) for block in todo]
+        index = {ref: k for k, ref in enumerate(pending)}
+        parts: list[Outcome | None] = [None] * len(pending)
+        done = 0
+        remaining = list(pending)
+        while remaining:
+            ready, remaining = ray.wait(remaining, num_returns=1)
+            for ref in ready:
+                parts[index[ref]] = ray.get(ref)
+                done += 1
+                if progress:
+                    progress(done, len(todo))
+        return _merge([p for p in parts if p is not None], order)
+
+    def close(self) -> None:
+        if self._started:
+            self._ray.shutdown()
+
+
+def _ray_work(ctx: OracleContext, block: list[Request]) -> Outcome:
+    return evaluate(library(ctx), block)
+
+
+def make_executor(kind: str, workers: int | None = None, ray_address: str | None = None) -> Any:
+    """``serial``, ``processes`` (default when workers > 1) or ``ray``."""
+    if kind == "ray":
+        return RayExecutor(ray_address, workers)
+    n = workers if workers is not None else (os.cpu_count() or 1)
+    if kind == "serial" or n <= 1:
+        return SerialExecutor()
+    if kind == "processes":
+        return ProcessExecutor(n)
+    raise InputError(f"unknown executor {kind!r}; expected serial, processes or ray")

@@ -1,0 +1,115 @@
+"""Nominal motions: what a robot does and sees when it drives a roadmap path.
+
+A :class:`NominalMotion` is the shortest roadmap path from a start node to a goal node,
+the turn-then-drive controls along it, the nominal poses they produce and the landmarks
+visible from each pose. Motions depend only on the robot, its start (node, heading) and
+the goal node, so the :class:`MotionLibrary` computes each once and shares it between the
+single-robot and joint evaluations that need it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from tmpnav.belief import path_controls
+from tmpnav.roadmap import RoadmapGraph
+from tmpnav.types import Roadmap, Scenario
+from tmpnav.world import World
+from tmpnav.world.visibility import LandmarkVisibility, mutual_visible
+
+
+@dataclass(frozen=True, eq=False)
+class NominalMotion:
+    robot: str
+    path: tuple[int, ...]  # roadmap node indices, start first
+    controls: np.ndarray  # (T, 2)
+    poses: np.ndarray  # (T+1, 3)
+    node_steps: np.ndarray  # (P,) step at which each path node is reached
+    lm_visible: np.ndarray  # (T+1, L)
+    noise_seed: int
+
+    @property
+    def n_steps(self) -> int:
+        return int(self.controls.shape[0])
+
+    @property
+    def final_heading(self) -> float:
+        return float(self.poses[-1, 2])
+
+    def padded(self, T: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Controls, poses and visibility extended to T steps: the robot waits at its
+        goal (u = 0) and keeps observing from there."""
+        extra = T - self.n_steps
+        return (
+            np.concatenate([self.controls, np.zeros((extra, 2))]),
+            np.concatenate([self.poses, np.repeat(self.poses[-1:], extra, axis=0)]),
+            np.concatenate([self.lm_visible, np.repeat(self.lm_visible[-1:], extra, axis=0)]),
+        )
+
+    def c_u(self, dt: float) -> float:
+        """Control usage c_u = sum_k (v_k² + omega_k²) dt (docs/models.md)."""
+        return float((self.controls**2).sum(-1).sum() * dt)
+
+
+def stable_seed(*parts: object) -> int:
+    """A 63-bit seed from any printable parts (stable across processes and machines)."""
+    digest = hashlib.sha256(repr(parts).encode()).digest()
+    return int.from_bytes(digest[:8], "little") >> 1
+
+
+class MotionLibrary:
+    """Memoised nominal motions of one scenario, world and roadmap."""
+
+    def __init__(self, scenario: Scenario, world: World, roadmap: Roadmap):
+        self.scenario = scenario
+        self.world = world
+        self.roadmap = roadmap
+        self.graph = RoadmapGraph(roadmap)
+        self.visibility = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
+        self._motions: dict[tuple[str, int, float, int], NominalMotion | None] = {}
+
+    def motion(self, robot: str, start: int, heading: float, goal: int) -> NominalMotion | None:
+        """The nominal motion start -> goal, or None if the roadmap does not connect them."""
+        key = (robot, start, heading, goal)
+        if key not in self._motions:
+            self._motions[key] = self._compute(robot, start, heading, goal)
+        return self._motions[key]
+
+    def prepare(self, starts: list[int]) -> None:
+        """Run Dijkstra from many start nodes at once."""
+        self.graph.prepare(starts)
+
+    def _compute(self, robot: str, start: int, heading: float, goal: int) -> NominalMotion | None:
+        path = self.graph.path(start, goal)
+        if path is None:
+            return None
+        spec = self.scenario.robot(robot)
+        models = self.scenario.models
+        pc = path_controls(self.graph.points(path), heading, spec.speed, spec.turn_rate, models.dt)
+        lm_visible = self.visibility.visible(pc.poses, models.landmark_sensor.fov, min_range=spec.radius)
+        return NominalMotion(
+            robot=robot,
+            path=path,
+            controls=pc.controls,
+            poses=pc.poses,
+            node_steps=pc.node_steps,
+            lm_visible=lm_visible,
+            # one stream per robot and start node, drawn step by step: a robot sees the
+            # same simulated observations at step k alone or in a pair, whatever its goal,
+            # so factorised pairs are exact and motions with a common prefix share it
+            noise_seed=stable_seed(models.seed, "landmarks", robot, start),
+        )
+
+    def mutual_visibility_pairs(self, observer: np.ndarray, target: np.ndarray, min_range: float) -> np.ndarray:
+        """Whether robots at poses ``observer`` (k, 3) see robots at ``target`` (k, 3).
+
+        Robots closer than ``min_range`` (the sum of their radii: they would touch) make
+        no observation; the range-bearing model is singular when they coincide.
+        """
+        sensor = self.scenario.models.mutual_sensor
+        if not self.scenario.models.mutual_observations:
+            return np.zeros(observer.shape[0], dtype=bool)
+        return mutual_visible(self.world, observer, target, sensor.range, sensor.fov, min_range)

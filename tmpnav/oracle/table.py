@@ -1,0 +1,139 @@
+"""Precompute every action cost the task encoding needs, before the planner runs.
+
+ENHSP cannot call back into tmpnav during its search, so the semantic attachment is
+evaluated up front for every move the encoding may use. Which start belief does a table
+entry use? The paper makes the pose instantiation chosen by a robot's previous move the
+start of its next one, which depends on the path the search took. The table fixes one
+canonical start per robot and location:
+
+* the robot's own start location: its initial pose and initial belief;
+* any other room A: the state in which the robot arrives in A when it drives there
+  directly from its start (the chosen instantiation, the arrival heading, the belief at
+  arrival).
+
+Pairs start from the two robots' canonical states with uncorrelated beliefs. The
+re-simulation of the final plan (:mod:`tmpnav.execute`) carries the true beliefs,
+cross-correlations included, from action to action and reports how far its cost is from
+the table's.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from tmpnav.oracle.evaluate import Request, StartState
+from tmpnav.oracle.oracle import Oracle
+from tmpnav.types import CostTable, MotionResult, MoveKey, Scenario
+from tmpnav.world import World
+
+
+@dataclass
+class TableResult:
+    table: CostTable
+    singles: dict[MoveKey, MotionResult]
+    pairs: dict[tuple[MoveKey, MoveKey], MotionResult]
+    canonical: dict[tuple[str, str], StartState]
+
+
+def start_locations(scenario: Scenario, world: World) -> dict[str, str]:
+    """Each robot's start location: the room its start pose lies in, else ``<robot>-start``."""
+    out = {}
+    for r in scenario.robots:
+        room = world.room_of([r.pose.x, r.pose.y])  # type: ignore[arg-type]
+        out[r.name] = room if room is not None else f"{r.name}-start"
+    return out
+
+
+def destinations(scenario: Scenario, mode: str) -> dict[str, tuple[str, ...]]:
+    """Rooms each robot may move to: the goal rooms it may serve, or every room."""
+    if mode == "all-rooms":
+        rooms = tuple(r.name for r in scenario.rooms)
+        return {r.name: rooms for r in scenario.robots}
+    return {
+        r.name: tuple(dict.fromkeys((*scenario.goals.visit, *scenario.goals.for_robot(r.name))))
+        for r in scenario.robots
+    }
+
+
+def initial_state(scenario: Scenario, roadmap_start: int, robot: str) -> StartState:
+    spec = scenario.robot(robot)
+    pose = spec.pose
+    return StartState(roadmap_start, pose.theta, (pose.x, pose.y, pose.theta), spec.covariance)
+
+
+def arrival_state(result: MotionResult, i: int = 0) -> StartState:
+    """The state in which robot i of an action ends it: its canonical start for the next."""
+    belief = result.final.marginal(i)
+    mean = tuple(float(v) for v in belief.mean)
+    cov = tuple(tuple(float(v) for v in row) for row in belief.cov)
+    return StartState(result.goal_nodes[i], result.final_headings[i], mean, cov)  # type: ignore[arg-type]
+
+
+def build_table(
+    oracle: Oracle, world: World, dest_mode: str, pair_filter: Callable[[MoveKey, MoveKey], bool] | None = None
+) -> TableResult:
+    """The cost table: single moves for every robot, and the pairs ``pair_filter`` admits
+    (none without a filter). The filter comes from the task encoding: only pairs that can
+    ever apply together are worth simulating."""
+    scenario, roadmap = oracle.ctx.scenario, oracle.ctx.roadmap
+    starts = start_locations(scenario, world)
+    dests = destinations(scenario, dest_mode)
+    canonical: dict[tuple[str, str], StartState] = {}
+    for r in scenario.robots:
+        canonical[(r.name, starts[r.name])] = initial_state(scenario, roadmap.starts[r.name], r.name)
+
+    # wave 1: from each robot's start to every destination; fixes the canonical starts
+    first = [(r, starts[r], d) for r in dests for d in dests[r] if d != starts[r]]
+    singles: dict[MoveKey, MotionResult] = {}
+    for key, res in zip(first, oracle.evaluate([_single(canonical, k) for k in first]), strict=True):
+        if res is not None:
+            singles[key] = res
+            canonical[(key[0], key[2])] = arrival_state(res)
+    # wave 2: between destinations, from their canonical starts
+    second = [
+        (r, a, b)
+        for r in dests
+        for a in dests[r]
+        for b in dests[r]
+        if a != b and a != starts[r] and (r, a) in canonical
+    ]
+    for key, res in zip(second, oracle.evaluate([_single(canonical, k) for k in second]), strict=True):
+        if res is not None:
+            singles[key] = res
+
+    pair_results: dict[tuple[MoveKey, MoveKey], MotionResult] = {}
+    if pair_filter is not None:
+        names = [r.name for r in scenario.robots]
+        wanted = [
+            (m1, m2)
+            for i, r1 in enumerate(names)
+            for r2 in names[i + 1 :]
+            for m1 in singles
+            if m1[0] == r1
+            for m2 in singles
+            if m2[0] == r2 and pair_filter(m1, m2)
+        ]
+        requests = [
+            Request((m1[0], m2[0]), (canonical[(m1[0], m1[1])], canonical[(m2[0], m2[1])]), (m1[2], m2[2]))
+            for m1, m2 in wanted
+        ]
+        for key, res in zip(wanted, oracle.evaluate(requests), strict=True):
+            if res is not None:
+                pair_results[key] = res
+
+    locations = tuple(dict.fromkeys([*(room.name for room in scenario.rooms), *starts.values()]))
+    table = CostTable(
+        robots=tuple(r.name for r in scenario.robots),
+        rooms=tuple(room.name for room in scenario.rooms),
+        locations=locations,
+        start_location=starts,
+        single={k: v.cost for k, v in singles.items()},
+        pair={k: v.cost for k, v in pair_results.items()},
+    )
+    return TableResult(table, singles, pair_results, canonical)
+
+
+def _single(canonical: dict[tuple[str, str], StartState], move: MoveKey) -> Request:
+    robot, origin, target = move
+    return Request((robot,), (canonical[(robot, origin)],), (target,))
