@@ -42,10 +42,12 @@ def report_errors(func: Callable[..., Any]) -> Callable[..., Any]:
             raise
         except click.ClickException:
             raise
-        except Exception as err:  # noqa: BLE001 - the last line of defence against tracebacks
+        except Exception as err:
             if os.environ.get("TMPNAV_DEBUG"):
                 traceback.print_exc()
-            click.echo(f"error: internal error: {type(err).__name__}: {err} (set TMPNAV_DEBUG=1 for the traceback)", err=True)
+            click.echo(
+                f"error: internal error: {type(err).__name__}: {err} (set TMPNAV_DEBUG=1 for the traceback)", err=True
+            )
             sys.exit(1)
 
     return wrapper
@@ -82,7 +84,14 @@ def validate(scenario: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@click.option("-o", "--output", type=click.Path(path_type=Path, dir_okay=False), default=Path("world.png"), show_default=True, help="PNG file to write.")
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=Path("world.png"),
+    show_default=True,
+    help="PNG file to write.",
+)
 @report_errors
 def show(scenario: Path, output: Path) -> None:
     """Draw the world: map, rooms, doors, landmarks, robots with 2-sigma start ellipses."""
@@ -96,7 +105,14 @@ def show(scenario: Path, output: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@click.option("-o", "--output", type=click.Path(path_type=Path, dir_okay=False), default=Path("roadmap.png"), show_default=True, help="PNG file to write.")
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=Path("roadmap.png"),
+    show_default=True,
+    help="PNG file to write.",
+)
 @report_errors
 def roadmap(scenario: Path, output: Path) -> None:
     """Build the probabilistic roadmap (OMPL PRM) and draw it over the map."""

@@ -1,19 +1,22 @@
 """The pipeline: the only module that knows the order of the stages, and times each one.
 
-    scenario -> world -> roadmap -> belief -> oracle -> task -> report
+scenario -> world -> roadmap -> oracle (belief + cache) -> task (encode, solve, decode)
+  -> re-simulation -> report
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any
 
 from tmpnav import scenario as scenario_stage
 from tmpnav import world as world_stage
-from tmpnav.errors import ScenarioError
-from tmpnav.types import Scenario, StageTimes
+from tmpnav.errors import InputError, ScenarioError
+from tmpnav.types import Goals, PlanStatus, Roadmap, Scenario, StageTimes
 from tmpnav.world import MapImageError, World
 
 
@@ -39,3 +42,174 @@ def load_world(path: str | Path) -> tuple[Scenario, World]:
     if problems:
         raise ScenarioError(problems)
     return scenario, world
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """Command-line choices that override the scenario, and how to run the oracle."""
+
+    encoding: str | None = None
+    planner: str | None = None
+    timeout: float | None = None
+    pair_min_gain: float | None = None
+    mutual_observations: bool | None = None
+    goals: Goals | None = None
+    cache_dir: Path | None = None  # None: the default (XDG) cache directory
+    use_cache: bool = True
+    executor: str = "processes"
+    workers: int | None = None
+    ray_address: str | None = None
+    progress: Callable[[int, int], None] | None = None
+
+
+@dataclass
+class PlanReport:
+    """Everything ``tmpnav plan`` reports (see report/plan_json.py for the JSON schema)."""
+
+    scenario: Scenario
+    world: World
+    roadmap: Roadmap
+    encoding: str
+    planner: str
+    status: PlanStatus
+    planner_cost: float
+    resimulated_cost: float
+    actions: list[Any]
+    trajectories: dict[str, list[Any]]
+    times: StageTimes
+    cache: dict[str, Any]
+    oracle: dict[str, Any]
+    task: dict[str, Any]
+    encoded: Any = field(repr=False, default=None)
+
+
+def apply_options(scenario: Scenario, options: PlanOptions) -> Scenario:
+    """The scenario with the command line's overrides."""
+    planner = scenario.planner
+    planner = replace(
+        planner,
+        encoding=options.encoding or planner.encoding,
+        name=options.planner or planner.name,
+        timeout=options.timeout if options.timeout is not None else planner.timeout,
+        pair_min_gain=options.pair_min_gain if options.pair_min_gain is not None else planner.pair_min_gain,
+    )
+    models = scenario.models
+    if options.mutual_observations is not None:
+        models = replace(models, mutual_observations=options.mutual_observations)
+    goals = options.goals or scenario.goals
+    return replace(scenario, planner=planner, models=models, goals=goals)
+
+
+def build_roadmap(scenario: Scenario, world: World, cache_dir: Path | None) -> tuple[Roadmap, bool]:
+    """The roadmap, from the store when possible; returns it and whether it was stored."""
+    from tmpnav.roadmap import build_roadmap as grow
+    from tmpnav.roadmap import store
+
+    if cache_dir is None:
+        return grow(world, scenario.robots, scenario.roadmap), False
+    key = store.roadmap_key(world, scenario.robots, scenario.roadmap)
+    found = store.load(cache_dir, key)
+    if found is not None:
+        return found, True
+    roadmap = grow(world, scenario.robots, scenario.roadmap)
+    store.save(cache_dir, key, roadmap)
+    return roadmap, False
+
+
+def make_oracle(scenario: Scenario, world: World, roadmap: Roadmap, options: PlanOptions) -> Any:
+    from tmpnav.oracle.cache import DiskCache, NullCache, default_cache_dir
+    from tmpnav.oracle.executors import OracleContext, make_executor
+    from tmpnav.oracle.oracle import Oracle
+
+    cache = DiskCache(options.cache_dir or default_cache_dir()) if options.use_cache else NullCache()
+    executor = make_executor(options.executor, options.workers, options.ray_address)
+    return Oracle(OracleContext(scenario, world, roadmap), cache, executor, options.progress)
+
+
+def plan(
+    path: str | Path, options: PlanOptions | None = None, loaded: tuple[Scenario, World] | None = None
+) -> PlanReport:
+    """Plan a scenario end to end: the task-level optimal plan for the roadmap, with its
+    motions and beliefs. ``loaded`` skips loading when the caller already has the world."""
+    from tmpnav.oracle.cache import default_cache_dir
+    from tmpnav.oracle.table import build_table
+    from tmpnav.resimulate import resimulate
+    from tmpnav.task.decode import decode, step_cost
+    from tmpnav.task.encode import ENCODINGS, encode, pair_filter
+    from tmpnav.task.solve import solve
+
+    options = options or PlanOptions()
+    times = StageTimes()
+    with timed(times, "load"):
+        scenario, world = loaded if loaded is not None else load_world(path)
+        scenario = apply_options(scenario, options)
+        _check_goals(scenario)
+    encoding = ENCODINGS[scenario.planner.encoding]
+    cache_dir = (options.cache_dir or default_cache_dir()) if options.use_cache else None
+    with timed(times, "roadmap"):
+        roadmap, roadmap_hit = build_roadmap(scenario, world, cache_dir)
+    oracle = make_oracle(scenario, world, roadmap, options)
+    try:
+        with timed(times, "oracle"):
+            from tmpnav.oracle.table import start_locations
+
+            starts = start_locations(scenario, world)
+            pairs = pair_filter(encoding.name, scenario.goals, starts) if encoding.pairs else None
+            table_result = build_table(oracle, world, encoding.destinations, pairs)
+        table = table_result.table
+        with timed(times, "encode"):
+            encoded = encode(
+                table, scenario.goals, encoding.name, name=scenario.name, min_gain=scenario.planner.pair_min_gain
+            )
+        with timed(times, "planner"):
+            solved = solve(encoded.problem, scenario.planner.name, scenario.planner.timeout)
+        steps = decode(solved, encoded)
+        planner_costs = [step_cost(table, s) for s in steps]
+        with timed(times, "resimulate"):
+            from tmpnav.oracle.executors import library
+
+            lib = library(oracle.ctx)
+            resim = resimulate(lib, oracle, scenario, steps, planner_costs, [a[0] for a in solved.actions])
+    finally:
+        oracle.executor.close()
+        oracle.cache.close()
+    times.seconds["total"] = sum(v for k, v in times.seconds.items() if k != "load")
+    stats = oracle.stats
+    return PlanReport(
+        scenario=scenario,
+        world=world,
+        roadmap=roadmap,
+        encoding=encoding.name,
+        planner=scenario.planner.name,
+        status=solved.status,
+        planner_cost=float(sum(planner_costs)),
+        resimulated_cost=resim.cost,
+        actions=resim.actions,
+        trajectories=resim.trajectories,
+        times=times,
+        cache={
+            "enabled": options.use_cache,
+            "directory": str(cache_dir) if cache_dir else None,
+            "hits": stats.cache_hits,
+            "misses": stats.cache_misses,
+            "roadmap_hit": roadmap_hit,
+            "warnings": list(getattr(oracle.cache.stats, "warnings", [])),
+        },
+        oracle=stats.as_dict(),
+        task={
+            "single_moves": len(table.single),
+            "pair_moves_evaluated": len(table.pair),
+            "actions": encoded.n_actions,
+            "pair_actions": len(encoded.pair_actions),
+            "reshaped_rooms": len(encoded.potentials),
+        },
+        encoded=encoded,
+    )
+
+
+def _check_goals(scenario: Scenario) -> None:
+    """Goals must name rooms of the scenario (the bench may override them)."""
+    rooms = {r.name for r in scenario.rooms}
+    unknown = [g for g in scenario.goals.all_rooms if g not in rooms]
+    if unknown:
+        raise InputError(f"goal rooms {', '.join(unknown)} are not rooms of scenario {scenario.name!r}")

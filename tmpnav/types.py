@@ -107,7 +107,7 @@ class RangeBearingSensor:
     sigma_bearing: float  # rad
 
     @property
-    def Q(self) -> np.ndarray:  # noqa: N802 - the paper's name for the observation noise
+    def Q(self) -> np.ndarray:
         return np.diag([self.sigma_range**2, self.sigma_bearing**2])
 
 
@@ -169,6 +169,7 @@ class PlannerOptions:
     name: str  # a unified-planning engine name
     encoding: str  # paper | single | mixed
     timeout: float  # s
+    pair_min_gain: float = 0.05  # mixed: minimum relative saving of a paired move
 
 
 @dataclass(frozen=True)
@@ -289,10 +290,32 @@ class MotionResult:
     final_mean: tuple[float, ...]
     final_cov: tuple[tuple[float, ...], ...]
     mutual_steps: int = 0  # steps with at least one mutual observation
+    final_headings: tuple[float, ...] = ()  # nominal heading of each robot at its goal
 
     @property
     def final(self) -> Belief:
         return Belief(np.array(self.final_mean), np.array(self.final_cov))
+
+
+MoveKey = tuple[str, str, str]  # (robot, origin location, target room)
+
+
+@dataclass(frozen=True, eq=False)
+class CostTable:
+    """The action costs the task planner sees, computed by the oracle before planning.
+
+    ``single[(r, origin, target)]`` is the cost of robot r moving alone;
+    ``pair[(m1, m2)]`` the joint cost of two moves done together (m1's robot comes first
+    in the scenario's robot order). Locations are rooms plus ``<robot>-start`` for a
+    robot that does not start inside a room.
+    """
+
+    robots: tuple[str, ...]
+    rooms: tuple[str, ...]
+    locations: tuple[str, ...]
+    start_location: dict[str, str]
+    single: dict[MoveKey, float]
+    pair: dict[tuple[MoveKey, MoveKey], float]
 
 
 class PlanStatus(str, enum.Enum):

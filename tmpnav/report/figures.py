@@ -13,12 +13,12 @@ from typing import Any
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.patches import Ellipse, Polygon  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Ellipse, Polygon
 
-from tmpnav.types import Scenario  # noqa: E402
-from tmpnav.world import World  # noqa: E402
+from tmpnav.types import Scenario
+from tmpnav.world import World
 
 ROBOT_COLORS = ("#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 LANDMARK_MARKERS = ("*", "P", "X", "D", "p", "h", "s", "^")
@@ -61,7 +61,17 @@ def draw_rooms(ax: Any, scenario: Scenario) -> None:
         poly = np.array(room.polygon)
         ax.add_patch(Polygon(poly, closed=True, facecolor="#fdf6e3", edgecolor="#b58900", lw=0.8, alpha=0.55, zorder=1))
         # the label sits in the room's top-left corner, away from robots and paths
-        ax.text(poly[:, 0].min() + 0.25, poly[:, 1].max() - 0.25, room.name, ha="left", va="top", fontsize=11, color="#7a5c00", weight="bold", zorder=2)
+        ax.text(
+            poly[:, 0].min() + 0.25,
+            poly[:, 1].max() - 0.25,
+            room.name,
+            ha="left",
+            va="top",
+            fontsize=11,
+            color="#7a5c00",
+            weight="bold",
+            zorder=2,
+        )
 
 
 def draw_doors(ax: Any, scenario: Scenario) -> None:
@@ -77,9 +87,31 @@ def draw_landmarks(ax: Any, scenario: Scenario, sensor_range: float | None = Non
         k = kinds.index(lm.kind)
         color = plt.get_cmap("tab10")(k % 10)
         label = lm.kind if lm is next(x for x in scenario.landmarks if x.kind == lm.kind) else None
-        ax.plot(*lm.position, marker=LANDMARK_MARKERS[k % len(LANDMARK_MARKERS)], ms=13, color=color, mec="black", mew=0.6, ls="none", zorder=6, label=label)
+        ax.plot(
+            *lm.position,
+            marker=LANDMARK_MARKERS[k % len(LANDMARK_MARKERS)],
+            ms=13,
+            color=color,
+            mec="black",
+            mew=0.6,
+            ls="none",
+            zorder=6,
+            label=label,
+        )
         if sensor_range:
-            ax.add_patch(Ellipse(lm.position, 2 * sensor_range, 2 * sensor_range, fill=False, ls="--", lw=0.5, ec=color, alpha=0.6, zorder=2))
+            ax.add_patch(
+                Ellipse(
+                    lm.position,
+                    2 * sensor_range,
+                    2 * sensor_range,
+                    fill=False,
+                    ls="--",
+                    lw=0.5,
+                    ec=color,
+                    alpha=0.6,
+                    zorder=2,
+                )
+            )
 
 
 def covariance_ellipse(mean: np.ndarray, cov: np.ndarray, n_sigma: float = 2.0, **style: Any) -> Ellipse:
@@ -98,7 +130,9 @@ def draw_robot_start(ax: Any, scenario: Scenario, index: int) -> None:
     ax.add_patch(plt.Circle((x, y), robot.radius, color=color, alpha=0.85, zorder=7))
     ax.arrow(x, y, 0.8 * np.cos(th), 0.8 * np.sin(th), width=0.06, color=color, zorder=7, length_includes_head=True)
     ax.add_patch(covariance_ellipse(np.array([x, y]), robot.cov, 2.0, fill=False, ec=color, lw=1.5, zorder=7))
-    ax.annotate(robot.name, (x, y), xytext=(8, 8), textcoords="offset points", color=color, fontsize=11, weight="bold", zorder=8)
+    ax.annotate(
+        robot.name, (x, y), xytext=(8, 8), textcoords="offset points", color=color, fontsize=11, weight="bold", zorder=8
+    )
 
 
 def save(fig: Any, path: Path, dpi: int = 110) -> None:

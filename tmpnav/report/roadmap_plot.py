@@ -25,7 +25,10 @@ def plot_roadmap(scenario: Scenario, world: World, roadmap: Roadmap, path: Path)
     fg.draw_landmarks(ax, scenario)
     for i in range(len(scenario.robots)):
         fg.draw_robot_start(ax, scenario, i)
-    ax.set_title(f"{scenario.name}: roadmap with {roadmap.n_nodes} nodes, {len(roadmap.edges)} edges, "
-                 f"{scenario.roadmap.instantiations} pose instantiations per room (seed {scenario.roadmap.seed})", fontsize=10)
+    ax.set_title(
+        f"{scenario.name}: roadmap with {roadmap.n_nodes} nodes, {len(roadmap.edges)} edges, "
+        f"{scenario.roadmap.instantiations} pose instantiations per room (seed {scenario.roadmap.seed})",
+        fontsize=10,
+    )
     ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=9, frameon=False)
     fg.save(fig, path)

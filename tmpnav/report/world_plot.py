@@ -22,8 +22,11 @@ def plot_world(scenario: Scenario, world: World, path: Path) -> None:
     if scenario.goals.visit:
         goals.append("visit " + ", ".join(scenario.goals.visit))
     goals += [f"{r} visits {', '.join(t)}" for r, t in scenario.goals.per_robot]
-    ax.set_title(f"{scenario.name}: {len(scenario.rooms)} rooms, {len(scenario.landmarks)} landmarks "
-                 f"(dashed: landmark sensor range), {len(scenario.robots)} robots (2σ start ellipses)\n"
-                 f"goals: {'; '.join(goals)}", fontsize=10)
+    ax.set_title(
+        f"{scenario.name}: {len(scenario.rooms)} rooms, {len(scenario.landmarks)} landmarks "
+        f"(dashed: landmark sensor range), {len(scenario.robots)} robots (2σ start ellipses)\n"
+        f"goals: {'; '.join(goals)}",
+        fontsize=10,
+    )
     ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=9, title="landmarks", frameon=False)
     fg.save(fig, path)

@@ -40,7 +40,11 @@ def _one_map_kind(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, 
         ctx.add(path, raw, "'walls' and 'obstacles' belong to polygonal maps; a ROS map takes its walls from the image")
     bounds = section.get("bounds")
     if bounds is not None and (bounds[2] <= bounds[0] or bounds[3] <= bounds[1]):
-        ctx.add(f"{path}.bounds", (*raw, "bounds"), f"{list(bounds)} is empty; expected [xmin, ymin, xmax, ymax] with xmin < xmax and ymin < ymax")
+        ctx.add(
+            f"{path}.bounds",
+            (*raw, "bounds"),
+            f"{list(bounds)} is empty; expected [xmin, ymin, xmax, ymax] with xmin < xmax and ymin < ymax",
+        )
 
 
 def _some_goal(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
@@ -50,12 +54,34 @@ def _some_goal(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...
 
 MAP = Section(
     fields={
-        "ros": Field(Text(), "ROS map_server YAML file (image, resolution, origin, negate, occupied_thresh, free_thresh, mode), relative to the scenario file"),
-        "bounds": Field(Vector(dimensions=("length",) * 4, names="xmin, ymin, xmax, ymax"), "polygonal map: the bounded plane; outside is occupied"),
-        "resolution": Field(Number("length", minimum=0.0, exclusive_minimum=True, maximum=1.0), "polygonal map: grid cell size for collision and line-of-sight checks", default=0.05),
-        "wall_thickness": Field(Number("length", minimum=0.0, exclusive_minimum=True), "polygonal map: thickness of wall polylines and closed doors", default=0.15),
-        "walls": Field(ListOf(PointList(min_points=2, what="polyline"), what="polylines"), "polygonal map: wall polylines", default=()),
-        "obstacles": Field(ListOf(PointList(min_points=3, what="polygon"), what="polygons"), "polygonal map: filled obstacle polygons", default=()),
+        "ros": Field(
+            Text(),
+            "ROS map_server YAML file (image, resolution, origin, negate, occupied_thresh, free_thresh, mode), relative to the scenario file",
+        ),
+        "bounds": Field(
+            Vector(dimensions=("length",) * 4, names="xmin, ymin, xmax, ymax"),
+            "polygonal map: the bounded plane; outside is occupied",
+        ),
+        "resolution": Field(
+            Number("length", minimum=0.0, exclusive_minimum=True, maximum=1.0),
+            "polygonal map: grid cell size for collision and line-of-sight checks",
+            default=0.05,
+        ),
+        "wall_thickness": Field(
+            Number("length", minimum=0.0, exclusive_minimum=True),
+            "polygonal map: thickness of wall polylines and closed doors",
+            default=0.15,
+        ),
+        "walls": Field(
+            ListOf(PointList(min_points=2, what="polyline"), what="polylines"),
+            "polygonal map: wall polylines",
+            default=(),
+        ),
+        "obstacles": Field(
+            ListOf(PointList(min_points=3, what="polygon"), what="polygons"),
+            "polygonal map: filled obstacle polygons",
+            default=(),
+        ),
     },
     post=_one_map_kind,
 )
@@ -63,16 +89,27 @@ MAP = Section(
 ROOM = Section(
     fields={
         "name": Field(Name(), "room name (a PDDL object: unique among rooms and robots)", required=True),
-        "polygon": Field(PointList(min_points=3, what="polygon"), "room outline; pose instantiations are sampled inside it", required=True),
+        "polygon": Field(
+            PointList(min_points=3, what="polygon"),
+            "room outline; pose instantiations are sampled inside it",
+            required=True,
+        ),
     }
 )
 
 DOOR = Section(
     fields={
         "name": Field(Name(), "door name", required=True),
-        "segment": Field(PointList(min_points=2, max_points=2, what="segment"), "the door leaf across a wall gap", required=True),
-        "state": Field(Choice(choices=("open", "closed")), "open doors are carved free, closed doors are walls", default="open"),
-        "thickness": Field(Number("length", minimum=0.0, exclusive_minimum=True), "thickness of the door (defaults to map.wall_thickness, 0.15 m for ROS maps)"),
+        "segment": Field(
+            PointList(min_points=2, max_points=2, what="segment"), "the door leaf across a wall gap", required=True
+        ),
+        "state": Field(
+            Choice(choices=("open", "closed")), "open doors are carved free, closed doors are walls", default="open"
+        ),
+        "thickness": Field(
+            Number("length", minimum=0.0, exclusive_minimum=True),
+            "thickness of the door (defaults to map.wall_thickness, 0.15 m for ROS maps)",
+        ),
     }
 )
 
@@ -87,11 +124,27 @@ LANDMARK = Section(
 ROBOT = Section(
     fields={
         "name": Field(Name(), "robot name (a PDDL object: unique among rooms and robots)", required=True),
-        "pose": Field(Vector(dimensions=("length", "length", "angle"), names="x, y, theta"), "mean of the initial pose belief", required=True),
-        "covariance": Field(Covariance(), "covariance of the initial pose belief", default=((0.01, 0.0, 0.0), (0.0, 0.01, 0.0), (0.0, 0.0, 0.003))),
-        "radius": Field(Number("length", minimum=0.0, exclusive_minimum=True), "radius of the robot's disc footprint", default=0.25),
-        "speed": Field(Number("speed", minimum=0.0, exclusive_minimum=True), "driving speed along roadmap edges", default=0.5),
-        "turn_rate": Field(Number("angular_speed", minimum=0.0, exclusive_minimum=True), "turning speed when aligning with the next edge", default=1.0),
+        "pose": Field(
+            Vector(dimensions=("length", "length", "angle"), names="x, y, theta"),
+            "mean of the initial pose belief",
+            required=True,
+        ),
+        "covariance": Field(
+            Covariance(),
+            "covariance of the initial pose belief",
+            default=((0.01, 0.0, 0.0), (0.0, 0.01, 0.0), (0.0, 0.0, 0.003)),
+        ),
+        "radius": Field(
+            Number("length", minimum=0.0, exclusive_minimum=True), "radius of the robot's disc footprint", default=0.25
+        ),
+        "speed": Field(
+            Number("speed", minimum=0.0, exclusive_minimum=True), "driving speed along roadmap edges", default=0.5
+        ),
+        "turn_rate": Field(
+            Number("angular_speed", minimum=0.0, exclusive_minimum=True),
+            "turning speed when aligning with the next edge",
+            default=1.0,
+        ),
     }
 )
 
@@ -99,32 +152,64 @@ ROBOT = Section(
 def _sensor(range_: float, fov: float, doc: str) -> Section:
     return Section(
         fields={
-            "range": Field(Number("length", minimum=0.0, exclusive_minimum=True), f"{doc}: maximum detection range", default=range_),
-            "fov": Field(Number("angle", minimum=0.0, exclusive_minimum=True, maximum=2 * math.pi + 1e-9), f"{doc}: field of view, centred on the heading", default=fov),
-            "sigma_range": Field(Number("length", minimum=0.0, exclusive_minimum=True), f"{doc}: range noise standard deviation", default=0.1),
-            "sigma_bearing": Field(Number("angle", minimum=0.0, exclusive_minimum=True), f"{doc}: bearing noise standard deviation", default=3 * DEG),
+            "range": Field(
+                Number("length", minimum=0.0, exclusive_minimum=True), f"{doc}: maximum detection range", default=range_
+            ),
+            "fov": Field(
+                Number("angle", minimum=0.0, exclusive_minimum=True, maximum=2 * math.pi + 1e-9),
+                f"{doc}: field of view, centred on the heading",
+                default=fov,
+            ),
+            "sigma_range": Field(
+                Number("length", minimum=0.0, exclusive_minimum=True),
+                f"{doc}: range noise standard deviation",
+                default=0.1,
+            ),
+            "sigma_bearing": Field(
+                Number("angle", minimum=0.0, exclusive_minimum=True),
+                f"{doc}: bearing noise standard deviation",
+                default=3 * DEG,
+            ),
         }
     )
 
 
 MODELS = Section(
     fields={
-        "dt": Field(Number("time", minimum=0.0, exclusive_minimum=True, maximum=10.0), "control time step", default=0.5),
+        "dt": Field(
+            Number("time", minimum=0.0, exclusive_minimum=True, maximum=10.0), "control time step", default=0.5
+        ),
         "motion_noise": Field(
             Section(
                 fields={
-                    "alpha1": Field(Number(None, minimum=0.0), "speed noise variance per v² (W = diag(a1 v² + a2 w², a3 v² + a4 w²))", default=0.01),
+                    "alpha1": Field(
+                        Number(None, minimum=0.0),
+                        "speed noise variance per v² (W = diag(a1 v² + a2 w², a3 v² + a4 w²))",
+                        default=0.01,
+                    ),
                     "alpha2": Field(Number(None, minimum=0.0), "speed noise variance per w² (m²/rad²)", default=0.0),
-                    "alpha3": Field(Number(None, minimum=0.0), "turn-rate noise variance per v² (rad²/m²)", default=0.02),
+                    "alpha3": Field(
+                        Number(None, minimum=0.0), "turn-rate noise variance per v² (rad²/m²)", default=0.02
+                    ),
                     "alpha4": Field(Number(None, minimum=0.0), "turn-rate noise variance per w²", default=0.01),
                 }
             ),
             "motion noise W(u) of the unicycle model (paper eq. (1))",
         ),
-        "landmark_sensor": Field(_sensor(5.0, 2 * math.pi, "landmark sensor"), "range-bearing landmark sensor (paper eq. (2))"),
-        "mutual_sensor": Field(_sensor(4.0, 2 * math.pi, "mutual sensor"), "range-bearing sensor of other robots (paper eq. (12))"),
-        "mutual_observations": Field(Flag(), "use mutual observations between robots (false: the paper's config 2)", default=True),
-        "observations": Field(Choice(choices=("noisy", "max-likelihood")), "simulated future observations: nominal + seeded noise (paper) or maximum likelihood (BRM)", default="noisy"),
+        "landmark_sensor": Field(
+            _sensor(5.0, 2 * math.pi, "landmark sensor"), "range-bearing landmark sensor (paper eq. (2))"
+        ),
+        "mutual_sensor": Field(
+            _sensor(4.0, 2 * math.pi, "mutual sensor"), "range-bearing sensor of other robots (paper eq. (12))"
+        ),
+        "mutual_observations": Field(
+            Flag(), "use mutual observations between robots (false: the paper's config 2)", default=True
+        ),
+        "observations": Field(
+            Choice(choices=("noisy", "max-likelihood")),
+            "simulated future observations: nominal + seeded noise (paper) or maximum likelihood (BRM)",
+            default="noisy",
+        ),
         "seed": Field(Number(None, minimum=0, integer=True), "seed of the simulated observation noise", default=0),
     }
 )
@@ -133,16 +218,28 @@ COST = Section(
     fields={
         "M_u": Field(Number(None, minimum=0.0), "weight of the control usage c_u", default=1.0),
         "M_G": Field(Number(None, minimum=0.0), "weight of the distance to goal c_G", default=1.0),
-        "M_Sigma": Field(Number(None, minimum=0.0), "weight of the uncertainty c_Sigma (time integral of trace(Sigma))", default=1.0),
+        "M_Sigma": Field(
+            Number(None, minimum=0.0), "weight of the uncertainty c_Sigma (time integral of trace(Sigma))", default=1.0
+        ),
     }
 )
 
 ROADMAP = Section(
     fields={
-        "samples": Field(Number(None, minimum=10, maximum=200000, integer=True), "PRM milestones grown by OMPL", default=1500),
-        "instantiations": Field(Number(None, minimum=1, maximum=50, integer=True), "pose instantiations sampled in each room", default=4),
-        "seed": Field(Number(None, minimum=0, integer=True), "seed of the roadmap (OMPL) and of the instantiations", default=1),
-        "neighbors": Field(Number(None, minimum=2, maximum=100, integer=True), "k of the PRM's k-nearest connection strategy", default=10),
+        "samples": Field(
+            Number(None, minimum=10, maximum=200000, integer=True), "PRM milestones grown by OMPL", default=1500
+        ),
+        "instantiations": Field(
+            Number(None, minimum=1, maximum=50, integer=True), "pose instantiations sampled in each room", default=4
+        ),
+        "seed": Field(
+            Number(None, minimum=0, integer=True), "seed of the roadmap (OMPL) and of the instantiations", default=1
+        ),
+        "neighbors": Field(
+            Number(None, minimum=2, maximum=100, integer=True),
+            "k of the PRM's k-nearest connection strategy",
+            default=10,
+        ),
     }
 )
 
@@ -156,9 +253,22 @@ GOALS = Section(
 
 PLANNER = Section(
     fields={
-        "name": Field(Text(), "unified-planning engine: enhsp-opt, enhsp, enhsp-any, or any installed engine that supports the problem", default="enhsp-opt"),
-        "encoding": Field(Choice(choices=ENCODING_CHOICES), "task encoding: the paper's pair action, single-robot actions, or both", default="mixed"),
+        "name": Field(
+            Text(),
+            "unified-planning engine: enhsp-opt, enhsp, enhsp-any, or any installed engine that supports the problem",
+            default="enhsp-opt",
+        ),
+        "encoding": Field(
+            Choice(choices=ENCODING_CHOICES),
+            "task encoding: the paper's pair action, single-robot actions, or both",
+            default="mixed",
+        ),
         "timeout": Field(Number("time", minimum=0.0, exclusive_minimum=True), "planner time limit", default=300.0),
+        "pair_min_gain": Field(
+            Number(None, minimum=0.0, maximum=1.0),
+            "mixed encoding: a paired move is offered to the planner only if it saves at least this fraction of its two single moves; the plan costs at most 1/(1 - pair_min_gain) times the optimum over all pairs (0: every saving pair, exact)",
+            default=0.05,
+        ),
     }
 )
 
@@ -184,10 +294,18 @@ ROS_MAP = Section(
     fields={
         "image": Field(Text(), "image file (PGM, PNG, ...) relative to the map YAML", required=True),
         "resolution": Field(Number("length", minimum=0.0, exclusive_minimum=True), "metres per pixel", required=True),
-        "origin": Field(Vector(dimensions=("length", "length", "angle"), names="x, y, yaw"), "pose of the lower-left pixel; yaw must be 0", required=True),
+        "origin": Field(
+            Vector(dimensions=("length", "length", "angle"), names="x, y, yaw"),
+            "pose of the lower-left pixel; yaw must be 0",
+            required=True,
+        ),
         "negate": Field(Number(None, minimum=0, maximum=1, integer=True), "1 swaps white/black", default=0),
-        "occupied_thresh": Field(Number(None, minimum=0.0, maximum=1.0), "occupancy probability above which a cell is occupied", default=0.65),
-        "free_thresh": Field(Number(None, minimum=0.0, maximum=1.0), "occupancy probability below which a cell is free", default=0.196),
+        "occupied_thresh": Field(
+            Number(None, minimum=0.0, maximum=1.0), "occupancy probability above which a cell is occupied", default=0.65
+        ),
+        "free_thresh": Field(
+            Number(None, minimum=0.0, maximum=1.0), "occupancy probability below which a cell is free", default=0.196
+        ),
         "mode": Field(Choice(choices=("trinary", "scale", "raw")), "interpretation of pixel values", default="trinary"),
     }
 )

@@ -26,13 +26,13 @@ from tmpnav.types import (
     ObservationMode,
     PlannerOptions,
     PolygonMap,
+    Pose,
     RangeBearingSensor,
     RoadmapParams,
     RobotSpec,
     Room,
     RosMap,
     Scenario,
-    Pose,
 )
 
 
@@ -142,7 +142,14 @@ def _ros_map(doc: YamlDoc, section: dict[str, Any]) -> tuple[RosMap | None, list
         return None, []
     map_path = (doc.path.parent / section["ros"]).resolve()
     if not map_path.is_file():
-        return None, [Problem(doc.name, "map.ros", f"{section['ros']!r}: map file not found ({display_path(map_path)})", doc.line(("map", "ros")))]
+        return None, [
+            Problem(
+                doc.name,
+                "map.ros",
+                f"{section['ros']!r}: map file not found ({display_path(map_path)})",
+                doc.line(("map", "ros")),
+            )
+        ]
     try:
         map_doc = YamlDoc(map_path)
     except ScenarioError as err:
@@ -155,9 +162,24 @@ def _ros_map(doc: YamlDoc, section: dict[str, Any]) -> tuple[RosMap | None, list
     if problems:
         return None, problems
     if abs(meta["origin"][2]) > 1e-9:
-        return None, [Problem(map_doc.name, "origin", f"yaw {meta['origin'][2]:g} is not supported; expected 0 (an axis-aligned map)", map_doc.line(("origin",)))]
+        return None, [
+            Problem(
+                map_doc.name,
+                "origin",
+                f"yaw {meta['origin'][2]:g} is not supported; expected 0 (an axis-aligned map)",
+                map_doc.line(("origin",)),
+            )
+        ]
     if meta["free_thresh"] >= meta["occupied_thresh"]:
-        return None, [Problem(map_doc.name, "free_thresh", f"{meta['free_thresh']:g} is not below occupied_thresh {meta['occupied_thresh']:g}; expected free_thresh < occupied_thresh", map_doc.line(("free_thresh",)))]
+        return None, [
+            Problem(
+                map_doc.name,
+                "free_thresh",
+                f"{meta['free_thresh']:g} is not below occupied_thresh {meta['occupied_thresh']:g}; "
+                "expected free_thresh < occupied_thresh",
+                map_doc.line(("free_thresh",)),
+            )
+        ]
     return (
         RosMap(
             yaml_path=map_path,
@@ -182,22 +204,57 @@ def _cross_references(doc: YamlDoc, data: dict[str, Any]) -> list[Problem]:
     for i, robot in enumerate(doc.data.get("robots") or []):
         name = robot.get("name") if isinstance(robot, dict) else None
         if name in rooms:
-            problems.append(Problem(doc.name, f"robots.{name}.name", f"{name!r} is also a room name; expected names unique among rooms and robots", doc.line(("robots", i, "name"))))
+            problems.append(
+                Problem(
+                    doc.name,
+                    f"robots.{name}.name",
+                    f"{name!r} is also a room name; expected names unique among rooms and robots",
+                    doc.line(("robots", i, "name")),
+                )
+            )
     for robot in robots:
         if f"{robot}-start" in rooms:
-            problems.append(Problem(doc.name, "rooms", f"room name '{robot}-start' is reserved for the start location of robot {robot!r}", doc.line(("rooms",))))
+            problems.append(
+                Problem(
+                    doc.name,
+                    "rooms",
+                    f"room name '{robot}-start' is reserved for the start location of robot {robot!r}",
+                    doc.line(("rooms",)),
+                )
+            )
     goals = data["goals"]
     if goals is MISSING:
         return problems
     for i, room in enumerate(goals.get("visit") or ()):
         if room not in rooms:
-            problems.append(Problem(doc.name, f"goals.visit[{i}]", f"{room!r} is not a room{_hint(room, rooms)}; expected one of {', '.join(sorted(rooms))}", doc.line(("goals", "visit", i))))
+            problems.append(
+                Problem(
+                    doc.name,
+                    f"goals.visit[{i}]",
+                    f"{room!r} is not a room{_hint(room, rooms)}; expected one of {', '.join(sorted(rooms))}",
+                    doc.line(("goals", "visit", i)),
+                )
+            )
     for robot, targets in (goals.get("robots") or {}).items():
         if robot not in robots:
-            problems.append(Problem(doc.name, f"goals.robots.{robot}", f"{robot!r} is not a robot{_hint(robot, robots)}; expected one of {', '.join(robots)}", doc.line(("goals", "robots", robot))))
+            problems.append(
+                Problem(
+                    doc.name,
+                    f"goals.robots.{robot}",
+                    f"{robot!r} is not a robot{_hint(robot, robots)}; expected one of {', '.join(robots)}",
+                    doc.line(("goals", "robots", robot)),
+                )
+            )
         for i, room in enumerate(targets):
             if room not in rooms:
-                problems.append(Problem(doc.name, f"goals.robots.{robot}[{i}]", f"{room!r} is not a room{_hint(room, rooms)}; expected one of {', '.join(sorted(rooms))}", doc.line(("goals", "robots", robot, i))))
+                problems.append(
+                    Problem(
+                        doc.name,
+                        f"goals.robots.{robot}[{i}]",
+                        f"{room!r} is not a room{_hint(room, rooms)}; expected one of {', '.join(sorted(rooms))}",
+                        doc.line(("goals", "robots", robot, i)),
+                    )
+                )
     return problems
 
 
@@ -231,8 +288,7 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
         map=map_spec,
         rooms=tuple(Room(r["name"], r["polygon"]) for r in d["rooms"]),
         doors=tuple(
-            Door(x["name"], x["segment"], x["state"] == "open", x["thickness"] or default_thickness)
-            for x in d["doors"]
+            Door(x["name"], x["segment"], x["state"] == "open", x["thickness"] or default_thickness) for x in d["doors"]
         ),
         landmarks=tuple(Landmark(x["name"], x["position"], x["kind"]) for x in d["landmarks"]),
         robots=tuple(

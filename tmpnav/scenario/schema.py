@@ -214,11 +214,7 @@ class PointList(Spec):
     what: str = "polygon"
 
     def describe(self) -> str:
-        count = (
-            f"exactly {self.min_points}"
-            if self.max_points == self.min_points
-            else f"at least {self.min_points}"
-        )
+        count = f"exactly {self.min_points}" if self.max_points == self.min_points else f"at least {self.min_points}"
         return f"a {self.what}: a list of {count} points [x, y] in m"
 
     def unit(self) -> str:
@@ -254,8 +250,10 @@ class Covariance(Spec):
         return self.units
 
     def check(self, value: Any, ctx: Ctx, path: str, raw: tuple[Any, ...]) -> Any:
-        shape_ok = isinstance(value, list) and len(value) == self.n and all(
-            isinstance(row, list) and len(row) == self.n for row in value
+        shape_ok = (
+            isinstance(value, list)
+            and len(value) == self.n
+            and all(isinstance(row, list) and len(row) == self.n for row in value)
         )
         if not shape_ok or not all(
             isinstance(v, (int, float)) and not isinstance(v, bool) for row in value for v in row
@@ -377,7 +375,7 @@ class Section(Spec):
         complete = True
         for key, fld in self.fields.items():
             sub = join(path, key)
-            if key not in value or value[key] is None and fld.required:
+            if key not in value or (value[key] is None and fld.required):
                 if fld.required:
                     ctx.add(sub, (*raw, key), f"is missing; expected {fld.spec.describe()}")
                     complete = False
@@ -427,7 +425,11 @@ class NamedList(Spec):
             usable = isinstance(name, str) and name and name not in seen
             sub = join(path, name) if usable else join(path, i)
             if isinstance(name, str) and name in seen:
-                ctx.add(join(path, i) + ".name", (*raw, i, "name"), f"duplicate {self.what} name {show(name)}; expected unique names")
+                ctx.add(
+                    join(path, i) + ".name",
+                    (*raw, i, "name"),
+                    f"duplicate {self.what} name {show(name)}; expected unique names",
+                )
             checked = self.item.check(item, ctx, sub, (*raw, i))
             if isinstance(name, str):
                 seen.add(name)
