@@ -43,9 +43,7 @@ def params(max_likelihood: bool) -> FilterParams:
     )
 
 
-def random_inputs(
-    rng: np.random.Generator, B: int, n: int, T: int, L: int, p_see: float = 0.4
-) -> BatchInputs:
+def random_inputs(rng: np.random.Generator, B: int, n: int, T: int, L: int, p_see: float = 0.4) -> BatchInputs:
     """Robots 4 m apart near y = 0 driving at most 1.6 m; landmarks at 4 <= y <= 8."""
     start = np.zeros((B, n, 3))
     start[:, :, 0] = 4.0 * np.arange(n) + rng.uniform(-0.5, 0.5, (B, n))
@@ -69,8 +67,7 @@ def random_inputs(
         active_steps=steps,
         landmarks=np.column_stack([rng.uniform(-2, 4 * n, L), rng.uniform(4, 8, L)]),
         lm_visible=rng.random((B, n, T + 1, L)) < p_see,
-        mutual_visible=(rng.random((B, n, n, T + 1)) < p_see)
-        & ~np.eye(n, dtype=bool)[None, :, :, None],
+        mutual_visible=(rng.random((B, n, n, T + 1)) < p_see) & ~np.eye(n, dtype=bool)[None, :, :, None],
         lm_noise=rng.standard_normal((B, n, T + 1, L, 2)),
         mutual_noise=rng.standard_normal((B, n, n, T + 1, 2)),
     )
@@ -155,10 +152,7 @@ def test_a_simulation_does_not_depend_on_the_rest_of_its_batch() -> None:
     for b in (0, 3):
         alone = propagate(
             BatchInputs(
-                **{
-                    name: value if name == "landmarks" else value[b : b + 1]
-                    for name, value in vars(inputs).items()
-                }
+                **{name: value if name == "landmarks" else value[b : b + 1] for name, value in vars(inputs).items()}
             ),
             params(False),
         )
@@ -185,9 +179,7 @@ def test_mutual_observations_never_increase_the_joint_uncertainty(seed: int, n: 
     # on the observations, and one more observation can only shrink the covariance
     rng = np.random.default_rng(seed)
     inputs = random_inputs(rng, 3, n, 15, 3)
-    alone = propagate(
-        replace(inputs, mutual_visible=np.zeros_like(inputs.mutual_visible)), params(True)
-    )
+    alone = propagate(replace(inputs, mutual_visible=np.zeros_like(inputs.mutual_visible)), params(True))
     together = propagate(inputs, params(True))
     assert alone.covs is not None and together.covs is not None
     trace_alone = np.trace(alone.covs, axis1=-2, axis2=-1)
@@ -241,9 +233,7 @@ def test_cost_terms_of_a_straight_drive_by_hand() -> None:
     #   P1 = xx 0.011, yy 0.01001,  yth 1e-4,   thth 0.0015  -> trace 0.02251
     #   P2 = xx 0.012, yy 0.010045, yth 2.5e-4, thth 0.002   -> trace 0.024045
     #   P3 = xx 0.013, yy 0.010115,             thth 0.0025  -> trace 0.025615
-    p = FilterParams(
-        0.1, (0.1, 0.0, 0.05, 0.0), ((0.01, 0.0), (0.0, 0.01)), ((0.01, 0.0), (0.0, 0.01))
-    )
+    p = FilterParams(0.1, (0.1, 0.0, 0.05, 0.0), ((0.01, 0.0), (0.0, 0.01)), ((0.01, 0.0), (0.0, 0.01)))
     result = propagate(straight_drive(3, 3, np.zeros(3)), p)
     assert result.covs is not None
     np.testing.assert_allclose(robot_traces(result.covs)[0, 1:, 0], [0.02251, 0.024045, 0.025615])

@@ -26,9 +26,7 @@ def test_straight_edge_along_the_heading_needs_no_turn() -> None:
 
 
 def test_quarter_turn_then_drive() -> None:
-    path = path_controls(
-        np.array([[0.0, 0.0], [0.0, 2.0]]), 0.0, speed=1.0, turn_rate=np.pi / 2, dt=0.1
-    )
+    path = path_controls(np.array([[0.0, 0.0], [0.0, 2.0]]), 0.0, speed=1.0, turn_rate=np.pi / 2, dt=0.1)
     # 90 degrees at 90 deg/s takes 1 s = 10 steps, then 2 m at 1 m/s = 20 steps
     assert path.n_steps == 30
     np.testing.assert_allclose(path.controls[:10], [[0.0, np.pi / 2]] * 10)

@@ -62,9 +62,7 @@ def test_wrap_angle_is_idempotent_and_preserves_the_angle(a: float) -> None:
     w = wrap_angle(a)
     assert -np.pi <= w < np.pi
     assert wrap_angle(w) == w  # bit for bit
-    assert np.isclose(np.cos(w), np.cos(a), atol=1e-9) and np.isclose(
-        np.sin(w), np.sin(a), atol=1e-9
-    )
+    assert np.isclose(np.cos(w), np.cos(a), atol=1e-9) and np.isclose(np.sin(w), np.sin(a), atol=1e-9)
 
 
 # --------------------------------------------------------------------------- motion
@@ -72,9 +70,7 @@ def test_wrap_angle_is_idempotent_and_preserves_the_angle(a: float) -> None:
 
 def test_motion_drives_along_the_heading_and_wraps_theta() -> None:
     x = np.array([1.0, 2.0, np.pi / 2])
-    np.testing.assert_allclose(
-        motion(x, np.array([2.0, 0.0]), 0.5), [1.0, 3.0, np.pi / 2], atol=1e-15
-    )
+    np.testing.assert_allclose(motion(x, np.array([2.0, 0.0]), 0.5), [1.0, 3.0, np.pi / 2], atol=1e-15)
     turned = motion(np.array([0.0, 0.0, 3.0]), np.array([0.0, 1.0]), 0.5)
     np.testing.assert_allclose(turned, [0.0, 0.0, 3.5 - 2 * np.pi])
 
@@ -147,16 +143,12 @@ def test_landmark_obs_range_and_bearing() -> None:
 def test_landmark_jacobian_equals_finite_differences(x: np.ndarray, d: tuple[float, float]) -> None:
     lm = x[:2] + np.array(d)
     H = landmark_obs_jacobian(x, lm)
-    np.testing.assert_allclose(
-        H, numeric_jacobian(lambda s: landmark_obs(s, lm), x, (1,)), atol=1e-6
-    )
+    np.testing.assert_allclose(H, numeric_jacobian(lambda s: landmark_obs(s, lm), x, (1,)), atol=1e-6)
 
 
 @settings(max_examples=60)
 @given(pose, offset, heading)
-def test_mutual_jacobian_equals_finite_differences(
-    x_r: np.ndarray, d: tuple[float, float], theta_s: float
-) -> None:
+def test_mutual_jacobian_equals_finite_differences(x_r: np.ndarray, d: tuple[float, float], theta_s: float) -> None:
     x_s = np.array([x_r[0] + d[0], x_r[1] + d[1], theta_s])
     joint = np.concatenate([x_r, x_s])
     H = mutual_obs_jacobian(x_r, x_s)

@@ -232,9 +232,7 @@ def cost_terms_from_history(
     B, n, T, _ = controls.shape
     steps = np.asarray(active_steps)
     traces = robot_traces(covs)  # (B, T+1, n)
-    counted = (np.arange(T + 1)[None, :, None] >= 1) & (
-        np.arange(T + 1)[None, :, None] <= steps[:, None, :]
-    )
+    counted = (np.arange(T + 1)[None, :, None] >= 1) & (np.arange(T + 1)[None, :, None] <= steps[:, None, :])
     c_sigma = np.where(counted, traces, 0.0).sum(1) * dt
     b_idx = np.arange(B)[:, None]
     r_idx = np.arange(n)[None, :]
@@ -321,9 +319,7 @@ class _Observations:
         self.mutual_visible = np.asarray(inputs.mutual_visible, dtype=bool) & not_self
         self.pair_seen: list[list[list[bool]]] = np.any(self.mutual_visible, axis=0).tolist()
 
-    def landmark_updates(
-        self, mean: np.ndarray, cov: np.ndarray, t: int
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def landmark_updates(self, mean: np.ndarray, cov: np.ndarray, t: int) -> tuple[np.ndarray, np.ndarray]:
         """Robot i ascending, its visible landmarks ascending (slot by slot), eq. (9)."""
         for i in range(self.n):
             cols = slice(3 * i, 3 * i + 3)
@@ -344,9 +340,7 @@ class _Observations:
                 mean[rows], cov[rows] = update(mean[rows], cov[rows], H, y, self.Q_lm)
         return mean, cov
 
-    def mutual_updates(
-        self, mean: np.ndarray, cov: np.ndarray, t: int
-    ) -> tuple[np.ndarray, np.ndarray]:
+    def mutual_updates(self, mean: np.ndarray, cov: np.ndarray, t: int) -> tuple[np.ndarray, np.ndarray]:
         """Ordered pairs (i, j), i != j, lexicographically: i observes j, eqs. (13)-(15)."""
         for i in range(self.n):
             for j in range(self.n):

@@ -249,8 +249,6 @@ def simulate_reference(
     return Propagation(
         means=means,
         covs=covs,
-        terms=tuple(
-            CostTerms(float(c_u[0, r]), float(c_g[0, r]), float(c_sigma[0, r])) for r in range(n)
-        ),
+        terms=tuple(CostTerms(float(c_u[0, r]), float(c_g[0, r]), float(c_sigma[0, r])) for r in range(n)),
         mutual_steps=int(np.any(off_diagonal, axis=(0, 1))[1:].sum()),
     )
