@@ -126,20 +126,30 @@ def make_oracle(scenario: Scenario, world: World, roadmap: Roadmap, options: Pla
     return Oracle(OracleContext(scenario, world, roadmap), cache, executor, options.progress)
 
 
-def plan(
-    path: str | Path, options: PlanOptions | None = None, loaded: tuple[Scenario, World] | None = None
-) -> PlanReport:
-    """Plan a scenario end to end: the task-level optimal plan for the roadmap, with its
-    motions and beliefs. ``loaded`` skips loading when the caller already has the world."""
-    from tmpnav.oracle.cache import default_cache_dir
-    from tmpnav.oracle.table import build_table
-    from tmpnav.resimulate import resimulate
-    from tmpnav.task.decode import decode, step_cost
-    from tmpnav.task.encode import ENCODINGS, encode, pair_filter
-    from tmpnav.task.solve import solve
+@dataclass
+class Prepared:
+    """The stages up to the cost table, shared by ``plan`` and ``export-pddl``."""
 
-    options = options or PlanOptions()
-    times = StageTimes()
+    scenario: Scenario
+    world: World
+    roadmap: Roadmap
+    roadmap_hit: bool
+    cache_dir: Path | None
+    oracle: Any
+    table: Any
+
+
+def prepare(
+    path: str | Path, options: PlanOptions, times: StageTimes, loaded: tuple[Scenario, World] | None = None
+) -> Prepared:
+    """Load, grow (or fetch) the roadmap, and compute the cost table the encoding needs.
+
+    The caller must close ``prepared.oracle`` (executor and cache).
+    """
+    from tmpnav.oracle.cache import default_cache_dir
+    from tmpnav.oracle.table import build_table, start_locations
+    from tmpnav.task.encode import ENCODINGS, pair_filter
+
     with timed(times, "load"):
         scenario, world = loaded if loaded is not None else load_world(path)
         scenario = apply_options(scenario, options)
@@ -151,35 +161,73 @@ def plan(
     oracle = make_oracle(scenario, world, roadmap, options)
     try:
         with timed(times, "oracle"):
-            from tmpnav.oracle.table import start_locations
-
             starts = start_locations(scenario, world)
             pairs = pair_filter(encoding.name, scenario.goals, starts) if encoding.pairs else None
-            table_result = build_table(oracle, world, encoding.destinations, pairs)
-        table = table_result.table
+            table = build_table(
+                oracle, world, encoding.destinations, pairs, filter_key=repr((encoding.name, scenario.goals))
+            )
+    except BaseException:
+        close(oracle)
+        raise
+    return Prepared(scenario, world, roadmap, roadmap_hit, cache_dir, oracle, table)
+
+
+def close(oracle: Any) -> None:
+    oracle.executor.close()
+    oracle.cache.close()
+
+
+def encode_only(path: str | Path, options: PlanOptions) -> Any:
+    """The encoded task problem with its computed costs (``tmpnav export-pddl``)."""
+    from tmpnav.task.encode import encode
+
+    prep = prepare(path, options, StageTimes())
+    close(prep.oracle)
+    sc = prep.scenario
+    return encode(prep.table, sc.goals, sc.planner.encoding, name=sc.name, min_gain=sc.planner.pair_min_gain)
+
+
+def plan(
+    path: str | Path, options: PlanOptions | None = None, loaded: tuple[Scenario, World] | None = None
+) -> PlanReport:
+    """Plan a scenario end to end: the task-level optimal plan for the roadmap, with its
+    motions and beliefs. ``loaded`` skips loading when the caller already has the world."""
+    from tmpnav.oracle.executors import library
+    from tmpnav.resimulate import resimulate
+    from tmpnav.task.decode import decode, step_cost
+    from tmpnav.task.encode import encode
+    from tmpnav.task.solve import solve
+
+    options = options or PlanOptions()
+    times = StageTimes()
+    prep = prepare(path, options, times, loaded)
+    scenario, oracle, table = prep.scenario, prep.oracle, prep.table
+    try:
         with timed(times, "encode"):
             encoded = encode(
-                table, scenario.goals, encoding.name, name=scenario.name, min_gain=scenario.planner.pair_min_gain
+                table,
+                scenario.goals,
+                scenario.planner.encoding,
+                name=scenario.name,
+                min_gain=scenario.planner.pair_min_gain,
             )
         with timed(times, "planner"):
             solved = solve(encoded.problem, scenario.planner.name, scenario.planner.timeout)
         steps = decode(solved, encoded)
         planner_costs = [step_cost(table, s) for s in steps]
         with timed(times, "resimulate"):
-            from tmpnav.oracle.executors import library
-
-            lib = library(oracle.ctx)
-            resim = resimulate(lib, oracle, scenario, steps, planner_costs, [a[0] for a in solved.actions])
+            resim = resimulate(
+                library(oracle.ctx), oracle, scenario, steps, planner_costs, [a[0] for a in solved.actions]
+            )
     finally:
-        oracle.executor.close()
-        oracle.cache.close()
+        close(oracle)
     times.seconds["total"] = sum(v for k, v in times.seconds.items() if k != "load")
     stats = oracle.stats
     return PlanReport(
         scenario=scenario,
-        world=world,
-        roadmap=roadmap,
-        encoding=encoding.name,
+        world=prep.world,
+        roadmap=prep.roadmap,
+        encoding=scenario.planner.encoding,
         planner=scenario.planner.name,
         status=solved.status,
         planner_cost=float(sum(planner_costs)),
@@ -189,10 +237,10 @@ def plan(
         times=times,
         cache={
             "enabled": options.use_cache,
-            "directory": str(cache_dir) if cache_dir else None,
+            "directory": str(prep.cache_dir) if prep.cache_dir else None,
             "hits": stats.cache_hits,
             "misses": stats.cache_misses,
-            "roadmap_hit": roadmap_hit,
+            "roadmap_hit": prep.roadmap_hit,
             "warnings": list(getattr(oracle.cache.stats, "warnings", [])),
         },
         oracle=stats.as_dict(),

@@ -279,7 +279,8 @@ class MotionResult:
 
     ``goal_nodes`` and ``paths`` are per robot of the action (roadmap node indices);
     ``terms`` per robot; ``final`` is the belief of the robots of the action at the end
-    (joint when two robots moved together).
+    (joint when two robots moved together). For a factorised pair (the robots never saw
+    each other) it is block-diagonal, each block the robot's belief at its own arrival.
     """
 
     cost: float

@@ -88,7 +88,8 @@ def _update(mean, cov, H, cols, ncols, y, Q, n, work, PHt, K):  # type: ignore[n
 
     H (2 x D) is non-zero only in the columns ``cols[:ncols]`` (the observed robots).
     The Joseph product (I - K H) P (I - K H)ᵀ + K Q Kᵀ is evaluated as two rank-2
-    corrections: M = P - K (H P), then M - (M Hᵀ) Kᵀ + K Q Kᵀ.
+    corrections: M = P - K (H P), then M - (M Hᵀ) Kᵀ + K Q Kᵀ, whose upper triangle is
+    mirrored (the fast path averages the two triangles; they differ by rounding only).
     """
     D = 3 * n
     for r in range(D):
@@ -126,16 +127,14 @@ def _update(mean, cov, H, cols, ncols, y, Q, n, work, PHt, K):  # type: ignore[n
             for q in range(ncols):
                 acc += work[r, cols[q]] * H[k, cols[q]]
             PHt[r, k] = acc
+    # the result is symmetric: compute the upper triangle and mirror it
     for r in range(D):
         kq0 = K[r, 0] * Q[0, 0] + K[r, 1] * Q[1, 0]
         kq1 = K[r, 0] * Q[0, 1] + K[r, 1] * Q[1, 1]
-        for c in range(D):
-            cov[r, c] = work[r, c] - (PHt[r, 0] * K[c, 0] + PHt[r, 1] * K[c, 1]) + (kq0 * K[c, 0] + kq1 * K[c, 1])
-    for r in range(D):
-        for c in range(r + 1, D):
-            m = 0.5 * (cov[r, c] + cov[c, r])
-            cov[r, c] = m
-            cov[c, r] = m
+        for c in range(r, D):
+            v = work[r, c] - (PHt[r, 0] * K[c, 0] + PHt[r, 1] * K[c, 1]) + (kq0 * K[c, 0] + kq1 * K[c, 1])
+            cov[r, c] = v
+            cov[c, r] = v
 
 
 @nb.njit(cache=True)

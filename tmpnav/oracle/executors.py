@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -51,13 +52,14 @@ def library(ctx: OracleContext) -> MotionLibrary:
     return _LIBRARIES[key]
 
 
-def blocks(requests: list[Request], size: int = BLOCK) -> tuple[list[list[Request]], list[int]]:
+def blocks(requests: list[Request], size: int | None = None) -> tuple[list[list[Request]], list[int]]:
     """Cut requests into blocks of whole start groups (about ``size`` requests each).
 
     Requests whose robots start from the same states share their simulations' prefixes,
     so a group is never split. Returns the blocks and the permutation that restores the
     requests' order (``order[k]`` is the original index of the k-th request in the blocks).
     """
+    size = size or BLOCK
     groups: dict[tuple, list[int]] = {}
     for i, r in enumerate(requests):
         groups.setdefault((r.robots, r.starts, r.joint_cov), []).append(i)
@@ -111,6 +113,8 @@ _WORKER_CTX: OracleContext | None = None
 
 def _init_worker(ctx: OracleContext) -> None:
     global _WORKER_CTX
+    # Ctrl-C is the parent's business (it cancels the pool); workers stay quiet
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _WORKER_CTX = ctx
 
 
@@ -133,14 +137,17 @@ class ProcessExecutor:
             return SerialExecutor().run(ctx, requests, progress)
         method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
         mp = multiprocessing.get_context(method)
-        with ProcessPoolExecutor(
-            max_workers=self.workers, mp_context=mp, initializer=_init_worker, initargs=(ctx,)
-        ) as pool:
+        pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=mp, initializer=_init_worker, initargs=(ctx,))
+        try:
             parts = []
             for k, part in enumerate(pool.map(_work, todo)):
                 parts.append(part)
                 if progress:
                     progress(k + 1, len(todo))
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)  # Ctrl-C: do not wait for queued blocks
+            raise
+        pool.shutdown()
         return _merge(parts, order)
 
     def close(self) -> None:

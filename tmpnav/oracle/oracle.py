@@ -20,9 +20,11 @@ class OracleStats:
     cache_misses: int = 0
     seconds: float = 0.0
     sims: EvalStats = field(default_factory=EvalStats)
+    table_hit: bool = False  # the whole cost table came from the cache
 
     def as_dict(self) -> dict[str, Any]:
         return {
+            "table_cache_hit": self.table_hit,
             "requests": self.requests,
             "cache_hits": self.cache_hits,
             "cache_misses": self.cache_misses,

@@ -19,21 +19,13 @@ the table's.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Callable
-from dataclasses import dataclass
 
 from tmpnav.oracle.evaluate import Request, StartState
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.types import CostTable, MotionResult, MoveKey, Scenario
 from tmpnav.world import World
-
-
-@dataclass
-class TableResult:
-    table: CostTable
-    singles: dict[MoveKey, MotionResult]
-    pairs: dict[tuple[MoveKey, MoveKey], MotionResult]
-    canonical: dict[tuple[str, str], StartState]
 
 
 def start_locations(scenario: Scenario, world: World) -> dict[str, str]:
@@ -71,24 +63,58 @@ def arrival_state(result: MotionResult, i: int = 0) -> StartState:
 
 
 def build_table(
-    oracle: Oracle, world: World, dest_mode: str, pair_filter: Callable[[MoveKey, MoveKey], bool] | None = None
-) -> TableResult:
+    oracle: Oracle,
+    world: World,
+    dest_mode: str,
+    pair_filter: Callable[[MoveKey, MoveKey], bool] | None = None,
+    filter_key: str = "",
+) -> CostTable:
     """The cost table: single moves for every robot, and the pairs ``pair_filter`` admits
     (none without a filter). The filter comes from the task encoding: only pairs that can
-    ever apply together are worth simulating."""
-    scenario, roadmap = oracle.ctx.scenario, oracle.ctx.roadmap
+    ever apply together are worth simulating; ``filter_key`` names it for the cache.
+
+    The whole table is also cached as one entry, so a warm run reads one record instead
+    of one per action; its key covers the oracle's context (code, world, roadmap, models,
+    weights), the robots, the destinations and the pair filter.
+    """
+    scenario = oracle.ctx.scenario
     starts = start_locations(scenario, world)
     dests = destinations(scenario, dest_mode)
+    key = table_key(oracle, starts, dests, pair_filter is not None, filter_key)
+    found = oracle.cache.get_many([key]).get(key)
+    if found is not None:
+        oracle.stats.table_hit = True
+        return _table_from_json(found)
+    table = _compute_table(oracle, starts, dests, pair_filter)
+    oracle.cache.put_many({key: _table_to_json(table)})
+    return table
+
+
+def table_key(
+    oracle: Oracle, starts: dict[str, str], dests: dict[str, tuple[str, ...]], pairs: bool, filter_key: str
+) -> str:
+    specs = [(r.name, r.pose, r.covariance, r.radius, r.speed, r.turn_rate) for r in oracle.ctx.scenario.robots]
+    parts = ("table/1", oracle.context, specs, sorted(starts.items()), sorted(dests.items()), pairs, filter_key)
+    return hashlib.sha256(repr(parts).encode()).hexdigest()
+
+
+def _compute_table(
+    oracle: Oracle,
+    starts: dict[str, str],
+    dests: dict[str, tuple[str, ...]],
+    pair_filter: Callable[[MoveKey, MoveKey], bool] | None,
+) -> CostTable:
+    scenario, roadmap = oracle.ctx.scenario, oracle.ctx.roadmap
     canonical: dict[tuple[str, str], StartState] = {}
     for r in scenario.robots:
         canonical[(r.name, starts[r.name])] = initial_state(scenario, roadmap.starts[r.name], r.name)
 
     # wave 1: from each robot's start to every destination; fixes the canonical starts
     first = [(r, starts[r], d) for r in dests for d in dests[r] if d != starts[r]]
-    singles: dict[MoveKey, MotionResult] = {}
+    singles: dict[MoveKey, float] = {}
     for key, res in zip(first, oracle.evaluate([_single(canonical, k) for k in first]), strict=True):
         if res is not None:
-            singles[key] = res
+            singles[key] = res.cost
             canonical[(key[0], key[2])] = arrival_state(res)
     # wave 2: between destinations, from their canonical starts
     second = [
@@ -100,9 +126,9 @@ def build_table(
     ]
     for key, res in zip(second, oracle.evaluate([_single(canonical, k) for k in second]), strict=True):
         if res is not None:
-            singles[key] = res
+            singles[key] = res.cost
 
-    pair_results: dict[tuple[MoveKey, MoveKey], MotionResult] = {}
+    pairs: dict[tuple[MoveKey, MoveKey], float] = {}
     if pair_filter is not None:
         names = [r.name for r in scenario.robots]
         wanted = [
@@ -120,18 +146,38 @@ def build_table(
         ]
         for key, res in zip(wanted, oracle.evaluate(requests), strict=True):
             if res is not None:
-                pair_results[key] = res
+                pairs[key] = res.cost
 
-    locations = tuple(dict.fromkeys([*(room.name for room in scenario.rooms), *starts.values()]))
-    table = CostTable(
+    return CostTable(
         robots=tuple(r.name for r in scenario.robots),
         rooms=tuple(room.name for room in scenario.rooms),
-        locations=locations,
+        locations=tuple(dict.fromkeys([*(room.name for room in scenario.rooms), *starts.values()])),
         start_location=starts,
-        single={k: v.cost for k, v in singles.items()},
-        pair={k: v.cost for k, v in pair_results.items()},
+        single=singles,
+        pair=pairs,
     )
-    return TableResult(table, singles, pair_results, canonical)
+
+
+def _table_to_json(table: CostTable) -> dict:
+    return {
+        "robots": list(table.robots),
+        "rooms": list(table.rooms),
+        "locations": list(table.locations),
+        "start_location": table.start_location,
+        "single": [[*k, v] for k, v in table.single.items()],
+        "pair": [[*m1, *m2, v] for (m1, m2), v in table.pair.items()],
+    }
+
+
+def _table_from_json(d: dict) -> CostTable:
+    return CostTable(
+        robots=tuple(d["robots"]),
+        rooms=tuple(d["rooms"]),
+        locations=tuple(d["locations"]),
+        start_location=dict(d["start_location"]),
+        single={(r, o, t): float(v) for r, o, t, v in d["single"]},
+        pair={((a, b, c), (e, f, g)): float(v) for a, b, c, e, f, g, v in d["pair"]},
+    )
 
 
 def _single(canonical: dict[tuple[str, str], StartState], move: MoveKey) -> Request:
