@@ -26,6 +26,7 @@ those increases into action costs (``MinimizeActionCosts``), the standard PDDL
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -165,8 +166,10 @@ def encode(
         encoded.potentials = potentials(table, goals, pairs) if enc.reshape else {}
         h = encoded.potentials
         move_cost = problem.fluent("move-cost")
-        for (r, origin, dest), cost in table.single.items():
-            problem.set_initial_value(move_cost(robots[r], locs[origin], locs[dest]), scaled(cost) - h.get(dest, 0))
+        for r, origin, dest in itertools.product(robots, locs, locs):  # every grounding defined
+            cost = table.single.get((r, origin, dest))
+            value = 0 if cost is None else scaled(cost) - h.get(dest, 0)
+            problem.set_initial_value(move_cost(robots[r], locs[origin], locs[dest]), value)
         for (m1, m2), cost in pairs.items():
             _add_pair_action(encoded, m1, m2, scaled(cost) - h.get(m1[2], 0) - h.get(m2[2], 0), targets, robots, locs)
 
@@ -233,13 +236,19 @@ def act_cost_to_action_costs(problem: Any) -> None:
 
 
 def _paper_costs(problem: Any, table: CostTable, robots: dict[str, Any], locs: dict[str, Any]) -> None:
-    """pair-cost for every ordered pair of moves of two different robots (both orders)."""
+    """pair-cost for every ordered pair of moves of two different robots (both orders).
+
+    Like the paper's encoding, the 6-ary function is defined for every combination of its
+    arguments (0 where the moves do not exist; can_move keeps those actions out): this is
+    the size that makes the paper's encoding slow with many robots.
+    """
     pair_cost = problem.fluent("pair-cost")
+    values = {}
     for (m1, m2), cost in table.pair.items():
-        value = scaled(cost)
-        for a, b in ((m1, m2), (m2, m1)):
-            args = (robots[a[0]], locs[a[1]], locs[a[2]], robots[b[0]], locs[b[1]], locs[b[2]])
-            problem.set_initial_value(pair_cost(*args), value)
+        values[(*m1, *m2)] = values[(*m2, *m1)] = scaled(cost)
+    for r1, f1, t1, r2, f2, t2 in itertools.product(robots, locs, locs, robots, locs, locs):
+        args = (robots[r1], locs[f1], locs[t1], robots[r2], locs[f2], locs[t2])
+        problem.set_initial_value(pair_cost(*args), values.get((r1, f1, t1, r2, f2, t2), 0))
 
 
 def pair_action_name(m1: MoveKey, m2: MoveKey) -> str:

@@ -47,6 +47,7 @@ class SolveResult:
     actions: tuple[tuple[str, tuple[str, ...]], ...]  # (action name, parameter names)
     engine: str
     log_tail: str
+    plan: Any = None  # the unified-planning plan, for validation
 
 
 def environment() -> Any:
@@ -175,4 +176,4 @@ def solve(problem: Any, planner: str, timeout: float) -> SolveResult:
         raise PlannerCrashError(f"planner {planner!r} failed with status {status.name}{detail}")
     actions = tuple((a.action.name, tuple(str(p) for p in a.actual_parameters)) for a in result.plan.actions)
     plan_status = PlanStatus.SOLVED_OPTIMALLY if status == St.SOLVED_OPTIMALLY else PlanStatus.SOLVED_SATISFICING
-    return SolveResult(plan_status, actions, result.engine_name, tail)
+    return SolveResult(plan_status, actions, result.engine_name, tail, result.plan)

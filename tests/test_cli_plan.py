@@ -1,0 +1,130 @@
+"""``tmpnav plan`` and ``export-pddl`` end to end, through the real command line.
+
+Each planner failure mode ends in one line on stderr and its own exit code, with no
+traceback and none of the "nanobind: leaked" lines OMPL's bindings print at exit.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tmpnav.errors import (
+    PlannerCrashError,
+    PlannerTimeoutError,
+    PlannerUnavailableError,
+    UnsolvableError,
+)
+
+ROOT = Path(__file__).resolve().parent.parent
+TWO_ROOMS = ROOT / "tests" / "fixtures" / "two_rooms.yaml"
+
+
+def tmpnav(*args: str, env: dict[str, str] | None = None, cwd: Path = ROOT) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "tmpnav", *args], capture_output=True, text=True, env=env, cwd=cwd, timeout=600
+    )
+
+
+def assert_clean_failure(proc: subprocess.CompletedProcess[str], code: int, fragment: str) -> None:
+    assert proc.returncode == code, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: "), proc.stderr
+    assert fragment in lines[0]
+    assert "Traceback" not in proc.stderr + proc.stdout
+    assert "nanobind" not in proc.stderr
+
+
+@pytest.fixture(scope="module")
+def cache_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("cache")
+
+
+@pytest.fixture(scope="module")
+def walled(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Room B's door is closed with r2 inside: r1 must visit B and cannot."""
+    text = TWO_ROOMS.read_text().replace("[[8.4, 4], [9.6, 4]], state: open", "[[8.4, 4], [9.6, 4]], state: closed")
+    path = tmp_path_factory.mktemp("walled") / "walled.yaml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.slow
+def test_plan_succeeds_and_prints_a_summary(cache_dir: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    proc = tmpnav("plan", str(TWO_ROOMS), "-o", str(out), "--cache-dir", str(cache_dir), "-q")
+    assert proc.returncode == 0, proc.stderr
+    assert "nanobind" not in proc.stderr and "Traceback" not in proc.stderr
+    assert "r1" in proc.stdout and "r2" in proc.stdout
+    for name in ("plan.json", "plan.png", "domain.pddl", "problem.pddl"):
+        assert (out / name).stat().st_size > 0
+    doc = json.loads((out / "plan.json").read_text())
+    assert doc["status"].startswith("solved")
+
+
+@pytest.mark.slow
+def test_plan_json_on_stdout(cache_dir: Path) -> None:
+    proc = tmpnav("plan", str(TWO_ROOMS), "--format", "json", "--cache-dir", str(cache_dir), "-q")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads(proc.stdout)
+    assert doc["timings"]["total"] > 0
+
+
+@pytest.mark.slow
+def test_unsolvable(walled: Path, cache_dir: Path) -> None:
+    proc = tmpnav("plan", str(walled), "--cache-dir", str(cache_dir), "-q")
+    assert_clean_failure(proc, UnsolvableError.exit_code, "found no plan")
+
+
+@pytest.mark.slow
+def test_timeout(cache_dir: Path) -> None:
+    proc = tmpnav("plan", str(TWO_ROOMS), "--timeout", "0.001", "--cache-dir", str(cache_dir), "-q")
+    assert_clean_failure(proc, PlannerTimeoutError.exit_code, "time limit")
+
+
+@pytest.mark.slow
+def test_no_java(cache_dir: Path) -> None:
+    env = dict(os.environ, PATH="")
+    proc = tmpnav("plan", str(TWO_ROOMS), "--cache-dir", str(cache_dir), "-q", env=env)
+    assert_clean_failure(proc, PlannerUnavailableError.exit_code, "Java was not found")
+
+
+@pytest.mark.slow
+def test_unknown_planner(cache_dir: Path) -> None:
+    proc = tmpnav("plan", str(TWO_ROOMS), "--planner", "no-such-planner", "--cache-dir", str(cache_dir), "-q")
+    assert_clean_failure(proc, PlannerUnavailableError.exit_code, "unknown planner")
+
+
+@pytest.mark.slow
+def test_planner_crash(cache_dir: Path) -> None:
+    env = dict(os.environ, TMPNAV_JAVA_OPTIONS="-XX:+NoSuchJvmOption")
+    proc = tmpnav("plan", str(TWO_ROOMS), "--cache-dir", str(cache_dir), "-q", env=env)
+    assert_clean_failure(proc, PlannerCrashError.exit_code, "failed with status")
+
+
+@pytest.mark.slow
+def test_export_pddl_is_accepted_by_enhsp(cache_dir: Path, tmp_path: Path) -> None:
+    from up_enhsp.enhsp_planner import ENHSP_JAR
+
+    proc = tmpnav("export-pddl", str(TWO_ROOMS), "-o", str(tmp_path), "--cache-dir", str(cache_dir), "-q")
+    assert proc.returncode == 0, proc.stderr
+    run = subprocess.run(
+        ["java", "-jar", ENHSP_JAR, "-o", str(tmp_path / "domain.pddl"), "-f", str(tmp_path / "problem.pddl"),
+         "-planner", "opt-hrmax"],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert "Problem Solved" in run.stdout, run.stdout[-2000:]
+
+
+def test_bad_scenario_is_exit_code_2(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("map: {bounds: [0, 0, 1, 1]}\nrooms: []\n")
+    proc = tmpnav("plan", str(bad), "--no-cache", "-q")
+    assert proc.returncode == 2
+    assert all(line.startswith("error: ") for line in proc.stderr.strip().splitlines())
+    assert "Traceback" not in proc.stderr
