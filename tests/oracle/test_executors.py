@@ -1,0 +1,70 @@
+"""Every way of computing an action gives bit-identical results.
+
+Through the cache and without it, in this process, in 1 and 2 local workers, and on a
+real local Ray instance: the same costs, goal instantiations, paths and final beliefs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tests.oracle.support import actions
+from tmpnav.oracle import executors
+from tmpnav.oracle.cache import DiskCache, NullCache
+from tmpnav.oracle.executors import OracleContext, ProcessExecutor, SerialExecutor
+from tmpnav.oracle.oracle import Oracle
+
+
+@pytest.fixture(scope="module")
+def reference(two_rooms: OracleContext):  # type: ignore[no-untyped-def]
+    return Oracle(two_rooms, NullCache(), SerialExecutor()).evaluate(actions(two_rooms))
+
+
+def test_reference_is_complete(reference) -> None:  # type: ignore[no-untyped-def]
+    assert all(r is not None for r in reference)
+    pairs = [r for r in reference if len(r.robots) == 2]
+    assert any(r.mutual_steps > 0 for r in pairs), "some pair should observe each other"
+
+
+def test_cache_returns_what_was_computed(two_rooms: OracleContext, reference, tmp_path: Path) -> None:  # type: ignore[no-untyped-def]
+    first = Oracle(two_rooms, DiskCache(tmp_path), SerialExecutor())
+    assert first.evaluate(actions(two_rooms)) == reference
+    assert first.stats.cache_misses > 0 and first.stats.cache_hits == 0
+    second = Oracle(two_rooms, DiskCache(tmp_path), SerialExecutor())
+    assert second.evaluate(actions(two_rooms)) == reference
+    assert second.stats.cache_misses == 0 and second.stats.cache_hits == first.stats.cache_misses
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_local_workers(two_rooms: OracleContext, reference, workers: int, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
+    monkeypatch.setattr(executors, "BLOCK", 4)  # several blocks, so two workers share the work
+    result = Oracle(two_rooms, NullCache(), ProcessExecutor(workers)).evaluate(actions(two_rooms))
+    assert result == reference
+
+
+@pytest.mark.ray
+@pytest.mark.slow
+def test_ray(two_rooms: OracleContext, reference, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
+    ray = pytest.importorskip("ray")
+    monkeypatch.setattr(executors, "BLOCK", 4)
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        executor = executors.RayExecutor()
+        assert executor.workers == 2
+        result = Oracle(two_rooms, NullCache(), executor).evaluate(actions(two_rooms))
+    finally:
+        ray.shutdown()
+    assert result == reference
+
+
+def test_blocks_keep_start_groups_together(two_rooms: OracleContext) -> None:
+    reqs = actions(two_rooms)
+    blocks, order = executors.blocks(reqs, size=4)
+    assert sorted(order) == list(range(len(reqs)))
+    seen: dict[tuple, int] = {}
+    for k, block in enumerate(blocks):
+        for r in block:
+            key = (r.robots, r.starts)
+            assert seen.setdefault(key, k) == k

@@ -1,0 +1,99 @@
+"""The OMPL roadmap: deterministic, with connected pose instantiations in every room."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tmpnav.errors import RoadmapError
+from tmpnav.pipeline import load_world
+from tmpnav.roadmap import RoadmapGraph, build_roadmap
+from tmpnav.world.geometry import points_in_polygon
+
+ROOT = Path(__file__).resolve().parents[2]
+TWO_ROOMS = ROOT / "tests" / "fixtures" / "two_rooms.yaml"
+
+
+@pytest.fixture(scope="module")
+def loaded():  # type: ignore[no-untyped-def]
+    return load_world(TWO_ROOMS)
+
+
+def test_same_seed_same_roadmap_in_this_process(loaded) -> None:  # type: ignore[no-untyped-def]
+    sc, world = loaded
+    a = build_roadmap(world, sc.robots, sc.roadmap)
+    b = build_roadmap(world, sc.robots, sc.roadmap)
+    assert a.fingerprint == b.fingerprint
+    assert np.array_equal(a.nodes, b.nodes) and np.array_equal(a.edges, b.edges)
+    c = build_roadmap(world, sc.robots, replace(sc.roadmap, seed=sc.roadmap.seed + 1))
+    assert c.fingerprint != a.fingerprint
+
+
+def test_same_seed_same_roadmap_across_processes(loaded) -> None:  # type: ignore[no-untyped-def]
+    sc, world = loaded
+    here = build_roadmap(world, sc.robots, sc.roadmap).fingerprint
+    code = (
+        "from tmpnav.pipeline import load_world; from tmpnav.roadmap import build_roadmap;"
+        f"sc, w = load_world({str(TWO_ROOMS)!r}); print(build_roadmap(w, sc.robots, sc.roadmap).fingerprint)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.stdout.strip() == here
+    assert "nanobind" not in out.stderr
+
+
+def test_instantiations_lie_in_their_rooms_free_and_connected(loaded) -> None:  # type: ignore[no-untyped-def]
+    sc, world = loaded
+    rm = build_roadmap(world, sc.robots, sc.roadmap)
+    graph = RoadmapGraph(rm)
+    radius = max(r.radius for r in sc.robots)
+    for room in sc.rooms:
+        ids = rm.instantiations[room.name]
+        assert len(ids) == sc.roadmap.instantiations
+        pts = rm.nodes[list(ids)]
+        assert points_in_polygon(pts, np.array(room.polygon)).all()
+        assert world.is_free(pts, radius).all()
+        for robot in sc.robots:
+            assert all(graph.path(rm.starts[robot.name], i) is not None for i in ids)
+
+
+def test_edges_are_collision_free(loaded) -> None:  # type: ignore[no-untyped-def]
+    sc, world = loaded
+    rm = build_roadmap(world, sc.robots, sc.roadmap)
+    radius = max(r.radius for r in sc.robots)
+    t = np.linspace(0, 1, 60)[:, None, None]
+    a, b = rm.nodes[rm.edges[:, 0]], rm.nodes[rm.edges[:, 1]]
+    samples = a[None] + t * (b - a)[None]
+    assert world.is_free(samples.reshape(-1, 2), radius).all()
+
+
+def test_shortest_path_is_shortest(loaded) -> None:  # type: ignore[no-untyped-def]
+    sc, world = loaded
+    rm = build_roadmap(world, sc.robots, sc.roadmap)
+    graph = RoadmapGraph(rm)
+    s, g = rm.starts["r1"], rm.instantiations["B"][0]
+    path = graph.path(s, g)
+    assert path is not None and path[0] == s and path[-1] == g
+    length = float(np.linalg.norm(np.diff(rm.nodes[list(path)], axis=0), axis=1).sum())
+    assert length == pytest.approx(graph.distance(s, g))
+
+
+def test_room_that_cannot_connect_is_named(loaded) -> None:  # type: ignore[no-untyped-def]
+    sc, world = loaded
+    with pytest.raises(RoadmapError, match=r"room '[ABC]': none of its 3 pose instantiations connects"):
+        # far too few samples to get through the doors
+        build_roadmap(world, sc.robots, replace(sc.roadmap, samples=10, neighbors=2))
+
+
+def test_only_the_roadmap_stage_imports_ompl() -> None:
+    offenders = [
+        str(p.relative_to(ROOT))
+        for p in (ROOT / "tmpnav").rglob("*.py")
+        if re.search(r"^\s*(from|import)\s+ompl\b", p.read_text(), re.M) and p.name != "prm.py"
+    ]
+    assert offenders == []
