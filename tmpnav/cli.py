@@ -126,6 +126,302 @@ def roadmap(scenario: Path, output: Path) -> None:
     click.echo(f"wrote {output}: {rm.n_nodes} nodes, {len(rm.edges)} edges")
 
 
+def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
+    """Options shared by every command that computes action costs."""
+    options = [
+        click.option(
+            "--encoding",
+            type=click.Choice(["paper", "single", "mixed"]),
+            help="Task encoding (overrides planner.encoding).",
+        ),
+        click.option(
+            "--planner",
+            "planner_name",
+            metavar="NAME",
+            help="unified-planning engine (overrides planner.name), e.g. enhsp-opt, enhsp, enhsp-blind.",
+        ),
+        click.option(
+            "--timeout", type=click.FloatRange(min=0, min_open=True), metavar="S", help="Planner time limit in seconds."
+        ),
+        click.option(
+            "--pair-min-gain",
+            type=click.FloatRange(0, 1),
+            metavar="G",
+            help="Mixed encoding: minimum relative saving of a paired move.",
+        ),
+        click.option(
+            "--no-mutual-observations",
+            is_flag=True,
+            help="Ignore mutual observations between robots (the paper's config 2).",
+        ),
+        click.option(
+            "--cache-dir",
+            type=click.Path(path_type=Path, file_okay=False),
+            help="Oracle and roadmap cache (default: $XDG_CACHE_HOME/tmpnav).",
+        ),
+        click.option("--no-cache", is_flag=True, help="Compute every cost afresh and store nothing."),
+        click.option(
+            "--workers", type=click.IntRange(min=1), help="Local worker processes for the oracle (default: all cores)."
+        ),
+        click.option(
+            "--executor",
+            type=click.Choice(["processes", "serial", "ray"]),
+            default="processes",
+            show_default=True,
+            help="Where oracle evaluations run.",
+        ),
+        click.option(
+            "--ray-address",
+            metavar="ADDR",
+            help="Ray cluster to join with --executor ray (default: start a local one).",
+        ),
+        click.option("-q", "--quiet", is_flag=True, help="No progress bar."),
+    ]
+    for option in reversed(options):
+        func = option(func)
+    return func
+
+
+def plan_options(kw: dict[str, Any]) -> Any:
+    from tmpnav.pipeline import PlanOptions
+
+    return PlanOptions(
+        encoding=kw["encoding"],
+        planner=kw["planner_name"],
+        timeout=kw["timeout"],
+        pair_min_gain=kw["pair_min_gain"],
+        mutual_observations=False if kw["no_mutual_observations"] else None,
+        cache_dir=kw["cache_dir"],
+        use_cache=not kw["no_cache"],
+        executor=kw["executor"],
+        workers=kw["workers"],
+        ray_address=kw["ray_address"],
+        progress=None if kw["quiet"] else progress_bar("oracle"),
+    )
+
+
+def progress_bar(label: str) -> Callable[[int, int], None] | None:
+    """A one-line progress bar on stderr, only when stderr is a terminal."""
+    if not sys.stderr.isatty():
+        return None
+
+    def show(done: int, total: int) -> None:
+        width = 30
+        filled = int(width * done / max(total, 1))
+        sys.stderr.write(f"\r{label} [{'#' * filled}{'.' * (width - filled)}] {done}/{total}")
+        if done >= total:
+            sys.stderr.write("\r" + " " * (width + len(label) + 20) + "\r")
+        sys.stderr.flush()
+
+    return show
+
+
+@cli.command()
+@SCENARIO_ARG
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path, file_okay=False),
+    help="Directory for plan.json, plan.png, domain.pddl, problem.pddl.",
+)
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["text", "json"]),
+    default="text",
+    show_default=True,
+    help="What to print on stdout.",
+)
+@oracle_options
+@report_errors
+def plan(scenario: Path, output: Path | None, fmt: str, **kw: Any) -> None:
+    """Plan: which robot visits which room, in which order, along which path.
+
+    Prints the task-motion plan (per step: robots, from, to, cost), the total cost as
+    the planner saw it and as re-simulated with carried-over beliefs, and the time per
+    stage. With -o DIR it also writes plan.json, plan.png and the PDDL files used.
+    """
+    import json
+
+    from tmpnav.pipeline import plan as run_plan
+
+    report = run_plan(scenario, plan_options(kw))
+    from tmpnav.report.plan_json import plan_document
+    from tmpnav.report.text import summary
+
+    written: list[Path] = []
+    if output is not None:
+        from tmpnav.report.outputs import write_outputs
+        from tmpnav.task.export import pddl_texts
+
+        written = write_outputs(report, output, pddl_texts(report.encoded))
+    if fmt == "json":
+        click.echo(json.dumps(plan_document(report), indent=1))
+    else:
+        click.echo(summary(report))
+        for path in written:
+            click.echo(f"wrote {path}")
+
+
+@cli.command("export-pddl")
+@SCENARIO_ARG
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path, file_okay=False),
+    required=True,
+    help="Directory for domain.pddl and problem.pddl.",
+)
+@oracle_options
+@report_errors
+def export_pddl(scenario: Path, output: Path, **kw: Any) -> None:
+    """Write the PDDL domain and problem (with the computed costs) that ENHSP accepts."""
+    from tmpnav.pipeline import encode_only
+    from tmpnav.task.export import pddl_texts, write_pddl
+
+    encoded = encode_only(scenario, plan_options(kw))
+    for path in write_pddl(output, pddl_texts(encoded)):
+        click.echo(f"wrote {path}")
+
+
+@cli.group()
+def cache() -> None:
+    """Inspect or clear the oracle's disk cache."""
+
+
+@cache.command("info")
+@click.option(
+    "--cache-dir",
+    type=click.Path(path_type=Path, file_okay=False),
+    help="Cache directory (default: $XDG_CACHE_HOME/tmpnav).",
+)
+@report_errors
+def cache_info(cache_dir: Path | None) -> None:
+    """Where the cache is, how big, how many entries."""
+    from tmpnav.oracle.cache import default_cache_dir, info
+
+    facts = info(cache_dir or default_cache_dir())
+    roadmaps = list((Path(facts["directory"]) / "roadmaps").glob("*.npz"))
+    click.echo(f"directory: {facts['directory']}")
+    if not facts["exists"]:
+        click.echo("empty (no cache file yet)")
+        return
+    if facts.get("error"):
+        click.echo(f"cache file: {facts['file']} ({facts['error']})")
+    else:
+        click.echo(f"cache file: {facts['file']}, {facts['entries']} entries, {facts['bytes'] / 1e6:.1f} MB")
+    click.echo(f"roadmaps: {len(roadmaps)}")
+
+
+@cache.command("clear")
+@click.option(
+    "--cache-dir",
+    type=click.Path(path_type=Path, file_okay=False),
+    help="Cache directory (default: $XDG_CACHE_HOME/tmpnav).",
+)
+@report_errors
+def cache_clear(cache_dir: Path | None) -> None:
+    """Delete every cached cost and roadmap."""
+    from tmpnav.oracle.cache import clear, default_cache_dir
+
+    directory = cache_dir or default_cache_dir()
+    removed = clear(directory)
+    roadmaps = list((directory / "roadmaps").glob("*.npz")) if (directory / "roadmaps").exists() else []
+    for p in roadmaps:
+        p.unlink(missing_ok=True)
+    click.echo(f"cleared {directory}: {removed} cache file(s), {len(roadmaps)} roadmap(s)")
+
+
+@cli.command()
+@SCENARIO_ARG
+@click.option("--sessions", type=click.IntRange(min=1), default=25, show_default=True, help="Simulated executions.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
+@click.option("-o", "--output", type=click.Path(path_type=Path, file_okay=False), help="Directory for errors.csv, errors.png, summary.md.")
+@oracle_options
+@report_errors
+def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw: Any) -> None:
+    """Execute the plan in simulation, with and without mutual observations.
+
+    Each session samples the true initial poses from the initial beliefs, applies noisy
+    controls (a waypoint follower steering on the estimate) and noisy observations, and
+    runs the EKF with mutual observations (config 1) and without (config 2), on the same
+    random draws. Prints the worst-case position error per robot and its reduction.
+    """
+    from tmpnav.bench.simulate import simulate as run_simulation
+    from tmpnav.bench.simulate import summary_lines, to_csv
+    from tmpnav.pipeline import plan as run_plan
+
+    options = plan_options(kw)
+    report = run_plan(scenario, options)
+    result = run_simulation(report, sessions, seed)
+    lines = summary_lines(result, sessions)
+    if output is not None:
+        from tmpnav.bench.bench import write_atomic
+        from tmpnav.report.bench_plot import plot_errors
+
+        write_atomic(output / "errors.csv", to_csv(result, report))
+        plot_errors(result, output / "errors.png", f"{report.scenario.name}: average position error over {sessions} sessions")
+        write_atomic(output / "summary.md", "\n".join(lines) + "\n")
+        lines += [f"wrote {output / name}" for name in ("errors.csv", "errors.png", "summary.md")]
+    click.echo("\n".join(lines))
+
+
+@cli.command()
+@click.option("--rooms", "rooms_text", default="2..10", show_default=True, help="Rooms to visit: a range A..B[:STEP] (step 2 by default) or a list A,B,C.")
+@click.option("--robots", "robots_text", default="2", show_default=True, help="Robots: a range or a list; several values make a robots experiment.")
+@click.option("--sessions", type=click.IntRange(min=1), default=25, show_default=True, help="Sessions (random goal draws) per point.")
+@click.option("--encoding", "encodings", multiple=True, type=click.Choice(["paper", "single", "mixed"]), help="Encodings to compare on the same draws (repeat the option); default: mixed.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
+@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=300.0, show_default=True, help="Seconds a run may take before it is recorded as a timeout.")
+@click.option("--scenario", type=click.Path(path_type=Path, dir_okay=False), help="World to use (default: configs/corridor-<N>robots.yaml).")
+@click.option("--workers", type=click.IntRange(min=1), help="Oracle worker processes per run (default: all cores).")
+@click.option("-o", "--output", type=click.Path(path_type=Path, file_okay=False), default=Path("bench-out"), show_default=True, help="Directory for bench.csv, bench.png, summary.md.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
+@report_errors
+def bench(rooms_text: str, robots_text: str, sessions: int, encodings: tuple[str, ...], seed: int, timeout: float,
+          scenario: Path | None, workers: int | None, output: Path, quiet: bool) -> None:
+    """Planning time against the number of rooms (Fig. 3(b)) or of robots (Fig. 3(c)).
+
+    Every run plans in its own process, cold (empty cache) then warm; runs longer than
+    --timeout are recorded as timeouts. Writes bench.csv, bench.png and summary.md.
+    """
+    from tmpnav.bench import bench as b
+    from tmpnav.report.bench_plot import plot_bench
+    from tmpnav.scenario import load
+
+    rooms, robots = b.parse_counts(rooms_text, "--rooms"), b.parse_counts(robots_text, "--robots")
+    experiment, axis = ("robots", "robots") if len(robots) > 1 else ("rooms", "rooms")
+    encs = list(encodings) or ["mixed"]
+    if scenario is not None:
+        load(scenario)  # bad input is reported before an hour of benchmarking, not after
+    job_list = b.jobs(experiment, robots, rooms, sessions, encs, seed, scenario,
+                      lambda path: [room.name for room in load(path).rooms])
+    say = None if quiet else (lambda line: click.echo(line, err=True))
+    table = b.run_bench(job_list, timeout, workers, say)
+    med = b.medians(table, axis)
+    text = f"# tmpnav bench: {experiment}\n\n" + b.summary(table, axis, default=encs[0])
+    b.write_atomic(output / "bench.csv", b.to_csv(table))
+    b.write_atomic(output / "summary.md", text)
+    plot_bench(med, axis, output / "bench.png", f"planning time against {axis} ({sessions} sessions per point)")
+    click.echo(text)
+    for name in ("bench.csv", "bench.png", "summary.md"):
+        click.echo(f"wrote {output / name}")
+
+
+@cli.command()
+@report_errors
+def doctor() -> None:
+    """Check that everything tmpnav runs on is here (Java 17+ for ENHSP, OMPL, numba)."""
+    from importlib.metadata import version
+
+    from tmpnav.task.solve import JAVA_MIN, check_java, java_version
+
+    check_java()
+    click.echo(f"java: {java_version()} (ENHSP needs {JAVA_MIN}+): ok")
+    for package in ("unified-planning", "up-enhsp", "ompl", "filterpy", "numba", "numpy"):
+        click.echo(f"{package}: {version(package)}")
+
+
 @cli.command()
 @report_errors
 def reference() -> None:
@@ -135,6 +431,20 @@ def reference() -> None:
     click.echo(markdown(), nl=False)
 
 
+def _one_line_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: Any = None,
+    line: str | None = None,
+) -> None:
+    click.echo(f"warning: {message}", err=True)
+
+
 def main() -> None:
-    """Console entry point."""
+    """Console entry point: warnings become one line each, never a traceback."""
+    import warnings
+
+    warnings.showwarning = _one_line_warning
     cli(prog_name="tmpnav")

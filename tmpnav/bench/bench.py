@@ -1,0 +1,215 @@
+"""``tmpnav bench``: planning time against the number of rooms or robots (paper, Fig. 3(b), (c)).
+
+For each point (a number of rooms, or of robots) and session, the rooms to visit are drawn
+at random from a seed; every encoding asked for plans the same goals in the same world,
+one run after the other on this machine, each in its own process (:mod:`worker`), cold
+(empty cache) and then warm. A run that does not finish within the time limit is killed
+and recorded as a timeout.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import random
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tmpnav.errors import InputError
+
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+STAGES = ("roadmap", "oracle", "encode", "planner", "resimulate", "total")
+COLUMNS = (
+    "experiment", "encoding", "robots", "rooms", "session", "goals", "phase", "status",
+    *(f"{s}_s" for s in STAGES), "planner_cost", "resimulated_cost", "actions", "pair_actions",
+    "joint_simulations", "joint_factorized", "table_cache_hit",
+)
+
+
+def parse_counts(text: str, option: str) -> list[int]:
+    """``2..10`` (every second number, as the paper), ``2..10:1``, or ``2,4,6``."""
+    try:
+        if ".." in text:
+            span, _, step = text.partition(":")
+            lo, hi = (int(v) for v in span.split(".."))
+            values = list(range(lo, hi + 1, int(step) if step else 2))
+        else:
+            values = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise InputError(f"{option} {text!r} is not a range A..B[:STEP] or a list A,B,C of integers") from None
+    if not values or min(values) < 1:
+        raise InputError(f"{option} {text!r} must name positive integers")
+    return values
+
+
+def scenario_for(robots: int, override: Path | None) -> Path:
+    if override is not None:
+        return override
+    path = CONFIGS / f"corridor-{robots}robots.yaml"
+    if not path.exists():
+        raise InputError(f"no benchmark scenario for {robots} robots ({path.name}); pass --scenario")
+    return path
+
+
+@dataclass(frozen=True)
+class Job:
+    experiment: str
+    encoding: str
+    robots: int
+    rooms: int
+    session: int
+    goals: tuple[str, ...]
+    scenario: Path
+
+
+def jobs(experiment: str, robots: list[int], rooms: list[int], sessions: int, encodings: list[str],
+         seed: int, scenario: Path | None, room_names: Callable[[Path], list[str]]) -> list[Job]:
+    out = []
+    for n_robots in robots:
+        path = scenario_for(n_robots, scenario)
+        names = room_names(path)
+        for n_rooms in rooms:
+            if n_rooms > len(names):
+                raise InputError(f"--rooms {n_rooms}: {path.name} has only {len(names)} rooms")
+            for s in range(sessions):
+                rnd = random.Random(f"{seed}/{n_robots}/{n_rooms}/{s}")
+                goals = tuple(sorted(rnd.sample(names, n_rooms), key=lambda r: names.index(r)))
+                for enc in encodings:
+                    out.append(Job(experiment, enc, n_robots, n_rooms, s, goals, path))
+    return out
+
+
+def run_job(job: Job, timeout: float, workers: int | None) -> dict[str, Any]:
+    payload = {"scenario": str(job.scenario), "rooms": list(job.goals), "encoding": job.encoding,
+               "planner_timeout": timeout, "workers": workers}
+    env = dict(os.environ)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "tmpnav.bench.worker"], input=json.dumps(payload),
+                              capture_output=True, text=True, timeout=2 * timeout + 120, env=env)
+    except subprocess.TimeoutExpired:
+        return {"cold": {"status": "timeout"}, "warm": {"status": "timeout"}}
+    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
+    if proc.returncode != 0 or not lines:
+        tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+        return {"cold": {"status": "error", "error": tail}, "warm": {"status": "error", "error": tail}}
+    result: dict[str, Any] = json.loads(lines[-1])
+    for phase in ("cold", "warm"):
+        if result[phase].get("status") == "PlannerTimeoutError":
+            result[phase]["status"] = "timeout"
+    return result
+
+
+def rows(job: Job, result: dict[str, Any]) -> list[dict[str, Any]]:
+    out = []
+    for phase in ("cold", "warm"):
+        r = result.get(phase, {"status": "missing"})
+        times = r.get("times", {})
+        oracle = r.get("oracle", {})
+        task = r.get("task", {})
+        out.append({
+            "experiment": job.experiment, "encoding": job.encoding, "robots": job.robots, "rooms": job.rooms,
+            "session": job.session, "goals": " ".join(job.goals), "phase": phase, "status": r.get("status"),
+            **{f"{s}_s": _num(times.get(s)) for s in STAGES},
+            "planner_cost": _num(r.get("planner_cost")), "resimulated_cost": _num(r.get("resimulated_cost")),
+            "actions": r.get("actions", ""), "pair_actions": task.get("pair_actions", ""),
+            "joint_simulations": oracle.get("joint_simulations", ""),
+            "joint_factorized": oracle.get("joint_factorized", ""),
+            "table_cache_hit": oracle.get("table_cache_hit", ""),
+        })
+    return out
+
+
+def _num(v: Any) -> str:
+    return "" if v is None else f"{float(v):.6g}"
+
+
+def run_bench(job_list: list[Job], timeout: float, workers: int | None,
+              progress: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
+    table: list[dict[str, Any]] = []
+    for k, job in enumerate(job_list):
+        start = time.perf_counter()
+        result = run_job(job, timeout, workers)
+        new = rows(job, result)
+        table.extend(new)
+        if progress:
+            cold, warm = new
+            progress(f"bench {k + 1}/{len(job_list)}: {job.encoding}, {job.robots} robots, {job.rooms} rooms, "
+                     f"session {job.session + 1}: cold {_fmt(cold)}, warm {_fmt(warm)} "
+                     f"({time.perf_counter() - start:.0f} s)")
+    return table
+
+
+def _fmt(row: dict[str, Any]) -> str:
+    return f"{float(row['total_s']):.2f} s" if row["status"].startswith("solved") else str(row["status"])
+
+
+def to_csv(table: list[dict[str, Any]]) -> str:
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(table)
+    return buffer.getvalue()
+
+
+def medians(table: list[dict[str, Any]], axis: str) -> dict[tuple[str, str, int], dict[str, Any]]:
+    """(encoding, phase, point) -> median total and stages over the solved sessions."""
+    out: dict[tuple[str, str, int], dict[str, Any]] = {}
+    keys = sorted({(r["encoding"], r["phase"], int(r[axis])) for r in table})
+    for enc, phase, point in keys:
+        runs = [r for r in table if r["encoding"] == enc and r["phase"] == phase and int(r[axis]) == point]
+        ok = [r for r in runs if str(r["status"]).startswith("solved")]
+        entry: dict[str, Any] = {"runs": len(runs), "solved": len(ok), "timeouts": sum(r["status"] == "timeout" for r in runs)}
+        for s in STAGES:
+            vals = [float(r[f"{s}_s"]) for r in ok if r[f"{s}_s"] != ""]
+            entry[s] = statistics.median(vals) if vals else None
+        totals = sorted(float(r["total_s"]) for r in ok)
+        entry["q1"] = totals[len(totals) // 4] if totals else None
+        entry["q3"] = totals[(3 * len(totals)) // 4] if totals else None
+        out[(enc, phase, point)] = entry
+    return out
+
+
+def summary(table: list[dict[str, Any]], axis: str, default: str = "mixed") -> str:
+    """A Markdown table of medians per point, with the speed-up of ``default`` over the others."""
+    med = medians(table, axis)
+    encodings = sorted({k[0] for k in med})
+    points = sorted({k[2] for k in med})
+    label = "rooms" if axis == "rooms" else "robots"
+    lines = [f"| {label} | encoding | cache | solved | median total (s) | roadmap | oracle | encode | planner | speed-up of {default} |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    for point in points:
+        for enc in encodings:
+            for phase in ("cold", "warm"):
+                e = med.get((enc, phase, point))
+                if e is None:
+                    continue
+                mine = med.get((default, phase, point), {}).get("total")
+                ratio = ""
+                if enc != default and mine and e["total"]:
+                    ratio = f"{e['total'] / mine:.1f}x"
+                elif enc != default and mine and e["solved"] == 0:
+                    ratio = "> timeout"
+                cells = [_s(e.get(s)) for s in ("total", "roadmap", "oracle", "encode", "planner")]
+                lines.append(f"| {point} | {enc} | {phase} | {e['solved']}/{e['runs']} | " + " | ".join(cells) + f" | {ratio} |")
+    return "\n".join(lines) + "\n"
+
+
+def _s(v: float | None) -> str:
+    return "timeout" if v is None else f"{v:.2f}"
+
+
+def write_atomic(path: Path, text: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    os.replace(tmp, path)

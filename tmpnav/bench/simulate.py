@@ -1,0 +1,228 @@
+"""``tmpnav simulate``: execute a plan many times with simulated noise (paper, Fig. 3(a)).
+
+Each session draws the robots' true initial poses from their initial beliefs, then runs the
+plan's actions in order. A moving robot follows its roadmap path with a waypoint
+controller that steers on its own estimate (turn towards the next waypoint when it points
+more than ``ALIGN`` away, otherwise drive with a heading correction); the true robot
+receives the commanded control plus noise drawn from W(u) (paper eq. (4)). Observations
+are generated from the true poses (landmarks in range, field of view and line of sight;
+the other moving robot when mutually visible) with sensor noise, and the joint EKF of
+:mod:`tmpnav.belief.ekf` (the filterpy reference) estimates the poses.
+
+Config 1 uses mutual observations, config 2 ignores them. Both configurations of a session
+use the same random draws (initial poses, control noise and observation noise are indexed
+by robot and step), so the comparison is paired. The error recorded is the distance
+between the true and the estimated position when a robot reaches each node of its path.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from tmpnav.belief import ekf
+from tmpnav.belief.models import landmark_obs, motion, motion_noise_cov, mutual_obs, noisy_observation, wrap_angle
+from tmpnav.types import Belief, Scenario
+from tmpnav.world.visibility import LandmarkVisibility, mutual_visible
+
+ALIGN = 0.3  # rad: beyond this heading error the robot turns on the spot
+ARRIVED = 0.02  # m: a waypoint is reached when the estimate is this close
+STEP_BUDGET = 6  # an action may take this many times its planned steps before it is cut
+
+
+@dataclass
+class SessionTrace:
+    """Errors of one session and configuration: robot -> error (m) at each path node."""
+
+    errors: dict[str, list[float]] = field(default_factory=dict)
+    truncated: bool = False
+
+
+@dataclass
+class SimulationResult:
+    robots: list[str]
+    nodes: dict[str, list[int]]  # robot -> roadmap node at each recorded point (start first)
+    errors: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions, nodes)
+    truncated_sessions: int
+
+    def mean_errors(self, config: int, robot: str) -> np.ndarray:
+        return np.nanmean(self.errors[(config, robot)], axis=0)
+
+    def worst(self, config: int, robot: str) -> float:
+        """The worst-case position error: the largest average error over the path nodes."""
+        return float(np.nanmax(self.mean_errors(config, robot)))
+
+    def reduction(self, robot: str) -> float:
+        """How much lower (%) the worst-case error is with mutual observations."""
+        w1, w2 = self.worst(1, robot), self.worst(2, robot)
+        return 100.0 * (w2 - w1) / w2 if w2 > 0 else 0.0
+
+    @property
+    def starved(self) -> str:
+        """The robot that suffers most without mutual observations (the paper's r')."""
+        return max(self.robots, key=lambda r: self.worst(2, r))
+
+
+@dataclass(frozen=True)
+class Draws:
+    """A session's random numbers, indexed so that both configurations share them."""
+
+    initial: np.ndarray  # (N, 3)
+    motion: np.ndarray  # (N, S, 2)
+    landmark: np.ndarray  # (N, S, L, 2)
+    mutual: np.ndarray  # (N, N, S, 2)
+
+    @staticmethod
+    def draw(seed: int, session: int, n: int, steps: int, landmarks: int) -> Draws:
+        rng = np.random.default_rng([seed, session])
+        return Draws(
+            initial=rng.standard_normal((n, 3)),
+            motion=rng.standard_normal((n, steps, 2)),
+            landmark=rng.standard_normal((n, steps, landmarks, 2)),
+            mutual=rng.standard_normal((n, n, steps, 2)),
+        )
+
+
+def control(est: np.ndarray, waypoint: np.ndarray, speed: float, turn_rate: float, dt: float) -> np.ndarray:
+    """The waypoint controller: turn on the spot, or drive with a heading correction."""
+    dx, dy = waypoint[0] - est[0], waypoint[1] - est[1]
+    err = float(wrap_angle(math.atan2(dy, dx) - est[2]))
+    omega = max(-turn_rate, min(turn_rate, err / dt))
+    if abs(err) > ALIGN:
+        return np.array([0.0, omega])
+    return np.array([min(speed, math.hypot(dx, dy) / dt), omega])
+
+
+def run_session(
+    scenario: Scenario, world, plan_paths, draws: Draws, mutual: bool, vis: LandmarkVisibility
+) -> SessionTrace:  # type: ignore[no-untyped-def]
+    """One execution of the plan: ``plan_paths`` lists, per action, {robot: waypoints}."""
+    robots = [r.name for r in scenario.robots]
+    N = len(robots)
+    models = scenario.models
+    dt, alphas = models.dt, models.motion_noise
+    Q_lm, Q_mu = models.landmark_sensor.Q, models.mutual_sensor.Q
+    chol_lm, chol_mu = np.linalg.cholesky(Q_lm), np.linalg.cholesky(Q_mu)
+    landmarks = world.landmark_xy
+    mean = np.concatenate([r.pose.as_array() for r in scenario.robots])
+    cov = np.zeros((3 * N, 3 * N))
+    truth = np.empty((N, 3))
+    for i, r in enumerate(scenario.robots):
+        cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = r.cov
+        truth[i] = r.pose.as_array() + np.linalg.cholesky(r.cov) @ draws.initial[i]
+    belief = Belief(mean, cov)
+    trace = SessionTrace(
+        {r: [float(np.hypot(*(truth[i, :2] - mean[3 * i : 3 * i + 2])))] for i, r in enumerate(robots)}
+    )
+    step = 0
+    S = draws.motion.shape[1]
+    for waypoints in plan_paths:
+        moving = [robots.index(r) for r in waypoints]
+        queue = {i: [np.asarray(p, dtype=float) for p in waypoints[robots[i]]] for i in moving}
+        budget = STEP_BUDGET * max(1, sum(len(q) for q in queue.values())) * 40
+        for _ in range(budget):
+            if not any(queue.values()) or step >= S:
+                break
+            u = np.zeros((N, 2))
+            for i in moving:
+                est = belief.mean[3 * i : 3 * i + 3]
+                while queue[i] and math.hypot(*(queue[i][0] - est[:2])) < ARRIVED:
+                    queue[i].pop(0)
+                    trace.errors[robots[i]].append(float(np.hypot(*(truth[i, :2] - est[:2]))))
+                if queue[i]:
+                    spec = scenario.robots[i]
+                    u[i] = control(est, queue[i][0], spec.speed, spec.turn_rate, dt)
+            # the true robots move with noisy controls; the filter predicts with the commands
+            for i in moving:
+                W = motion_noise_cov(u[i], alphas)
+                truth[i] = motion(truth[i], u[i] + np.sqrt(np.diag(W)) * draws.motion[i, step], dt)
+            belief = ekf.predict(belief, u, dt, alphas)
+            seen = vis.visible(truth[moving], models.landmark_sensor.fov)
+            for k, i in enumerate(moving):
+                for lm in np.flatnonzero(seen[k]):
+                    z = noisy_observation(landmark_obs(truth[i], landmarks[lm]), chol_lm, draws.landmark[i, step, lm])
+                    belief = ekf.update_landmark(belief, i, landmarks[lm], z, Q_lm)
+            if mutual and len(moving) > 1:
+                sensor = models.mutual_sensor
+                for i in moving:
+                    for j in moving:
+                        if i == j:
+                            continue
+                        radius = scenario.robots[i].radius + scenario.robots[j].radius
+                        if mutual_visible(world, truth[i : i + 1], truth[j : j + 1], sensor.range, sensor.fov, radius)[
+                            0
+                        ]:
+                            z = noisy_observation(mutual_obs(truth[i], truth[j]), chol_mu, draws.mutual[i, j, step])
+                            belief = ekf.update_mutual(belief, i, j, z, Q_mu)
+            step += 1
+        for i in moving:  # arrival at the last waypoint is checked after the final step
+            est = belief.mean[3 * i : 3 * i + 3]
+            while queue[i] and math.hypot(*(queue[i][0] - est[:2])) < ARRIVED:
+                queue[i].pop(0)
+                trace.errors[robots[i]].append(float(np.hypot(*(truth[i, :2] - est[:2]))))
+            if queue[i]:
+                trace.truncated = True
+                trace.errors[robots[i]].extend([math.nan] * len(queue[i]))
+    return trace
+
+
+def simulate(report, sessions: int = 25, seed: int = 0) -> SimulationResult:  # type: ignore[no-untyped-def]
+    """Execute ``report``'s plan ``sessions`` times in both configurations."""
+    scenario, world, roadmap = report.scenario, report.world, report.roadmap
+    robots = [r.name for r in scenario.robots]
+    plan_paths = []
+    nodes: dict[str, list[int]] = {r: [roadmap.starts[r]] for r in robots}
+    for action in report.actions:
+        step = {}
+        for (robot, _, _), path in zip(action.moves, action.paths, strict=True):
+            step[robot] = [roadmap.nodes[n] for n in path[1:]]
+            nodes[robot].extend(path[1:])
+        plan_paths.append(step)
+    planned = sum(len(t) for t in report.trajectories.values())
+    vis = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
+    errors: dict[tuple[int, str], list[list[float]]] = {(c, r): [] for c in (1, 2) for r in robots}
+    truncated = 0
+    for s in range(sessions):
+        draws = Draws.draw(seed, s, len(robots), STEP_BUDGET * planned + 100, world.landmark_xy.shape[0])
+        cut = False
+        for config, mutual in ((1, True), (2, False)):
+            trace = run_session(scenario, world, plan_paths, draws, mutual, vis)
+            cut |= trace.truncated
+            for r in robots:
+                errors[(config, r)].append(trace.errors[r])
+        truncated += int(cut)
+    return SimulationResult(robots, nodes, {k: np.array(v, dtype=float) for k, v in errors.items()}, truncated)
+
+
+def summary_lines(result: SimulationResult, sessions: int) -> list[str]:
+    """The worst-case position error per robot in both configurations (stdout of simulate)."""
+    lines = [f"{sessions} sessions; worst-case position error (largest average error over the path's nodes):"]
+    for robot in result.robots:
+        lines.append(
+            f"  {robot}: with mutual observations {result.worst(1, robot):.3f} m, without {result.worst(2, robot):.3f} m, "
+            f"{result.reduction(robot):.1f}% lower"
+        )
+    starved = result.starved
+    lines.append(f"landmark-starved robot (largest error without mutual observations): {starved}, "
+                 f"{result.reduction(starved):.1f}% lower with mutual observations")
+    if result.truncated_sessions:
+        lines.append(f"note: {result.truncated_sessions} session(s) did not reach every node within the step budget")
+    return lines
+
+
+def to_csv(result: SimulationResult, report) -> str:  # type: ignore[no-untyped-def]
+    """Average (and spread of) the position error at each node, per robot and configuration."""
+    rows = ["config,mutual_observations,robot,node_index,roadmap_node,x,y,mean_error_m,std_error_m,max_error_m,sessions"]
+    for config in (1, 2):
+        for robot in result.robots:
+            errors = result.errors[(config, robot)]
+            for k, node in enumerate(result.nodes[robot]):
+                col = errors[:, k]
+                x, y = report.roadmap.nodes[node]
+                rows.append(
+                    f"{config},{'yes' if config == 1 else 'no'},{robot},{k},{node},{x:.4f},{y:.4f},"
+                    f"{np.nanmean(col):.6f},{np.nanstd(col):.6f},{np.nanmax(col):.6f},{int(np.sum(~np.isnan(col)))}"
+                )
+    return "\n".join(rows) + "\n"

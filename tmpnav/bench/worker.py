@@ -1,0 +1,70 @@
+"""One benchmark run in its own process: ``python -m tmpnav.bench.worker`` reads a JSON job
+on stdin and prints one JSON line with the stage timings of a cold and a warm run.
+
+Before measuring, the worker plans a tiny scenario once (``configs/two-rooms.yaml``) so
+that imports, compiled kernels and the first JVM start are not counted: the timings are
+those of a planning service that is already running, as in the paper's figures. The cold
+run uses an empty cache directory (oracle and roadmap), the warm run the same directory
+again.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from tmpnav.errors import TmpnavError
+from tmpnav.pipeline import PlanOptions, plan
+from tmpnav.types import Goals
+
+WARM_UP = Path(__file__).resolve().parents[2] / "configs" / "two-rooms.yaml"
+
+
+def warm_up() -> None:
+    if WARM_UP.exists():
+        plan(WARM_UP, PlanOptions(use_cache=False, executor="serial"))
+
+
+def run(job: dict[str, Any]) -> dict[str, Any]:
+    goals = Goals(visit=tuple(job["rooms"]), per_robot=())
+    out: dict[str, Any] = {}
+    with tempfile.TemporaryDirectory(prefix="tmpnav-bench-") as cache:
+        for phase in ("cold", "warm"):
+            options = PlanOptions(
+                encoding=job["encoding"],
+                planner=job.get("planner"),
+                timeout=job.get("planner_timeout"),
+                goals=goals,
+                cache_dir=Path(cache),
+                workers=job.get("workers"),
+            )
+            start = time.perf_counter()
+            try:
+                report = plan(job["scenario"], options)
+            except TmpnavError as err:
+                out[phase] = {"status": type(err).__name__, "error": str(err), "wall": time.perf_counter() - start}
+                continue
+            out[phase] = {
+                "status": report.status.value,
+                "times": report.times.seconds,
+                "planner_cost": report.planner_cost,
+                "resimulated_cost": report.resimulated_cost,
+                "actions": len(report.actions),
+                "task": report.task,
+                "oracle": report.oracle,
+            }
+    return out
+
+
+def main() -> None:
+    job = json.loads(sys.stdin.read())
+    warm_up()
+    print(json.dumps(run(job)), flush=True)
+
+
+if __name__ == "__main__":
+    main()
