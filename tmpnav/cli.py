@@ -241,12 +241,10 @@ def plan(scenario: Path, output: Path | None, fmt: str, **kw: Any) -> None:
     the planner saw it and as re-simulated with carried-over beliefs, and the time per
     stage. With -o DIR it also writes plan.json, plan.png and the PDDL files used.
     """
-    import json
-
     from tmpnav.pipeline import plan as run_plan
 
     report = run_plan(scenario, plan_options(kw))
-    from tmpnav.report.plan_json import plan_document
+    from tmpnav.report.plan_json import dumps, plan_document
     from tmpnav.report.text import summary
 
     written: list[Path] = []
@@ -256,7 +254,7 @@ def plan(scenario: Path, output: Path | None, fmt: str, **kw: Any) -> None:
 
         written = write_outputs(report, output, pddl_texts(report.encoded))
     if fmt == "json":
-        click.echo(json.dumps(plan_document(report), indent=1))
+        click.echo(dumps(plan_document(report)))
     else:
         click.echo(summary(report))
         for path in written:

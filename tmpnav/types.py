@@ -265,15 +265,6 @@ class CostTerms:
 
 
 @dataclass(frozen=True)
-class Move:
-    """One robot's part of a task action: from a location to a target room."""
-
-    robot: str
-    origin: str  # location name (a room, or "<robot>-start")
-    target: str  # room name
-
-
-@dataclass(frozen=True)
 class MotionResult:
     """The oracle's answer for one action: min cost over goal instantiations.
 
@@ -340,7 +331,7 @@ class PlannedAction:
 
     index: int
     name: str  # the PDDL action name
-    moves: tuple[Move, ...]
+    moves: tuple[MoveKey, ...]  # (robot, from, to) of each robot that moves
     planner_cost: float  # from the cost table, as the planner saw it
     resimulated_cost: float  # with beliefs carried over from the previous actions
     goal_nodes: tuple[int, ...]

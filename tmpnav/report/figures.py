@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Ellipse, Polygon
 
-from tmpnav.types import Scenario
+from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 
 ROBOT_COLORS = ("#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
@@ -28,10 +28,18 @@ def robot_color(index: int) -> str:
     return ROBOT_COLORS[index % len(ROBOT_COLORS)]
 
 
-def new_axes(world: World, width: float = 12.0) -> tuple[Any, Any]:
-    """A figure sized to the map's aspect ratio, with axes in metres."""
-    xmin, ymin, xmax, ymax = world.grid.extent
+def new_axes(
+    world: World,
+    width: float = 12.0,
+    extent: tuple[float, float, float, float] | None = None,
+    max_height: float | None = None,
+) -> tuple[Any, Any]:
+    """A figure sized to the aspect ratio of the map (or of ``extent``: xmin, ymin, xmax, ymax,
+    a part of it), with axes in metres; with ``max_height`` (inches) a tall view gets narrower."""
+    xmin, ymin, xmax, ymax = extent if extent is not None else world.grid.extent
     aspect = (ymax - ymin) / max(xmax - xmin, 1e-9)
+    if max_height is not None and width * aspect + 1.2 > max_height:
+        width = max(4.0, (max_height - 1.2) / aspect)
     fig, ax = plt.subplots(figsize=(width, max(3.0, width * aspect + 1.2)))
     ax.set_xlim(xmin, xmax)
     ax.set_ylim(ymin, ymax)
@@ -135,6 +143,44 @@ def draw_robot_start(ax: Any, scenario: Scenario, index: int) -> None:
     )
 
 
+def draw_instantiations(ax: Any, roadmap: Roadmap, ms: float = 3.0, label: str | None = None) -> None:
+    """The rooms' pose instantiations (sampled goal poses) as small black dots, as in the paper's Fig. 2."""
+    ids = [i for nodes in roadmap.instantiations.values() for i in nodes]
+    if not ids:
+        return
+    xy = np.asarray(roadmap.nodes)[ids]
+    ax.plot(xy[:, 0], xy[:, 1], "o", ms=ms, color="black", ls="none", zorder=4, label=label)
+
+
+def step_badge(ax: Any, xy: tuple[float, float], text: str, color: str, offset: tuple[float, float] = (0, 0)) -> None:
+    """A numbered round label (a plan step at its goal) in a robot's colour, ``offset`` in points."""
+    ax.annotate(
+        text,
+        xy,
+        xytext=offset,
+        textcoords="offset points",
+        ha="center",
+        va="center",
+        fontsize=8,
+        weight="bold",
+        color=color,
+        bbox={"boxstyle": "circle,pad=0.25", "fc": "white", "ec": color, "lw": 1.4},
+        arrowprops=None if offset == (0, 0) else {"arrowstyle": "-", "color": color, "lw": 0.8},
+        zorder=9,
+    )
+
+
+def public_mode() -> int:
+    """The mode a newly created file gets under the current umask (mkstemp's temporary files are 0600)."""
+    try:  # Linux reports the umask without changing it (os.umask would, process-wide, for an instant)
+        with open("/proc/self/status", encoding="ascii") as fh:
+            mask = next(int(line.split()[1], 8) for line in fh if line.startswith("Umask:"))
+    except (OSError, StopIteration, ValueError, IndexError):
+        mask = os.umask(0)
+        os.umask(mask)
+    return 0o666 & ~mask
+
+
 def save(fig: Any, path: Path, dpi: int = 110) -> None:
     """Write the figure atomically (a temporary file renamed over the target)."""
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -142,6 +188,7 @@ def save(fig: Any, path: Path, dpi: int = 110) -> None:
     os.close(fd)
     try:
         fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png")
+        os.chmod(tmp, public_mode())
         os.replace(tmp, path)
     finally:
         plt.close(fig)

@@ -1,0 +1,141 @@
+"""write_outputs: every file complete or none of this run; an earlier plan.json is never half-replaced."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tmpnav.report import outputs
+from tmpnav.report.outputs import write_outputs
+
+PDDL = ("(define (domain rooms))\n", "(define (problem three-rooms) (:domain rooms))\n")
+NAMES = ["plan.json", "plan.png", "domain.pddl", "problem.pddl"]
+
+pytestmark = pytest.mark.slow  # every test writes the session's real plan
+
+
+def earlier_run(out: Path) -> dict[str, bytes]:
+    """Files of an earlier run in ``out``: what must survive a failed write."""
+    out.mkdir(parents=True, exist_ok=True)
+    old = {
+        "plan.json": b'{"schema": "tmpnav-plan/1", "earlier": true}\n',
+        "plan.png": b"\x89PNG\r\n\x1a\nearlier",
+        "domain.pddl": b"(define (domain earlier))\n",
+        "problem.pddl": b"(define (problem earlier))\n",
+    }
+    for name, content in old.items():
+        (out / name).write_bytes(content)
+    return old
+
+
+def contents(out: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in out.iterdir()}
+
+
+def test_writes_all_files(plan_report: Any, tmp_path: Path) -> None:
+    out = tmp_path / "new" / "out"  # missing: created
+    written = write_outputs(plan_report, out, PDDL)
+    assert written == [out / name for name in NAMES]
+    assert sorted(os.listdir(out)) == sorted(NAMES)  # no temporary file left
+    doc = json.loads((out / "plan.json").read_text(encoding="utf-8"))
+    assert doc["schema"] == "tmpnav-plan/1" and len(doc["actions"]) == len(plan_report.actions)
+    assert (out / "plan.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (out / "domain.pddl").read_text() == PDDL[0] and (out / "problem.pddl").read_text() == PDDL[1]
+
+
+def test_files_get_the_umask_mode_not_mkstemp_0600(plan_report: Any, tmp_path: Path) -> None:
+    old = os.umask(0o022)
+    try:
+        write_outputs(plan_report, tmp_path, PDDL)
+    finally:
+        os.umask(old)
+    assert {(tmp_path / n).stat().st_mode & 0o777 for n in NAMES} == {0o644}
+
+
+def test_without_pddl(plan_report: Any, tmp_path: Path) -> None:
+    assert write_outputs(plan_report, tmp_path, None) == [tmp_path / "plan.json", tmp_path / "plan.png"]
+    assert sorted(os.listdir(tmp_path)) == ["plan.json", "plan.png"]
+
+
+def test_replaces_an_earlier_run(plan_report: Any, tmp_path: Path) -> None:
+    old = earlier_run(tmp_path)
+    write_outputs(plan_report, tmp_path, PDDL)
+    new = contents(tmp_path)
+    assert set(new) == set(NAMES)
+    assert all(new[name] != old[name] for name in NAMES)
+
+
+def test_figure_failure_leaves_the_earlier_run_untouched(
+    plan_report: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    old = earlier_run(tmp_path)
+
+    def broken_plot(report: Any, path: Path) -> None:
+        path.write_bytes(b"\x89PNG half a figure")  # some bytes, then the failure
+        raise RuntimeError("matplotlib fell over")
+
+    monkeypatch.setattr(outputs, "plot_plan", broken_plot)
+    with pytest.raises(RuntimeError, match="fell over"):
+        write_outputs(plan_report, tmp_path, PDDL)
+    assert contents(tmp_path) == old  # same files, same bytes, no temporary file
+
+
+def test_failure_while_writing_a_file_leaves_no_partial_file(
+    plan_report: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    old = earlier_run(tmp_path)
+    real = outputs.stage_text
+    calls: list[Path] = []
+
+    def disk_full_on_problem(tmp: Path, text: str) -> None:
+        calls.append(tmp)
+        if len(calls) == 3:  # plan.json and domain.pddl are staged, problem.pddl fails half-way
+            tmp.write_text(text[: len(text) // 2])
+            raise OSError(28, "No space left on device")
+        real(tmp, text)
+
+    monkeypatch.setattr(outputs, "stage_text", disk_full_on_problem)
+    with pytest.raises(OSError, match="No space left"):
+        write_outputs(plan_report, tmp_path, PDDL)
+    assert len(calls) == 3
+    assert contents(tmp_path) == old
+    assert json.loads((tmp_path / "plan.json").read_text())["earlier"] is True
+
+
+def test_partial_plan_json_never_replaces_the_earlier_one(
+    plan_report: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    old = earlier_run(tmp_path)
+
+    def interrupted(tmp: Path, text: str) -> None:
+        tmp.write_text(text[:100])
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(outputs, "stage_text", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        write_outputs(plan_report, tmp_path, None)
+    assert contents(tmp_path) == old
+
+
+def test_failure_removes_the_directory_it_created(
+    plan_report: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def broken_plot(report: Any, path: Path) -> None:
+        raise RuntimeError("no figure")
+
+    monkeypatch.setattr(outputs, "plot_plan", broken_plot)
+    out = tmp_path / "fresh"
+    with pytest.raises(RuntimeError):
+        write_outputs(plan_report, out, PDDL)
+    assert not out.exists()
+    assert os.listdir(tmp_path) == []
+
+
+def test_wrong_pddl_arity_writes_nothing(plan_report: Any, tmp_path: Path) -> None:
+    with pytest.raises(ValueError):
+        write_outputs(plan_report, tmp_path, ("only a domain",))  # type: ignore[arg-type]
+    assert os.listdir(tmp_path) == []

@@ -1,0 +1,248 @@
+"""plan.png: the task-motion plan drawn as in the paper's Fig. 2.
+
+The map with rooms, doors and landmarks; each robot's re-simulated belief mean in its colour
+with 2-sigma ellipses of the (x, y) covariance along it; the rooms' pose instantiations as
+small black dots; the start poses; and a numbered badge at every plan step's goal.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.colors import to_rgb
+from matplotlib.lines import Line2D
+from matplotlib.patches import Ellipse
+
+from tmpnav.report import figures as fg
+from tmpnav.report.plan_json import move_parts
+from tmpnav.types import TrajectoryStep
+
+N_SIGMA = 2.0
+#: ellipse outline as in the paper's Fig. 2 (red), filled in the robot's colour: a red outline stands out
+#: against every robot's line, even where an ellipse is only a few centimetres wide
+ELLIPSE_EDGE = "#e41a1c"
+MAX_ELLIPSES = 45  # per robot: more and they merge into a band
+WIDE = 0.45  # height / width of the view under which the figure is wider and the legend goes below
+#: offsets (points) of a badge that would hide another badge or a start marker; robot names sit up-right
+NUDGES = ((-20.0, 10.0), (20.0, -14.0), (-20.0, -14.0), (0.0, 24.0))
+
+
+def ellipse_spacing(report: Any) -> float:
+    """Distance (m) travelled by the belief mean between two drawn ellipses.
+
+    Chosen so that the longest trajectory gets at most ``MAX_ELLIPSES`` ellipses, and never
+    closer than 0.6 m, where neighbouring 2-sigma ellipses of a well-localized robot start to touch.
+    """
+    longest = max((_travelled(steps)[-1] for steps in report.trajectories.values() if steps), default=0.0)
+    return max(0.6, longest / MAX_ELLIPSES)
+
+
+def _travelled(steps: list[TrajectoryStep]) -> np.ndarray:
+    """Cumulative distance (m) of the belief mean at every step."""
+    xy = np.array([s.mean[:2] for s in steps], dtype=float).reshape(-1, 2)
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
+
+
+def ellipse_steps(steps: list[TrajectoryStep], spacing: float, keep: set[int] | None = None) -> list[int]:
+    """Indices of the steps to draw an ellipse at: one every ``spacing`` metres, the last step,
+    and the steps in ``keep`` (the goals of the plan steps). Turning on the spot adds none."""
+    if not steps:
+        return []
+    s = _travelled(steps)
+    chosen, last = [0], 0.0
+    for i in range(1, len(steps)):
+        if s[i] - last >= spacing:
+            chosen.append(i)
+            last = s[i]
+    chosen.append(len(steps) - 1)
+    return sorted(set(chosen) | (keep or set()))
+
+
+def goal_steps(report: Any, robot: str) -> set[int]:
+    """Indices of ``robot``'s trajectory steps at the goal node of each of its plan steps."""
+    steps = report.trajectories.get(robot, [])
+    found, i = set(), 0
+    for action in report.actions:
+        for move, path in zip(action.moves, action.paths, strict=True):
+            if move_parts(move)[0] != robot:
+                continue
+            for node in path[1:]:
+                i = next((j for j in range(i + 1, len(steps)) if steps[j].node == node), i)
+            found.add(i)
+    return found
+
+
+def _draw_beliefs(ax: Any, report: Any, spacing: float) -> None:
+    for index, robot in enumerate(r.name for r in report.scenario.robots):
+        steps = report.trajectories.get(robot, [])
+        if not steps:
+            continue
+        color = fg.robot_color(index)
+        xy = np.array([s.mean[:2] for s in steps], dtype=float)
+        # later robots are drawn thinner on top, so robots that share a corridor both stay visible
+        lw = max(1.1, 2.4 - 0.9 * index)
+        ax.plot(xy[:, 0], xy[:, 1], "-", color=color, lw=lw, zorder=5 + 0.01 * index, solid_capstyle="round")
+        for i in ellipse_steps(steps, spacing, goal_steps(report, robot)):
+            patch = fg.covariance_ellipse(np.array(steps[i].mean), np.array(steps[i].cov), N_SIGMA, lw=0.9)
+            patch.set_facecolor((*to_rgb(color), 0.25))
+            patch.set_edgecolor(ELLIPSE_EDGE)
+            patch.set_zorder(5.5)  # above the lines: the small ellipses of a well-localized robot stay visible
+            ax.add_patch(patch)
+
+
+def plan_extent(report: Any, margin: float = 1.0, min_aspect: float = 1.6) -> tuple[float, float, float, float] | None:
+    """The part of the map the plan uses (xmin, ymin, xmax, ymax): trajectories with their ellipses,
+    start poses and the rooms moved from and to, plus ``margin`` metres, widened to at least ``min_aspect``
+    (a tall strip beside the legend reads badly); None when that is most of the map."""
+    xs: list[float] = []
+    ys: list[float] = []
+    for steps in report.trajectories.values():
+        for st in steps:
+            r = N_SIGMA * float(np.sqrt(max(st.cov[0][0], st.cov[1][1], 0.0)))
+            xs += [st.mean[0] - r, st.mean[0] + r]
+            ys += [st.mean[1] - r, st.mean[1] + r]
+    rooms = {name for a in report.actions for m in a.moves for name in move_parts(m)[1:]}
+    for room in report.scenario.rooms:
+        if room.name in rooms:
+            xs += [p[0] for p in room.polygon]
+            ys += [p[1] for p in room.polygon]
+    for robot in report.scenario.robots:
+        xs.append(robot.pose.x)
+        ys.append(robot.pose.y)
+    mxmin, mymin, mxmax, mymax = report.world.grid.extent
+    if not xs:
+        return None
+    box = (
+        max(mxmin, min(xs) - margin),
+        max(mymin, min(ys) - margin),
+        min(mxmax, max(xs) + margin),
+        min(mymax, max(ys) + margin),
+    )
+    box = _widen(box, (mxmin, mymin, mxmax, mymax), min_aspect)
+    share = (box[2] - box[0]) * (box[3] - box[1]) / max((mxmax - mxmin) * (mymax - mymin), 1e-9)
+    return None if share > 0.7 else box
+
+
+def _widen(
+    box: tuple[float, float, float, float], bounds: tuple[float, float, float, float], min_aspect: float
+) -> tuple[float, float, float, float]:
+    """``box`` grown sideways, inside ``bounds``, to at least ``min_aspect`` (width / height)."""
+    xmin, ymin, xmax, ymax = box
+    missing = min_aspect * (ymax - ymin) - (xmax - xmin)
+    if missing <= 0:
+        return box
+    left = min(missing / 2, xmin - bounds[0])
+    right = min(missing - left, bounds[2] - xmax)
+    left = min(missing - right, xmin - bounds[0])
+    return xmin - left, ymin, xmax + right, ymax
+
+
+def _draw_step_badges(ax: Any, report: Any) -> None:
+    """Numbered badges at every plan step's goal, nudged apart when two fall on the same spot."""
+    names = [r.name for r in report.scenario.robots]
+    placed = [(r.pose.x, r.pose.y) for r in report.scenario.robots]  # keep the start markers readable
+    for action in report.actions:
+        for move, pose in zip(action.moves, action.goal_poses, strict=True):
+            robot = move_parts(move)[0]
+            x, y = float(pose[0]), float(pose[1])
+            crowded = sum(1 for px, py in placed if (px - x) ** 2 + (py - y) ** 2 < 0.8**2)
+            offset = (0.0, 0.0) if not crowded else NUDGES[(crowded - 1) % len(NUDGES)]
+            fg.step_badge(ax, (x, y), str(action.index), fg.robot_color(names.index(robot)), offset)
+            placed.append((x, y))
+
+
+def _legend(ax: Any, report: Any, spacing: float) -> None:
+    handles, labels = [], []
+    kinds = _kinds_in_view(ax, report)
+    for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):  # landmarks, pose instantiations
+        if label == "pose instantiations" or label in kinds:
+            handles.append(handle)
+            labels.append(label)
+    extra: list[tuple[Any, str]] = []
+    for index, robot in enumerate(r.name for r in report.scenario.robots):
+        if report.trajectories.get(robot):
+            extra.append(
+                (Line2D([], [], color=fg.robot_color(index), lw=max(1.1, 2.4 - 0.9 * index)), f"{robot}: belief mean")
+            )
+    extra.append(
+        (
+            Ellipse((0, 0), 1, 0.6, fc=(0.3, 0.3, 0.3, 0.25), ec=ELLIPSE_EDGE, lw=0.9),
+            f"{N_SIGMA:g}σ (x, y) covariance, every {spacing:.1f} m",
+        )
+    )
+    extra.append(
+        (
+            Line2D([], [], marker="o", ms=11, mfc="white", mec="black", ls="none"),
+            "goal of plan step k (numbered)",
+        )
+    )
+    extra.append((Line2D([], [], marker="o", ms=9, color="#777777", ls="none"), "start pose (2σ initial ellipse)"))
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    # beside a wide, flat map the legend would be taller than the map: put it underneath
+    below = (y1 - y0) / max(x1 - x0, 1e-9) < WIDE
+    ax.legend(
+        [h for h, _ in extra] + handles,
+        [label for _, label in extra] + labels,
+        loc="upper center" if below else "upper left",
+        bbox_to_anchor=(0.5, -_below_label(ax)) if below else (1.0, 1.0),
+        ncol=4 if below else 1,
+        fontsize=9,
+        frameon=False,
+    )
+
+
+def _below_label(ax: Any, inches: float = 0.55) -> float:
+    """``inches`` below the axes, as a fraction of their height: clear of the x axis label."""
+    height = ax.figure.get_size_inches()[1] * ax.get_position().height
+    return inches / max(height, 1e-9)
+
+
+def _kinds_in_view(ax: Any, report: Any) -> set[str]:
+    """Landmark kinds with at least one marker inside the axes (the view may be a part of the map)."""
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    return {lm.kind for lm in report.scenario.landmarks if x0 <= lm.position[0] <= x1 and y0 <= lm.position[1] <= y1}
+
+
+def _title(report: Any) -> str:
+    sc = report.scenario
+    status = getattr(report.status, "value", str(report.status))
+    mutual = "with mutual observations" if sc.models.mutual_observations else "without mutual observations"
+    n = len(report.actions)
+    return (
+        f"{sc.name}: {n} plan step{'s' if n != 1 else ''}, {mutual}\n"
+        f"cost: planner {report.planner_cost:.3f}, re-simulated {report.resimulated_cost:.3f} "
+        f"({report.encoding} encoding, {report.planner}, {status})"
+    )
+
+
+def plot_plan(report: Any, path: Path, crop: bool = True) -> None:
+    """Write the plan figure (PNG) of a :class:`~tmpnav.pipeline.PlanReport` to ``path``, atomically.
+
+    With ``crop`` the view shows the part of the map the plan uses (see :func:`plan_extent`),
+    so the ellipses of a short plan in a large map stay visible.
+    """
+    sc, world = report.scenario, report.world
+    extent = plan_extent(report) if crop else None
+    xmin, ymin, xmax, ymax = extent if extent is not None else world.grid.extent
+    width = 15.0 if (ymax - ymin) / max(xmax - xmin, 1e-9) < WIDE else 12.0
+    fig, ax = fg.new_axes(world, width=width, extent=extent, max_height=9.0)
+    fg.draw_map(ax, world)
+    fg.draw_rooms(ax, sc)
+    fg.draw_doors(ax, sc)
+    fg.draw_instantiations(ax, report.roadmap, label="pose instantiations")
+    fg.draw_landmarks(ax, sc)
+    spacing = ellipse_spacing(report)
+    _draw_beliefs(ax, report, spacing)
+    for i in range(len(sc.robots)):
+        fg.draw_robot_start(ax, sc, i)
+    _draw_step_badges(ax, report)
+    if extent is not None:
+        ax.set_xlim(extent[0], extent[2])
+        ax.set_ylim(extent[1], extent[3])
+        for text in ax.texts:  # room names of rooms outside the view would stretch the figure
+            text.set_clip_on(True)
+    ax.set_title(_title(report), fontsize=10)
+    _legend(ax, report, spacing)
+    fg.save(fig, path)

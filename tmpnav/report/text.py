@@ -1,0 +1,144 @@
+"""The terminal summary of a plan: what ``tmpnav plan`` prints (plain text, no colours).
+
+Example (the paper's Fig. 2 task, ``tmpnav plan configs/corridor.yaml``)::
+
+    corridor (configs/corridor.yaml): encoding mixed, planner enhsp-opt, solved-optimally
+    2 robots, mutual observations on; goals: r1 visits L10; r2 visits L1
+
+    step  moves                            planner cost  re-sim cost     diff  t [s]
+       1  r1: L1 -> L10  &  r2: L10 -> L1        11.278       11.278   +0.000  0.0-24.0
+    total (1 step)                               11.278       11.278   +0.000  0.0-24.0
+
+    robot  travelled  control steps  final pos. std  max pos. std  final heading std
+    r1         9.1 m             48          0.27 m        0.28 m            6.3 deg
+    r2         9.7 m             48          0.13 m        0.30 m            2.6 deg
+    (pos. std = sqrt(var x + var y) of the re-simulated belief; travelled: by the belief mean)
+
+    time [s]  roadmap  oracle  encode  planner  resimulate   total  (load)
+                 0.58    0.34    0.55     0.59        0.01    2.06    0.19
+    oracle cache (/home/me/.cache/tmpnav): 1 hit, 3 misses (25% hits); roadmap grown
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tmpnav.report.plan_json import STAGES, action_spans, move_parts
+
+
+def _display_path(path: Path) -> str:
+    """The scenario file relative to the working directory when it lies below it."""
+    try:
+        return str(Path(path).resolve().relative_to(Path(os.getcwd()).resolve()))
+    except ValueError:
+        return str(path)
+
+
+def _goals(report: Any) -> str:
+    goals = report.scenario.goals
+    parts = []
+    if goals.visit:
+        parts.append("visit " + ", ".join(goals.visit))
+    parts += [f"{robot} visits {', '.join(rooms)}" for robot, rooms in goals.per_robot]
+    return "; ".join(parts) or "none"
+
+
+def _header(report: Any) -> list[str]:
+    sc = report.scenario
+    status = getattr(report.status, "value", str(report.status))
+    if status == "solved-satisficing":
+        status += " (not proven optimal)"
+    mutual = "on" if sc.models.mutual_observations else "off"
+    return [
+        f"{sc.name} ({_display_path(sc.source)}): encoding {report.encoding}, planner {report.planner}, {status}",
+        f"{len(sc.robots)} robots, mutual observations {mutual}; goals: {_goals(report)}",
+    ]
+
+
+def _cost(x: float) -> str:
+    return f"{x:.3f}" if math.isfinite(x) else str(x)
+
+
+def _steps(report: Any) -> list[str]:
+    """One row per plan step and the totals; ``diff`` is re-simulated minus planner cost."""
+    spans = action_spans(report)
+    moves = ["  &  ".join(f"{r}: {o} -> {t}" for r, o, t in (move_parts(m) for m in a.moves)) for a in report.actions]
+    n = len(report.actions)
+    total = f"total ({n} step{'s' if n != 1 else ''})"
+    width = max([len("moves"), len(total) - 6, *map(len, moves)])
+    rows = [f"step  {'moves':<{width}}  planner cost  re-sim cost     diff  t [s]"]
+    for k, (action, text) in enumerate(zip(report.actions, moves, strict=True)):
+        rows.append(
+            f"{action.index:>4}  {text:<{width}}  {_cost(action.planner_cost):>12}  "
+            f"{_cost(action.resimulated_cost):>11}  {action.resimulated_cost - action.planner_cost:>+7.3f}  "
+            f"{_span(spans, k, k)}"
+        )
+    if not report.actions:
+        rows.append("   -  (no moves: the goals hold in the initial state)")
+    rows.append(
+        f"{total:<{width + 6}}  {_cost(report.planner_cost):>12}  {_cost(report.resimulated_cost):>11}  "
+        f"{report.resimulated_cost - report.planner_cost:>+7.3f}  {_span(spans, 0, n - 1)}"
+    )
+    return rows
+
+
+def _span(spans: list[tuple[float, float]] | None, first: int, last: int) -> str:
+    if not spans or last < first:
+        return ""
+    return f"{spans[first][0]:.1f}-{spans[last][1]:.1f}"
+
+
+def _beliefs(report: Any) -> list[str]:
+    """Per robot: distance driven by the belief mean, and its position / heading uncertainty."""
+    rows = ["robot  travelled  control steps  final pos. std  max pos. std  final heading std"]
+    for robot, steps in report.trajectories.items():
+        if not steps:
+            continue
+        means = np.array([s.mean for s in steps], dtype=float)
+        covs = np.array([s.cov for s in steps], dtype=float)
+        travelled = float(np.sum(np.linalg.norm(np.diff(means[:, :2], axis=0), axis=1)))
+        pos_std = np.sqrt(np.clip(covs[:, 0, 0] + covs[:, 1, 1], 0.0, None))  # sqrt(trace of the (x, y) block)
+        heading_std = math.degrees(math.sqrt(max(covs[-1, 2, 2], 0.0)))
+        rows.append(
+            f"{robot:<5}  {travelled:>7.1f} m  {len(steps) - 1:>13}  {pos_std[-1]:>12.2f} m  {pos_std.max():>10.2f} m"
+            f"  {heading_std:>13.1f} deg"
+        )
+    rows.append("(pos. std = sqrt(var x + var y) of the re-simulated belief; travelled: by the belief mean)")
+    return rows
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}" if n == 1 else f"{n} {word}{'es' if word.endswith('s') else 's'}"
+
+
+def _times(report: Any) -> list[str]:
+    """Seconds per stage as a small table (``total`` excludes ``load``), then the oracle cache."""
+    seconds = report.times.seconds
+    cache = report.cache
+    stages = [s for s in STAGES if s != "load" and s in seconds] + (["load"] if "load" in seconds else [])
+    names = [f"({s})" if s == "load" else s for s in stages]
+    widths = [max(len(n), 6) for n in names]
+    head = "time [s]  " + "  ".join(f"{n:>{w}}" for n, w in zip(names, widths, strict=True))
+    row = " " * 10 + "  ".join(f"{seconds[s]:>{w}.2f}" for s, w in zip(stages, widths, strict=True))
+    hits, misses = int(cache.get("hits", 0)), int(cache.get("misses", 0))
+    roadmap = "roadmap from cache" if cache.get("roadmap_hit") else "roadmap grown"
+    if report.oracle.get("table_cache_hit"):
+        roadmap += ", cost table from cache"
+    if cache.get("enabled", False):
+        share = f" ({100 * hits / (hits + misses):.0f}% hits)" if hits + misses else ""
+        where = f" ({cache['directory']})" if cache.get("directory") else ""
+        cache_line = f"oracle cache{where}: {_plural(hits, 'hit')}, {_plural(misses, 'miss')}{share}; {roadmap}"
+    else:
+        cache_line = f"oracle cache: off ({_plural(misses, 'action')} simulated); {roadmap}"
+    return [head, row, cache_line] + [f"cache warning: {w}" for w in cache.get("warnings", [])]
+
+
+def summary(report: Any) -> str:
+    """The plan at a glance: header, one line per plan step, totals, beliefs, time per stage."""
+    blocks = [_header(report), _steps(report), _beliefs(report), _times(report)]
+    return "\n\n".join("\n".join(block) for block in blocks)
