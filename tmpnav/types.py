@@ -283,6 +283,7 @@ class MotionResult:
     final_cov: tuple[tuple[float, ...], ...]
     mutual_steps: int = 0  # steps with at least one mutual observation
     final_headings: tuple[float, ...] = ()  # nominal heading of each robot at its goal
+    pruned: bool = False  # a pair proved unable to save min_gain: cost is a lower bound only
 
     @property
     def final(self) -> Belief:

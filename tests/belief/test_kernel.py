@@ -65,6 +65,7 @@ def _run_kernel(models: Models, landmarks, motions, mean0, cov0, mvis, lm_noise,
         np.empty((1, n)),
         np.empty((1, n, 2)),
         np.empty(1, dtype=np.int64),
+        np.empty((0, 1, n)),
     )
     hm, hc = run_sequences(
         n,
@@ -104,7 +105,7 @@ def _run_kernel(models: Models, landmarks, motions, mean0, cov0, mvis, lm_noise,
 def test_kernel_matches_filterpy_step_by_step(n: int, ml: bool, seed: int) -> None:
     models = _models(ml)
     landmarks, motions, mean0, cov0, mvis, lm_noise, mu_noise, h = _case(seed * 7 + n, n, ml)
-    hm, hc, (_, _, csig, _, mutual) = _run_kernel(models, landmarks, motions, mean0, cov0, mvis, lm_noise, mu_noise, h)
+    hm, hc, (_, _, csig, _, mutual, _) = _run_kernel(models, landmarks, motions, mean0, cov0, mvis, lm_noise, mu_noise, h)
 
     controls = np.zeros((n, h, 2))
     poses = np.empty((n, h + 1, 3))
@@ -170,6 +171,7 @@ def test_restart_from_shared_prefix_is_bit_identical() -> None:
             np.empty((C, 1)),
             np.empty((C, 1, 2)),
             np.empty(C, dtype=np.int64),
+            np.empty((C, T + 1, 1)),
         )
         run_sequences(
             *args,
@@ -188,3 +190,5 @@ def test_restart_from_shared_prefix_is_bit_identical() -> None:
     assert np.array_equal(shared[0][1], alone[0][0])
     assert np.array_equal(shared[1][1], alone[1][0])
     assert np.array_equal(shared[2][1], alone[2][0])
+    assert np.array_equal(shared[5][1], alone[5][0])  # the running c_Sigma history too
+    assert shared[5][1][-1, 0] == shared[2][1][0]

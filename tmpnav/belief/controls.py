@@ -8,13 +8,11 @@ trajectory agree to rounding error.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from tmpnav.belief.kernel import integrate_poses
-from tmpnav.belief.models import wrap_angle
+from tmpnav.belief.kernel import turn_then_drive
 
 #: below these a turn or an edge is treated as already done (rad, m)
 ANGLE_EPS = 1e-9
@@ -40,11 +38,6 @@ class PathControls:
         return int(self.controls.shape[0])
 
 
-def _steps(amount: float, rate: float, dt: float) -> int:
-    """Smallest number of steps covering ``amount`` at no more than ``rate`` per second."""
-    return max(1, math.ceil(amount / (rate * dt)))
-
-
 def path_controls(points: np.ndarray, start_theta: float, speed: float, turn_rate: float, dt: float) -> PathControls:
     """Turn-then-drive controls that take a robot through ``points`` (P, 2), in metres.
 
@@ -61,35 +54,10 @@ def path_controls(points: np.ndarray, start_theta: float, speed: float, turn_rat
         raise ValueError("path_controls needs at least one point")
     if speed <= 0 or turn_rate <= 0 or dt <= 0:
         raise ValueError("speed, turn_rate and dt must be positive")
-    pose = np.array([pts[0, 0], pts[0, 1], float(wrap_angle(start_theta))])
-    controls: list[np.ndarray] = []
-    poses = [pose[None, :]]
-    node_steps = [0]
-    steps = 0
-    for target in pts[1:]:
-        delta = target - pose[:2]
-        length = math.hypot(delta[0], delta[1])
-        if length >= LENGTH_EPS:
-            dtheta = float(wrap_angle(math.atan2(delta[1], delta[0]) - pose[2]))
-            segments = []
-            if abs(dtheta) >= ANGLE_EPS:
-                n_turn = _steps(abs(dtheta), turn_rate, dt)
-                segments.append((n_turn, (0.0, dtheta / (n_turn * dt))))
-            n_drive = _steps(length, speed, dt)
-            segments.append((n_drive, (length / (n_drive * dt), 0.0)))
-            for n, u in segments:
-                seg = np.tile(np.array(u, dtype=float), (n, 1))
-                seg_poses = integrate_poses(pose, seg, dt)  # paper eq. (4), step by step
-                controls.append(seg)
-                poses.append(seg_poses[1:])
-                pose = seg_poses[-1]
-                steps += n
-        node_steps.append(steps)
-    return PathControls(
-        controls=np.concatenate(controls).reshape(-1, 2) if controls else np.zeros((0, 2)),
-        poses=np.concatenate(poses),
-        node_steps=np.array(node_steps, dtype=int),
-    )
+    controls, poses, node_steps = turn_then_drive(
+        np.ascontiguousarray(pts), float(start_theta), float(speed), float(turn_rate), float(dt), ANGLE_EPS, LENGTH_EPS
+    )  # compiled; the motion model is paper eq. (4), applied step by step
+    return PathControls(controls=controls, poses=poses, node_steps=node_steps.astype(int))
 
 
 def pad(controls: np.ndarray, poses: np.ndarray, T_total: int) -> tuple[np.ndarray, np.ndarray]:

@@ -176,6 +176,7 @@ def run_sequences(  # type: ignore[no-untyped-def]
     out_csig,
     out_fxy,
     out_mutual,
+    out_csig_hist,
 ):
     """Propagate C simulations of n robots; see the module docstring.
 
@@ -187,7 +188,8 @@ def run_sequences(  # type: ignore[no-untyped-def]
     previous simulation had after step ``c_start[c]``, and runs to step ``c_horizon[c]``;
     ``mvis[c_mvis_off[c] + k, i, j]``: robot i sees robot j at step k.
     Outputs per simulation: final joint belief, c_Sigma per robot, each robot's mean
-    position at its arrival, and the number of steps with a mutual observation. Returns the
+    position at its arrival, and the number of steps with a mutual observation; if
+    ``out_csig_hist`` has one row per simulation, the running c_Sigma at every step. Returns the
     history buffers (means, covariances): after a call with one simulation they hold its
     whole trajectory.
     """
@@ -329,6 +331,8 @@ def run_sequences(  # type: ignore[no-untyped-def]
         out_csig[c] = h_csig[h]
         out_fxy[c] = h_fxy[h]
         out_mutual[c] = h_mut[h]
+        if out_csig_hist.shape[0] == c_group.shape[0]:  # cumulative c_Sigma at every step, when asked
+            out_csig_hist[c, : h + 1] = h_csig[: h + 1]
     return h_mean, h_cov
 
 
@@ -421,3 +425,50 @@ def joint_lex_order(a, b, P1, P2):  # type: ignore[no-untyped-def]
         order[:] = tmp
         width *= 2
     return order
+
+
+@nb.njit(cache=True)
+def _n_steps(amount, rate, dt):  # type: ignore[no-untyped-def]
+    return max(1, math.ceil(amount / (rate * dt)))
+
+
+@nb.njit(cache=True)
+def turn_then_drive(pts, theta0, speed, turn_rate, dt, angle_eps, length_eps):  # type: ignore[no-untyped-def]
+    """Controls (T, 2), nominal poses (T+1, 3) and the step reaching each point (P,) of
+    :func:`tmpnav.belief.controls.path_controls`, which documents the rule."""
+    P = pts.shape[0]
+    bound = 1
+    for k in range(1, P):
+        d = math.hypot(pts[k, 0] - pts[k - 1, 0], pts[k, 1] - pts[k - 1, 1])
+        bound += _n_steps(PI, turn_rate, dt) + _n_steps(d + 1e-6, speed, dt) + 2
+    controls = np.zeros((bound, 2))
+    poses = np.zeros((bound + 1, 3))
+    node_steps = np.zeros(P, dtype=np.int64)
+    poses[0, 0], poses[0, 1], poses[0, 2] = pts[0, 0], pts[0, 1], _wrap(theta0)
+    T = 0
+    for k in range(1, P):
+        dx, dy = pts[k, 0] - poses[T, 0], pts[k, 1] - poses[T, 1]
+        length = math.hypot(dx, dy)
+        if length >= length_eps:
+            dtheta = _wrap(math.atan2(dy, dx) - poses[T, 2])
+            if abs(dtheta) >= angle_eps:
+                n = _n_steps(abs(dtheta), turn_rate, dt)
+                omega = dtheta / (n * dt)
+                for _ in range(n):
+                    controls[T, 0], controls[T, 1] = 0.0, omega
+                    th = poses[T, 2]
+                    poses[T + 1, 0] = poses[T, 0] + 0.0 * dt * math.cos(th)
+                    poses[T + 1, 1] = poses[T, 1] + 0.0 * dt * math.sin(th)
+                    poses[T + 1, 2] = _wrap(th + omega * dt)
+                    T += 1
+            n = _n_steps(length, speed, dt)
+            v = length / (n * dt)
+            for _ in range(n):
+                controls[T, 0], controls[T, 1] = v, 0.0
+                th = poses[T, 2]
+                poses[T + 1, 0] = poses[T, 0] + v * dt * math.cos(th)
+                poses[T + 1, 1] = poses[T, 1] + v * dt * math.sin(th)
+                poses[T + 1, 2] = _wrap(th + 0.0 * dt)
+                T += 1
+        node_steps[k] = T
+    return controls[:T].copy(), poses[: T + 1].copy(), node_steps

@@ -51,12 +51,16 @@ class Request:
 
     ``joint_cov`` is the full initial covariance (3n x 3n) when the robots' beliefs are
     correlated (carried over from earlier joint moves); None means block-diagonal.
+    ``min_gain`` (pairs): when a lower bound proves the pair cannot save this fraction of
+    its two single moves, its joint simulations are skipped and the result is marked
+    ``pruned`` with the bound as its cost (see :meth:`_Pairs.prune`).
     """
 
     robots: tuple[str, ...]
     starts: tuple[StartState, ...]
     rooms: tuple[str, ...]
     joint_cov: tuple[tuple[float, ...], ...] | None = None
+    min_gain: float | None = None  # a pair that provably saves less is not simulated
 
     @property
     def n(self) -> int:
@@ -82,11 +86,12 @@ class EvalStats:
     single_sims: int = 0
     joint_sims: int = 0
     joint_factorized: int = 0
+    pairs_pruned: int = 0  # pair requests proved unable to save min_gain (no joint simulation)
     steps_total: int = 0  # EKF steps the simulations span
     steps_computed: int = 0  # EKF steps actually computed (shared prefixes run once)
 
     def add(self, other: EvalStats) -> None:
-        for name in ("single_sims", "joint_sims", "joint_factorized", "steps_total", "steps_computed"):
+        for name in ("single_sims", "joint_sims", "joint_factorized", "pairs_pruned", "steps_total", "steps_computed"):
             setattr(self, name, getattr(self, name) + getattr(other, name))
 
 
@@ -188,9 +193,11 @@ def _simulate(
     c_mvis_off: np.ndarray,
     mvis: np.ndarray,
     mu_noise: np.ndarray | None = None,
+    keep_csig: bool = False,
 ) -> tuple[np.ndarray, ...]:
     """One kernel call: final beliefs, c_Sigma, arrival means and mutual steps per combo,
-    then the history buffers (the whole trajectory of the last combo)."""
+    the running c_Sigma of every step (when ``keep_csig``), then the history buffers (the
+    whole trajectory of the last combo)."""
     models = lib.scenario.models
     landmarks = np.ascontiguousarray(lib.world.landmark_xy)
     L = landmarks.shape[0]
@@ -205,6 +212,7 @@ def _simulate(
         np.empty((C, n)),
         np.empty((C, n, 2)),
         np.empty(C, dtype=np.int64),
+        np.zeros((C, T_max + 1, n)) if keep_csig else np.zeros((0, 1, n)),
     )
     Q_lm, Q_mu = models.landmark_sensor.Q, models.mutual_sensor.Q
     h_mean, h_cov = run_sequences(
@@ -278,7 +286,7 @@ def trajectory(
         np.ascontiguousarray(mvis),
         mu_noise[None],
     )
-    _, _, csig, fxy, mutual, h_mean, h_cov = out
+    _, _, csig, fxy, mutual, _, h_mean, h_cov = out
     terms = tuple(
         CostTerms(float(table.c_u[i]), float(np.hypot(*(fxy[0, i] - m.poses[-1, :2]))), float(csig[0, i]))
         for i, m in enumerate(motions)
@@ -312,7 +320,6 @@ def evaluate(lib: MotionLibrary, requests: list[Request]) -> tuple[list[MotionRe
             wanted.setdefault((robot, start), set()).update(lib.roadmap.instantiations[room])
     sets = _motion_sets(lib, wanted)
     pairs = _Pairs(lib, sets, requests)
-    pairs.run(stats)
     singles = _Singles(lib, sets)
     for req in requests:
         if req.n == 1 and (req.robots[0], req.starts[0]) in sets:
@@ -321,6 +328,7 @@ def evaluate(lib: MotionLibrary, requests: list[Request]) -> tuple[list[MotionRe
     for ms, local in pairs.singles_needed():
         singles.need(ms, local)
     singles.run(stats)
+    pairs.run(stats, singles)
     out: list[MotionResult | None] = []
     for i, req in enumerate(requests):
         out.append(singles.best(req) if req.n == 1 else pairs.best(i, singles))
@@ -358,9 +366,10 @@ class _Singles:
         c_group, c_motion, c_start, c_horizon = (np.concatenate(x) for x in (cg, cm, cs, ch))
         c_mvis_off = np.concatenate([[0], np.cumsum(c_horizon + 1)[:-1]]).astype(np.int64)
         mvis = np.zeros((int((c_horizon + 1).sum()), 1, 1), dtype=bool)
-        self.mean, self.cov, csig, fxy, _, _, _ = _simulate(
-            self.lib, table, 1, groups, c_group, c_motion[:, None], c_start, c_horizon, c_mvis_off, mvis
+        self.mean, self.cov, csig, fxy, _, hist, _, _ = _simulate(
+            self.lib, table, 1, groups, c_group, c_motion[:, None], c_start, c_horizon, c_mvis_off, mvis, keep_csig=True
         )
+        self.csig_hist = hist[:, :, 0]  # running c_Sigma after each step: the bound of pruned pairs
         w = self.lib.scenario.cost
         goal_xy = np.concatenate([self.by_id[id(ms)].goal_xy[sorted(self.wanted[id(ms)])] for ms in sets])
         c_u = np.concatenate([self.by_id[id(ms)].c_u[sorted(self.wanted[id(ms)])] for ms in sets])
@@ -373,6 +382,11 @@ class _Singles:
 
     def index(self, ms: MotionSet, k: int) -> int:
         return self.results[(id(ms), k)]
+
+    def best_cost(self, ms: MotionSet, room: str) -> float:
+        """The single-robot optimum of moving to ``room`` (its table cost)."""
+        rows = [self.index(ms, ms.by_goal[g]) for g in self.lib.roadmap.instantiations[room] if g in ms.by_goal]
+        return float(min(self.cost[r] for r in rows))
 
     def terms(self, r: int) -> CostTerms:
         return CostTerms(float(self.c_u[r]), float(self.c_g[r]), float(self.c_sigma[r]))
@@ -435,11 +449,13 @@ class _Pairs:
             for i, mine in raw.get(g, []):
                 self.of_request[i] = (g, np.array([position[c] for c in mine], dtype=np.int64))
 
-    def run(self, stats: EvalStats) -> None:
-        """Mutual visibility of every combo, factorisation, then the joint simulations."""
+    def run(self, stats: EvalStats, singles: _Singles) -> None:
+        """Mutual visibility of every combo, factorisation, pruning, then the joint simulations."""
         lib = self.lib
         G = len(self.groups)
         self.seen: list[np.ndarray] = [np.zeros(a.shape[0], dtype=bool) for a in self.a]
+        self.pruned = {}
+        first_all: np.ndarray | None = None
         self.kept_row: list[np.ndarray] = [np.full(a.shape[0], -1, dtype=np.int64) for a in self.a]
         if G == 0 or not any(a.shape[0] for a in self.a):
             return
@@ -469,12 +485,12 @@ class _Pairs:
                     for g, (s1, s2, _) in enumerate(self.groups)
                 ]
             )
-            seen = np.zeros(c_horizon.shape[0], dtype=bool)
+            first_all = np.full(c_horizon.shape[0], -1, dtype=np.int64)
             for r in np.unique(radii):  # one call per radius sum: teams mostly share one size
                 sel = np.nonzero(radii == r)[0]
                 st = vis_start[sel].copy()
                 st[1:][np.diff(sel) != 1] = -1  # a gap breaks the chain of shared prefixes
-                seen[sel] = mutual_visibility_sequences(
+                first_all[sel] = mutual_visibility_sequences(
                     grid.occupied,
                     lib.world.clearance,
                     grid.origin[0],
@@ -493,14 +509,20 @@ class _Pairs:
                     mvis,
                 )
             bounds = np.cumsum([0] + [a.shape[0] for a in self.a])
-            self.seen = [seen[bounds[g] : bounds[g + 1]] for g in range(G)]
-        # simulate jointly what cannot be factorised
+            self.seen = [first_all[bounds[g] : bounds[g + 1]] >= 0 for g in range(G)]
+        bounds = np.cumsum([0] + [a.shape[0] for a in self.a])
+        first = [
+            first_all[bounds[g] : bounds[g + 1]] if first_all is not None else np.full(self.a[g].shape[0], -1)
+            for g in range(G)
+        ]
+        needed = self.prune(first, singles, stats)
+        # simulate jointly what cannot be factorised (and is not pruned)
         groups, cg, cm, cs, ch, co = [], [], [], [], [], []
         bounds = np.cumsum([0] + [a.shape[0] for a in self.a])
         rows = 0
         for g, (s1, s2, req) in enumerate(self.groups):
-            keep = self.seen[g] | (req.joint_cov is not None)
-            stats.joint_factorized += int((~keep).sum())
+            keep = (self.seen[g] | (req.joint_cov is not None)) & needed[g]
+            stats.joint_factorized += int((~self.seen[g] & needed[g]).sum()) if req.joint_cov is None else 0
             k = np.nonzero(keep)[0]
             if k.size == 0:
                 continue
@@ -516,7 +538,7 @@ class _Pairs:
         if rows == 0:
             return
         c_group, c_mot, c_start, c_hor, c_moff = (np.concatenate(x) for x in (cg, cm, cs, ch, co))
-        self.mean, self.cov, csig, fxy, self.mutual, _, _ = _simulate(
+        self.mean, self.cov, csig, fxy, self.mutual, _, _, _ = _simulate(
             lib, table, 2, groups, c_group, c_mot, c_start, c_hor, c_moff, mvis
         )
         goal_xy = table.pose[table.off[c_mot] + c_mot + table.T[c_mot], :2]  # (rows, 2, 2)
@@ -529,18 +551,59 @@ class _Pairs:
         stats.steps_computed += int((c_hor - c_start).sum())
 
     def singles_needed(self) -> list[tuple[MotionSet, np.ndarray]]:
-        """The single-robot simulations that factorised combos are made of."""
+        """Every motion the combos use, simulated alone: factorised combos are sums of these,
+        and their running c_Sigma bounds the joint cost (see :meth:`prune`)."""
         out = []
         for g, (s1, s2, _) in enumerate(self.groups):
-            f = self.kept_row[g] < 0
-            if f.any():
-                out.append((s1, self.a[g][f]))
-                out.append((s2, self.b[g][f]))
+            out.append((s1, self.a[g]))
+            out.append((s2, self.b[g]))
         return out
+
+    def prune(self, first: list[np.ndarray], singles: _Singles, stats: EvalStats) -> list[np.ndarray]:
+        """Requests that provably cannot save ``min_gain``; returns, per group, the combos
+        still worth simulating jointly.
+
+        Until the robots first see each other (step k0), their joint EKF equals the two
+        single ones (uncorrelated starts, separate noise streams): the joint cost of a
+        combination is at least M_u (c_u1 + c_u2) + M_Sigma (C1(k0 - 1) + C2(k0 - 1)), with
+        C_i the running c_Sigma of robot i alone, since trace(Sigma) and c_G are never
+        negative. A factorised combination costs exactly the sum of its singles.
+        """
+        w = self.lib.scenario.cost
+        needed = [np.zeros(a.shape[0], dtype=bool) for a in self.a]
+        self.pruned: dict[int, float] = {}
+        for i, (g, positions) in self.of_request.items():
+            req = self.requests[i]
+            s1, s2, _ = self.groups[g]
+            if req.min_gain is None or req.joint_cov is not None or positions.size == 0:
+                needed[g][positions] = True
+                continue
+            bound = np.inf
+            for p in positions:
+                r1, r2 = singles.index(s1, int(self.a[g][p])), singles.index(s2, int(self.b[g][p]))
+                k0 = int(first[g][p])
+                if k0 < 0:
+                    bound = min(bound, singles.cost[r1] + singles.cost[r2])
+                    continue
+                before = max(k0 - 1, 0)
+                h1, h2 = singles.csig_hist[r1], singles.csig_hist[r2]
+                c1 = h1[min(before, int(s1.steps[self.a[g][p]]))]
+                c2 = h2[min(before, int(s2.steps[self.b[g][p]]))]
+                bound = min(bound, w.M_u * (singles.c_u[r1] + singles.c_u[r2]) + w.M_Sigma * (c1 + c2))
+            alone = singles.best_cost(s1, req.rooms[0]) + singles.best_cost(s2, req.rooms[1])
+            if bound > (1.0 - req.min_gain) * alone + 1e-9 * alone + 0.002:
+                self.pruned[i] = float(bound)
+                stats.pairs_pruned += 1
+            else:
+                needed[g][positions] = True
+        return needed
 
     def best(self, i: int, singles: _Singles) -> MotionResult | None:
         if i not in self.of_request or self.of_request[i][1].size == 0:
             return None
+        if i in self.pruned:
+            req = self.requests[i]
+            return MotionResult(self.pruned[i], req.robots, (), (), (), (), (), pruned=True)
         g, positions = self.of_request[i]
         s1, s2, _req = self.groups[g]
         costs = np.empty(positions.size)

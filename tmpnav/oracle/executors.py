@@ -124,20 +124,33 @@ def _work(block: list[Request]) -> Outcome:
 
 
 class ProcessExecutor:
-    """Local worker processes (``--workers N``); the context is sent once per worker."""
+    """Local worker processes (``--workers N``); the context is sent once per worker.
+
+    The pool lives until :meth:`close`, so the nominal motions a worker computed for one
+    wave of requests (singles, then pairs) are still in its memory for the next.
+    """
 
     name = "processes"
 
     def __init__(self, workers: int):
         self.workers = workers
+        self._pool: ProcessPoolExecutor | None = None
+        self._ctx: OracleContext | None = None
+
+    def _get_pool(self, ctx: OracleContext) -> ProcessPoolExecutor:
+        if self._pool is None or self._ctx is not ctx:
+            self.close()
+            method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+            mp = multiprocessing.get_context(method)
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=mp, initializer=_init_worker, initargs=(ctx,))
+            self._ctx = ctx
+        return self._pool
 
     def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome:
         todo, order = blocks(requests)
         if len(todo) <= 1:
             return SerialExecutor().run(ctx, requests, progress)
-        method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
-        mp = multiprocessing.get_context(method)
-        pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=mp, initializer=_init_worker, initargs=(ctx,))
+        pool = self._get_pool(ctx)
         try:
             parts = []
             for k, part in enumerate(pool.map(_work, todo)):
@@ -146,12 +159,14 @@ class ProcessExecutor:
                     progress(k + 1, len(todo))
         except BaseException:
             pool.shutdown(wait=False, cancel_futures=True)  # Ctrl-C: do not wait for queued blocks
+            self._pool = None
             raise
-        pool.shutdown()
         return _merge(parts, order)
 
     def close(self) -> None:
-        return None
+        if self._pool is not None:
+            self._pool.shutdown()
+            self._pool = None
 
 
 class RayExecutor:

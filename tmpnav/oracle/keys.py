@@ -63,6 +63,8 @@ def request_key(context: str, scenario: Scenario, request: Request) -> str:
 def to_json(result: MotionResult | None) -> dict[str, Any]:
     if result is None:
         return {"unreachable": True}
+    if result.pruned:
+        return {"pruned": True, "cost": result.cost, "robots": list(result.robots)}
     return {
         "cost": result.cost,
         "robots": list(result.robots),
@@ -79,6 +81,8 @@ def to_json(result: MotionResult | None) -> dict[str, Any]:
 def from_json(data: dict[str, Any]) -> MotionResult | None:
     if data.get("unreachable"):
         return None
+    if data.get("pruned"):
+        return MotionResult(float(data["cost"]), tuple(data["robots"]), (), (), (), (), (), pruned=True)
     return MotionResult(
         cost=float(data["cost"]),
         robots=tuple(data["robots"]),

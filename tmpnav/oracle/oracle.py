@@ -31,6 +31,7 @@ class OracleStats:
             "single_simulations": self.sims.single_sims,
             "joint_simulations": self.sims.joint_sims,
             "joint_factorized": self.sims.joint_factorized,
+            "pairs_pruned": self.sims.pairs_pruned,
         }
 
 
@@ -57,7 +58,8 @@ class Oracle:
             computed, sims = self.executor.run(self.ctx, todo, self.progress)
             self.stats.sims.add(sims)
             fresh = {keys[i]: res for i, res in zip(missing, computed, strict=True)}
-            self.cache.put_many({k: to_json(v) for k, v in fresh.items()})
+            if not isinstance(self.cache, NullCache):
+                self.cache.put_many({k: to_json(v) for k, v in fresh.items()})
             results.update(fresh)
         self.stats.requests += len(requests)
         self.stats.cache_hits += len(cached)

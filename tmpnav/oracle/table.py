@@ -68,10 +68,12 @@ def build_table(
     dest_mode: str,
     pair_filter: Callable[[MoveKey, MoveKey], bool] | None = None,
     filter_key: str = "",
+    pair_min_gain: float | None = None,
 ) -> CostTable:
     """The cost table: single moves for every robot, and the pairs ``pair_filter`` admits
     (none without a filter). The filter comes from the task encoding: only pairs that can
-    ever apply together are worth simulating; ``filter_key`` names it for the cache.
+    ever apply together are worth simulating; ``filter_key`` names it for the cache. With
+    ``pair_min_gain``, pairs proved unable to save that fraction are left out unsimulated.
 
     The whole table is also cached as one entry, so a warm run reads one record instead
     of one per action; its key covers the oracle's context (code, world, roadmap, models,
@@ -80,12 +82,12 @@ def build_table(
     scenario = oracle.ctx.scenario
     starts = start_locations(scenario, world)
     dests = destinations(scenario, dest_mode)
-    key = table_key(oracle, starts, dests, pair_filter is not None, filter_key)
+    key = table_key(oracle, starts, dests, pair_filter is not None, f"{filter_key}|{pair_min_gain!r}")
     found = oracle.cache.get_many([key]).get(key)
     if found is not None:
         oracle.stats.table_hit = True
         return _table_from_json(found)
-    table = _compute_table(oracle, starts, dests, pair_filter)
+    table = _compute_table(oracle, starts, dests, pair_filter, pair_min_gain)
     oracle.cache.put_many({key: _table_to_json(table)})
     return table
 
@@ -103,6 +105,7 @@ def _compute_table(
     starts: dict[str, str],
     dests: dict[str, tuple[str, ...]],
     pair_filter: Callable[[MoveKey, MoveKey], bool] | None,
+    pair_min_gain: float | None = None,
 ) -> CostTable:
     scenario, roadmap = oracle.ctx.scenario, oracle.ctx.roadmap
     canonical: dict[tuple[str, str], StartState] = {}
@@ -141,11 +144,16 @@ def _compute_table(
             if m2[0] == r2 and pair_filter(m1, m2)
         ]
         requests = [
-            Request((m1[0], m2[0]), (canonical[(m1[0], m1[1])], canonical[(m2[0], m2[1])]), (m1[2], m2[2]))
+            Request(
+                (m1[0], m2[0]),
+                (canonical[(m1[0], m1[1])], canonical[(m2[0], m2[1])]),
+                (m1[2], m2[2]),
+                min_gain=pair_min_gain,
+            )
             for m1, m2 in wanted
         ]
         for key, res in zip(wanted, oracle.evaluate(requests), strict=True):
-            if res is not None:
+            if res is not None and not res.pruned:
                 pairs[key] = res.cost
 
     return CostTable(

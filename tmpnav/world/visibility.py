@@ -146,10 +146,10 @@ def mutual_visibility_sequences(  # type: ignore[no-untyped-def]
     previous simulation, which shares them; the others are computed: range within
     [min_range, rng], field of view, and a sphere-traced line of sight.
     ``out[c_off[c] + t, i, j]``: robot i sees robot j at step t. Returns, per simulation,
-    whether any mutual observation happens.
+    the first step with a mutual observation (-1 if there is none).
     """
     C = c_motion.shape[0]
-    any_seen = np.zeros(C, dtype=np.bool_)
+    first_seen = np.full(C, -1, dtype=np.int64)
     for c in range(C):
         first = 0
         if c > 0:
@@ -158,8 +158,8 @@ def mutual_visibility_sequences(  # type: ignore[no-untyped-def]
                 for i in range(2):
                     for j in range(2):
                         out[c_off[c] + t, i, j] = out[c_off[c - 1] + t, i, j]
-                        if out[c_off[c] + t, i, j]:
-                            any_seen[c] = True
+                        if out[c_off[c] + t, i, j] and first_seen[c] < 0:
+                            first_seen[c] = t
         ma, mb = c_motion[c, 0], c_motion[c, 1]
         for t in range(first, c_horizon[c] + 1):
             ra = m_off[ma] + ma + (t if t <= m_T[ma] else m_T[ma])
@@ -173,9 +173,9 @@ def mutual_visibility_sequences(  # type: ignore[no-untyped-def]
                 ba = False
             out[c_off[c] + t, 0, 1] = ab
             out[c_off[c] + t, 1, 0] = ba
-            if ab or ba:
-                any_seen[c] = True
-    return any_seen
+            if (ab or ba) and first_seen[c] < 0:
+                first_seen[c] = t
+    return first_seen
 
 
 @nb.njit(cache=True)
