@@ -163,8 +163,15 @@ def prepare(
         with timed(times, "oracle"):
             starts = start_locations(scenario, world)
             pairs = pair_filter(encoding.name, scenario.goals, starts) if encoding.pairs else None
+            # only the mixed encoding drops pairs that save little, so only it may prune them
+            prune = scenario.planner.pair_min_gain if encoding.name == "mixed" and scenario.planner.pair_min_gain > 0 else None
             table = build_table(
-                oracle, world, encoding.destinations, pairs, filter_key=repr((encoding.name, scenario.goals))
+                oracle,
+                world,
+                encoding.destinations,
+                pairs,
+                filter_key=repr((encoding.name, scenario.goals)),
+                pair_min_gain=prune,
             )
     except BaseException:
         close(oracle)
@@ -194,7 +201,7 @@ def plan(
     motions and beliefs. ``loaded`` skips loading when the caller already has the world."""
     from tmpnav.oracle.executors import library
     from tmpnav.resimulate import resimulate
-    from tmpnav.task.decode import decode, step_cost
+    from tmpnav.task.decode import canonical_order, decode, step_cost
     from tmpnav.task.encode import encode
     from tmpnav.task.solve import solve
 
@@ -213,12 +220,13 @@ def plan(
             )
         with timed(times, "planner"):
             solved = solve(encoded.problem, scenario.planner.name, scenario.planner.timeout)
-        steps = decode(solved, encoded)
+        planned = decode(solved, encoded)
+        order = canonical_order(planned, table.robots)
+        steps = [planned[i] for i in order]
+        names = [solved.actions[i][0] for i in order]
         planner_costs = [step_cost(table, s) for s in steps]
         with timed(times, "resimulate"):
-            resim = resimulate(
-                library(oracle.ctx), oracle, scenario, steps, planner_costs, [a[0] for a in solved.actions]
-            )
+            resim = resimulate(library(oracle.ctx), oracle, scenario, steps, planner_costs, names)
     finally:
         close(oracle)
     times.seconds["total"] = sum(v for k, v in times.seconds.items() if k != "load")

@@ -13,7 +13,7 @@ import random
 
 import pytest
 
-from tmpnav.task.decode import decode, step_cost
+from tmpnav.task.decode import canonical_order, decode, step_cost
 from tmpnav.task.encode import encode, pair_filter, scaled
 from tmpnav.task.solve import solve
 from tmpnav.types import CostTable, Goals, MoveKey
@@ -113,13 +113,18 @@ def exhaustive_optimum(table: CostTable, goals: Goals, encoding: str, min_gain: 
     raise AssertionError("no plan exists")
 
 
-def validate(encoded, result) -> None:  # type: ignore[no-untyped-def]
+def validate(encoded, result, table: CostTable) -> None:  # type: ignore[no-untyped-def]
+    """The planner's plan, and the same plan in tmpnav's canonical order, are both valid."""
     from unified_planning.engines import ValidationResultStatus
+    from unified_planning.plans import SequentialPlan
     from unified_planning.shortcuts import PlanValidator
 
+    order = canonical_order(decode(result, encoded), table.robots)
+    canonical = SequentialPlan([result.plan.actions[i] for i in order])
     with PlanValidator(problem_kind=encoded.problem.kind) as validator:
-        outcome = validator.validate(encoded.problem, result.plan)
-    assert outcome.status == ValidationResultStatus.VALID, outcome
+        for plan in (result.plan, canonical):
+            outcome = validator.validate(encoded.problem, plan)
+            assert outcome.status == ValidationResultStatus.VALID, outcome
 
 
 CASES = [
@@ -145,7 +150,7 @@ def test_plan_cost_equals_exhaustive_optimum(encoding: str, seed: int, robots: i
                       {k: v for k, v in table.pair.items() if keep(*k)})
     encoded = encode(table, goals, encoding, min_gain=0.0)
     result = solve(encoded.problem, "enhsp-opt", 120)
-    validate(encoded, result)
+    validate(encoded, result, table)
     steps = decode(result, encoded)
     planner = sum(scaled(step_cost(table, s)) for s in steps)
     assert planner == exhaustive_optimum(table, goals, encoding)

@@ -29,3 +29,45 @@ def step_cost(table: CostTable, step: tuple[MoveKey, ...]) -> float:
         return table.single[step[0]]
     m1, m2 = step
     return table.pair[(m1, m2)] if (m1, m2) in table.pair else table.pair[(m2, m1)]
+
+
+def canonical_order(steps: list[tuple[MoveKey, ...]], robots: tuple[str, ...]) -> list[int]:
+    """The plan's step indices in one canonical order, among the orders the planner could
+    equally have returned.
+
+    Two steps that share no robot and no room commute: each one's preconditions and
+    effects concern only its own robots and rooms. So a plan is a partial order, and the
+    planner's tie-breaking between its interleavings depends on the order in which the
+    PDDL writer happens to list objects (Python's per-process string hashing). Steps keep
+    their order relative to every step they depend on; among the free ones, the step of
+    the earliest robot (scenario order) comes first. Same cost, reproducible output.
+    """
+    import heapq
+
+    rank = {r: i for i, r in enumerate(robots)}
+
+    def touches(step: tuple[MoveKey, ...]) -> set[str]:
+        return {m[0] for m in step} | {m[1] for m in step} | {m[2] for m in step}
+
+    n = len(steps)
+    deps = [{j for j in range(i) if touches(steps[i]) & touches(steps[j])} for i in range(n)]
+    waiting = [len(d) for d in deps]
+    users: list[list[int]] = [[] for _ in range(n)]
+    for i, d in enumerate(deps):
+        for j in d:
+            users[j].append(i)
+
+    def key(i: int) -> tuple:
+        return (min(rank[m[0]] for m in steps[i]), i)
+
+    ready = [key(i) for i in range(n) if waiting[i] == 0]
+    heapq.heapify(ready)
+    out = []
+    while ready:
+        _, i = heapq.heappop(ready)
+        out.append(i)
+        for u in users[i]:
+            waiting[u] -= 1
+            if waiting[u] == 0:
+                heapq.heappush(ready, key(u))
+    return out
