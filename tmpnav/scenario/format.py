@@ -31,6 +31,14 @@ DEG = math.pi / 180.0
 
 ENCODING_CHOICES = ("paper", "single", "mixed")
 
+#: largest occupancy grid of a polygonal map (about 1.5 GB of working memory at the limit)
+MAX_CELLS = 20_000_000
+
+
+def grid_cells(bounds: tuple[float, ...], resolution: float) -> int:
+    """How many cells the occupancy grid of a polygonal map has (world.build.rasterize)."""
+    return math.ceil((bounds[2] - bounds[0]) / resolution) * math.ceil((bounds[3] - bounds[1]) / resolution)
+
 
 def _one_map_kind(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
     has_ros, has_bounds = section.get("ros") is not None, section.get("bounds") is not None
@@ -45,6 +53,16 @@ def _one_map_kind(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, 
             (*raw, "bounds"),
             f"{list(bounds)} is empty; expected [xmin, ymin, xmax, ymax] with xmin < xmax and ymin < ymax",
         )
+    elif bounds is not None:
+        # a typo (bounds in mm, resolution in m) would otherwise exhaust memory: exit 1 instead of 2
+        cells = grid_cells(bounds, section["resolution"])
+        if cells > MAX_CELLS:
+            ctx.add(
+                f"{path}.resolution",
+                (*raw, "resolution"),
+                f"{section['resolution']:g} m over bounds {list(bounds)} makes {cells:,} grid cells; "
+                f"expected at most {MAX_CELLS:,} (a coarser resolution or smaller bounds)",
+            )
 
 
 def _some_goal(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
@@ -255,8 +273,9 @@ PLANNER = Section(
     fields={
         "name": Field(
             Text(),
-            "unified-planning engine: enhsp-opt, enhsp, enhsp-any, or any installed engine that supports the problem",
-            default="enhsp-opt",
+            "unified-planning engine: enhsp-blind (optimal; default), enhsp-opt (optimal, hrmax), enhsp, enhsp-any, "
+            "or any installed engine that supports the problem",
+            default="enhsp-blind",
         ),
         "encoding": Field(
             Choice(choices=ENCODING_CHOICES),
