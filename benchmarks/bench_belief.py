@@ -61,6 +61,33 @@ def batched(belief: Belief, rollout: Rollout, B: int) -> BatchInputs:
     )
 
 
+def kernel_run(belief: Belief, rollout: Rollout, models: Models, B: int) -> Callable[[], object]:
+    """The oracle's compiled kernel on B copies of the scene, each from scratch (no shared
+    prefixes): the raw propagation speed the oracle's trie ordering then multiplies."""
+    from tmpnav.belief.kernel import run_sequences
+
+    n, T = 2, rollout.n_steps
+    m_T = np.array([int(s) for s in rollout.active_steps], dtype=np.int64)
+    ctrl = np.concatenate([rollout.controls[i, : m_T[i]] for i in range(n)])
+    pose = np.concatenate([rollout.true_poses[i, : m_T[i] + 1] for i in range(n)])
+    vis = np.ascontiguousarray(np.concatenate([rollout.lm_visible[i, : m_T[i] + 1] for i in range(n)]))
+    m_off = np.array([0, m_T[0]], dtype=np.int64)
+    rng = np.random.default_rng(0)
+    lm_noise = rng.standard_normal((2, T + 1, len(LANDMARKS), 2))
+    mu_noise = rng.standard_normal((1, T + 1, n, n, 2))
+    mvis = np.ascontiguousarray(np.tile(np.transpose(rollout.mutual_visible, (2, 0, 1)), (B, 1, 1)))
+    Q_lm, Q_mu = models.landmark_sensor.Q, models.mutual_sensor.Q
+    outs = (np.empty((B, 6)), np.empty((B, 6, 6)), np.empty((B, 2)), np.empty((B, 2, 2)),
+            np.empty(B, dtype=np.int64), np.zeros((0, 1, 2)))
+    args = (n, models.dt, np.array(models.motion_noise), Q_lm, np.linalg.cholesky(Q_lm), Q_mu,
+            np.linalg.cholesky(Q_mu), False, LANDMARKS, m_off, m_T, ctrl, pose, vis,
+            np.arange(2, dtype=np.int64), lm_noise, belief.mean[None], belief.cov[None],
+            np.zeros(1, dtype=np.int64), mu_noise, np.zeros(B, dtype=np.int64),
+            np.tile(np.arange(2, dtype=np.int64), (B, 1)), np.zeros(B, dtype=np.int64),
+            np.full(B, T, dtype=np.int64), np.arange(B, dtype=np.int64) * (T + 1), mvis, *outs)
+    return lambda: run_sequences(*args)
+
+
 def evals_per_second(run: Callable[[], object], evals_per_run: int, repeat: int) -> float:
     run()  # warm-up
     best = float("inf")
@@ -86,6 +113,9 @@ def main() -> None:
                 "updates_per_eval": n_updates,
                 "batch1_evals_per_s": round(
                     evals_per_second(lambda: simulate_batch(one, models), 1, args.repeat), 1
+                ),
+                "kernel_batch1000_evals_per_s": round(
+                    evals_per_second(kernel_run(belief, rollout, models, 1000), 1000, args.repeat), 1
                 ),
                 "batch1000_evals_per_s": round(
                     evals_per_second(lambda: simulate_batch(thousand, models), 1000, args.repeat), 1

@@ -138,7 +138,7 @@ def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
             "--planner",
             "planner_name",
             metavar="NAME",
-            help="unified-planning engine (overrides planner.name), e.g. enhsp-opt, enhsp, enhsp-blind.",
+            help="unified-planning engine (overrides planner.name), e.g. enhsp-blind (default), enhsp-opt, enhsp.",
         ),
         click.option(
             "--timeout", type=click.FloatRange(min=0, min_open=True), metavar="S", help="Planner time limit in seconds."
@@ -371,7 +371,7 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
 @click.option("--encoding", "encodings", multiple=True, type=click.Choice(["paper", "single", "mixed"]), help="Encodings to compare on the same draws (repeat the option); default: mixed.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
 @click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=300.0, show_default=True, help="Seconds a run may take before it is recorded as a timeout.")
-@click.option("--scenario", type=click.Path(path_type=Path, dir_okay=False), help="World to use (default: configs/corridor-<N>robots.yaml).")
+@click.option("--scenario", type=click.Path(path_type=Path, dir_okay=False), help="World to use; {robots} in it becomes the number of robots (default: configs/corridor-{robots}robots.yaml).")
 @click.option("--workers", type=click.IntRange(min=1), help="Oracle worker processes per run (default: all cores).")
 @click.option("-o", "--output", type=click.Path(path_type=Path, file_okay=False), default=Path("bench-out"), show_default=True, help="Directory for bench.csv, bench.png, summary.md.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
@@ -390,8 +390,8 @@ def bench(rooms_text: str, robots_text: str, sessions: int, encodings: tuple[str
     rooms, robots = b.parse_counts(rooms_text, "--rooms"), b.parse_counts(robots_text, "--robots")
     experiment, axis = ("robots", "robots") if len(robots) > 1 else ("rooms", "rooms")
     encs = list(encodings) or ["mixed"]
-    if scenario is not None:
-        load(scenario)  # bad input is reported before an hour of benchmarking, not after
+    for n in robots:  # bad input is reported before an hour of benchmarking, not after
+        load(b.scenario_for(n, scenario))
     job_list = b.jobs(experiment, robots, rooms, sessions, encs, seed, scenario,
                       lambda path: [room.name for room in load(path).rooms])
     say = None if quiet else (lambda line: click.echo(line, err=True))

@@ -1,0 +1,56 @@
+"""Smoke runs of ``tmpnav bench`` and ``tmpnav simulate`` with two sessions (CI)."""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def tmpnav(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "tmpnav", *args], capture_output=True, text=True, cwd=ROOT, timeout=900)
+
+
+@pytest.mark.slow
+def test_bench_rooms_compares_encodings(tmp_path: Path) -> None:
+    proc = tmpnav("bench", "--scenario", "configs/two-rooms.yaml", "--rooms", "1..2:1", "--sessions", "2",
+                  "--encoding", "mixed", "--encoding", "paper", "--timeout", "120", "-o", str(tmp_path), "-q")
+    assert proc.returncode == 0, proc.stderr
+    rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
+    assert len(rows) == 2 * 2 * 2 * 2  # points x sessions x encodings x (cold, warm)
+    assert all(r["status"].startswith("solved") for r in rows), rows
+    assert all(r["table_cache_hit"] == "True" for r in rows if r["phase"] == "warm")
+    assert (tmp_path / "bench.png").stat().st_size > 0
+    summary = (tmp_path / "summary.md").read_text()
+    assert "speed-up of mixed" in summary and "| paper |" in summary
+
+
+@pytest.mark.slow
+def test_bench_robots(tmp_path: Path) -> None:
+    proc = tmpnav("bench", "--robots", "2,3", "--rooms", "2", "--sessions", "2", "--scenario",
+                  "configs/corridor-{robots}robots.yaml", "--timeout", "120", "-o", str(tmp_path), "-q")
+    assert proc.returncode == 0, proc.stderr
+    rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
+    assert {r["robots"] for r in rows} == {"2", "3"}
+    assert all(r["status"].startswith("solved") for r in rows)
+
+
+def test_bench_rejects_bad_ranges(tmp_path: Path) -> None:
+    proc = tmpnav("bench", "--rooms", "two..ten", "-o", str(tmp_path))
+    assert proc.returncode == 2
+    assert proc.stderr.startswith("error: --rooms 'two..ten'")
+
+
+@pytest.mark.slow
+def test_simulate_two_sessions(tmp_path: Path) -> None:
+    proc = tmpnav("simulate", "configs/corridor.yaml", "--sessions", "2", "--no-cache", "-o", str(tmp_path), "-q")
+    assert proc.returncode == 0, proc.stderr
+    assert "lower with mutual observations" in proc.stdout
+    rows = list(csv.DictReader((tmp_path / "errors.csv").open()))
+    assert {r["config"] for r in rows} == {"1", "2"}
+    assert all(float(r["mean_error_m"]) >= 0 for r in rows)

@@ -1,0 +1,104 @@
+"""Regression runs: a few scenarios whose plans and costs are recorded in benchmarks/regression/.
+
+    python -m tmpnav.bench.regression            # check: exit 1 if a plan or cost changed
+    python -m tmpnav.bench.regression --update   # rewrite the baseline on purpose (make regression-update)
+
+A recorded plan is the sequence of moves of every step; costs are compared to a relative
+tolerance of 1e-6 (the same machine type gives the same bits; the tolerance only absorbs
+a different BLAS). Plans are computed without any cache, so the baseline checks the whole
+pipeline, not the cache.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tmpnav.pipeline import PlanOptions, plan
+from tmpnav.types import Goals
+
+ROOT = Path(__file__).resolve().parents[2]
+BASELINE = ROOT / "benchmarks" / "regression"
+RTOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    scenario: str
+    visit: tuple[str, ...] | None = None  # replaces the scenario's goals when given
+    encoding: str | None = None
+    why: str = ""
+
+
+CASES = (
+    Case("fig2", "configs/corridor.yaml", why="the paper's Fig. 2 swap: one paired move"),
+    Case("odd-rooms", "configs/corridor-2robots.yaml", ("L2", "L5", "L9"), why="an odd number of rooms, mixed"),
+    Case("odd-rooms-paper", "configs/corridor-2robots.yaml", ("L2", "L5", "L9"), "paper",
+         why="the same with the paper's encoding: the extra visit"),
+    Case("three-robots", "configs/corridor-3robots.yaml", why="three robots on the corridor"),
+    Case("ros-map", "configs/office-ros.yaml", why="a ROS map_server office, three robots"),
+)
+
+
+def run_case(case: Case) -> dict[str, Any]:
+    goals = Goals(visit=case.visit, per_robot=()) if case.visit else None
+    report = plan(ROOT / case.scenario, PlanOptions(encoding=case.encoding, goals=goals, use_cache=False))
+    return {
+        "name": case.name,
+        "scenario": case.scenario,
+        "why": case.why,
+        "encoding": report.encoding,
+        "planner": report.planner,
+        "goals": list(report.scenario.goals.all_rooms),
+        "steps": [[list(m) for m in a.moves] for a in report.actions],
+        "goal_nodes": [list(a.goal_nodes) for a in report.actions],
+        "planner_cost": report.planner_cost,
+        "resimulated_cost": report.resimulated_cost,
+    }
+
+
+def compare(recorded: dict[str, Any], now: dict[str, Any]) -> list[str]:
+    """What changed, in words (empty when the run matches its baseline)."""
+    diffs = []
+    if recorded["steps"] != now["steps"]:
+        diffs.append(f"plan changed: {recorded['steps']} -> {now['steps']}")
+    for key in ("planner_cost", "resimulated_cost"):
+        if not math.isclose(recorded[key], now[key], rel_tol=RTOL):
+            diffs.append(f"{key} changed: {recorded[key]!r} -> {now[key]!r}")
+    return diffs
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--update", action="store_true", help="rewrite the recorded baseline")
+    parser.add_argument("cases", nargs="*", help="case names (default: all)")
+    args = parser.parse_args()
+    failed = False
+    for case in CASES:
+        if args.cases and case.name not in args.cases:
+            continue
+        now = run_case(case)
+        path = BASELINE / f"{case.name}.json"
+        if args.update:
+            BASELINE.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps(now, indent=1) + "\n")
+            print(f"{case.name}: recorded {len(now['steps'])} steps, cost {now['planner_cost']:.6f}")
+            continue
+        if not path.exists():
+            print(f"{case.name}: no baseline; run `make regression-update`")
+            failed = True
+            continue
+        diffs = compare(json.loads(path.read_text()), now)
+        print(f"{case.name}: {'ok' if not diffs else 'CHANGED: ' + '; '.join(diffs)}")
+        failed |= bool(diffs)
+    sys.exit(1 if failed else 0)
+
+
+if __name__ == "__main__":
+    main()
