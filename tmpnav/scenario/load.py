@@ -15,7 +15,7 @@ from typing import Any
 import yaml
 
 from tmpnav.errors import Problem, ScenarioError
-from tmpnav.scenario.format import ROS_MAP, SCENARIO
+from tmpnav.scenario.format import MAX_CELLS, ROS_MAP, SCENARIO, grid_cells
 from tmpnav.scenario.schema import MISSING, Ctx, Issue
 from tmpnav.types import (
     CostWeights,
@@ -100,7 +100,7 @@ class YamlDoc:
 
     def duplicate_problems(self) -> list[Problem]:
         return [
-            Problem(self.name, ".".join(str(k) for k in raw), "duplicate key; a key may appear once", line)
+            Problem(self.name, _display(raw, self), "duplicate key; a key may appear once", line)
             for raw, line in self.duplicates
         ]
 
@@ -133,7 +133,17 @@ def load_partial(path: str | Path) -> tuple[Scenario | None, list[Problem]]:
     problems += _cross_references(doc, data)
     if data["map"].get("ros") is not None and ros is None:
         return None, problems
+    if ros is None and not _buildable(data["map"]):
+        return None, problems  # no grid to build the world on; the schema said why
     return _build(doc, data, ros), problems
+
+
+def _buildable(section: dict[str, Any]) -> bool:
+    """Whether a polygonal map has bounds that make a grid of reasonable size."""
+    b = section.get("bounds")
+    if b is None or b[0] >= b[2] or b[1] >= b[3]:
+        return False
+    return grid_cells(b, section["resolution"]) <= MAX_CELLS
 
 
 def _ros_map(doc: YamlDoc, section: dict[str, Any]) -> tuple[RosMap | None, list[Problem]]:
@@ -199,11 +209,13 @@ def _cross_references(doc: YamlDoc, data: dict[str, Any]) -> list[Problem]:
     """Names must be unique across rooms and robots (both are PDDL objects); goals must
     name defined rooms and robots."""
     problems = []
-    rooms = {r["name"] for r in data["rooms"]}
-    robots = [r["name"] for r in data["robots"]]
+    # declared names, including those of items with other problems (reported already):
+    # a goal naming a robot whose pose is bad should not also be told the robot does not exist
+    rooms = set(_declared(doc, "rooms"))
+    robots = list(dict.fromkeys(_declared(doc, "robots")))
     for i, robot in enumerate(doc.data.get("robots") or []):
         name = robot.get("name") if isinstance(robot, dict) else None
-        if name in rooms:
+        if isinstance(name, str) and name in rooms:  # a list or mapping is unhashable (reported already)
             problems.append(
                 Problem(
                     doc.name,
@@ -231,7 +243,7 @@ def _cross_references(doc: YamlDoc, data: dict[str, Any]) -> list[Problem]:
                 Problem(
                     doc.name,
                     f"goals.visit[{i}]",
-                    f"{room!r} is not a room{_hint(room, rooms)}; expected one of {', '.join(sorted(rooms))}",
+                    f"{room!r} is not a room{_hint(room, rooms)}; expected {_one_of('room', sorted(rooms))}",
                     doc.line(("goals", "visit", i)),
                 )
             )
@@ -241,7 +253,7 @@ def _cross_references(doc: YamlDoc, data: dict[str, Any]) -> list[Problem]:
                 Problem(
                     doc.name,
                     f"goals.robots.{robot}",
-                    f"{robot!r} is not a robot{_hint(robot, robots)}; expected one of {', '.join(robots)}",
+                    f"{robot!r} is not a robot{_hint(robot, robots)}; expected {_one_of('robot', robots)}",
                     doc.line(("goals", "robots", robot)),
                 )
             )
@@ -251,11 +263,23 @@ def _cross_references(doc: YamlDoc, data: dict[str, Any]) -> list[Problem]:
                     Problem(
                         doc.name,
                         f"goals.robots.{robot}[{i}]",
-                        f"{room!r} is not a room{_hint(room, rooms)}; expected one of {', '.join(sorted(rooms))}",
+                        f"{room!r} is not a room{_hint(room, rooms)}; expected {_one_of('room', sorted(rooms))}",
                         doc.line(("goals", "robots", robot, i)),
                     )
                 )
     return problems
+
+
+def _declared(doc: YamlDoc, section: str) -> list[str]:
+    """The names given to the items of a named list (rooms, robots), valid or not."""
+    items = doc.data.get(section)
+    if not isinstance(items, list):
+        return []
+    return [str(x["name"]) for x in items if isinstance(x, dict) and isinstance(x.get("name"), (str, int, float))]
+
+
+def _one_of(what: str, names: list[str]) -> str:
+    return f"one of {', '.join(names)}" if names else f"a {what} defined in {what}s (there is none)"
 
 
 def _hint(word: str, options: Any) -> str:

@@ -392,7 +392,13 @@ class Section(Spec):
             checked = fld.spec.check(value[key], ctx, sub, (*raw, key))
             if checked is MISSING:
                 complete = False
-                out[key] = fld.default if not fld.required else MISSING
+                if fld.required:
+                    out[key] = MISSING
+                elif isinstance(fld.spec, Section):
+                    # a bad optional section (`roadmap: 5`, reported above) falls back to its defaults
+                    out[key] = fld.spec.check({}, Ctx(), sub, (*raw, key))
+                else:
+                    out[key] = fld.default
             else:
                 out[key] = checked
         if complete and self.post is not None:

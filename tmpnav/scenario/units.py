@@ -54,6 +54,6 @@ def parse_quantity(value: object, dimension: str | None) -> float:
         factors = UNITS[dimension]
         if unit not in factors:
             known = ", ".join(factors)
-            raise UnitError(f"has unit '{unit}', which is not a {dimension} unit ({known})")
+            raise UnitError(f"has unit '{unit}', which is not a unit of {dimension.replace('_', ' ')} ({known})")
         return number * factors[unit]
     raise UnitError(f"is a {type(value).__name__}")

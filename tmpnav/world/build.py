@@ -72,7 +72,8 @@ def rasterize(spec: PolygonMap) -> OccupancyGrid:
     """A polygonal map as a grid: walls (thick polylines) and obstacles are occupied."""
     xmin, ymin, xmax, ymax = spec.bounds
     r = spec.resolution
-    cols, rows = int(np.ceil((xmax - xmin) / r)), int(np.ceil((ymax - ymin) / r))
+    # the tolerance keeps a rounding error ((0.2 - -2.7) / 0.1 = 29.000000000000004) from adding a cell
+    cols, rows = int(np.ceil((xmax - xmin) / r - 1e-9)), int(np.ceil((ymax - ymin) / r - 1e-9))
     grid = OccupancyGrid(np.zeros((rows, cols), dtype=bool), (xmin, ymin), r)
     xs, ys = grid.cell_centers()
     for wall in spec.walls:
@@ -90,10 +91,10 @@ def build(scenario: Scenario) -> World:
     xs, ys = grid.cell_centers()
     for door in scenario.doors:
         a, b = (np.array(p, dtype=float) for p in door.segment)
-        # an open door is carved through whatever the map drew; a closed one is a wall
-        fill_segment(
-            grid.occupied, xs, ys, a, b, door.thickness + (2 * grid.resolution if door.open else 0.0), not door.open
-        )
+        # an open door is carved through whatever the map drew, exactly as wide as declared
+        # (flat caps); a closed one is a wall joining the wall ends (round caps)
+        thickness = door.thickness + (2 * grid.resolution if door.open else 0.0)
+        fill_segment(grid.occupied, xs, ys, a, b, thickness, not door.open, flat_caps=door.open)
     landmark_xy = np.array([lm.position for lm in scenario.landmarks], dtype=float).reshape(-1, 2)
     h = hashlib.sha256()
     h.update(np.packbits(grid.occupied).tobytes())

@@ -83,7 +83,7 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
     return problems
 
 
-def _reachability(scenario: Scenario, world: World, robots: list, problem) -> list[Problem]:  # type: ignore[no-untyped-def]
+def _reachability(scenario: Scenario, world: World, robots: list, problem) -> list[Problem]:
     """Rooms no robot can reach.
 
     A room some robot reaches but not the robot that goals.robots sends there is left to

@@ -24,7 +24,7 @@ class OccupancyGrid:
 
     @property
     def shape(self) -> tuple[int, int]:
-        return self.occupied.shape  # type: ignore[return-value]
+        return self.occupied.shape
 
     @property
     def extent(self) -> tuple[float, float, float, float]:
@@ -66,9 +66,20 @@ def fill_polygon(grid: np.ndarray, xs: np.ndarray, ys: np.ndarray, polygon: np.n
 
 
 def fill_segment(
-    grid: np.ndarray, xs: np.ndarray, ys: np.ndarray, a: np.ndarray, b: np.ndarray, thickness: float, value: bool
+    grid: np.ndarray,
+    xs: np.ndarray,
+    ys: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    thickness: float,
+    value: bool,
+    flat_caps: bool = False,
 ) -> None:
-    """Set the cells within thickness/2 of the segment a-b to ``value`` (in place)."""
+    """Set the cells within thickness/2 of the segment a-b to ``value`` (in place).
+
+    Round caps (the default) join wall polylines; ``flat_caps`` stops at the segment's
+    ends, so an open door is exactly as wide as it was declared.
+    """
     half = thickness / 2.0
     lo, hi = np.minimum(a, b) - half, np.maximum(a, b) + half
     cols = np.nonzero((xs >= lo[0]) & (xs <= hi[0]))[0]
@@ -76,7 +87,12 @@ def fill_segment(
     if cols.size == 0 or rows.size == 0:
         return
     gx, gy = np.meshgrid(xs[cols], ys[rows])
-    near = distance_to_segment(np.column_stack([gx.ravel(), gy.ravel()]), a, b) <= half
+    pts = np.column_stack([gx.ravel(), gy.ravel()])
+    near = distance_to_segment(pts, a, b) <= half
+    if flat_caps:
+        ab = b - a
+        t = (pts - a) @ ab / max(float(ab @ ab), 1e-12)
+        near &= (t >= 0.0) & (t <= 1.0)
     block = grid[np.ix_(rows, cols)]
     block[near.reshape(block.shape)] = value
     grid[np.ix_(rows, cols)] = block

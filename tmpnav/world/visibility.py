@@ -86,7 +86,7 @@ def mutual_visible(
 
 
 @nb.njit(cache=True)
-def _traced_los(occupied, clear, x0, y0, res, ax, ay, bx, by):  # type: ignore[no-untyped-def]
+def _traced_los(occupied, clear, x0, y0, res, ax, ay, bx, by):
     """Sphere-traced line of sight between two points (see grid.line_of_sight_traced)."""
     rows, cols = occupied.shape
     dx, dy = bx - ax, by - ay
@@ -108,7 +108,7 @@ def _traced_los(occupied, clear, x0, y0, res, ax, ay, bx, by):  # type: ignore[n
 
 
 @nb.njit(cache=True)
-def _sees(px, py, pth, qx, qy, rng, min_range, fov):  # type: ignore[no-untyped-def]
+def _sees(px, py, pth, qx, qy, rng, min_range, fov):
     d = math.hypot(qx - px, qy - py)
     if d > rng or d < min_range:
         return False
@@ -121,7 +121,7 @@ def _sees(px, py, pth, qx, qy, rng, min_range, fov):  # type: ignore[no-untyped-
 
 
 @nb.njit(cache=True)
-def mutual_visibility_sequences(  # type: ignore[no-untyped-def]
+def mutual_visibility_sequences(
     occupied,
     clear,
     x0,
@@ -179,7 +179,7 @@ def mutual_visibility_sequences(  # type: ignore[no-untyped-def]
 
 
 @nb.njit(cache=True)
-def _visible_pairs(occupied, clear, x0, y0, res, rng, min_range, fov, A, B):  # type: ignore[no-untyped-def]
+def _visible_pairs(occupied, clear, x0, y0, res, rng, min_range, fov, A, B):
     out = np.zeros(A.shape[0], dtype=np.bool_)
     for k in range(A.shape[0]):
         if _sees(A[k, 0], A[k, 1], A[k, 2], B[k, 0], B[k, 1], rng, min_range, fov):

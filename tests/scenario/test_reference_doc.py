@@ -1,0 +1,39 @@
+"""docs/scenario.md is the output of ``tmpnav reference``: it cannot drift from the schema."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from tmpnav.cli import cli
+from tmpnav.scenario.format import ROS_MAP, SCENARIO
+from tmpnav.scenario.reference import markdown
+from tmpnav.scenario.schema import reference_rows
+
+DOC = Path(__file__).resolve().parents[2] / "docs" / "scenario.md"
+
+
+def test_docs_scenario_md_is_up_to_date() -> None:
+    assert DOC.is_file(), "docs/scenario.md is missing: run `tmpnav reference > docs/scenario.md`"
+    assert DOC.read_text(encoding="utf-8") == markdown(), (
+        "docs/scenario.md differs from the schema in tmpnav/scenario/format.py: "
+        "run `tmpnav reference > docs/scenario.md` and commit the result"
+    )
+
+
+def test_tmpnav_reference_prints_the_markdown() -> None:
+    result = CliRunner().invoke(cli, ["reference"])
+    assert result.exit_code == 0
+    assert result.stdout == markdown()
+
+
+def test_every_key_of_the_schema_has_a_row() -> None:
+    text = markdown()
+    for spec in (SCENARIO, ROS_MAP):
+        for key, _kind, _unit, _default, meaning in reference_rows(spec):
+            assert f"| `{key}` |" in text
+            assert meaning, f"{key} has no description"
+    # list items are documented under their list, with []
+    assert "| `robots[].covariance` | 3x3 matrix | m², m², rad² |" in text
+    assert "| `models.landmark_sensor.fov` | number | rad | 360 deg |" in text
