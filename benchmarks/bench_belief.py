@@ -77,14 +77,43 @@ def kernel_run(belief: Belief, rollout: Rollout, models: Models, B: int) -> Call
     mu_noise = rng.standard_normal((1, T + 1, n, n, 2))
     mvis = np.ascontiguousarray(np.tile(np.transpose(rollout.mutual_visible, (2, 0, 1)), (B, 1, 1)))
     Q_lm, Q_mu = models.landmark_sensor.Q, models.mutual_sensor.Q
-    outs = (np.empty((B, 6)), np.empty((B, 6, 6)), np.empty((B, 2)), np.empty((B, 2, 2)),
-            np.empty(B, dtype=np.int64), np.zeros((0, 1, 2)))
-    args = (n, models.dt, np.array(models.motion_noise), Q_lm, np.linalg.cholesky(Q_lm), Q_mu,
-            np.linalg.cholesky(Q_mu), False, LANDMARKS, m_off, m_T, ctrl, pose, vis,
-            np.arange(2, dtype=np.int64), lm_noise, belief.mean[None], belief.cov[None],
-            np.zeros(1, dtype=np.int64), mu_noise, np.zeros(B, dtype=np.int64),
-            np.tile(np.arange(2, dtype=np.int64), (B, 1)), np.zeros(B, dtype=np.int64),
-            np.full(B, T, dtype=np.int64), np.arange(B, dtype=np.int64) * (T + 1), mvis, *outs)
+    outs = (
+        np.empty((B, 6)),
+        np.empty((B, 6, 6)),
+        np.empty((B, 2)),
+        np.empty((B, 2, 2)),
+        np.empty(B, dtype=np.int64),
+        np.zeros((0, 1, 2)),
+    )
+    args = (
+        n,
+        models.dt,
+        np.array(models.motion_noise),
+        Q_lm,
+        np.linalg.cholesky(Q_lm),
+        Q_mu,
+        np.linalg.cholesky(Q_mu),
+        False,
+        LANDMARKS,
+        m_off,
+        m_T,
+        ctrl,
+        pose,
+        vis,
+        np.arange(2, dtype=np.int64),
+        lm_noise,
+        belief.mean[None],
+        belief.cov[None],
+        np.zeros(1, dtype=np.int64),
+        mu_noise,
+        np.zeros(B, dtype=np.int64),
+        np.tile(np.arange(2, dtype=np.int64), (B, 1)),
+        np.zeros(B, dtype=np.int64),
+        np.full(B, T, dtype=np.int64),
+        np.arange(B, dtype=np.int64) * (T + 1),
+        mvis,
+        *outs,
+    )
     return lambda: run_sequences(*args)
 
 
@@ -111,9 +140,7 @@ def main() -> None:
                 "benchmark": "belief-joint-2-robots",
                 "steps": rollout.n_steps,
                 "updates_per_eval": n_updates,
-                "batch1_evals_per_s": round(
-                    evals_per_second(lambda: simulate_batch(one, models), 1, args.repeat), 1
-                ),
+                "batch1_evals_per_s": round(evals_per_second(lambda: simulate_batch(one, models), 1, args.repeat), 1),
                 "kernel_batch1000_evals_per_s": round(
                     evals_per_second(kernel_run(belief, rollout, models, 1000), 1000, args.repeat), 1
                 ),

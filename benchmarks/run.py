@@ -98,12 +98,17 @@ print(json.dumps(rows))
         sys.exit(f"oracle benchmark failed:\n{proc.stderr[-2000:]}")
     rows = json.loads(proc.stdout.strip().splitlines()[-1])
     (out / "oracle.json").write_text(json.dumps(rows, indent=1) + "\n")
-    lines = ["| workers | pair bound | seconds | joint simulations | factorised | pruned pairs | joint evals/s | EKF steps computed / spanned |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = [
+        "| workers | pair bound | seconds | joint simulations | factorised | pruned pairs | joint evals/s "
+        "| EKF steps computed / spanned |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in rows:
-        lines.append(f"| {r['workers']} | {r['pair_min_gain_bound']} | {r['seconds']} | {r['joint_simulations']} | "
-                     f"{r['joint_factorized']} | {r['pairs_pruned']} | {r['joint_evaluations_per_s']} | "
-                     f"{r['steps_computed']} / {r['steps_spanned']} |")
+        lines.append(
+            f"| {r['workers']} | {r['pair_min_gain_bound']} | {r['seconds']} | {r['joint_simulations']} | "
+            f"{r['joint_factorized']} | {r['pairs_pruned']} | {r['joint_evaluations_per_s']} | "
+            f"{r['steps_computed']} / {r['steps_spanned']} |"
+        )
     (out / "summary.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines), flush=True)
     return {"rows": rows}
@@ -128,19 +133,73 @@ def main() -> None:
     if "rooms" in only:
         sessions, rooms = ("2", "2,6,10") if args.quick else ("25", "2..10")
         out = base / "rooms"
-        run([*TMPNAV, "bench", "--rooms", rooms, "--robots", "2", "--sessions", sessions, "--encoding", "mixed",
-             "--encoding", "paper", "--timeout", "120", "-o", str(out.relative_to(ROOT)), "-q"], out, out / "log.txt")
+        run(
+            [
+                *TMPNAV,
+                "bench",
+                "--rooms",
+                rooms,
+                "--robots",
+                "2",
+                "--sessions",
+                sessions,
+                "--encoding",
+                "mixed",
+                "--encoding",
+                "paper",
+                "--timeout",
+                "120",
+                "-o",
+                str(out.relative_to(ROOT)),
+                "-q",
+            ],
+            out,
+            out / "log.txt",
+        )
     if "robots" in only:
         sessions = "1" if args.quick else "25"
         robots = "2,4" if args.quick else "2,4,6"
         out = base / "robots"
-        run([*TMPNAV, "bench", "--robots", robots, "--rooms", "8", "--sessions", sessions, "--encoding", "mixed",
-             "--encoding", "paper", "--timeout", "120", "-o", str(out.relative_to(ROOT)), "-q"], out, out / "log.txt")
+        run(
+            [
+                *TMPNAV,
+                "bench",
+                "--robots",
+                robots,
+                "--rooms",
+                "8",
+                "--sessions",
+                sessions,
+                "--encoding",
+                "mixed",
+                "--encoding",
+                "paper",
+                "--timeout",
+                "120",
+                "-o",
+                str(out.relative_to(ROOT)),
+                "-q",
+            ],
+            out,
+            out / "log.txt",
+        )
     if "simulate" in only:
         out = base / "simulate"
         sessions = "5" if args.quick else "25"
-        text = run([*TMPNAV, "simulate", "configs/corridor.yaml", "--sessions", sessions, "--no-cache",
-                    "-o", str(out.relative_to(ROOT)), "-q"], out)
+        text = run(
+            [
+                *TMPNAV,
+                "simulate",
+                "configs/corridor.yaml",
+                "--sessions",
+                sessions,
+                "--no-cache",
+                "-o",
+                str(out.relative_to(ROOT)),
+                "-q",
+            ],
+            out,
+        )
         print(text, flush=True)
     shutil.rmtree(ROOT / "benchmarks" / "tmp", ignore_errors=True)
 

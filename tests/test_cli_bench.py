@@ -13,13 +13,31 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def tmpnav(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "tmpnav", *args], capture_output=True, text=True, cwd=ROOT, timeout=900)
+    return subprocess.run(
+        [sys.executable, "-m", "tmpnav", *args], capture_output=True, text=True, cwd=ROOT, timeout=900
+    )
 
 
 @pytest.mark.slow
 def test_bench_rooms_compares_encodings(tmp_path: Path) -> None:
-    proc = tmpnav("bench", "--scenario", "configs/two-rooms.yaml", "--rooms", "1..2:1", "--sessions", "2",
-                  "--encoding", "mixed", "--encoding", "paper", "--timeout", "120", "-o", str(tmp_path), "-q")
+    proc = tmpnav(
+        "bench",
+        "--scenario",
+        "configs/two-rooms.yaml",
+        "--rooms",
+        "1..2:1",
+        "--sessions",
+        "2",
+        "--encoding",
+        "mixed",
+        "--encoding",
+        "paper",
+        "--timeout",
+        "120",
+        "-o",
+        str(tmp_path),
+        "-q",
+    )
     assert proc.returncode == 0, proc.stderr
     rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
     assert len(rows) == 2 * 2 * 2 * 2  # points x sessions x encodings x (cold, warm)
@@ -32,8 +50,22 @@ def test_bench_rooms_compares_encodings(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_bench_robots(tmp_path: Path) -> None:
-    proc = tmpnav("bench", "--robots", "2,3", "--rooms", "2", "--sessions", "2", "--scenario",
-                  "configs/corridor-{robots}robots.yaml", "--timeout", "120", "-o", str(tmp_path), "-q")
+    proc = tmpnav(
+        "bench",
+        "--robots",
+        "2,3",
+        "--rooms",
+        "2",
+        "--sessions",
+        "2",
+        "--scenario",
+        "configs/corridor-{robots}robots.yaml",
+        "--timeout",
+        "120",
+        "-o",
+        str(tmp_path),
+        "-q",
+    )
     assert proc.returncode == 0, proc.stderr
     rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
     assert {r["robots"] for r in rows} == {"2", "3"}

@@ -114,9 +114,20 @@ def test_export_pddl_is_accepted_by_enhsp(cache_dir: Path, tmp_path: Path) -> No
     proc = tmpnav("export-pddl", str(TWO_ROOMS), "-o", str(tmp_path), "--cache-dir", str(cache_dir), "-q")
     assert proc.returncode == 0, proc.stderr
     run = subprocess.run(
-        ["java", "-jar", ENHSP_JAR, "-o", str(tmp_path / "domain.pddl"), "-f", str(tmp_path / "problem.pddl"),
-         "-planner", "opt-hrmax"],
-        capture_output=True, text=True, timeout=300,
+        [
+            "java",
+            "-jar",
+            ENHSP_JAR,
+            "-o",
+            str(tmp_path / "domain.pddl"),
+            "-f",
+            str(tmp_path / "problem.pddl"),
+            "-planner",
+            "opt-hrmax",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
     )
     assert "Problem Solved" in run.stdout, run.stdout[-2000:]
 

@@ -17,7 +17,9 @@ from tmpnav.bench.regression import BASELINE, CASES, compare, run_case
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
 def test_plan_and_cost_unchanged(case) -> None:  # type: ignore[no-untyped-def]
     recorded = json.loads((BASELINE / f"{case.name}.json").read_text())
-    assert compare(recorded, run_case(case)) == [], f"run `make regression-update` if the change is intended ({case.why})"
+    assert compare(recorded, run_case(case)) == [], (
+        f"run `make regression-update` if the change is intended ({case.why})"
+    )
 
 
 def test_odd_rooms_baselines_show_the_papers_extra_visit() -> None:

@@ -334,7 +334,12 @@ def cache_clear(cache_dir: Path | None) -> None:
 @SCENARIO_ARG
 @click.option("--sessions", type=click.IntRange(min=1), default=25, show_default=True, help="Simulated executions.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
-@click.option("-o", "--output", type=click.Path(path_type=Path, file_okay=False), help="Directory for errors.csv, errors.png, summary.md.")
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path, file_okay=False),
+    help="Directory for errors.csv, errors.png, summary.md.",
+)
 @oracle_options
 @report_errors
 def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw: Any) -> None:
@@ -358,26 +363,79 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
         from tmpnav.report.bench_plot import plot_errors
 
         write_atomic(output / "errors.csv", to_csv(result, report))
-        plot_errors(result, output / "errors.png", f"{report.scenario.name}: average position error over {sessions} sessions")
+        plot_errors(
+            result, output / "errors.png", f"{report.scenario.name}: average position error over {sessions} sessions"
+        )
         write_atomic(output / "summary.md", "\n".join(lines) + "\n")
         lines += [f"wrote {output / name}" for name in ("errors.csv", "errors.png", "summary.md")]
     click.echo("\n".join(lines))
 
 
 @cli.command()
-@click.option("--rooms", "rooms_text", default="2..10", show_default=True, help="Rooms to visit: a range A..B[:STEP] (step 2 by default) or a list A,B,C.")
-@click.option("--robots", "robots_text", default="2", show_default=True, help="Robots: a range or a list; several values make a robots experiment.")
-@click.option("--sessions", type=click.IntRange(min=1), default=25, show_default=True, help="Sessions (random goal draws) per point.")
-@click.option("--encoding", "encodings", multiple=True, type=click.Choice(["paper", "single", "mixed"]), help="Encodings to compare on the same draws (repeat the option); default: mixed.")
+@click.option(
+    "--rooms",
+    "rooms_text",
+    default="2..10",
+    show_default=True,
+    help="Rooms to visit: a range A..B[:STEP] (step 2 by default) or a list A,B,C.",
+)
+@click.option(
+    "--robots",
+    "robots_text",
+    default="2",
+    show_default=True,
+    help="Robots: a range or a list; several values make a robots experiment.",
+)
+@click.option(
+    "--sessions",
+    type=click.IntRange(min=1),
+    default=25,
+    show_default=True,
+    help="Sessions (random goal draws) per point.",
+)
+@click.option(
+    "--encoding",
+    "encodings",
+    multiple=True,
+    type=click.Choice(["paper", "single", "mixed"]),
+    help="Encodings to compare on the same draws (repeat the option); default: mixed.",
+)
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
-@click.option("--timeout", type=click.FloatRange(min=0, min_open=True), default=300.0, show_default=True, help="Seconds a run may take before it is recorded as a timeout.")
-@click.option("--scenario", type=click.Path(path_type=Path, dir_okay=False), help="World to use; {robots} in it becomes the number of robots (default: configs/corridor-{robots}robots.yaml).")
+@click.option(
+    "--timeout",
+    type=click.FloatRange(min=0, min_open=True),
+    default=300.0,
+    show_default=True,
+    help="Seconds a run may take before it is recorded as a timeout.",
+)
+@click.option(
+    "--scenario",
+    type=click.Path(path_type=Path, dir_okay=False),
+    help="World to use; {robots} in it becomes the number of robots (default: configs/corridor-{robots}robots.yaml).",
+)
 @click.option("--workers", type=click.IntRange(min=1), help="Oracle worker processes per run (default: all cores).")
-@click.option("-o", "--output", type=click.Path(path_type=Path, file_okay=False), default=Path("bench-out"), show_default=True, help="Directory for bench.csv, bench.png, summary.md.")
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path, file_okay=False),
+    default=Path("bench-out"),
+    show_default=True,
+    help="Directory for bench.csv, bench.png, summary.md.",
+)
 @click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
 @report_errors
-def bench(rooms_text: str, robots_text: str, sessions: int, encodings: tuple[str, ...], seed: int, timeout: float,
-          scenario: Path | None, workers: int | None, output: Path, quiet: bool) -> None:
+def bench(
+    rooms_text: str,
+    robots_text: str,
+    sessions: int,
+    encodings: tuple[str, ...],
+    seed: int,
+    timeout: float,
+    scenario: Path | None,
+    workers: int | None,
+    output: Path,
+    quiet: bool,
+) -> None:
     """Planning time against the number of rooms (Fig. 3(b)) or of robots (Fig. 3(c)).
 
     Every run plans in its own process, cold (empty cache) then warm; runs longer than
@@ -392,8 +450,9 @@ def bench(rooms_text: str, robots_text: str, sessions: int, encodings: tuple[str
     encs = list(encodings) or ["mixed"]
     for n in robots:  # bad input is reported before an hour of benchmarking, not after
         load(b.scenario_for(n, scenario))
-    job_list = b.jobs(experiment, robots, rooms, sessions, encs, seed, scenario,
-                      lambda path: [room.name for room in load(path).rooms])
+    job_list = b.jobs(
+        experiment, robots, rooms, sessions, encs, seed, scenario, lambda path: [room.name for room in load(path).rooms]
+    )
     say = None if quiet else (lambda line: click.echo(line, err=True))
     table = b.run_bench(job_list, timeout, workers, say)
     med = b.medians(table, axis)

@@ -164,7 +164,11 @@ def prepare(
             starts = start_locations(scenario, world)
             pairs = pair_filter(encoding.name, scenario.goals, starts) if encoding.pairs else None
             # only the mixed encoding drops pairs that save little, so only it may prune them
-            prune = scenario.planner.pair_min_gain if encoding.name == "mixed" and scenario.planner.pair_min_gain > 0 else None
+            prune = (
+                scenario.planner.pair_min_gain
+                if encoding.name == "mixed" and scenario.planner.pair_min_gain > 0
+                else None
+            )
             table = build_table(
                 oracle,
                 world,

@@ -19,7 +19,7 @@ from tmpnav.errors import TmpnavError
 from tmpnav.oracle.evaluate import Request, StartState, mutual_seed, trajectory
 from tmpnav.oracle.motions import MotionLibrary, NominalMotion
 from tmpnav.oracle.oracle import Oracle
-from tmpnav.types import Belief, CostTerms, MoveKey, PlannedAction, Scenario, TrajectoryStep
+from tmpnav.types import Belief, CostTerms, MoveKey, PlannedAction, Scenario, TrajectoryStep, cov3, vec3
 
 
 @dataclass
@@ -79,9 +79,9 @@ def resimulate(
             StartState(
                 node[r],
                 float(heading[r]),
-                tuple(float(v) for v in mean[3 * i : 3 * i + 3]),
-                tuple(tuple(float(v) for v in row) for row in cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]),
-            )  # type: ignore[arg-type]
+                vec3(mean[3 * i : 3 * i + 3]),
+                cov3(cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]),
+            )
             for r, i in zip(robots, idx, strict=True)
         )
         correlated = len(robots) > 1 and bool(np.any(sub_cov[:3, 3:] != 0.0))
@@ -167,7 +167,7 @@ def _step(t: float, mean: np.ndarray, cov: np.ndarray, i: int, node: int | None)
     c = cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
     return TrajectoryStep(
         t=round(float(t), 9),
-        mean=(float(m[0]), float(m[1]), float(m[2])),
-        cov=tuple(tuple(float(v) for v in row) for row in c),
+        mean=vec3(m),
+        cov=cov3(c),
         node=None if node is None else int(node),
     )

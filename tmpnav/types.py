@@ -17,6 +17,20 @@ Point = tuple[float, float]
 Polygon = tuple[Point, ...]
 
 
+Vec3 = tuple[float, float, float]
+Cov3 = tuple[Vec3, Vec3, Vec3]
+
+
+def vec3(a: np.ndarray) -> Vec3:
+    """Three numbers (a pose, a mean) as a plain tuple of floats."""
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+def cov3(m: np.ndarray) -> Cov3:
+    """A 3x3 matrix (a pose covariance) as plain tuples of floats."""
+    return (vec3(m[0]), vec3(m[1]), vec3(m[2]))
+
+
 # --------------------------------------------------------------------------- scenario
 
 
@@ -111,7 +125,7 @@ class RangeBearingSensor:
         return np.diag([self.sigma_range**2, self.sigma_bearing**2])
 
 
-class ObservationMode(str, enum.Enum):
+class ObservationMode(enum.StrEnum):
     """How future observations are simulated while planning."""
 
     NOISY = "noisy"  # the paper: nominal observation corrupted by seeded noise
@@ -311,7 +325,7 @@ class CostTable:
     pair: dict[tuple[MoveKey, MoveKey], float]
 
 
-class PlanStatus(str, enum.Enum):
+class PlanStatus(enum.StrEnum):
     SOLVED_OPTIMALLY = "solved-optimally"
     SOLVED_SATISFICING = "solved-satisficing"
 

@@ -105,7 +105,8 @@ def _run_kernel(models: Models, landmarks, motions, mean0, cov0, mvis, lm_noise,
 def test_kernel_matches_filterpy_step_by_step(n: int, ml: bool, seed: int) -> None:
     models = _models(ml)
     landmarks, motions, mean0, cov0, mvis, lm_noise, mu_noise, h = _case(seed * 7 + n, n, ml)
-    hm, hc, (_, _, csig, _, mutual, _) = _run_kernel(models, landmarks, motions, mean0, cov0, mvis, lm_noise, mu_noise, h)
+    inputs = (models, landmarks, motions, mean0, cov0, mvis, lm_noise, mu_noise, h)
+    hm, hc, (_, _, csig, _, mutual, _) = _run_kernel(*inputs)
 
     controls = np.zeros((n, h, 2))
     poses = np.empty((n, h + 1, 3))

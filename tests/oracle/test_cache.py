@@ -50,8 +50,15 @@ def test_every_input_changes_the_keys(two_rooms: OracleContext) -> None:
     walled_world = build(walled_sc)
     walled = OracleContext(walled_sc, walled_world, two_rooms.roadmap)
     reseeded = replace(two_rooms, roadmap=build_roadmap(two_rooms.world, sc.robots, RoadmapParams(300, 3, 2, 10)))
-    for name, ctx in [("noise", noise), ("weight", weight), ("observation seed", seed), ("sensor", sensor),
-                      ("speed", speed), ("map", walled), ("roadmap seed", reseeded)]:
+    for name, ctx in [
+        ("noise", noise),
+        ("weight", weight),
+        ("observation seed", seed),
+        ("sensor", sensor),
+        ("speed", speed),
+        ("map", walled),
+        ("roadmap seed", reseeded),
+    ]:
         assert base.isdisjoint(keys(ctx)), name
 
 
@@ -105,7 +112,9 @@ def test_killed_precompute_leaves_a_usable_cache(tmp_path: Path, sig: signal.Sig
     """Kill ``tmpnav plan`` while the oracle writes; the next run must succeed."""
     scenario = tmp_path / "ten.yaml"
     text = (ROOT / "configs" / "corridor.yaml").read_text()
-    text = text.replace("goals:\n  robots:\n    r1: [L10]\n    r2: [L1]", "goals:\n  visit: [L2, L3, L4, L5, L6, L7, L8, L9]")
+    text = text.replace(
+        "goals:\n  robots:\n    r1: [L10]\n    r2: [L1]", "goals:\n  visit: [L2, L3, L4, L5, L6, L7, L8, L9]"
+    )
     scenario.write_text(text)
     cache = tmp_path / "cache"
     cmd = [sys.executable, "-m", "tmpnav", "plan", str(scenario), "--cache-dir", str(cache), "-q", "--workers", "2"]

@@ -88,9 +88,9 @@ def exhaustive_optimum(table: CostTable, goals: Goals, encoding: str, min_gain: 
                 alone = scaled(table.single[m1]) + scaled(table.single[m2])
                 if not (scaled(c) < alone and scaled(c) <= (1 - min_gain) * alone):
                     continue
-                if at[m1[0]] == m1[1] and at[m2[0]] == m2[1]:
-                    if may_enter(m1[0], m1[2], visited, by) and may_enter(m2[0], m2[2], visited, by):
-                        yield scaled(c), apply(pos, visited, by, (m1, m2))
+                at_origins = at[m1[0]] == m1[1] and at[m2[0]] == m2[1]
+                if at_origins and may_enter(m1[0], m1[2], visited, by) and may_enter(m2[0], m2[2], visited, by):
+                    yield scaled(c), apply(pos, visited, by, (m1, m2))
         if encoding == "paper":
             for (m1, m2), c in table.pair.items():
                 if at[m1[0]] == m1[1] and at[m2[0]] == m2[1]:
@@ -146,8 +146,14 @@ CASES = [
 def test_plan_cost_equals_exhaustive_optimum(encoding: str, seed: int, robots: int, rooms: int, targets: bool) -> None:
     table, goals = random_table(seed, robots, rooms, targets)
     keep = pair_filter(encoding, goals, table.start_location)
-    table = CostTable(table.robots, table.rooms, table.locations, table.start_location, table.single,
-                      {k: v for k, v in table.pair.items() if keep(*k)})
+    table = CostTable(
+        table.robots,
+        table.rooms,
+        table.locations,
+        table.start_location,
+        table.single,
+        {k: v for k, v in table.pair.items() if keep(*k)},
+    )
     encoded = encode(table, goals, encoding, min_gain=0.0)
     result = solve(encoded.problem, "enhsp-opt", 120)
     validate(encoded, result, table)
@@ -175,8 +181,14 @@ def test_odd_number_of_rooms_needs_no_extra_visit_with_mixed() -> None:
     entered = {}
     for encoding in ("mixed", "paper"):
         keep = pair_filter(encoding, goals, table.start_location)
-        t = CostTable(table.robots, table.rooms, table.locations, table.start_location, table.single,
-                      {k: v for k, v in table.pair.items() if keep(*k)})
+        t = CostTable(
+            table.robots,
+            table.rooms,
+            table.locations,
+            table.start_location,
+            table.single,
+            {k: v for k, v in table.pair.items() if keep(*k)},
+        )
         encoded = encode(t, goals, encoding)
         steps = decode(solve(encoded.problem, "enhsp-opt", 120), encoded)
         entered[encoding] = [m[2] for step in steps for m in step]

@@ -34,7 +34,7 @@ def _wrap(a: float) -> float:
 
 
 @nb.njit(cache=True)
-def _predict(mean, cov, u, n, dt, alphas, work):  # type: ignore[no-untyped-def]
+def _predict(mean, cov, u, n, dt, alphas, work):
     """Joint prediction, paper eqs. (8), (11)-(12): P = F P Fᵀ + V W Vᵀ.
 
     F is block-diagonal with F_i = I + E_i, where E_i has only the entries (0, 2) =
@@ -67,23 +67,23 @@ def _predict(mean, cov, u, n, dt, alphas, work):  # type: ignore[no-untyped-def]
     for i in range(n):
         th = mean[3 * i + 2]
         v, w = u[i, 0], u[i, 1]
-        c, s = math.cos(th), math.sin(th)
+        co, sn = math.cos(th), math.sin(th)
         w_v = alphas[0] * v * v + alphas[1] * w * w
         w_w = alphas[2] * v * v + alphas[3] * w * w
         # R_i = V W Vᵀ with V = [[dt c, 0], [dt s, 0], [0, dt]]
-        V00, V10 = dt * c, dt * s
+        V00, V10 = dt * co, dt * sn
         cov[3 * i, 3 * i] += V00 * w_v * V00
         cov[3 * i, 3 * i + 1] += V00 * w_v * V10
         cov[3 * i + 1, 3 * i] += V10 * w_v * V00
         cov[3 * i + 1, 3 * i + 1] += V10 * w_v * V10
         cov[3 * i + 2, 3 * i + 2] += dt * w_w * dt
-        mean[3 * i] = mean[3 * i] + v * dt * c
-        mean[3 * i + 1] = mean[3 * i + 1] + v * dt * s
+        mean[3 * i] = mean[3 * i] + v * dt * co
+        mean[3 * i + 1] = mean[3 * i + 1] + v * dt * sn
         mean[3 * i + 2] = _wrap(th + w * dt)
 
 
 @nb.njit(cache=True)
-def _update(mean, cov, H, cols, ncols, y, Q, n, work, PHt, K):  # type: ignore[no-untyped-def]
+def _update(mean, cov, H, cols, ncols, y, Q, n, work, PHt, K):
     """EKF update with a 2-D observation, paper eq. (9), in Joseph form, symmetrised.
 
     H (2 x D) is non-zero only in the columns ``cols[:ncols]`` (the observed robots).
@@ -138,13 +138,13 @@ def _update(mean, cov, H, cols, ncols, y, Q, n, work, PHt, K):  # type: ignore[n
 
 
 @nb.njit(cache=True)
-def _range_bearing(px, py, th, qx, qy):  # type: ignore[no-untyped-def]
+def _range_bearing(px, py, th, qx, qy):
     dx, dy = qx - px, qy - py
     return math.hypot(dx, dy), _wrap(math.atan2(dy, dx) - th), dx, dy
 
 
 @nb.njit(cache=True)
-def run_sequences(  # type: ignore[no-untyped-def]
+def run_sequences(
     n,
     dt,
     alphas,
@@ -337,7 +337,7 @@ def run_sequences(  # type: ignore[no-untyped-def]
 
 
 @nb.njit(cache=True)
-def integrate_poses(start, controls, dt):  # type: ignore[no-untyped-def]
+def integrate_poses(start, controls, dt):
     """Nominal poses (T+1, 3) from a start pose and controls (T, 2), by paper eq. (4)."""
     T = controls.shape[0]
     out = np.empty((T + 1, 3))
@@ -352,7 +352,7 @@ def integrate_poses(start, controls, dt):  # type: ignore[no-untyped-def]
 
 
 @nb.njit(cache=True)
-def common_prefix_matrix(ctrl, m_off, m_T, motions):  # type: ignore[no-untyped-def]
+def common_prefix_matrix(ctrl, m_off, m_T, motions):
     """Leading steps in common between each pair of ``motions`` (all from one start).
 
     Two motions from the same start state share step k when their controls agree on
@@ -377,7 +377,7 @@ def common_prefix_matrix(ctrl, m_off, m_T, motions):  # type: ignore[no-untyped-
 
 
 @nb.njit(cache=True)
-def _before(a, b, x, y, P1, P2):  # type: ignore[no-untyped-def]
+def _before(a, b, x, y, P1, P2):
     """Is combination x before y in the lexicographic order of their joint step sequences?
 
     Motions are numbered in each robot's lexicographic order, and P1, P2 give the steps two
@@ -394,7 +394,7 @@ def _before(a, b, x, y, P1, P2):  # type: ignore[no-untyped-def]
 
 
 @nb.njit(cache=True)
-def joint_lex_order(a, b, P1, P2):  # type: ignore[no-untyped-def]
+def joint_lex_order(a, b, P1, P2):
     """Permutation sorting two-robot combinations (motions a[k], b[k]) into trie order
     (a stable merge sort with :func:`_before`)."""
     n = a.shape[0]
@@ -428,12 +428,12 @@ def joint_lex_order(a, b, P1, P2):  # type: ignore[no-untyped-def]
 
 
 @nb.njit(cache=True)
-def _n_steps(amount, rate, dt):  # type: ignore[no-untyped-def]
+def _n_steps(amount, rate, dt):
     return max(1, math.ceil(amount / (rate * dt)))
 
 
 @nb.njit(cache=True)
-def turn_then_drive(pts, theta0, speed, turn_rate, dt, angle_eps, length_eps):  # type: ignore[no-untyped-def]
+def turn_then_drive(pts, theta0, speed, turn_rate, dt, angle_eps, length_eps):
     """Controls (T, 2), nominal poses (T+1, 3) and the step reaching each point (P,) of
     :func:`tmpnav.belief.controls.path_controls`, which documents the rule."""
     P = pts.shape[0]

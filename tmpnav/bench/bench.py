@@ -29,9 +29,22 @@ from tmpnav.errors import InputError
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 STAGES = ("roadmap", "oracle", "encode", "planner", "resimulate", "total")
 COLUMNS = (
-    "experiment", "encoding", "robots", "rooms", "session", "goals", "phase", "status",
-    *(f"{s}_s" for s in STAGES), "planner_cost", "resimulated_cost", "actions", "pair_actions",
-    "joint_simulations", "joint_factorized", "table_cache_hit",
+    "experiment",
+    "encoding",
+    "robots",
+    "rooms",
+    "session",
+    "goals",
+    "phase",
+    "status",
+    *(f"{s}_s" for s in STAGES),
+    "planner_cost",
+    "resimulated_cost",
+    "actions",
+    "pair_actions",
+    "joint_simulations",
+    "joint_factorized",
+    "table_cache_hit",
 )
 
 
@@ -76,8 +89,16 @@ class Job:
     scenario: Path
 
 
-def jobs(experiment: str, robots: list[int], rooms: list[int], sessions: int, encodings: list[str],
-         seed: int, scenario: Path | None, room_names: Callable[[Path], list[str]]) -> list[Job]:
+def jobs(
+    experiment: str,
+    robots: list[int],
+    rooms: list[int],
+    sessions: int,
+    encodings: list[str],
+    seed: int,
+    scenario: Path | None,
+    room_names: Callable[[Path], list[str]],
+) -> list[Job]:
     out = []
     for n_robots in robots:
         path = scenario_for(n_robots, scenario)
@@ -94,12 +115,23 @@ def jobs(experiment: str, robots: list[int], rooms: list[int], sessions: int, en
 
 
 def run_job(job: Job, timeout: float, workers: int | None) -> dict[str, Any]:
-    payload = {"scenario": str(job.scenario), "rooms": list(job.goals), "encoding": job.encoding,
-               "planner_timeout": timeout, "workers": workers}
+    payload = {
+        "scenario": str(job.scenario),
+        "rooms": list(job.goals),
+        "encoding": job.encoding,
+        "planner_timeout": timeout,
+        "workers": workers,
+    }
     env = dict(os.environ)
     try:
-        proc = subprocess.run([sys.executable, "-m", "tmpnav.bench.worker"], input=json.dumps(payload),
-                              capture_output=True, text=True, timeout=2 * timeout + 60, env=env)
+        proc = subprocess.run(
+            [sys.executable, "-m", "tmpnav.bench.worker"],
+            input=json.dumps(payload),
+            capture_output=True,
+            text=True,
+            timeout=2 * timeout + 60,
+            env=env,
+        )
     except subprocess.TimeoutExpired:
         return {"cold": {"status": "timeout"}, "warm": {"status": "timeout"}}
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
@@ -120,16 +152,26 @@ def rows(job: Job, result: dict[str, Any]) -> list[dict[str, Any]]:
         times = r.get("times", {})
         oracle = r.get("oracle", {})
         task = r.get("task", {})
-        out.append({
-            "experiment": job.experiment, "encoding": job.encoding, "robots": job.robots, "rooms": job.rooms,
-            "session": job.session, "goals": " ".join(job.goals), "phase": phase, "status": r.get("status"),
-            **{f"{s}_s": _num(times.get(s)) for s in STAGES},
-            "planner_cost": _num(r.get("planner_cost")), "resimulated_cost": _num(r.get("resimulated_cost")),
-            "actions": r.get("actions", ""), "pair_actions": task.get("pair_actions", ""),
-            "joint_simulations": oracle.get("joint_simulations", ""),
-            "joint_factorized": oracle.get("joint_factorized", ""),
-            "table_cache_hit": oracle.get("table_cache_hit", ""),
-        })
+        out.append(
+            {
+                "experiment": job.experiment,
+                "encoding": job.encoding,
+                "robots": job.robots,
+                "rooms": job.rooms,
+                "session": job.session,
+                "goals": " ".join(job.goals),
+                "phase": phase,
+                "status": r.get("status"),
+                **{f"{s}_s": _num(times.get(s)) for s in STAGES},
+                "planner_cost": _num(r.get("planner_cost")),
+                "resimulated_cost": _num(r.get("resimulated_cost")),
+                "actions": r.get("actions", ""),
+                "pair_actions": task.get("pair_actions", ""),
+                "joint_simulations": oracle.get("joint_simulations", ""),
+                "joint_factorized": oracle.get("joint_factorized", ""),
+                "table_cache_hit": oracle.get("table_cache_hit", ""),
+            }
+        )
     return out
 
 
@@ -141,8 +183,9 @@ def _num(v: Any) -> str:
 GIVE_UP_AFTER = 2
 
 
-def run_bench(job_list: list[Job], timeout: float, workers: int | None,
-              progress: Callable[[str], None] | None = None) -> list[dict[str, Any]]:
+def run_bench(
+    job_list: list[Job], timeout: float, workers: int | None, progress: Callable[[str], None] | None = None
+) -> list[dict[str, Any]]:
     """Run the jobs one after the other (timings on a shared machine would not mean much
     otherwise). A point where an encoding already timed out GIVE_UP_AFTER times records
     its remaining sessions as timeouts without running them, so that a hopeless point
@@ -152,6 +195,7 @@ def run_bench(job_list: list[Job], timeout: float, workers: int | None,
     for k, job in enumerate(job_list):
         start = time.perf_counter()
         point = (job.encoding, job.robots, job.rooms)
+        result: dict[str, Any]
         if timeouts.get(point, 0) >= GIVE_UP_AFTER:
             result = {"cold": {"status": "timeout"}, "warm": {"status": "timeout"}, "skipped": True}
         else:
@@ -162,9 +206,11 @@ def run_bench(job_list: list[Job], timeout: float, workers: int | None,
         table.extend(new)
         if progress:
             cold, warm = new
-            progress(f"bench {k + 1}/{len(job_list)}: {job.encoding}, {job.robots} robots, {job.rooms} rooms, "
-                     f"session {job.session + 1}: cold {_fmt(cold)}, warm {_fmt(warm)} "
-                     f"({time.perf_counter() - start:.0f} s)")
+            progress(
+                f"bench {k + 1}/{len(job_list)}: {job.encoding}, {job.robots} robots, {job.rooms} rooms, "
+                f"session {job.session + 1}: cold {_fmt(cold)}, warm {_fmt(warm)} "
+                f"({time.perf_counter() - start:.0f} s)"
+            )
     return table
 
 
@@ -187,7 +233,11 @@ def medians(table: list[dict[str, Any]], axis: str) -> dict[tuple[str, str, int]
     for enc, phase, point in keys:
         runs = [r for r in table if r["encoding"] == enc and r["phase"] == phase and int(r[axis]) == point]
         ok = [r for r in runs if str(r["status"]).startswith("solved")]
-        entry: dict[str, Any] = {"runs": len(runs), "solved": len(ok), "timeouts": sum(r["status"] == "timeout" for r in runs)}
+        entry: dict[str, Any] = {
+            "runs": len(runs),
+            "solved": len(ok),
+            "timeouts": sum(r["status"] == "timeout" for r in runs),
+        }
         for s in STAGES:
             vals = [float(r[f"{s}_s"]) for r in ok if r[f"{s}_s"] != ""]
             entry[s] = statistics.median(vals) if vals else None
@@ -204,8 +254,11 @@ def summary(table: list[dict[str, Any]], axis: str, default: str = "mixed") -> s
     encodings = sorted({k[0] for k in med})
     points = sorted({k[2] for k in med})
     label = "rooms" if axis == "rooms" else "robots"
-    lines = [f"| {label} | encoding | cache | solved | median total (s) | roadmap | oracle | encode | planner | speed-up of {default} |",
-             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines = [
+        f"| {label} | encoding | cache | solved | median total (s) | roadmap | oracle | encode | planner "
+        f"| speed-up of {default} |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
     for point in points:
         for enc in encodings:
             for phase in ("cold", "warm"):
@@ -219,7 +272,9 @@ def summary(table: list[dict[str, Any]], axis: str, default: str = "mixed") -> s
                 elif enc != default and mine and e["solved"] == 0:
                     ratio = "> timeout"
                 cells = [_s(e.get(s)) for s in ("total", "roadmap", "oracle", "encode", "planner")]
-                lines.append(f"| {point} | {enc} | {phase} | {e['solved']}/{e['runs']} | " + " | ".join(cells) + f" | {ratio} |")
+                lines.append(
+                    f"| {point} | {enc} | {phase} | {e['solved']}/{e['runs']} | " + " | ".join(cells) + f" | {ratio} |"
+                )
     return "\n".join(lines) + "\n"
 
 

@@ -39,8 +39,13 @@ class Case:
 CASES = (
     Case("fig2", "configs/corridor.yaml", why="the paper's Fig. 2 swap: one paired move"),
     Case("odd-rooms", "configs/corridor-2robots.yaml", ("L2", "L5", "L9"), why="an odd number of rooms, mixed"),
-    Case("odd-rooms-paper", "configs/corridor-2robots.yaml", ("L2", "L5", "L9"), "paper",
-         why="the same with the paper's encoding: the extra visit"),
+    Case(
+        "odd-rooms-paper",
+        "configs/corridor-2robots.yaml",
+        ("L2", "L5", "L9"),
+        "paper",
+        why="the same with the paper's encoding: the extra visit",
+    ),
     Case("three-robots", "configs/corridor-3robots.yaml", why="three robots on the corridor"),
     Case("ros-map", "configs/office-ros.yaml", why="a ROS map_server office, three robots"),
 )

@@ -97,7 +97,7 @@ def control(est: np.ndarray, waypoint: np.ndarray, speed: float, turn_rate: floa
 
 def run_session(
     scenario: Scenario, world, plan_paths, draws: Draws, mutual: bool, vis: LandmarkVisibility
-) -> SessionTrace:  # type: ignore[no-untyped-def]
+) -> SessionTrace:
     """One execution of the plan: ``plan_paths`` lists, per action, {robot: waypoints}."""
     robots = [r.name for r in scenario.robots]
     N = len(robots)
@@ -168,7 +168,7 @@ def run_session(
     return trace
 
 
-def simulate(report, sessions: int = 25, seed: int = 0) -> SimulationResult:  # type: ignore[no-untyped-def]
+def simulate(report, sessions: int = 25, seed: int = 0) -> SimulationResult:
     """Execute ``report``'s plan ``sessions`` times in both configurations."""
     scenario, world, roadmap = report.scenario, report.world, report.roadmap
     robots = [r.name for r in scenario.robots]
@@ -201,20 +201,24 @@ def summary_lines(result: SimulationResult, sessions: int) -> list[str]:
     lines = [f"{sessions} sessions; worst-case position error (largest average error over the path's nodes):"]
     for robot in result.robots:
         lines.append(
-            f"  {robot}: with mutual observations {result.worst(1, robot):.3f} m, without {result.worst(2, robot):.3f} m, "
-            f"{result.reduction(robot):.1f}% lower"
+            f"  {robot}: with mutual observations {result.worst(1, robot):.3f} m, "
+            f"without {result.worst(2, robot):.3f} m, {result.reduction(robot):.1f}% lower"
         )
     starved = result.starved
-    lines.append(f"landmark-starved robot (largest error without mutual observations): {starved}, "
-                 f"{result.reduction(starved):.1f}% lower with mutual observations")
+    lines.append(
+        f"landmark-starved robot (largest error without mutual observations): {starved}, "
+        f"{result.reduction(starved):.1f}% lower with mutual observations"
+    )
     if result.truncated_sessions:
         lines.append(f"note: {result.truncated_sessions} session(s) did not reach every node within the step budget")
     return lines
 
 
-def to_csv(result: SimulationResult, report) -> str:  # type: ignore[no-untyped-def]
+def to_csv(result: SimulationResult, report) -> str:
     """Average (and spread of) the position error at each node, per robot and configuration."""
-    rows = ["config,mutual_observations,robot,node_index,roadmap_node,x,y,mean_error_m,std_error_m,max_error_m,sessions"]
+    rows = [
+        "config,mutual_observations,robot,node_index,roadmap_node,x,y,mean_error_m,std_error_m,max_error_m,sessions"
+    ]
     for config in (1, 2):
         for robot in result.robots:
             errors = result.errors[(config, robot)]

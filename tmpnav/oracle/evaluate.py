@@ -416,6 +416,7 @@ class _Pairs:
         self.a: list[np.ndarray] = []
         self.b: list[np.ndarray] = []
         self.of_request: dict[int, tuple[int, np.ndarray]] = {}  # request -> (group, combo positions)
+        self.pruned: dict[int, float] = {}  # request -> lower bound, for pairs not simulated
         group_of: dict[tuple, int] = {}
         raw: dict[int, list[tuple[int, list[tuple[int, int]]]]] = {}
         for i, req in enumerate(requests):
@@ -454,7 +455,6 @@ class _Pairs:
         lib = self.lib
         G = len(self.groups)
         self.seen: list[np.ndarray] = [np.zeros(a.shape[0], dtype=bool) for a in self.a]
-        self.pruned = {}
         first_all: np.ndarray | None = None
         self.kept_row: list[np.ndarray] = [np.full(a.shape[0], -1, dtype=np.int64) for a in self.a]
         if G == 0 or not any(a.shape[0] for a in self.a):
@@ -571,7 +571,7 @@ class _Pairs:
         """
         w = self.lib.scenario.cost
         needed = [np.zeros(a.shape[0], dtype=bool) for a in self.a]
-        self.pruned: dict[int, float] = {}
+        self.pruned = {}
         for i, (g, positions) in self.of_request.items():
             req = self.requests[i]
             s1, s2, _ = self.groups[g]

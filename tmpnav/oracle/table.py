@@ -24,7 +24,7 @@ from collections.abc import Callable
 
 from tmpnav.oracle.evaluate import Request, StartState
 from tmpnav.oracle.oracle import Oracle
-from tmpnav.types import CostTable, MotionResult, MoveKey, Scenario
+from tmpnav.types import CostTable, MotionResult, MoveKey, Scenario, cov3, vec3
 from tmpnav.world import World
 
 
@@ -57,9 +57,7 @@ def initial_state(scenario: Scenario, roadmap_start: int, robot: str) -> StartSt
 def arrival_state(result: MotionResult, i: int = 0) -> StartState:
     """The state in which robot i of an action ends it: its canonical start for the next."""
     belief = result.final.marginal(i)
-    mean = tuple(float(v) for v in belief.mean)
-    cov = tuple(tuple(float(v) for v in row) for row in belief.cov)
-    return StartState(result.goal_nodes[i], result.final_headings[i], mean, cov)  # type: ignore[arg-type]
+    return StartState(result.goal_nodes[i], result.final_headings[i], vec3(belief.mean), cov3(belief.cov))
 
 
 def build_table(
@@ -152,9 +150,9 @@ def _compute_table(
             )
             for m1, m2 in wanted
         ]
-        for key, res in zip(wanted, oracle.evaluate(requests), strict=True):
+        for pair, res in zip(wanted, oracle.evaluate(requests), strict=True):
             if res is not None and not res.pruned:
-                pairs[key] = res.cost
+                pairs[pair] = res.cost
 
     return CostTable(
         robots=tuple(r.name for r in scenario.robots),

@@ -54,14 +54,14 @@ def reachable_free_space(world: World, radius: float, starts: np.ndarray) -> np.
     return np.isin(labels, keep)
 
 
-def _validity_checker(world: World, free_cells: np.ndarray):  # type: ignore[no-untyped-def]
+def _validity_checker(world: World, free_cells: np.ndarray):
     """A fast scalar validity check for OMPL's callback (called ~10^6 times)."""
     free = free_cells.tolist()
     x0, y0 = world.grid.origin
     inv = 1.0 / world.grid.resolution
     rows, cols = world.grid.shape
 
-    def is_valid(state) -> bool:  # type: ignore[no-untyped-def]
+    def is_valid(state) -> bool:
         i = math.floor((state[1] - y0) * inv)
         j = math.floor((state[0] - x0) * inv)
         return 0 <= i < rows and 0 <= j < cols and free[i][j]
@@ -118,7 +118,7 @@ def _grow(
     prm.getPlannerData(data)
     n = data.numVertices()
     nodes = np.empty((n, 2))
-    edges = []
+    edges: list[tuple[int, int]] = []
     for i in range(n):
         st = data.getVertex(i).getState()
         nodes[i] = st[0], st[1]

@@ -82,7 +82,8 @@ def save(directory: Path, key: str, roadmap: Roadmap) -> None:
         "fingerprint": roadmap.fingerprint,
     }
     buffer = io.BytesIO()
-    np.savez(buffer, header=np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays)
+    contents = {"header": np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays}
+    np.savez(buffer, **contents)  # type: ignore[arg-type]  # numpy's stub mistakes ** for allow_pickle
     fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "wb") as fh:
