@@ -12,7 +12,7 @@ canonical start per robot and location:
   arrival).
 
 Pairs start from the two robots' canonical states with uncorrelated beliefs. The
-re-simulation of the final plan (:mod:`tmpnav.execute`) carries the true beliefs,
+re-simulation of the final plan (:mod:`tmpnav.resimulate`) carries the true beliefs,
 cross-correlations included, from action to action and reports how far its cost is from
 the table's.
 """
