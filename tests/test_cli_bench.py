@@ -40,9 +40,15 @@ def test_bench_rooms_compares_encodings(tmp_path: Path) -> None:
     )
     assert proc.returncode == 0, proc.stderr
     rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
-    assert len(rows) == 2 * 2 * 2 * 2  # points x sessions x encodings x (cold, warm)
+    assert len(rows) == 2 * 2 * 2 * 3  # points x sessions x encodings x (cold, warm, replan)
     assert all(r["status"].startswith("solved") for r in rows), rows
-    assert all(r["table_cache_hit"] == "True" for r in rows if r["phase"] == "warm")
+    assert all(r["table_cache_hit"] == "True" for r in rows if r["phase"] in ("warm", "replan"))
+    assert all(r["plan_cache_hit"] == "True" for r in rows if r["phase"] == "warm")
+    assert all(r["plan_cache_hit"] == "False" for r in rows if r["phase"] in ("cold", "replan"))
+    costs: dict[tuple[str, str, str], set[str]] = {}
+    for r in rows:  # the cache never changes the plan
+        costs.setdefault((r["encoding"], r["rooms"], r["session"]), set()).add(r["planner_cost"])
+    assert all(len(v) == 1 for v in costs.values()), costs
     assert (tmp_path / "bench.png").stat().st_size > 0
     summary = (tmp_path / "summary.md").read_text()
     assert "speed-up of mixed" in summary and "| paper |" in summary

@@ -83,14 +83,15 @@ def test_unsolvable(walled: Path, cache_dir: Path) -> None:
 
 @pytest.mark.slow
 def test_timeout(cache_dir: Path) -> None:
-    proc = tmpnav("plan", str(TWO_ROOMS), "--timeout", "0.001", "--cache-dir", str(cache_dir), "-q")
+    # --replan: the cache already remembers this problem's plan from the tests above
+    proc = tmpnav("plan", str(TWO_ROOMS), "--timeout", "0.001", "--replan", "--cache-dir", str(cache_dir), "-q")
     assert_clean_failure(proc, PlannerTimeoutError.exit_code, "time limit")
 
 
 @pytest.mark.slow
 def test_no_java(cache_dir: Path) -> None:
     env = dict(os.environ, PATH="")
-    proc = tmpnav("plan", str(TWO_ROOMS), "--cache-dir", str(cache_dir), "-q", env=env)
+    proc = tmpnav("plan", str(TWO_ROOMS), "--replan", "--cache-dir", str(cache_dir), "-q", env=env)
     assert_clean_failure(proc, PlannerUnavailableError.exit_code, "Java was not found")
 
 
@@ -103,7 +104,7 @@ def test_unknown_planner(cache_dir: Path) -> None:
 @pytest.mark.slow
 def test_planner_crash(cache_dir: Path) -> None:
     env = dict(os.environ, TMPNAV_JAVA_OPTIONS="-XX:+NoSuchJvmOption")
-    proc = tmpnav("plan", str(TWO_ROOMS), "--cache-dir", str(cache_dir), "-q", env=env)
+    proc = tmpnav("plan", str(TWO_ROOMS), "--replan", "--cache-dir", str(cache_dir), "-q", env=env)
     assert_clean_failure(proc, PlannerCrashError.exit_code, "failed with status")
 
 

@@ -193,6 +193,7 @@ def plan_options(kw: dict[str, Any]) -> Any:
         mutual_observations=False if kw["no_mutual_observations"] else None,
         cache_dir=kw["cache_dir"],
         use_cache=not kw["no_cache"],
+        replan=kw.get("replan", False),
         executor=kw["executor"],
         workers=kw["workers"],
         ray_address=kw["ray_address"],
@@ -232,6 +233,11 @@ def progress_bar(label: str) -> Callable[[int, int], None] | None:
     show_default=True,
     help="What to print on stdout.",
 )
+@click.option(
+    "--replan",
+    is_flag=True,
+    help="Run the task planner even if the cache remembers its plan for this exact problem.",
+)
 @oracle_options
 @report_errors
 def plan(scenario: Path, output: Path | None, fmt: str, **kw: Any) -> None:
@@ -240,6 +246,9 @@ def plan(scenario: Path, output: Path | None, fmt: str, **kw: Any) -> None:
     Prints the task-motion plan (per step: robots, from, to, cost), the total cost as
     the planner saw it and as re-simulated with carried-over beliefs, and the time per
     stage. With -o DIR it also writes plan.json, plan.png and the PDDL files used.
+
+    A cost table and a task plan computed before for the same inputs come from the cache
+    (--no-cache: compute everything; --replan: run the task planner again anyway).
     """
     from tmpnav.pipeline import plan as run_plan
 
@@ -250,9 +259,8 @@ def plan(scenario: Path, output: Path | None, fmt: str, **kw: Any) -> None:
     written: list[Path] = []
     if output is not None:
         from tmpnav.report.outputs import write_outputs
-        from tmpnav.task.export import pddl_texts
 
-        written = write_outputs(report, output, pddl_texts(report.encoded))
+        written = write_outputs(report, output, report.pddl_texts())
     if fmt == "json":
         click.echo(dumps(plan_document(report)))
     else:
@@ -339,6 +347,11 @@ def cache_clear(cache_dir: Path | None) -> None:
     "--output",
     type=click.Path(path_type=Path, file_okay=False),
     help="Directory for errors.csv, errors.png, summary.md.",
+)
+@click.option(
+    "--replan",
+    is_flag=True,
+    help="Run the task planner even if the cache remembers its plan for this exact problem.",
 )
 @oracle_options
 @report_errors
@@ -438,8 +451,10 @@ def bench(
 ) -> None:
     """Planning time against the number of rooms (Fig. 3(b)) or of robots (Fig. 3(c)).
 
-    Every run plans in its own process, cold (empty cache) then warm; runs longer than
-    --timeout are recorded as timeouts. Writes bench.csv, bench.png and summary.md.
+    Every run plans in its own process: cold (empty cache), warm (cost table and task
+    plan from the cache) and replan (cost table from the cache, the task planner runs
+    again); runs longer than --timeout are recorded as timeouts. Writes bench.csv,
+    bench.png and summary.md.
     """
     from tmpnav.bench import bench as b
     from tmpnav.report.bench_plot import plot_bench
@@ -456,10 +471,11 @@ def bench(
     say = None if quiet else (lambda line: click.echo(line, err=True))
     table = b.run_bench(job_list, timeout, workers, say)
     med = b.medians(table, axis)
-    text = f"# tmpnav bench: {experiment}\n\n" + b.summary(table, axis, default=encs[0])
+    text = f"# tmpnav bench: {experiment}\n\n" + b.summary(table, axis, default=encs[0], timeout=timeout)
     b.write_atomic(output / "bench.csv", b.to_csv(table))
     b.write_atomic(output / "summary.md", text)
-    plot_bench(med, axis, output / "bench.png", f"planning time against {axis} ({sessions} sessions per point)")
+    per_point = f"{sessions} session{'s' if sessions != 1 else ''} per point"
+    plot_bench(med, axis, output / "bench.png", f"planning time against {axis} ({per_point})")
     click.echo(text)
     for name in ("bench.csv", "bench.png", "summary.md"):
         click.echo(f"wrote {output / name}")

@@ -56,6 +56,7 @@ class PlanOptions:
     goals: Goals | None = None
     cache_dir: Path | None = None  # None: the default (XDG) cache directory
     use_cache: bool = True
+    replan: bool = False  # run the task planner even when the cache remembers its plan
     executor: str = "processes"
     workers: int | None = None
     ray_address: str | None = None
@@ -80,7 +81,19 @@ class PlanReport:
     cache: dict[str, Any]
     oracle: dict[str, Any]
     task: dict[str, Any]
-    encoded: Any = field(repr=False, default=None)
+    encoded: Any = field(repr=False, default=None)  # None when the plan came from the cache
+    table: Any = field(repr=False, default=None)
+
+    def pddl_texts(self) -> tuple[str, str]:
+        """The PDDL domain and problem behind the plan (encoded again after a cache hit)."""
+        from tmpnav.task.encode import encode
+        from tmpnav.task.export import pddl_texts
+
+        encoded = self.encoded
+        if encoded is None:
+            sc = self.scenario
+            encoded = encode(self.table, sc.goals, sc.planner.encoding, name=sc.name, min_gain=sc.planner.pair_min_gain)
+        return pddl_texts(encoded)
 
 
 def apply_options(scenario: Scenario, options: PlanOptions) -> Scenario:
@@ -207,6 +220,8 @@ def plan(
     from tmpnav.resimulate import resimulate
     from tmpnav.task.decode import canonical_order, decode, step_cost
     from tmpnav.task.encode import encode
+    from tmpnav.task.memo import Memo, from_json, memo_key
+    from tmpnav.task.memo import to_json as memo_to_json
     from tmpnav.task.solve import solve
 
     options = options or PlanOptions()
@@ -214,20 +229,43 @@ def plan(
     prep = prepare(path, options, times, loaded)
     scenario, oracle, table = prep.scenario, prep.oracle, prep.table
     try:
-        with timed(times, "encode"):
-            encoded = encode(
-                table,
-                scenario.goals,
-                scenario.planner.encoding,
-                name=scenario.name,
-                min_gain=scenario.planner.pair_min_gain,
+        memo, key, encoded = None, None, None
+        if options.use_cache:
+            with timed(times, "planner"):
+                sp = scenario.planner
+                key = memo_key(table, scenario.goals, sp.encoding, sp.pair_min_gain, sp.name, scenario.name)
+                found = None if options.replan else oracle.cache.get_many([key]).get(key)
+                memo = from_json(found, table) if found is not None else None
+        if memo is None:
+            with timed(times, "encode"):
+                encoded = encode(
+                    table,
+                    scenario.goals,
+                    scenario.planner.encoding,
+                    name=scenario.name,
+                    min_gain=scenario.planner.pair_min_gain,
+                )
+            with timed(times, "planner"):
+                solved = solve(encoded.problem, scenario.planner.name, scenario.planner.timeout)
+            memo = Memo(
+                status=solved.status,
+                engine=solved.engine,
+                actions=solved.actions,
+                steps=tuple(decode(solved, encoded)),
+                task={
+                    "actions": encoded.n_actions,
+                    "pair_actions": len(encoded.pair_actions),
+                    "reshaped_rooms": len(encoded.potentials),
+                },
             )
-        with timed(times, "planner"):
-            solved = solve(encoded.problem, scenario.planner.name, scenario.planner.timeout)
-        planned = decode(solved, encoded)
-        order = canonical_order(planned, table.robots)
-        steps = [planned[i] for i in order]
-        names = [solved.actions[i][0] for i in order]
+            if key is not None:
+                oracle.cache.put_many({key: memo_to_json(memo)})
+        else:
+            times.seconds.setdefault("encode", 0.0)
+        plan_hit = encoded is None
+        order = canonical_order(list(memo.steps), table.robots)
+        steps = [memo.steps[i] for i in order]
+        names = [memo.actions[i][0] for i in order]
         planner_costs = [step_cost(table, s) for s in steps]
         with timed(times, "resimulate"):
             resim = resimulate(library(oracle.ctx), oracle, scenario, steps, planner_costs, names)
@@ -241,7 +279,7 @@ def plan(
         roadmap=prep.roadmap,
         encoding=scenario.planner.encoding,
         planner=scenario.planner.name,
-        status=solved.status,
+        status=memo.status,
         planner_cost=float(sum(planner_costs)),
         resimulated_cost=resim.cost,
         actions=resim.actions,
@@ -253,17 +291,13 @@ def plan(
             "hits": stats.cache_hits,
             "misses": stats.cache_misses,
             "roadmap_hit": prep.roadmap_hit,
+            "plan_hit": plan_hit,
             "warnings": list(getattr(oracle.cache.stats, "warnings", [])),
         },
         oracle=stats.as_dict(),
-        task={
-            "single_moves": len(table.single),
-            "pair_moves_evaluated": len(table.pair),
-            "actions": encoded.n_actions,
-            "pair_actions": len(encoded.pair_actions),
-            "reshaped_rooms": len(encoded.potentials),
-        },
+        task={"single_moves": len(table.single), "pair_moves_evaluated": len(table.pair), **memo.task},
         encoded=encoded,
+        table=table,
     )
 
 

@@ -3,8 +3,9 @@
 For each point (a number of rooms, or of robots) and session, the rooms to visit are drawn
 at random from a seed; every encoding asked for plans the same goals in the same world,
 one run after the other on this machine, each in its own process (:mod:`worker`), cold
-(empty cache) and then warm. A run that does not finish within the time limit is killed
-and recorded as a timeout.
+(empty cache), then warm (cost table and task plan from the cache), then re-planned
+(cost table from the cache, the task planner runs again). A run that does not finish
+within the time limit is killed and recorded as a timeout.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ from typing import Any
 
 from tmpnav.errors import InputError
 
+#: cold: empty cache; warm: everything cached; replan: costs cached, the planner runs again
+PHASES = ("cold", "warm", "replan")
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 STAGES = ("roadmap", "oracle", "encode", "planner", "resimulate", "total")
 COLUMNS = (
@@ -45,6 +48,7 @@ COLUMNS = (
     "joint_simulations",
     "joint_factorized",
     "table_cache_hit",
+    "plan_cache_hit",
 )
 
 
@@ -129,17 +133,17 @@ def run_job(job: Job, timeout: float, workers: int | None) -> dict[str, Any]:
             input=json.dumps(payload),
             capture_output=True,
             text=True,
-            timeout=2 * timeout + 60,
+            timeout=len(PHASES) * timeout + 60,
             env=env,
         )
     except subprocess.TimeoutExpired:
-        return {"cold": {"status": "timeout"}, "warm": {"status": "timeout"}}
+        return {phase: {"status": "timeout"} for phase in PHASES}
     lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
     if proc.returncode != 0 or not lines:
         tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-        return {"cold": {"status": "error", "error": tail}, "warm": {"status": "error", "error": tail}}
+        return {phase: {"status": "error", "error": tail} for phase in PHASES}
     result: dict[str, Any] = json.loads(lines[-1])
-    for phase in ("cold", "warm"):
+    for phase in PHASES:
         if result[phase].get("status") == "PlannerTimeoutError":
             result[phase]["status"] = "timeout"
     return result
@@ -147,7 +151,7 @@ def run_job(job: Job, timeout: float, workers: int | None) -> dict[str, Any]:
 
 def rows(job: Job, result: dict[str, Any]) -> list[dict[str, Any]]:
     out = []
-    for phase in ("cold", "warm"):
+    for phase in PHASES:
         r = result.get(phase, {"status": "missing"})
         times = r.get("times", {})
         oracle = r.get("oracle", {})
@@ -170,6 +174,7 @@ def rows(job: Job, result: dict[str, Any]) -> list[dict[str, Any]]:
                 "joint_simulations": oracle.get("joint_simulations", ""),
                 "joint_factorized": oracle.get("joint_factorized", ""),
                 "table_cache_hit": oracle.get("table_cache_hit", ""),
+                "plan_cache_hit": r.get("plan_cache_hit", ""),
             }
         )
     return out
@@ -197,7 +202,7 @@ def run_bench(
         point = (job.encoding, job.robots, job.rooms)
         result: dict[str, Any]
         if timeouts.get(point, 0) >= GIVE_UP_AFTER:
-            result = {"cold": {"status": "timeout"}, "warm": {"status": "timeout"}, "skipped": True}
+            result = {**{phase: {"status": "timeout"} for phase in PHASES}, "skipped": True}
         else:
             result = run_job(job, timeout, workers)
             if result["cold"].get("status") == "timeout":
@@ -205,11 +210,10 @@ def run_bench(
         new = rows(job, result)
         table.extend(new)
         if progress:
-            cold, warm = new
+            phases = ", ".join(f"{row['phase']} {_fmt(row)}" for row in new)
             progress(
                 f"bench {k + 1}/{len(job_list)}: {job.encoding}, {job.robots} robots, {job.rooms} rooms, "
-                f"session {job.session + 1}: cold {_fmt(cold)}, warm {_fmt(warm)} "
-                f"({time.perf_counter() - start:.0f} s)"
+                f"session {job.session + 1}: {phases} ({time.perf_counter() - start:.0f} s)"
             )
     return table
 
@@ -248,8 +252,11 @@ def medians(table: list[dict[str, Any]], axis: str) -> dict[tuple[str, str, int]
     return out
 
 
-def summary(table: list[dict[str, Any]], axis: str, default: str = "mixed") -> str:
-    """A Markdown table of medians per point, with the speed-up of ``default`` over the others."""
+def summary(table: list[dict[str, Any]], axis: str, default: str = "mixed", timeout: float | None = None) -> str:
+    """A Markdown table of medians per point, with the speed-up of ``default`` over the others.
+
+    Where another encoding never finished, its speed-up is a lower bound: the time limit
+    over ``default``'s median."""
     med = medians(table, axis)
     encodings = sorted({k[0] for k in med})
     points = sorted({k[2] for k in med})
@@ -261,7 +268,7 @@ def summary(table: list[dict[str, Any]], axis: str, default: str = "mixed") -> s
     ]
     for point in points:
         for enc in encodings:
-            for phase in ("cold", "warm"):
+            for phase in PHASES:
                 e = med.get((enc, phase, point))
                 if e is None:
                     continue
@@ -270,7 +277,7 @@ def summary(table: list[dict[str, Any]], axis: str, default: str = "mixed") -> s
                 if enc != default and mine and e["total"]:
                     ratio = f"{e['total'] / mine:.1f}x"
                 elif enc != default and mine and e["solved"] == 0:
-                    ratio = "> timeout"
+                    ratio = f"> {timeout / mine:.0f}x (timeout)" if timeout else "> timeout"
                 cells = [_s(e.get(s)) for s in ("total", "roadmap", "oracle", "encode", "planner")]
                 lines.append(
                     f"| {point} | {enc} | {phase} | {e['solved']}/{e['runs']} | " + " | ".join(cells) + f" | {ratio} |"

@@ -178,6 +178,7 @@ def plan_document(report: Any) -> dict[str, Any]:
             "hits": int(report.cache.get("hits", 0)),
             "misses": int(report.cache.get("misses", 0)),
             "roadmap_hit": bool(report.cache.get("roadmap_hit", False)),
+            "plan_hit": bool(report.cache.get("plan_hit", False)),
             "warnings": [str(w) for w in report.cache.get("warnings", [])],
         },
         "oracle": {k: _plain(v) for k, v in report.oracle.items()},

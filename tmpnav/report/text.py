@@ -129,6 +129,8 @@ def _times(report: Any) -> list[str]:
     roadmap = "roadmap from cache" if cache.get("roadmap_hit") else "roadmap grown"
     if report.oracle.get("table_cache_hit"):
         roadmap += ", cost table from cache"
+    if cache.get("plan_hit"):
+        roadmap += ", task plan from cache (--replan runs the planner)"
     if cache.get("enabled", False):
         share = f" ({100 * hits / (hits + misses):.0f}% hits)" if hits + misses else ""
         where = f" ({cache['directory']})" if cache.get("directory") else ""
