@@ -104,16 +104,37 @@ def check_java() -> None:
         raise PlannerUnavailableError(f"Java {version} found on PATH; ENHSP needs Java {JAVA_MIN} or newer")
 
 
-def _freeze_kind(problem: Any) -> None:
-    """Compute the problem's kind once for the duration of a solve.
+def _freeze(problem: Any) -> None:
+    """Answer unified-planning's repeated questions about the problem once per solve.
 
-    unified-planning recomputes ``Problem.kind`` on every access, and a solve reads it
-    half a dozen times (support checks, the PDDL writer): with a few thousand grounded
-    actions that was most of the planning time. The problem is not modified while it is
-    being solved, so the first answer stays right.
+    unified-planning recomputes ``Problem.kind`` and the static fluents on every access,
+    and a solve asks half a dozen times (support checks, the PDDL writer); its writer also
+    checks every name it mangles with ``has_name``, a linear scan over the actions. With a
+    thousand grounded actions these were most of the planning time. The problem is not
+    modified while it is being solved, so the first answers stay right.
     """
-    kind = problem.kind
-    frozen = type("FrozenKindProblem", (type(problem),), {"kind": property(lambda self: kind)})
+    base = type(problem)
+    actions = {a.name for a in problem.actions}
+    answers: dict[str, Any] = {}
+
+    def static_and_unused(self: Any) -> Any:
+        if "static" not in answers:
+            answers["static"] = base._get_static_and_unused_fluents(self)
+        return answers["static"]
+
+    def kind(self: Any) -> Any:
+        if "kind" not in answers:
+            answers["kind"] = base.kind.fget(self)
+        return answers["kind"]
+
+    def has_action(self: Any, name: str) -> bool:
+        return name in actions
+
+    frozen = type(
+        "FrozenProblem",
+        (base,),
+        {"kind": property(kind), "_get_static_and_unused_fluents": static_and_unused, "has_action": has_action},
+    )
     problem.__class__ = frozen
 
 
@@ -133,7 +154,7 @@ def solve(problem: Any, planner: str, timeout: float) -> SolveResult:
         engine_cls = env.factory.engine(planner)
     except Exception as err:
         raise PlannerUnavailableError(f"planner {planner!r} cannot be loaded: {err}") from None
-    _freeze_kind(problem)
+    _freeze(problem)
     if not engine_cls.supports(problem.kind):
         raise PlannerUnavailableError(
             f"planner {planner!r} does not support this problem (it needs numeric fluents and action costs); "
