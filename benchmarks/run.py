@@ -114,6 +114,13 @@ print(json.dumps(rows))
     return {"rows": rows}
 
 
+def bench(out: Path, robots: str, rooms: str, sessions: str, timeout: str) -> None:
+    """``tmpnav bench``, the default encoding against the paper's on the same goal draws."""
+    cmd = [*TMPNAV, "bench", "--robots", robots, "--rooms", rooms, "--sessions", sessions]
+    cmd += ["--encoding", "mixed", "--encoding", "paper", "--timeout", timeout]
+    run([*cmd, "-o", str(out.relative_to(ROOT)), "-q"], out, out / "log.txt")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="the reduced version (make bench)")
@@ -130,63 +137,15 @@ def main() -> None:
         print(text, flush=True)
     if "oracle" in only:
         oracle_throughput(base / "oracle")
+    # 60 s bounds the paper encoding's runs; past it a run counts as a timeout, so the
+    # speed-up at that point is a lower bound (60 s / the default's median).
+    timeout = "30" if args.quick else "60"
     if "rooms" in only:
         sessions, rooms = ("2", "2,6,10") if args.quick else ("25", "2..10")
-        # 60 s bounds the paper encoding's runs; past it a run counts as a timeout, so the
-        # speed-up at that point is a lower bound (60 s / the default's median).
-        timeout = "30" if args.quick else "60"
-        out = base / "rooms"
-        run(
-            [
-                *TMPNAV,
-                "bench",
-                "--rooms",
-                rooms,
-                "--robots",
-                "2",
-                "--sessions",
-                sessions,
-                "--encoding",
-                "mixed",
-                "--encoding",
-                "paper",
-                "--timeout",
-                timeout,
-                "-o",
-                str(out.relative_to(ROOT)),
-                "-q",
-            ],
-            out,
-            out / "log.txt",
-        )
+        bench(base / "rooms", "2", rooms, sessions, timeout)
     if "robots" in only:
-        sessions = "1" if args.quick else "25"
-        robots = "2,4" if args.quick else "2,4,6"
-        timeout = "30" if args.quick else "60"
-        out = base / "robots"
-        run(
-            [
-                *TMPNAV,
-                "bench",
-                "--robots",
-                robots,
-                "--rooms",
-                "8",
-                "--sessions",
-                sessions,
-                "--encoding",
-                "mixed",
-                "--encoding",
-                "paper",
-                "--timeout",
-                timeout,
-                "-o",
-                str(out.relative_to(ROOT)),
-                "-q",
-            ],
-            out,
-            out / "log.txt",
-        )
+        sessions, robots = ("1", "2,4") if args.quick else ("25", "2,4,6")
+        bench(base / "robots", robots, "8", sessions, timeout)
     if "simulate" in only:
         out = base / "simulate"
         sessions = "5" if args.quick else "25"

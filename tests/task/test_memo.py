@@ -27,6 +27,17 @@ def summary(report) -> tuple:
     )
 
 
+def stored(cache_dir: Path, report) -> tuple[str, object]:
+    """The memo key of ``report``'s task problem and the entry the cache holds for it."""
+    sc = report.scenario
+    key = memo_key(report.table, sc.goals, sc.planner.encoding, sc.planner.pair_min_gain, sc.planner.name, sc.name)
+    cache = DiskCache(cache_dir)
+    try:
+        return key, cache.get_many([key])[key]
+    finally:
+        cache.close()
+
+
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory: pytest.TempPathFactory):
     cache = tmp_path_factory.mktemp("cache")
@@ -81,14 +92,8 @@ def test_the_key_covers_goals_encoding_gain_planner_and_costs(runs) -> None:
     ],
 )
 def test_an_entry_that_does_not_fit_is_a_miss(runs, damage) -> None:
-    _, cold, _, _, _ = runs
-    sc = cold.scenario
-    key = memo_key(cold.table, sc.goals, sc.planner.encoding, sc.planner.pair_min_gain, sc.planner.name, sc.name)
-    cache = DiskCache(runs[0])
-    try:
-        good = cache.get_many([key])[key]
-    finally:
-        cache.close()
+    cache_dir, cold, _, _, _ = runs
+    _, good = stored(cache_dir, cold)
     assert from_json(good, cold.table) is not None
     assert from_json(damage(good), cold.table) is None
 
@@ -96,11 +101,9 @@ def test_an_entry_that_does_not_fit_is_a_miss(runs, damage) -> None:
 def test_a_damaged_entry_makes_the_planner_run_again(tmp_path: Path) -> None:
     options = PlanOptions(cache_dir=tmp_path, executor="serial")
     first = plan(TWO_ROOMS, options)
-    sc = first.scenario
-    key = memo_key(first.table, sc.goals, sc.planner.encoding, sc.planner.pair_min_gain, sc.planner.name, sc.name)
+    key, entry = stored(tmp_path, first)
     cache = DiskCache(tmp_path)
     try:
-        entry = cache.get_many([key])[key]
         cache.put_many({key: {**entry, "steps": [[["nobody", "nowhere", "L1"]]]}})
     finally:
         cache.close()
@@ -112,13 +115,7 @@ def test_a_damaged_entry_makes_the_planner_run_again(tmp_path: Path) -> None:
 
 
 def test_round_trip_of_an_entry(runs) -> None:
-    _, cold, _, _, _ = runs
-    sc = cold.scenario
-    key = memo_key(cold.table, sc.goals, sc.planner.encoding, sc.planner.pair_min_gain, sc.planner.name, sc.name)
-    cache = DiskCache(runs[0])
-    try:
-        entry = cache.get_many([key])[key]
-    finally:
-        cache.close()
+    cache_dir, cold, _, _, _ = runs
+    _, entry = stored(cache_dir, cold)
     memo = from_json(entry, cold.table)
     assert memo is not None and to_json(memo) == entry

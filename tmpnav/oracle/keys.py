@@ -41,14 +41,19 @@ CODE_FILES = (
 NOT_RESULT_CODE = ("oracle/oracle.py", "world/build.py")
 
 
-@lru_cache(maxsize=1)
-def code_version() -> str:
+def source_digest(files: tuple[str, ...]) -> Any:
+    """A SHA-256 over the names and bytes of tmpnav source files (paths relative to the package)."""
     root = Path(__file__).resolve().parent.parent
     h = hashlib.sha256()
-    for rel in CODE_FILES:
+    for rel in files:
         h.update(rel.encode())
         h.update((root / rel).read_bytes())
-    return h.hexdigest()
+    return h
+
+
+@lru_cache(maxsize=1)
+def code_version() -> str:
+    return str(source_digest(CODE_FILES).hexdigest())
 
 
 def context_digest(scenario: Scenario, world: World, roadmap: Roadmap) -> str:

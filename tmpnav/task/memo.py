@@ -21,9 +21,9 @@ from dataclasses import dataclass
 from functools import lru_cache
 from importlib import metadata
 from importlib.resources import files
-from pathlib import Path
 from typing import Any
 
+from tmpnav.oracle.keys import source_digest
 from tmpnav.task.encode import ENCODINGS
 from tmpnav.types import CostTable, Goals, MoveKey, PlanStatus
 
@@ -45,11 +45,7 @@ class Memo:
 
 @lru_cache(maxsize=1)
 def _code_version() -> str:
-    root = Path(__file__).resolve().parent.parent
-    h = hashlib.sha256()
-    for rel in CODE_FILES:
-        h.update(rel.encode())
-        h.update((root / rel).read_bytes())
+    h = source_digest(CODE_FILES)
     for name in sorted(e.domain_file for e in ENCODINGS.values()):
         h.update(name.encode())
         h.update(files("tmpnav.pddl").joinpath(name).read_bytes())
