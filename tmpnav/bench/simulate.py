@@ -3,7 +3,9 @@
 Each session draws the robots' true initial poses from their initial beliefs, then runs the
 plan's actions in order. A moving robot follows its roadmap path with a waypoint
 controller that steers on its own estimate (turn towards the next waypoint when it points
-more than ``ALIGN`` away, otherwise drive with a heading correction); the true robot
+more than ``ALIGN`` away, otherwise drive with a heading correction; a waypoint counts as
+reached when the estimate is within ``ARRIVED`` of it or has passed it along its segment,
+so that a robot that lands a few centimetres off never turns around for it); the true robot
 receives the commanded control plus noise drawn from W(u) (paper eq. (4)). Observations
 are generated from the true poses (landmarks in range, field of view and line of sight;
 the other moving robot when mutually visible) with sensor noise, and the joint EKF of
@@ -28,7 +30,7 @@ from tmpnav.types import Belief, Scenario
 from tmpnav.world.visibility import LandmarkVisibility, mutual_visible
 
 ALIGN = 0.3  # rad: beyond this heading error the robot turns on the spot
-ARRIVED = 0.02  # m: a waypoint is reached when the estimate is this close
+ARRIVED = 0.05  # m: a waypoint is reached when the estimate is this close (or this close to abreast)
 STEP_BUDGET = 6  # an action may take this many times its planned steps before it is cut
 
 
@@ -85,6 +87,30 @@ class Draws:
         )
 
 
+def reached(est: np.ndarray, previous: np.ndarray, waypoint: np.ndarray) -> bool:
+    """Whether the robot (its estimate) is at ``waypoint`` or abreast of it: no more than
+    ``ARRIVED`` short of the line through the waypoint perpendicular to the segment from
+    ``previous``. Without the second test a robot a few centimetres to the side of a
+    waypoint turns on the spot to reach it, and every such turn adds heading noise."""
+    dx, dy = waypoint[0] - est[0], waypoint[1] - est[1]
+    if math.hypot(dx, dy) < ARRIVED:
+        return True
+    sx, sy = waypoint[0] - previous[0], waypoint[1] - previous[1]
+    length = math.hypot(sx, sy)
+    return length > ARRIVED and (dx * sx + dy * sy) / length <= ARRIVED
+
+
+def advance(
+    queue: list[np.ndarray], previous: np.ndarray, est: np.ndarray, errors: list[float], truth: np.ndarray
+) -> np.ndarray:
+    """Drop the waypoints the robot has reached from ``queue``, recording the position error
+    at each; returns the last waypoint reached (``previous`` if none)."""
+    while queue and reached(est, previous, queue[0]):
+        previous = queue.pop(0)
+        errors.append(float(np.hypot(*(truth[:2] - est[:2]))))
+    return previous
+
+
 def control(est: np.ndarray, waypoint: np.ndarray, speed: float, turn_rate: float, dt: float) -> np.ndarray:
     """The waypoint controller: turn on the spot, or drive with a heading correction."""
     dx, dy = waypoint[0] - est[0], waypoint[1] - est[1]
@@ -98,7 +124,8 @@ def control(est: np.ndarray, waypoint: np.ndarray, speed: float, turn_rate: floa
 def run_session(
     scenario: Scenario, world, plan_paths, draws: Draws, mutual: bool, vis: LandmarkVisibility
 ) -> SessionTrace:
-    """One execution of the plan: ``plan_paths`` lists, per action, {robot: waypoints}."""
+    """One execution of the plan: ``plan_paths`` lists, per action, {robot: its path's points,
+    start first}."""
     robots = [r.name for r in scenario.robots]
     N = len(robots)
     models = scenario.models
@@ -118,9 +145,10 @@ def run_session(
     )
     step = 0
     S = draws.motion.shape[1]
-    for waypoints in plan_paths:
-        moving = [robots.index(r) for r in waypoints]
-        queue = {i: [np.asarray(p, dtype=float) for p in waypoints[robots[i]]] for i in moving}
+    for paths in plan_paths:
+        moving = [robots.index(r) for r in paths]
+        queue = {i: [np.asarray(p, dtype=float) for p in paths[robots[i]][1:]] for i in moving}
+        previous = {i: np.asarray(paths[robots[i]][0], dtype=float) for i in moving}
         budget = STEP_BUDGET * max(1, sum(len(q) for q in queue.values())) * 40
         for _ in range(budget):
             if not any(queue.values()) or step >= S:
@@ -128,9 +156,7 @@ def run_session(
             u = np.zeros((N, 2))
             for i in moving:
                 est = belief.mean[3 * i : 3 * i + 3]
-                while queue[i] and math.hypot(*(queue[i][0] - est[:2])) < ARRIVED:
-                    queue[i].pop(0)
-                    trace.errors[robots[i]].append(float(np.hypot(*(truth[i, :2] - est[:2]))))
+                previous[i] = advance(queue[i], previous[i], est, trace.errors[robots[i]], truth[i])
                 if queue[i]:
                     spec = scenario.robots[i]
                     u[i] = control(est, queue[i][0], spec.speed, spec.turn_rate, dt)
@@ -158,10 +184,9 @@ def run_session(
                             belief = ekf.update_mutual(belief, i, j, z, Q_mu)
             step += 1
         for i in moving:  # arrival at the last waypoint is checked after the final step
-            est = belief.mean[3 * i : 3 * i + 3]
-            while queue[i] and math.hypot(*(queue[i][0] - est[:2])) < ARRIVED:
-                queue[i].pop(0)
-                trace.errors[robots[i]].append(float(np.hypot(*(truth[i, :2] - est[:2]))))
+            previous[i] = advance(
+                queue[i], previous[i], belief.mean[3 * i : 3 * i + 3], trace.errors[robots[i]], truth[i]
+            )
             if queue[i]:
                 trace.truncated = True
                 trace.errors[robots[i]].extend([math.nan] * len(queue[i]))
@@ -177,7 +202,7 @@ def simulate(report, sessions: int = 25, seed: int = 0) -> SimulationResult:
     for action in report.actions:
         step = {}
         for (robot, _, _), path in zip(action.moves, action.paths, strict=True):
-            step[robot] = [roadmap.nodes[n] for n in path[1:]]
+            step[robot] = [roadmap.nodes[n] for n in path]
             nodes[robot].extend(path[1:])
         plan_paths.append(step)
     planned = sum(len(t) for t in report.trajectories.values())
