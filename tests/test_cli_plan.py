@@ -140,3 +140,33 @@ def test_bad_scenario_is_exit_code_2(tmp_path: Path) -> None:
     assert proc.returncode == 2
     assert all(line.startswith("error: ") for line in proc.stderr.strip().splitlines())
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("command", ["plan", "export-pddl", "simulate", "show", "roadmap"])
+def test_an_output_that_cannot_be_created_is_refused_before_any_work(command: str, tmp_path: Path) -> None:
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    if command in ("show", "roadmap"):  # -o names a PNG file
+        proc = tmpnav(command, str(TWO_ROOMS), "-o", str(blocker / "out.png"))
+    else:
+        proc = tmpnav(command, str(TWO_ROOMS), "-o", str(blocker / "out"), "--no-cache")
+    assert proc.returncode == 2, proc.stderr
+    assert f"{blocker} is a file, so" in proc.stderr
+    assert "Traceback" not in proc.stderr + proc.stdout
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_late_write_failure_is_one_output_error(tmp_path: Path) -> None:
+    from tmpnav.cli import writing
+    from tmpnav.errors import OutputError
+
+    with pytest.raises(OutputError, match=r"cannot write .*plan\.json: No space left on device"), writing(tmp_path):
+        raise OSError(28, "No space left on device", str(tmp_path / "plan.json"))
+
+
+@pytest.mark.slow
+def test_a_cache_directory_that_cannot_exist_is_exit_code_8(tmp_path: Path) -> None:
+    blocker = tmp_path / "a-file"
+    blocker.write_text("")
+    proc = tmpnav("plan", str(TWO_ROOMS), "--cache-dir", str(blocker / "cache"), "-q")
+    assert_clean_failure(proc, 8, "cannot be used")

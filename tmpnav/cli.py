@@ -2,18 +2,19 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import sys
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import click
 
 from tmpnav import __version__
-from tmpnav.errors import EXIT_CODES, ScenarioError, TmpnavError
+from tmpnav.errors import EXIT_CODES, OutputError, ScenarioError, TmpnavError
 
 EPILOG = "Exit codes: " + "; ".join(f"{code} {meaning}" for code, meaning in EXIT_CODES.items())
 
@@ -56,6 +57,42 @@ def report_errors(func: Callable[..., Any]) -> Callable[..., Any]:
 SCENARIO_ARG = click.argument("scenario", type=click.Path(path_type=Path, dir_okay=False))
 
 
+def unwritable(path: Path, directory: bool) -> str | None:
+    """Why ``path`` (an output directory, or a file when not ``directory``) cannot be
+    written, or None. Nothing is created: a run that fails later leaves no empty folder.
+    (click.Path has already refused a file where a directory is expected, and the reverse.)"""
+    folder = (path if directory and path.is_dir() else path.parent).absolute()
+    while not folder.exists():
+        folder = folder.parent
+    if not folder.is_dir():
+        return f"{folder} is a file, so {path} cannot be created"
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return f"{folder} is not writable"
+    return None
+
+
+def output_option(directory: bool, help_text: str, **kwargs: Any) -> Callable[..., Any]:
+    """``-o/--output``, checked before any work is done (a directory, or a file)."""
+
+    def check(ctx: click.Context, param: click.Parameter, value: Path | None) -> Path | None:
+        if value is not None and (why := unwritable(value, directory)):
+            raise click.BadParameter(why, ctx=ctx, param=param)
+        return value
+
+    kind = click.Path(path_type=Path, file_okay=not directory, dir_okay=directory)
+    return click.option("-o", "--output", type=kind, callback=check, help=help_text, **kwargs)
+
+
+@contextlib.contextmanager
+def writing(output: Path) -> Iterator[None]:
+    """Outputs that fail to write late (a full disk) are one line, not an internal error."""
+    try:
+        yield
+    except OSError as err:
+        target = err.filename or output
+        raise OutputError(f"cannot write {target}: {err.strerror or err}") from None
+
+
 @click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="tmpnav")
 def cli() -> None:
@@ -84,14 +121,7 @@ def validate(scenario: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=Path("world.png"),
-    show_default=True,
-    help="PNG file to write.",
-)
+@output_option(False, "PNG file to write.", default=Path("world.png"), show_default=True)
 @report_errors
 def show(scenario: Path, output: Path) -> None:
     """Draw the world: map, rooms, doors, landmarks, robots with 2-sigma start ellipses."""
@@ -99,20 +129,14 @@ def show(scenario: Path, output: Path) -> None:
     from tmpnav.report.world_plot import plot_world
 
     sc, world = load_world(scenario)
-    plot_world(sc, world, output)
+    with writing(output):
+        plot_world(sc, world, output)
     click.echo(f"wrote {output}")
 
 
 @cli.command()
 @SCENARIO_ARG
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=Path("roadmap.png"),
-    show_default=True,
-    help="PNG file to write.",
-)
+@output_option(False, "PNG file to write.", default=Path("roadmap.png"), show_default=True)
 @report_errors
 def roadmap(scenario: Path, output: Path) -> None:
     """Build the probabilistic roadmap (OMPL PRM) and draw it over the map."""
@@ -122,7 +146,8 @@ def roadmap(scenario: Path, output: Path) -> None:
 
     sc, world = load_world(scenario)
     rm = build_roadmap(world, sc.robots, sc.roadmap)
-    plot_roadmap(sc, world, rm, output)
+    with writing(output):
+        plot_roadmap(sc, world, rm, output)
     click.echo(f"wrote {output}: {rm.n_nodes} nodes, {len(rm.edges)} edges")
 
 
@@ -219,12 +244,7 @@ def progress_bar(label: str) -> Callable[[int, int], None] | None:
 
 @cli.command()
 @SCENARIO_ARG
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(path_type=Path, file_okay=False),
-    help="Directory for plan.json, plan.png, domain.pddl, problem.pddl.",
-)
+@output_option(True, "Directory for plan.json, plan.png, domain.pddl, problem.pddl.")
 @click.option(
     "--format",
     "fmt",
@@ -260,7 +280,9 @@ def plan(scenario: Path, output: Path | None, fmt: str, **kw: Any) -> None:
     if output is not None:
         from tmpnav.report.outputs import write_outputs
 
-        written = write_outputs(report, output, report.pddl_texts())
+        pddl = report.pddl_texts()
+        with writing(output):
+            written = write_outputs(report, output, pddl)
     if fmt == "json":
         click.echo(dumps(plan_document(report)))
     else:
@@ -271,13 +293,7 @@ def plan(scenario: Path, output: Path | None, fmt: str, **kw: Any) -> None:
 
 @cli.command("export-pddl")
 @SCENARIO_ARG
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(path_type=Path, file_okay=False),
-    required=True,
-    help="Directory for domain.pddl and problem.pddl.",
-)
+@output_option(True, "Directory for domain.pddl and problem.pddl.", required=True)
 @oracle_options
 @report_errors
 def export_pddl(scenario: Path, output: Path, **kw: Any) -> None:
@@ -286,7 +302,10 @@ def export_pddl(scenario: Path, output: Path, **kw: Any) -> None:
     from tmpnav.task.export import pddl_texts, write_pddl
 
     encoded = encode_only(scenario, plan_options(kw))
-    for path in write_pddl(output, pddl_texts(encoded)):
+    texts = pddl_texts(encoded)
+    with writing(output):
+        written = write_pddl(output, texts)
+    for path in written:
         click.echo(f"wrote {path}")
 
 
@@ -342,12 +361,7 @@ def cache_clear(cache_dir: Path | None) -> None:
 @SCENARIO_ARG
 @click.option("--sessions", type=click.IntRange(min=1), default=25, show_default=True, help="Simulated executions.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(path_type=Path, file_okay=False),
-    help="Directory for errors.csv, errors.png, summary.md.",
-)
+@output_option(True, "Directory for errors.csv, errors.png, summary.md.")
 @click.option(
     "--replan",
     is_flag=True,
@@ -375,11 +389,14 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
         from tmpnav.bench.bench import write_atomic
         from tmpnav.report.bench_plot import plot_errors
 
-        write_atomic(output / "errors.csv", to_csv(result, report))
-        plot_errors(
-            result, output / "errors.png", f"{report.scenario.name}: average position error over {sessions} sessions"
-        )
-        write_atomic(output / "summary.md", "\n".join(lines) + "\n")
+        with writing(output):
+            write_atomic(output / "errors.csv", to_csv(result, report))
+            plot_errors(
+                result,
+                output / "errors.png",
+                f"{report.scenario.name}: average position error over {sessions} sessions",
+            )
+            write_atomic(output / "summary.md", "\n".join(lines) + "\n")
         lines += [f"wrote {output / name}" for name in ("errors.csv", "errors.png", "summary.md")]
     click.echo("\n".join(lines))
 
@@ -427,14 +444,7 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
     help="World to use; {robots} in it becomes the number of robots (default: configs/corridor-{robots}robots.yaml).",
 )
 @click.option("--workers", type=click.IntRange(min=1), help="Oracle worker processes per run (default: all cores).")
-@click.option(
-    "-o",
-    "--output",
-    type=click.Path(path_type=Path, file_okay=False),
-    default=Path("bench-out"),
-    show_default=True,
-    help="Directory for bench.csv, bench.png, summary.md.",
-)
+@output_option(True, "Directory for bench.csv, bench.png, summary.md.", default=Path("bench-out"), show_default=True)
 @click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
 @report_errors
 def bench(
@@ -472,10 +482,11 @@ def bench(
     table = b.run_bench(job_list, timeout, workers, say)
     med = b.medians(table, axis)
     text = f"# tmpnav bench: {experiment}\n\n" + b.summary(table, axis, default=encs[0], timeout=timeout)
-    b.write_atomic(output / "bench.csv", b.to_csv(table))
-    b.write_atomic(output / "summary.md", text)
     per_point = f"{sessions} session{'s' if sessions != 1 else ''} per point"
-    plot_bench(med, axis, output / "bench.png", f"planning time against {axis} ({per_point})")
+    with writing(output):
+        b.write_atomic(output / "bench.csv", b.to_csv(table))
+        b.write_atomic(output / "summary.md", text)
+        plot_bench(med, axis, output / "bench.png", f"planning time against {axis} ({per_point})")
     click.echo(text)
     for name in ("bench.csv", "bench.png", "summary.md"):
         click.echo(f"wrote {output / name}")

@@ -43,6 +43,10 @@ class InputError(TmpnavError):
     exit_code = 2
 
 
+class OutputError(InputError):
+    """An output file or directory (``-o``) cannot be written; nothing half-written is left."""
+
+
 class ScenarioError(InputError):
     """A scenario (or a map it names) has one or more problems; all are listed."""
 
@@ -95,7 +99,7 @@ class CacheError(TmpnavError):
 EXIT_CODES: dict[int, str] = {
     0: "success",
     1: "unexpected internal error (a bug: please report it)",
-    InputError.exit_code: "bad input: scenario, map or command-line value",
+    InputError.exit_code: "bad input: scenario, map or command-line value (an output path that cannot be written too)",
     PlannerError.exit_code: "the planner failed for another reason",
     PlannerUnavailableError.exit_code: "no usable planner: Java 17+ missing, or unknown engine",
     PlannerTimeoutError.exit_code: "the planner timed out",

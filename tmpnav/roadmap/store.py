@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tmpnav.errors import CacheError
 from tmpnav.types import Roadmap, RoadmapParams, RobotSpec
 from tmpnav.world import World
 
@@ -72,8 +73,15 @@ def load(directory: Path, key: str) -> Roadmap | None:
 
 
 def save(directory: Path, key: str, roadmap: Roadmap) -> None:
+    """Store a roadmap; a cache directory that cannot hold files at all is a CacheError, a
+    failed write (disk full) only a warning: the roadmap is simply grown again next time."""
     folder = Path(directory) / "roadmaps"
-    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise CacheError(
+            f"cache directory {directory} cannot be used: {err.strerror} (use --cache-dir DIR or --no-cache)"
+        ) from None
     arrays = {"nodes": roadmap.nodes, "edges": roadmap.edges, "weights": roadmap.weights}
     header = {
         "digest": hashlib.sha256(b"".join(a.tobytes() for a in arrays.values())).hexdigest(),
@@ -84,11 +92,14 @@ def save(directory: Path, key: str, roadmap: Roadmap) -> None:
     buffer = io.BytesIO()
     contents = {"header": np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays}
     np.savez(buffer, **contents)  # type: ignore[arg-type]  # numpy's stub mistakes ** for allow_pickle
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".tmp")
+    tmp = None
     try:
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".tmp")
         with os.fdopen(fd, "wb") as fh:
             fh.write(buffer.getvalue())
         os.replace(tmp, folder / f"{key}.npz")
+    except OSError as err:
+        warnings.warn(f"roadmap not stored in {folder} ({err.strerror})", RoadmapCacheWarning, stacklevel=2)
     finally:
-        if os.path.exists(tmp):
+        if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
