@@ -170,3 +170,26 @@ def test_a_cache_directory_that_cannot_exist_is_exit_code_8(tmp_path: Path) -> N
     blocker.write_text("")
     proc = tmpnav("plan", str(TWO_ROOMS), "--cache-dir", str(blocker / "cache"), "-q")
     assert_clean_failure(proc, 8, "cannot be used")
+
+
+@pytest.mark.parametrize(
+    ("args", "fragment"),
+    [
+        (("plan",), "Missing argument 'SCENARIO'"),
+        (("plan", str(TWO_ROOMS), "--timeout", "-1"), "'--timeout': -1.0 is not in the range"),
+        (("plan", str(TWO_ROOMS), "--bogus"), "No such option '--bogus'"),
+        (("frobnicate",), "No such command 'frobnicate'"),
+        (("simulate", str(TWO_ROOMS), "--sessions", "0"), "'--sessions': 0 is not in the range"),
+    ],
+)
+def test_command_line_mistakes_are_one_line_with_exit_code_2(args: tuple[str, ...], fragment: str) -> None:
+    proc = tmpnav(*args)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0], proc.stderr
+    assert "--help')" in lines[0]
+
+
+def test_bare_tmpnav_prints_the_help() -> None:
+    proc = tmpnav()
+    assert proc.returncode == 0 and proc.stdout.startswith("Usage: tmpnav")

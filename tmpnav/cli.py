@@ -527,8 +527,24 @@ def _one_line_warning(
 
 
 def main() -> None:
-    """Console entry point: warnings become one line each, never a traceback."""
+    """Console entry point: warnings and command-line mistakes become one line each, never
+    a traceback (click's own usage errors included: ``error: ... (see 'tmpnav plan --help')``)."""
     import warnings
 
     warnings.showwarning = _one_line_warning
-    cli(prog_name="tmpnav")
+    try:
+        code = cli.main(prog_name="tmpnav", standalone_mode=False)
+    except click.exceptions.NoArgsIsHelpError as err:  # a bare `tmpnav`: the help, as asked
+        click.echo(err.format_message())
+        sys.exit(0)
+    except click.UsageError as err:
+        hint = f" (see '{err.ctx.command_path} --help')" if err.ctx is not None else ""
+        click.echo(f"error: {err.format_message()}{hint}", err=True)
+        sys.exit(err.exit_code)
+    except click.ClickException as err:
+        click.echo(f"error: {err.format_message()}", err=True)
+        sys.exit(err.exit_code)
+    except click.Abort:
+        click.echo("error: interrupted", err=True)
+        sys.exit(130)
+    sys.exit(code if isinstance(code, int) else 0)
