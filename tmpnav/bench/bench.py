@@ -10,11 +10,13 @@ within the time limit is killed and recorded as a timeout.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
 import os
 import random
+import signal
 import statistics
 import subprocess
 import sys
@@ -126,27 +128,42 @@ def run_job(job: Job, timeout: float, workers: int | None) -> dict[str, Any]:
         "planner_timeout": timeout,
         "workers": workers,
     }
-    env = dict(os.environ)
+    # its own session, so that a run killed at its time limit (or by Ctrl-C) takes its
+    # oracle worker processes with it instead of leaving them to load the machine
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "tmpnav.bench.worker"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=dict(os.environ),
+        start_new_session=True,
+    )
     try:
-        proc = subprocess.run(
-            [sys.executable, "-m", "tmpnav.bench.worker"],
-            input=json.dumps(payload),
-            capture_output=True,
-            text=True,
-            timeout=len(PHASES) * timeout + 60,
-            env=env,
-        )
+        stdout, stderr = proc.communicate(json.dumps(payload), timeout=len(PHASES) * timeout + 60)
     except subprocess.TimeoutExpired:
+        _kill_group(proc)
         return {phase: {"status": "timeout"} for phase in PHASES}
-    lines = [ln for ln in proc.stdout.splitlines() if ln.startswith("{")]
+    except BaseException:
+        _kill_group(proc)
+        raise
+    _kill_group(proc)  # the run is over; nothing of it may outlive it
+    lines = [ln for ln in stdout.splitlines() if ln.startswith("{")]
     if proc.returncode != 0 or not lines:
-        tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+        tail = (stderr.strip().splitlines() or ["no output"])[-1]
         return {phase: {"status": "error", "error": tail} for phase in PHASES}
     result: dict[str, Any] = json.loads(lines[-1])
     for phase in PHASES:
         if result[phase].get("status") == "PlannerTimeoutError":
             result[phase]["status"] = "timeout"
     return result
+
+
+def _kill_group(proc: subprocess.Popen[str]) -> None:
+    """Kill a run's whole process group (the worker and its oracle pool) and reap it."""
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(proc.pid, signal.SIGKILL)
+    proc.communicate()
 
 
 def rows(job: Job, result: dict[str, Any]) -> list[dict[str, Any]]:
