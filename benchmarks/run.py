@@ -14,7 +14,8 @@ What is measured, each into its own folder:
   encoding on the same goal draws;
 - simulate/: ``tmpnav simulate`` on the corridor (paper Fig. 3(a)).
 
-Each folder gets the command that produced it (command.txt); machine.txt says where.
+Each folder gets the command that produced it (command.txt) and the machine it ran on, with
+the date (machine.txt): experiments rerun one at a time (--only) keep their own record.
 """
 
 from __future__ import annotations
@@ -36,6 +37,7 @@ TMPNAV = [sys.executable, "-m", "tmpnav"]
 def run(cmd: list[str], out: Path, log: Path | None = None) -> str:
     out.mkdir(parents=True, exist_ok=True)
     (out / "command.txt").write_text(" ".join(c if " " not in c else repr(c) for c in cmd[2:]) + "\n")
+    (out / "machine.txt").write_text(machine())
     print("$", " ".join(cmd[1:]), flush=True)
     proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
     if log is not None:
@@ -93,6 +95,7 @@ print(json.dumps(rows))
 """
     out.mkdir(parents=True, exist_ok=True)
     (out / "command.txt").write_text("python benchmarks/run.py (oracle_throughput: see benchmarks/run.py)\n")
+    (out / "machine.txt").write_text(machine())
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True)
     if proc.returncode != 0:
         sys.exit(f"oracle benchmark failed:\n{proc.stderr[-2000:]}")
@@ -129,7 +132,6 @@ def main() -> None:
     base = ROOT / "benchmarks" / ("quick" if args.quick else "full")
     only = set(args.only or ["belief", "oracle", "rooms", "robots", "simulate"])
     base.mkdir(parents=True, exist_ok=True)
-    (base / "machine.txt").write_text(machine())
     if "belief" in only:
         out = base / "belief"
         text = run([sys.executable, "benchmarks/bench_belief.py", "--repeat", "3" if args.quick else "7"], out)
