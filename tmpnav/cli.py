@@ -446,6 +446,11 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
 @click.option("--workers", type=click.IntRange(min=1), help="Oracle worker processes per run (default: all cores).")
 @output_option(True, "Directory for bench.csv, bench.png, summary.md.", default=Path("bench-out"), show_default=True)
 @click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
+@click.option(
+    "--replot",
+    is_flag=True,
+    help="Run nothing: rewrite summary.md and bench.png from the bench.csv in -o DIR (give the run's --timeout).",
+)
 @report_errors
 def bench(
     rooms_text: str,
@@ -458,6 +463,7 @@ def bench(
     workers: int | None,
     output: Path,
     quiet: bool,
+    replot: bool,
 ) -> None:
     """Planning time against the number of rooms (Fig. 3(b)) or of robots (Fig. 3(c)).
 
@@ -470,25 +476,42 @@ def bench(
     from tmpnav.report.bench_plot import plot_bench
     from tmpnav.scenario import load
 
-    rooms, robots = b.parse_counts(rooms_text, "--rooms"), b.parse_counts(robots_text, "--robots")
-    experiment, axis = ("robots", "robots") if len(robots) > 1 else ("rooms", "rooms")
-    encs = list(encodings) or ["mixed"]
-    for n in robots:  # bad input is reported before an hour of benchmarking, not after
-        load(b.scenario_for(n, scenario))
-    job_list = b.jobs(
-        experiment, robots, rooms, sessions, encs, seed, scenario, lambda path: [room.name for room in load(path).rooms]
-    )
-    say = None if quiet else (lambda line: click.echo(line, err=True))
-    table = b.run_bench(job_list, timeout, workers, say)
+    written = ["bench.png", "summary.md"]
+    if replot:
+        table = b.read_csv(output / "bench.csv")
+        experiment = str(table[0]["experiment"])
+        encs = list(dict.fromkeys(str(r["encoding"]) for r in table))
+        sessions = len({r["session"] for r in table})
+    else:
+        rooms, robots = b.parse_counts(rooms_text, "--rooms"), b.parse_counts(robots_text, "--robots")
+        experiment = "robots" if len(robots) > 1 else "rooms"
+        encs = list(encodings) or ["mixed"]
+        for n in robots:  # bad input is reported before an hour of benchmarking, not after
+            load(b.scenario_for(n, scenario))
+        job_list = b.jobs(
+            experiment,
+            robots,
+            rooms,
+            sessions,
+            encs,
+            seed,
+            scenario,
+            lambda path: [room.name for room in load(path).rooms],
+        )
+        say = None if quiet else (lambda line: click.echo(line, err=True))
+        table = b.run_bench(job_list, timeout, workers, say)
+        with writing(output):
+            b.write_atomic(output / "bench.csv", b.to_csv(table))
+        written.insert(0, "bench.csv")
+    axis = experiment
     med = b.medians(table, axis)
     text = f"# tmpnav bench: {experiment}\n\n" + b.summary(table, axis, default=encs[0], timeout=timeout)
     per_point = f"{sessions} session{'s' if sessions != 1 else ''} per point"
     with writing(output):
-        b.write_atomic(output / "bench.csv", b.to_csv(table))
         b.write_atomic(output / "summary.md", text)
-        plot_bench(med, axis, output / "bench.png", f"planning time against {axis} ({per_point})")
+        plot_bench(med, axis, output / "bench.png", f"planning time against {axis} ({per_point})", timeout)
     click.echo(text)
-    for name in ("bench.csv", "bench.png", "summary.md"):
+    for name in written:
         click.echo(f"wrote {output / name}")
 
 

@@ -239,6 +239,22 @@ def _fmt(row: dict[str, Any]) -> str:
     return f"{float(row['total_s']):.2f} s" if row["status"].startswith("solved") else str(row["status"])
 
 
+def read_csv(path: Path) -> list[dict[str, Any]]:
+    """The rows of a bench.csv written by :func:`to_csv` (for ``tmpnav bench --replot``)."""
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            reader = csv.DictReader(fh)
+            table = list(reader)
+            header = reader.fieldnames or []
+    except OSError as err:
+        raise InputError(f"--replot: cannot read {path}: {err.strerror}") from None
+    missing = [c for c in COLUMNS if c not in header]
+    if missing or not table:
+        what = f"misses the columns {', '.join(missing)}" if missing else "has no rows"
+        raise InputError(f"--replot: {path} is not a tmpnav bench.csv: it {what}")
+    return table
+
+
 def to_csv(table: list[dict[str, Any]]) -> str:
     buffer = io.StringIO()
     writer = csv.DictWriter(buffer, fieldnames=COLUMNS, lineterminator="\n")
@@ -293,9 +309,13 @@ def summary(table: list[dict[str, Any]], axis: str, default: str = "mixed", time
                 ratio = ""
                 if enc != default and mine and e["total"]:
                     ratio = f"{e['total'] / mine:.1f}x"
+                elif e["solved"] == 0 and phase != "cold":
+                    ratio = "not run: the cold runs timed out"
                 elif enc != default and mine and e["solved"] == 0:
                     ratio = f"> {timeout / mine:.0f}x (timeout)" if timeout else "> timeout"
                 cells = [_s(e.get(s)) for s in ("total", "roadmap", "oracle", "encode", "planner")]
+                if e["solved"] == 0 and phase != "cold":
+                    cells = ["-"] * len(cells)
                 lines.append(
                     f"| {point} | {enc} | {phase} | {e['solved']}/{e['runs']} | " + " | ".join(cells) + f" | {ratio} |"
                 )
