@@ -92,3 +92,23 @@ def test_simulate_two_sessions(tmp_path: Path) -> None:
     rows = list(csv.DictReader((tmp_path / "errors.csv").open()))
     assert {r["config"] for r in rows} == {"1", "2"}
     assert all(float(r["mean_error_m"]) >= 0 for r in rows)
+
+
+@pytest.mark.slow
+def test_a_run_past_the_time_limit_is_a_timeout_and_leaves_nothing_behind(tmp_path: Path) -> None:
+    """The limit holds for the whole run (here it ends in the oracle, long before ENHSP):
+    the worker gives up at the limit instead of the bench waiting for its backstop, and the
+    oracle's worker processes go with it."""
+    args = ("bench", "--rooms", "10", "--sessions", "1", "--timeout", "0.5", "-o", str(tmp_path), "-q")
+    proc = subprocess.run(
+        [sys.executable, "-m", "tmpnav", *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=60,  # the old backstop alone was 61.5 s
+    )
+    assert proc.returncode == 0, proc.stderr
+    rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
+    assert [r["status"] for r in rows] == ["timeout"] * 3
+    leftovers = subprocess.run(["pgrep", "-f", "tmpnav.bench.worker"], capture_output=True, text=True).stdout
+    assert leftovers.strip() == ""

@@ -128,26 +128,32 @@ def run_job(job: Job, timeout: float, workers: int | None) -> dict[str, Any]:
         "planner_timeout": timeout,
         "workers": workers,
     }
-    # its own session, so that a run killed at its time limit (or by Ctrl-C) takes its
-    # oracle worker processes with it instead of leaving them to load the machine
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "tmpnav.bench.worker"],
-        stdin=subprocess.PIPE,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=dict(os.environ),
-        start_new_session=True,
-    )
-    try:
-        stdout, stderr = proc.communicate(json.dumps(payload), timeout=len(PHASES) * timeout + 60)
-    except subprocess.TimeoutExpired:
-        _kill_group(proc)
-        return {phase: {"status": "timeout"} for phase in PHASES}
-    except BaseException:
-        _kill_group(proc)
-        raise
-    _kill_group(proc)  # the run is over; nothing of it may outlive it
+    # Its own session, so that a run killed at its time limit (or by Ctrl-C) takes its
+    # oracle worker processes and its JVM with it. Its output goes to files, not pipes: a
+    # worker that gives up (tmpnav.bench.worker's watchdog) exits at once, while the
+    # processes it leaves would hold a pipe open until they are killed.
+    with tempfile.TemporaryFile("w+") as out, tempfile.TemporaryFile("w+") as err:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "tmpnav.bench.worker"],
+            stdin=subprocess.PIPE,
+            stdout=out,
+            stderr=err,
+            text=True,
+            env=dict(os.environ),
+            start_new_session=True,
+        )
+        try:
+            proc.communicate(json.dumps(payload), timeout=len(PHASES) * timeout + 60)
+        except subprocess.TimeoutExpired:
+            _kill_group(proc)
+            return {phase: {"status": "timeout"} for phase in PHASES}
+        except BaseException:
+            _kill_group(proc)
+            raise
+        _kill_group(proc)  # the run is over; nothing of it may outlive it
+        out.seek(0)
+        err.seek(0)
+        stdout, stderr = out.read(), err.read()
     lines = [ln for ln in stdout.splitlines() if ln.startswith("{")]
     if proc.returncode != 0 or not lines:
         tail = (stderr.strip().splitlines() or ["no output"])[-1]

@@ -8,13 +8,21 @@ run uses an empty cache directory (oracle and roadmap), the warm run the same di
 again (roadmap, cost table and task plan come from the cache), and the re-planned run the
 same with ``--replan`` (cost table from the cache, the task planner runs again). When the
 cold run fails (a timeout), the others are not tried and record the same failure.
+
+The time limit holds for a whole run, whatever stage it is in (roadmap, oracle, encoding,
+ENHSP): a watchdog prints the result so far, with this run and the ones after it as
+timeouts, and ends the worker; the bench then kills what the run left (its oracle worker
+processes, a JVM).
 """
 
 from __future__ import annotations
 
 import json
+import os
+import shutil
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -33,10 +41,44 @@ def warm_up() -> None:
         plan(WARM_UP, PlanOptions(use_cache=False, executor="serial"))
 
 
+class Watchdog:
+    """Ends the worker when a run passes the time limit, printing what was measured so far."""
+
+    def __init__(self, out: dict[str, Any], limit: float | None, cache: str):
+        self.out, self.limit, self.cache = out, limit, cache
+        self.lock = threading.Lock()
+        self.timer: threading.Timer | None = None
+
+    def start(self, phase: str) -> None:
+        if self.limit:
+            self.timer = threading.Timer(self.limit, self._expire, args=(phase,))
+            self.timer.daemon = True
+            self.timer.start()
+
+    def stop(self, phase: str, result: dict[str, Any]) -> None:
+        """Record a finished run, unless the watchdog has already given it up."""
+        with self.lock:
+            if self.timer is not None:
+                self.timer.cancel()
+            self.out[phase] = result
+
+    def _expire(self, phase: str) -> None:
+        with self.lock:
+            if phase in self.out:  # it finished just in time
+                return
+            result = dict(self.out)
+            for later in PHASES:
+                result.setdefault(later, {"status": "timeout", "wall": self.limit if later == phase else 0.0})
+            print(json.dumps(result), flush=True)
+            shutil.rmtree(self.cache, ignore_errors=True)
+            os._exit(0)  # the bench kills the rest of the process group (oracle pool, JVM)
+
+
 def run(job: dict[str, Any]) -> dict[str, Any]:
     goals = Goals(visit=tuple(job["rooms"]), per_robot=())
     out: dict[str, Any] = {}
     with tempfile.TemporaryDirectory(prefix="tmpnav-bench-") as cache:
+        watchdog = Watchdog(out, job.get("planner_timeout"), cache)
         for phase in PHASES:
             if phase != "cold" and out["cold"].get("status") not in SOLVED:
                 out[phase] = dict(out["cold"], wall=0.0)
@@ -51,21 +93,27 @@ def run(job: dict[str, Any]) -> dict[str, Any]:
                 replan=phase == "replan",
             )
             start = time.perf_counter()
+            watchdog.start(phase)
             try:
                 report = plan(job["scenario"], options)
             except TmpnavError as err:
-                out[phase] = {"status": type(err).__name__, "error": str(err), "wall": time.perf_counter() - start}
+                watchdog.stop(
+                    phase, {"status": type(err).__name__, "error": str(err), "wall": time.perf_counter() - start}
+                )
                 continue
-            out[phase] = {
-                "status": report.status.value,
-                "times": report.times.seconds,
-                "planner_cost": report.planner_cost,
-                "resimulated_cost": report.resimulated_cost,
-                "actions": len(report.actions),
-                "task": report.task,
-                "oracle": report.oracle,
-                "plan_cache_hit": report.cache.get("plan_hit", False),
-            }
+            watchdog.stop(
+                phase,
+                {
+                    "status": report.status.value,
+                    "times": report.times.seconds,
+                    "planner_cost": report.planner_cost,
+                    "resimulated_cost": report.resimulated_cost,
+                    "actions": len(report.actions),
+                    "task": report.task,
+                    "oracle": report.oracle,
+                    "plan_cache_hit": report.cache.get("plan_hit", False),
+                },
+            )
     return out
 
 
