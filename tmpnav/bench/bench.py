@@ -312,16 +312,15 @@ def summary(table: list[dict[str, Any]], axis: str, default: str = "mixed", time
                 if e is None:
                     continue
                 mine = med.get((default, phase, point), {}).get("total")
+                not_run = e["solved"] == 0 and phase != "cold"  # a cold run past the limit skips the others
+                cells = [_s(e.get(s)) for s in ("total", "roadmap", "oracle", "encode", "planner")]
                 ratio = ""
-                if enc != default and mine and e["total"]:
+                if not_run:
+                    ratio, cells = "not run: the cold runs timed out", ["-"] * len(cells)
+                elif enc != default and mine and e["total"]:
                     ratio = f"{e['total'] / mine:.1f}x"
-                elif e["solved"] == 0 and phase != "cold":
-                    ratio = "not run: the cold runs timed out"
                 elif enc != default and mine and e["solved"] == 0:
                     ratio = f"> {timeout / mine:.0f}x (timeout)" if timeout else "> timeout"
-                cells = [_s(e.get(s)) for s in ("total", "roadmap", "oracle", "encode", "planner")]
-                if e["solved"] == 0 and phase != "cold":
-                    cells = ["-"] * len(cells)
                 lines.append(
                     f"| {point} | {enc} | {phase} | {e['solved']}/{e['runs']} | " + " | ".join(cells) + f" | {ratio} |"
                 )
