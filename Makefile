@@ -40,3 +40,10 @@ regression-update: $(STAMP)
 
 clean:
 	rm -rf out .pytest_cache .mypy_cache .ruff_cache
+
+# Property-based fuzzing of the inputs through the real CLI, about ten minutes of random
+# examples (CI runs a fixed smoke set in `make test`); record results in tests/fuzz/RESULTS.md.
+FUZZ_SCALE ?= 2
+.PHONY: fuzz
+fuzz: $(STAMP)
+	TMPNAV_FUZZ_EXAMPLES=$(FUZZ_SCALE) $(BIN)/pytest -q tests/fuzz -p no:cacheprovider --durations=5

@@ -1,8 +1,10 @@
 """Micro-benchmark of the belief layer: a joint two-robot propagation over a 100-step path.
 
-Times evaluations per second of the fast path (batch of 1, batch of 1000, without
-history as the oracle runs it) and of the filterpy reference, and prints one JSON line.
-Run it by hand: ``.venv/bin/python benchmarks/bench_belief.py [--repeat N]``; it is not a test.
+Times evaluations per second of the compiled kernel the oracle runs (one simulation with
+its history, as the re-simulation of a plan uses it; 1,000 simulations from scratch in one
+call, without the shared prefixes the oracle's trie order adds) and of the filterpy
+reference, and prints one JSON line. Run it by hand:
+``.venv/bin/python benchmarks/bench_belief.py [--repeat N]``; it is not a test.
 """
 
 from __future__ import annotations
@@ -15,9 +17,17 @@ from collections.abc import Callable
 
 import numpy as np
 
-from tmpnav.belief.batch import BatchInputs
 from tmpnav.belief.controls import path_controls
-from tmpnav.belief.propagate import Rollout, simulate_batch, simulate_reference, stack_paths
+from tmpnav.belief.reference import propagate_reference
+from tmpnav.belief.rollout import ObservationNoise, Rollout, observed_mutually, propagate_rollout, stack_paths
+from tmpnav.belief.sequences import (
+    EKFConstants,
+    MotionArrays,
+    SequenceBatch,
+    Sequences,
+    StartGroups,
+    propagate_sequences,
+)
 from tmpnav.types import Belief, Models, ObservationMode, RangeBearingSensor
 
 LANDMARKS = np.array([[1.0, 2.0], [4.0, -2.0], [7.0, 2.0], [10.0, -2.0], [2.0, 8.0]])
@@ -45,80 +55,41 @@ def scene() -> tuple[Belief, Rollout, Models]:
     return belief, Rollout(controls, poses, steps, lm_visible, mutual), models
 
 
-def batched(belief: Belief, rollout: Rollout, B: int) -> BatchInputs:
-    def rep(a: np.ndarray) -> np.ndarray:
-        return np.repeat(np.asarray(a)[None], B, axis=0)
-
-    return BatchInputs(
-        mean0=rep(belief.mean),
-        cov0=rep(belief.cov),
-        controls=rep(rollout.controls),
-        true_poses=rep(rollout.true_poses),
-        active_steps=rep(rollout.active_steps),
-        landmarks=LANDMARKS,
-        lm_visible=rep(rollout.lm_visible),
-        mutual_visible=rep(rollout.mutual_visible),
-    )
-
-
-def kernel_run(belief: Belief, rollout: Rollout, models: Models, B: int) -> Callable[[], object]:
-    """The oracle's compiled kernel on B copies of the scene, each from scratch (no shared
-    prefixes): the raw propagation speed the oracle's trie ordering then multiplies."""
-    from tmpnav.belief.kernel import run_sequences
-
+def kernel_batch(belief: Belief, rollout: Rollout, models: Models, B: int) -> SequenceBatch:
+    """B copies of the scene as one batch, each simulated from scratch (no shared prefixes):
+    the raw propagation speed that the oracle's trie ordering then multiplies."""
     n, T = 2, rollout.n_steps
-    m_T = np.array([int(s) for s in rollout.active_steps], dtype=np.int64)
-    ctrl = np.concatenate([rollout.controls[i, : m_T[i]] for i in range(n)])
-    pose = np.concatenate([rollout.true_poses[i, : m_T[i] + 1] for i in range(n)])
-    vis = np.ascontiguousarray(np.concatenate([rollout.lm_visible[i, : m_T[i] + 1] for i in range(n)]))
-    m_off = np.array([0, m_T[0]], dtype=np.int64)
-    rng = np.random.default_rng(0)
-    lm_noise = rng.standard_normal((2, T + 1, len(LANDMARKS), 2))
-    mu_noise = rng.standard_normal((1, T + 1, n, n, 2))
-    mvis = np.ascontiguousarray(np.tile(np.transpose(rollout.mutual_visible, (2, 0, 1)), (B, 1, 1)))
-    Q_lm, Q_mu = models.landmark_sensor.Q, models.mutual_sensor.Q
-    outs = (
-        np.empty((B, 6)),
-        np.empty((B, 6, 6)),
-        np.empty((B, 2)),
-        np.empty((B, 2, 2)),
-        np.empty(B, dtype=np.int64),
-        np.zeros((0, 1, 2)),
+    steps = [int(s) for s in rollout.active_steps]
+    noise = ObservationNoise.draw(0, n, T, len(LANDMARKS))
+    motions = MotionArrays.of(
+        [rollout.controls[i, : steps[i]] for i in range(n)],
+        [rollout.true_poses[i, : steps[i] + 1] for i in range(n)],
+        [rollout.lm_visible[i, : steps[i] + 1] for i in range(n)],
+        np.arange(n),
+        len(LANDMARKS),
     )
-    args = (
-        n,
-        models.dt,
-        np.array(models.motion_noise),
-        Q_lm,
-        np.linalg.cholesky(Q_lm),
-        Q_mu,
-        np.linalg.cholesky(Q_mu),
-        False,
-        LANDMARKS,
-        m_off,
-        m_T,
-        ctrl,
-        pose,
-        vis,
-        np.arange(2, dtype=np.int64),
-        lm_noise,
-        belief.mean[None],
-        belief.cov[None],
-        np.zeros(1, dtype=np.int64),
-        mu_noise,
-        np.zeros(B, dtype=np.int64),
-        np.tile(np.arange(2, dtype=np.int64), (B, 1)),
-        np.zeros(B, dtype=np.int64),
-        np.full(B, T, dtype=np.int64),
-        np.arange(B, dtype=np.int64) * (T + 1),
-        mvis,
-        *outs,
+    visible = np.ascontiguousarray(observed_mutually(rollout, models).transpose(2, 0, 1))
+    return SequenceBatch(
+        n=n,
+        ekf=EKFConstants.of(models, LANDMARKS),
+        motions=motions,
+        landmark_noise=noise.landmark,
+        groups=StartGroups(
+            belief.mean[None], belief.cov[None], np.ascontiguousarray(noise.mutual.transpose(2, 0, 1, 3))[None]
+        ),
+        sequences=Sequences(
+            group=np.zeros(B, dtype=np.int64),
+            motions=np.tile(np.arange(n, dtype=np.int64), (B, 1)),
+            restart=np.zeros(B, dtype=np.int64),
+            horizon=np.full(B, T, dtype=np.int64),
+            mutual_offset=np.arange(B, dtype=np.int64) * (T + 1),
+        ),
+        mutual_visible=np.ascontiguousarray(np.tile(visible, (B, 1, 1))),
     )
-    return lambda: run_sequences(*args)
 
 
 def evals_per_second(run: Callable[[], object], evals_per_run: int, repeat: int) -> float:
-    run()  # warm-up
+    run()  # warm-up (and the kernel's compilation or cache load)
     best = float("inf")
     for _ in range(repeat):
         start = time.perf_counter()
@@ -132,29 +103,22 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=5, help="timed runs (best is kept)")
     args = parser.parse_args()
     belief, rollout, models = scene()
-    one, thousand = batched(belief, rollout, 1), batched(belief, rollout, 1000)
+    batch = kernel_batch(belief, rollout, models, 1000)
     n_updates = int(rollout.lm_visible[:, 1:].sum() + rollout.mutual_visible[:, :, 1:].sum())
+    one = round(evals_per_second(lambda: propagate_rollout(belief, rollout, LANDMARKS, models), 1, args.repeat), 1)
+    many = round(evals_per_second(lambda: propagate_sequences(batch), 1000, args.repeat), 1)
+    reference = round(
+        evals_per_second(lambda: propagate_reference(belief, rollout, LANDMARKS, models), 1, args.repeat), 1
+    )
     print(
         json.dumps(
             {
                 "benchmark": "belief-joint-2-robots",
                 "steps": rollout.n_steps,
                 "updates_per_eval": n_updates,
-                "batch1_evals_per_s": round(evals_per_second(lambda: simulate_batch(one, models), 1, args.repeat), 1),
-                "kernel_batch1000_evals_per_s": round(
-                    evals_per_second(kernel_run(belief, rollout, models, 1000), 1000, args.repeat), 1
-                ),
-                "batch1000_evals_per_s": round(
-                    evals_per_second(lambda: simulate_batch(thousand, models), 1000, args.repeat), 1
-                ),
-                "filterpy_reference_evals_per_s": round(
-                    evals_per_second(
-                        lambda: simulate_reference(belief, rollout, LANDMARKS, models),
-                        1,
-                        args.repeat,
-                    ),
-                    1,
-                ),
+                "kernel_batch1_evals_per_s": one,
+                "kernel_batch1000_evals_per_s": many,
+                "filterpy_reference_evals_per_s": reference,
                 "python": platform.python_version(),
                 "numpy": np.__version__,
             }

@@ -10,6 +10,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -145,6 +146,9 @@ class Models:
     seed: int  # seed of the simulated observation noise
 
 
+CostValue = TypeVar("CostValue", float, np.ndarray)
+
+
 @dataclass(frozen=True)
 class CostWeights:
     """c = M_u*c_u + M_G*c_G + M_Sigma*c_Sigma (paper, section Approach)."""
@@ -152,6 +156,14 @@ class CostWeights:
     M_u: float
     M_G: float
     M_Sigma: float
+
+    def combine(self, c_u: CostValue, c_G: CostValue | float, c_Sigma: CostValue) -> CostValue:
+        """The weighted cost M_u c_u + M_G c_G + M_Sigma c_Sigma: the one place it is written.
+
+        Works on floats and, element by element, on numpy arrays of terms; always in this
+        order of operations, so every caller gets the same bits for the same terms.
+        """
+        return self.M_u * c_u + self.M_G * c_G + self.M_Sigma * c_Sigma
 
 
 @dataclass(frozen=True)
@@ -272,7 +284,8 @@ class CostTerms:
     c_Sigma: float
 
     def total(self, w: CostWeights) -> float:
-        return w.M_u * self.c_u + w.M_G * self.c_G + w.M_Sigma * self.c_Sigma
+        """This robot's weighted cost under ``w`` (:meth:`CostWeights.combine`)."""
+        return w.combine(self.c_u, self.c_G, self.c_Sigma)
 
 
 # --------------------------------------------------------------------------- oracle / task
@@ -352,13 +365,3 @@ class PlannedAction:
     goal_nodes: tuple[int, ...]
     paths: tuple[tuple[int, ...], ...]
     goal_poses: tuple[tuple[float, float, float], ...]
-
-
-@dataclass
-class StageTimes:
-    """Seconds spent in each stage of a run, filled in by the pipeline."""
-
-    seconds: dict[str, float] = field(default_factory=dict)
-
-    def add(self, stage: str, dt: float) -> None:
-        self.seconds[stage] = self.seconds.get(stage, 0.0) + dt

@@ -46,25 +46,6 @@ def numeric_jacobian(fn, x: np.ndarray, angle_rows: tuple[int, ...]) -> np.ndarr
     return np.stack(columns, axis=-1)
 
 
-# --------------------------------------------------------------------------- wrap_angle
-
-
-def test_wrap_angle_range_and_edges() -> None:
-    a = np.array([np.pi, -np.pi, 3 * np.pi, -3 * np.pi, 0.5, 2 * np.pi + 0.5, -np.pi - 1e-17])
-    w = wrap_angle(a)
-    assert np.all(w >= -np.pi) and np.all(w < np.pi)
-    np.testing.assert_allclose(w[:4], -np.pi)
-    np.testing.assert_allclose(w[5], 0.5)
-
-
-@given(st.floats(-100.0, 100.0))
-def test_wrap_angle_is_idempotent_and_preserves_the_angle(a: float) -> None:
-    w = wrap_angle(a)
-    assert -np.pi <= w < np.pi
-    assert wrap_angle(w) == w  # bit for bit
-    assert np.isclose(np.cos(w), np.cos(a), atol=1e-9) and np.isclose(np.sin(w), np.sin(a), atol=1e-9)
-
-
 # --------------------------------------------------------------------------- motion
 
 

@@ -15,7 +15,9 @@ import numpy as np
 import pytest
 
 from tests.oracle.support import actions, variant
-from tmpnav.oracle.cache import FILENAME, CacheWarning, DiskCache, NullCache, clear, info
+from tmpnav.cachedir import DATABASE as FILENAME
+from tmpnav.cachedir import CacheDir
+from tmpnav.oracle.cache import CacheWarning, DiskCache, NullCache
 from tmpnav.oracle.executors import OracleContext, SerialExecutor
 from tmpnav.oracle.keys import context_digest, request_key
 from tmpnav.oracle.oracle import Oracle
@@ -100,10 +102,10 @@ def test_tampered_entry_fails_its_checksum(two_rooms: OracleContext, tmp_path: P
 
 def test_info_and_clear(two_rooms: OracleContext, tmp_path: Path) -> None:
     Oracle(two_rooms, DiskCache(tmp_path), SerialExecutor()).evaluate(actions(two_rooms)[:4])
-    facts = info(tmp_path)
-    assert facts["entries"] == 4
-    assert clear(tmp_path) >= 1
-    assert info(tmp_path)["exists"] is False
+    facts = CacheDir(tmp_path).info()
+    assert facts.entries == 4
+    assert CacheDir(tmp_path).clear()[0] >= 1
+    assert CacheDir(tmp_path).info().database_exists is False
 
 
 @pytest.mark.slow

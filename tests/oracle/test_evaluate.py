@@ -83,3 +83,17 @@ def test_fig2_mutual_observations_help_the_landmark_starved_robot() -> None:
         cov = np.array(res.final_cov)
         traces[mutual] = float(np.trace(cov[:2, :2]))  # r1's position block
     assert traces[True] < 0.5 * traces[False], traces
+
+
+def test_a_world_without_landmarks(two_rooms: OracleContext) -> None:
+    """Landmarks are optional in a scenario: the robots then only predict (and see each other)."""
+    world = two_rooms.world
+    bare = replace(
+        two_rooms,
+        world=replace(world, landmarks=(), landmark_xy=np.zeros((0, 2)), fingerprint=world.fingerprint + "/bare"),
+    )
+    with_landmarks, without = evaluate(two_rooms, actions(two_rooms)), evaluate(bare, actions(bare))
+    assert all(r is not None for r in without)
+    singles = [(a, b) for a, b in zip(with_landmarks, without, strict=True) if len(a.robots) == 1 and a.paths[0][1:]]
+    assert all(b.terms[0].c_Sigma >= a.terms[0].c_Sigma for a, b in singles)
+    assert any(b.terms[0].c_Sigma > a.terms[0].c_Sigma for a, b in singles)

@@ -4,7 +4,7 @@ import ast
 from pathlib import Path
 
 import tmpnav
-from tmpnav.oracle.keys import CODE_FILES, NOT_RESULT_CODE
+from tmpnav.oracle.keys import CODE_FILES, NOT_RESULT_CODE, RESULT_ENTRY_POINTS
 
 ROOT = Path(tmpnav.__file__).resolve().parent
 
@@ -45,6 +45,14 @@ def test_every_code_file_exists():
         assert (ROOT / rel).is_file(), rel
 
 
+def _imports(rel: str) -> set[str]:
+    deps = set()
+    for node in ast.walk(ast.parse((ROOT / rel).read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("tmpnav."):
+            deps |= _dependencies(node)
+    return deps
+
+
 def test_modules_that_result_code_imports_are_in_the_code_version():
     """Editing a module the EKF or the cost depend on must change every cache key."""
     missing = set()
@@ -55,3 +63,20 @@ def test_modules_that_result_code_imports_are_in_the_code_version():
                     if dep not in CODE_FILES and dep not in NOT_RESULT_CODE:
                         missing.add((rel, dep))
     assert not missing, f"imported by result code but not in CODE_FILES: {sorted(missing)}"
+
+
+def test_the_code_version_is_exactly_the_code_results_depend_on():
+    """Nothing else is hashed: the belief stage's reference and test-only code (filterpy's EKF,
+    the model equations it is built from) can change without invalidating every cache."""
+    reached, todo = set(), list(RESULT_ENTRY_POINTS)
+    while todo:
+        rel = todo.pop()
+        if rel in reached or rel in NOT_RESULT_CODE:
+            continue
+        reached.add(rel)
+        todo.extend(_imports(rel))
+    # the occupancy grid's code decides landmark visibility through the World's grid object
+    # (world.grid.is_occupied), not through an import of the modules above
+    assert reached | {"world/grid.py"} == set(CODE_FILES)
+    for reference in ("belief/ekf.py", "belief/models.py", "belief/reference.py", "belief/rollout.py"):
+        assert reference not in CODE_FILES

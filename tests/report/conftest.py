@@ -11,7 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from tmpnav.pipeline import PlanOptions, PlanReport, plan
+from tmpnav.pipeline import PlanOptions, plan
+from tmpnav.results import PlanReport
 
 ROOT = Path(__file__).resolve().parents[2]
 

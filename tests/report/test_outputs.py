@@ -5,12 +5,13 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Any
 
 import pytest
 
-from tmpnav.report import outputs
+from tmpnav import atomic
+from tmpnav.report import figures, outputs
 from tmpnav.report.outputs import write_outputs
+from tmpnav.results import PlanReport
 
 PDDL = ("(define (domain rooms))\n", "(define (problem three-rooms) (:domain rooms))\n")
 NAMES = ["plan.json", "plan.png", "domain.pddl", "problem.pddl"]
@@ -33,10 +34,10 @@ def earlier_run(out: Path) -> dict[str, bytes]:
 
 
 def contents(out: Path) -> dict[str, bytes]:
-    return {p.name: p.read_bytes() for p in out.iterdir()}
+    return {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
 
 
-def test_writes_all_files(plan_report: Any, tmp_path: Path) -> None:
+def test_writes_all_files(plan_report: PlanReport, tmp_path: Path) -> None:
     out = tmp_path / "new" / "out"  # missing: created
     written = write_outputs(plan_report, out, PDDL)
     assert written == [out / name for name in NAMES]
@@ -47,7 +48,7 @@ def test_writes_all_files(plan_report: Any, tmp_path: Path) -> None:
     assert (out / "domain.pddl").read_text() == PDDL[0] and (out / "problem.pddl").read_text() == PDDL[1]
 
 
-def test_files_get_the_umask_mode_not_mkstemp_0600(plan_report: Any, tmp_path: Path) -> None:
+def test_files_get_the_umask_mode_not_mkstemp_0600(plan_report: PlanReport, tmp_path: Path) -> None:
     old = os.umask(0o022)
     try:
         write_outputs(plan_report, tmp_path, PDDL)
@@ -56,12 +57,12 @@ def test_files_get_the_umask_mode_not_mkstemp_0600(plan_report: Any, tmp_path: P
     assert {(tmp_path / n).stat().st_mode & 0o777 for n in NAMES} == {0o644}
 
 
-def test_without_pddl(plan_report: Any, tmp_path: Path) -> None:
+def test_without_pddl(plan_report: PlanReport, tmp_path: Path) -> None:
     assert write_outputs(plan_report, tmp_path, None) == [tmp_path / "plan.json", tmp_path / "plan.png"]
     assert sorted(os.listdir(tmp_path)) == ["plan.json", "plan.png"]
 
 
-def test_replaces_an_earlier_run(plan_report: Any, tmp_path: Path) -> None:
+def test_replaces_an_earlier_run(plan_report: PlanReport, tmp_path: Path) -> None:
     old = earlier_run(tmp_path)
     write_outputs(plan_report, tmp_path, PDDL)
     new = contents(tmp_path)
@@ -70,64 +71,81 @@ def test_replaces_an_earlier_run(plan_report: Any, tmp_path: Path) -> None:
 
 
 def test_figure_failure_leaves_the_earlier_run_untouched(
-    plan_report: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     old = earlier_run(tmp_path)
 
-    def broken_plot(report: Any, path: Path) -> None:
+    def broken_render(fig: object, path: Path, dpi: int = 110) -> None:
         path.write_bytes(b"\x89PNG half a figure")  # some bytes, then the failure
         raise RuntimeError("matplotlib fell over")
 
-    monkeypatch.setattr(outputs, "plot_plan", broken_plot)
+    monkeypatch.setattr(figures, "render", broken_render)
     with pytest.raises(RuntimeError, match="fell over"):
         write_outputs(plan_report, tmp_path, PDDL)
     assert contents(tmp_path) == old  # same files, same bytes, no temporary file
 
 
 def test_failure_while_writing_a_file_leaves_no_partial_file(
-    plan_report: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     old = earlier_run(tmp_path)
-    real = outputs.stage_text
-    calls: list[Path] = []
+    real = atomic._stage
+    calls: list[str] = []
 
-    def disk_full_on_problem(tmp: Path, text: str) -> None:
-        calls.append(tmp)
-        if len(calls) == 3:  # plan.json and domain.pddl are staged, problem.pddl fails half-way
-            tmp.write_text(text[: len(text) // 2])
-            raise OSError(28, "No space left on device")
-        real(tmp, text)
+    def disk_full_on_problem(tmp: Path, content: atomic.Content) -> None:
+        calls.append(tmp.name.split(".tmpnav-")[0].lstrip("."))
+        if calls[-1] == "problem.pddl":  # the others are staged, problem.pddl fails half-way
+            assert isinstance(content, str)
+            tmp.write_text(content[: len(content) // 2])
+            raise OSError(28, "No space left on device", str(tmp))
+        real(tmp, content)
 
-    monkeypatch.setattr(outputs, "stage_text", disk_full_on_problem)
-    with pytest.raises(OSError, match="No space left"):
+    monkeypatch.setattr(atomic, "_stage", disk_full_on_problem)
+    with pytest.raises(OSError, match="No space left") as caught:
         write_outputs(plan_report, tmp_path, PDDL)
-    assert len(calls) == 3
+    assert calls == NAMES
+    assert caught.value.filename == str(tmp_path / "problem.pddl")  # the file asked for, not a temporary one
     assert contents(tmp_path) == old
     assert json.loads((tmp_path / "plan.json").read_text())["earlier"] is True
 
 
 def test_partial_plan_json_never_replaces_the_earlier_one(
-    plan_report: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     old = earlier_run(tmp_path)
 
-    def interrupted(tmp: Path, text: str) -> None:
-        tmp.write_text(text[:100])
+    def interrupted(tmp: Path, content: atomic.Content) -> None:
+        tmp.write_text(str(content)[:100])
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(outputs, "stage_text", interrupted)
+    monkeypatch.setattr(atomic, "_stage", interrupted)
     with pytest.raises(KeyboardInterrupt):
         write_outputs(plan_report, tmp_path, None)
     assert contents(tmp_path) == old
 
 
+def test_a_late_rename_failure_puts_the_earlier_files_back(plan_report: PlanReport, tmp_path: Path) -> None:
+    """The last rename fails (problem.pddl is a directory): the three files already replaced
+    get their earlier content back, and the error names problem.pddl."""
+    old = earlier_run(tmp_path)
+    (tmp_path / "problem.pddl").unlink()
+    (tmp_path / "problem.pddl").mkdir()
+    (tmp_path / "problem.pddl" / "keep").write_text("x")
+    del old["problem.pddl"]
+    with pytest.raises(OSError) as caught:
+        write_outputs(plan_report, tmp_path, PDDL)
+    assert caught.value.filename == str(tmp_path / "problem.pddl")
+    assert contents(tmp_path) == old
+    assert sorted(os.listdir(tmp_path)) == sorted(NAMES)  # no temporary or backup file left
+
+
 def test_failure_removes_the_directory_it_created(
-    plan_report: Any, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    def broken_plot(report: Any, path: Path) -> None:
+    def broken_figure(report: PlanReport, crop: bool = True) -> None:
         raise RuntimeError("no figure")
 
-    monkeypatch.setattr(outputs, "plot_plan", broken_plot)
+    monkeypatch.setattr(outputs, "plan_figure", broken_figure)
     out = tmp_path / "fresh"
     with pytest.raises(RuntimeError):
         write_outputs(plan_report, out, PDDL)
@@ -135,7 +153,7 @@ def test_failure_removes_the_directory_it_created(
     assert os.listdir(tmp_path) == []
 
 
-def test_wrong_pddl_arity_writes_nothing(plan_report: Any, tmp_path: Path) -> None:
+def test_wrong_pddl_arity_writes_nothing(plan_report: PlanReport, tmp_path: Path) -> None:
     with pytest.raises(ValueError):
         write_outputs(plan_report, tmp_path, ("only a domain",))  # type: ignore[arg-type]
     assert os.listdir(tmp_path) == []

@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import copy
+import dataclasses
 import re
 from typing import Any
 
 import pytest
 
-from tmpnav.report.text import summary
+from tmpnav.report.text import plan_summary
 from tmpnav.types import PlanStatus
 
 STEP = re.compile(
@@ -24,7 +24,7 @@ pytestmark = pytest.mark.slow  # every test reads the session's real plan
 
 @pytest.fixture(scope="module")
 def lines(plan_report: Any) -> list[str]:
-    return summary(plan_report).splitlines()
+    return plan_summary(plan_report).splitlines()
 
 
 def test_header(lines: list[str], plan_report: Any) -> None:
@@ -70,24 +70,26 @@ def test_times_and_cache(lines: list[str], plan_report: Any) -> None:
     for name, value in zip(names, values, strict=True):
         assert float(value) == pytest.approx(seconds[name.strip("()")], abs=5e-3)
     cache_line = lines[i + 2]
-    hits, misses = plan_report.cache["hits"], plan_report.cache["misses"]
+    hits, misses = plan_report.cache.hits, plan_report.cache.misses
     assert re.match(rf"oracle cache \(.+\): {hits} hits?, {misses} miss(es)? \(\d+% hits\); roadmap grown", cache_line)
 
 
 def test_plain_text(plan_report: Any) -> None:
-    text = summary(plan_report)
+    text = plan_summary(plan_report)
     assert "\x1b[" not in text  # no colours
-    cache_dir = str(plan_report.cache["directory"])
+    cache_dir = str(plan_report.cache.directory)
     # fits a terminal, except for lines with paths (scenario file, cache directory)
     assert max(len(line) for line in text.splitlines() if cache_dir not in line and ".yaml" not in line) <= 100
     assert not text.endswith("\n")
 
 
 def test_satisficing_and_cache_off(plan_report: Any) -> None:
-    other = copy.copy(plan_report)
-    other.status = PlanStatus.SOLVED_SATISFICING
-    other.cache = {**plan_report.cache, "enabled": False, "hits": 0, "warnings": ["cache is read-only"]}
-    text = summary(other)
+    other = dataclasses.replace(
+        plan_report,
+        task=dataclasses.replace(plan_report.task, status=PlanStatus.SOLVED_SATISFICING),
+        cache=dataclasses.replace(plan_report.cache, enabled=False, hits=0, warnings=("cache is read-only",)),
+    )
+    text = plan_summary(other)
     assert "solved-satisficing (not proven optimal)" in text.splitlines()[0]
     assert "oracle cache: off" in text
     assert "cache warning: cache is read-only" in text

@@ -103,3 +103,18 @@ def test_only_the_roadmap_stage_imports_ompl() -> None:
         if re.search(r"^\s*(from|import)\s+ompl\b", p.read_text(), re.M) and p.name != "prm.py"
     ]
     assert offenders == []
+
+
+def test_instantiations_avoid_pockets_of_a_room_no_robot_reaches(tmp_path: Path) -> None:
+    """A sealed box inside room A (as noise in a map can seal off a corner): its free cells lie in
+    the room, but OMPL refuses them as milestones, so no instantiation may be drawn there."""
+    from tests.scenario.helpers import base_scenario, build_world
+
+    doc = base_scenario()
+    doc["map"]["walls"].append([[0.5, 3.5], [2.0, 3.5], [2.0, 5.5], [0.5, 5.5], [0.5, 3.5]])
+    doc["robots"][0]["pose"] = [3.5, 4.5, 0.0]
+    box = np.array([[0.5, 3.5], [2.0, 3.5], [2.0, 5.5], [0.5, 5.5]])
+    sc, world = build_world(tmp_path, doc)
+    for seed in range(1, 9):
+        rm = build_roadmap(world, sc.robots, replace(sc.roadmap, seed=seed, instantiations=4))
+        assert not points_in_polygon(rm.nodes[list(rm.instantiations["A"])], box).any()

@@ -77,11 +77,12 @@ def write_yaml(path: Path, data: Any) -> Path:
     return path
 
 
-def write_pgm(path: Path, pixels: np.ndarray) -> Path:
-    """Write grey levels (rows, cols) uint8 as a binary PGM (P5), top row first, as ROS does."""
-    pixels = np.asarray(pixels, dtype=np.uint8)
-    rows, cols = pixels.shape
-    path.write_bytes(f"P5\n{cols} {rows}\n255\n".encode("ascii") + pixels.tobytes())
+def write_pgm(path: Path, pixels: np.ndarray, maxval: int = 255) -> Path:
+    """Write grey levels (rows, cols) 0..maxval as a binary PGM (P5), top row first, as ROS
+    does: one byte per pixel, or two (big-endian) when maxval is above 255."""
+    rows, cols = np.shape(pixels)
+    data = np.asarray(pixels, dtype=">u2" if maxval > 255 else np.uint8).tobytes()
+    path.write_bytes(f"P5\n{cols} {rows}\n{maxval}\n".encode("ascii") + data)
     return path
 
 
@@ -101,16 +102,17 @@ def ros_map_yaml(image: str = "map.pgm", **overrides: Any) -> dict[str, Any]:
     return {k: v for k, v in meta.items() if v is not None}
 
 
-def base_as_ros_map(doc: dict[str, Any], folder: Path, **overrides: Any) -> None:
+def base_as_ros_map(doc: dict[str, Any], folder: Path, maxval: int = 255, **overrides: Any) -> None:
     """Replace the polygonal map of ``doc`` by the same map drawn as a ROS map_server image
-    (folder/map.yaml + folder/map.pgm): free 254, occupied 0, like map_saver writes."""
+    (folder/map.yaml + folder/map.pgm): free 254, occupied 0, like map_saver writes (scaled
+    to ``maxval`` for a 16-bit image)."""
     from tmpnav.types import PolygonMap
     from tmpnav.world.build import rasterize
 
     m = doc["map"]
     grid = rasterize(PolygonMap(tuple(m["bounds"]), m["resolution"], 0.15, m["walls"], m["obstacles"]))
     pixels = np.where(grid.occupied[::-1], 0, 254)  # image rows run from the top (highest y) down
-    write_pgm(folder / "map.pgm", pixels)
+    write_pgm(folder / "map.pgm", pixels * maxval // 255, maxval)
     write_yaml(folder / "map.yaml", ros_map_yaml(**{"resolution": m["resolution"], **overrides}))
     doc["map"] = {"ros": "map.yaml"}
 

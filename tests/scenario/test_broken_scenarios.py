@@ -185,7 +185,7 @@ CASES = [
     Case("missing-robot-pose", delete("robots", "r2", "pose"), "robots.r2.pose",
          "is missing; expected a list of 3 numbers [x, y, theta] in (m, m, rad)"),
     Case("missing-room-polygon", delete("rooms", "hall", "polygon"), "rooms.hall.polygon",
-         "is missing; expected a polygon: a list of at least 3 points [x, y] in m"),
+         "is missing; expected a polygon: a list of 3 to 1000 points [x, y] in m"),
     Case("goals-name-no-room", top(goals={}), "goals",
          "names no room to visit; expected rooms in goals.visit or goals.robots"),
     # --- types
@@ -203,7 +203,7 @@ CASES = [
     Case("pose-too-short", change("robots", "r2", pose=[7.5, 1.5]), "robots.r2.pose",
          "[7.5, 1.5] is not a list of 3 numbers [x, y, theta] in (m, m, rad)"),
     Case("polygon-too-few-points", change("rooms", "hall", polygon=[[0.2, 0.2], [9.8, 2.8]]), "rooms.hall.polygon",
-         "is not a polygon: a list of at least 3 points [x, y] in m"),
+         "is not a polygon: a list of 3 to 1000 points [x, y] in m"),
     Case("not-an-integer", nested("roadmap.samples", 10.5), "roadmap.samples",
          "10.5 is not an integer; expected an integer >= 10 and <= 200000"),
     Case("out-of-range", nested("map.resolution", 2), "map.resolution",
@@ -282,7 +282,8 @@ CASES = [
     Case("map-empty-bounds", nested("map.bounds", [0, 0, -10, 6]), "map.bounds",
          "[0.0, 0.0, -10.0, 6.0] is empty; expected [xmin, ymin, xmax, ymax] with xmin < xmax and ymin < ymax"),
     Case("map-grid-too-large", nested("map.resolution", "0.1 mm"), "map.resolution",
-         "makes 6,000,000,000 grid cells; expected at most 20,000,000"),
+         "makes 6,000,000,000 grid cells; the cap is 64,000,000 (a coarser resolution or smaller bounds, "
+         "or raise the cap: TMPNAV_MAX_MAP_CELLS=6000000000)"),
     Case("wall-with-one-point", nested("map.walls", [[[0, 0]]]), "map.walls[0]",
          "[[0, 0]] is not a polyline: a list of at least 2 points [x, y] in m"),
     # --- geometry (world/checks.py)
@@ -315,8 +316,8 @@ CASES = [
     Case("ros-image-not-an-image", ros_image(b"this is not an image"), "image",
          "cannot read image map.pgm: cannot identify image file", file="map.yaml"),
     Case("ros-image-empty", ros_image(b""), "image", "cannot read image map.pgm", file="map.yaml"),
-    Case("ros-missing-resolution", ros_map(resolution=None), "resolution", "is missing; expected a number > 0 in m",
-         file="map.yaml", line=1),
+    Case("ros-missing-resolution", ros_map(resolution=None), "resolution",
+         "is missing; expected a number > 0 and <= 1 in m", file="map.yaml", line=1),
     Case("ros-missing-image-key", ros_map(image=None), "image", "is missing; expected a string", file="map.yaml"),
     Case("ros-threshold-above-one", ros_map(occupied_thresh=1.5), "occupied_thresh",
          "1.5 is out of range; expected a number >= 0 and <= 1", file="map.yaml", line=5),

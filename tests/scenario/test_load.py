@@ -18,7 +18,8 @@ from tests.scenario.helpers import base_as_ros_map, base_scenario, item, write_y
 from tmpnav.errors import Problem, ScenarioError
 from tmpnav.pipeline import load_world
 from tmpnav.scenario import load, load_partial
-from tmpnav.scenario.format import MAX_CELLS, ROBOT, SCENARIO
+from tmpnav.scenario.format import ROBOT, SCENARIO
+from tmpnav.scenario.limits import MAP_CELLS
 from tmpnav.scenario.schema import (
     MISSING,
     Covariance,
@@ -320,7 +321,8 @@ def test_grid_limit_is_stated_in_the_message(tmp_path: Path) -> None:
     _, problems = load_partial(write_yaml(tmp_path / "s.yaml", doc))
     assert problems[0].message == (
         f"0.001 m over bounds [0.0, 0.0, 100.0, 1000.0] makes 100,000,000,000 grid cells; "
-        f"expected at most {MAX_CELLS:,} (a coarser resolution or smaller bounds)"
+        f"the cap is {MAP_CELLS.default:,} (a coarser resolution or smaller bounds, "
+        "or raise the cap: TMPNAV_MAX_MAP_CELLS=100000000000)"
     )
 
 

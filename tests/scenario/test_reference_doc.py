@@ -36,4 +36,29 @@ def test_every_key_of_the_schema_has_a_row() -> None:
             assert meaning, f"{key} has no description"
     # list items are documented under their list, with []
     assert "| `robots[].covariance` | 3x3 matrix | m², m², rad² |" in text
-    assert "| `models.landmark_sensor.fov` | number | rad | 360 deg |" in text
+    assert "| `models.landmark_sensor.fov` | number > 0 and ≤ 6.28319 | rad | 360 deg |" in text
+    assert "| `roadmap.seed` | integer ≥ 0 and ≤ 4294967295 |  | 1 |" in text
+
+
+LIMITS = DOC.parent / "limits.md"
+
+
+def test_docs_limits_md_is_up_to_date() -> None:
+    from tmpnav.scenario.reference import limits_markdown
+
+    assert LIMITS.read_text(encoding="utf-8") == limits_markdown(), (
+        "docs/limits.md differs from the caps and exit codes in the code: run `python -c "
+        "\"from tmpnav.scenario.reference import limits_markdown; print(limits_markdown(), end='')\"` "
+        "> docs/limits.md` and commit the result"
+    )
+
+
+def test_docs_limits_md_lists_every_exit_code_and_cap() -> None:
+    from tmpnav.errors import EXIT_CODES
+    from tmpnav.scenario.limits import CAPS
+
+    text = LIMITS.read_text(encoding="utf-8")
+    for code in EXIT_CODES:
+        assert f"\n| {code} | " in text
+    for cap in CAPS:
+        assert f"| {cap.default:,} | `{cap.env}` |" in text

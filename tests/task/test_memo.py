@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from tmpnav.oracle.cache import DiskCache
-from tmpnav.pipeline import PlanOptions, plan
-from tmpnav.task.memo import from_json, memo_key, table_digest, to_json
+from tmpnav.pipeline import PlanOptions, pddl_texts, plan
+from tmpnav.task.memo import entry_to_memo, memo_key, memo_to_entry, table_digest
 from tmpnav.types import Goals
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -51,16 +51,16 @@ def runs(tmp_path_factory: pytest.TempPathFactory):
 
 def test_the_second_run_reads_the_plan_and_plans_the_same(runs) -> None:
     _, cold, warm, replanned, uncached = runs
-    assert not cold.cache["plan_hit"] and warm.cache["plan_hit"]
-    assert not replanned.cache["plan_hit"] and not uncached.cache["plan_hit"]
-    assert warm.encoded is None and warm.times.seconds["encode"] == 0.0
+    assert not cold.cache.plan_hit and warm.cache.plan_hit
+    assert not replanned.cache.plan_hit and not uncached.cache.plan_hit
+    assert warm.task.plan_hit and warm.task.encoded is None and warm.times.seconds["encode"] == 0.0
     assert summary(warm) == summary(cold) == summary(replanned) == summary(uncached)
-    assert warm.task == cold.task
+    assert warm.task.counts == cold.task.counts
 
 
 def test_pddl_of_a_remembered_plan_is_the_one_planned(runs) -> None:
     _, cold, warm, _, _ = runs
-    assert warm.pddl_texts() == cold.pddl_texts()
+    assert pddl_texts(warm) == pddl_texts(cold)
 
 
 def test_the_key_covers_goals_encoding_gain_planner_and_costs(runs) -> None:
@@ -94,8 +94,8 @@ def test_the_key_covers_goals_encoding_gain_planner_and_costs(runs) -> None:
 def test_an_entry_that_does_not_fit_is_a_miss(runs, damage) -> None:
     cache_dir, cold, _, _, _ = runs
     _, good = stored(cache_dir, cold)
-    assert from_json(good, cold.table) is not None
-    assert from_json(damage(good), cold.table) is None
+    assert entry_to_memo(good, cold.table) is not None
+    assert entry_to_memo(damage(good), cold.table) is None
 
 
 def test_a_damaged_entry_makes_the_planner_run_again(tmp_path: Path) -> None:
@@ -108,14 +108,14 @@ def test_a_damaged_entry_makes_the_planner_run_again(tmp_path: Path) -> None:
     finally:
         cache.close()
     again = plan(TWO_ROOMS, options)
-    assert not again.cache["plan_hit"]
+    assert not again.cache.plan_hit
     assert summary(again) == summary(first)
     third = plan(TWO_ROOMS, options)  # the good plan was stored again
-    assert third.cache["plan_hit"] and summary(third) == summary(first)
+    assert third.cache.plan_hit and summary(third) == summary(first)
 
 
 def test_round_trip_of_an_entry(runs) -> None:
     cache_dir, cold, _, _, _ = runs
     _, entry = stored(cache_dir, cold)
-    memo = from_json(entry, cold.table)
-    assert memo is not None and to_json(memo) == entry
+    memo = entry_to_memo(entry, cold.table)
+    assert memo is not None and memo_to_entry(memo) == entry

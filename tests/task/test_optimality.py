@@ -14,7 +14,8 @@ import random
 import pytest
 
 from tmpnav.task.decode import canonical_order, decode, step_cost
-from tmpnav.task.encode import encode, pair_filter, scaled
+from tmpnav.task.encode import encode
+from tmpnav.task.encodings import ENCODINGS, scaled
 from tmpnav.task.solve import solve
 from tmpnav.types import CostTable, Goals, MoveKey
 
@@ -145,14 +146,14 @@ CASES = [
 @pytest.mark.parametrize(("encoding", "seed", "robots", "rooms", "targets"), CASES)
 def test_plan_cost_equals_exhaustive_optimum(encoding: str, seed: int, robots: int, rooms: int, targets: bool) -> None:
     table, goals = random_table(seed, robots, rooms, targets)
-    keep = pair_filter(encoding, goals, table.start_location)
+    keep = ENCODINGS[encoding].pair_filter(goals, table.start_location)  # None: the encoding has no pairs
     table = CostTable(
         table.robots,
         table.rooms,
         table.locations,
         table.start_location,
         table.single,
-        {k: v for k, v in table.pair.items() if keep(*k)},
+        {k: v for k, v in table.pair.items() if keep is not None and keep(*k)},
     )
     encoded = encode(table, goals, encoding, min_gain=0.0)
     result = solve(encoded.problem, "enhsp-opt", 120)
@@ -180,7 +181,8 @@ def test_odd_number_of_rooms_needs_no_extra_visit_with_mixed() -> None:
     table, goals = random_table(21, 2, 3, False)
     entered = {}
     for encoding in ("mixed", "paper"):
-        keep = pair_filter(encoding, goals, table.start_location)
+        keep = ENCODINGS[encoding].pair_filter(goals, table.start_location)
+        assert keep is not None
         t = CostTable(
             table.robots,
             table.rooms,

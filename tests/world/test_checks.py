@@ -10,6 +10,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from tests.scenario.helpers import base_scenario, build_world, item
@@ -127,3 +128,24 @@ def test_every_problem_is_reported_at_once(tmp_path: Path) -> None:
         door("door-B", "closed"),
     )
     assert sorted(paths(problems)) == ["doors.door-A.segment", "landmarks.plant.position", "robots.r2.pose", "rooms.B"]
+
+
+# ------------------------------------------------------------------- room outlines
+
+
+@pytest.mark.parametrize(
+    ("polygon", "crossing"),
+    [
+        ([[0, 0], [4, 0], [4, 3], [0, 3]], None),  # a rectangle
+        ([[0, 0], [4, 0], [4, 3], [2, 1], [0, 3]], None),  # concave, still simple
+        ([[0, 0], [1, 0], [1, 1]], None),  # a triangle cannot cross itself
+        ([[0, 0], [4, 3], [4, 0], [0, 3]], (0, 2)),  # a bow tie
+        ([[0, 0], [4, 0], [4, 3], [0, 3], [2, -1]], (0, 3)),  # the last point pokes back across
+        ([[0, 0], [2, 4], [4, 0], [0, 3], [4, 3]], (0, 2)),  # a pentagram
+    ],
+    ids=["rectangle", "concave", "triangle", "bow-tie", "poke", "star"],
+)
+def test_self_intersection_finds_the_first_crossing_edges(polygon: list[list[float]], crossing: object) -> None:
+    from tmpnav.world.checks import _self_intersection
+
+    assert _self_intersection(np.array(polygon, dtype=float)) == crossing

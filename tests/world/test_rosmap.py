@@ -170,3 +170,88 @@ def test_a_scenario_on_a_ros_map_validates(tmp_path: Path, monkeypatch: pytest.M
     _, ros_world = build_world(tmp_path, doc)
     assert ros_world.grid.extent == polygon_world.grid.extent
     assert np.array_equal(ros_world.grid.occupied, polygon_world.grid.occupied)
+
+
+# ------------------------------------------------------------------- bit depths and sizes
+
+
+@pytest.mark.parametrize("maxval", [65535, 4095, 1023])
+def test_a_16_bit_pgm_means_what_its_8_bit_copy_means(tmp_path: Path, maxval: int) -> None:
+    """A PGM with maxval above 255 has two bytes per pixel; grey levels are read relative to
+    maxval, so unknown (205/255) stays unknown instead of turning free."""
+    write_pgm(tmp_path / "map.pgm", np.round(PIXELS.astype(float) * maxval / 255), maxval)
+    grid = load_ros_map(ros_spec(tmp_path))
+    assert np.array_equal(grid.occupied, (PIXELS != FREE)[::-1])
+
+
+def test_a_16_bit_png_means_what_its_8_bit_copy_means(tmp_path: Path) -> None:
+    Image.fromarray(PIXELS.astype(np.uint16) * 257).save(tmp_path / "map.png")
+    assert Image.open(tmp_path / "map.png").mode == "I;16"
+    grid = load_ros_map(ros_spec(tmp_path, image="map.png"))
+    assert np.array_equal(grid.occupied, (PIXELS != FREE)[::-1])
+
+
+def test_a_mostly_unknown_16_bit_map_stays_mostly_occupied(tmp_path: Path) -> None:
+    """The reported case: map_saver's unknown grey in 16 bits read as free (0.6 % occupied
+    instead of 94.6 %)."""
+    pixels = np.full((40, 50), UNKNOWN, dtype=np.uint16)
+    pixels[10:20, 10:20] = FREE
+    write_pgm(tmp_path / "map.pgm", pixels * 257, 65535)
+    grid = load_ros_map(ros_spec(tmp_path))
+    assert grid.occupied.mean() == pytest.approx(1 - 100 / 2000)
+
+
+@pytest.mark.parametrize(
+    ("array", "mode", "fragment"),
+    [
+        (np.zeros((4, 6), dtype=np.float32), "F", "has pixels of mode F (TIFF); expected 8- or 16-bit grey levels"),
+        (np.zeros((4, 6), dtype=np.int32), "I", "has pixels of mode I (TIFF); expected 8- or 16-bit grey levels"),
+    ],
+    ids=["float", "int32"],
+)
+def test_other_pixel_formats_are_refused_with_the_reason(
+    tmp_path: Path, array: np.ndarray, mode: str, fragment: str
+) -> None:
+    Image.fromarray(array, mode=mode).save(tmp_path / "map.tiff")
+    with pytest.raises(MapImageError) as info:
+        load_ros_map(ros_spec(tmp_path, image="map.tiff"))
+    assert (info.value.problem.path, fragment in info.value.problem.message) == ("image", True)
+
+
+def test_raw_mode_needs_an_8_bit_image(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)  # messages name files relative to the working directory
+    write_pgm(tmp_path / "map.pgm", np.zeros((4, 6)), 65535)
+    with pytest.raises(MapImageError) as info:
+        load_ros_map(ros_spec(tmp_path, mode="raw"))
+    assert info.value.problem.path == "mode"
+    assert "raw needs an 8-bit image (pixel values 0..100); map.pgm has 16-bit pixels" in info.value.problem.message
+
+
+@pytest.mark.parametrize("side", [12000, 20000, 100000])
+def test_an_image_larger_than_the_cap_is_refused_from_its_header(
+    tmp_path: Path, side: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Only the header is read: the file here has no pixel data at all. PIL's own
+    decompression-bomb warning or error never reaches the user."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "map.pgm").write_bytes(f"P5\n{side} {side}\n255\n".encode())
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught, pytest.raises(MapImageError) as info:
+        warnings.simplefilter("always")
+        load_ros_map(ros_spec(tmp_path))
+    assert caught == []
+    assert info.value.problem.message == (
+        f"map.pgm has {side} x {side} pixels: {side * side:,} grid cells; the cap is 64,000,000 "
+        f"(a smaller image, cropped to the building, or raise the cap: TMPNAV_MAX_MAP_CELLS={side * side})"
+    )
+
+
+def test_the_map_cells_cap_can_be_lifted_and_lowered(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    write_pgm(tmp_path / "map.pgm", PIXELS)
+    spec = ros_spec(tmp_path)
+    monkeypatch.setenv("TMPNAV_MAX_MAP_CELLS", "23")
+    with pytest.raises(MapImageError, match="24 grid cells; the cap is 23"):
+        load_ros_map(spec)
+    monkeypatch.setenv("TMPNAV_MAX_MAP_CELLS", "24")
+    assert load_ros_map(spec).shape == PIXELS.shape

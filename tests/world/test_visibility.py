@@ -10,6 +10,7 @@ every pose, and on every pose whose answer does not hinge on grazing a cell corn
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,7 @@ import pytest
 
 from tests.scenario.helpers import base_scenario, build_world
 from tmpnav.world.build import World
-from tmpnav.world.visibility import LandmarkVisibility, mutual_visible
+from tmpnav.world.visibility import LandmarkVisibility, MutualSensing, mutual_visible
 
 RANGE = 4.0
 FULL = 2 * math.pi
@@ -174,3 +175,47 @@ def test_mutual_visibility_uses_the_same_line_of_sight_as_the_world(world: World
     observers, targets = random_poses(world, 400, seed=11), random_poses(world, 400, seed=12)
     seen = mutual_visible(world, observers, targets, 20.0, FULL)
     assert np.array_equal(seen, world.line_of_sight(observers[:, :2], targets[:, :2]))
+
+
+# --------------------------------------------------------------------------- mutual sensing
+
+
+def test_mutual_sensing_between_two_robots(tmp_path: Path) -> None:
+    """The one place that decides whether and how two robots observe each other."""
+    doc = base_scenario()
+    doc["robots"][0]["radius"] = 0.3
+    doc["robots"][1]["radius"] = 0.2
+    scenario, _ = build_world(tmp_path, doc)
+    a, b = (r.name for r in scenario.robots)
+    sensing = MutualSensing.between(scenario, a, b)
+    assert sensing is not None
+    sensor = scenario.models.mutual_sensor
+    assert (sensing.range, sensing.fov, sensing.min_range) == (sensor.range, sensor.fov, 0.5)
+    assert MutualSensing.between(scenario, b, a) == sensing
+    off = replace(scenario, models=replace(scenario.models, mutual_observations=False))
+    assert MutualSensing.between(off, a, b) is None
+
+
+def test_mutual_sensing_along_sequences_agrees_with_pose_pairs(world: World) -> None:
+    """Whole simulations in trie order (shared prefixes copied) see what pose pairs see."""
+    sensing = MutualSensing(RANGE, math.radians(200), 0.3)
+    lengths = [6, 9, 4]
+    poses = [random_poses(world, T + 1, seed=20 + k) for k, T in enumerate(lengths)]
+    steps = np.array(lengths, dtype=np.int64)
+    offset = np.concatenate([[0], np.cumsum(steps)[:-1]]).astype(np.int64)
+    stacked = np.concatenate(poses)
+    pairs = np.array([[0, 1], [0, 1], [1, 2], [2, 0]], dtype=np.int64)
+    horizon = np.array([max(lengths[a], lengths[b]) for a, b in pairs], dtype=np.int64)
+    rows = np.concatenate([[0], np.cumsum(horizon + 1)[:-1]]).astype(np.int64)
+    restart = np.array([-1, 3, -1, -1], dtype=np.int64)  # the second copies steps 0..3 from the first
+    out = np.zeros((int((horizon + 1).sum()), 2, 2), dtype=bool)
+    first = sensing.sequences(world, (offset, steps, stacked), pairs, restart, horizon, rows, out)
+    for c, (a, b) in enumerate(pairs):
+        h = int(horizon[c])
+        pa = np.array([poses[a][min(t, lengths[a])] for t in range(h + 1)])
+        pb = np.array([poses[b][min(t, lengths[b])] for t in range(h + 1)])
+        assert np.array_equal(out[rows[c] : rows[c] + h + 1, 0, 1], sensing.visible(world, pa, pb))
+        assert np.array_equal(out[rows[c] : rows[c] + h + 1, 1, 0], sensing.visible(world, pb, pa))
+        seen = np.nonzero(out[rows[c] : rows[c] + h + 1].any(axis=(1, 2)))[0]
+        assert first[c] == (seen[0] if seen.size else -1)
+    assert out[:, 0, 1].any() and not out[:, 0, 1].all()  # robots see each other at some steps only

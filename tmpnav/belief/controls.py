@@ -1,18 +1,20 @@
 """A roadmap path (a polyline of positions) turned into unicycle controls.
 
 The robot follows a path point by point: it turns on the spot towards the next point,
-then drives straight to it. Its nominal poses are obtained by applying the motion model
-(:func:`tmpnav.belief.models.motion`) exactly, so the belief layer and the nominal
-trajectory agree to rounding error.
+then drives straight to it. Its nominal poses are the motion model, paper eq. (4), applied
+step by step (compiled: the oracle turns thousands of paths into controls), so the belief
+layer and the nominal trajectory agree to rounding error.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
-from tmpnav.belief.kernel import turn_then_drive
+from tmpnav.world.geometry import wrap_angle_scalar
 
 #: below these a turn or an edge is treated as already done (rad, m)
 ANGLE_EPS = 1e-9
@@ -54,9 +56,9 @@ def path_controls(points: np.ndarray, start_theta: float, speed: float, turn_rat
         raise ValueError("path_controls needs at least one point")
     if speed <= 0 or turn_rate <= 0 or dt <= 0:
         raise ValueError("speed, turn_rate and dt must be positive")
-    controls, poses, node_steps = turn_then_drive(
+    controls, poses, node_steps = _turn_then_drive(
         np.ascontiguousarray(pts), float(start_theta), float(speed), float(turn_rate), float(dt), ANGLE_EPS, LENGTH_EPS
-    )  # compiled; the motion model is paper eq. (4), applied step by step
+    )
     return PathControls(controls=controls, poses=poses, node_steps=node_steps.astype(int))
 
 
@@ -73,3 +75,51 @@ def pad(controls: np.ndarray, poses: np.ndarray, T_total: int) -> tuple[np.ndarr
     padded_controls = np.concatenate([controls, np.zeros((extra, 2))], axis=0)
     padded_poses = np.concatenate([poses, np.repeat(poses[-1:], extra, axis=0)], axis=0)
     return padded_controls, padded_poses
+
+
+@nb.njit(cache=True)
+def _n_steps(amount, rate, dt):
+    """Whole steps to cover ``amount`` at ``rate`` per second (at least one)."""
+    return max(1, math.ceil(amount / (rate * dt)))
+
+
+@nb.njit(cache=True)
+def _turn_then_drive(pts, theta0, speed, turn_rate, dt, angle_eps, length_eps):
+    """Controls (T, 2), nominal poses (T+1, 3) and the step reaching each point (P,) of
+    :func:`tmpnav.belief.controls.path_controls`, which documents the rule."""
+    P = pts.shape[0]
+    bound = 1
+    for k in range(1, P):
+        d = math.hypot(pts[k, 0] - pts[k - 1, 0], pts[k, 1] - pts[k - 1, 1])
+        bound += _n_steps(math.pi, turn_rate, dt) + _n_steps(d + 1e-6, speed, dt) + 2
+    controls = np.zeros((bound, 2))
+    poses = np.zeros((bound + 1, 3))
+    node_steps = np.zeros(P, dtype=np.int64)
+    poses[0, 0], poses[0, 1], poses[0, 2] = pts[0, 0], pts[0, 1], wrap_angle_scalar(theta0)
+    T = 0
+    for k in range(1, P):
+        dx, dy = pts[k, 0] - poses[T, 0], pts[k, 1] - poses[T, 1]
+        length = math.hypot(dx, dy)
+        if length >= length_eps:
+            dtheta = wrap_angle_scalar(math.atan2(dy, dx) - poses[T, 2])
+            if abs(dtheta) >= angle_eps:
+                n = _n_steps(abs(dtheta), turn_rate, dt)
+                omega = dtheta / (n * dt)
+                for _ in range(n):
+                    controls[T, 0], controls[T, 1] = 0.0, omega
+                    th = poses[T, 2]
+                    poses[T + 1, 0] = poses[T, 0] + 0.0 * dt * math.cos(th)
+                    poses[T + 1, 1] = poses[T, 1] + 0.0 * dt * math.sin(th)
+                    poses[T + 1, 2] = wrap_angle_scalar(th + omega * dt)
+                    T += 1
+            n = _n_steps(length, speed, dt)
+            v = length / (n * dt)
+            for _ in range(n):
+                controls[T, 0], controls[T, 1] = v, 0.0
+                th = poses[T, 2]
+                poses[T + 1, 0] = poses[T, 0] + v * dt * math.cos(th)
+                poses[T + 1, 1] = poses[T, 1] + v * dt * math.sin(th)
+                poses[T + 1, 2] = wrap_angle_scalar(th + 0.0 * dt)
+                T += 1
+        node_steps[k] = T
+    return controls[:T].copy(), poses[: T + 1].copy(), node_steps

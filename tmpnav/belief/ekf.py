@@ -2,11 +2,13 @@
 
 Each function takes a :class:`~tmpnav.types.Belief` over n robots (joint state of
 dimension 3n, robot i in entries 3i..3i+2) and returns a new one; the filterpy object
-lives only inside a call. The batched fast path (:mod:`tmpnav.belief.batch`) is tested
-against these functions step by step.
+lives only inside a call. The compiled kernel that runs in the oracle
+(:mod:`tmpnav.belief.kernel`) is tested against these functions step by step, through
+:func:`tmpnav.belief.reference.propagate_reference`.
 
 After every update the heading entries of the mean are wrapped to [-pi, pi) and the
-covariance is symmetrised, P <- (P + Pᵀ)/2 (the batched path does the same).
+covariance is symmetrised, P <- (P + Pᵀ)/2 (the kernel computes the upper triangle and
+mirrors it).
 """
 
 from __future__ import annotations
@@ -52,7 +54,7 @@ class _JointUnicycleEKF(ExtendedKalmanFilter):
 
 
 def predict(belief: Belief, controls: np.ndarray, dt: float, alphas: Sequence[float]) -> Belief:
-    """Joint EKF prediction of n robots, paper eqs. (8), (11)-(12).
+    """Joint EKF prediction of n robots, paper eqs. (8), (11), (12).
 
     mean' = [f(mean_1, u_1), ..., f(mean_n, u_n)],   P' = F P Fᵀ + R,
     with F = blockdiag(F_i) and R = blockdiag(V_i W(u_i) V_iᵀ).

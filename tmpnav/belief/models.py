@@ -8,9 +8,11 @@ Baglietto, "Towards Multi-Robot Task-Motion Planning for Navigation in Belief Sp
 
 Every function is vectorised: poses may carry leading batch dimensions, ``x`` of shape
 (..., 3), controls (..., 2), landmark positions (..., 2), all broadcast against each other
-with numpy rules. The batched fast path (:mod:`tmpnav.belief.batch`) and the filterpy
-reference (:mod:`tmpnav.belief.ekf`) call these same functions, so each equation has one
-implementation. Units: metres, radians, seconds; u = (v, omega) in m/s and rad/s.
+with numpy rules. The filterpy reference (:mod:`tmpnav.belief.ekf`) and ``tmpnav simulate``
+call these functions; the compiled kernel that runs in the oracle
+(:mod:`tmpnav.belief.kernel`) writes the same equations out scalar by scalar and is held
+to the reference by the tests. Angles are wrapped by :func:`tmpnav.world.geometry.wrap_angle`
+(re-exported here). Units: metres, radians, seconds; u = (v, omega) in m/s and rad/s.
 """
 
 from __future__ import annotations
@@ -19,24 +21,22 @@ from collections.abc import Sequence
 
 import numpy as np
 
-TWO_PI = 2.0 * np.pi
+from tmpnav.world.geometry import wrap_angle
 
-
-def wrap_angle(a: np.ndarray | float) -> np.ndarray:
-    """Angle(s) ``a`` (rad, any shape) wrapped to [-pi, pi).
-
-    Angles already in range are returned bit-for-bit unchanged, so wrapping is idempotent;
-    every difference of two angles in tmpnav goes through this helper.
-    """
-    a = np.asarray(a, dtype=float)
-    inside = (a >= -np.pi) & (a < np.pi)
-    if inside.all():  # the common case, and the cheap one
-        return a.copy()
-    wrapped = np.mod(a + np.pi, TWO_PI) - np.pi
-    # (a + pi) mod 2pi rounds up to exactly 2pi for a a hair below -pi
-    wrapped = np.where(wrapped >= np.pi, -np.pi, wrapped)
-    return np.where(inside, a, wrapped)
-
+__all__ = [
+    "joint_block_diag",
+    "landmark_obs",
+    "landmark_obs_jacobian",
+    "motion",
+    "motion_jacobians",
+    "motion_noise_cov",
+    "mutual_obs",
+    "mutual_obs_jacobian",
+    "noisy_observation",
+    "observation_residual",
+    "process_noise",
+    "wrap_angle",
+]
 
 # --------------------------------------------------------------------------- motion
 

@@ -1,7 +1,10 @@
-"""Regression runs: a few scenarios whose plans and costs are recorded in benchmarks/regression/.
+"""Regression runs: a few shipped scenarios whose plans and costs are recorded in benchmarks/regression/.
 
     python -m tmpnav.bench.regression            # check: exit 1 if a plan or cost changed
     python -m tmpnav.bench.regression --update   # rewrite the baseline on purpose (make regression-update)
+
+The baseline lives in the source checkout (benchmarks/regression/), not in the package:
+this is a developer's check, run from the checkout.
 
 A recorded plan is the sequence of moves of every step; costs are compared to a relative
 tolerance of 1e-6 (the same machine type gives the same bits; the tolerance only absorbs
@@ -19,16 +22,18 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from tmpnav import shipped
 from tmpnav.pipeline import PlanOptions, plan
 from tmpnav.types import Goals
 
-ROOT = Path(__file__).resolve().parents[2]
-BASELINE = ROOT / "benchmarks" / "regression"
+BASELINE = Path(__file__).resolve().parents[2] / "benchmarks" / "regression"
 RTOL = 1e-6
 
 
 @dataclass(frozen=True)
 class Case:
+    """A recorded plan: a shipped scenario (``configs/NAME.yaml``), its goals and encoding."""
+
     name: str
     scenario: str
     visit: tuple[str, ...] | None = None  # replaces the scenario's goals when given
@@ -52,8 +57,10 @@ CASES = (
 
 
 def run_case(case: Case) -> dict[str, Any]:
+    """Plan a case without any cache; the plan and costs as they are recorded."""
     goals = Goals(visit=case.visit, per_robot=()) if case.visit else None
-    report = plan(ROOT / case.scenario, PlanOptions(encoding=case.encoding, goals=goals, use_cache=False))
+    scenario = shipped.configs_dir() / Path(case.scenario).name
+    report = plan(scenario, PlanOptions(encoding=case.encoding, goals=goals, use_cache=False))
     return {
         "name": case.name,
         "scenario": case.scenario,
@@ -84,6 +91,8 @@ def main() -> None:
     parser.add_argument("--update", action="store_true", help="rewrite the recorded baseline")
     parser.add_argument("cases", nargs="*", help="case names (default: all)")
     args = parser.parse_args()
+    if not BASELINE.parent.is_dir():
+        sys.exit(f"error: {BASELINE} not found: run the regression check from a source checkout")
     failed = False
     for case in CASES:
         if args.cases and case.name not in args.cases:

@@ -1,7 +1,7 @@
 """One benchmark run in its own process: ``python -m tmpnav.bench.worker`` reads a JSON job
 on stdin and prints one JSON line with the stage timings of a cold, a warm and a re-planned run.
 
-Before measuring, the worker plans a tiny scenario once (``configs/two-rooms.yaml``) so
+Before measuring, the worker plans a tiny shipped scenario once (``configs/two-rooms.yaml``) so
 that imports, compiled kernels and the first JVM start are not counted: the timings are
 those of a planning service that is already running, as in the paper's figures. The cold
 run uses an empty cache directory (oracle and roadmap), the warm run the same directory
@@ -24,21 +24,24 @@ import sys
 import tempfile
 import threading
 import time
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
-from tmpnav.bench.bench import PHASES
+from tmpnav import shipped
+from tmpnav.bench.table import PHASES
 from tmpnav.errors import TmpnavError
 from tmpnav.pipeline import PlanOptions, plan
+from tmpnav.results import PlanReport
 from tmpnav.types import Goals, PlanStatus
 
 SOLVED = {s.value for s in PlanStatus}
-WARM_UP = Path(__file__).resolve().parents[2] / "configs" / "two-rooms.yaml"
+WARM_UP = "two-rooms.yaml"  # a shipped scenario
 
 
 def warm_up() -> None:
-    if WARM_UP.exists():
-        plan(WARM_UP, PlanOptions(use_cache=False, executor="serial"))
+    """Plan a tiny scenario once: imports, compiled kernels and the first JVM start are then paid."""
+    plan(shipped.configs_dir() / WARM_UP, PlanOptions(use_cache=False, executor="serial"))
 
 
 class Watchdog:
@@ -101,20 +104,22 @@ def run(job: dict[str, Any]) -> dict[str, Any]:
                     phase, {"status": type(err).__name__, "error": str(err), "wall": time.perf_counter() - start}
                 )
                 continue
-            watchdog.stop(
-                phase,
-                {
-                    "status": report.status.value,
-                    "times": report.times.seconds,
-                    "planner_cost": report.planner_cost,
-                    "resimulated_cost": report.resimulated_cost,
-                    "actions": len(report.actions),
-                    "task": report.task,
-                    "oracle": report.oracle,
-                    "plan_cache_hit": report.cache.get("plan_hit", False),
-                },
-            )
+            watchdog.stop(phase, measured(report))
     return out
+
+
+def measured(report: PlanReport) -> dict[str, Any]:
+    """What a run reports to the bench: status, stage times, costs, counters."""
+    return {
+        "status": report.status.value,
+        "times": report.times.seconds,
+        "planner_cost": report.planner_cost,
+        "resimulated_cost": report.resimulated_cost,
+        "actions": len(report.actions),
+        "task": asdict(report.task.counts),
+        "oracle": report.oracle.as_dict(),
+        "plan_cache_hit": report.cache.plan_hit,
+    }
 
 
 def main() -> None:

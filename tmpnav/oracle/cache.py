@@ -6,7 +6,8 @@ several processes may read and write at once (WAL journal, busy timeout), and a 
 Ctrl-C in the middle of a write leaves the previous state (transactions are atomic).
 Each value carries its own SHA-256; an entry that does not match, or a database file that
 is not a database any more, is reported once as a warning and recomputed: the bad file
-is moved aside, never read again, never a crash.
+is set aside (:func:`tmpnav.cachedir.set_aside`), never read again, never a crash. Where the
+database lives is :mod:`tmpnav.cachedir`'s business.
 """
 
 from __future__ import annotations
@@ -14,7 +15,6 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
-import os
 import sqlite3
 import time
 import warnings
@@ -23,9 +23,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tmpnav.errors import CacheError
+from tmpnav.cachedir import CacheDir, set_aside
 
-FILENAME = "oracle-v1.sqlite3"
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS entries (
     key TEXT PRIMARY KEY,
@@ -38,16 +37,6 @@ CREATE TABLE IF NOT EXISTS entries (
 
 class CacheWarning(UserWarning):
     """Something in the cache was unusable and is being recomputed."""
-
-
-def default_cache_dir() -> Path:
-    """``$XDG_CACHE_HOME/tmpnav`` (``~/.cache/tmpnav``), or ``$TMPNAV_CACHE_DIR``."""
-    env = os.environ.get("TMPNAV_CACHE_DIR")
-    if env:
-        return Path(env)
-    from platformdirs import user_cache_dir
-
-    return Path(user_cache_dir("tmpnav", appauthor=False))
 
 
 def _digest(value: bytes) -> str:
@@ -87,15 +76,10 @@ class DiskCache:
     """A JSON key-value store in one SQLite file, safe for concurrent processes."""
 
     def __init__(self, directory: Path):
-        self.directory = Path(directory)
-        self.path = self.directory / FILENAME
+        cache = CacheDir(Path(directory))
+        self.directory = cache.ensure()
+        self.path = cache.database
         self.stats = CacheStats()
-        try:
-            self.directory.mkdir(parents=True, exist_ok=True)
-        except OSError as err:
-            raise CacheError(f"cache directory {self.directory} cannot be created: {err.strerror}") from None
-        if not os.access(self.directory, os.W_OK):
-            raise CacheError(f"cache directory {self.directory} is not writable (use --cache-dir DIR or --no-cache)")
         self._conn: sqlite3.Connection | None = None
         self._connect()
 
@@ -121,14 +105,8 @@ class DiskCache:
             with contextlib.suppress(sqlite3.Error):
                 self._conn.close()
             self._conn = None
-        stamp = time.strftime("%Y%m%d-%H%M%S")
         for suffix in ("", "-wal", "-shm"):
-            src = Path(str(self.path) + suffix)
-            if src.exists():
-                try:
-                    os.replace(src, Path(f"{src}.corrupt-{stamp}-{os.getpid()}"))
-                except OSError:
-                    src.unlink(missing_ok=True)
+            set_aside(Path(str(self.path) + suffix))
         self._warn(f"{reason}; moved it aside and recomputing")
 
     def _warn(self, message: str) -> None:
@@ -205,26 +183,15 @@ class DiskCache:
             self._conn = None
 
 
-def info(directory: Path) -> dict[str, Any]:
-    """What ``tmpnav cache info`` prints: location, size and number of entries."""
-    path = Path(directory) / FILENAME
-    out: dict[str, Any] = {"directory": str(directory), "file": str(path), "exists": path.exists()}
-    if not path.exists():
-        return out | {"entries": 0, "bytes": 0}
-    size = sum(p.stat().st_size for p in Path(directory).glob(FILENAME + "*"))
+def count_entries(path: Path) -> tuple[int | None, str | None]:
+    """How many entries the database at ``path`` holds, read-only: (count, None), or
+    (None, why) when it is unreadable."""
     try:
         conn = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=10.0)
-        entries, oldest, newest = conn.execute("SELECT count(*), min(created), max(created) FROM entries").fetchone()
-        conn.close()
+        try:
+            (entries,) = conn.execute("SELECT count(*) FROM entries").fetchone()
+        finally:
+            conn.close()
     except sqlite3.DatabaseError as err:
-        return out | {"entries": None, "bytes": size, "error": f"unreadable: {err}"}
-    return out | {"entries": entries, "bytes": size, "oldest": oldest, "newest": newest}
-
-
-def clear(directory: Path) -> int:
-    """Delete the cache files (including set-aside corrupt ones); returns how many."""
-    removed = 0
-    for p in Path(directory).glob(FILENAME + "*"):
-        p.unlink(missing_ok=True)
-        removed += 1
-    return removed
+        return None, f"unreadable: {err}"
+    return int(entries), None

@@ -3,16 +3,27 @@
 The requests are cut into the same blocks whatever the executor, and each result depends
 only on its own request, so every executor returns bit-identical results. Ray stays an
 optional dependency (``pip install tmpnav[ray]``) and is imported only here.
+
+Local workers never outlive the process that started them, however it ends: on Linux the
+operating system kills them when it dies (``PR_SET_PDEATHSIG``, SIGKILL included), elsewhere a
+watchdog thread in each worker notices that its parent is gone; SIGTERM and Ctrl-C in the
+parent terminate them before it exits.
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
 import multiprocessing
 import os
 import signal
+import sys
+import threading
+import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from types import FrameType
 from typing import Any
 
 from tmpnav.errors import InputError
@@ -110,9 +121,32 @@ class SerialExecutor:
 
 _WORKER_CTX: OracleContext | None = None
 
+#: prctl(2) option: the signal a process gets when its parent dies (Linux)
+PR_SET_PDEATHSIG = 1
+#: seconds between two checks of the watchdog that ends a worker whose parent is gone
+WATCHDOG_PERIOD = 1.0
 
-def _init_worker(ctx: OracleContext) -> None:
+
+def _die_with_parent(parent: int, use_prctl: bool = True) -> None:
+    """Make this worker process end when ``parent`` does, however the parent ends."""
+    if use_prctl and sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    if os.getppid() != parent:  # the parent died before the kernel was told
+        os._exit(1)
+    threading.Thread(target=_watch_parent, args=(parent,), name="tmpnav-parent-watchdog", daemon=True).start()
+
+
+def _watch_parent(parent: int) -> None:
+    """The fallback where prctl is missing: a worker whose parent is gone is re-parented."""
+    while os.getppid() == parent:
+        time.sleep(WATCHDOG_PERIOD)
+    os._exit(1)
+
+
+def _init_worker(ctx: OracleContext, parent: int) -> None:
     global _WORKER_CTX
+    _die_with_parent(parent)
     # Ctrl-C is the parent's business (it cancels the pool); workers stay quiet
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     _WORKER_CTX = ctx
@@ -127,7 +161,9 @@ class ProcessExecutor:
     """Local worker processes (``--workers N``); the context is sent once per worker.
 
     The pool lives until :meth:`close`, so the nominal motions a worker computed for one
-    wave of requests (singles, then pairs) are still in its memory for the next.
+    wave of requests (singles, then pairs) are still in its memory for the next. While it
+    lives, SIGTERM terminates the workers first and then ends this process as SIGTERM
+    would have (the handler is installed only from the main thread).
     """
 
     name = "processes"
@@ -136,14 +172,19 @@ class ProcessExecutor:
         self.workers = workers
         self._pool: ProcessPoolExecutor | None = None
         self._ctx: OracleContext | None = None
+        self._previous_sigterm: Any = None  # the handler ours replaced, while ours is installed
+        self._sigterm_installed = False
 
     def _get_pool(self, ctx: OracleContext) -> ProcessPoolExecutor:
         if self._pool is None or self._ctx is not ctx:
             self.close()
             method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
             mp = multiprocessing.get_context(method)
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=mp, initializer=_init_worker, initargs=(ctx,))
+            self._pool = ProcessPoolExecutor(
+                self.workers, mp_context=mp, initializer=_init_worker, initargs=(ctx, os.getpid())
+            )
             self._ctx = ctx
+            self._install_sigterm()
         return self._pool
 
     def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome:
@@ -158,15 +199,58 @@ class ProcessExecutor:
                 if progress:
                     progress(k + 1, len(todo))
         except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)  # Ctrl-C: do not wait for queued blocks
-            self._pool = None
+            self._terminate()  # Ctrl-C or a failure: do not wait for the blocks under way
             raise
         return _merge(parts, order)
+
+    def _install_sigterm(self) -> None:
+        """Route SIGTERM through :meth:`_on_sigterm` (only the main thread may, and a
+        process that ignores SIGTERM keeps ignoring it)."""
+        if threading.current_thread() is not threading.main_thread():
+            return
+        if signal.getsignal(signal.SIGTERM) is signal.SIG_IGN:
+            return
+        self._previous_sigterm = signal.signal(signal.SIGTERM, self._on_sigterm)
+        self._sigterm_installed = True
+
+    def _on_sigterm(self, signum: int, frame: FrameType | None) -> None:
+        previous = self._previous_sigterm
+        self._terminate()  # also puts the previous handler back
+        if callable(previous):
+            previous(signum, frame)
+        else:  # the default action: end this process, reported as killed by SIGTERM
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+
+    def _terminate(self) -> None:
+        """Stop the workers now (cancelling queued blocks) and reap them."""
+        pool, self._pool = self._pool, None
+        self._restore_sigterm()
+        if pool is None:
+            return
+        # ProcessPoolExecutor has no public way to stop running tasks before Python 3.14
+        workers = list(getattr(pool, "_processes", {}).values())
+        for process in workers:
+            with contextlib.suppress(OSError, ValueError):
+                process.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in workers:
+            with contextlib.suppress(OSError, ValueError, AssertionError):
+                process.join(timeout=5)
+                if process.is_alive():
+                    process.kill()
+
+    def _restore_sigterm(self) -> None:
+        if self._sigterm_installed and threading.current_thread() is threading.main_thread():
+            previous = self._previous_sigterm
+            signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
+            self._sigterm_installed, self._previous_sigterm = False, None
 
     def close(self) -> None:
         if self._pool is not None:
             self._pool.shutdown()
             self._pool = None
+        self._restore_sigterm()
 
 
 class RayExecutor:

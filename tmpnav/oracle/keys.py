@@ -14,28 +14,38 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from tmpnav.oracle.evaluate import Request
+from tmpnav.oracle.requests import Request
+from tmpnav.oracle.results import pruned_result
 from tmpnav.types import CostTerms, MotionResult, Roadmap, Scenario
 from tmpnav.world import World
 
-#: modules whose code determines the oracle's results; editing any of them changes every key
+#: modules whose code determines the oracle's results, and only those: editing any of them
+#: changes every key. The belief stage's reference (belief/ekf.py, belief/models.py,
+#: belief/reference.py) is not among them: it checks the compiled kernel, it does not run.
 CODE_FILES = (
-    "belief/models.py",
-    "belief/kernel.py",
-    "belief/ekf.py",
-    "belief/batch.py",
     "belief/controls.py",
-    "belief/propagate.py",
+    "belief/kernel.py",
+    "belief/sequences.py",
+    "belief/trie.py",
+    "oracle/bounds.py",
     "oracle/evaluate.py",
-    "oracle/motions.py",
     "oracle/keys.py",
+    "oracle/motions.py",
+    "oracle/motionsets.py",
+    "oracle/pairs.py",
+    "oracle/requests.py",
+    "oracle/results.py",
+    "oracle/singles.py",
     "oracle/table.py",
     "roadmap/graph.py",
-    "world/visibility.py",
-    "world/grid.py",
-    "world/geometry.py",
     "types.py",
+    "world/geometry.py",
+    "world/grid.py",
+    "world/visibility.py",
 )
+#: the modules whose results are cached: their imports, followed through CODE_FILES, are
+#: what decides a result (tests/oracle/test_keys.py checks CODE_FILES against them)
+RESULT_ENTRY_POINTS = ("oracle/evaluate.py", "oracle/table.py", "oracle/keys.py")
 #: imported by those modules without deciding results: orchestration, or content already
 #: covered by the world's fingerprint (tests/oracle/test_keys.py checks the two lists)
 NOT_RESULT_CODE = ("oracle/oracle.py", "world/build.py")
@@ -53,6 +63,7 @@ def source_digest(files: tuple[str, ...]) -> Any:
 
 @lru_cache(maxsize=1)
 def code_version() -> str:
+    """The digest of :data:`CODE_FILES`: changes whenever code that decides a result does."""
     return str(source_digest(CODE_FILES).hexdigest())
 
 
@@ -69,12 +80,14 @@ def context_digest(scenario: Scenario, world: World, roadmap: Roadmap) -> str:
 
 
 def request_key(context: str, scenario: Scenario, request: Request) -> str:
+    """The key of one request: the context, the specs of its robots and the request itself."""
     robots = tuple(scenario.robot(r) for r in request.robots)
     specs = tuple((r.name, r.radius, r.speed, r.turn_rate) for r in robots)
     return hashlib.sha256(repr((context, specs, request)).encode()).hexdigest()
 
 
 def to_json(result: MotionResult | None) -> dict[str, Any]:
+    """The JSON form of a result (None: the robots cannot reach their rooms)."""
     if result is None:
         return {"unreachable": True}
     if result.pruned:
@@ -93,10 +106,11 @@ def to_json(result: MotionResult | None) -> dict[str, Any]:
 
 
 def from_json(data: dict[str, Any]) -> MotionResult | None:
+    """The result :func:`to_json` wrote."""
     if data.get("unreachable"):
         return None
     if data.get("pruned"):
-        return MotionResult(float(data["cost"]), tuple(data["robots"]), (), (), (), (), (), pruned=True)
+        return pruned_result(tuple(data["robots"]), float(data["cost"]))
     return MotionResult(
         cost=float(data["cost"]),
         robots=tuple(data["robots"]),

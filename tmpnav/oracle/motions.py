@@ -14,15 +14,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tmpnav.belief import path_controls
+from tmpnav.belief.controls import path_controls
 from tmpnav.roadmap import RoadmapGraph
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
-from tmpnav.world.visibility import LandmarkVisibility, mutual_visible
+from tmpnav.world.visibility import LandmarkVisibility
 
 
 @dataclass(frozen=True, eq=False)
 class NominalMotion:
+    """One robot driving one roadmap path: its controls, nominal poses and what it sees."""
+
     robot: str
     path: tuple[int, ...]  # roadmap node indices, start first
     controls: np.ndarray  # (T, 2)
@@ -102,14 +104,3 @@ class MotionLibrary:
             # so factorised pairs are exact and motions with a common prefix share it
             noise_seed=stable_seed(models.seed, "landmarks", robot, start),
         )
-
-    def mutual_visibility_pairs(self, observer: np.ndarray, target: np.ndarray, min_range: float) -> np.ndarray:
-        """Whether robots at poses ``observer`` (k, 3) see robots at ``target`` (k, 3).
-
-        Robots closer than ``min_range`` (the sum of their radii: they would touch) make
-        no observation; the range-bearing model is singular when they coincide.
-        """
-        sensor = self.scenario.models.mutual_sensor
-        if not self.scenario.models.mutual_observations:
-            return np.zeros(observer.shape[0], dtype=bool)
-        return mutual_visible(self.world, observer, target, sensor.range, sensor.fov, min_range)

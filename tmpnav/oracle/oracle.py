@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
+from tmpnav.errors import InputError
 from tmpnav.oracle.cache import NullCache
 from tmpnav.oracle.evaluate import EvalStats, Request
 from tmpnav.oracle.executors import OracleContext, Progress, SerialExecutor
@@ -47,7 +51,10 @@ class Oracle:
         self.stats = OracleStats()
 
     def evaluate(self, requests: list[Request]) -> list[MotionResult | None]:
-        """Results in request order; None where the robots cannot reach their rooms."""
+        """Results in request order; None where the robots cannot reach their rooms.
+
+        Raises InputError if a cost is not a finite number.
+        """
         start = time.perf_counter()
         keys = [request_key(self.context, self.ctx.scenario, r) for r in requests]
         cached = self.cache.get_many(keys)
@@ -56,6 +63,8 @@ class Oracle:
         if missing:
             todo = [requests[i] for i in missing]
             computed, sims = self.executor.run(self.ctx, todo, self.progress)
+            for request, result in zip(todo, computed, strict=True):
+                self._check_finite(request, result)
             self.stats.sims.add(sims)
             fresh = {keys[i]: res for i, res in zip(missing, computed, strict=True)}
             if not isinstance(self.cache, NullCache):
@@ -66,3 +75,29 @@ class Oracle:
         self.stats.cache_misses += len(missing)
         self.stats.seconds += time.perf_counter() - start
         return [results[k] for k in keys]
+
+    def _check_finite(self, request: Request, result: MotionResult | None) -> None:
+        """Refuse a cost that is not a finite number (NaN or infinity: the EKF overflowed,
+        from an extreme covariance or noise) before it reaches the cache or the planner."""
+        if result is None or math.isfinite(result.cost):
+            return
+        terms = "; ".join(
+            f"{robot}: c_u {t.c_u:g}, c_G {t.c_G:g}, c_Sigma {t.c_Sigma:g}"
+            for robot, t in zip(result.robots, result.terms, strict=True)
+        )
+        keys = " and ".join(f"robots.{robot}.covariance" for robot in request.robots)
+        raise InputError(
+            f"the cost of {self._move(request)} is {result.cost} ({terms or 'a lower bound'}), not a finite number: "
+            f"the EKF overflowed; expected {keys} and the models' noise small enough for finite beliefs"
+        )
+
+    def _move(self, request: Request) -> str:
+        """The move in words: ``r1 moving from roadmap node 9 (room A) to room B``."""
+        world, nodes = self.ctx.world, self.ctx.roadmap.nodes
+        parts = []
+        for robot, start, room in zip(request.robots, request.starts, request.rooms, strict=True):
+            x, y = (float(v) for v in nodes[start.node])
+            where = world.room_of(np.array([x, y]))
+            origin = f"room {where}" if where is not None else f"({x:g}, {y:g})"
+            parts.append(f"{robot} moving from roadmap node {start.node} ({origin}) to room {room}")
+        return " with ".join(parts)

@@ -22,8 +22,8 @@ from __future__ import annotations
 import hashlib
 from collections.abc import Callable
 
-from tmpnav.oracle.evaluate import Request, StartState
 from tmpnav.oracle.oracle import Oracle
+from tmpnav.oracle.requests import Request, StartState
 from tmpnav.types import CostTable, MotionResult, MoveKey, Scenario, cov3, vec3
 from tmpnav.world import World
 

@@ -2,19 +2,21 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from tmpnav.report import figures as fg
+
+if TYPE_CHECKING:
+    from tmpnav.bench.table import Medians
+    from tmpnav.execution import ExecutionResult
 
 ENCODING_COLORS = {"mixed": "#1f77b4", "paper": "#d62728", "single": "#2ca02c"}
 
 
-def plot_bench(
-    medians: dict[tuple[str, str, int], dict[str, Any]], axis: str, path: Path, title: str, timeout: float | None = None
-) -> None:
+def bench_figure(medians: Medians, axis: str, title: str, timeout: float | None = None) -> Figure:
     """Median total planning time (with the quartiles) per encoding and cache phase.
 
     Log scale on both experiments: the warm runs (a cache lookup), the default encoding and
@@ -26,16 +28,16 @@ def plot_bench(
     for enc in encodings:
         color = ENCODING_COLORS.get(enc, "#7f7f7f")
         for phase, style in (("cold", "-"), ("replan", "--"), ("warm", ":")):
-            pts = sorted(p for e, ph, p in medians if e == enc and ph == phase and medians[(e, ph, p)]["total"])
+            pts = sorted(p for e, ph, p in medians if e == enc and ph == phase and medians[(e, ph, p)].total)
             if not pts:
                 continue
-            y = np.array([medians[(enc, phase, p)]["total"] for p in pts])
-            lo = np.array([medians[(enc, phase, p)]["q1"] for p in pts])
-            hi = np.array([medians[(enc, phase, p)]["q3"] for p in pts])
+            y = np.array([medians[(enc, phase, p)].total for p in pts], dtype=float)
+            lo = np.array([medians[(enc, phase, p)].q1 for p in pts], dtype=float)
+            hi = np.array([medians[(enc, phase, p)].q3 for p in pts], dtype=float)
             label = {"cold": "cold cache", "warm": "warm cache", "replan": "warm costs, planner re-run"}[phase]
             ax.plot(pts, y, style, marker="o", color=color, label=f"{enc}, {label}")
             ax.fill_between(pts, lo, hi, color=color, alpha=0.12 if phase == "cold" else 0.06)
-        timeouts = sorted(p for e, ph, p in medians if e == enc and ph == "cold" and medians[(e, ph, p)]["solved"] == 0)
+        timeouts = sorted(p for e, ph, p in medians if e == enc and ph == "cold" and medians[(e, ph, p)].solved == 0)
         if timeouts and timeout:
             ax.plot(
                 timeouts,
@@ -55,10 +57,10 @@ def plot_bench(
     ax.grid(alpha=0.3)
     ax.set_title(title, fontsize=10)
     ax.legend(fontsize=8)
-    fg.save(fig, path)
+    return fig
 
 
-def plot_errors(result: Any, path: Path, title: str) -> None:
+def errors_figure(result: ExecutionResult, title: str) -> Figure:
     """Average position error at each node of each robot's trajectory, both configurations."""
     plt = fg.plt
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
@@ -73,4 +75,4 @@ def plot_errors(result: Any, path: Path, title: str) -> None:
     ax.grid(alpha=0.3)
     ax.set_title(title, fontsize=10)
     ax.legend(fontsize=8)
-    fg.save(fig, path)
+    return fig

@@ -1,24 +1,26 @@
 """Drawing primitives shared by every figure (the only code that imports matplotlib).
 
-Figures are drawn with the non-interactive Agg backend and written atomically.
+Figures are drawn with the non-interactive Agg backend and written atomically (:mod:`tmpnav.atomic`).
 """
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
-from typing import Any
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Polygon
+from numpy.typing import NDArray
 
-from tmpnav.types import Roadmap, Scenario
+from tmpnav.atomic import write_file
+from tmpnav.types import Roadmap, RosMap, Scenario
 from tmpnav.world import World
+from tmpnav.world.grid import OccupancyGrid
 
 ROBOT_COLORS = ("#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 LANDMARK_MARKERS = ("*", "P", "X", "D", "p", "h", "s", "^")
@@ -33,7 +35,7 @@ def new_axes(
     width: float = 12.0,
     extent: tuple[float, float, float, float] | None = None,
     max_height: float | None = None,
-) -> tuple[Any, Any]:
+) -> tuple[Figure, Axes]:
     """A figure sized to the aspect ratio of the map (or of ``extent``: xmin, ymin, xmax, ymax,
     a part of it), with axes in metres; with ``max_height`` (inches) a tall view gets narrower."""
     xmin, ymin, xmax, ymax = extent if extent is not None else world.grid.extent
@@ -49,7 +51,49 @@ def new_axes(
     return fig, ax
 
 
-def draw_map(ax: Any, world: World) -> None:
+def free_extent(grid: OccupancyGrid, margin: float = 1.0, min_area: float = 1.0) -> tuple[float, float, float, float]:
+    """The part of the grid (xmin, ymin, xmax, ymax) around its known free space: the free
+    regions of at least ``min_area`` m² (specks of free space in the unknown are left out),
+    plus ``margin`` metres, within the grid. The whole grid if nothing is free."""
+    from scipy import ndimage
+
+    comp, n = ndimage.label(~grid.occupied)
+    big = np.nonzero(np.bincount(comp.ravel(), minlength=n + 1)[1:] * grid.resolution**2 >= min_area)[0] + 1
+    rows, cols = np.nonzero(np.isin(comp, big))
+    gx0, gy0, gx1, gy1 = grid.extent
+    if rows.size == 0:
+        return gx0, gy0, gx1, gy1
+    (x0, y0), r = grid.origin, grid.resolution
+    return (
+        max(gx0, x0 + cols.min() * r - margin),
+        max(gy0, y0 + rows.min() * r - margin),
+        min(gx1, x0 + (cols.max() + 1) * r + margin),
+        min(gy1, y0 + (rows.max() + 1) * r + margin),
+    )
+
+
+def scenario_extent(scenario: Scenario, world: World) -> tuple[float, float, float, float] | None:
+    """The view of ``show`` and ``roadmap``: for a ROS map, its known free space together with
+    everything the scenario places (rooms, doors, landmarks, robots); None (the whole map) for a
+    polygonal map, whose bounds the user chose."""
+    if not isinstance(scenario.map, RosMap):
+        return None
+    x0, y0, x1, y1 = free_extent(world.grid)
+    points = [p for room in scenario.rooms for p in room.polygon]
+    points += [p for door in scenario.doors for p in door.segment]
+    points += [lm.position for lm in scenario.landmarks] + [(r.pose.x, r.pose.y) for r in scenario.robots]
+    gx0, gy0, gx1, gy1 = world.grid.extent
+    for x, y in points:
+        x0, y0, x1, y1 = (
+            min(x0, max(gx0, x - 1.0)),
+            min(y0, max(gy0, y - 1.0)),
+            max(x1, min(gx1, x + 1.0)),
+            max(y1, min(gy1, y + 1.0)),
+        )
+    return x0, y0, x1, y1
+
+
+def draw_map(ax: Axes, world: World) -> None:
     """Occupied cells in dark grey on white."""
     xmin, ymin, xmax, ymax = world.grid.extent
     ax.imshow(
@@ -64,7 +108,7 @@ def draw_map(ax: Any, world: World) -> None:
     )
 
 
-def draw_rooms(ax: Any, scenario: Scenario) -> None:
+def draw_rooms(ax: Axes, scenario: Scenario) -> None:
     for room in scenario.rooms:
         poly = np.array(room.polygon)
         ax.add_patch(Polygon(poly, closed=True, facecolor="#fdf6e3", edgecolor="#b58900", lw=0.8, alpha=0.55, zorder=1))
@@ -82,14 +126,16 @@ def draw_rooms(ax: Any, scenario: Scenario) -> None:
         )
 
 
-def draw_doors(ax: Any, scenario: Scenario) -> None:
+def draw_doors(ax: Axes, scenario: Scenario) -> None:
     for door in scenario.doors:
         (x0, y0), (x1, y1) = door.segment
-        style = {"color": "#268bd2", "lw": 2.0, "ls": ":"} if door.open else {"color": "#dc322f", "lw": 3.0}
-        ax.plot([x0, x1], [y0, y1], zorder=3, solid_capstyle="butt", **style)
+        if door.open:
+            ax.plot([x0, x1], [y0, y1], zorder=3, solid_capstyle="butt", color="#268bd2", lw=2.0, ls=":")
+        else:
+            ax.plot([x0, x1], [y0, y1], zorder=3, solid_capstyle="butt", color="#dc322f", lw=3.0)
 
 
-def draw_landmarks(ax: Any, scenario: Scenario, sensor_range: float | None = None) -> None:
+def draw_landmarks(ax: Axes, scenario: Scenario, sensor_range: float | None = None) -> None:
     kinds = list(dict.fromkeys(lm.kind for lm in scenario.landmarks))
     for lm in scenario.landmarks:
         k = kinds.index(lm.kind)
@@ -122,7 +168,9 @@ def draw_landmarks(ax: Any, scenario: Scenario, sensor_range: float | None = Non
             )
 
 
-def covariance_ellipse(mean: np.ndarray, cov: np.ndarray, n_sigma: float = 2.0, **style: Any) -> Ellipse:
+def covariance_ellipse(
+    mean: NDArray[np.float64], cov: NDArray[np.float64], n_sigma: float = 2.0, **style: object
+) -> Ellipse:
     """The n-sigma ellipse of the (x, y) block of a pose covariance."""
     vals, vecs = np.linalg.eigh(np.asarray(cov)[:2, :2])
     vals = np.clip(vals, 0.0, None)
@@ -131,7 +179,7 @@ def covariance_ellipse(mean: np.ndarray, cov: np.ndarray, n_sigma: float = 2.0, 
     return Ellipse((float(mean[0]), float(mean[1])), width, height, angle=angle, **style)
 
 
-def draw_robot_start(ax: Any, scenario: Scenario, index: int) -> None:
+def draw_robot_start(ax: Axes, scenario: Scenario, index: int) -> None:
     robot = scenario.robots[index]
     color = robot_color(index)
     x, y, th = robot.pose.x, robot.pose.y, robot.pose.theta
@@ -143,7 +191,7 @@ def draw_robot_start(ax: Any, scenario: Scenario, index: int) -> None:
     )
 
 
-def draw_instantiations(ax: Any, roadmap: Roadmap, ms: float = 3.0, label: str | None = None) -> None:
+def draw_instantiations(ax: Axes, roadmap: Roadmap, ms: float = 3.0, label: str | None = None) -> None:
     """The rooms' pose instantiations (sampled goal poses) as small black dots, as in the paper's Fig. 2."""
     ids = [i for nodes in roadmap.instantiations.values() for i in nodes]
     if not ids:
@@ -152,7 +200,7 @@ def draw_instantiations(ax: Any, roadmap: Roadmap, ms: float = 3.0, label: str |
     ax.plot(xy[:, 0], xy[:, 1], "o", ms=ms, color="black", ls="none", zorder=4, label=label)
 
 
-def step_badge(ax: Any, xy: tuple[float, float], text: str, color: str, offset: tuple[float, float] = (0, 0)) -> None:
+def step_badge(ax: Axes, xy: tuple[float, float], text: str, color: str, offset: tuple[float, float] = (0, 0)) -> None:
     """A numbered round label (a plan step at its goal) in a robot's colour, ``offset`` in points."""
     ax.annotate(
         text,
@@ -170,27 +218,17 @@ def step_badge(ax: Any, xy: tuple[float, float], text: str, color: str, offset: 
     )
 
 
-def public_mode() -> int:
-    """The mode a newly created file gets under the current umask (mkstemp's temporary files are 0600)."""
-    try:  # Linux reports the umask without changing it (os.umask would, process-wide, for an instant)
-        with open("/proc/self/status", encoding="ascii") as fh:
-            mask = next(int(line.split()[1], 8) for line in fh if line.startswith("Umask:"))
-    except (OSError, StopIteration, ValueError, IndexError):
-        mask = os.umask(0)
-        os.umask(mask)
-    return 0o666 & ~mask
-
-
-def save(fig: Any, path: Path, dpi: int = 110) -> None:
-    """Write the figure atomically (a temporary file renamed over the target)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
-    os.close(fd)
+def render(fig: Figure, path: Path, dpi: int = 110) -> None:
+    """Write the figure as a PNG to ``path`` (a temporary file of :mod:`tmpnav.atomic`) and close it."""
     try:
-        fig.savefig(tmp, dpi=dpi, bbox_inches="tight", format="png")
-        os.chmod(tmp, public_mode())
-        os.replace(tmp, path)
+        fig.savefig(path, dpi=dpi, bbox_inches="tight", format="png")
     finally:
         plt.close(fig)
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+
+
+def save(fig: Figure, path: Path, dpi: int = 110) -> None:
+    """Write the figure to ``path`` atomically (all or nothing) and close it."""
+    try:
+        write_file(path, lambda tmp: render(fig, tmp, dpi))
+    finally:
+        plt.close(fig)

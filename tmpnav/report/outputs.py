@@ -1,84 +1,51 @@
-"""``tmpnav plan -o DIR``: plan.json, plan.png and the PDDL files, written all or nothing.
+"""The output folders: ``tmpnav plan -o DIR`` (plan.json, plan.png and the PDDL files) and
+``tmpnav simulate -o DIR`` (errors.csv, errors.png, summary.md), each written all or nothing.
 
-Every file is first written in full to a hidden temporary file in the output directory, then
-the temporary files are renamed over their targets one after the other (``os.replace``, atomic
-on POSIX within a directory). If anything fails before the renames, the temporary files are
-removed and the files of an earlier run stay as they were: a reader never sees a partial
-plan.json or a plan.png of another plan than the plan.json beside it.
+The files of a folder are one group for :func:`tmpnav.atomic.write_files`: a reader never sees a partial
+plan.json, nor a plan.png of another plan than the plan.json beside it, and a run that fails
+while writing leaves the files of the earlier run as they were.
 """
 
 from __future__ import annotations
 
-import contextlib
-import os
-import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
-from tmpnav.report.figures import public_mode
+from tmpnav.atomic import Content, write_files
+from tmpnav.report import figures as fg
 from tmpnav.report.plan_json import dumps, plan_document
-from tmpnav.report.plan_plot import plot_plan
+from tmpnav.report.plan_plot import plan_figure
+from tmpnav.results import PlanReport
+from tmpnav.task.export import PDDL_FILES
+
+if TYPE_CHECKING:
+    from tmpnav.execution import ExecutionResult
 
 PLAN_JSON = "plan.json"
 PLAN_PNG = "plan.png"
-PDDL_FILES = ("domain.pddl", "problem.pddl")
 
 
-def _temporary(directory: Path, name: str) -> Path:
-    """A new empty hidden file in ``directory`` for ``name``'s content (same file system: rename is atomic)."""
-    fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{name}.", suffix=".tmp")
-    os.close(fd)
-    return Path(tmp)
-
-
-def stage_text(tmp: Path, text: str) -> None:
-    """Write ``text`` to the temporary file ``tmp`` and flush it to disk."""
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
-
-
-def write_outputs(report: Any, out_dir: Path, pddl: tuple[str, str] | None) -> list[Path]:
+def write_outputs(report: PlanReport, out_dir: Path, pddl: tuple[str, str] | None) -> list[Path]:
     """Write plan.json, plan.png and, when ``pddl`` = (domain, problem) is given, domain.pddl and
-    problem.pddl into ``out_dir`` (created if missing). Returns the paths written, in that order.
-
-    All or nothing up to the renames: on any error no file of this run is left behind (and a
-    directory created for it is removed again if still empty), and the error propagates.
-    """
-    out_dir = Path(out_dir)
-    created = not out_dir.exists()
-    out_dir.mkdir(parents=True, exist_ok=True)
-    texts: list[tuple[str, str]] = [(PLAN_JSON, dumps(plan_document(report)))]
+    problem.pddl into ``out_dir`` (created if missing). Returns the paths written, in that order."""
+    contents: dict[str, Content] = {
+        PLAN_JSON: dumps(plan_document(report)),
+        PLAN_PNG: lambda tmp: fg.render(plan_figure(report), tmp),
+    }
     if pddl is not None:
-        texts += list(zip(PDDL_FILES, pddl, strict=True))
-    staged: list[tuple[Path, Path]] = []  # (temporary file, target)
-    try:
-        for name, text in texts:
-            tmp = _temporary(out_dir, name)
-            staged.append((tmp, out_dir / name))
-            stage_text(tmp, text)
-        tmp = _temporary(out_dir, PLAN_PNG)
-        staged.insert(1, (tmp, out_dir / PLAN_PNG))
-        plot_plan(report, tmp)
-        mode = public_mode()
-        for tmp, _ in staged:
-            os.chmod(tmp, mode)
-    except BaseException:
-        _discard(staged)
-        if created:
-            with contextlib.suppress(OSError):
-                out_dir.rmdir()
-        raise
-    try:
-        for tmp, target in staged:
-            os.replace(tmp, target)
-    finally:
-        _discard(staged)  # only those a failed rename left behind
-    return [target for _, target in staged]
+        contents.update(zip(PDDL_FILES, pddl, strict=True))
+    return write_files(out_dir, contents)
 
 
-def _discard(staged: list[tuple[Path, Path]]) -> None:
-    for tmp, _ in staged:
-        with contextlib.suppress(FileNotFoundError):
-            tmp.unlink()
+def write_execution_outputs(report: PlanReport, result: ExecutionResult, sessions: int, out_dir: Path) -> list[Path]:
+    """``tmpnav simulate -o DIR``: errors.csv, errors.png and summary.md, all or nothing."""
+    from tmpnav.execution import error_summary, errors_csv
+    from tmpnav.report.bench_plot import errors_figure
+
+    title = f"{report.scenario.name}: average position error over {sessions} sessions"
+    contents: dict[str, Content] = {
+        "errors.csv": errors_csv(result, report.roadmap),
+        "errors.png": lambda tmp: fg.render(errors_figure(result, title), tmp),
+        "summary.md": "\n".join(error_summary(result, sessions)) + "\n",
+    }
+    return write_files(out_dir, contents)

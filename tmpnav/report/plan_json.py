@@ -12,18 +12,19 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Sequence
-from typing import Any
+from dataclasses import asdict
+
+import numpy as np
 
 from tmpnav import __version__
-from tmpnav.types import Roadmap, TrajectoryStep
+from tmpnav.results import JSON, STAGES, CacheUse, PlanReport
+from tmpnav.types import PlannedAction, Roadmap, TrajectoryStep
 
 SCHEMA = "tmpnav-plan/1"
-#: stages of a run, in pipeline order; ``total`` is every stage but ``load`` (see pipeline.plan)
-STAGES = ("load", "roadmap", "oracle", "encode", "planner", "resimulate", "total")
 _T_TOL = 1e-6  # s, trajectory times are rounded to 1e-9 s by the re-simulation
 
 
-def number(value: Any, digits: int | None = None) -> float | None:
+def number(value: float | int, digits: int | None = None) -> float | None:
     """A plain Python float (numpy scalars included), optionally rounded; None if not finite."""
     x = float(value)
     if not math.isfinite(x):
@@ -31,15 +32,7 @@ def number(value: Any, digits: int | None = None) -> float | None:
     return round(x, digits) if digits is not None else x
 
 
-def move_parts(move: Any) -> tuple[str, str, str]:
-    """(robot, origin, target) of a move, given as a :class:`~tmpnav.types.Move` or a MoveKey tuple."""
-    if isinstance(move, tuple):
-        robot, origin, target = move
-        return str(robot), str(origin), str(target)
-    return str(move.robot), str(move.origin), str(move.target)
-
-
-def action_spans(report: Any) -> list[tuple[float, float]] | None:
+def action_spans(report: PlanReport) -> list[tuple[float, float]] | None:
     """(t_start, t_end) in seconds of every plan step, or None if the trajectories do not fit the paths.
 
     The re-simulation runs the steps one after the other; a step lasts as long as its slowest
@@ -52,7 +45,7 @@ def action_spans(report: Any) -> list[tuple[float, float]] | None:
     spans: list[tuple[float, float]] = []
     for action in report.actions:
         t_end = t0
-        robots = [move_parts(m)[0] for m in action.moves]
+        robots = [m[0] for m in action.moves]
         for robot, path in zip(robots, action.paths, strict=True):
             steps = trajectories.get(robot, [])
             i = cursor.get(robot, 0)
@@ -84,13 +77,13 @@ def step_action(t: float, spans: Sequence[tuple[float, float]] | None) -> int | 
     return None
 
 
-def _points(roadmap: Roadmap, nodes: Sequence[int]) -> list[list[float | None]]:
+def _points(roadmap: Roadmap, nodes: Sequence[int]) -> list[JSON]:
     return [[number(v) for v in roadmap.nodes[int(n)]] for n in nodes]
 
 
-def _action(action: Any, roadmap: Roadmap, span: tuple[float, float] | None) -> dict[str, Any]:
-    parts = [move_parts(m) for m in action.moves]
-    moves = [
+def _action(action: PlannedAction, roadmap: Roadmap, span: tuple[float, float] | None) -> JSON:
+    parts = action.moves
+    moves: list[JSON] = [
         {
             "robot": robot,
             "from": origin,
@@ -118,7 +111,7 @@ def _action(action: Any, roadmap: Roadmap, span: tuple[float, float] | None) -> 
     }
 
 
-def _step(step: TrajectoryStep, spans: Sequence[tuple[float, float]] | None) -> dict[str, Any]:
+def _step(step: TrajectoryStep, spans: Sequence[tuple[float, float]] | None) -> JSON:
     return {
         "t": number(step.t, 9),
         "mean": [number(v) for v in step.mean],
@@ -128,12 +121,12 @@ def _step(step: TrajectoryStep, spans: Sequence[tuple[float, float]] | None) -> 
     }
 
 
-def _goals(report: Any) -> dict[str, Any]:
+def _goals(report: PlanReport) -> JSON:
     goals = report.scenario.goals
     return {"visit": list(goals.visit), "per_robot": {robot: list(rooms) for robot, rooms in goals.per_robot}}
 
 
-def _roadmap(roadmap: Roadmap) -> dict[str, Any]:
+def _roadmap(roadmap: Roadmap) -> JSON:
     return {
         "nodes": roadmap.n_nodes,
         "edges": len(roadmap.edges),
@@ -146,21 +139,21 @@ def _roadmap(roadmap: Roadmap) -> dict[str, Any]:
     }
 
 
-def plan_document(report: Any) -> dict[str, Any]:
-    """The JSON-ready document of a :class:`~tmpnav.pipeline.PlanReport` (schema in docs/plan-json.md)."""
+def plan_document(report: PlanReport) -> dict[str, JSON]:
+    """The JSON-ready document of a :class:`~tmpnav.results.PlanReport` (schema in docs/plan-json.md)."""
     sc = report.scenario
     spans = action_spans(report)
-    timings = {stage: number(report.times.seconds.get(stage, 0.0), 6) for stage in STAGES}
+    timings: dict[str, JSON] = {stage: number(report.times.seconds.get(stage, 0.0), 6) for stage in (*STAGES, "total")}
     timings.update({k: number(v, 6) for k, v in report.times.seconds.items() if k not in timings})
     return {
         "schema": SCHEMA,
         "tmpnav_version": __version__,
         "scenario": {"name": sc.name, "file": str(sc.source), "description": sc.description},
-        "encoding": str(report.encoding),
-        "planner": str(report.planner),
-        "status": getattr(report.status, "value", str(report.status)),
+        "encoding": report.encoding,
+        "planner": report.planner,
+        "status": report.status.value,
         "mutual_observations": bool(sc.models.mutual_observations),
-        "observations": getattr(sc.models.observations, "value", str(sc.models.observations)),
+        "observations": sc.models.observations.value,
         "dt": number(sc.models.dt),
         "cost_weights": {"M_u": number(sc.cost.M_u), "M_G": number(sc.cost.M_G), "M_Sigma": number(sc.cost.M_Sigma)},
         "goals": _goals(report),
@@ -172,30 +165,36 @@ def plan_document(report: Any) -> dict[str, Any]:
         "trajectories": {robot: [_step(s, spans) for s in steps] for robot, steps in report.trajectories.items()},
         "roadmap": _roadmap(report.roadmap),
         "timings": timings,
-        "cache": {
-            "enabled": bool(report.cache.get("enabled", False)),
-            "directory": report.cache.get("directory"),
-            "hits": int(report.cache.get("hits", 0)),
-            "misses": int(report.cache.get("misses", 0)),
-            "roadmap_hit": bool(report.cache.get("roadmap_hit", False)),
-            "plan_hit": bool(report.cache.get("plan_hit", False)),
-            "warnings": [str(w) for w in report.cache.get("warnings", [])],
-        },
-        "oracle": {k: _plain(v) for k, v in report.oracle.items()},
-        "task": {k: _plain(v) for k, v in report.task.items()},
+        "cache": _cache(report.cache),
+        "oracle": {k: _plain(v) for k, v in report.oracle.as_dict().items()},
+        "task": {k: _plain(v) for k, v in asdict(report.task.counts).items()},
     }
 
 
-def _plain(value: Any) -> Any:
+def _cache(cache: CacheUse) -> JSON:
+    return {
+        "enabled": cache.enabled,
+        "directory": None if cache.directory is None else str(cache.directory),
+        "hits": cache.hits,
+        "misses": cache.misses,
+        "roadmap_hit": cache.roadmap_hit,
+        "plan_hit": cache.plan_hit,
+        "warnings": list(cache.warnings),
+    }
+
+
+def _plain(value: object) -> JSON:
     """Counters as plain JSON scalars (numpy integers and floats included)."""
     if isinstance(value, bool) or value is None or isinstance(value, str):
         return value
-    if isinstance(value, int) or (hasattr(value, "dtype") and getattr(value.dtype, "kind", "") in "iu"):
+    if isinstance(value, int | np.integer):
         return int(value)
-    return number(value)
+    if isinstance(value, float | np.floating):
+        return number(float(value))
+    raise TypeError(f"not a counter: {value!r}")
 
 
-def dumps(document: dict[str, Any], width: int = 120) -> str:
+def dumps(document: JSON, width: int = 120) -> str:
     """The document as strict JSON text, indented, with every short array or object on one line.
 
     Trajectory steps and paths stay one line each, so a plan of a few hundred steps reads
@@ -204,7 +203,7 @@ def dumps(document: dict[str, Any], width: int = 120) -> str:
     return _format(document, 0, width) + "\n"
 
 
-def _format(value: Any, indent: int, width: int) -> str:
+def _format(value: JSON, indent: int, width: int) -> str:
     flat = json.dumps(value, allow_nan=False, separators=(", ", ": "), ensure_ascii=False)
     if not isinstance(value, dict | list) or indent + len(flat) <= width or _numeric(value):
         return flat
@@ -216,7 +215,7 @@ def _format(value: Any, indent: int, width: int) -> str:
     return "{\n" + ",\n".join(items) + "\n" + " " * indent + "}"
 
 
-def _numeric(value: Any) -> bool:
+def _numeric(value: JSON) -> bool:
     """An array of numbers or of arrays of numbers (a pose, a covariance): never split across lines."""
     return isinstance(value, list) and all(
         isinstance(v, int | float) or (isinstance(v, list) and all(isinstance(w, int | float) for w in v))

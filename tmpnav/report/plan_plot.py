@@ -8,15 +8,18 @@ small black dots; the start poses; and a numbered badge at every plan step's goa
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
+from matplotlib.artist import Artist
+from matplotlib.axes import Axes
 from matplotlib.colors import to_rgb
+from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Ellipse
+from numpy.typing import NDArray
 
 from tmpnav.report import figures as fg
-from tmpnav.report.plan_json import move_parts
+from tmpnav.results import PlanReport
 from tmpnav.types import TrajectoryStep
 
 N_SIGMA = 2.0
@@ -29,7 +32,7 @@ WIDE = 0.45  # height / width of the view under which the figure is wider and th
 NUDGES = ((-20.0, 10.0), (20.0, -14.0), (-20.0, -14.0), (0.0, 24.0))
 
 
-def ellipse_spacing(report: Any) -> float:
+def ellipse_spacing(report: PlanReport) -> float:
     """Distance (m) travelled by the belief mean between two drawn ellipses.
 
     Chosen so that the longest trajectory gets at most ``MAX_ELLIPSES`` ellipses, and never
@@ -39,7 +42,7 @@ def ellipse_spacing(report: Any) -> float:
     return max(0.6, longest / MAX_ELLIPSES)
 
 
-def _travelled(steps: list[TrajectoryStep]) -> np.ndarray:
+def _travelled(steps: list[TrajectoryStep]) -> NDArray[np.float64]:
     """Cumulative distance (m) of the belief mean at every step."""
     xy = np.array([s.mean[:2] for s in steps], dtype=float).reshape(-1, 2)
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(xy, axis=0), axis=1))])
@@ -60,13 +63,13 @@ def ellipse_steps(steps: list[TrajectoryStep], spacing: float, keep: set[int] | 
     return sorted(set(chosen) | (keep or set()))
 
 
-def goal_steps(report: Any, robot: str) -> set[int]:
+def goal_steps(report: PlanReport, robot: str) -> set[int]:
     """Indices of ``robot``'s trajectory steps at the goal node of each of its plan steps."""
     steps = report.trajectories.get(robot, [])
     found, i = set(), 0
     for action in report.actions:
         for move, path in zip(action.moves, action.paths, strict=True):
-            if move_parts(move)[0] != robot:
+            if move[0] != robot:
                 continue
             for node in path[1:]:
                 i = next((j for j in range(i + 1, len(steps)) if steps[j].node == node), i)
@@ -74,7 +77,7 @@ def goal_steps(report: Any, robot: str) -> set[int]:
     return found
 
 
-def _draw_beliefs(ax: Any, report: Any, spacing: float) -> None:
+def _draw_beliefs(ax: Axes, report: PlanReport, spacing: float) -> None:
     for index, robot in enumerate(r.name for r in report.scenario.robots):
         steps = report.trajectories.get(robot, [])
         if not steps:
@@ -92,7 +95,9 @@ def _draw_beliefs(ax: Any, report: Any, spacing: float) -> None:
             ax.add_patch(patch)
 
 
-def plan_extent(report: Any, margin: float = 1.0, min_aspect: float = 1.6) -> tuple[float, float, float, float] | None:
+def plan_extent(
+    report: PlanReport, margin: float = 1.0, min_aspect: float = 1.6
+) -> tuple[float, float, float, float] | None:
     """The part of the map the plan uses (xmin, ymin, xmax, ymax): trajectories with their ellipses,
     start poses and the rooms moved from and to, plus ``margin`` metres, widened to at least ``min_aspect``
     (a tall strip beside the legend reads badly); None when that is most of the map."""
@@ -103,7 +108,7 @@ def plan_extent(report: Any, margin: float = 1.0, min_aspect: float = 1.6) -> tu
             r = N_SIGMA * float(np.sqrt(max(st.cov[0][0], st.cov[1][1], 0.0)))
             xs += [st.mean[0] - r, st.mean[0] + r]
             ys += [st.mean[1] - r, st.mean[1] + r]
-    rooms = {name for a in report.actions for m in a.moves for name in move_parts(m)[1:]}
+    rooms = {name for a in report.actions for m in a.moves for name in m[1:]}
     for room in report.scenario.rooms:
         if room.name in rooms:
             xs += [p[0] for p in room.polygon]
@@ -139,13 +144,13 @@ def _widen(
     return xmin - left, ymin, xmax + right, ymax
 
 
-def _draw_step_badges(ax: Any, report: Any) -> None:
+def _draw_step_badges(ax: Axes, report: PlanReport) -> None:
     """Numbered badges at every plan step's goal, nudged apart when two fall on the same spot."""
     names = [r.name for r in report.scenario.robots]
     placed = [(r.pose.x, r.pose.y) for r in report.scenario.robots]  # keep the start markers readable
     for action in report.actions:
         for move, pose in zip(action.moves, action.goal_poses, strict=True):
-            robot = move_parts(move)[0]
+            robot = move[0]
             x, y = float(pose[0]), float(pose[1])
             crowded = sum(1 for px, py in placed if (px - x) ** 2 + (py - y) ** 2 < 0.8**2)
             offset = (0.0, 0.0) if not crowded else NUDGES[(crowded - 1) % len(NUDGES)]
@@ -153,14 +158,14 @@ def _draw_step_badges(ax: Any, report: Any) -> None:
             placed.append((x, y))
 
 
-def _legend(ax: Any, report: Any, spacing: float) -> None:
+def _legend(ax: Axes, report: PlanReport, spacing: float) -> None:
     handles, labels = [], []
     kinds = _kinds_in_view(ax, report)
     for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):  # landmarks, pose instantiations
         if label == "pose instantiations" or label in kinds:
             handles.append(handle)
             labels.append(label)
-    extra: list[tuple[Any, str]] = []
+    extra: list[tuple[Artist, str]] = []
     for index, robot in enumerate(r.name for r in report.scenario.robots):
         if report.trajectories.get(robot):
             extra.append(
@@ -193,21 +198,22 @@ def _legend(ax: Any, report: Any, spacing: float) -> None:
     )
 
 
-def _below_label(ax: Any, inches: float = 0.55) -> float:
+def _below_label(ax: Axes, inches: float = 0.55) -> float:
     """``inches`` below the axes, as a fraction of their height: clear of the x axis label."""
-    height = ax.figure.get_size_inches()[1] * ax.get_position().height
+    fig = ax.get_figure(root=True)
+    height = (fig.get_size_inches()[1] if fig is not None else 1.0) * ax.get_position().height
     return inches / max(height, 1e-9)
 
 
-def _kinds_in_view(ax: Any, report: Any) -> set[str]:
+def _kinds_in_view(ax: Axes, report: PlanReport) -> set[str]:
     """Landmark kinds with at least one marker inside the axes (the view may be a part of the map)."""
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     return {lm.kind for lm in report.scenario.landmarks if x0 <= lm.position[0] <= x1 and y0 <= lm.position[1] <= y1}
 
 
-def _title(report: Any) -> str:
+def _title(report: PlanReport) -> str:
     sc = report.scenario
-    status = getattr(report.status, "value", str(report.status))
+    status = report.status.value
     mutual = "with mutual observations" if sc.models.mutual_observations else "without mutual observations"
     n = len(report.actions)
     return (
@@ -217,8 +223,8 @@ def _title(report: Any) -> str:
     )
 
 
-def plot_plan(report: Any, path: Path, crop: bool = True) -> None:
-    """Write the plan figure (PNG) of a :class:`~tmpnav.pipeline.PlanReport` to ``path``, atomically.
+def plan_figure(report: PlanReport, crop: bool = True) -> Figure:
+    """The plan figure of a :class:`~tmpnav.results.PlanReport`.
 
     With ``crop`` the view shows the part of the map the plan uses (see :func:`plan_extent`),
     so the ellipses of a short plan in a large map stay visible.
@@ -245,4 +251,9 @@ def plot_plan(report: Any, path: Path, crop: bool = True) -> None:
             text.set_clip_on(True)
     ax.set_title(_title(report), fontsize=10)
     _legend(ax, report, spacing)
-    fg.save(fig, path)
+    return fig
+
+
+def plot_plan(report: PlanReport, path: Path, crop: bool = True) -> None:
+    """Write the plan figure (PNG) to ``path``, atomically."""
+    fg.save(plan_figure(report, crop), path)

@@ -13,7 +13,7 @@ from tmpnav.world import World
 
 
 def plot_roadmap(scenario: Scenario, world: World, roadmap: Roadmap, path: Path) -> None:
-    fig, ax = fg.new_axes(world)
+    fig, ax = fg.new_axes(world, extent=fg.scenario_extent(scenario, world))
     fg.draw_map(ax, world)
     fg.draw_rooms(ax, scenario)
     fg.draw_doors(ax, scenario)

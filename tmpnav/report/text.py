@@ -24,22 +24,29 @@ from __future__ import annotations
 import math
 import os
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from tmpnav.report.plan_json import STAGES, action_spans, move_parts
+from tmpnav.report.plan_json import action_spans
+from tmpnav.results import STAGES, PlanReport
+from tmpnav.shipped import PREFIX, configs_dir
 
 
 def _display_path(path: Path) -> str:
-    """The scenario file relative to the working directory when it lies below it."""
+    """The scenario file relative to the working directory when it lies below it, as
+    ``shipped configs/NAME.yaml`` when it is a scenario shipped with tmpnav."""
+    resolved = Path(path).resolve()
     try:
-        return str(Path(path).resolve().relative_to(Path(os.getcwd()).resolve()))
+        return str(resolved.relative_to(Path(os.getcwd()).resolve()))
+    except ValueError:
+        pass
+    try:
+        return f"shipped {PREFIX}/{resolved.relative_to(configs_dir().resolve())}"
     except ValueError:
         return str(path)
 
 
-def _goals(report: Any) -> str:
+def _goals(report: PlanReport) -> str:
     goals = report.scenario.goals
     parts = []
     if goals.visit:
@@ -48,9 +55,9 @@ def _goals(report: Any) -> str:
     return "; ".join(parts) or "none"
 
 
-def _header(report: Any) -> list[str]:
+def _header(report: PlanReport) -> list[str]:
     sc = report.scenario
-    status = getattr(report.status, "value", str(report.status))
+    status = report.status.value
     if status == "solved-satisficing":
         status += " (not proven optimal)"
     mutual = "on" if sc.models.mutual_observations else "off"
@@ -64,10 +71,10 @@ def _cost(x: float) -> str:
     return f"{x:.3f}" if math.isfinite(x) else str(x)
 
 
-def _steps(report: Any) -> list[str]:
+def _steps(report: PlanReport) -> list[str]:
     """One row per plan step and the totals; ``diff`` is re-simulated minus planner cost."""
     spans = action_spans(report)
-    moves = ["  &  ".join(f"{r}: {o} -> {t}" for r, o, t in (move_parts(m) for m in a.moves)) for a in report.actions]
+    moves = ["  &  ".join(f"{r}: {o} -> {t}" for r, o, t in a.moves) for a in report.actions]
     n = len(report.actions)
     total = f"total ({n} step{'s' if n != 1 else ''})"
     width = max([len("moves"), len(total) - 6, *map(len, moves)])
@@ -93,7 +100,7 @@ def _span(spans: list[tuple[float, float]] | None, first: int, last: int) -> str
     return f"{spans[first][0]:.1f}-{spans[last][1]:.1f}"
 
 
-def _beliefs(report: Any) -> list[str]:
+def _beliefs(report: PlanReport) -> list[str]:
     """Per robot: distance driven by the belief mean, and its position / heading uncertainty."""
     rows = ["robot  travelled  control steps  final pos. std  max pos. std  final heading std"]
     for robot, steps in report.trajectories.items():
@@ -116,31 +123,31 @@ def _plural(n: int, word: str) -> str:
     return f"{n} {word}" if n == 1 else f"{n} {word}{'es' if word.endswith('s') else 's'}"
 
 
-def _times(report: Any) -> list[str]:
+def _times(report: PlanReport) -> list[str]:
     """Seconds per stage as a small table (``total`` excludes ``load``), then the oracle cache."""
     seconds = report.times.seconds
     cache = report.cache
-    stages = [s for s in STAGES if s != "load" and s in seconds] + (["load"] if "load" in seconds else [])
+    stages = [s for s in (*STAGES, "total") if s != "load" and s in seconds] + (["load"] if "load" in seconds else [])
     names = [f"({s})" if s == "load" else s for s in stages]
     widths = [max(len(n), 6) for n in names]
     head = "time [s]  " + "  ".join(f"{n:>{w}}" for n, w in zip(names, widths, strict=True))
     row = " " * 10 + "  ".join(f"{seconds[s]:>{w}.2f}" for s, w in zip(stages, widths, strict=True))
-    hits, misses = int(cache.get("hits", 0)), int(cache.get("misses", 0))
-    roadmap = "roadmap from cache" if cache.get("roadmap_hit") else "roadmap grown"
-    if report.oracle.get("table_cache_hit"):
+    hits, misses = cache.hits, cache.misses
+    roadmap = "roadmap from cache" if cache.roadmap_hit else "roadmap grown"
+    if cache.table_hit:
         roadmap += ", cost table from cache"
-    if cache.get("plan_hit"):
+    if cache.plan_hit:
         roadmap += ", task plan from cache (--replan runs the planner)"
-    if cache.get("enabled", False):
+    if cache.enabled:
         share = f" ({100 * hits / (hits + misses):.0f}% hits)" if hits + misses else ""
-        where = f" ({cache['directory']})" if cache.get("directory") else ""
+        where = f" ({cache.directory})" if cache.directory is not None else ""
         cache_line = f"oracle cache{where}: {_plural(hits, 'hit')}, {_plural(misses, 'miss')}{share}; {roadmap}"
     else:
         cache_line = f"oracle cache: off ({_plural(misses, 'action')} simulated); {roadmap}"
-    return [head, row, cache_line] + [f"cache warning: {w}" for w in cache.get("warnings", [])]
+    return [head, row, cache_line] + [f"cache warning: {w}" for w in cache.warnings]
 
 
-def summary(report: Any) -> str:
+def plan_summary(report: PlanReport) -> str:
     """The plan at a glance: header, one line per plan step, totals, beliefs, time per stage."""
     blocks = [_header(report), _steps(report), _beliefs(report), _times(report)]
     return "\n\n".join("\n".join(block) for block in blocks)

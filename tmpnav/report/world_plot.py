@@ -11,7 +11,7 @@ from tmpnav.world import World
 
 def plot_world(scenario: Scenario, world: World, path: Path) -> None:
     """Write the world figure; robots are drawn with their 2-sigma initial ellipse."""
-    fig, ax = fg.new_axes(world)
+    fig, ax = fg.new_axes(world, extent=fg.scenario_extent(scenario, world))
     fg.draw_map(ax, world)
     fg.draw_rooms(ax, scenario)
     fg.draw_doors(ax, scenario)

@@ -23,11 +23,17 @@ from tmpnav.types import Roadmap, RoadmapParams, RobotSpec
 from tmpnav.world import World
 
 
-def sample_instantiations(world: World, room: str, radius: float, k: int, rng: np.random.Generator) -> np.ndarray:
-    """k collision-free positions (k, 2) drawn uniformly in a room's free space."""
+def sample_instantiations(
+    world: World, room: str, radius: float, k: int, rng: np.random.Generator, allowed: np.ndarray | None = None
+) -> np.ndarray:
+    """k collision-free positions (k, 2) drawn uniformly in a room's free space (only in the
+    cells ``allowed`` (rows, cols), if given: a pocket of the room no robot reaches has none)."""
     cells = world.free_cells_in_room(room, radius)
+    if allowed is not None:
+        i, j, _ = world.grid.cells(cells)
+        cells = cells[allowed[i, j]]
     if cells.shape[0] == 0:
-        raise RoadmapError(f"room {room!r} has no free space for a robot of radius {radius:g} m")
+        raise RoadmapError(f"room {room!r} has no free space a robot of radius {radius:g} m can reach")
     half = world.grid.resolution / 2.0
     out: list[np.ndarray] = []
     for _ in range(100 * k):
@@ -136,12 +142,16 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
     """
     radius = max(r.radius for r in robots)
     rng = np.random.default_rng(params.seed)
-    inst = {
-        room.name: sample_instantiations(world, room.name, radius, params.instantiations, rng) for room in world.rooms
-    }
     starts = np.array([[r.pose.x, r.pose.y] for r in robots])
+    free_cells = reachable_free_space(world, radius, starts)
+    # instantiations only where OMPL may put milestones: one in a pocket of the room cut off by
+    # noise in the map would be refused as a start state, and its room would lose it
+    inst = {
+        room.name: sample_instantiations(world, room.name, radius, params.instantiations, rng, free_cells)
+        for room in world.rooms
+    }
     specials = np.vstack([*inst.values(), starts])
-    nodes, edges = _grow(world, reachable_free_space(world, radius, starts), params, specials)
+    nodes, edges = _grow(world, free_cells, params, specials)
 
     index = {(float(x), float(y)): i for i, (x, y) in enumerate(nodes)}
     special_ids = np.array([index[(float(x), float(y))] for x, y in specials])

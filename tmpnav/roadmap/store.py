@@ -1,10 +1,12 @@
-"""Roadmaps kept on disk next to the oracle cache, so a warm run does not regrow them.
+"""Roadmaps kept in the cache directory, so that a warm run does not grow them again.
 
 A roadmap is stored as a ``.npz`` file (numpy arrays and a JSON header, read with
 ``allow_pickle=False``) named by the SHA-256 of everything it depends on: the world, the
 largest robot radius, the robot starts, the roadmap parameters, OMPL's version and this
-package's roadmap code. Files are written to a temporary name and renamed, so a reader
-never sees half a file; one that fails its checksum is reported and rebuilt.
+package's roadmap code. Files are written all or nothing (:mod:`tmpnav.atomic`). Reading
+checks everything: the archive, the checksum over the arrays and the header, the arrays'
+shapes, every node index. A file that fails any check (truncated by a full disk,
+emptied, overwritten) is set aside with one warning and the roadmap is grown again.
 """
 
 from __future__ import annotations
@@ -12,31 +14,36 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-import os
-import tempfile
 import warnings
+import zipfile
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 import numpy as np
 
-from tmpnav.errors import CacheError
+from tmpnav.atomic import write_file
+from tmpnav.cachedir import CacheDir, set_aside
 from tmpnav.types import Roadmap, RoadmapParams, RobotSpec
 from tmpnav.world import World
 
 CODE = Path(__file__).with_name("prm.py")
+FORMAT = "roadmap-file/2"  # the checksum covers the header too; part of the key, so older files are not read
+#: what reading a damaged .npz file can raise (numpy reports a truncated archive as EOFError or BadZipFile)
+DAMAGE = (OSError, EOFError, zipfile.BadZipFile, ValueError, KeyError, TypeError, IndexError, UnicodeDecodeError)
 
 
 class RoadmapCacheWarning(UserWarning):
-    """A stored roadmap was unreadable and is being rebuilt."""
+    """A stored roadmap was unreadable and is being grown again."""
 
 
 def roadmap_key(world: World, robots: tuple[RobotSpec, ...], params: RoadmapParams) -> str:
+    """The content address of the roadmap of this world, team and parameters."""
     try:
         ompl_version = version("ompl")
     except PackageNotFoundError:
         ompl_version = "unknown"
     parts = (
+        FORMAT,
         world.fingerprint,
         max(r.radius for r in robots),
         [(r.name, r.pose.x, r.pose.y) for r in robots],
@@ -47,59 +54,80 @@ def roadmap_key(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPara
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 
 
-def load(directory: Path, key: str) -> Roadmap | None:
-    path = Path(directory) / "roadmaps" / f"{key}.npz"
-    if not path.exists():
-        return None
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            header = json.loads(bytes(data["header"]).decode())
-            arrays = {k: data[k] for k in ("nodes", "edges", "weights")}
-        digest = hashlib.sha256(b"".join(a.tobytes() for a in arrays.values())).hexdigest()
-        if digest != header["digest"]:
-            raise ValueError("checksum mismatch")
-        return Roadmap(
-            nodes=arrays["nodes"],
-            edges=arrays["edges"],
-            weights=arrays["weights"],
-            instantiations={k: tuple(v) for k, v in header["instantiations"].items()},
-            starts={k: int(v) for k, v in header["starts"].items()},
-            fingerprint=header["fingerprint"],
-        )
-    except (OSError, ValueError, KeyError, json.JSONDecodeError, UnicodeDecodeError) as err:
-        warnings.warn(f"stored roadmap {path} is unreadable ({err}); rebuilding it", RoadmapCacheWarning, stacklevel=2)
-        path.unlink(missing_ok=True)
-        return None
+class RoadmapStore:
+    """The roadmaps of one cache directory; ``warnings`` lists the damaged files set aside."""
+
+    def __init__(self, cache: CacheDir):
+        self.cache = cache
+        self.warnings: list[str] = []
+
+    def load(self, key: str) -> Roadmap | None:
+        """The stored roadmap, or None when there is none or it was damaged (then set aside)."""
+        path = self.cache.roadmap(key)
+        if not path.exists():
+            return None
+        try:
+            return read(path)
+        except DAMAGE as err:
+            moved = set_aside(path)
+            where = f"; moved it to {moved.name}" if moved is not None else ""
+            self._warn(f"stored roadmap {path} is unreadable ({type(err).__name__}: {err}){where}; growing it again")
+            return None
+
+    def save(self, key: str, roadmap: Roadmap) -> None:
+        """Store a roadmap. A cache directory that cannot hold files at all is a CacheError; a
+        failed write (a full disk) only a warning: the roadmap is grown again next time."""
+        self.cache.ensure(self.cache.roadmaps)
+        path = self.cache.roadmap(key)
+        try:
+            write_file(path, serialize(roadmap))
+        except OSError as err:
+            self._warn(f"roadmap not stored in {path.parent} ({err.strerror or err})")
+
+    def _warn(self, message: str) -> None:
+        self.warnings.append(message)
+        warnings.warn(message, RoadmapCacheWarning, stacklevel=3)
 
 
-def save(directory: Path, key: str, roadmap: Roadmap) -> None:
-    """Store a roadmap; a cache directory that cannot hold files at all is a CacheError, a
-    failed write (disk full) only a warning: the roadmap is simply grown again next time."""
-    folder = Path(directory) / "roadmaps"
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise CacheError(
-            f"cache directory {directory} cannot be used: {err.strerror} (use --cache-dir DIR or --no-cache)"
-        ) from None
+def _digest(arrays: dict[str, np.ndarray], header: dict[str, object]) -> str:
+    """SHA-256 of the arrays and of the header's other fields (JSON, sorted keys)."""
+    h = hashlib.sha256(b"".join(a.tobytes() for a in arrays.values()))
+    h.update(json.dumps({k: v for k, v in header.items() if k != "digest"}, sort_keys=True).encode())
+    return h.hexdigest()
+
+
+def serialize(roadmap: Roadmap) -> bytes:
+    """The .npz file of a roadmap."""
     arrays = {"nodes": roadmap.nodes, "edges": roadmap.edges, "weights": roadmap.weights}
-    header = {
-        "digest": hashlib.sha256(b"".join(a.tobytes() for a in arrays.values())).hexdigest(),
+    header: dict[str, object] = {
         "instantiations": {k: list(v) for k, v in roadmap.instantiations.items()},
         "starts": roadmap.starts,
         "fingerprint": roadmap.fingerprint,
     }
+    header["digest"] = _digest(arrays, header)
     buffer = io.BytesIO()
     contents = {"header": np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays}
     np.savez(buffer, **contents)  # type: ignore[arg-type]  # numpy's stub mistakes ** for allow_pickle
-    tmp = None
-    try:
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix=f".{key}.", suffix=".tmp")
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(buffer.getvalue())
-        os.replace(tmp, folder / f"{key}.npz")
-    except OSError as err:
-        warnings.warn(f"roadmap not stored in {folder} ({err.strerror})", RoadmapCacheWarning, stacklevel=2)
-    finally:
-        if tmp is not None and os.path.exists(tmp):
-            os.unlink(tmp)
+    return buffer.getvalue()
+
+
+def read(path: Path) -> Roadmap:
+    """A stored roadmap, every part checked; raises one of ``DAMAGE`` when anything is off."""
+    with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:  # our handle: closed even on a bad zip
+        header = json.loads(bytes(data["header"]).decode())
+        arrays = {k: data[k] for k in ("nodes", "edges", "weights")}
+    if not isinstance(header, dict) or _digest(arrays, header) != header["digest"]:
+        raise ValueError("checksum mismatch")
+    nodes, edges, weights = arrays["nodes"], arrays["edges"], arrays["weights"]
+    n = nodes.shape[0]
+    if nodes.ndim != 2 or nodes.shape[1] != 2 or edges.ndim != 2 or edges.shape[1] != 2:
+        raise ValueError("arrays of the wrong shape")
+    if weights.shape != (edges.shape[0],) or (edges.size and (edges.min() < 0 or edges.max() >= n)):
+        raise ValueError("edges that do not fit the nodes")
+    instantiations = {str(k): tuple(int(i) for i in v) for k, v in header["instantiations"].items()}
+    starts = {str(k): int(v) for k, v in header["starts"].items()}
+    if any(not 0 <= i < n for ids in instantiations.values() for i in ids) or any(
+        not 0 <= i < n for i in starts.values()
+    ):
+        raise ValueError("node indices out of range")
+    return Roadmap(nodes, edges, weights, instantiations, starts, str(header["fingerprint"]))

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from tmpnav.scenario.limits import MAP_CELLS, grid_cells
 from tmpnav.scenario.schema import (
     Choice,
     Covariance,
@@ -26,18 +27,41 @@ from tmpnav.scenario.schema import (
     Text,
     Vector,
 )
+from tmpnav.task.encodings import ENCODINGS
 
 DEG = math.pi / 180.0
 
-ENCODING_CHOICES = ("paper", "single", "mixed")
+#: the task encodings: the task stage's registry is the one list (it imports no planning library)
+ENCODING_CHOICES = tuple(ENCODINGS)
 
-#: largest occupancy grid of a polygonal map (about 1.5 GB of working memory at the limit)
-MAX_CELLS = 20_000_000
+#: points of a room outline: rooms are tested for self-intersection pair by pair
+MAX_ROOM_POINTS = 1000
+
+#: coordinates farther from the origin are beyond any map on Earth (UTM northings reach 1e7 m)
+MAX_COORDINATE = 1e7
+
+#: seeds are 32-bit (OMPL and numpy take them; larger ones are typos)
+MAX_SEED = 2**32 - 1
+
+#: a planner time limit beyond 11 days is a typo
+MAX_TIMEOUT = 1e6
+
+HALF_TURN = "a spread beyond a half turn says nothing about the bearing"
+
+#: sensor noise below a micrometre (microradian) drives the EKF's covariance below float
+#: precision: costs turned NaN or astronomically negative at 1e-30 and below (measured)
+MIN_SIGMA = 1e-6
+PRECISE = "a sensor more precise than 1e-6 drives the filter below float precision"
+NOISE = "beyond 1 the noise's standard deviation exceeds the command itself"
+
+#: cost weights are relative; at 1e6 to 1 the smaller term is already below the cost's
+#: resolution (thousandths), and larger weights let costs overflow
+WEIGHT = Number(None, minimum=0.0, maximum=1e6, reason="weights are relative, 1e6 to 1 hides the smaller term")
 
 
-def grid_cells(bounds: tuple[float, ...], resolution: float) -> int:
+def polygonal_cells(bounds: tuple[float, ...], resolution: float) -> float:
     """How many cells the occupancy grid of a polygonal map has (world.build.rasterize)."""
-    return math.ceil((bounds[2] - bounds[0]) / resolution) * math.ceil((bounds[3] - bounds[1]) / resolution)
+    return grid_cells(bounds[2] - bounds[0], bounds[3] - bounds[1], resolution)
 
 
 def _one_map_kind(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
@@ -54,14 +78,14 @@ def _one_map_kind(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, 
             f"{list(bounds)} is empty; expected [xmin, ymin, xmax, ymax] with xmin < xmax and ymin < ymax",
         )
     elif bounds is not None:
-        # a typo (bounds in mm, resolution in m) would otherwise exhaust memory: exit 1 instead of 2
-        cells = grid_cells(bounds, section["resolution"])
-        if cells > MAX_CELLS:
+        # a typo (bounds in mm, resolution in m) would otherwise exhaust memory: refuse it here
+        cells = polygonal_cells(bounds, section["resolution"])
+        if cells > MAP_CELLS.value():
             ctx.add(
                 f"{path}.resolution",
                 (*raw, "resolution"),
-                f"{section['resolution']:g} m over bounds {list(bounds)} makes {cells:,} grid cells; "
-                f"expected at most {MAX_CELLS:,} (a coarser resolution or smaller bounds)",
+                f"{section['resolution']:g} m over bounds {list(bounds)} makes "
+                + MAP_CELLS.refusal(cells, "a coarser resolution or smaller bounds"),
             )
 
 
@@ -77,7 +101,7 @@ MAP = Section(
             "ROS map_server YAML file (image, resolution, origin, negate, occupied_thresh, free_thresh, mode), relative to the scenario file",
         ),
         "bounds": Field(
-            Vector(dimensions=("length",) * 4, names="xmin, ymin, xmax, ymax"),
+            Vector(dimensions=("length",) * 4, names="xmin, ymin, xmax, ymax", max_abs=MAX_COORDINATE),
             "polygonal map: the bounded plane; outside is occupied",
         ),
         "resolution": Field(
@@ -91,12 +115,12 @@ MAP = Section(
             default=0.15,
         ),
         "walls": Field(
-            ListOf(PointList(min_points=2, what="polyline"), what="polylines"),
+            ListOf(PointList(min_points=2, what="polyline", max_abs=MAX_COORDINATE), what="polylines"),
             "polygonal map: wall polylines",
             default=(),
         ),
         "obstacles": Field(
-            ListOf(PointList(min_points=3, what="polygon"), what="polygons"),
+            ListOf(PointList(min_points=3, what="polygon", max_abs=MAX_COORDINATE), what="polygons"),
             "polygonal map: filled obstacle polygons",
             default=(),
         ),
@@ -108,8 +132,8 @@ ROOM = Section(
     fields={
         "name": Field(Name(), "room name (a PDDL object: unique among rooms and robots)", required=True),
         "polygon": Field(
-            PointList(min_points=3, what="polygon"),
-            "room outline; pose instantiations are sampled inside it",
+            PointList(min_points=3, max_points=MAX_ROOM_POINTS, what="polygon", max_abs=MAX_COORDINATE),
+            "room outline: a simple polygon of at most 1000 points; pose instantiations are sampled inside it",
             required=True,
         ),
     }
@@ -119,7 +143,9 @@ DOOR = Section(
     fields={
         "name": Field(Name(), "door name", required=True),
         "segment": Field(
-            PointList(min_points=2, max_points=2, what="segment"), "the door leaf across a wall gap", required=True
+            PointList(min_points=2, max_points=2, what="segment", max_abs=MAX_COORDINATE),
+            "the door leaf across a wall gap",
+            required=True,
         ),
         "state": Field(
             Choice(choices=("open", "closed")), "open doors are carved free, closed doors are walls", default="open"
@@ -134,7 +160,11 @@ DOOR = Section(
 LANDMARK = Section(
     fields={
         "name": Field(Name(), "landmark name", required=True),
-        "position": Field(Vector(dimensions=("length", "length"), names="x, y"), "landmark position", required=True),
+        "position": Field(
+            Vector(dimensions=("length", "length"), names="x, y", max_abs=MAX_COORDINATE),
+            "landmark position",
+            required=True,
+        ),
         "kind": Field(Text(), "what it is (printer, trash can, ...); used for the legend of plots", default="landmark"),
     }
 )
@@ -143,7 +173,7 @@ ROBOT = Section(
     fields={
         "name": Field(Name(), "robot name (a PDDL object: unique among rooms and robots)", required=True),
         "pose": Field(
-            Vector(dimensions=("length", "length", "angle"), names="x, y, theta"),
+            Vector(dimensions=("length", "length", "angle"), names="x, y, theta", max_abs=MAX_COORDINATE),
             "mean of the initial pose belief",
             required=True,
         ),
@@ -167,6 +197,21 @@ ROBOT = Section(
 )
 
 
+def _noise_within_range(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
+    if section["sigma_range"] > section["range"]:
+        ctx.add(
+            f"{path}.sigma_range",
+            (*raw, "sigma_range"),
+            f"{section['sigma_range']:g} m is larger than the sensor's range {section['range']:g} m; expected a noise "
+            "standard deviation below the range (a larger one says nothing about the distance)",
+        )
+
+
+def _some_weight(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
+    if not any(section.values()):
+        ctx.add(path, raw, "weights M_u, M_G and M_Sigma are all 0, so every plan would cost 0; expected one above 0")
+
+
 def _sensor(range_: float, fov: float, doc: str) -> Section:
     return Section(
         fields={
@@ -179,16 +224,17 @@ def _sensor(range_: float, fov: float, doc: str) -> Section:
                 default=fov,
             ),
             "sigma_range": Field(
-                Number("length", minimum=0.0, exclusive_minimum=True),
+                Number("length", minimum=MIN_SIGMA, reason=PRECISE),  # at most the range: see _noise_within_range
                 f"{doc}: range noise standard deviation",
                 default=0.1,
             ),
             "sigma_bearing": Field(
-                Number("angle", minimum=0.0, exclusive_minimum=True),
+                Number("angle", minimum=MIN_SIGMA, maximum=math.pi, reason=f"{PRECISE}; {HALF_TURN}"),
                 f"{doc}: bearing noise standard deviation",
                 default=3 * DEG,
             ),
-        }
+        },
+        post=_noise_within_range,
     )
 
 
@@ -201,24 +247,34 @@ MODELS = Section(
             Section(
                 fields={
                     "alpha1": Field(
-                        Number(None, minimum=0.0),
+                        Number(None, minimum=0.0, maximum=1.0, reason=NOISE),
                         "speed noise variance per v² (W = diag(a1 v² + a2 w², a3 v² + a4 w²))",
                         default=0.01,
                     ),
-                    "alpha2": Field(Number(None, minimum=0.0), "speed noise variance per w² (m²/rad²)", default=0.0),
-                    "alpha3": Field(
-                        Number(None, minimum=0.0), "turn-rate noise variance per v² (rad²/m²)", default=0.02
+                    "alpha2": Field(
+                        Number(None, minimum=0.0, maximum=1.0, reason=NOISE),
+                        "speed noise variance per w² (m²/rad²)",
+                        default=0.0,
                     ),
-                    "alpha4": Field(Number(None, minimum=0.0), "turn-rate noise variance per w²", default=0.01),
+                    "alpha3": Field(
+                        Number(None, minimum=0.0, maximum=1.0, reason=NOISE),
+                        "turn-rate noise variance per v² (rad²/m²)",
+                        default=0.02,
+                    ),
+                    "alpha4": Field(
+                        Number(None, minimum=0.0, maximum=1.0, reason=NOISE),
+                        "turn-rate noise variance per w²",
+                        default=0.01,
+                    ),
                 }
             ),
-            "motion noise W(u) of the unicycle model (paper eq. (1))",
+            "motion noise W(u) of the unicycle model (paper eq. (4))",
         ),
         "landmark_sensor": Field(
-            _sensor(5.0, 2 * math.pi, "landmark sensor"), "range-bearing landmark sensor (paper eq. (2))"
+            _sensor(5.0, 2 * math.pi, "landmark sensor"), "range-bearing landmark sensor (paper eq. (5))"
         ),
         "mutual_sensor": Field(
-            _sensor(4.0, 2 * math.pi, "mutual sensor"), "range-bearing sensor of other robots (paper eq. (12))"
+            _sensor(4.0, 2 * math.pi, "mutual sensor"), "range-bearing sensor of other robots (paper eq. (14))"
         ),
         "mutual_observations": Field(
             Flag(), "use mutual observations between robots (false: the paper's config 2)", default=True
@@ -228,18 +284,21 @@ MODELS = Section(
             "simulated future observations: nominal + seeded noise (paper) or maximum likelihood (BRM)",
             default="noisy",
         ),
-        "seed": Field(Number(None, minimum=0, integer=True), "seed of the simulated observation noise", default=0),
+        "seed": Field(
+            Number(None, minimum=0, maximum=MAX_SEED, integer=True),
+            "seed of the simulated observation noise",
+            default=0,
+        ),
     }
 )
 
 COST = Section(
     fields={
-        "M_u": Field(Number(None, minimum=0.0), "weight of the control usage c_u", default=1.0),
-        "M_G": Field(Number(None, minimum=0.0), "weight of the distance to goal c_G", default=1.0),
-        "M_Sigma": Field(
-            Number(None, minimum=0.0), "weight of the uncertainty c_Sigma (time integral of trace(Sigma))", default=1.0
-        ),
-    }
+        "M_u": Field(WEIGHT, "weight of the control usage c_u", default=1.0),
+        "M_G": Field(WEIGHT, "weight of the distance to goal c_G", default=1.0),
+        "M_Sigma": Field(WEIGHT, "weight of the uncertainty c_Sigma (time integral of trace(Sigma))", default=1.0),
+    },
+    post=_some_weight,
 )
 
 ROADMAP = Section(
@@ -251,7 +310,9 @@ ROADMAP = Section(
             Number(None, minimum=1, maximum=50, integer=True), "pose instantiations sampled in each room", default=4
         ),
         "seed": Field(
-            Number(None, minimum=0, integer=True), "seed of the roadmap (OMPL) and of the instantiations", default=1
+            Number(None, minimum=0, maximum=MAX_SEED, integer=True),
+            "seed of the roadmap (OMPL) and of the instantiations",
+            default=1,
         ),
         "neighbors": Field(
             Number(None, minimum=2, maximum=100, integer=True),
@@ -282,7 +343,11 @@ PLANNER = Section(
             "task encoding: the paper's pair action, single-robot actions, or both",
             default="mixed",
         ),
-        "timeout": Field(Number("time", minimum=0.0, exclusive_minimum=True), "planner time limit", default=300.0),
+        "timeout": Field(
+            Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
+            "planner time limit",
+            default=300.0,
+        ),
         "pair_min_gain": Field(
             Number(None, minimum=0.0, maximum=1.0),
             "mixed encoding: a paired move is offered to the planner only if it saves at least this fraction of its two single moves; the plan costs at most 1/(1 - pair_min_gain) times the optimum over all pairs (0: every saving pair, exact)",
@@ -312,9 +377,11 @@ SCENARIO = Section(
 ROS_MAP = Section(
     fields={
         "image": Field(Text(), "image file (PGM, PNG, ...) relative to the map YAML", required=True),
-        "resolution": Field(Number("length", minimum=0.0, exclusive_minimum=True), "metres per pixel", required=True),
+        "resolution": Field(
+            Number("length", minimum=0.0, exclusive_minimum=True, maximum=1.0), "metres per pixel", required=True
+        ),
         "origin": Field(
-            Vector(dimensions=("length", "length", "angle"), names="x, y, yaw"),
+            Vector(dimensions=("length", "length", "angle"), names="x, y, yaw", max_abs=MAX_COORDINATE),
             "pose of the lower-left pixel; yaw must be 0",
             required=True,
         ),

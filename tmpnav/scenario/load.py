@@ -2,9 +2,9 @@
 
 Everything wrong with the file is collected and raised at once as a
 :class:`~tmpnav.errors.ScenarioError`, one line per problem naming the file, the line,
-the key path, the bad value and what is expected. Only ``yaml.safe_load`` reads data;
-the node tree used for line numbers comes from ``yaml.compose`` with the safe loader,
-which builds no Python objects.
+the key path, the bad value and what is expected. Files are read by
+:func:`~tmpnav.scenario.yamlio.read_yaml`: PyYAML's safe loader with YAML 1.2 numbers,
+and bounds on size, nesting and alias expansion checked before anything is built.
 """
 
 from __future__ import annotations
@@ -15,8 +15,10 @@ from typing import Any
 import yaml
 
 from tmpnav.errors import Problem, ScenarioError
-from tmpnav.scenario.format import MAX_CELLS, ROS_MAP, SCENARIO, grid_cells
-from tmpnav.scenario.schema import MISSING, Ctx, Issue
+from tmpnav.scenario.format import ROS_MAP, SCENARIO, polygonal_cells
+from tmpnav.scenario.limits import MAP_CELLS, YAML_BYTES
+from tmpnav.scenario.schema import MISSING, Ctx, Issue, key_text
+from tmpnav.scenario.yamlio import YamlLimitError, YamlValueError, read_yaml
 from tmpnav.types import (
     CostWeights,
     Door,
@@ -53,21 +55,21 @@ class YamlDoc:
         self.lines: dict[tuple[Any, ...], int] = {}
         self.duplicates: list[tuple[tuple[Any, ...], int]] = []
         try:
+            size = path.stat().st_size
+            if size > YAML_BYTES.value():
+                message = "is " + YAML_BYTES.refusal(size, "a YAML file this large is not a scenario or map file")
+                raise ScenarioError([Problem(self.name, "", message)])
             text = path.read_text(encoding="utf-8")
         except FileNotFoundError:
             raise ScenarioError([Problem(self.name, "", "file not found")]) from None
+        except IsADirectoryError:
+            raise ScenarioError([Problem(self.name, "", "is a directory; expected a YAML file")]) from None
         except (OSError, UnicodeDecodeError) as err:
             raise ScenarioError([Problem(self.name, "", f"cannot be read: {err}")]) from None
         try:
-            self.data = yaml.safe_load(text)
-            node = yaml.compose(text, Loader=yaml.SafeLoader)
+            self.data, node = read_yaml(text)
         except yaml.YAMLError as err:
-            mark = getattr(err, "problem_mark", None)
-            line = mark.line + 1 if mark is not None else None
-            reason = getattr(err, "problem", None) or str(err).splitlines()[0]
-            context = getattr(err, "context", None)
-            message = f"YAML syntax error: {reason}" + (f" ({context})" if context else "")
-            raise ScenarioError([Problem(self.name, "", message, line)]) from None
+            raise ScenarioError([Problem(self.name, "", _yaml_message(err), _yaml_line(err))]) from None
         if node is not None:
             self._index(node, ())
 
@@ -103,6 +105,20 @@ class YamlDoc:
             Problem(self.name, _display(raw, self), "duplicate key; a key may appear once", line)
             for raw, line in self.duplicates
         ]
+
+
+def _yaml_line(err: yaml.YAMLError) -> int | None:
+    mark = getattr(err, "problem_mark", None)
+    return mark.line + 1 if mark is not None else None
+
+
+def _yaml_message(err: yaml.YAMLError) -> str:
+    """One line for a YAML error: syntax errors say so; limits say what was exceeded."""
+    reason = getattr(err, "problem", None) or str(err).splitlines()[0]
+    if isinstance(err, (YamlLimitError, YamlValueError)):
+        return f"YAML {reason}"
+    context = getattr(err, "context", None)
+    return f"YAML syntax error: {reason}" + (f" ({context})" if context else "")
 
 
 def load(path: str | Path) -> Scenario:
@@ -143,7 +159,7 @@ def _buildable(section: dict[str, Any]) -> bool:
     b = section.get("bounds")
     if b is None or b[0] >= b[2] or b[1] >= b[3]:
         return False
-    return grid_cells(b, section["resolution"]) <= MAX_CELLS
+    return polygonal_cells(b, section["resolution"]) <= MAP_CELLS.value()
 
 
 def _ros_map(doc: YamlDoc, section: dict[str, Any]) -> tuple[RosMap | None, list[Problem]]:
@@ -160,6 +176,11 @@ def _ros_map(doc: YamlDoc, section: dict[str, Any]) -> tuple[RosMap | None, list
                 doc.line(("map", "ros")),
             )
         ]
+    return read_ros_map(map_path)
+
+
+def read_ros_map(map_path: Path) -> tuple[RosMap | None, list[Problem]]:
+    """Read and check a ROS map_server YAML file (the image is read by the world stage)."""
     try:
         map_doc = YamlDoc(map_path)
     except ScenarioError as err:
@@ -346,9 +367,9 @@ def _display(raw: tuple[Any, ...], doc: YamlDoc) -> str:
         if isinstance(key, int) and isinstance(node, list) and key < len(node):
             item = node[key]
             name = item.get("name") if isinstance(item, dict) else None
-            out = f"{out}.{name}" if isinstance(name, str) else f"{out}[{key}]"
+            out = f"{out}.{key_text(name)}" if isinstance(name, str) else f"{out}[{key}]"
             node = item
         else:
-            out = f"{out}.{key}" if out else str(key)
+            out = f"{out}.{key_text(key)}" if out else key_text(key)
             node = node.get(key) if isinstance(node, dict) else None
     return out.lstrip(".")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import difflib
 import math
+import reprlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -42,15 +43,37 @@ class Ctx:
 
 
 def join(path: str, key: object) -> str:
+    """A display key path one level down: ``robots[2]``, ``robots.r1.speed``."""
     if isinstance(key, int):
         return f"{path}[{key}]"
-    return f"{path}.{key}" if path else str(key)
+    text = key_text(key)
+    return f"{path}.{text}" if path else text
+
+
+def key_text(key: object, limit: int = 60) -> str:
+    """A mapping key as messages show it: control and invisible characters escaped (a
+    key must not break the one-line message or hide in it), long keys shortened."""
+    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(key))
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxdict, _SHORT.maxstring, _SHORT.maxother = 4, 8, 8, 80, 80
 
 
 def show(value: object, limit: int = 60) -> str:
-    """A value as it appears in messages, shortened when long."""
-    text = repr(value) if isinstance(value, str) else str(value)
+    """A value as it appears in messages, shortened when long (in time too: a huge
+    nested value is never converted to text whole)."""
+    text = _SHORT.repr(value)
     return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def as_float(value: int | float) -> float:
+    """float(value), with integers beyond the largest float as +-inf (not OverflowError)."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf if value > 0 else -math.inf
 
 
 class Spec:
@@ -76,17 +99,28 @@ class Number(Spec):
     maximum: float | None = None
     exclusive_minimum: bool = False
     integer: bool = False
+    reason: str = ""  # why the range ends where it does, for messages
+
+    def bounds(self) -> str:
+        """The accepted range: ``> 0``, ``>= 0 and <= 1``, or empty."""
+
+        def fmt(x: float) -> str:
+            return str(int(x)) if self.integer else f"{x:g}"
+
+        parts = []
+        if self.minimum is not None:
+            parts.append(f"{'>' if self.exclusive_minimum else '>='} {fmt(self.minimum)}")
+        if self.maximum is not None:
+            parts.append(f"<= {fmt(self.maximum)}")
+        return " and ".join(parts)
 
     def describe(self) -> str:
         kind = "an integer" if self.integer else "a number"
-        bounds = []
-        if self.minimum is not None:
-            bounds.append(f"{'>' if self.exclusive_minimum else '>='} {self.minimum:g}")
-        if self.maximum is not None:
-            bounds.append(f"<= {self.maximum:g}")
-        text = kind + (" " + " and ".join(bounds) if bounds else "")
+        text = kind + (f" {self.bounds()}" if self.bounds() else "")
         if self.dimension:
             text += f" in {si_unit(self.dimension)} (or a string such as '1.5 {si_unit(self.dimension)}')"
+        if self.reason:
+            text += f"; {self.reason}"
         return text
 
     def unit(self) -> str:
@@ -101,7 +135,9 @@ class Number(Spec):
         if not math.isfinite(number):
             ctx.add(path, raw, f"{show(value)} is not finite; expected {self.describe()}")
             return MISSING
-        if self.integer and (not isinstance(value, int) or isinstance(value, bool)):
+        # an integer may be written 1e3 (a float in YAML 1.2), but not 10.5 or '10'
+        whole = isinstance(value, int) or (isinstance(value, float) and value.is_integer() and abs(value) < 2**53)
+        if self.integer and not whole:
             ctx.add(path, raw, f"{show(value)} is not an integer; expected {self.describe()}")
             return MISSING
         too_small = self.minimum is not None and (
@@ -179,6 +215,7 @@ class Vector(Spec):
 
     dimensions: tuple[str | None, ...] = ()
     names: str = ""  # "x, y" for messages
+    max_abs: float | None = None  # bound on the magnitude of the length elements (coordinates)
 
     def describe(self) -> str:
         units = ", ".join(si_unit(d) or "-" for d in self.dimensions)
@@ -201,6 +238,14 @@ class Vector(Spec):
             if not math.isfinite(number):
                 ctx.add(path, raw, f"element {i} {show(item)} is not finite; expected {self.describe()}")
                 return MISSING
+            if self.max_abs is not None and dim == "length" and abs(number) > self.max_abs:
+                ctx.add(
+                    path,
+                    raw,
+                    f"element {i} {show(item)} is out of range; expected coordinates within +-{self.max_abs:g} m "
+                    "(farther out is beyond any map on Earth)",
+                )
+                return MISSING
             out.append(number)
         return tuple(out)
 
@@ -212,9 +257,15 @@ class PointList(Spec):
     min_points: int = 3
     max_points: int | None = None
     what: str = "polygon"
+    max_abs: float | None = None  # bound on the magnitude of the coordinates
 
     def describe(self) -> str:
-        count = f"exactly {self.min_points}" if self.max_points == self.min_points else f"at least {self.min_points}"
+        if self.max_points == self.min_points:
+            count = f"exactly {self.min_points}"
+        elif self.max_points is not None:
+            count = f"{self.min_points} to {self.max_points}"
+        else:
+            count = f"at least {self.min_points}"
         return f"a {self.what}: a list of {count} points [x, y] in m"
 
     def unit(self) -> str:
@@ -226,7 +277,7 @@ class PointList(Spec):
         if too_few or too_many:
             ctx.add(path, raw, f"{show(value)} is not {self.describe()}")
             return MISSING
-        point = Vector(dimensions=("length", "length"), names="x, y")
+        point = Vector(dimensions=("length", "length"), names="x, y", max_abs=self.max_abs)
         out = []
         for i, item in enumerate(value):
             p = point.check(item, ctx, join(path, i), (*raw, i))
@@ -260,7 +311,7 @@ class Covariance(Spec):
         ):
             ctx.add(path, raw, f"{show(value)} is not {self.describe()}")
             return MISSING
-        m = np.array(value, dtype=float)
+        m = np.array([[as_float(v) for v in row] for row in value], dtype=float)
         if not np.all(np.isfinite(m)):
             ctx.add(path, raw, f"{show(value)} has NaN or infinite entries; expected {self.describe()}")
             return MISSING
@@ -466,8 +517,10 @@ def reference_rows(spec: Spec, path: str = "") -> Iterator[tuple[str, str, str, 
 
 
 def _kind(spec: Spec) -> str:
+    if isinstance(spec, Number):
+        kind = "integer" if spec.integer else "number"
+        return f"{kind} {spec.bounds()}".strip().replace("<=", "≤").replace(">=", "≥")
     return {
-        Number: "integer" if getattr(spec, "integer", False) else "number",
         Text: "string",
         Name: "name",
         Flag: "boolean",

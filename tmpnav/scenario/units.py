@@ -1,7 +1,8 @@
 """Physical quantities in scenario files.
 
-A value is either a plain number, read in the key's documented unit, or a string with an
-explicit unit such as ``"90 deg"``, ``"40 cm"`` or ``"0.5 m/s"``. Everything is converted
+A value is either a plain number, read in the key's documented unit (also when quoted,
+``"1e-3"``), or a string with an explicit unit such as ``"90 deg"``, ``"40 cm"`` or
+``"0.5 m/s"``. Everything is converted
 to SI (metres, radians, seconds) on loading.
 """
 
@@ -19,7 +20,7 @@ UNITS: dict[str, dict[str, float]] = {
     "angular_speed": {"rad/s": 1.0, "deg/s": math.pi / 180.0},
 }
 
-_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/]+)\s*$")
+_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/]+)?\s*$")
 
 
 class UnitError(ValueError):
@@ -43,12 +44,17 @@ def parse_quantity(value: object, dimension: str | None) -> float:
     if isinstance(value, bool):
         raise UnitError("is a boolean")
     if isinstance(value, (int, float)):
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:  # an integer beyond the largest float
+            return math.inf if value > 0 else -math.inf
     if isinstance(value, str):
         match = _QUANTITY.match(value)
         if match is None:
             raise UnitError("is not a number")
         number, unit = float(match.group(1)), match.group(2)
+        if unit is None:  # a quoted number, '1e-3': read in the documented unit
+            return number
         if dimension is None:
             raise UnitError(f"has a unit '{unit}' but is a plain number")
         factors = UNITS[dimension]

@@ -1,4 +1,4 @@
-"""Stage 6c: a plan from the planner -> the ordered task actions as robot moves."""
+"""Stage 6c: a plan from the planner -> its steps as robot moves, their costs and a canonical order."""
 
 from __future__ import annotations
 
@@ -57,12 +57,12 @@ def canonical_order(steps: list[tuple[MoveKey, ...]], robots: tuple[str, ...]) -
         for j in d:
             users[j].append(i)
 
-    def key(i: int) -> tuple:
+    def key(i: int) -> tuple[int, int]:
         return (min(rank[m[0]] for m in steps[i]), i)
 
     ready = [key(i) for i in range(n) if waiting[i] == 0]
     heapq.heapify(ready)
-    out = []
+    out: list[int] = []
     while ready:
         _, i = heapq.heappop(ready)
         out.append(i)

@@ -2,35 +2,22 @@
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
+from tmpnav.atomic import write_files
 from tmpnav.task.encode import EncodedProblem
+
+PDDL_FILES = ("domain.pddl", "problem.pddl")
 
 
 def pddl_texts(encoded: EncodedProblem) -> tuple[str, str]:
-    """(domain, problem) text; the costs are the table's, scaled to integers (see encode)."""
+    """(domain, problem) text; the costs are the table's, scaled to integers (see encodings)."""
     from unified_planning.io import PDDLWriter
 
     writer = PDDLWriter(encoded.problem)
-    return writer.get_domain(), writer.get_problem()
+    return str(writer.get_domain()), str(writer.get_problem())
 
 
 def write_pddl(directory: Path, texts: tuple[str, str]) -> list[Path]:
-    """Write domain.pddl and problem.pddl atomically (temporary files renamed at the end)."""
-    directory.mkdir(parents=True, exist_ok=True)
-    staged: list[tuple[str, Path]] = []
-    try:
-        for name, text in zip(("domain.pddl", "problem.pddl"), texts, strict=True):
-            fd, tmp = tempfile.mkstemp(dir=directory, prefix=f".{name}.", suffix=".tmp")
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write(text)
-            staged.append((tmp, directory / name))
-        for tmp, final in staged:
-            os.replace(tmp, final)
-    finally:
-        for tmp, _ in staged:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-    return [final for _, final in staged]
+    """Write domain.pddl and problem.pddl into ``directory``, both or neither."""
+    return write_files(directory, dict(zip(PDDL_FILES, texts, strict=True)))

@@ -13,7 +13,7 @@ import shutil
 import subprocess
 import warnings
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 from tmpnav.errors import (
     PlannerCrashError,
@@ -23,6 +23,11 @@ from tmpnav.errors import (
     UnsolvableError,
 )
 from tmpnav.types import PlanStatus
+
+if TYPE_CHECKING:
+    from unified_planning.environment import Environment
+    from unified_planning.model import Problem, ProblemKind
+    from unified_planning.plans import Plan
 
 #: engines tmpnav registers with unified-planning besides those of installed packages:
 #: name -> (module, class, what it is)
@@ -43,14 +48,16 @@ JAVA_OPTIONS = "-XX:TieredStopAtLevel=1 -XX:+UseSerialGC"
 
 @dataclass(frozen=True)
 class SolveResult:
+    """A solved problem: the plan's actions, which engine found it, the end of its log."""
+
     status: PlanStatus
     actions: tuple[tuple[str, tuple[str, ...]], ...]  # (action name, parameter names)
     engine: str
     log_tail: str
-    plan: Any = None  # the unified-planning plan, for validation
+    plan: Plan | None = None  # the unified-planning plan, for validation
 
 
-def environment() -> Any:
+def environment() -> Environment:
     """unified-planning's environment, quiet, with tmpnav's extra engines registered."""
     import unified_planning.shortcuts as ups
 
@@ -94,6 +101,7 @@ def java_version() -> int | None:
 
 
 def check_java() -> None:
+    """Raise PlannerUnavailableError unless a Java 17+ is on PATH (ENHSP is a Java program)."""
     version = java_version()
     if version is None:
         raise PlannerUnavailableError(
@@ -104,7 +112,7 @@ def check_java() -> None:
         raise PlannerUnavailableError(f"Java {version} found on PATH; ENHSP needs Java {JAVA_MIN} or newer")
 
 
-def _freeze(problem: Any) -> None:
+def _freeze(problem: Problem) -> None:
     """Answer unified-planning's repeated questions about the problem once per solve.
 
     unified-planning recomputes ``Problem.kind`` and the static fluents on every access,
@@ -115,19 +123,19 @@ def _freeze(problem: Any) -> None:
     """
     base = type(problem)
     actions = {a.name for a in problem.actions}
-    answers: dict[str, Any] = {}
+    answers: dict[str, object] = {}
 
-    def static_and_unused(self: Any) -> Any:
+    def static_and_unused(self: Problem) -> object:
         if "static" not in answers:
             answers["static"] = base._get_static_and_unused_fluents(self)
         return answers["static"]
 
-    def kind(self: Any) -> Any:
+    def kind(self: Problem) -> ProblemKind:
         if "kind" not in answers:
             answers["kind"] = base.kind.fget(self)
         return answers["kind"]
 
-    def has_action(self: Any, name: str) -> bool:
+    def has_action(self: Problem, name: str) -> bool:
         return name in actions
 
     frozen = type(
@@ -138,7 +146,7 @@ def _freeze(problem: Any) -> None:
     problem.__class__ = frozen
 
 
-def solve(problem: Any, planner: str, timeout: float) -> SolveResult:
+def solve(problem: Problem, planner: str, timeout: float) -> SolveResult:
     """Run ``planner`` on ``problem`` within ``timeout`` seconds; raise on any failure."""
     from unified_planning.engines import PlanGenerationResultStatus as St
     from unified_planning.exceptions import UPException

@@ -1,16 +1,21 @@
 """Geometric checks of a scenario against its world, each problem naming its key path.
 
 Run by ``tmpnav validate`` and before every plan: things outside the map, robots starting
-in collision, rooms that are degenerate, too cramped for a robot, or unreachable.
+in collision or on top of each other, rooms that are degenerate, self-intersecting, too
+cramped for a robot, or unreachable; model values that stop being meaningful at the
+map's size, and the resource caps estimated from it (tmpnav.scenario.extent).
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 from scipy import ndimage
 
 from tmpnav.errors import Problem
 from tmpnav.scenario import display_path
+from tmpnav.scenario.extent import model_ranges, move_sizes, plan_sizes
 from tmpnav.types import Scenario
 from tmpnav.world.build import World
 from tmpnav.world.geometry import polygon_area
@@ -29,13 +34,29 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
     def inside(p: tuple[float, float]) -> bool:
         return xmin <= p[0] <= xmax and ymin <= p[1] <= ymax
 
-    problems: list[Problem] = []
+    width, height = xmax - xmin, ymax - ymin
+    problems = [
+        problem(path, message)
+        for path, message in model_ranges(scenario, width, height)
+        + move_sizes(scenario, width, height)
+        + plan_sizes(scenario)
+    ]
     for room in scenario.rooms:
         path = f"rooms.{room.name}.polygon"
         outside = [p for p in room.polygon if not inside(p)]
+        crossing = _self_intersection(np.array(room.polygon, dtype=float))
         if outside:
             problems.append(
                 problem(path, f"point {list(outside[0])} is outside the map {extent}; expected a room inside the map")
+            )
+        elif crossing is not None:
+            i, j = crossing
+            problems.append(
+                problem(
+                    path,
+                    f"edge {i} (point {i} to {(i + 1) % len(room.polygon)}) crosses edge {j} (point {j} to "
+                    f"{(j + 1) % len(room.polygon)}); expected a simple polygon, an outline that does not cross itself",
+                )
             )
         elif abs(polygon_area(np.array(room.polygon))) < world.grid.resolution**2:
             problems.append(problem(path, "has (almost) zero area; expected a polygon enclosing a region"))
@@ -77,10 +98,62 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
             )
         else:
             starts_ok.append(robot)
+    problems += _overlapping(scenario, problem)
     if any(p.path.startswith("rooms.") for p in problems):
         return problems
     problems += _reachability(scenario, world, starts_ok, problem)
     return problems
+
+
+def _overlapping(scenario: Scenario, problem: Callable[[str, str], Problem]) -> list[Problem]:
+    """Robots whose discs overlap at the start: two robots cannot stand on one spot."""
+    problems = []
+    robots = scenario.robots
+    for k, robot in enumerate(robots):
+        for other in robots[:k]:
+            distance = float(np.hypot(robot.pose.x - other.pose.x, robot.pose.y - other.pose.y))
+            if distance < robot.radius + other.radius:
+                problems.append(
+                    problem(
+                        f"robots.{robot.name}.pose",
+                        f"{[robot.pose.x, robot.pose.y]} is {distance:.3g} m from robot {other.name}'s start, closer "
+                        f"than their radii {robot.radius:g} + {other.radius:g} m; expected robots that do not overlap",
+                    )
+                )
+                break
+    return problems
+
+
+def _self_intersection(polygon: np.ndarray) -> tuple[int, int] | None:
+    """The first pair (i, j), i < j, of non-adjacent edges of a closed polygon (k, 2)
+    that cross each other, or None. Edge i joins point i to point i + 1 (the last edge
+    closes the outline).
+
+    Room outlines are short (the format allows at most ``MAX_ROOM_POINTS``), so all
+    pairs are tested at once with the orientation test.
+    """
+    a = polygon
+    b = np.roll(polygon, -1, axis=0)
+    k = len(a)
+    if k < 4:
+        return None
+
+    def orient(p: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
+        """Sign of the turn p -> q -> r: 1 counter-clockwise, -1 clockwise, 0 collinear."""
+        pq, pr = q - p, r - p
+        return np.sign(pq[..., 0] * pr[..., 1] - pq[..., 1] * pr[..., 0])
+
+    A, B = a[:, None, :], b[:, None, :]
+    C, D = a[None, :, :], b[None, :, :]
+    o1, o2, o3, o4 = orient(A, B, C), orient(A, B, D), orient(C, D, A), orient(C, D, B)
+    proper = (o1 * o2 < 0) & (o3 * o4 < 0)
+    i, j = np.meshgrid(np.arange(k), np.arange(k), indexing="ij")
+    adjacent = (np.abs(i - j) <= 1) | (np.abs(i - j) == k - 1)
+    hits = np.argwhere(proper & ~adjacent & (i < j))
+    if hits.size == 0:
+        return None
+    first = hits[0]
+    return int(first[0]), int(first[1])
 
 
 def _reachability(scenario: Scenario, world: World, robots: list, problem) -> list[Problem]:

@@ -1,8 +1,14 @@
-"""Planar geometry on numpy arrays: polygons, segments, distances (all in metres)."""
+"""Planar geometry on numpy arrays: polygons, segments, distances (metres), angles (radians)."""
 
 from __future__ import annotations
 
+import math
+
+import numba as nb
 import numpy as np
+
+PI = math.pi
+TWO_PI = 2.0 * math.pi
 
 
 def polygon_area(polygon: np.ndarray) -> float:
@@ -34,6 +40,30 @@ def distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.
     return np.linalg.norm(points - closest, axis=1)
 
 
-def wrap_to_pi(angle: np.ndarray | float) -> np.ndarray:
-    """Angles wrapped to [-pi, pi) (the world's own copy; the EKF has models.wrap_angle)."""
-    return (np.asarray(angle) + np.pi) % (2.0 * np.pi) - np.pi
+def wrap_angle(a: np.ndarray | float) -> np.ndarray:
+    """Angle(s) ``a`` (rad, any shape) wrapped to [-pi, pi): the one wrapping rule of tmpnav.
+
+    Angles already in range are returned bit-for-bit unchanged, so wrapping is idempotent.
+    Others map to (a + pi) mod 2pi - pi, where a result that rounds up to pi becomes -pi.
+    Compiled code uses the scalar twin :func:`wrap_angle_scalar`, which follows the same
+    rule operation for operation (the tests hold the two to bit equality).
+    """
+    a = np.asarray(a, dtype=float)
+    inside = (a >= -np.pi) & (a < np.pi)
+    if inside.all():  # the common case, and the cheap one
+        return a.copy()
+    wrapped = np.mod(a + np.pi, TWO_PI) - np.pi
+    # (a + pi) mod 2pi rounds up to exactly 2pi for a a hair below -pi
+    wrapped = np.where(wrapped >= np.pi, -np.pi, wrapped)
+    return np.where(inside, a, wrapped)
+
+
+@nb.njit(cache=True)
+def wrap_angle_scalar(a: float) -> float:
+    """:func:`wrap_angle` of one angle, for compiled (numba) code."""
+    if -PI <= a < PI:
+        return a
+    w = (a + PI) % TWO_PI - PI
+    if w >= PI:
+        w = -PI
+    return w

@@ -6,14 +6,23 @@ value / 255. ``trinary`` and ``scale``: p > occupied_thresh is occupied, p < fre
 is free, anything else (unknown, or a grey level in between) counts as occupied, as does
 a transparent pixel. ``raw``: the pixel value itself is the occupancy in percent (0 free,
 100 occupied), other values (such as 255, unknown) are occupied.
+
+Images of 16 bits per pixel (a PGM with maxval above 255, a 16-bit PNG) are scaled to
+0..255 by their maximum value first; other pixel formats (32-bit or floating-point TIFF)
+are refused with the reason, never misread.
 """
 
 from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
 
 from tmpnav.errors import Problem
 from tmpnav.scenario import display_path
+from tmpnav.scenario.limits import MAP_CELLS
 from tmpnav.types import RosMap
 from tmpnav.world.grid import OccupancyGrid
 
@@ -26,27 +35,81 @@ class MapImageError(Exception):
         super().__init__(str(problem))
 
 
+#: image modes with 8 bits per channel: PIL converts them to grey (and alpha)
+EIGHT_BIT = frozenset({"1", "L", "LA", "La", "P", "PA", "RGB", "RGBA", "RGBa", "RGBX", "CMYK", "YCbCr"})
+#: 16-bit grey: PNG opens as I;16, a PGM with maxval above 255 as I scaled to 0..65535
+SIXTEEN_BIT = frozenset({"I;16", "I;16B", "I;16L", "I;16N"})
+SIXTEEN_BIT_FORMATS = frozenset({"PPM", "PNG"})
+
+
+@contextmanager
+def _own_size_cap() -> Iterator[None]:
+    """PIL's decompression-bomb guard off: the map_cells cap, checked on the header
+    before any pixel is decoded, replaces it (and PIL's warning never reaches users)."""
+    from PIL import Image
+
+    saved = Image.MAX_IMAGE_PIXELS
+    Image.MAX_IMAGE_PIXELS = None
+    try:
+        yield
+    finally:
+        Image.MAX_IMAGE_PIXELS = saved
+
+
 def read_image(spec: RosMap) -> np.ndarray:
-    """Grey levels (rows, cols) as float 0..255, and transparency as NaN."""
+    """Grey levels (rows, cols) as float32 0..255 whatever the bit depth, and
+    transparency as NaN. The image's size is checked against the map_cells cap first."""
     from PIL import Image, UnidentifiedImageError
 
     where = display_path(spec.yaml_path)
+    image = display_path(spec.image_path)
     if not spec.image_path.is_file():
-        raise MapImageError(Problem(where, "image", f"image file not found: {display_path(spec.image_path)}"))
+        raise MapImageError(Problem(where, "image", f"image file not found: {image}"))
     try:
-        with Image.open(spec.image_path) as img:
+        with _own_size_cap(), Image.open(spec.image_path) as img:
+            cols, rows = img.size
+            cells = float(cols) * float(rows)
+            if cells > MAP_CELLS.value():
+                message = f"{image} has {cols} x {rows} pixels: " + MAP_CELLS.refusal(
+                    cells, "a smaller image, cropped to the building"
+                )
+                raise MapImageError(Problem(where, "image", message))
             img.load()
-            has_alpha = img.mode in ("RGBA", "LA") or (img.mode == "P" and "transparency" in img.info)
-            rgba = np.asarray(img.convert("RGBA" if has_alpha else "RGB"), dtype=float)
+            grey = _grey_levels(img, spec, where, image)
     except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as err:
-        raise MapImageError(
-            Problem(where, "image", f"cannot read image {display_path(spec.image_path)}: {err}")
-        ) from None
-    grey = rgba[..., :3].mean(axis=2)
-    if has_alpha:
-        grey[rgba[..., 3] == 0] = np.nan
+        raise MapImageError(Problem(where, "image", f"cannot read image {image}: {err}")) from None
     if grey.size == 0:
         raise MapImageError(Problem(where, "image", "image is empty"))
+    return grey
+
+
+def _grey_levels(img: Any, spec: RosMap, where: str, image: str) -> np.ndarray:
+    """An opened PIL image as grey levels 0..255 (float32), NaN where transparent.
+
+    8-bit images average their colour channels (as map_server does); 16-bit grey images
+    are scaled by their maximum value, so a 16-bit map means what its 8-bit copy means.
+    """
+    mode = img.mode
+    if mode in SIXTEEN_BIT or (mode == "I" and img.format in SIXTEEN_BIT_FORMATS):
+        if spec.mode == "raw":
+            raise MapImageError(
+                Problem(where, "mode", f"raw needs an 8-bit image (pixel values 0..100); {image} has 16-bit pixels")
+            )
+        return np.asarray(img, dtype=np.float32) * np.float32(255.0 / 65535.0)
+    if mode not in EIGHT_BIT:
+        raise MapImageError(
+            Problem(
+                where,
+                "image",
+                f"{image} has pixels of mode {mode} ({img.format}); expected 8- or 16-bit grey levels "
+                "(PGM or PNG, as map_saver writes)",
+            )
+        )
+    has_alpha = mode in ("RGBA", "LA", "La", "PA", "RGBa") or (mode == "P" and "transparency" in img.info)
+    pixels = np.asarray(img.convert("RGBA" if has_alpha else "RGB"))
+    grey = pixels[..., :3].sum(axis=2, dtype=np.uint16).astype(np.float32) / np.float32(3.0)
+    if has_alpha:
+        grey[pixels[..., 3] == 0] = np.nan
     return grey
 
 

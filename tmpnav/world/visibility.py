@@ -11,12 +11,14 @@ about 2.5 cm apart, half a grid cell.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba as nb
 import numpy as np
 
+from tmpnav.types import Scenario
 from tmpnav.world.build import World
-from tmpnav.world.geometry import wrap_to_pi
+from tmpnav.world.geometry import wrap_angle, wrap_angle_scalar
 
 RAYS = 1440
 
@@ -52,7 +54,7 @@ class LandmarkVisibility:
         dist = np.hypot(d[..., 0], d[..., 1])
         seen = (dist <= self.range) & (dist >= min_range)
         if fov < 2 * np.pi - 1e-9:
-            bearing = wrap_to_pi(np.arctan2(d[..., 1], d[..., 0]) - poses.reshape(-1, 1, 3)[:, :, 2])
+            bearing = wrap_angle(np.arctan2(d[..., 1], d[..., 0]) - poses.reshape(-1, 1, 3)[:, :, 2])
             seen &= np.abs(bearing) <= fov / 2
         # the ray from the landmark towards the pose
         ray_angle = np.arctan2(-d[..., 1], -d[..., 0])
@@ -60,6 +62,64 @@ class LandmarkVisibility:
         free = np.take_along_axis(self._free, ray.T, axis=1).T if self._free.size else np.zeros_like(dist)
         seen &= dist <= free
         return seen.reshape(*poses.shape[:-1], len(self.landmarks))
+
+
+class SightGrid(NamedTuple):
+    """The occupancy grid as compiled line-of-sight code reads it."""
+
+    occupied: np.ndarray  # (rows, cols) bool
+    clearance: np.ndarray  # (rows, cols) m, distance to the nearest occupied cell
+    x0: float  # m, the grid's origin
+    y0: float
+    resolution: float  # m per cell
+
+    @staticmethod
+    def of(world: World) -> SightGrid:
+        grid = world.grid
+        return SightGrid(grid.occupied, world.clearance, grid.origin[0], grid.origin[1], grid.resolution)
+
+
+class MutualSensing(NamedTuple):
+    """How two robots observe each other: within ``range`` and ``fov`` of the mutual sensor
+    and in line of sight, but not closer than ``min_range``, the sum of their radii (they
+    would touch, and the range-bearing model is singular where they coincide)."""
+
+    range: float  # m
+    fov: float  # rad, centred on the observer's heading
+    min_range: float  # m
+
+    @staticmethod
+    def between(scenario: Scenario, robot_a: str, robot_b: str) -> MutualSensing | None:
+        """The sensing between two robots of a scenario; None when its models switch
+        mutual observations off (the robots then never see each other)."""
+        models = scenario.models
+        if not models.mutual_observations:
+            return None
+        radii = scenario.robot(robot_a).radius + scenario.robot(robot_b).radius
+        return MutualSensing(models.mutual_sensor.range, models.mutual_sensor.fov, radii)
+
+    def visible(self, world: World, observer: np.ndarray, target: np.ndarray) -> np.ndarray:
+        """Whether robots at poses ``observer`` (k, 3) see robots at ``target`` (k, 3)."""
+        return mutual_visible(world, observer, target, self.range, self.fov, self.min_range)
+
+    def sequences(
+        self,
+        world: World,
+        motions: tuple[np.ndarray, np.ndarray, np.ndarray],
+        pairs: np.ndarray,
+        restart: np.ndarray,
+        horizon: np.ndarray,
+        row_offset: np.ndarray,
+        out: np.ndarray,
+    ) -> np.ndarray:
+        """Who sees whom at every step of two-robot simulations in trie order; see
+        :func:`mutual_visibility_sequences`. ``motions`` is (offset, steps, poses) of the
+        motions laid end to end. Returns each simulation's first step with a mutual
+        observation (-1: none)."""
+        offset, steps, poses = motions
+        return mutual_visibility_sequences(
+            SightGrid.of(world), self, offset, steps, poses, pairs, restart, horizon, row_offset, out
+        )
 
 
 def mutual_visible(
@@ -70,24 +130,18 @@ def mutual_visible(
     Range between ``min_range`` and ``sensor_range``, field of view, and a sphere-traced
     line of sight (the same compiled code the oracle uses for whole sequences).
     """
-    grid = world.grid
     return _visible_pairs(
-        grid.occupied,
-        world.clearance,
-        grid.origin[0],
-        grid.origin[1],
-        grid.resolution,
-        sensor_range,
-        min_range,
-        fov,
+        SightGrid.of(world),
+        MutualSensing(sensor_range, fov, min_range),
         np.ascontiguousarray(observer, dtype=float),
         np.ascontiguousarray(target, dtype=float),
     )
 
 
 @nb.njit(cache=True)
-def _traced_los(occupied, clear, x0, y0, res, ax, ay, bx, by):
+def _traced_los(grid, ax, ay, bx, by):
     """Sphere-traced line of sight between two points (see grid.line_of_sight_traced)."""
+    occupied, clear, x0, y0, res = grid
     rows, cols = occupied.shape
     dx, dy = bx - ax, by - ay
     length = math.hypot(dx, dy)
@@ -108,43 +162,29 @@ def _traced_los(occupied, clear, x0, y0, res, ax, ay, bx, by):
 
 
 @nb.njit(cache=True)
-def _sees(px, py, pth, qx, qy, rng, min_range, fov):
+def _sees(px, py, pth, qx, qy, sensing):
+    """Is (qx, qy) within range and field of view of a sensor at pose (px, py, pth)?"""
     d = math.hypot(qx - px, qy - py)
-    if d > rng or d < min_range:
+    if d > sensing.range or d < sensing.min_range:
         return False
-    if fov < 2.0 * math.pi - 1e-9:
-        b = math.atan2(qy - py, qx - px) - pth
-        b = (b + math.pi) % (2.0 * math.pi) - math.pi
-        if abs(b) > fov / 2.0:
+    if sensing.fov < 2.0 * math.pi - 1e-9:
+        b = wrap_angle_scalar(math.atan2(qy - py, qx - px) - pth)
+        if abs(b) > sensing.fov / 2.0:
             return False
     return True
 
 
 @nb.njit(cache=True)
-def mutual_visibility_sequences(
-    occupied,
-    clear,
-    x0,
-    y0,
-    res,
-    rng,
-    min_range,
-    fov,
-    m_off,
-    m_T,
-    pose,
-    c_motion,
-    c_start,
-    c_horizon,
-    c_off,
-    out,
-):
+def mutual_visibility_sequences(grid, sensing, m_off, m_T, pose, c_motion, c_start, c_horizon, c_off, out):
     """Who sees whom at every step of C two-robot simulations in trie order.
 
-    Robot poses come from motions laid out as in :func:`tmpnav.belief.kernel.run_sequences`
-    (a robot that arrived waits at its last pose). Steps 0..c_start[c] are copied from the
-    previous simulation, which shares them; the others are computed: range within
-    [min_range, rng], field of view, and a sphere-traced line of sight.
+    Motion m has ``m_T[m]`` steps and its poses are rows ``m_off[m] + m`` to
+    ``m_off[m] + m + m_T[m]`` of ``pose`` (the layout of
+    :class:`tmpnav.belief.sequences.MotionArrays`); a robot that arrived waits at its last
+    pose. Simulation c moves the two robots along motions ``c_motion[c]`` to step
+    ``c_horizon[c]``; its steps 0..c_start[c] are copied from the previous simulation,
+    which shares them; the others are computed: range, field of view and a sphere-traced
+    line of sight (:class:`MutualSensing`, :class:`SightGrid`).
     ``out[c_off[c] + t, i, j]``: robot i sees robot j at step t. Returns, per simulation,
     the first step with a mutual observation (-1 if there is none).
     """
@@ -166,9 +206,9 @@ def mutual_visibility_sequences(
             rb = m_off[mb] + mb + (t if t <= m_T[mb] else m_T[mb])
             ax, ay, ath = pose[ra, 0], pose[ra, 1], pose[ra, 2]
             bx, by, bth = pose[rb, 0], pose[rb, 1], pose[rb, 2]
-            ab = _sees(ax, ay, ath, bx, by, rng, min_range, fov)
-            ba = _sees(bx, by, bth, ax, ay, rng, min_range, fov)
-            if (ab or ba) and not _traced_los(occupied, clear, x0, y0, res, ax, ay, bx, by):
+            ab = _sees(ax, ay, ath, bx, by, sensing)
+            ba = _sees(bx, by, bth, ax, ay, sensing)
+            if (ab or ba) and not _traced_los(grid, ax, ay, bx, by):
                 ab = False
                 ba = False
             out[c_off[c] + t, 0, 1] = ab
@@ -179,9 +219,9 @@ def mutual_visibility_sequences(
 
 
 @nb.njit(cache=True)
-def _visible_pairs(occupied, clear, x0, y0, res, rng, min_range, fov, A, B):
+def _visible_pairs(grid, sensing, A, B):
     out = np.zeros(A.shape[0], dtype=np.bool_)
     for k in range(A.shape[0]):
-        if _sees(A[k, 0], A[k, 1], A[k, 2], B[k, 0], B[k, 1], rng, min_range, fov):
-            out[k] = _traced_los(occupied, clear, x0, y0, res, A[k, 0], A[k, 1], B[k, 0], B[k, 1])
+        if _sees(A[k, 0], A[k, 1], A[k, 2], B[k, 0], B[k, 1], sensing):
+            out[k] = _traced_los(grid, A[k, 0], A[k, 1], B[k, 0], B[k, 1])
     return out

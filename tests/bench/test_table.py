@@ -1,0 +1,50 @@
+"""bench.csv: rows read back as written, and the summary's speed-ups and lower bounds."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from tmpnav.bench.table import COLUMNS, PHASES, read_csv, summary_markdown, to_csv
+from tmpnav.errors import InputError
+
+
+def row(encoding: str, phase: str, status: str, total: str, session: int = 0) -> dict[str, str]:
+    base = dict.fromkeys(COLUMNS, "")
+    stages = dict.fromkeys((f"{s}_s" for s in ("roadmap", "oracle", "encode", "planner", "resimulate")), "0.1")
+    return {
+        **base,
+        **(stages if total else {}),
+        "experiment": "robots",
+        "encoding": encoding,
+        "robots": "4",
+        "rooms": "8",
+        "session": str(session),
+        "phase": phase,
+        "status": status,
+        "total_s": total,
+    }
+
+
+def test_a_timed_out_encoding_shows_a_lower_bound_cold_and_not_run_otherwise() -> None:
+    table = [row("mixed", phase, "solved-optimally", "2.0") for phase in PHASES]
+    table += [row("paper", phase, "timeout", "") for phase in PHASES]
+    text = summary_markdown(table, "robots", default="mixed", timeout=60.0)
+    lines = {tuple(c.strip() for c in line.split("|")[2:4]): line for line in text.splitlines()[2:]}
+    assert "> 30x (timeout)" in lines[("paper", "cold")]
+    assert "not run: the cold runs timed out" in lines[("paper", "warm")]
+    assert "not run" in lines[("paper", "replan")] and "timeout |" not in lines[("paper", "replan")]
+
+
+def test_read_csv_round_trips_and_rejects_other_files(tmp_path: Path) -> None:
+    table = [row("mixed", phase, "solved-optimally", "2.0") for phase in PHASES]
+    path = tmp_path / "bench.csv"
+    path.write_text(to_csv(table))
+    assert read_csv(path) == table
+    other = tmp_path / "other.csv"
+    other.write_text("a,b\n1,2\n")
+    with pytest.raises(InputError, match=r"is not a tmpnav bench\.csv"):
+        read_csv(other)
+    with pytest.raises(InputError, match="cannot read"):
+        read_csv(tmp_path / "missing.csv")

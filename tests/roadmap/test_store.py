@@ -1,0 +1,95 @@
+"""Stored roadmaps: read back exactly, and any damaged file set aside instead of breaking runs."""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tmpnav.cachedir import CacheDir
+from tmpnav.roadmap.store import DAMAGE, RoadmapCacheWarning, RoadmapStore, read, serialize
+from tmpnav.types import Roadmap
+
+KEY = "ab" * 32
+
+
+def small_roadmap() -> Roadmap:
+    nodes = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.5], [0.0, 2.0]])
+    edges = np.array([[0, 1], [1, 2], [2, 3]], dtype=np.int64)
+    weights = np.linalg.norm(nodes[edges[:, 0]] - nodes[edges[:, 1]], axis=1)
+    return Roadmap(nodes, edges, weights, {"A": (2, 3)}, {"r1": 0}, "f" * 64)
+
+
+def same(a: Roadmap, b: Roadmap) -> bool:
+    return (
+        np.array_equal(a.nodes, b.nodes)
+        and np.array_equal(a.edges, b.edges)
+        and np.array_equal(a.weights, b.weights)
+        and (a.instantiations, a.starts, a.fingerprint) == (b.instantiations, b.starts, b.fingerprint)
+    )
+
+
+def test_a_stored_roadmap_reads_back_exactly(tmp_path: Path) -> None:
+    store = RoadmapStore(CacheDir(tmp_path))
+    store.save(KEY, small_roadmap())
+    found = store.load(KEY)
+    assert found is not None and same(found, small_roadmap())
+    assert store.load("cd" * 32) is None and store.warnings == []
+
+
+def damage_truncate(path: Path) -> None:
+    path.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
+
+
+def damage_empty(path: Path) -> None:
+    path.write_bytes(b"")
+
+
+def damage_header(path: Path) -> None:
+    """A valid archive whose header was edited: an instantiation that is not a node."""
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    header = json.loads(bytes(arrays["header"]).decode())
+    header["instantiations"]["A"] = [2, 99]
+    arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
+    with open(path, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+def damage_arrays(path: Path) -> None:
+    with np.load(path) as data:
+        arrays = {k: data[k] for k in data.files}
+    arrays["nodes"] = arrays["nodes"] + 0.5
+    with open(path, "wb") as fh:
+        np.savez(fh, **arrays)
+
+
+@pytest.mark.parametrize("damage", [damage_truncate, damage_empty, damage_header, damage_arrays])
+def test_a_damaged_file_is_set_aside_with_one_warning(tmp_path: Path, damage) -> None:  # type: ignore[no-untyped-def]
+    cache = CacheDir(tmp_path)
+    RoadmapStore(cache).save(KEY, small_roadmap())
+    damage(cache.roadmap(KEY))
+    store = RoadmapStore(cache)
+    with pytest.warns(RoadmapCacheWarning, match="unreadable") as caught:
+        assert store.load(KEY) is None
+    assert len(caught) == 1 and len(store.warnings) == 1
+    assert not cache.roadmap(KEY).exists()
+    assert [p.name.split(".corrupt-")[0] for p in cache.roadmaps.iterdir()] == [f"{KEY}.npz"]  # set aside
+    store.save(KEY, small_roadmap())  # and grown again
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        again = RoadmapStore(cache).load(KEY)
+    assert again is not None and same(again, small_roadmap())
+    assert cache.info().set_aside == 1 and cache.info().roadmaps == 1
+
+
+def test_read_rejects_what_serialize_did_not_write(tmp_path: Path) -> None:
+    path = tmp_path / "x.npz"
+    path.write_bytes(serialize(small_roadmap()))
+    assert same(read(path), small_roadmap())
+    path.write_bytes(b"PK\x03\x04 not a zip")
+    with pytest.raises(DAMAGE):
+        read(path)

@@ -1,0 +1,64 @@
+"""The Python API (tmpnav.api, re-exported lazily by tmpnav): load, plan, read, export."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import tmpnav
+from tmpnav.errors import ScenarioError
+
+ROOT = Path(__file__).resolve().parent.parent
+TWO_ROOMS = ROOT / "tests" / "fixtures" / "two_rooms.yaml"
+
+
+def test_import_tmpnav_stays_light() -> None:
+    code = "import sys, tmpnav; print(sorted(m for m in ('tmpnav.api', 'numpy', 'scipy') if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+    assert callable(tmpnav.plan) and tmpnav.plan is tmpnav.api.plan
+    with pytest.raises(AttributeError):
+        _ = tmpnav.no_such_thing  # type: ignore[attr-defined]
+
+
+def test_load_checks_the_scenario(tmp_path: Path) -> None:
+    scenario = tmpnav.load(TWO_ROOMS)
+    assert [r.name for r in scenario.rooms] == ["A", "B", "C"]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(TWO_ROOMS.read_text().replace("r1: [B]", "r1: [Z]"))
+    with pytest.raises(ScenarioError, match="'Z' is not a room"):
+        tmpnav.load(bad)
+
+
+@pytest.mark.slow
+def test_plan_read_save_and_export(tmp_path: Path) -> None:
+    result = tmpnav.plan(TWO_ROOMS, cache_dir=tmp_path / "cache", workers=1)
+    assert result.status == "solved-optimally"
+    assert result.scenario.name == "two-rooms"
+    assert result.planner_cost == pytest.approx(sum(s.planner_cost for s in result.steps))
+    assert result.resimulated_cost == pytest.approx(sum(s.resimulated_cost for s in result.steps))
+    moved = {m[0]: m[2] for s in result.steps for m in s.moves}
+    assert moved == {"r1": "B", "r2": "A"}
+    assert all(len(s.goal_poses) == len(s.robots) for s in result.steps)
+    assert set(result.trajectories) == {"r1", "r2"}
+    written = result.save(tmp_path / "out")
+    assert [p.name for p in written] == ["plan.json", "plan.png"]
+    doc = json.loads((tmp_path / "out" / "plan.json").read_text())
+    assert doc["cost"]["planner"] == result.planner_cost
+    waypoints = result.waypoints()
+    assert waypoints["r1"][-1].room == "B" and waypoints["r1"][0].kind == "start"
+    from_file = tmpnav.export_nav2(tmp_path / "out" / "plan.json", tmp_path / "nav2")
+    from_result = result.export_nav2(tmp_path / "nav2-again")
+    assert [p.read_text() for p in from_file] == [p.read_text() for p in from_result]
+
+
+def test_segment_map_and_write_skeleton(tmp_path: Path) -> None:
+    proposal = tmpnav.segment_map(ROOT / "configs" / "office" / "office.yaml", max_rooms=4)
+    assert len(proposal.rooms) == 4
+    path = tmpnav.write_skeleton(proposal, tmp_path / "office.yaml")
+    scenario = tmpnav.load(path)
+    assert scenario.name == "office" and len(scenario.rooms) == 4

@@ -1,0 +1,49 @@
+"""The one angle-wrapping rule (world/geometry.py), in numpy and in compiled code."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+from tmpnav.world.geometry import wrap_angle, wrap_angle_scalar
+
+EDGES = [
+    math.pi,
+    -math.pi,
+    3 * math.pi,
+    -3 * math.pi,
+    0.5,
+    2 * math.pi + 0.5,
+    -math.pi - 1e-17,
+    math.nextafter(-math.pi, -4),
+]
+
+
+def test_wrap_angle_range_and_edges() -> None:
+    w = wrap_angle(np.array(EDGES))
+    assert np.all(w >= -np.pi) and np.all(w < np.pi)
+    np.testing.assert_allclose(w[:4], -np.pi)
+    np.testing.assert_allclose(w[5], 0.5)
+
+
+@given(st.floats(-100.0, 100.0))
+def test_wrap_angle_is_idempotent_and_preserves_the_angle(a: float) -> None:
+    w = wrap_angle(a)
+    assert -np.pi <= w < np.pi
+    assert wrap_angle(w) == w  # bit for bit
+    assert np.isclose(np.cos(w), np.cos(a), atol=1e-9) and np.isclose(np.sin(w), np.sin(a), atol=1e-9)
+
+
+@given(st.floats(-1e6, 1e6) | st.sampled_from(EDGES))
+def test_the_compiled_twin_gives_the_same_bits(a: float) -> None:
+    assert wrap_angle_scalar(a) == float(wrap_angle(a))
+    assert math.copysign(1.0, wrap_angle_scalar(a)) == math.copysign(1.0, float(wrap_angle(a)))
+
+
+def test_angles_in_range_pass_through_unchanged() -> None:
+    inside = np.array([-math.pi, -1.0, 0.0, 1e-300, math.nextafter(math.pi, 0.0)])
+    assert np.array_equal(wrap_angle(inside), inside)
+    assert [wrap_angle_scalar(float(a)) for a in inside] == inside.tolist()

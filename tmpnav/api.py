@@ -1,0 +1,185 @@
+"""tmpnav from Python, without the command line.
+
+    import tmpnav
+
+    scenario = tmpnav.load("configs/corridor.yaml")          # validated, as `tmpnav validate`
+    result = tmpnav.plan("configs/corridor.yaml", planner="enhsp-blind", timeout=60)
+    print(result.status, result.planner_cost, result.resimulated_cost)
+    for step in result.steps:
+        print(step.index, step.moves, step.resimulated_cost)
+    result.save("out")                                       # plan.json and plan.png
+    result.export_nav2("out/nav2")                           # waypoint files per robot
+
+    proposal = tmpnav.segment_map("map.yaml", min_area=3.0)  # rooms, doors, landmark candidates
+    tmpnav.write_skeleton(proposal, "scenario.yaml")
+
+Errors are the library's typed exceptions (:mod:`tmpnav.errors`): ``ScenarioError`` lists every
+problem of a scenario or map, ``PlannerError`` and its subclasses say how planning failed.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # imported lazily: `import tmpnav` stays fast
+    from tmpnav.export.nav2 import Waypoint
+    from tmpnav.rooms.proposal import Proposal
+    from tmpnav.types import Scenario, TrajectoryStep
+
+__all__ = ["PlanResult", "Step", "export_nav2", "load", "plan", "segment_map", "write_skeleton"]
+
+
+def load(path: str | Path) -> Scenario:
+    """Load and check a scenario file: the format, then its geometry against the map (every
+    problem at once in a :class:`~tmpnav.errors.ScenarioError`)."""
+    from tmpnav.pipeline import load_world
+
+    return load_world(path)[0]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step of the plan: one robot moving alone, or two moving together."""
+
+    index: int  # 1-based, in execution order
+    moves: tuple[tuple[str, str, str], ...]  # (robot, from, to) per robot of the step
+    planner_cost: float  # as the task planner saw it (cost table)
+    resimulated_cost: float  # with beliefs carried over from the previous steps
+    goal_poses: tuple[tuple[float, float, float], ...]  # per robot: x, y (m), theta (rad)
+
+    @property
+    def robots(self) -> tuple[str, ...]:
+        return tuple(m[0] for m in self.moves)
+
+
+@dataclass(frozen=True, eq=False)
+class PlanResult:
+    """A plan and what comes with it. ``report`` is the pipeline's full report."""
+
+    report: Any
+
+    @property
+    def scenario(self) -> Scenario:
+        return self.report.scenario
+
+    @property
+    def status(self) -> str:
+        """``solved-optimally`` or ``solved-satisficing``."""
+        return str(getattr(self.report.status, "value", self.report.status))
+
+    @property
+    def planner_cost(self) -> float:
+        return float(self.report.planner_cost)
+
+    @property
+    def resimulated_cost(self) -> float:
+        return float(self.report.resimulated_cost)
+
+    @property
+    def steps(self) -> list[Step]:
+        return [
+            Step(
+                index=int(a.index),
+                moves=tuple(_move(m) for m in a.moves),
+                planner_cost=float(a.planner_cost),
+                resimulated_cost=float(a.resimulated_cost),
+                goal_poses=tuple(tuple(float(v) for v in p) for p in a.goal_poses),  # type: ignore[misc]
+            )
+            for a in self.report.actions
+        ]
+
+    @property
+    def trajectories(self) -> dict[str, list[TrajectoryStep]]:
+        """Each robot's re-simulated belief (mean, covariance) at every control step."""
+        return dict(self.report.trajectories)
+
+    def document(self) -> dict[str, Any]:
+        """The plan as the plan.json document (docs/plan-json.md)."""
+        from tmpnav.report.plan_json import plan_document
+
+        return plan_document(self.report)
+
+    def waypoints(self) -> dict[str, list[Waypoint]]:
+        """Each robot's waypoints in the map frame, sync points of paired moves marked."""
+        from tmpnav.export.nav2 import waypoints
+
+        return waypoints(self.document())
+
+    def save(self, directory: str | Path) -> list[Path]:
+        """Write plan.json and plan.png into ``directory``; returns the paths."""
+        from tmpnav.report.outputs import write_outputs
+
+        return write_outputs(self.report, Path(directory), None)
+
+    def export_nav2(self, directory: str | Path) -> list[Path]:
+        """Write each robot's waypoint files for nav2 into ``directory``; returns the paths."""
+        return export_nav2(self.document(), directory)
+
+
+def _move(move: Any) -> tuple[str, str, str]:
+    if isinstance(move, tuple):
+        robot, origin, target = move
+        return str(robot), str(origin), str(target)
+    return str(move.robot), str(move.origin), str(move.target)
+
+
+def plan(
+    scenario: str | Path,
+    *,
+    encoding: str | None = None,
+    planner: str | None = None,
+    timeout: float | None = None,
+    pair_min_gain: float | None = None,
+    mutual_observations: bool | None = None,
+    cache_dir: str | Path | None = None,
+    use_cache: bool = True,
+    workers: int | None = None,
+    executor: str = "processes",
+) -> PlanResult:
+    """Plan a scenario file, as ``tmpnav plan`` does; keyword arguments override the file's
+    choices like the command's options of the same names."""
+    from tmpnav.pipeline import PlanOptions
+    from tmpnav.pipeline import plan as run
+
+    options = PlanOptions(
+        encoding=encoding,
+        planner=planner,
+        timeout=timeout,
+        pair_min_gain=pair_min_gain,
+        mutual_observations=mutual_observations,
+        cache_dir=Path(cache_dir) if cache_dir is not None else None,
+        use_cache=use_cache,
+        workers=workers,
+        executor=executor,
+    )
+    return PlanResult(run(Path(scenario), options))
+
+
+def export_nav2(plan_json: str | Path | dict[str, Any], directory: str | Path) -> list[Path]:
+    """Write nav2 waypoint files for a plan: a plan.json file or its document (a dict)."""
+    from tmpnav.export.nav2 import write_nav2
+
+    doc = json.loads(Path(plan_json).read_text(encoding="utf-8")) if not isinstance(plan_json, dict) else plan_json
+    return write_nav2(doc, Path(directory))
+
+
+def segment_map(map_yaml: str | Path, *, min_area: float = 3.0, max_rooms: int | None = None) -> Proposal:
+    """Rooms, doors, landmark candidates, a placeholder robot and goals for a ROS map, as
+    ``tmpnav rooms`` finds them."""
+    from tmpnav.rooms.proposal import propose, read_map
+    from tmpnav.rooms.segment import SegmentParams
+
+    spec, grid = read_map(Path(map_yaml))
+    return propose(spec, grid, SegmentParams(min_area=min_area, max_rooms=max_rooms))
+
+
+def write_skeleton(proposal: Proposal, path: str | Path) -> Path:
+    """Write the scenario skeleton of ``proposal`` to ``path`` (the map referred to relative to it)."""
+    from tmpnav.rooms.skeleton import save, skeleton
+
+    target = Path(path)
+    save(target, skeleton(proposal, target))
+    return target

@@ -1,0 +1,239 @@
+"""The belief stage's entry point for the oracle: a batch of simulations in, results out.
+
+A :class:`SequenceBatch` holds C simulations of n robots each: which motions the robots
+drive, from which initial belief, with which simulated observation noise, and who sees
+whom at every step. :func:`propagate_sequences` runs them through the compiled EKF of
+:mod:`tmpnav.belief.kernel` (the production path; its reference is the filterpy EKF of
+:mod:`tmpnav.belief.ekf`) and returns a :class:`SequenceResults`.
+
+Arrays are laid out for the kernel: motions end to end (:class:`MotionArrays`), one row
+per simulation (:class:`Sequences`). The named tuples are passed to the kernel as they
+are, so their fields are its arguments.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from tmpnav.belief.kernel import run_sequences
+from tmpnav.types import Models, ObservationMode
+
+
+class EKFConstants(NamedTuple):
+    """The filter's constants: time step (s), motion noise, sensor noise, landmarks."""
+
+    dt: float
+    alphas: np.ndarray  # (4,) a1..a4 of the control noise W(u), paper eq. (4)
+    Q_landmark: np.ndarray  # (2, 2) landmark observation noise (m², rad²)
+    chol_landmark: np.ndarray  # (2, 2) its lower Cholesky factor
+    Q_mutual: np.ndarray  # (2, 2) mutual observation noise (m², rad²)
+    chol_mutual: np.ndarray  # (2, 2) its lower Cholesky factor
+    max_likelihood: bool  # simulate z = h(mean) (no innovation) instead of h(pose) + noise
+    landmarks: np.ndarray  # (L, 2) landmark positions (m)
+
+    @staticmethod
+    def of(models: Models, landmarks: np.ndarray) -> EKFConstants:
+        """The constants of a scenario's models, with the world's landmarks (L, 2)."""
+        Q_lm, Q_mu = models.landmark_sensor.Q, models.mutual_sensor.Q
+        return EKFConstants(
+            dt=models.dt,
+            alphas=np.array(models.motion_noise, dtype=float),
+            Q_landmark=Q_lm,
+            chol_landmark=np.linalg.cholesky(Q_lm),
+            Q_mutual=Q_mu,
+            chol_mutual=np.linalg.cholesky(Q_mu),
+            max_likelihood=models.observations is ObservationMode.MAX_LIKELIHOOD,
+            landmarks=np.ascontiguousarray(landmarks, dtype=float).reshape(-1, 2),
+        )
+
+
+class MotionArrays(NamedTuple):
+    """M nominal motions laid end to end.
+
+    Motion m has ``steps[m]`` = T_m controls (v m/s, omega rad/s), rows ``offset[m]`` to
+    ``offset[m] + T_m - 1`` of ``controls``, and T_m + 1 nominal poses (m, m, rad) and
+    landmark-visibility rows, rows ``offset[m] + m`` to ``offset[m] + m + T_m`` of
+    ``poses`` and ``lm_visible`` (L columns). After its last step a robot waits (u = 0)
+    at its last pose and keeps observing from there. ``noise_stream[m]`` is the row of
+    :attr:`SequenceBatch.landmark_noise` its simulated landmark observations use.
+    """
+
+    offset: np.ndarray  # (M,) int64
+    steps: np.ndarray  # (M,) int64
+    controls: np.ndarray  # (sum T_m, 2)
+    poses: np.ndarray  # (sum T_m + 1, 3)
+    lm_visible: np.ndarray  # (sum T_m + 1, L) bool
+    noise_stream: np.ndarray  # (M,) int64
+
+    @staticmethod
+    def of(
+        controls: Sequence[np.ndarray],
+        poses: Sequence[np.ndarray],
+        lm_visible: Sequence[np.ndarray],
+        noise_stream: np.ndarray,
+        landmarks: int,
+    ) -> MotionArrays:
+        """Lay out motions given as per-motion arrays (T_m, 2), (T_m + 1, 3), (T_m + 1, L)."""
+        steps = np.array([c.shape[0] for c in controls], dtype=np.int64)
+        return MotionArrays(
+            offset=np.concatenate([[0], np.cumsum(steps)[:-1]]).astype(np.int64),
+            steps=steps,
+            controls=np.concatenate(list(controls)).reshape(-1, 2),
+            poses=np.concatenate(list(poses)),
+            lm_visible=np.ascontiguousarray(
+                np.concatenate(list(lm_visible)).reshape(int((steps + 1).sum()), landmarks)
+            ),
+            noise_stream=np.asarray(noise_stream, dtype=np.int64),
+        )
+
+
+class StartGroups(NamedTuple):
+    """G initial joint beliefs, each with the draws of its mutual observations."""
+
+    mean0: np.ndarray  # (G, 3n)
+    cov0: np.ndarray  # (G, 3n, 3n)
+    mutual_noise: np.ndarray  # (G, T+1, n, n, 2) standard-normal draws: robot i observes j at step t
+
+
+class Sequences(NamedTuple):
+    """C simulations of n robots, in the order they run (trie order, :mod:`tmpnav.belief.trie`).
+
+    Simulation c moves robot i along motion ``motions[c, i]`` from the belief of group
+    ``group[c]`` and runs to step ``horizon[c]``. With ``restart[c]`` = d > 0 it starts
+    from the state simulation c - 1 had after step d (they share their first d steps,
+    noise and visibility included); d = 0 starts from the group's initial belief.
+    Mutual visibility at step t is row ``mutual_offset[c] + t`` of
+    :attr:`SequenceBatch.mutual_visible`.
+    """
+
+    group: np.ndarray  # (C,) int64
+    motions: np.ndarray  # (C, n) int64
+    restart: np.ndarray  # (C,) int64
+    horizon: np.ndarray  # (C,) int64
+    mutual_offset: np.ndarray  # (C,) int64
+
+
+@dataclass(frozen=True, eq=False)
+class SequenceBatch:
+    """Everything one kernel call needs (see the module docstring and each part's).
+
+    ``landmark_noise`` (S, T+1, L, 2): standard-normal draws of the landmark observations
+    per noise stream, step and landmark; ``mutual_visible`` (rows, n, n) bool: robot i sees
+    robot j; ``c_sigma_history``: also return the running c_Sigma after every step.
+    """
+
+    n: int
+    ekf: EKFConstants
+    motions: MotionArrays
+    landmark_noise: np.ndarray
+    groups: StartGroups
+    sequences: Sequences
+    mutual_visible: np.ndarray
+    c_sigma_history: bool = False
+
+    @property
+    def horizon(self) -> int:
+        """The last step of the longest simulation."""
+        return int(self.sequences.horizon.max(initial=0))
+
+    def check(self) -> None:
+        """Raise ValueError naming the first array that does not fit the others (the
+        compiled kernel does not check its indices)."""
+        n, C, T = self.n, self.sequences.group.shape[0], self.horizon
+        M = self.motions.steps.shape[0]
+        seq = self.sequences
+        expected: dict[str, tuple[np.ndarray, tuple[int | None, ...]]] = {
+            "sequences.motions": (seq.motions, (C, n)),
+            "sequences.restart": (seq.restart, (C,)),
+            "sequences.horizon": (seq.horizon, (C,)),
+            "sequences.mutual_offset": (seq.mutual_offset, (C,)),
+            "groups.cov0": (self.groups.cov0, (self.groups.mean0.shape[0], 3 * n, 3 * n)),
+            "groups.mutual_noise": (self.groups.mutual_noise, (self.groups.mean0.shape[0], None, n, n, 2)),
+            "landmark_noise": (self.landmark_noise, (None, None, self.ekf.landmarks.shape[0], 2)),
+            "mutual_visible": (self.mutual_visible, (None, n, n)),
+        }
+        for name, (value, shape) in expected.items():
+            if value.ndim != len(shape) or any(
+                s is not None and s != v for s, v in zip(shape, value.shape, strict=True)
+            ):
+                raise ValueError(f"{name} has shape {value.shape}, expected {shape} (None: any)")
+        if C and (seq.motions.min() < 0 or seq.motions.max() >= M):
+            raise ValueError(f"sequences.motions must index the {M} motions")
+        if C and (seq.group.min() < 0 or seq.group.max() >= self.groups.mean0.shape[0]):
+            raise ValueError("sequences.group must index the start groups")
+        if self.groups.mutual_noise.shape[1] <= T or self.landmark_noise.shape[1] <= T:
+            raise ValueError(f"the noise draws must cover steps 0..{T}")
+        if C and int((seq.mutual_offset + seq.horizon).max()) >= self.mutual_visible.shape[0]:
+            raise ValueError("mutual_visible must have a row for every step of every simulation")
+
+
+@dataclass(frozen=True, eq=False)
+class SequenceResults:
+    """What the simulations of a batch end with, one row per simulation.
+
+    ``mean`` (C, 3n), ``cov`` (C, 3n, 3n): the joint belief after the last step;
+    ``c_sigma`` (C, n): c_Sigma of each robot (docs/models.md, "Motion cost");
+    ``arrival_xy`` (C, n, 2): each robot's mean position after its own last step;
+    ``mutual_steps`` (C,): steps with at least one mutual observation;
+    ``c_sigma_history`` (C, T+1, n): the running c_Sigma after every step, if asked for;
+    ``last_means`` (T+1, 3n), ``last_covs`` (T+1, 3n, 3n): the history of the last
+    simulation (its whole trajectory if it started from its group's initial belief).
+    """
+
+    mean: np.ndarray
+    cov: np.ndarray
+    c_sigma: np.ndarray
+    arrival_xy: np.ndarray
+    mutual_steps: np.ndarray
+    c_sigma_history: np.ndarray | None
+    last_means: np.ndarray
+    last_covs: np.ndarray
+
+
+class _KernelOutputs(NamedTuple):
+    mean: np.ndarray
+    cov: np.ndarray
+    c_sigma: np.ndarray
+    arrival_xy: np.ndarray
+    mutual_steps: np.ndarray
+    c_sigma_history: np.ndarray
+
+
+def propagate_sequences(batch: SequenceBatch) -> SequenceResults:
+    """Run every simulation of ``batch`` through the compiled EKF (paper eqs. (8), (9), (11)-(15))."""
+    batch.check()
+    n, C, T = batch.n, batch.sequences.group.shape[0], batch.horizon
+    out = _KernelOutputs(
+        np.empty((C, 3 * n)),
+        np.empty((C, 3 * n, 3 * n)),
+        np.empty((C, n)),
+        np.empty((C, n, 2)),
+        np.empty(C, dtype=np.int64),
+        np.zeros((C, T + 1, n)) if batch.c_sigma_history else np.zeros((0, 1, n)),
+    )
+    last_means, last_covs = run_sequences(
+        n, batch.ekf, batch.motions, batch.landmark_noise, batch.groups, batch.sequences, batch.mutual_visible, out
+    )
+    return SequenceResults(
+        mean=out.mean,
+        cov=out.cov,
+        c_sigma=out.c_sigma,
+        arrival_xy=out.arrival_xy,
+        mutual_steps=out.mutual_steps,
+        c_sigma_history=out.c_sigma_history if batch.c_sigma_history else None,
+        last_means=last_means,
+        last_covs=last_covs,
+    )
+
+
+def standard_normal_draws(seeds: Sequence[int], shape: tuple[int, ...]) -> np.ndarray:
+    """(len(seeds), *shape) standard-normal draws, one independent stream per seed.
+
+    A stream's draws are filled in C order, so a stream drawn for more steps starts with
+    the draws of a shorter one: a simulation's noise does not depend on its batch.
+    """
+    return np.stack([np.random.default_rng(s).standard_normal(shape) for s in seeds])

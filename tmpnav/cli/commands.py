@@ -1,0 +1,414 @@
+"""The commands of ``tmpnav``: each parses its options, calls the library, prints the result."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from tmpnav import __version__
+from tmpnav.cli.options import (
+    CACHE_DIR_OPTION,
+    SCENARIO_ARG,
+    encoding_choice,
+    oracle_options,
+    output_option,
+    plan_options,
+    report_errors,
+    writing,
+)
+from tmpnav.errors import EXIT_CODES
+
+EPILOG = "Exit codes: " + "; ".join(f"{code} {meaning}" for code, meaning in EXIT_CODES.items())
+
+
+@click.group(epilog=EPILOG, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="tmpnav")
+def cli() -> None:
+    """Multi-robot task-motion planning for navigation in belief space.
+
+    tmpnav decides which robot visits which room, in which order and along which
+    roadmap path, minimising motion and uncertainty cost (c = M_u c_u + M_G c_G +
+    M_Sigma trace(Sigma)), with robots that localize better when they see each other.
+    """
+
+
+@cli.command()
+@SCENARIO_ARG
+@report_errors
+def validate(scenario: Path) -> None:
+    """Check a scenario file and report every problem (exit code 2 if any)."""
+    from tmpnav.pipeline import load_world
+
+    sc, world = load_world(scenario)
+    rows, cols = world.grid.shape
+    click.echo(
+        f"{scenario}: ok: {len(sc.rooms)} rooms, {len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
+        f"{len(sc.robots)} robots, map {cols}x{rows} cells of {world.grid.resolution:g} m"
+    )
+
+
+@cli.command()
+@SCENARIO_ARG
+@output_option(False, "PNG file to write.", default=Path("world.png"), show_default=True)
+@report_errors
+def show(scenario: Path, output: Path) -> None:
+    """Draw the world: map, rooms, doors, landmarks, robots with 2-sigma start ellipses."""
+    from tmpnav.pipeline import load_world
+    from tmpnav.report.world_plot import plot_world
+
+    sc, world = load_world(scenario)
+    with writing(output):
+        plot_world(sc, world, output)
+    click.echo(f"wrote {output}")
+
+
+@cli.command()
+@SCENARIO_ARG
+@output_option(False, "PNG file to write.", default=Path("roadmap.png"), show_default=True)
+@report_errors
+def roadmap(scenario: Path, output: Path) -> None:
+    """Build the probabilistic roadmap (OMPL PRM) and draw it over the map."""
+    from tmpnav.pipeline import load_world
+    from tmpnav.report.roadmap_plot import plot_roadmap
+    from tmpnav.roadmap import build_roadmap
+
+    sc, world = load_world(scenario)
+    rm = build_roadmap(world, sc.robots, sc.roadmap)
+    with writing(output):
+        plot_roadmap(sc, world, rm, output)
+    click.echo(f"wrote {output}: {rm.n_nodes} nodes, {len(rm.edges)} edges")
+
+
+@cli.command()
+@SCENARIO_ARG
+@output_option(True, "Directory for plan.json, plan.png, domain.pddl, problem.pddl.")
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["text", "json"]),
+    default="text",
+    show_default=True,
+    help="What to print on stdout.",
+)
+@click.option(
+    "--replan",
+    is_flag=True,
+    help="Run the task planner even if the cache remembers its plan for this exact problem.",
+)
+@click.option(
+    "--export",
+    "exports",
+    multiple=True,
+    type=click.Choice(["nav2"]),
+    help="Also write each robot's waypoints for ROS 2 navigation into DIR/nav2/ (needs -o DIR).",
+)
+@oracle_options
+@report_errors
+def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...], **kw: Any) -> None:
+    """Plan: which robot visits which room, in which order, along which path.
+
+    Prints the task-motion plan (per step: robots, from, to, cost), the total cost as
+    the planner saw it and as re-simulated with carried-over beliefs, and the time per
+    stage. With -o DIR it also writes plan.json, plan.png and the PDDL files used.
+
+    A cost table and a task plan computed before for the same inputs come from the cache
+    (--no-cache: compute everything; --replan: run the task planner again anyway).
+    """
+    from tmpnav.pipeline import pddl_texts
+    from tmpnav.pipeline import plan as run_plan
+    from tmpnav.report.plan_json import dumps, plan_document
+    from tmpnav.report.text import plan_summary
+
+    if exports and output is None:
+        raise click.UsageError("--export needs -o DIR: the waypoint files go to DIR/nav2/")
+    report = run_plan(scenario, plan_options(kw))
+    written: list[Path] = []
+    if output is not None:
+        from tmpnav.report.outputs import write_outputs
+
+        pddl = pddl_texts(report)
+        with writing(output):
+            written = write_outputs(report, output, pddl)
+    if "nav2" in exports and output is not None:
+        from tmpnav.export.nav2 import write_nav2
+
+        with writing(output):
+            written += write_nav2(plan_document(report), output / "nav2")
+    if fmt == "json":
+        click.echo(dumps(plan_document(report)))
+    else:
+        click.echo(plan_summary(report))
+        for path in written:
+            click.echo(f"wrote {path}")
+
+
+@cli.command("export-pddl")
+@SCENARIO_ARG
+@output_option(True, "Directory for domain.pddl and problem.pddl.", required=True)
+@oracle_options
+@report_errors
+def export_pddl(scenario: Path, output: Path, **kw: Any) -> None:
+    """Write the PDDL domain and problem (with the computed costs) that ENHSP accepts."""
+    from tmpnav.pipeline import export_problem
+    from tmpnav.task.export import pddl_texts, write_pddl
+
+    encoded = export_problem(scenario, plan_options(kw))
+    texts = pddl_texts(encoded)
+    with writing(output):
+        written = write_pddl(output, texts)
+    for path in written:
+        click.echo(f"wrote {path}")
+
+
+@cli.group()
+def cache() -> None:
+    """Inspect or clear the cache directory (costs, roadmaps, task plans)."""
+
+
+@cache.command("info")
+@CACHE_DIR_OPTION
+@report_errors
+def cache_info(cache_dir: Path | None) -> None:
+    """Where the cache is, how big, how many entries."""
+    from tmpnav.cachedir import CacheDir
+
+    facts = CacheDir.at(cache_dir).info()
+    click.echo(f"directory: {facts.directory}")
+    if not facts.database_exists and not facts.roadmaps:
+        click.echo("empty (no cache file yet)")
+        return
+    if facts.error:
+        click.echo(f"cache file: {facts.database} ({facts.error})")
+    elif facts.database_exists:
+        click.echo(f"cache file: {facts.database}, {facts.entries} entries, {facts.database_bytes / 1e6:.1f} MB")
+    click.echo(f"roadmaps: {facts.roadmaps}")
+    if facts.set_aside:
+        click.echo(f"set aside: {facts.set_aside} damaged file(s) (tmpnav cache clear removes them)")
+
+
+@cache.command("clear")
+@CACHE_DIR_OPTION
+@report_errors
+def cache_clear(cache_dir: Path | None) -> None:
+    """Delete every cached cost, roadmap and task plan."""
+    from tmpnav.cachedir import CacheDir
+
+    cache = CacheDir.at(cache_dir)
+    database, roadmaps = cache.clear()
+    click.echo(f"cleared {cache.root}: {database} cache file(s), {roadmaps} roadmap(s)")
+
+
+@cli.command()
+@SCENARIO_ARG
+@click.option("--sessions", type=click.IntRange(min=1), default=25, show_default=True, help="Simulated executions.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
+@output_option(True, "Directory for errors.csv, errors.png, summary.md.")
+@click.option(
+    "--replan",
+    is_flag=True,
+    help="Run the task planner even if the cache remembers its plan for this exact problem.",
+)
+@oracle_options
+@report_errors
+def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw: Any) -> None:
+    """Execute the plan in simulation, with and without mutual observations.
+
+    Each session samples the true initial poses from the initial beliefs, applies noisy
+    controls (a waypoint follower steering on the estimate) and noisy observations, and
+    runs the EKF with mutual observations (config 1) and without (config 2), on the same
+    random draws. Prints the worst-case position error per robot and its reduction.
+    """
+    from tmpnav.execution import error_summary, execute
+    from tmpnav.pipeline import plan as run_plan
+
+    report = run_plan(scenario, plan_options(kw))
+    result = execute(report, sessions, seed)
+    lines = error_summary(result, sessions)
+    if output is not None:
+        from tmpnav.report.outputs import write_execution_outputs
+
+        with writing(output):
+            written = write_execution_outputs(report, result, sessions, output)
+        lines += [f"wrote {path}" for path in written]
+    click.echo("\n".join(lines))
+
+
+@cli.command()
+@click.option(
+    "--rooms",
+    "rooms_text",
+    default="2..10",
+    show_default=True,
+    help="Rooms to visit: a range A..B[:STEP] (step 2 by default) or a list A,B,C.",
+)
+@click.option(
+    "--robots",
+    "robots_text",
+    default="2",
+    show_default=True,
+    help="Robots: a range or a list; several values make a robots experiment.",
+)
+@click.option(
+    "--sessions",
+    type=click.IntRange(min=1),
+    default=25,
+    show_default=True,
+    help="Sessions (random goal draws) per point.",
+)
+@click.option(
+    "--encoding",
+    "encodings",
+    multiple=True,
+    type=encoding_choice(),
+    help="Encodings to compare on the same draws (repeat the option); default: mixed.",
+)
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
+@click.option(
+    "--timeout",
+    type=click.FloatRange(min=0, min_open=True),
+    default=300.0,
+    show_default=True,
+    help="Seconds a run may take before it is recorded as a timeout.",
+)
+@click.option(
+    "--scenario",
+    type=click.Path(path_type=Path, dir_okay=False),
+    help="World to use; {robots} in it becomes the number of robots (default: the shipped "
+    "configs/corridor-{robots}robots.yaml).",
+)
+@click.option("--workers", type=click.IntRange(min=1), help="Oracle worker processes per run (default: all cores).")
+@output_option(True, "Directory for bench.csv, bench.png, summary.md.", default=Path("bench-out"), show_default=True)
+@click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
+@click.option(
+    "--replot",
+    is_flag=True,
+    help="Run nothing: rewrite summary.md and bench.png from the bench.csv in -o DIR (give the run's --timeout).",
+)
+@report_errors
+def bench(
+    rooms_text: str,
+    robots_text: str,
+    sessions: int,
+    encodings: tuple[str, ...],
+    seed: int,
+    timeout: float,
+    scenario: Path | None,
+    workers: int | None,
+    output: Path,
+    quiet: bool,
+    replot: bool,
+) -> None:
+    """Planning time against the number of rooms (Fig. 3(b)) or of robots (Fig. 3(c)).
+
+    Every run plans in its own process: cold (empty cache), warm (cost table and task
+    plan from the cache) and replan (cost table from the cache, the task planner runs
+    again); runs longer than --timeout are recorded as timeouts. Writes bench.csv,
+    bench.png and summary.md.
+    """
+    from tmpnav.bench import experiment
+
+    written: list[Path] = []
+    if replot:
+        run = experiment.replot(output / experiment.BENCH_CSV)
+    else:
+        spec = experiment.BenchSpec.parse(
+            rooms_text, robots_text, sessions, list(encodings), seed, timeout, scenario, workers
+        )
+        run = experiment.run(spec, None if quiet else (lambda line: click.echo(line, err=True)))
+        with writing(output):
+            written.append(experiment.write_csv(run, output))
+    with writing(output):
+        text, figures = experiment.write_summary(run, output, timeout)
+    click.echo(text)
+    for path in [*written, *figures]:
+        click.echo(f"wrote {path}")
+
+
+@cli.command()
+@output_option(True, "Copy the shipped scenarios (and their maps) into DIR; files already there are kept.")
+@report_errors
+def configs(output: Path | None) -> None:
+    """List the scenarios shipped with tmpnav, or copy them (-o DIR).
+
+    Any command takes a shipped scenario as configs/NAME.yaml, from any directory:
+    when there is no such file under the working directory, the shipped one is used.
+    """
+    from tmpnav import shipped
+    from tmpnav.scenario import load
+
+    if output is None:
+        paths = shipped.scenarios()
+        width = max(len(p.name) for p in paths) + len(shipped.PREFIX) + 1
+        for path in paths:
+            sc = load(path)
+            description = f": {sc.description}" if sc.description else ""
+            name = f"{shipped.PREFIX}/{path.name}"
+            click.echo(f"{name:<{width}}  {len(sc.robots)} robots, {len(sc.rooms)} rooms{description}")
+        return
+    with writing(output):
+        written, kept = shipped.copy_to(output)
+    for path in written:
+        click.echo(f"wrote {path}")
+    for path in kept:
+        click.echo(f"kept {path} (already there)")
+
+
+@cli.command()
+@report_errors
+def doctor() -> None:
+    """Check that everything tmpnav runs on is here (Java 17+ for ENHSP, OMPL, numba)."""
+    from importlib.metadata import version
+
+    from tmpnav.task.solve import JAVA_MIN, check_java, java_version
+
+    check_java()
+    click.echo(f"java: {java_version()} (ENHSP needs {JAVA_MIN}+): ok")
+    for package in ("unified-planning", "up-enhsp", "ompl", "filterpy", "numba", "numpy"):
+        click.echo(f"{package}: {version(package)}")
+
+
+@cli.command()
+@report_errors
+def reference() -> None:
+    """Print the scenario format reference (every key, unit, default) as Markdown."""
+    from tmpnav.scenario.reference import markdown
+
+    click.echo(markdown(), nl=False)
+
+
+def _one_line_warning(
+    message: Warning | str,
+    category: type[Warning],
+    filename: str,
+    lineno: int,
+    file: Any = None,
+    line: str | None = None,
+) -> None:
+    click.echo(f"warning: {message}", err=True)
+
+
+def main() -> None:
+    """Console entry point: warnings and command-line mistakes become one line each, never
+    a traceback (click's own usage errors included: ``error: ... (see 'tmpnav plan --help')``)."""
+    import warnings
+
+    warnings.showwarning = _one_line_warning
+    try:
+        code = cli.main(prog_name="tmpnav", standalone_mode=False)
+    except click.exceptions.NoArgsIsHelpError as err:  # a bare `tmpnav`: the help, as asked
+        click.echo(err.format_message())
+        sys.exit(0)
+    except click.UsageError as err:
+        hint = f" (see '{err.ctx.command_path} --help')" if err.ctx is not None else ""
+        click.echo(f"error: {err.format_message()}{hint}", err=True)
+        sys.exit(err.exit_code)
+    except click.ClickException as err:
+        click.echo(f"error: {err.format_message()}", err=True)
+        sys.exit(err.exit_code)
+    except click.Abort:
+        click.echo("error: interrupted", err=True)
+        sys.exit(130)
+    sys.exit(code if isinstance(code, int) else 0)

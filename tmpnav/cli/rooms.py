@@ -1,0 +1,94 @@
+"""``tmpnav rooms``: a scenario skeleton from a ROS map_server map (tmpnav/rooms/)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from tmpnav.cli.commands import cli
+from tmpnav.cli.options import report_errors, unwritable, writing
+
+
+def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path, ...]) -> dict[str, Path]:
+    """``-o`` of ``tmpnav rooms``: at most one .yaml scenario and one .png picture, writable."""
+    kinds = {".yaml": "scenario", ".yml": "scenario", ".png": "picture"}
+    out: dict[str, Path] = {}
+    for path in value:
+        kind = kinds.get(path.suffix.lower())
+        if kind is None:
+            raise click.BadParameter(f"{path}: expected a .yaml scenario or a .png picture", ctx=ctx, param=param)
+        if kind in out:
+            raise click.BadParameter(f"{path}: a {kind} is written once ({out[kind]})", ctx=ctx, param=param)
+        if why := unwritable(path, False):
+            raise click.BadParameter(why, ctx=ctx, param=param)
+        out[kind] = path
+    return out
+
+
+@cli.command()
+@click.argument("map_yaml", metavar="MAP.yaml", type=click.Path(path_type=Path, dir_okay=False))
+@click.option(
+    "-o",
+    "--output",
+    "outputs",
+    multiple=True,
+    type=click.Path(path_type=Path, dir_okay=False),
+    callback=_rooms_outputs,
+    help="scenario.yaml to write (default: print it), and/or rooms.png: the segmentation over the map.",
+)
+@click.option(
+    "--min-area",
+    type=click.FloatRange(min=0, min_open=True),
+    default=3.0,
+    show_default=True,
+    metavar="M2",
+    help="Smaller regions join their neighbour (a closet, a niche) or are left out.",
+)
+@click.option(
+    "--max-rooms", type=click.IntRange(min=1), metavar="N", help="Join the least separated rooms down to N rooms."
+)
+@report_errors
+def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_rooms: int | None) -> None:
+    """Segment a ROS map_server map into rooms and write a scenario skeleton.
+
+    Finds the rooms and open areas (distance-transform watershed), the doors between them and
+    landmark candidates (pillars, isolated obstacles, door frames, corners), and writes a
+    scenario that validates and plans as written: rooms R1..Rn with polygons, doors, landmarks,
+    a placeholder robot and two goal rooms, with comments saying what to check.
+    """
+    from tmpnav.rooms.proposal import propose, read_map
+    from tmpnav.rooms.segment import SegmentParams
+    from tmpnav.rooms.skeleton import save, skeleton
+    from tmpnav.rooms.verify import verify
+    from tmpnav.scenario import display_path
+
+    spec, grid = read_map(map_yaml)
+    proposal, warnings = verify(propose(spec, grid, SegmentParams(min_area=min_area, max_rooms=max_rooms)))
+    for warning in warnings:  # not expected: the proposal is built to pass
+        click.echo(f"warning: {warning}", err=True)
+    left_out = [r.name for r in proposal.rooms if not r.reachable]
+    if left_out:
+        click.echo(
+            f"warning: {', '.join(left_out)} left out (as comments): a robot of radius 0.25 m does not reach "
+            "them from r1's start (a narrow door, or noise in the map at a doorway)",
+            err=True,
+        )
+    target = outputs.get("scenario")
+    text = skeleton(proposal, target)
+    found = (
+        f"{len(proposal.usable_rooms)} rooms, {len(proposal.doors)} doors, "
+        f"{len(proposal.landmarks)} landmark candidates"
+    )
+    if target is None:
+        click.echo(text, nl=False)
+    else:
+        with writing(target):
+            save(target, text)
+        click.echo(f"wrote {target}: {found}")
+    if "picture" in outputs:
+        from tmpnav.report.rooms_plot import plot_rooms
+
+        with writing(outputs["picture"]):
+            plot_rooms(proposal, outputs["picture"], f"{display_path(spec.yaml_path)}: {found}")
+        click.echo(f"wrote {outputs['picture']}", err=target is None)

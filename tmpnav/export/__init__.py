@@ -1,0 +1,1 @@
+"""Plans out of tmpnav: waypoint files for the robots' navigation stacks (nav2)."""

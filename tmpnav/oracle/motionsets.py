@@ -1,0 +1,226 @@
+"""Motions as the compiled kernel reads them, and the runs of the kernel the oracle makes.
+
+A :class:`MotionSet` is every motion one robot may drive from one start state, sorted in
+lexicographic order of their controls: neighbours share the longest prefixes. A
+:class:`MotionTable` lays many motions end to end (:class:`tmpnav.belief.sequences.MotionArrays`)
+and runs simulations of them through the belief stage (:meth:`MotionTable.propagate`).
+:func:`trajectory` is the one simulation with its whole history that the re-simulation of a
+plan needs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+
+from tmpnav.belief.sequences import (
+    EKFConstants,
+    MotionArrays,
+    SequenceBatch,
+    SequenceResults,
+    Sequences,
+    StartGroups,
+    propagate_sequences,
+    standard_normal_draws,
+)
+from tmpnav.belief.trie import common_prefix_matrix
+from tmpnav.oracle.motions import MotionLibrary, NominalMotion
+from tmpnav.oracle.requests import StartState
+from tmpnav.types import CostTerms
+
+
+@dataclass
+class MotionSet:
+    """The motions of one robot from one start state, in lexicographic order of controls.
+
+    Neighbours in this order share the longest prefixes; ``prefix[a, b]`` is the number of
+    leading steps motions a and b have in common. ``by_goal`` maps a goal node to its
+    motion's position.
+    """
+
+    robot: str
+    start: StartState
+    motions: list[NominalMotion]
+    by_goal: dict[int, int]
+    prefix: np.ndarray
+    steps: np.ndarray  # (k,) T of each motion
+    c_u: np.ndarray  # (k,) control usage of each motion
+    goal_xy: np.ndarray  # (k, 2) nominal final position
+
+    @staticmethod
+    def build(robot: str, start: StartState, motions: dict[int, NominalMotion], dt: float) -> MotionSet:
+        ordered = sorted(motions.items(), key=lambda kv: tuple(kv[1].controls.ravel().tolist()))
+        ms = [m for _, m in ordered]
+        T = np.array([m.n_steps for m in ms], dtype=np.int64)
+        off = np.concatenate([[0], np.cumsum(T)[:-1]]).astype(np.int64)
+        ctrl = np.concatenate([m.controls for m in ms]).reshape(-1, 2)
+        prefix = common_prefix_matrix(ctrl, off, T, np.arange(len(ms), dtype=np.int64))
+        return MotionSet(
+            robot,
+            start,
+            ms,
+            {g: k for k, (g, _) in enumerate(ordered)},
+            prefix,
+            T,
+            np.array([m.c_u(dt) for m in ms]),
+            np.array([m.poses[-1, :2] for m in ms]),
+        )
+
+    def goals_in(self, lib: MotionLibrary, room: str) -> list[int]:
+        """Positions of the motions to the room's instantiations, in the roadmap's order."""
+        return [self.by_goal[g] for g in lib.roadmap.instantiations[room] if g in self.by_goal]
+
+
+SetKey = tuple[str, StartState]
+
+
+def motion_sets(lib: MotionLibrary, wanted: dict[SetKey, set[int]]) -> dict[SetKey, MotionSet]:
+    """The motion set of each (robot, start state) to the goal nodes wanted from it; a
+    start that reaches none of them has no set."""
+    sets = {}
+    for (robot, start), goals in wanted.items():
+        motions = {g: lib.motion(robot, start.node, start.heading, g) for g in sorted(goals)}
+        valid = {g: m for g, m in motions.items() if m is not None}
+        if valid:
+            sets[(robot, start)] = MotionSet.build(robot, start, valid, lib.scenario.models.dt)
+    return sets
+
+
+def chain_restarts(
+    P1: np.ndarray, a: np.ndarray, horizon: np.ndarray, P2: np.ndarray | None = None, b: np.ndarray | None = None
+) -> np.ndarray:
+    """Steps each simulation shares with the previous one (0 for the first), for one robot
+    moving along motions ``a`` of a set with prefix matrix P1 (and a second along ``b``)."""
+    start = np.zeros(a.shape[0], dtype=np.int64)
+    if a.shape[0] > 1:
+        shared = P1[a[:-1], a[1:]]
+        if P2 is not None and b is not None:
+            shared = np.minimum(shared, P2[b[:-1], b[1:]])
+        start[1:] = np.minimum(shared, horizon[:-1])
+    return start
+
+
+class GroupStart(NamedTuple):
+    """The initial joint belief of a group of simulations and its mutual-noise seed."""
+
+    mean0: np.ndarray
+    cov0: np.ndarray
+    seed: int
+
+
+class MotionTable:
+    """Motions laid out for the compiled kernel (concatenated arrays with offsets)."""
+
+    def __init__(self, motions: list[NominalMotion], landmarks: int, dt: float):
+        self.offset: dict[int, int] = {}
+        self.motions = motions
+        self.c_u = np.array([m.c_u(dt) for m in motions])
+        streams: dict[int, int] = {}
+        stream = np.array([streams.setdefault(m.noise_seed, len(streams)) for m in motions], dtype=np.int64)
+        self.seeds = list(streams)  # one landmark-noise stream per robot and start node
+        self.arrays = MotionArrays.of(
+            [m.controls for m in motions],
+            [m.poses for m in motions],
+            [m.lm_visible for m in motions],
+            stream,
+            landmarks,
+        )
+
+    @staticmethod
+    def of_sets(sets: list[MotionSet], landmarks: int, dt: float) -> MotionTable:
+        table = MotionTable([m for ms in sets for m in ms.motions], landmarks, dt)
+        k = 0
+        for ms in sets:
+            table.offset[id(ms)] = k
+            k += len(ms.motions)
+        return table
+
+    def ids(self, ms: MotionSet, local: np.ndarray) -> np.ndarray:
+        """Table rows of the motions at positions ``local`` of set ``ms``."""
+        return self.offset[id(ms)] + local
+
+    def goal_xy(self, ids: np.ndarray) -> np.ndarray:
+        """Nominal final position (..., 2) of the motions ``ids`` (any shape)."""
+        a = self.arrays
+        return a.poses[a.offset[ids] + ids + a.steps[ids], :2]
+
+    def propagate(
+        self,
+        lib: MotionLibrary,
+        n: int,
+        groups: list[GroupStart],
+        sequences: Sequences,
+        mutual_visible: np.ndarray,
+        mutual_noise: np.ndarray | None = None,
+        c_sigma_history: bool = False,
+    ) -> SequenceResults:
+        """Run ``sequences`` of n robots over this table's motions in one kernel call.
+
+        Landmark noise is drawn per stream (robot and start node), mutual noise per group
+        from its seed unless ``mutual_noise`` (G, T+1, n, n, 2) is given.
+        """
+        models = lib.scenario.models
+        landmarks = np.ascontiguousarray(lib.world.landmark_xy)
+        T = int(sequences.horizon.max(initial=0))
+        if mutual_noise is None:
+            mutual_noise = standard_normal_draws([g.seed for g in groups], (T + 1, n, n, 2))
+        batch = SequenceBatch(
+            n=n,
+            ekf=EKFConstants.of(models, landmarks),
+            motions=self.arrays,
+            landmark_noise=standard_normal_draws(self.seeds, (T + 1, landmarks.shape[0], 2)),
+            groups=StartGroups(np.stack([g.mean0 for g in groups]), np.stack([g.cov0 for g in groups]), mutual_noise),
+            sequences=sequences,
+            mutual_visible=mutual_visible,
+            c_sigma_history=c_sigma_history,
+        )
+        return propagate_sequences(batch)
+
+
+def row_offsets(horizon: np.ndarray) -> np.ndarray:
+    """First row of each simulation in a stack of per-step rows (steps 0..horizon)."""
+    return np.concatenate([[0], np.cumsum(horizon + 1)[:-1]]).astype(np.int64)
+
+
+@dataclass
+class Trajectory:
+    """One simulation with its history: ``means`` (T+1, 3n), ``covs`` (T+1, 3n, 3n)."""
+
+    means: np.ndarray
+    covs: np.ndarray
+    terms: tuple[CostTerms, ...]
+    mutual_steps: int
+
+
+def trajectory(
+    lib: MotionLibrary,
+    motions: list[NominalMotion],
+    mean0: np.ndarray,
+    cov0: np.ndarray,
+    mvis: np.ndarray,
+    mu_noise: np.ndarray,
+) -> Trajectory:
+    """Simulate n robots through their motions from a joint belief, keeping every step.
+
+    ``mvis`` (h+1, n, n) says who sees whom; ``mu_noise`` (h+1, n, n, 2) are the draws of
+    the mutual observations. Used to re-simulate the plan with all robots in one state.
+    """
+    n = len(motions)
+    table = MotionTable(motions, lib.world.landmark_xy.shape[0], lib.scenario.models.dt)
+    h = int(table.arrays.steps.max(initial=0))
+    one = Sequences(
+        group=np.zeros(1, dtype=np.int64),
+        motions=np.arange(n, dtype=np.int64)[None],
+        restart=np.zeros(1, dtype=np.int64),
+        horizon=np.array([h], dtype=np.int64),
+        mutual_offset=np.zeros(1, dtype=np.int64),
+    )
+    run = table.propagate(lib, n, [GroupStart(mean0, cov0, 0)], one, np.ascontiguousarray(mvis), mu_noise[None])
+    arrival = run.arrival_xy[0]
+    terms = tuple(
+        CostTerms(float(table.c_u[i]), float(np.hypot(*(arrival[i] - m.poses[-1, :2]))), float(run.c_sigma[0, i]))
+        for i, m in enumerate(motions)
+    )
+    return Trajectory(run.last_means[: h + 1].copy(), run.last_covs[: h + 1].copy(), terms, int(run.mutual_steps[0]))

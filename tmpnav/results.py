@@ -1,0 +1,132 @@
+"""What a planning run returns: the task stage's result and the pipeline's report.
+
+``TaskResult`` is what :func:`tmpnav.task.stage.plan_task` returns (the ordered plan steps, their
+costs as the planner saw them, how big the task problem was, whether the plan came from the
+cache); ``PlanReport`` is what :func:`tmpnav.pipeline.plan` returns and every writer of
+``report/`` reads (plan.json, the terminal summary, plan.png). Both are typed values: the
+report code reads attributes, never dictionary keys.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from tmpnav.types import CostTable, MoveKey, PlannedAction, PlanStatus, Roadmap, Scenario, TrajectoryStep
+
+if TYPE_CHECKING:  # annotations only: these modules import this one's stages
+    from tmpnav.oracle.oracle import OracleStats
+    from tmpnav.task.encode import EncodedProblem
+    from tmpnav.world import World
+
+#: a JSON value (plan.json, cache entries), as the standard library's ``json`` reads and writes it
+JSON = dict[str, "JSON"] | list["JSON"] | str | int | float | bool | None
+
+#: the pipeline's stages in the order they run; a run's ``total`` is all of them but ``load``
+STAGES = ("load", "roadmap", "oracle", "encode", "planner", "resimulate")
+
+
+@dataclass
+class StageTimes:
+    """Seconds spent in each stage of a run (keys of :data:`STAGES`), filled in as it runs."""
+
+    seconds: dict[str, float] = field(default_factory=dict)
+
+    def add(self, stage: str, dt: float) -> None:
+        self.seconds[stage] = self.seconds.get(stage, 0.0) + dt
+
+    @contextmanager
+    def timed(self, stage: str) -> Iterator[None]:
+        """Add the wall-clock time of the ``with`` block to ``stage``."""
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.add(stage, time.perf_counter() - start)
+
+    def close(self) -> None:
+        """Record ``total``: every stage but ``load`` (scenario parsing and world building)."""
+        self.seconds["total"] = sum(v for k, v in self.seconds.items() if k not in ("load", "total"))
+
+
+@dataclass(frozen=True)
+class TaskCounts:
+    """How big the task problem was (plan.json ``task``)."""
+
+    single_moves: int  # cost-table entries of one robot moving alone
+    pair_moves_evaluated: int  # pairs of moves the oracle costed jointly
+    actions: int  # actions of the task problem
+    pair_actions: int  # grounded paired actions kept in the problem
+    reshaped_rooms: int  # rooms with a cost-reshaping potential
+
+
+@dataclass(frozen=True)
+class TaskResult:
+    """The task stage's answer: the plan's steps in canonical order, with their table costs."""
+
+    status: PlanStatus
+    engine: str  # the engine that solved the problem (unified-planning's name for it)
+    steps: tuple[tuple[MoveKey, ...], ...]  # each step: the moves of the 1 or 2 robots it moves
+    action_names: tuple[str, ...]  # the planner's action name of each step
+    step_costs: tuple[float, ...]  # each step's cost in the cost table, as the planner saw it
+    counts: TaskCounts
+    plan_hit: bool  # the plan was remembered for this exact problem; nothing was encoded or solved
+    encoded: EncodedProblem | None = field(default=None, repr=False, compare=False)  # None after a plan_hit
+
+    @property
+    def planner_cost(self) -> float:
+        return float(sum(self.step_costs))
+
+
+@dataclass(frozen=True)
+class CacheUse:
+    """What the disk cache did during a run (plan.json ``cache``)."""
+
+    enabled: bool
+    directory: Path | None
+    hits: int  # oracle requests answered from the cache
+    misses: int  # oracle requests computed
+    roadmap_hit: bool  # the roadmap was loaded instead of grown
+    table_hit: bool  # the whole cost table was loaded
+    plan_hit: bool  # the task plan was remembered
+    warnings: tuple[str, ...] = ()  # damaged cache files set aside, entries recomputed
+
+
+@dataclass(frozen=True)
+class PlanReport:
+    """Everything ``tmpnav plan`` reports (the JSON schema is docs/plan-json.md)."""
+
+    scenario: Scenario  # with the command line's overrides applied
+    world: World
+    roadmap: Roadmap
+    table: CostTable  # the costs the task planner saw
+    task: TaskResult
+    actions: tuple[PlannedAction, ...]  # the plan's steps, re-simulated with carried-over beliefs
+    trajectories: dict[str, list[TrajectoryStep]]  # robot -> belief at every control step
+    times: StageTimes
+    cache: CacheUse
+    oracle: OracleStats
+
+    @property
+    def encoding(self) -> str:
+        return self.scenario.planner.encoding
+
+    @property
+    def planner(self) -> str:
+        return self.scenario.planner.name
+
+    @property
+    def status(self) -> PlanStatus:
+        return self.task.status
+
+    @property
+    def planner_cost(self) -> float:
+        return self.task.planner_cost
+
+    @property
+    def resimulated_cost(self) -> float:
+        return float(sum(a.resimulated_cost for a in self.actions))

@@ -1,0 +1,1 @@
+"""Rooms from a robot's map: segmentation, doors, landmark candidates, scenario skeleton."""

@@ -1,0 +1,189 @@
+"""A :class:`~tmpnav.rooms.proposal.Proposal` -> the text of a scenario YAML file, with comments
+that say what the user must check. The file validates and plans as written: the robot is a
+placeholder at the roomiest spot of the best-connected room and the goals are pre-filled."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable
+from pathlib import Path
+
+import numpy as np
+
+from tmpnav import __version__
+from tmpnav.rooms.proposal import DEEP_DOOR, ROBOT_RADIUS, Proposal, RoomProposal
+
+WIDTH = 100  # characters per line of a wrapped polygon
+
+
+def scenario_yaml(proposal: Proposal, name: str, map_ref: str, map_shown: str) -> str:
+    """The scenario file; ``map_ref`` is the map YAML's path relative to the scenario file and
+    ``map_shown`` the path to mention in the header."""
+    parts = [
+        _header(proposal, map_shown),
+        f"name: {json.dumps(name)}",
+        f"description: {json.dumps(f'Rooms segmented from {map_shown} by tmpnav rooms; check them (see above)')}",
+        "map:",
+        f"  ros: {json.dumps(map_ref)}",
+        "",
+        *_rooms(proposal),
+        "",
+        *_doors(proposal),
+        "",
+        *_landmarks(proposal),
+        "",
+        *_robot(proposal),
+        "",
+        "roadmap:",
+        f"  samples: {proposal.samples}  # PRM milestones: tmpnav rooms checked that every room connects with these",
+        "  instantiations: 4  # goal poses sampled in each room",
+        "  seed: 1",
+        "",
+        "goals:",
+        f"  visit: [{', '.join(proposal.goals)}]  # pre-filled so that `tmpnav plan` runs as written: put yours",
+    ]
+    return "\n".join(parts) + "\n"
+
+
+def _header(p: Proposal, map_shown: str) -> str:
+    usable = p.usable_rooms
+    text = f"""\
+Scenario skeleton written by `tmpnav rooms` (tmpnav {__version__}) from the ROS map {map_shown}.
+Found {len(usable)} rooms, {len(p.doors)} doors, {len(p.landmarks)} landmark candidates. Coordinates: metres, map frame.
+`tmpnav show THIS_FILE -o world.png` draws it. Check before you plan:
+
+1. rooms: R1..R{len(p.rooms)} are numbered in reading order (top row of the map first, left to right).
+   Rename them (a name starts with a letter, then letters, digits, '_' or '-'), delete those
+   nobody needs to visit, and fix outlines that split or join rooms wrongly (or run
+   `tmpnav rooms` again with --min-area or --max-rooms).
+2. doors: all open. Set `state: closed` on doors that are shut: a closed door is a wall.
+3. landmarks: candidates (isolated pillars and obstacles, door frames, room corners). Keep
+   those your robots' sensors really recognise, and add the ones you know of.
+4. robots: r1 is a placeholder (radius {ROBOT_RADIUS:g} m) at the roomiest spot of {p.robot_room}. Put your
+   robots with their real start poses, radii and speeds.
+5. goals: pre-filled with the rooms nearest to r1 so that `tmpnav plan` runs as written.
+   Replace them with the rooms your robots must visit."""
+    return "\n".join(f"# {line}".rstrip() for line in text.splitlines()) + "\n"
+
+
+def _rooms(p: Proposal) -> list[str]:
+    lines = ["rooms:"]
+    hidden = [r for r in p.rooms if not r.reachable]
+    for room in p.usable_rooms:
+        lines.append(f"  - name: {room.name}  # {_room_note(p, room)}")
+        lines += _wrap("    polygon: ", room.polygon)
+    if hidden:
+        lines.append(
+            f"  # Not reachable by a robot of radius {ROBOT_RADIUS:g} m from r1's start (a passage narrower than "
+            f"{2 * ROBOT_RADIUS + 2 * p.grid.resolution:.2f} m?), left out:"
+        )
+        for room in hidden:
+            lines.append(f"  # - name: {room.name}  # {_room_note(p, room)}")
+            lines += ["  # " + line for line in _wrap("    polygon: ", room.polygon)]
+    return lines
+
+
+def _room_note(p: Proposal, room: RoomProposal) -> str:
+    doors = [
+        f"{name} to {p.room(d.rooms[1] if d.rooms[0] == room.label else d.rooms[0]).name}"
+        for name, d in p.doors.items()
+        if room.label in d.rooms
+    ]
+    return f"{room.area:.1f} m², {room.width:.1f} m wide; doors: {', '.join(doors) or 'none'}"
+
+
+def _doors(p: Proposal) -> list[str]:
+    if not p.doors:
+        return ["doors: []  # no passage between two rooms was found"]
+    lines = ["doors:  # from jamb to jamb; open doors are carved free, closed ones become walls"]
+    for name, d in p.doors.items():
+        a, b = p.room(d.rooms[0]).name, p.room(d.rooms[1]).name
+        note = f"{a} - {b}, {d.width:.2f} m wide"
+        deep = ""
+        if name in p.deep_doors:
+            deep = f", thickness: {DEEP_DOOR:g}"
+            note += f"; carved {DEEP_DOOR:g} m deep: noise in the map blocks the doorway (if closed: 0.15)"
+        lines.append(f"  - {{name: {name}, segment: {_points(d.segment)}, state: open{deep}}}  # {note}")
+    return lines
+
+
+def _landmarks(p: Proposal) -> list[str]:
+    if not p.landmarks:
+        return ["landmarks: []  # none found: add the ones you know of"]
+    lines = ["landmarks:  # candidates: keep those your robots recognise"]
+    for name, lm in p.landmarks.items():
+        x, y = lm.position
+        room = p.room(lm.room).name
+        lines.append(f"  - {{name: {name}, kind: {lm.kind}, position: [{x:.2f}, {y:.2f}]}}  # {room}: {lm.note}")
+    return lines
+
+
+def _robot(p: Proposal) -> list[str]:
+    x, y, theta = p.robot_pose
+    return [
+        "robots:",
+        f"  - name: r1  # a placeholder in {p.robot_room}: give your robots' start poses",
+        f"    pose: [{x:.2f}, {y:.2f}, {theta:.2f}]  # x, y (m), heading (rad)",
+        f"    radius: {ROBOT_RADIUS:g}",
+    ]
+
+
+def _points(points: Iterable[Iterable[float]]) -> str:
+    return "[" + ", ".join(f"[{_num(x)}, {_num(y)}]" for x, y in np.asarray(list(points), dtype=float)) + "]"
+
+
+def _num(v: float) -> str:
+    text = f"{v:.2f}"
+    return "0.00" if text == "-0.00" else text
+
+
+def _wrap(prefix: str, points: np.ndarray) -> list[str]:
+    """``prefix`` and a flow sequence of points, broken between points to fit ``WIDTH``."""
+    items = [f"[{_num(x)}, {_num(y)}]" for x, y in np.asarray(points, dtype=float)]
+    lines, line = [], prefix + "["
+    for k, item in enumerate(items):
+        piece = item + ("]" if k == len(items) - 1 else ",")
+        if len(line) + len(piece) + 1 > WIDTH and not line.endswith("["):
+            lines.append(line)
+            line = " " * (len(prefix) + 1) + piece
+        else:
+            line += ("" if line.endswith("[") else " ") + piece
+    return [*lines, line]
+
+
+def skeleton(proposal: Proposal, target: Path | None) -> str:
+    """The scenario text to write to ``target`` (None: to print, paths relative to the working
+    directory), named after ``target`` or the map, the map referred to relative to it."""
+    name = scenario_name(target.stem if target is not None else f"{proposal.map.yaml_path.stem}-rooms")
+    return skeleton_in(proposal, target.parent if target is not None else Path.cwd(), name)
+
+
+def skeleton_in(proposal: Proposal, folder: Path, name: str) -> str:
+    """The scenario text for a file in ``folder`` (the map path is relative to it)."""
+    import os
+
+    from tmpnav.scenario import display_path
+
+    map_path = proposal.map.yaml_path
+    return scenario_yaml(proposal, name, os.path.relpath(map_path, folder.absolute()), display_path(map_path))
+
+
+def scenario_name(stem: str) -> str:
+    """``stem`` made a valid scenario name: a letter first, then letters, digits, '_' or '-'."""
+    name = "".join(c if c.isalnum() or c in "_-" else "-" for c in stem).strip("-_")
+    return name if name[:1].isalpha() else f"map-{name}".rstrip("-")
+
+
+def save(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` atomically: a temporary file beside it (created with the
+    umask's permissions, as ``path`` would be) renamed over it."""
+    import os
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
+    try:
+        with open(tmp, "x", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)

@@ -1,0 +1,210 @@
+"""The task problem's single moves as a vehicle routing problem, solved by OR-Tools.
+
+A thin adapter (the only module of tmpnav that imports ``ortools``): it gives plain data
+in and plain data out, and is meant for an initial assignment of rooms to robots, a good
+plan where the exact planner cannot go (20 rooms and more), and a yardstick for the lower
+bound of :mod:`tmpnav.task.bound`.
+
+The model. Vehicles are the robots, each starting at its start location, with open
+routes (each vehicle ends at a dummy node that every node reaches at cost 0). The nodes
+to visit are the rows of :func:`tmpnav.task.bound.required_entries`: every goal room that
+is nobody's start and nobody's target (any robot with a move into it may take it), and
+every target room of a robot that does not start there (only that robot may take it), so
+a robot's start room that is a goal counts as visited. Rooms that are nobody's goal, start
+or target are optional waypoints (a detour through one may be cheaper than the direct
+move). Arc costs depend on the vehicle: the table's single-move cost in thousandths
+(``COST_SCALE``); a move that is not in the table is forbidden, never merely expensive.
+Pairs are not modelled: the routes are plans of single moves, and the table cost
+reported is theirs.
+
+Executed robot after robot, the routes are a plan of the ``mixed`` (and ``single``)
+encoding: each room is entered once, or once by each robot that targets it.
+
+Routes are a subset of the plans: a plan may also pass through a room that is another
+robot's target before that robot gets there, which can be cheaper when the table's costs
+break the triangle inequality, or necessary when a move is missing. So the best
+routes may cost more than the best single-move plan; on tables whose costs obey the
+triangle inequality they cost the same (tests/task/test_routing.py).
+
+Search: a first solution (``PATH_CHEAPEST_ARC`` by default), then guided local search
+until the time limit (or ``solution_limit`` solutions). OR-Tools' local search is
+single-threaded and deterministic up to its stopping point: with a ``solution_limit``
+that stops the search first, the routes are the same on every run; with a time limit
+they depend on how far the search got, so on the machine's speed and load. Guided local
+search never proves optimality. ``proved`` is "optimal" or "infeasible" when OR-Tools
+reports that status (it does on very small models): a statement about routes, not about
+every plan. One proof holds for every plan: "infeasible" with
+status ``NO_ROBOT_CAN_ENTER``, when a goal room has no move of an allowed robot into it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from tmpnav.task.bound import required_entries
+from tmpnav.task.encodings import COST_SCALE
+from tmpnav.types import CostTable, Goals, MoveKey
+
+#: OR-Tools' first-solution strategies that tmpnav offers (names of its enum)
+FIRST_SOLUTION = ("PATH_CHEAPEST_ARC", "PARALLEL_CHEAPEST_INSERTION", "SAVINGS", "GLOBAL_CHEAPEST_ARC")
+
+
+@dataclass(frozen=True)
+class Routes:
+    """Per robot, the rooms it enters in order (its start not included); the table cost
+    of those single moves (inf when no routes were found); OR-Tools' status name; and
+    what was proved: "optimal", "infeasible" or "nothing"."""
+
+    rooms: dict[str, tuple[str, ...]]
+    cost: float
+    status: str
+    proved: str
+
+    @property
+    def found(self) -> bool:
+        return math.isfinite(self.cost)
+
+    def moves(self, table: CostTable) -> list[MoveKey]:
+        """The routes as single moves, robot after robot (a valid plan in this order)."""
+        out: list[MoveKey] = []
+        for r in table.robots:
+            here = table.start_location[r]
+            for room in self.rooms.get(r, ()):
+                out.append((r, here, room))
+                here = room
+        return out
+
+
+def solve_routes(
+    table: CostTable,
+    goals: Goals,
+    time_limit: float,
+    solution_limit: int | None = None,
+    first_solution: str = "PATH_CHEAPEST_ARC",
+) -> Routes:
+    """Routes for the robots that visit every goal, by OR-Tools within ``time_limit`` s.
+
+    ``solution_limit`` stops the search after that many solutions (reproducible runs);
+    ``first_solution`` is one of ``FIRST_SOLUTION``. See the module docstring for the model.
+    """
+    if first_solution not in FIRST_SOLUTION:
+        raise ValueError(f"first_solution {first_solution!r} is not one of {', '.join(FIRST_SOLUTION)}")
+    if time_limit <= 0:
+        raise ValueError(f"time_limit must be positive, got {time_limit}")
+    tasks = required_entries(table, goals)
+    robots = table.robots
+    if not tasks:
+        return Routes({r: () for r in robots}, 0.0, "NOTHING_TO_VISIT", "optimal")
+    allowed = [_allowed(table, robot, room) for robot, room in tasks]
+    if not all(allowed):
+        return Routes({}, math.inf, "NO_ROBOT_CAN_ENTER", "infeasible")
+    waypoints: list[tuple[str | None, str]] = [(None, x) for x in _waypoints(table, goals)]
+    model = _Model(table, tasks + waypoints, allowed + [_allowed(table, None, x) for _, x in waypoints])
+    for node in range(model.first_task + len(tasks), len(model.location)):
+        model.routing.AddDisjunction([model.manager.NodeToIndex(node)], 0)  # optional, free to skip
+    return model.solve(time_limit, solution_limit, first_solution)
+
+
+def _waypoints(table: CostTable, goals: Goals) -> list[str]:
+    """Rooms no plan has to enter and nobody else can enter after a robot passes through:
+    not a goal, nobody's start, nobody's target. A route may pass through them when that
+    is cheaper than the direct move (the table's costs need not obey the triangle inequality)."""
+    taken = set(goals.all_rooms) | set(table.start_location.values())
+    entered = {x for _, _, x in table.single}
+    return [x for x in table.locations if x not in taken and x in entered]
+
+
+def _allowed(table: CostTable, robot: str | None, room: str) -> list[int]:
+    """Indices of the robots that may take a task: those with a move into its room."""
+    candidates = table.robots if robot is None else (robot,)
+    entering = {r for r, _, x in table.single if x == room}
+    return [table.robots.index(r) for r in candidates if r in entering]
+
+
+class _Model:
+    """The OR-Tools routing model of one task problem (nodes: starts, ends, tasks)."""
+
+    def __init__(self, table: CostTable, tasks: list[tuple[str | None, str]], allowed: list[list[int]]):
+        from ortools.constraint_solver import pywrapcp
+
+        self.table, self.tasks = table, tasks
+        n_v = len(table.robots)
+        # nodes: 0..n_v-1 the robots' starts, n_v..2n_v-1 their (dummy) ends, then the tasks
+        self.location = [table.start_location[r] for r in table.robots] + [""] * n_v + [x for _, x in tasks]
+        self.first_task = 2 * n_v
+        self.vehicles = [[v] for v in range(n_v)] * 2 + allowed
+        starts, ends = list(range(n_v)), list(range(n_v, 2 * n_v))
+        self.manager = pywrapcp.RoutingIndexManager(len(self.location), n_v, starts, ends)
+        self.routing = pywrapcp.RoutingModel(self.manager)
+        for v, r in enumerate(table.robots):
+            callback = self.routing.RegisterTransitMatrix(self._matrix(r))
+            self.routing.SetArcCostEvaluatorOfVehicle(callback, v)
+        for node in range(self.first_task, len(self.location)):
+            # VehicleVar's domain, not SetAllowedVehiclesForIndex: that binding rejects Python lists
+            self.routing.VehicleVar(self.manager.NodeToIndex(node)).SetValues([-1, *self.vehicles[node]])
+        self._forbid_missing_moves()
+
+    def _matrix(self, robot: str) -> list[list[int]]:
+        """Arc costs of one robot in thousandths; a missing move gets a cost that no
+        solution pays (it is also forbidden by a constraint)."""
+        n = len(self.location)
+        worst = max((c for (r, _, _), c in self.table.single.items() if r == robot), default=0.0)
+        missing = (n + 1) * round(worst * COST_SCALE + 1)
+        rows = []
+        for i in range(n):
+            row = [0] * n
+            for j in range(self.first_task, n):
+                cost = self.table.single.get((robot, self.location[i], self.location[j]))
+                row[j] = missing if cost is None else round(cost * COST_SCALE)
+            rows.append(row)
+        return rows
+
+    def _forbid_missing_moves(self) -> None:
+        """Remove each arc i -> j from every vehicle whose table has no such move."""
+        solver, n = self.routing.solver(), len(self.location)
+        from_nodes = [*range(len(self.table.robots)), *range(self.first_task, n)]
+        for i in from_nodes:
+            next_i = self.routing.NextVar(self.manager.NodeToIndex(i))
+            for j in range(self.first_task, n):
+                common = sorted(set(self.vehicles[i]) & set(self.vehicles[j]))
+                able = [v for v in common if self._has_move(v, i, j)]
+                index_j = self.manager.NodeToIndex(j)
+                if i == j or not able:
+                    if i != j:
+                        next_i.RemoveValue(index_j)
+                    continue
+                vehicle_i = self.routing.VehicleVar(self.manager.NodeToIndex(i))
+                for v in set(common) - set(able):
+                    solver.Add(solver.IsEqualCstVar(next_i, index_j) + solver.IsEqualCstVar(vehicle_i, v) <= 1)
+
+    def _has_move(self, v: int, i: int, j: int) -> bool:
+        return (self.table.robots[v], self.location[i], self.location[j]) in self.table.single
+
+    def solve(self, time_limit: float, solution_limit: int | None, first_solution: str) -> Routes:
+        from ortools.constraint_solver import pywrapcp, routing_enums_pb2
+
+        params = pywrapcp.DefaultRoutingSearchParameters()
+        params.first_solution_strategy = getattr(routing_enums_pb2.FirstSolutionStrategy, first_solution)
+        params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH
+        params.time_limit.FromMilliseconds(max(1, round(time_limit * 1000)))
+        if solution_limit is not None:
+            params.solution_limit = solution_limit
+        solution = self.routing.SolveWithParameters(params)
+        status = routing_enums_pb2.RoutingSearchStatus.Value.Name(self.routing.status())
+        proved = {"ROUTING_OPTIMAL": "optimal", "ROUTING_INFEASIBLE": "infeasible"}.get(status, "nothing")
+        if solution is None:
+            return Routes({}, math.inf, status, proved)
+        rooms = {r: self._route(solution, v) for v, r in enumerate(self.table.robots)}
+        cost = 0.0
+        for r, here, room in Routes(rooms, 0.0, status, proved).moves(self.table):
+            cost += self.table.single[(r, here, room)]
+        return Routes(rooms, cost, status, proved)
+
+    def _route(self, solution: object, v: int) -> tuple[str, ...]:
+        index, out = self.routing.Start(v), list[str]()
+        while True:
+            index = solution.Value(self.routing.NextVar(index))  # type: ignore[attr-defined]
+            if self.routing.IsEnd(index):
+                return tuple(out)
+            out.append(self.location[self.manager.IndexToNode(index)])

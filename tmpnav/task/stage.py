@@ -1,0 +1,102 @@
+"""Stage 6: the task stage's entry point, from a cost table to the ordered plan steps.
+
+:func:`plan_task` owns everything between the oracle and the re-simulation: the lookup of
+a remembered plan (:mod:`~tmpnav.task.memo`), encoding (:mod:`~tmpnav.task.encode`),
+solving (:mod:`~tmpnav.task.solve`), decoding and ordering the plan's steps
+(:mod:`~tmpnav.task.decode`) and their costs as the planner saw them. A new planner plugs
+in behind :func:`~tmpnav.task.solve.solve` (registered in ``EXTRA_ENGINES``); one that
+needs more than a PDDL problem (a search over sub-problems, a cost model that carries
+beliefs) takes a :class:`TaskProblem` and returns a :class:`~tmpnav.results.TaskResult`,
+like this function.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from tmpnav.results import StageTimes, TaskCounts, TaskResult
+from tmpnav.task.decode import canonical_order, decode, step_cost
+from tmpnav.task.encode import EncodedProblem, encode
+from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
+from tmpnav.task.solve import solve
+from tmpnav.types import CostTable, Goals, PlannerOptions, Scenario
+
+
+@dataclass(frozen=True)
+class TaskProblem:
+    """What the task stage plans: the goals over the oracle's cost table, with the planner options."""
+
+    table: CostTable
+    goals: Goals
+    planner: PlannerOptions  # engine, encoding, time limit, pair_min_gain
+    name: str  # the scenario's name: the PDDL problem's name
+
+    @classmethod
+    def of(cls, scenario: Scenario, table: CostTable) -> TaskProblem:
+        """The task problem of a scenario (its goals and planner options) over a cost table."""
+        return cls(table, scenario.goals, scenario.planner, scenario.name)
+
+    def encode(self) -> EncodedProblem:
+        """The unified-planning problem of this task, in the planner options' encoding."""
+        return encode(
+            self.table, self.goals, self.planner.encoding, name=self.name, min_gain=self.planner.pair_min_gain
+        )
+
+    def memo_key(self) -> str:
+        p = self.planner
+        return memo_key(self.table, self.goals, p.encoding, p.pair_min_gain, p.name, self.name)
+
+
+def plan_task(
+    task: TaskProblem, store: EntryStore | None = None, replan: bool = False, times: StageTimes | None = None
+) -> TaskResult:
+    """The task plan, from ``store`` when it remembers this exact problem (unless ``replan``),
+    else encoded and solved (and then remembered). ``times`` gets the ``encode`` and
+    ``planner`` stages (a lookup counts as ``planner``). Raises a PlannerError when the
+    planner fails."""
+    times = times if times is not None else StageTimes()
+    key, memo = None, None
+    if store is not None:
+        with times.timed("planner"):
+            key = task.memo_key()
+            found = None if replan else store.get_many([key]).get(key)
+            memo = entry_to_memo(found, task.table) if found is not None else None
+    if memo is not None:
+        times.seconds.setdefault("encode", 0.0)
+        return _result(task.table, memo, None)
+    with times.timed("encode"):
+        encoded = task.encode()
+    with times.timed("planner"):
+        solved = solve(encoded.problem, task.planner.name, task.planner.timeout)
+    memo = Memo(
+        status=solved.status,
+        engine=solved.engine,
+        actions=solved.actions,
+        steps=tuple(decode(solved, encoded)),
+        sizes=(encoded.n_actions, len(encoded.pair_actions), len(encoded.potentials)),
+    )
+    if store is not None and key is not None:
+        store.put_many({key: memo_to_entry(memo)})
+    return _result(task.table, memo, encoded)
+
+
+def encoded_problem(task: TaskProblem, result: TaskResult) -> EncodedProblem:
+    """The problem behind ``result``: the one solved, or encoded again after a remembered plan."""
+    return result.encoded if result.encoded is not None else task.encode()
+
+
+def _result(table: CostTable, memo: Memo, encoded: EncodedProblem | None) -> TaskResult:
+    """The memo's steps in canonical order, with their table costs."""
+    order = canonical_order(list(memo.steps), table.robots)
+    steps = tuple(memo.steps[i] for i in order)
+    actions, pair_actions, reshaped = memo.sizes
+    return TaskResult(
+        status=memo.status,
+        engine=memo.engine,
+        steps=steps,
+        action_names=tuple(memo.actions[i][0] for i in order),
+        step_costs=tuple(step_cost(table, s) for s in steps),
+        counts=TaskCounts(len(table.single), len(table.pair), actions, pair_actions, reshaped),
+        plan_hit=encoded is None,
+        encoded=encoded,
+    )
