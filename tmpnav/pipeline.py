@@ -28,7 +28,7 @@ from tmpnav.world import MapImageError, World
 if TYPE_CHECKING:
     from tmpnav.oracle.oracle import Oracle
     from tmpnav.roadmap.store import RoadmapStore
-    from tmpnav.task.encode import EncodedProblem
+    from tmpnav.task.encode import EncodedTask
 
 
 def load_world(path: str | Path) -> tuple[Scenario, World]:
@@ -173,7 +173,7 @@ def close(oracle: Oracle) -> None:
     oracle.cache.close()
 
 
-def export_problem(path: str | Path, options: PlanOptions) -> EncodedProblem:
+def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
     """The encoded task problem with its computed costs (``tmpnav export-pddl``)."""
     from tmpnav.task.stage import TaskProblem
 

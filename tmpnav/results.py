@@ -20,7 +20,7 @@ from tmpnav.types import CostTable, MoveKey, PlannedAction, PlanStatus, Roadmap,
 
 if TYPE_CHECKING:  # annotations only: these modules import this one's stages
     from tmpnav.oracle.oracle import OracleStats
-    from tmpnav.task.encode import EncodedProblem
+    from tmpnav.task.encode import EncodedTask
     from tmpnav.world import World
 
 #: a JSON value (plan.json, cache entries), as the standard library's ``json`` reads and writes it
@@ -75,7 +75,7 @@ class TaskResult:
     step_costs: tuple[float, ...]  # each step's cost in the cost table, as the planner saw it
     counts: TaskCounts
     plan_hit: bool  # the plan was remembered for this exact problem; nothing was encoded or solved
-    encoded: EncodedProblem | None = field(default=None, repr=False, compare=False)  # None after a plan_hit
+    encoded: EncodedTask | None = field(default=None, repr=False, compare=False)  # None after a plan_hit
 
     @property
     def planner_cost(self) -> float:

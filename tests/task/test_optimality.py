@@ -13,7 +13,7 @@ import random
 
 import pytest
 
-from tmpnav.task.decode import canonical_order, decode, step_cost
+from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import encode
 from tmpnav.task.encodings import ENCODINGS, scaled
 from tmpnav.task.solve import solve
@@ -120,7 +120,7 @@ def validate(encoded, result, table: CostTable) -> None:  # type: ignore[no-unty
     from unified_planning.plans import SequentialPlan
     from unified_planning.shortcuts import PlanValidator
 
-    order = canonical_order(decode(result, encoded), table.robots)
+    order = canonical_order(encoded.decode(result), table.robots)
     canonical = SequentialPlan([result.plan.actions[i] for i in order])
     with PlanValidator(problem_kind=encoded.problem.kind) as validator:
         for plan in (result.plan, canonical):
@@ -158,7 +158,7 @@ def test_plan_cost_equals_exhaustive_optimum(encoding: str, seed: int, robots: i
     encoded = encode(table, goals, encoding, min_gain=0.0)
     result = solve(encoded.problem, "enhsp-opt", 120)
     validate(encoded, result, table)
-    steps = decode(result, encoded)
+    steps = encoded.decode(result)
     planner = sum(scaled(step_cost(table, s)) for s in steps)
     assert planner == exhaustive_optimum(table, goals, encoding)
 
@@ -169,7 +169,7 @@ def test_pair_min_gain_is_within_its_bound() -> None:
     exact = exhaustive_optimum(table, goals, "mixed", 0.0)
     encoded = encode(table, goals, "mixed", min_gain=0.25)
     result = solve(encoded.problem, "enhsp-opt", 120)
-    cost = sum(scaled(step_cost(table, s)) for s in decode(result, encoded))
+    cost = sum(scaled(step_cost(table, s)) for s in encoded.decode(result))
     assert cost == exhaustive_optimum(table, goals, "mixed", 0.25)
     assert exact <= cost <= exact / (1 - 0.25) + 1
 
@@ -192,7 +192,7 @@ def test_odd_number_of_rooms_needs_no_extra_visit_with_mixed() -> None:
             {k: v for k, v in table.pair.items() if keep(*k)},
         )
         encoded = encode(t, goals, encoding)
-        steps = decode(solve(encoded.problem, "enhsp-opt", 120), encoded)
+        steps = encoded.decode(solve(encoded.problem, "enhsp-opt", 120))
         entered[encoding] = [m[2] for step in steps for m in step]
     assert sorted(entered["mixed"]) == sorted(goals.visit)
     assert len(entered["paper"]) == 4

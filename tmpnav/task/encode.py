@@ -1,5 +1,9 @@
 """Stage 6a: a cost table and goals -> a unified-planning problem, in one of the encodings.
 
+This is the general path: any engine unified-planning can run, and the paper's encoding.
+For ENHSP and the ``single``/``mixed`` encodings, :mod:`tmpnav.task.pddl_text` writes the
+same problem as text, far faster; :func:`encode_task` picks the path.
+
 :func:`encode` writes what every encoding shares (robots, locations, where each robot
 starts, which moves exist, the goals) and lets the :class:`~tmpnav.task.encodings.Encoding`
 write its costs through a :class:`ProblemBuilder`, the thin adapter over unified-planning
@@ -17,13 +21,35 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
+from tmpnav.errors import PlannerCrashError
 from tmpnav.task.encodings import ENCODINGS, Encoding
+from tmpnav.task.names import PddlNames
+from tmpnav.task.pddl_text import TEXT_ENCODINGS, PddlTask, write_task
+from tmpnav.task.solve import SolveResult, reads_pddl_text, solve
 from tmpnav.types import CostTable, Goals, MoveKey
 
 if TYPE_CHECKING:
     from unified_planning.model import Object, Problem
+
+Step = tuple[MoveKey, ...]
+
+
+class EncodedTask(Protocol):
+    """A task problem ready for a planner, by either path: solve it, decode its plans, print it."""
+
+    pair_actions: dict[str, tuple[MoveKey, MoveKey]]  # grounded pair actions
+    potentials: dict[str, int]  # room -> h_x (scaled)
+
+    @property
+    def n_actions(self) -> int: ...
+
+    def solve(self, planner: str, timeout: float) -> SolveResult: ...
+
+    def decode(self, result: SolveResult) -> list[Step]: ...
+
+    def texts(self) -> tuple[str, str]: ...
 
 
 @dataclass
@@ -32,12 +58,63 @@ class EncodedProblem:
 
     problem: Problem
     encoding: Encoding
+    names: PddlNames
     pair_actions: dict[str, tuple[MoveKey, MoveKey]] = field(default_factory=dict)  # grounded pair actions
     potentials: dict[str, int] = field(default_factory=dict)  # room -> h_x (scaled)
 
     @property
     def n_actions(self) -> int:
         return len(self.problem.actions)
+
+    def solve(self, planner: str, timeout: float) -> SolveResult:
+        return solve(self.problem, planner, timeout)
+
+    def decode(self, result: SolveResult) -> list[Step]:
+        """The plan's actions, each as the moves of the robots it moves (1 or 2)."""
+        steps: list[Step] = []
+        for name, params in result.actions:
+            try:
+                step = self._step(name, params)
+            except KeyError:
+                step = None
+            if step is None:
+                raise PlannerCrashError(f"the planner returned an action tmpnav does not know: {name}{params}")
+            steps.append(step)
+        return steps
+
+    def _step(self, name: str, params: tuple[str, ...]) -> Step | None:
+        rob, loc = self.names.robot_named, self.names.location_named
+        if name in self.pair_actions:
+            return self.pair_actions[name]
+        if name == "goto_room" and len(params) == 3:
+            return ((rob(params[0]), loc(params[1]), loc(params[2])),)
+        if name == "goto_room" and len(params) == 6:
+            return (
+                (rob(params[0]), loc(params[1]), loc(params[2])),
+                (rob(params[3]), loc(params[4]), loc(params[5])),
+            )
+        return None
+
+    def texts(self) -> tuple[str, str]:
+        """(domain, problem) as unified-planning writes them for ENHSP."""
+        from unified_planning.io import PDDLWriter
+
+        writer = PDDLWriter(self.problem)
+        return str(writer.get_domain()), str(writer.get_problem())
+
+
+def encode_task(
+    table: CostTable, goals: Goals, encoding: str, planner: str, name: str = "tmpnav", min_gain: float = 0.0
+) -> EncodedTask:
+    """The task problem for ``planner``: PDDL text written by tmpnav when the planner is an
+    ENHSP engine and the encoding is ``single`` or ``mixed``, else a unified-planning problem."""
+    if encoding in TEXT_ENCODINGS and reads_pddl_text(planner):
+        return write_task(table, goals, encoding, name, min_gain)
+    return encode(table, goals, encoding, name, min_gain)
+
+
+def _text_task_interface(task: PddlTask) -> EncodedTask:  # mypy checks that PddlTask fits EncodedTask
+    return task
 
 
 class ProblemBuilder:
@@ -50,12 +127,13 @@ class ProblemBuilder:
         problem = PDDLReader().parse_problem_string(encoding.domain_text())
         problem.name = name
         robot_t, loc_t = problem.user_type("robot"), problem.user_type("location")
-        self.robots: dict[str, Object] = {r: Object(r, robot_t) for r in table.robots}
-        self.locs: dict[str, Object] = {loc: Object(loc, loc_t) for loc in table.locations}
+        names = PddlNames.of(table.robots, table.locations)
+        self.robots: dict[str, Object] = {r: Object(names.robot[r], robot_t) for r in table.robots}
+        self.locs: dict[str, Object] = {loc: Object(names.location[loc], loc_t) for loc in table.locations}
         problem.add_objects([*self.robots.values(), *self.locs.values()])
         self.problem = problem
         self.targets = {(r, room) for r, rooms in goals.per_robot for room in rooms}
-        self.encoded = EncodedProblem(problem, encoding)
+        self.encoded = EncodedProblem(problem, encoding, names)
         self.potentials = self.encoded.potentials
 
     def set_move_costs(self, cost: Callable[[MoveKey], int]) -> None:
@@ -86,7 +164,7 @@ class ProblemBuilder:
             problem.fluent("visited"),
             problem.fluent("visited_by"),
         )
-        name = pair_action_name(m1, m2)
+        name = f"goto_room_pair_{len(self.encoded.pair_actions) + 1}"
         action = InstantaneousAction(name)
         for r, origin, dest in (m1, m2):
             action.add_precondition(robot_in(robots[r], locs[origin]))
@@ -156,8 +234,3 @@ def act_cost_to_action_costs(problem: Problem) -> None:
             action._add_effect_instance(effect)
         costs[action] = cost if cost is not None else problem.environment.expression_manager.Int(0)
     problem.add_quality_metric(MinimizeActionCosts(costs))
-
-
-def pair_action_name(m1: MoveKey, m2: MoveKey) -> str:
-    """The name of the grounded action that makes moves ``m1`` and ``m2`` together."""
-    return "goto_room_pair__" + "__".join((*m1, *m2))

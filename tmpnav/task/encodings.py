@@ -32,12 +32,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.resources import files
-from typing import TYPE_CHECKING, Literal
+from typing import Literal, Protocol
 
 from tmpnav.types import CostTable, Goals, MoveKey
-
-if TYPE_CHECKING:
-    from tmpnav.task.encode import ProblemBuilder
 
 COST_SCALE = 1000
 
@@ -49,6 +46,20 @@ Destinations = Literal["goals", "all-rooms"]
 def scaled(cost: float) -> int:
     """A cost as the integer the PDDL problem holds (thousandths)."""
     return round(cost * COST_SCALE)
+
+
+class CostSink(Protocol):
+    """Where an encoding writes its costs: the unified-planning problem being built
+    (:class:`tmpnav.task.encode.ProblemBuilder`) or its PDDL text
+    (:class:`tmpnav.task.pddl_text.TextBuilder`)."""
+
+    potentials: dict[str, int]  # room -> h_x (scaled), filled in by the encoding
+
+    def set_move_costs(self, cost: Callable[[MoveKey], int]) -> None: ...
+
+    def set_pair_costs(self, values: dict[tuple[str, ...], int]) -> None: ...
+
+    def add_pair_action(self, m1: MoveKey, m2: MoveKey, cost: int) -> None: ...
 
 
 @dataclass(frozen=True)
@@ -91,7 +102,7 @@ class Encoding:
             pair_min_gain=self.prune_bound(pair_min_gain),
         )
 
-    def add_costs(self, problem: ProblemBuilder, table: CostTable, goals: Goals, min_gain: float) -> None:
+    def add_costs(self, problem: CostSink, table: CostTable, goals: Goals, min_gain: float) -> None:
         """Write the table's costs into ``problem`` (fluent values, grounded actions)."""
         raise NotImplementedError
 
@@ -103,7 +114,7 @@ class PaperEncoding(Encoding):
     def pair_filter(self, goals: Goals, start_location: dict[str, str]) -> PairFilter | None:
         return lambda m1, m2: m1[0] != m2[0]
 
-    def add_costs(self, problem: ProblemBuilder, table: CostTable, goals: Goals, min_gain: float) -> None:
+    def add_costs(self, problem: CostSink, table: CostTable, goals: Goals, min_gain: float) -> None:
         """pair-cost for every ordered pair of moves of two different robots (both orders)."""
         values: dict[tuple[str, ...], int] = {}
         for (m1, m2), cost in table.pair.items():
@@ -119,7 +130,7 @@ class SingleEncoding(Encoding):
         """The paired moves the problem offers the planner (none here)."""
         return {}
 
-    def add_costs(self, problem: ProblemBuilder, table: CostTable, goals: Goals, min_gain: float) -> None:
+    def add_costs(self, problem: CostSink, table: CostTable, goals: Goals, min_gain: float) -> None:
         pairs = self.offered_pairs(table, min_gain)
         h = potentials(table, goals, pairs)
         problem.potentials.update(h)

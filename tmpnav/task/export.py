@@ -1,21 +1,18 @@
-"""The PDDL files of an encoded problem, as unified-planning writes them for ENHSP."""
+"""The PDDL files of an encoded task problem."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 from tmpnav.atomic import write_files
-from tmpnav.task.encode import EncodedProblem
+from tmpnav.task.encode import EncodedTask
 
 PDDL_FILES = ("domain.pddl", "problem.pddl")
 
 
-def pddl_texts(encoded: EncodedProblem) -> tuple[str, str]:
+def pddl_texts(encoded: EncodedTask) -> tuple[str, str]:
     """(domain, problem) text; the costs are the table's, scaled to integers (see encodings)."""
-    from unified_planning.io import PDDLWriter
-
-    writer = PDDLWriter(encoded.problem)
-    return str(writer.get_domain()), str(writer.get_problem())
+    return encoded.texts()
 
 
 def write_pddl(directory: Path, texts: tuple[str, str]) -> list[Path]:

@@ -11,7 +11,11 @@ import os
 import re
 import shutil
 import subprocess
+import tempfile
+import threading
 import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -25,6 +29,7 @@ from tmpnav.errors import (
 from tmpnav.types import PlanStatus
 
 if TYPE_CHECKING:
+    from unified_planning.engines.engine import Engine
     from unified_planning.environment import Environment
     from unified_planning.model import Problem, ProblemKind
     from unified_planning.plans import Plan
@@ -146,11 +151,8 @@ def _freeze(problem: Problem) -> None:
     problem.__class__ = frozen
 
 
-def solve(problem: Problem, planner: str, timeout: float) -> SolveResult:
-    """Run ``planner`` on ``problem`` within ``timeout`` seconds; raise on any failure."""
-    from unified_planning.engines import PlanGenerationResultStatus as St
-    from unified_planning.exceptions import UPException
-
+def _engine_class(planner: str) -> type[Engine]:
+    """The unified-planning engine class registered as ``planner``; raises when there is none."""
     env = environment()
     if planner not in env.factory.engines:
         raise PlannerUnavailableError(
@@ -159,9 +161,58 @@ def solve(problem: Problem, planner: str, timeout: float) -> SolveResult:
     if planner.startswith("enhsp"):
         check_java()
     try:
-        engine_cls = env.factory.engine(planner)
+        return env.factory.engine(planner)
     except Exception as err:
         raise PlannerUnavailableError(f"planner {planner!r} cannot be loaded: {err}") from None
+
+
+def reads_pddl_text(planner: str) -> bool:
+    """Whether ``planner`` is an ENHSP engine, which can be given tmpnav's own PDDL text."""
+    env = environment()
+    if planner not in env.factory.engines:
+        return False
+    try:
+        cls = env.factory.engine(planner)
+    except Exception:
+        return False
+    from up_enhsp.enhsp_planner import ENHSPEngine
+
+    return isinstance(cls, type) and issubclass(cls, ENHSPEngine)
+
+
+_java_lock = threading.Lock()
+_java_users = 0
+_java_saved: str | None = None
+
+
+@contextmanager
+def java_options() -> Iterator[None]:
+    """ENHSP's JVM options (``TMPNAV_JAVA_OPTIONS`` or :data:`JAVA_OPTIONS`) for the JVMs
+    started inside; nests and may be entered by several threads at once (the first sets
+    them, the last puts the environment back)."""
+    global _java_users, _java_saved
+    with _java_lock:
+        if _java_users == 0:
+            _java_saved = os.environ.get("JAVA_TOOL_OPTIONS")
+            os.environ["JAVA_TOOL_OPTIONS"] = os.environ.get("TMPNAV_JAVA_OPTIONS", JAVA_OPTIONS)
+        _java_users += 1
+    try:
+        yield
+    finally:
+        with _java_lock:
+            _java_users -= 1
+            if _java_users == 0:
+                if _java_saved is None:
+                    os.environ.pop("JAVA_TOOL_OPTIONS", None)
+                else:
+                    os.environ["JAVA_TOOL_OPTIONS"] = _java_saved
+
+
+def solve(problem: Problem, planner: str, timeout: float) -> SolveResult:
+    """Run ``planner`` on ``problem`` within ``timeout`` seconds; raise on any failure."""
+    from unified_planning.exceptions import UPException
+
+    engine_cls = _engine_class(planner)
     _freeze(problem)
     if not engine_cls.supports(problem.kind):
         raise PlannerUnavailableError(
@@ -170,10 +221,8 @@ def solve(problem: Problem, planner: str, timeout: float) -> SolveResult:
         )
     import unified_planning.shortcuts as ups
 
-    saved = os.environ.get("JAVA_TOOL_OPTIONS")
-    os.environ["JAVA_TOOL_OPTIONS"] = os.environ.get("TMPNAV_JAVA_OPTIONS", JAVA_OPTIONS)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), java_options():
             warnings.simplefilter("ignore")
             with ups.OneshotPlanner(name=planner) as engine:
                 result = engine.solve(problem, timeout=timeout)
@@ -181,14 +230,81 @@ def solve(problem: Problem, planner: str, timeout: float) -> SolveResult:
         raise PlannerError(f"planner {planner!r} failed: {err}") from None
     except FileNotFoundError as err:
         raise PlannerUnavailableError(f"planner {planner!r} could not start: {err}") from None
-    finally:
-        if saved is None:
-            os.environ.pop("JAVA_TOOL_OPTIONS", None)
-        else:
-            os.environ["JAVA_TOOL_OPTIONS"] = saved
     log = "\n".join(m.message for m in (result.log_messages or []) if "JAVA_TOOL_OPTIONS" not in m.message)
-    tail = " | ".join(line.strip() for line in log.strip().splitlines()[-3:])
-    status = result.status
+    _raise_on_failure(planner, result.status, result.plan is None, timeout, _tail(log))
+    actions = tuple((a.action.name, tuple(str(p) for p in a.actual_parameters)) for a in result.plan.actions)
+    return SolveResult(_plan_status(result.status), actions, result.engine_name, _tail(log), result.plan)
+
+
+def solve_text(domain: str, problem: str, planner: str, timeout: float) -> SolveResult:
+    """Run the ENHSP engine ``planner`` on PDDL text within ``timeout`` seconds.
+
+    The engine is unified-planning's own (up_enhsp's class, registered under ``planner``):
+    its command line, its process handling (``run_command``: a process group, killed at
+    the time limit) and its reading of the result; only the PDDL writing is tmpnav's
+    (:mod:`tmpnav.task.pddl_text`). Plan actions come back as (name, parameters) in
+    ENHSP's spelling.
+    """
+    from unified_planning.engines import OptimalityGuarantee
+    from unified_planning.engines import PlanGenerationResultStatus as St
+    from unified_planning.engines.pddl_planner import run_command
+
+    engine_cls = _engine_class(planner)
+    engine = engine_cls()
+    with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp, java_options():
+        d, p, plan_file = (os.path.join(tmp, n) for n in ("domain.pddl", "problem.pddl", "plan.txt"))
+        for path, text in ((d, domain), (p, problem)):
+            with open(path, "w", encoding="utf-8") as f:
+                f.write(text)
+        try:
+            timed_out, (out, err), retval = run_command(engine, engine._get_cmd(d, p, plan_file), timeout=timeout)
+        except FileNotFoundError as error:
+            raise PlannerUnavailableError(f"planner {planner!r} could not start: {error}") from None
+        plan_text = None
+        if os.path.isfile(plan_file):
+            with open(plan_file, encoding="utf-8-sig") as f:
+                plan_text = f.read()
+    log = "".join(out) + "".join(e for e in err if "JAVA_TOOL_OPTIONS" not in e)
+    if timed_out and retval != 0:
+        status = St.TIMEOUT
+    elif retval != 0:
+        status = St.INTERNAL_ERROR
+    elif plan_text is None:
+        status = St.UNSOLVABLE_PROVEN
+    elif engine_cls.satisfies(OptimalityGuarantee.SOLVED_OPTIMALLY):
+        status = St.SOLVED_OPTIMALLY
+    else:
+        status = St.SOLVED_SATISFICING
+    _raise_on_failure(planner, status, plan_text is None, timeout, _tail(log))
+    assert plan_text is not None
+    return SolveResult(_plan_status(status), _plan_actions(plan_text), engine.name, _tail(log))
+
+
+def _plan_actions(text: str) -> tuple[tuple[str, tuple[str, ...]], ...]:
+    """The actions of a plan file: lines ``(name arg ...)``, optionally after ``time:``."""
+    actions = []
+    for line in text.splitlines():
+        match = re.search(r"\(([^()]*)\)", line.split(";", 1)[0])
+        if match:
+            name, *params = match.group(1).split()
+            actions.append((name, tuple(params)))
+    return tuple(actions)
+
+
+def _tail(log: str) -> str:
+    return " | ".join(line.strip() for line in log.strip().splitlines()[-3:])
+
+
+def _plan_status(status: object) -> PlanStatus:
+    from unified_planning.engines import PlanGenerationResultStatus as St
+
+    return PlanStatus.SOLVED_OPTIMALLY if status == St.SOLVED_OPTIMALLY else PlanStatus.SOLVED_SATISFICING
+
+
+def _raise_on_failure(planner: str, status: object, no_plan: bool, timeout: float, tail: str) -> None:
+    """Turn a result status that is not a plan into its typed error."""
+    from unified_planning.engines import PlanGenerationResultStatus as St
+
     if status == St.TIMEOUT:
         raise PlannerTimeoutError(
             f"planner {planner!r} found no plan within the time limit of {timeout:g} s (--timeout)"
@@ -200,9 +316,7 @@ def solve(problem: Problem, planner: str, timeout: float) -> SolveResult:
         )
     if status == St.UNSUPPORTED_PROBLEM:
         raise PlannerUnavailableError(f"planner {planner!r} does not support this problem")
-    if status not in (St.SOLVED_OPTIMALLY, St.SOLVED_SATISFICING) or result.plan is None:
+    if status not in (St.SOLVED_OPTIMALLY, St.SOLVED_SATISFICING) or no_plan:
         detail = f": {tail}" if tail else ""
-        raise PlannerCrashError(f"planner {planner!r} failed with status {status.name}{detail}")
-    actions = tuple((a.action.name, tuple(str(p) for p in a.actual_parameters)) for a in result.plan.actions)
-    plan_status = PlanStatus.SOLVED_OPTIMALLY if status == St.SOLVED_OPTIMALLY else PlanStatus.SOLVED_SATISFICING
-    return SolveResult(plan_status, actions, result.engine_name, tail, result.plan)
+        name = getattr(status, "name", str(status))
+        raise PlannerCrashError(f"planner {planner!r} failed with status {name}{detail}")

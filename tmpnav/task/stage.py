@@ -15,10 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from tmpnav.results import StageTimes, TaskCounts, TaskResult
-from tmpnav.task.decode import canonical_order, decode, step_cost
-from tmpnav.task.encode import EncodedProblem, encode
+from tmpnav.task.decode import canonical_order, step_cost
+from tmpnav.task.encode import EncodedTask, encode_task
 from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
-from tmpnav.task.solve import solve
 from tmpnav.types import CostTable, Goals, PlannerOptions, Scenario
 
 
@@ -36,11 +35,10 @@ class TaskProblem:
         """The task problem of a scenario (its goals and planner options) over a cost table."""
         return cls(table, scenario.goals, scenario.planner, scenario.name)
 
-    def encode(self) -> EncodedProblem:
-        """The unified-planning problem of this task, in the planner options' encoding."""
-        return encode(
-            self.table, self.goals, self.planner.encoding, name=self.name, min_gain=self.planner.pair_min_gain
-        )
+    def encode(self) -> EncodedTask:
+        """This task in the planner options' encoding, ready for the planner they name."""
+        p = self.planner
+        return encode_task(self.table, self.goals, p.encoding, p.name, name=self.name, min_gain=p.pair_min_gain)
 
     def memo_key(self) -> str:
         p = self.planner
@@ -67,12 +65,12 @@ def plan_task(
     with times.timed("encode"):
         encoded = task.encode()
     with times.timed("planner"):
-        solved = solve(encoded.problem, task.planner.name, task.planner.timeout)
+        solved = encoded.solve(task.planner.name, task.planner.timeout)
     memo = Memo(
         status=solved.status,
         engine=solved.engine,
         actions=solved.actions,
-        steps=tuple(decode(solved, encoded)),
+        steps=tuple(encoded.decode(solved)),
         sizes=(encoded.n_actions, len(encoded.pair_actions), len(encoded.potentials)),
     )
     if store is not None and key is not None:
@@ -80,12 +78,12 @@ def plan_task(
     return _result(task.table, memo, encoded)
 
 
-def encoded_problem(task: TaskProblem, result: TaskResult) -> EncodedProblem:
+def encoded_problem(task: TaskProblem, result: TaskResult) -> EncodedTask:
     """The problem behind ``result``: the one solved, or encoded again after a remembered plan."""
     return result.encoded if result.encoded is not None else task.encode()
 
 
-def _result(table: CostTable, memo: Memo, encoded: EncodedProblem | None) -> TaskResult:
+def _result(table: CostTable, memo: Memo, encoded: EncodedTask | None) -> TaskResult:
     """The memo's steps in canonical order, with their table costs."""
     order = canonical_order(list(memo.steps), table.robots)
     steps = tuple(memo.steps[i] for i in order)
