@@ -151,7 +151,7 @@ class TextBuilder:
         )
         return head + "".join(self.pair_texts) + ")\n"
 
-    def problem_text(self, name: str) -> str:
+    def problem_text(self, name: str, ends: dict[str, str] | None = None) -> str:
         rob, loc = self.names.robot, self.names.location
         table, init = self.table, []
         for r, where in table.start_location.items():
@@ -168,6 +168,7 @@ class TextBuilder:
                     init.append(f"(= (move-cost {rob[r]} {loc[origin]} {loc[dest]}) {cost})")
         goal = [f"(visited {loc[room]})" for room in self.goals.visit]
         goal += [f"(visited_by {rob[r]} {loc[room]})" for r, room in sorted(self.targets)]
+        goal += [f"(robot_in {rob[r]} {loc[where]})" for r, where in sorted((ends or {}).items())]
         return (
             f"(define (problem {name})\n (:domain {name}-domain)\n (:init\n  (= (total-cost) 0)\n  "
             + "\n  ".join(init)
@@ -178,12 +179,18 @@ class TextBuilder:
 
 
 def write_task(
-    table: CostTable, goals: Goals, encoding: Encoding | str, name: str = "tmpnav", min_gain: float = 0.0
+    table: CostTable,
+    goals: Goals,
+    encoding: Encoding | str,
+    name: str = "tmpnav",
+    min_gain: float = 0.0,
+    ends: dict[str, str] | None = None,
 ) -> PddlTask:
     """The PDDL text of ``encoding`` (``single`` or ``mixed``) for the cost table and the goals.
 
     ``min_gain`` (mixed): a pair move enters the problem only if it saves at least this
     fraction of its two single moves (0: any saving), as in :func:`tmpnav.task.encode.encode`.
+    ``ends`` (a sub-problem of the anytime search): robot -> the location it must end in.
     """
     enc = ENCODINGS[encoding] if isinstance(encoding, str) else encoding
     builder = TextBuilder(enc, table, goals)
@@ -191,7 +198,7 @@ def write_task(
     pname = _problem_name(name)
     return PddlTask(
         domain=builder.domain_text(pname),
-        problem=builder.problem_text(pname),
+        problem=builder.problem_text(pname, ends),
         names=builder.names,
         pair_actions=builder.pair_actions,
         potentials=builder.potentials,

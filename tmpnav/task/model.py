@@ -1,0 +1,118 @@
+"""What the task-level search asks of action costs: the :class:`CostModel` protocol.
+
+The search (:mod:`tmpnav.task.search`) never computes a cost itself. It asks a cost model
+for the single moves it starts from, for the cost of a whole plan, and for the small cost
+tables of its sub-problems, costed from where the robots are at that point of the plan.
+Two models implement it:
+
+* :class:`TableModel` (here): a fixed cost table, the planner's model of ``--costs table``
+  and of the tests' random tables; every move costs the same wherever it is made;
+* the oracle's models (:mod:`tmpnav.oracle.lazy`, :mod:`tmpnav.oracle.carried`), which call
+  the semantic attachment on demand: with canonical start states, or with the beliefs the
+  robots carry at that point of the plan.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+from tmpnav.task.encodings import ENCODINGS
+from tmpnav.task.plans import Plan, Rules
+from tmpnav.types import CostTable, Goals, MoveKey
+
+
+@dataclass(frozen=True)
+class PlanCost:
+    """A plan's cost under a model: the total and each step's share."""
+
+    total: float
+    steps: tuple[float, ...]
+
+    @classmethod
+    def impossible(cls, n: int) -> PlanCost:
+        return cls(math.inf, (math.inf,) * n)
+
+
+class CostModel(Protocol):
+    """Action costs as the task-level search sees them."""
+
+    robots: tuple[str, ...]
+    start_location: dict[str, str]
+
+    def singles(self, goals: Goals) -> CostTable:
+        """Every single move between the robots' starts and the goal rooms (no pairs)."""
+        ...
+
+    def plan_cost(self, plan: Plan) -> PlanCost:
+        """The plan's cost under this model (inf where a move is impossible)."""
+        ...
+
+    def subtable(self, head: Plan, robots: Sequence[str], rooms: Sequence[str], goals: Goals) -> CostTable:
+        """The moves of ``robots`` into ``rooms`` from where they are after ``head``, and the
+        paired moves among them, costed from the robots' states after ``head``. The table's
+        ``start_location`` is each robot's location after ``head``; ``goals`` are the
+        sub-problem's (they decide which pairs can ever happen)."""
+        ...
+
+
+def head_locations(head: Plan, start_location: dict[str, str], robots: Sequence[str]) -> dict[str, str]:
+    """Where each of ``robots`` is after the steps of ``head``."""
+    at = dict(start_location)
+    for step in head:
+        for r, _, t in step:
+            at[r] = t
+    return {r: at[r] for r in robots}
+
+
+def sub_moves(at: dict[str, str], rooms: Sequence[str]) -> list[MoveKey]:
+    """The single moves of a sub-problem: each robot from where it is, and between its rooms."""
+    moves: list[MoveKey] = []
+    for r, here in at.items():
+        for origin in dict.fromkeys([here, *rooms]):
+            moves.extend((r, origin, t) for t in rooms if t != origin and t != here)
+    return moves
+
+
+class TableModel:
+    """A fixed cost table: a move costs the same wherever in the plan it is made."""
+
+    def __init__(self, table: CostTable, min_gain: float = 0.0):
+        self.table = table
+        self.robots = table.robots
+        self.start_location = dict(table.start_location)
+        self.min_gain = min_gain
+
+    def singles(self, goals: Goals) -> CostTable:
+        t = self.table
+        return CostTable(t.robots, t.rooms, t.locations, t.start_location, t.single, {})
+
+    def plan_cost(self, plan: Plan) -> PlanCost:
+        costs = []
+        for step in plan:
+            if len(step) == 1:
+                costs.append(self.table.single.get(step[0], math.inf))
+            else:
+                m1, m2 = step
+                costs.append(self.table.pair.get((m1, m2), self.table.pair.get((m2, m1), math.inf)))
+        return PlanCost(float(sum(costs)), tuple(costs))
+
+    def subtable(self, head: Plan, robots: Sequence[str], rooms: Sequence[str], goals: Goals) -> CostTable:
+        at = head_locations(head, self.start_location, robots)
+        single = {m: self.table.single[m] for m in sub_moves(at, rooms) if m in self.table.single}
+        keep = ENCODINGS["mixed"].pair_filter(goals, at)
+        assert keep is not None
+        pair = {
+            (m1, m2): c
+            for (m1, m2), c in self.table.pair.items()
+            if m1 in single and m2 in single and keep(m1, m2)
+        }
+        locations = tuple(dict.fromkeys([*rooms, *at.values()]))
+        return CostTable(tuple(robots), tuple(rooms), locations, at, single, pair)
+
+
+def plan_rules(model: CostModel, goals: Goals) -> Rules:
+    """The entry rules and goals of the whole task problem of ``model``."""
+    return Rules(model.start_location, goals)

@@ -1,0 +1,165 @@
+"""Task plans as values: the entry rules they obey, and the edits the anytime search makes.
+
+A plan is a sequence of steps; a step is the moves (robot, origin, target) of the one or two
+robots it moves. The rules are those of the ``single`` and ``mixed`` encodings
+(pddl/mixed.pddl): a robot moves from where it is; it enters a room only if nobody has
+visited it, or if the room is one of its own target rooms that it has not visited itself
+(for a pair, both moves are checked against the state before the step); a plan is done
+when every room of ``goals.visit`` is visited and every robot has visited its targets.
+The search edits plans only through :func:`splice`, and keeps only plans that
+:meth:`Rules.check` accepts.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from tmpnav.types import Goals, MoveKey
+
+Step = tuple[MoveKey, ...]
+Plan = tuple[Step, ...]
+
+
+class PlanError(ValueError):
+    """A plan that breaks the entry rules or leaves a goal undone."""
+
+
+@dataclass(frozen=True)
+class State:
+    """Where the robots are, which locations are visited, which targets are visited by their robot."""
+
+    at: dict[str, str]
+    visited: frozenset[str]
+    visited_by: frozenset[tuple[str, str]]
+
+
+class Rules:
+    """The entry rules and goals of a task problem."""
+
+    def __init__(self, start_location: dict[str, str], goals: Goals):
+        self.start_location = dict(start_location)
+        self.goals = goals
+        self.targets = frozenset((r, x) for r, rooms in goals.per_robot for x in rooms)
+
+    def start(self) -> State:
+        at = dict(self.start_location)
+        by = frozenset((r, x) for r, x in at.items() if (r, x) in self.targets)
+        return State(at, frozenset(at.values()), by)
+
+    def may_enter(self, state: State, robot: str, room: str) -> bool:
+        return room not in state.visited or ((robot, room) in self.targets and (robot, room) not in state.visited_by)
+
+    def apply(self, state: State, step: Step) -> State:
+        """The state after ``step``; PlanError if the rules forbid it."""
+        robots = [m[0] for m in step]
+        if len(set(robots)) != len(robots) or not 1 <= len(step) <= 2:
+            raise PlanError(f"a step moves one or two different robots, not {robots}")
+        for r, origin, target in step:
+            if state.at.get(r) != origin:
+                raise PlanError(f"{r} is not at {origin} (it is at {state.at.get(r)})")
+            if not self.may_enter(state, r, target):
+                raise PlanError(f"{r} may not enter {target}: visited before")
+        if len(step) == 2 and step[0][2] == step[1][2] and not any((r, t) in self.targets for r, _, t in step):
+            raise PlanError(f"two robots enter {step[0][2]} at once")
+        at, visited, by = dict(state.at), set(state.visited), set(state.visited_by)
+        for r, _, target in step:
+            at[r] = target
+            visited.add(target)
+            if (r, target) in self.targets:
+                by.add((r, target))
+        return State(at, frozenset(visited), frozenset(by))
+
+    def run(self, plan: Iterable[Step], state: State | None = None) -> State:
+        """The state after the plan's steps; PlanError at the first step the rules forbid."""
+        state = state or self.start()
+        for k, step in enumerate(plan):
+            try:
+                state = self.apply(state, step)
+            except PlanError as err:
+                raise PlanError(f"step {k + 1}: {err}") from None
+        return state
+
+    def done(self, state: State) -> bool:
+        return set(self.goals.visit) <= state.visited and self.targets <= state.visited_by
+
+    def check(self, plan: Iterable[Step]) -> None:
+        """Raise PlanError unless ``plan`` obeys the rules and reaches the goals."""
+        state = self.run(plan)
+        if not self.done(state):
+            missing = sorted(set(self.goals.visit) - state.visited)
+            missing += sorted(f"{x} by {r}" for r, x in self.targets - state.visited_by)
+            raise PlanError(f"the plan leaves goals undone: {', '.join(missing)}")
+
+    def valid(self, plan: Iterable[Step]) -> bool:
+        try:
+            self.check(plan)
+        except PlanError:
+            return False
+        return True
+
+
+def with_origins(steps: Iterable[Sequence[tuple[str, str]]], start_location: dict[str, str]) -> Plan:
+    """Steps given as (robot, target) pairs, with each move's origin filled in: where its
+    robot was after the steps before."""
+    at = dict(start_location)
+    out = []
+    for step in steps:
+        moves = tuple((r, at[r], t) for r, t in step)
+        for r, _, t in moves:
+            at[r] = t
+        out.append(moves)
+    return tuple(out)
+
+
+def targets_only(plan: Iterable[Step]) -> list[tuple[tuple[str, str], ...]]:
+    """The steps as (robot, target) pairs, origins dropped."""
+    return [tuple((r, t) for r, _, t in step) for step in plan]
+
+
+@dataclass(frozen=True)
+class Cut:
+    """A plan opened for a sub-problem: the steps before the insertion point and after it.
+
+    ``head`` ends where the sub-problem starts (its robots' states after ``head`` are the
+    sub-problem's start); ``tail`` holds what is kept after it.
+    """
+
+    head: Plan
+    tail: tuple[tuple[tuple[str, str], ...], ...]  # (robot, target) pairs: origins change with the insert
+
+
+def cut(plan: Plan, removed: set[int], robots: set[str]) -> Cut:
+    """Open ``plan`` for new moves of ``robots`` in place of their moves at ``removed``.
+
+    The insertion point is the first removed step. A removed step may be a pair whose
+    other robot is not one of ``robots``: that robot's move stays, as a single move, where
+    the pair was. A step after the insertion point that moves one of ``robots`` joins the
+    head when none of its robots has a move waiting behind the insertion point (so every
+    robot still makes its moves in its order); a robot of ``robots`` with no removed step
+    thus keeps all its moves in the head.
+    """
+    first = min(removed) if removed else len(plan)
+    head, after = list(plan[:first]), []
+    waiting: set[str] = set()  # robots with a move in ``after`` (or the insert): their later steps follow it
+    for k in range(first, len(plan)):
+        step = plan[k]
+        moving = {m[0] for m in step}
+        if k in removed:
+            kept = tuple(m for m in step if m[0] not in robots)
+            if kept:
+                after.append(kept)
+            waiting |= moving
+            continue
+        if moving & robots and not moving & waiting:
+            head.append(step)
+        else:
+            after.append(step)
+            waiting |= moving
+    return Cut(tuple(head), tuple(targets_only(after)))
+
+
+def splice(opened: Cut, insert: Sequence[Step], start_location: dict[str, str]) -> Plan:
+    """The plan ``head + insert + tail``, origins recomputed (the caller checks the rules)."""
+    steps = [*targets_only(opened.head), *targets_only(insert), *opened.tail]
+    return with_origins(steps, start_location)

@@ -1,0 +1,343 @@
+"""The anytime task planner: large-neighbourhood search whose repairs ENHSP plans exactly.
+
+At building scale (20-60 rooms, up to 8 robots) the exact problem is too big for one
+optimal ENHSP search, but any part of it a few rooms and robots wide is small. The search:
+
+1. **Start.** OR-Tools routes the robots through the goal rooms on the single-move costs
+   (:mod:`tmpnav.task.routing`): a plan of single moves, usually good, within seconds.
+2. **Improve.** Repeatedly open the plan around a seed room: up to ``sub_robots`` robots
+   whose routes pass near it and a contiguous stretch of each route, ``size`` rooms in all.
+   The sub-problem -- those robots, from where they are at that point of the plan, must
+   visit those rooms, each ending where its stretch ended when the robot has moves after
+   it -- is costed by the cost model from the robots' states at that point (paired moves
+   included) and solved optimally by ENHSP through unified-planning
+   (:mod:`tmpnav.task.pddl_text`). Its plan replaces the stretch; the whole plan is costed
+   again by the model, and kept if it is cheaper. ENHSP decides every step of the plan.
+3. **Stop** when the lower bound proves the plan optimal, when a round of neighbourhoods of
+   every size has covered every room without an improvement (a local optimum of the
+   neighbourhoods), or at the time budget.
+
+The plan returned is always one the model has costed in full, so its cost is the model's
+cost of that plan; the lower bound (:mod:`tmpnav.task.bound`, computed by the caller over
+the plan space) says how far from optimal it can be.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from tmpnav.errors import PlannerError
+from tmpnav.task.model import CostModel, PlanCost
+from tmpnav.task.pddl_text import write_task
+from tmpnav.task.plans import Plan, PlanError, Rules, State, cut, splice, with_origins
+from tmpnav.task.routing import solve_routes
+from tmpnav.types import CostTable, Goals
+
+#: relative improvement below which a new plan does not count as better
+EPSILON = 1e-9
+
+#: progress callback: (seconds since the start, best plan cost, lower bound or None, what happened)
+Progress = Callable[[float, float, float | None, str], None]
+
+
+@dataclass(frozen=True)
+class SearchOptions:
+    """How the anytime search runs."""
+
+    planner: str = "enhsp-blind"  # the ENHSP engine of the sub-problems (optimal)
+    encoding: str = "mixed"  # single | mixed
+    min_gain: float = 0.05  # mixed: pairs must save this fraction
+    budget: float = 60.0  # seconds for the whole search
+    sizes: tuple[int, ...] = (4, 6, 8)  # rooms per neighbourhood, grown when a round brings nothing
+    sub_robots: int = 3  # robots per neighbourhood, at most
+    sub_timeout: float = 30.0  # seconds for one sub-problem's ENHSP run
+    routing_time: float | None = None  # OR-Tools' time; None: a tenth of the budget, 1-10 s
+    seed: int = 0
+
+
+@dataclass
+class SearchStats:
+    """What the search did (plan.json ``task.search``)."""
+
+    subproblems: int = 0
+    improvements: int = 0
+    rounds: int = 0
+    history: list[tuple[float, float]] = field(default_factory=list)  # (seconds, best cost)
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    plan: Plan
+    cost: PlanCost
+    stopped: str  # "optimal" | "converged" | "time budget" | "nothing to do"
+    stats: SearchStats
+    start: str  # how the first plan was found
+
+
+@dataclass(frozen=True)
+class Neighbourhood:
+    robots: tuple[str, ...]
+    removed: frozenset[int]  # step indices opened
+    rooms: tuple[str, ...]  # rooms the opened moves of ``robots`` entered
+    ends: dict[str, str]  # robot -> where it must end (it has moves after its stretch)
+
+
+class AnytimeSearch:
+    """One run of the anytime search on a cost model."""
+
+    def __init__(
+        self,
+        model: CostModel,
+        goals: Goals,
+        options: SearchOptions,
+        progress: Progress | None = None,
+        proves_optimal: Callable[[float], bool] | None = None,
+    ):
+        self.model, self.goals, self.options = model, goals, options
+        self.rules = Rules(model.start_location, goals)
+        self.progress = progress
+        self.proves_optimal = proves_optimal or (lambda cost: False)
+        self.rng = random.Random(options.seed)
+        self.stats = SearchStats()
+        self.t0 = time.perf_counter()
+        self.near: dict[str, dict[str, float]] = {}
+        self.waypoints: tuple[str, ...] = ()
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.t0
+
+    def left(self) -> float:
+        return self.options.budget - self.elapsed()
+
+    # ------------------------------------------------------------------ start
+
+    def first_plan(self, singles: CostTable) -> tuple[Plan, str]:
+        """OR-Tools' routes on the single moves, as a plan of single moves."""
+        opts = self.options
+        # guided local search runs until its time limit: give it time by the size of the problem
+        n = len(self.goals.all_rooms) * len(self.model.robots)
+        limit = opts.routing_time if opts.routing_time is not None else min(10.0, max(0.2, 0.01 * n))
+        routes = solve_routes(singles, self.goals, time_limit=max(0.1, min(limit, self.left())))
+        if not routes.found:
+            raise PlannerError(
+                f"no plan of single moves reaches the goals ({routes.status}): a goal room no robot can enter?"
+            )
+        plan = with_origins([((m[0], m[2]),) for m in routes.moves(singles)], self.model.start_location)
+        return plan, f"OR-Tools routing ({routes.status})"
+
+    def run(self, first: Plan | None = None, start: str = "given") -> SearchResult:
+        """Search from ``first`` (or from OR-Tools' routes) until the plan is proved
+        optimal, a local optimum, or the budget is spent."""
+        singles = self.model.singles(self.goals)
+        self._distances(singles)
+        taken = set(self.goals.all_rooms) | set(self.model.start_location.values())
+        self.waypoints = tuple(dict.fromkeys(t for _, _, t in singles.single if t not in taken))
+        if first is None:
+            first, start = self.first_plan(singles)
+        self.rules.check(first)
+        best, cost = first, self.model.plan_cost(first)
+        self._note(cost.total, "first plan")
+        if not best:
+            return SearchResult(best, cost, "nothing to do", self.stats, start)
+        stopped = self._improve_until_done(best, cost)
+        return SearchResult(self.best, self.best_cost, stopped, self.stats, start)
+
+    # ------------------------------------------------------------------ improve
+
+    def _improve_until_done(self, best: Plan, cost: PlanCost) -> str:
+        self.best, self.best_cost = best, cost
+        size_index = 0
+        while True:
+            if self.proves_optimal(self.best_cost.total):
+                return "optimal"
+            outcome = self._round(self.options.sizes[size_index])
+            self.stats.rounds += 1
+            if outcome in ("time budget", "optimal"):
+                return outcome
+            if outcome == "improved":
+                size_index = 0
+            elif size_index + 1 < len(self.options.sizes):
+                size_index += 1
+            else:
+                return "converged"
+
+    def _round(self, size: int) -> str:
+        """Neighbourhoods of ``size`` rooms around seeds until every room was in one
+        ('improved' or 'unchanged'); the round starts again on each improved plan. Ends
+        early with 'time budget' or 'optimal'."""
+        improved = False
+        while True:
+            plan = self.best
+            seeds = [(k, i) for k, step in enumerate(plan) for i in range(len(step))]
+            self.rng.shuffle(seeds)
+            covered: set[str] = set()
+            tried: set[tuple[tuple[str, ...], frozenset[int]]] = set()
+            for k, i in seeds:
+                if self.left() <= 0:
+                    return "time budget"
+                if plan[k][i][2] in covered:
+                    continue
+                hood = self._neighbourhood(plan, k, i, size)
+                covered.update(hood.rooms)
+                if (hood.robots, hood.removed) in tried:
+                    continue
+                tried.add((hood.robots, hood.removed))
+                if self._try(plan, hood):
+                    improved = True
+                    if self.proves_optimal(self.best_cost.total):
+                        return "optimal"
+                    break
+            else:
+                return "improved" if improved else "unchanged"
+
+    def _try(self, plan: Plan, hood: Neighbourhood) -> bool:
+        """Solve the sub-problem of ``hood`` and keep the spliced plan if it is cheaper."""
+        opened = cut(plan, set(hood.removed), set(hood.robots))
+        head_state = self.rules.run(opened.head)
+        goals = self._sub_goals(plan, hood, head_state)
+        # rooms nobody has to enter may be passed through (a detour can be cheaper than a direct move)
+        entered = {m[2] for step in plan for m in step}
+        free = [x for x in self.waypoints if x not in entered or x in hood.rooms]
+        table = self.model.subtable(opened.head, hood.robots, (*hood.rooms, *free), goals)
+        timeout = min(self.options.sub_timeout, self.left())
+        if timeout <= 0.05:
+            return False
+        task = write_task(table, goals, self.options.encoding, "sub", self.options.min_gain, ends=hood.ends)
+        try:
+            solved = task.solve(self.options.planner, timeout)
+        except PlannerError:
+            return False
+        finally:
+            self.stats.subproblems += 1
+        candidate = splice(opened, task.decode(solved), self.model.start_location)
+        try:
+            self.rules.check(candidate)
+        except PlanError:
+            return False
+        cost = self.model.plan_cost(candidate)
+        if cost.total < self.best_cost.total * (1 - EPSILON) - EPSILON:
+            self.best, self.best_cost = candidate, cost
+            self.stats.improvements += 1
+            self._note(cost.total, f"{len(hood.robots)} robots, {len(hood.rooms)} rooms")
+            return True
+        return False
+
+    def _sub_goals(self, plan: Plan, hood: Neighbourhood, state: State) -> Goals:
+        """What the opened moves achieved that is still to do after the head."""
+        visit: list[str] = []
+        per_robot: dict[str, list[str]] = {}
+        for k in sorted(hood.removed):
+            for r, _, x in plan[k]:
+                if r not in hood.robots:
+                    continue
+                if x in self.goals.visit and x not in state.visited:
+                    visit.append(x)
+                if (r, x) in self.rules.targets and (r, x) not in state.visited_by:
+                    per_robot.setdefault(r, []).append(x)
+        return Goals(tuple(dict.fromkeys(visit)), tuple((r, tuple(xs)) for r, xs in per_robot.items()))
+
+    # ------------------------------------------------------------------ neighbourhoods
+
+    def _distances(self, singles: CostTable) -> None:
+        """Room closeness for choosing neighbourhoods: the cheapest single move either way."""
+        near: dict[str, dict[str, float]] = {}
+        for (_, a, b), c in singles.single.items():
+            for x, y in ((a, b), (b, a)):
+                row = near.setdefault(x, {})
+                row[y] = min(row.get(y, math.inf), c)
+        self.near = near
+
+    def _d(self, a: str, b: str) -> float:
+        return 0.0 if a == b else self.near.get(a, {}).get(b, math.inf)
+
+    def _neighbourhood(self, plan: Plan, k: int, i: int, size: int) -> Neighbourhood:
+        """Robots near the seed move ``plan[k][i]`` and a stretch of each one's route."""
+        routes: dict[str, list[tuple[int, str]]] = {r: [] for r in self.model.robots}
+        for idx, step in enumerate(plan):
+            for r, _, x in step:
+                routes[r].append((idx, x))
+        r0, _, x0 = plan[k][i]
+        start = self.model.start_location
+        others = sorted(
+            (min([self._d(x0, start[r])] + [self._d(x0, x) for _, x in route]), self.rng.random(), r)
+            for r, route in routes.items()
+            if r != r0
+        )
+        most = max(1, self.options.sub_robots)
+        n_robots = most if size == self.options.sizes[-1] else self.rng.randint(min(2, len(routes)), most)
+        robots = [r0] + [r for d, _, r in others[: n_robots - 1] if math.isfinite(d)]
+        windows: dict[str, list[int]] = {}
+        for r in robots:
+            route = routes[r]
+            if not route:
+                windows[r] = [0, -1]  # an idle robot: an empty stretch that can take rooms
+                continue
+            anchor = next(p for p, (idx, _) in enumerate(route) if idx == k) if r == r0 else min(
+                range(len(route)), key=lambda p: self._d(x0, route[p][1])
+            )
+            windows[r] = [anchor, anchor]
+        total = sum(hi - lo + 1 for lo, hi in windows.values())
+        while total < size:
+            options = []
+            for r, (lo, hi) in windows.items():
+                route = routes[r]
+                if lo > 0:
+                    options.append((self._d(x0, route[lo - 1][1]), r, -1))
+                if hi + 1 < len(route):
+                    options.append((self._d(x0, route[hi + 1][1]), r, +1))
+            if not options:
+                break
+            _, r, side = min(options)
+            windows[r][0 if side < 0 else 1] += side
+            total += 1
+        _close_under_pairs(windows, routes)
+        removed: set[int] = set()
+        rooms: list[str] = []
+        ends: dict[str, str] = {}
+        for r, (lo, hi) in windows.items():
+            route = routes[r]
+            removed.update(idx for idx, _ in route[lo : hi + 1])
+            rooms.extend(x for _, x in route[lo : hi + 1])
+            if hi + 1 < len(route):
+                ends[r] = route[hi][1]
+        return Neighbourhood(tuple(robots), frozenset(removed), tuple(dict.fromkeys(rooms)), ends)
+
+    # ------------------------------------------------------------------ progress
+
+    def _note(self, cost: float, what: str) -> None:
+        t = self.elapsed()
+        self.stats.history.append((round(t, 3), cost))
+        if self.progress is not None:
+            self.progress(t, cost, None, what)
+
+
+def search(
+    model: CostModel,
+    goals: Goals,
+    options: SearchOptions,
+    progress: Progress | None = None,
+    proves_optimal: Callable[[float], bool] | None = None,
+    first: Plan | None = None,
+) -> SearchResult:
+    """Run the anytime search (see the module docstring)."""
+    return AnytimeSearch(model, goals, options, progress, proves_optimal).run(first)
+
+
+def _close_under_pairs(windows: dict[str, list[int]], routes: dict[str, list[tuple[int, str]]]) -> None:
+    """Widen the robots' stretches until every opened paired step is opened for both of its
+    robots when both take part (a robot's opened moves must be one stretch of its route)."""
+    position = {r: {idx: p for p, (idx, _) in enumerate(route)} for r, route in routes.items()}
+    changed = True
+    while changed:
+        changed = False
+        opened = {idx for r, (lo, hi) in windows.items() for idx, _ in routes[r][lo : hi + 1]}
+        for r, window in windows.items():
+            for idx in opened:
+                p = position[r].get(idx)
+                if p is not None and not window[0] <= p <= window[1]:
+                    window[0], window[1] = min(window[0], p), max(window[1], p)
+                    changed = True
