@@ -22,13 +22,19 @@ from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
 from tmpnav.errors import InputError, ScenarioError
 from tmpnav.results import CacheUse, PlanReport, StageTimes, TaskResult
+from tmpnav.task.modes import exact_fits
 from tmpnav.types import CostTable, Goals, Roadmap, Scenario
 from tmpnav.world import MapImageError, World
 
+#: progress of the anytime search: (seconds, best plan cost, lower bound or None, what happened)
+SearchProgress = Callable[[float, float, float | None, str], None]
+
 if TYPE_CHECKING:
+    from tmpnav.attachment.canonical import CanonicalCosts
     from tmpnav.oracle.oracle import Oracle
     from tmpnav.roadmap.store import RoadmapStore
     from tmpnav.task.encode import EncodedTask
+    from tmpnav.task.model import CostModel
 
 
 def load_world(path: str | Path) -> tuple[Scenario, World]:
@@ -63,6 +69,10 @@ class PlanOptions:
     workers: int | None = None
     ray_address: str | None = None
     progress: Callable[[int, int], None] | None = None
+    search: str | None = None  # exact | anytime | auto
+    time_budget: float | None = None
+    costs: str | None = None  # table | carried
+    search_progress: SearchProgress | None = None  # (seconds, best cost, bound, what happened)
 
 
 def apply_options(scenario: Scenario, options: PlanOptions) -> Scenario:
@@ -74,6 +84,9 @@ def apply_options(scenario: Scenario, options: PlanOptions) -> Scenario:
         name=options.planner or planner.name,
         timeout=options.timeout if options.timeout is not None else planner.timeout,
         pair_min_gain=options.pair_min_gain if options.pair_min_gain is not None else planner.pair_min_gain,
+        search=options.search or planner.search,
+        time_budget=options.time_budget if options.time_budget is not None else planner.time_budget,
+        costs=options.costs or planner.costs,
     )
     models = scenario.models
     if options.mutual_observations is not None:
@@ -121,19 +134,22 @@ class Prepared:
     cache: CacheDir | None
     roadmap_warnings: tuple[str, ...]
     oracle: Oracle  # open: the caller closes it (see close)
-    table: CostTable
+    table: CostTable | None  # None when prepared without it (the anytime search costs lazily)
 
 
 def prepare(
-    path: str | Path, options: PlanOptions, times: StageTimes, loaded: tuple[Scenario, World] | None = None
+    path: str | Path,
+    options: PlanOptions,
+    times: StageTimes,
+    loaded: tuple[Scenario, World] | None = None,
+    with_table: bool = True,
 ) -> Prepared:
-    """Load, grow (or read) the roadmap, and compute the cost table the encoding asks for.
+    """Load, grow (or read) the roadmap, and (``with_table``) compute the cost table the
+    encoding asks for; without it, ``prepared.table`` is None.
 
     The caller must close ``prepared.oracle`` (executor and cache), see :func:`close`.
     """
-    from tmpnav.oracle.table import build_table, start_locations
     from tmpnav.roadmap.store import RoadmapStore
-    from tmpnav.task.encodings import ENCODINGS
 
     with times.timed("load"):
         scenario, world = loaded if loaded is not None else load_world(path)
@@ -147,24 +163,30 @@ def prepare(
         roadmap, roadmap_hit = roadmap_for(scenario, world, store)
     oracle = make_oracle(scenario, world, roadmap, options)
     try:
-        with times.timed("oracle"):
-            sp = scenario.planner
-            want = ENCODINGS[sp.encoding].table_request(
-                scenario.goals, start_locations(scenario, world), sp.pair_min_gain
-            )
-            table = build_table(
-                oracle,
-                world,
-                want.destinations,
-                want.pair_filter,
-                filter_key=want.filter_key,
-                pair_min_gain=want.pair_min_gain,
-            )
+        table = full_table(scenario, world, oracle, times) if with_table else None
     except BaseException:
         close(oracle)
         raise
     warnings = tuple(store.warnings) if store is not None else ()
     return Prepared(scenario, world, roadmap, roadmap_hit, cache, warnings, oracle, table)
+
+
+def full_table(scenario: Scenario, world: World, oracle: Oracle, times: StageTimes) -> CostTable:
+    """Every cost the encoding may need, before the exact planner runs (stage ``oracle``)."""
+    from tmpnav.oracle.table import build_table, start_locations
+    from tmpnav.task.encodings import ENCODINGS
+
+    with times.timed("oracle"):
+        sp = scenario.planner
+        want = ENCODINGS[sp.encoding].table_request(scenario.goals, start_locations(scenario, world), sp.pair_min_gain)
+        return build_table(
+            oracle,
+            world,
+            want.destinations,
+            want.pair_filter,
+            filter_key=want.filter_key,
+            pair_min_gain=want.pair_min_gain,
+        )
 
 
 def close(oracle: Oracle) -> None:
@@ -179,6 +201,7 @@ def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
 
     prep = prepare(path, options, StageTimes())
     close(prep.oracle)
+    assert prep.table is not None
     return TaskProblem.of(prep.scenario, prep.table).encode()
 
 
@@ -187,21 +210,28 @@ def plan(
 ) -> PlanReport:
     """Plan a scenario end to end: the task-level optimal plan for the roadmap, with its
     motions and beliefs. ``loaded`` skips loading when the caller already has the world."""
-    from tmpnav.oracle.executors import library
+    from tmpnav.attachment.canonical import CanonicalCosts
+    from tmpnav.attachment.carried import CarriedCosts
     from tmpnav.resimulate import resimulate
     from tmpnav.task.stage import TaskProblem, plan_task
 
     options = options or PlanOptions()
     times = StageTimes()
-    prep = prepare(path, options, times, loaded)
+    prep = prepare(path, options, times, loaded, with_table=False)
     scenario, oracle = prep.scenario, prep.oracle
     try:
-        store = oracle.cache if options.use_cache else None
-        task = plan_task(TaskProblem.of(scenario, prep.table), store, options.replan, times)
+        sp = scenario.planner
+        canonical = CanonicalCosts(oracle, prep.world, sp.pair_min_gain)
+        carried = CarriedCosts(oracle, canonical)
+        if search_mode(scenario) == "exact":
+            table = full_table(scenario, prep.world, oracle, times)
+            store = oracle.cache if options.use_cache else None
+            task = plan_task(TaskProblem.of(scenario, table), store, options.replan, times)
+        else:
+            model = carried if sp.costs == "carried" else canonical
+            table, task = _plan_anytime(scenario, canonical, model, times, options.search_progress)
         with times.timed("resimulate"):
-            resim = resimulate(
-                library(oracle.ctx), oracle, scenario, list(task.steps), list(task.step_costs), list(task.action_names)
-            )
+            resim = resimulate(carried, list(task.steps), list(task.step_costs), list(task.action_names))
     finally:
         close(oracle)
     times.close()
@@ -209,7 +239,7 @@ def plan(
         scenario=scenario,
         world=prep.world,
         roadmap=prep.roadmap,
-        table=prep.table,
+        table=table,
         task=task,
         actions=tuple(resim.actions),
         trajectories=resim.trajectories,
@@ -217,6 +247,35 @@ def plan(
         cache=_cache_use(prep, task, options.use_cache),
         oracle=oracle.stats,
     )
+
+
+def search_mode(scenario: Scenario) -> str:
+    """``exact`` or ``anytime``: the scenario's choice, or for ``auto`` exact where it fits."""
+    sp = scenario.planner
+    if sp.encoding == "paper":
+        if sp.search == "anytime":
+            raise InputError("the anytime search plans the single and mixed encodings, not the paper's")
+        return "exact"
+    if sp.search != "auto":
+        return sp.search
+    return "exact" if exact_fits(len(scenario.goals.all_rooms), len(scenario.robots)) else "anytime"
+
+
+def _plan_anytime(
+    scenario: Scenario,
+    canonical: CanonicalCosts,
+    model: CostModel,
+    times: StageTimes,
+    progress: SearchProgress | None,
+) -> tuple[CostTable, TaskResult]:
+    """The anytime search on ``model``'s lazily computed costs; the lower bound over the
+    canonical table; the canonical costs it saw."""
+    from tmpnav.task.stage import plan_anytime
+
+    sp, goals = scenario.planner, scenario.goals
+    bound = (lambda: canonical.bound_table(goals)) if sp.costs == "table" else None
+    task = plan_anytime(model, goals, sp, bound, times, progress, costs=sp.costs)
+    return canonical.seen(), task
 
 
 def pddl_texts(report: PlanReport) -> tuple[str, str]:

@@ -26,8 +26,10 @@ if TYPE_CHECKING:  # annotations only: these modules import this one's stages
 #: a JSON value (plan.json, cache entries), as the standard library's ``json`` reads and writes it
 JSON = dict[str, "JSON"] | list["JSON"] | str | int | float | bool | None
 
-#: the pipeline's stages in the order they run; a run's ``total`` is all of them but ``load``
-STAGES = ("load", "roadmap", "oracle", "encode", "planner", "resimulate")
+#: the pipeline's stages in the order they run; a run's ``total`` is all of them but ``load``.
+#: In the anytime search the stages interleave: ``oracle`` counts the costs it asks for,
+#: ``encode`` and ``planner`` its sub-problems, ``bound`` the lower bound.
+STAGES = ("load", "roadmap", "oracle", "encode", "planner", "bound", "resimulate")
 
 
 @dataclass
@@ -65,6 +67,30 @@ class TaskCounts:
 
 
 @dataclass(frozen=True)
+class SearchSummary:
+    """How the task plan was found (plan.json ``search``)."""
+
+    mode: str  # "exact": one optimal ENHSP search over the whole table; "anytime": tmpnav.task.search
+    costs: str  # "table" (canonical start states) | "carried" (the beliefs the robots carry)
+    stopped: str  # exact: "solved"; anytime: "optimal" | "converged" | "time budget" | "nothing to do"
+    start: str = ""  # anytime: how the first plan was found
+    subproblems: int = 0  # anytime: sub-problems ENHSP solved
+    improvements: int = 0  # anytime: plans kept because they were cheaper
+    seconds: float = 0.0  # the search's own time
+    history: tuple[tuple[float, float], ...] = ()  # (seconds, best cost) at each improvement
+
+
+@dataclass(frozen=True)
+class BoundSummary:
+    """A certified lower bound on the cost of every plan of the plan space (plan.json ``bound``)."""
+
+    value: float
+    relaxation: str  # what proved it: "exact" (ENHSP's optimal search), "flow", "assignment", ...
+    gap: float  # (plan cost - bound) / plan cost
+    proved_optimal: bool
+
+
+@dataclass(frozen=True)
 class TaskResult:
     """The task stage's answer: the plan's steps in canonical order, with their table costs."""
 
@@ -76,6 +102,8 @@ class TaskResult:
     counts: TaskCounts
     plan_hit: bool  # the plan was remembered for this exact problem; nothing was encoded or solved
     encoded: EncodedTask | None = field(default=None, repr=False, compare=False)  # None after a plan_hit
+    search: SearchSummary | None = None
+    bound: BoundSummary | None = None
 
     @property
     def planner_cost(self) -> float:

@@ -196,6 +196,9 @@ class PlannerOptions:
     encoding: str  # paper | single | mixed
     timeout: float  # s
     pair_min_gain: float = 0.05  # mixed: minimum relative saving of a paired move
+    search: str = "auto"  # exact | anytime | auto (tmpnav.task.stage)
+    time_budget: float = 60.0  # s, the anytime search's budget
+    costs: str = "table"  # table (canonical start states) | carried (the beliefs the robots carry)
 
 
 @dataclass(frozen=True)

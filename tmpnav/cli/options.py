@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from tmpnav.errors import OutputError, ScenarioError, TmpnavError
+from tmpnav.task.modes import COSTS, SEARCHES
 
 if TYPE_CHECKING:
     from tmpnav.pipeline import PlanOptions
@@ -132,6 +133,23 @@ def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
             "--timeout", type=click.FloatRange(min=0, min_open=True), metavar="S", help="Planner time limit in seconds."
         ),
         click.option(
+            "--search",
+            type=click.Choice(list(SEARCHES)),
+            help="Task-level search: exact, anytime (ENHSP on sub-problems, with a lower bound) or auto "
+            "(exact where it finishes quickly; the default, or planner.search).",
+        ),
+        click.option(
+            "--time-budget",
+            type=click.FloatRange(min=0, min_open=True),
+            metavar="S",
+            help="Anytime search: seconds to improve the plan (default 60, or planner.time_budget).",
+        ),
+        click.option(
+            "--costs",
+            type=click.Choice(list(COSTS)),
+            help="Action costs: table (canonical start states) or carried (the beliefs the robots carry).",
+        ),
+        click.option(
             "--pair-min-gain",
             type=click.FloatRange(0, 1),
             metavar="G",
@@ -187,7 +205,31 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
         workers=kw["workers"],
         ray_address=kw["ray_address"],
         progress=None if kw["quiet"] else progress_bar("oracle"),
+        search=kw["search"],
+        time_budget=kw["time_budget"],
+        costs=kw["costs"],
+        search_progress=None if kw["quiet"] else search_progress(),
     )
+
+
+def search_progress() -> Callable[[float, float, float | None, str], None]:
+    """The anytime search's progress on stderr: elapsed time, best cost, lower bound, gap.
+    On a terminal one line is rewritten in place; otherwise a line per event."""
+    tty = sys.stderr.isatty()
+
+    def show(seconds: float, best: float, bound: float | None, what: str) -> None:
+        text = f"search {seconds:7.1f} s  best {best:12.3f}"
+        if bound is not None:
+            gap = max(0.0, (best - bound) / best) if best > 0 else 0.0
+            text += f"  bound {bound:12.3f}  gap {100 * gap:5.1f}%"
+        text += f"  ({what})"
+        if tty:
+            sys.stderr.write("\r\033[K" + text)
+        else:
+            sys.stderr.write(text + "\n")
+        sys.stderr.flush()
+
+    return show
 
 
 def progress_bar(label: str) -> Callable[[int, int], None] | None:

@@ -176,13 +176,14 @@ class PairCombos:
         for i, (g, positions) in self.of_request.items():
             req = self.requests[i]
             s1, s2, _ = self.groups[g]
-            if req.min_gain is None or req.joint_cov is not None or positions.size == 0:
+            bounded = req.min_gain is not None or req.bound_only
+            if not bounded or req.joint_cov is not None or positions.size == 0:
                 needed[g][positions] = True
                 continue
             a, b = self.a[g][positions], self.b[g][positions]
             bound = pair_lower_bound(singles, s1, s2, a, b, first[g][positions], weights)
             alone = singles.best_cost(s1, req.rooms[0]) + singles.best_cost(s2, req.rooms[1])
-            if cannot_save(bound, alone, req.min_gain):
+            if req.bound_only or cannot_save(bound, alone, req.min_gain or 0.0):
                 self.pruned[i] = bound
                 stats.pairs_pruned += 1
             else:

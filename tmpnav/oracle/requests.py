@@ -27,7 +27,8 @@ class Request:
     correlated (carried over from earlier joint moves); None means block-diagonal.
     ``min_gain`` (pairs): when a lower bound proves the pair cannot save this fraction of
     its two single moves, its joint simulations are skipped and the result is marked
-    ``pruned`` with the bound as its cost (:mod:`tmpnav.oracle.bounds`).
+    ``pruned`` with the bound as its cost (:mod:`tmpnav.oracle.bounds`). ``bound_only``
+    (pairs): never simulate jointly; the result is that lower bound, marked ``pruned``.
     """
 
     robots: tuple[str, ...]
@@ -35,6 +36,7 @@ class Request:
     rooms: tuple[str, ...]
     joint_cov: tuple[tuple[float, ...], ...] | None = None
     min_gain: float | None = None  # a pair that provably saves less is not simulated
+    bound_only: bool = False  # a pair: its lower bound only, no joint simulation
 
     @property
     def n(self) -> int:

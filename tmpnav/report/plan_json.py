@@ -168,6 +168,36 @@ def plan_document(report: PlanReport) -> dict[str, JSON]:
         "cache": _cache(report.cache),
         "oracle": {k: _plain(v) for k, v in report.oracle.as_dict().items()},
         "task": {k: _plain(v) for k, v in asdict(report.task.counts).items()},
+        "search": _search(report),
+        "bound": _bound(report),
+    }
+
+
+def _search(report: PlanReport) -> JSON:
+    s = report.task.search
+    if s is None:
+        return None
+    return {
+        "mode": s.mode,
+        "costs": s.costs,
+        "stopped": s.stopped,
+        "start": s.start,
+        "subproblems": s.subproblems,
+        "improvements": s.improvements,
+        "seconds": number(s.seconds, 6),
+        "history": [[number(t, 6), number(c)] for t, c in s.history],
+    }
+
+
+def _bound(report: PlanReport) -> JSON:
+    b = report.task.bound
+    if b is None:
+        return None
+    return {
+        "value": number(b.value),
+        "relaxation": b.relaxation,
+        "gap": number(b.gap),
+        "proved_optimal": b.proved_optimal,
     }
 
 

@@ -64,7 +64,26 @@ def _header(report: PlanReport) -> list[str]:
     return [
         f"{sc.name} ({_display_path(sc.source)}): encoding {report.encoding}, planner {report.planner}, {status}",
         f"{len(sc.robots)} robots, mutual observations {mutual}; goals: {_goals(report)}",
+        *_search(report),
     ]
+
+
+def _search(report: PlanReport) -> list[str]:
+    """How the plan was searched, and the lower bound with the gap."""
+    search, bound = report.task.search, report.task.bound
+    lines = []
+    if search is not None:
+        line = f"search: {search.mode}, costs {search.costs}"
+        if search.mode == "anytime":
+            line += (
+                f"; first plan by {search.start}; {_plural(search.subproblems, 'sub-problem')} solved by ENHSP, "
+                f"{_plural(search.improvements, 'improvement')}; stopped: {search.stopped}"
+            )
+        lines.append(line)
+    if bound is not None:
+        verdict = "proved optimal" if bound.proved_optimal else f"gap {100 * bound.gap:.2f}%"
+        lines.append(f"lower bound: {_cost(bound.value)} ({bound.relaxation}); {verdict}")
+    return lines
 
 
 def _cost(x: float) -> str:

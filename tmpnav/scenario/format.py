@@ -28,11 +28,14 @@ from tmpnav.scenario.schema import (
     Vector,
 )
 from tmpnav.task.encodings import ENCODINGS
+from tmpnav.task.modes import COSTS, SEARCHES
 
 DEG = math.pi / 180.0
 
 #: the task encodings: the task stage's registry is the one list (it imports no planning library)
 ENCODING_CHOICES = tuple(ENCODINGS)
+SEARCH_CHOICES = SEARCHES
+COSTS_CHOICES = COSTS
 
 #: points of a room outline: rooms are tested for self-intersection pair by pair
 MAX_ROOM_POINTS = 1000
@@ -352,6 +355,21 @@ PLANNER = Section(
             Number(None, minimum=0.0, maximum=1.0),
             "mixed encoding: a paired move is offered to the planner only if it saves at least this fraction of its two single moves; the plan costs at most 1/(1 - pair_min_gain) times the optimum over all pairs (0: every saving pair, exact)",
             default=0.05,
+        ),
+        "search": Field(
+            Choice(choices=SEARCH_CHOICES),
+            "task-level search: exact (one optimal ENHSP search over the whole cost table), anytime (large-neighbourhood search with ENHSP on sub-problems and a certified lower bound), or auto (exact where it finishes quickly)",
+            default="auto",
+        ),
+        "time_budget": Field(
+            Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
+            "anytime search: time budget; it stops earlier when the plan is proved optimal or no neighbourhood improves it",
+            default=60.0,
+        ),
+        "costs": Field(
+            Choice(choices=COSTS_CHOICES),
+            "what an action costs the planner: table (every move from a canonical start state) or carried (from the beliefs the robots carry at that point of the plan, as executed)",
+            default="table",
         ),
     }
 )

@@ -25,15 +25,19 @@ the plan space) says how far from optimal it can be.
 from __future__ import annotations
 
 import math
+import os
 import random
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 from tmpnav.errors import PlannerError
+from tmpnav.results import StageTimes
+from tmpnav.task.decode import canonical_order
 from tmpnav.task.model import CostModel, PlanCost
-from tmpnav.task.pddl_text import write_task
-from tmpnav.task.plans import Plan, PlanError, Rules, State, cut, splice, with_origins
+from tmpnav.task.pddl_text import PddlTask, write_task
+from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_origins
 from tmpnav.task.routing import solve_routes
 from tmpnav.types import CostTable, Goals
 
@@ -55,8 +59,9 @@ class SearchOptions:
     sizes: tuple[int, ...] = (4, 6, 8)  # rooms per neighbourhood, grown when a round brings nothing
     sub_robots: int = 3  # robots per neighbourhood, at most
     sub_timeout: float = 30.0  # seconds for one sub-problem's ENHSP run
-    routing_time: float | None = None  # OR-Tools' time; None: a tenth of the budget, 1-10 s
+    routing_time: float | None = None  # OR-Tools' time; None: by the problem's size, 0.2-10 s
     seed: int = 0
+    parallel: int = min(2, os.cpu_count() or 1)  # sub-problems ENHSP solves at once
 
 
 @dataclass
@@ -79,6 +84,15 @@ class SearchResult:
 
 
 @dataclass(frozen=True)
+class _Sub:
+    """A neighbourhood's sub-problem, ready for ENHSP."""
+
+    hood: Neighbourhood
+    opened: Cut
+    task: PddlTask
+
+
+@dataclass(frozen=True)
 class Neighbourhood:
     robots: tuple[str, ...]
     removed: frozenset[int]  # step indices opened
@@ -96,8 +110,10 @@ class AnytimeSearch:
         options: SearchOptions,
         progress: Progress | None = None,
         proves_optimal: Callable[[float], bool] | None = None,
+        times: StageTimes | None = None,
     ):
         self.model, self.goals, self.options = model, goals, options
+        self.times = times if times is not None else StageTimes()
         self.rules = Rules(model.start_location, goals)
         self.progress = progress
         self.proves_optimal = proves_optimal or (lambda cost: False)
@@ -121,25 +137,32 @@ class AnytimeSearch:
         # guided local search runs until its time limit: give it time by the size of the problem
         n = len(self.goals.all_rooms) * len(self.model.robots)
         limit = opts.routing_time if opts.routing_time is not None else min(10.0, max(0.2, 0.01 * n))
-        routes = solve_routes(singles, self.goals, time_limit=max(0.1, min(limit, self.left())))
+        with self.times.timed("planner"):
+            routes = solve_routes(singles, self.goals, time_limit=max(0.1, min(limit, self.left())))
         if not routes.found:
             raise PlannerError(
                 f"no plan of single moves reaches the goals ({routes.status}): a goal room no robot can enter?"
             )
         plan = with_origins([((m[0], m[2]),) for m in routes.moves(singles)], self.model.start_location)
-        return plan, f"OR-Tools routing ({routes.status})"
+        return self.canonical(plan), f"OR-Tools routing ({routes.status})"
+
+    def canonical(self, plan: Plan) -> Plan:
+        """The plan's steps in the canonical order of commuting steps (tmpnav.task.decode)."""
+        return tuple(plan[i] for i in canonical_order(list(plan), self.model.robots))
 
     def run(self, first: Plan | None = None, start: str = "given") -> SearchResult:
         """Search from ``first`` (or from OR-Tools' routes) until the plan is proved
         optimal, a local optimum, or the budget is spent."""
-        singles = self.model.singles(self.goals)
+        with self.times.timed("oracle"):
+            singles = self.model.singles(self.goals)
         self._distances(singles)
         taken = set(self.goals.all_rooms) | set(self.model.start_location.values())
         self.waypoints = tuple(dict.fromkeys(t for _, _, t in singles.single if t not in taken))
         if first is None:
             first, start = self.first_plan(singles)
+        first = self.canonical(first)
         self.rules.check(first)
-        best, cost = first, self.model.plan_cost(first)
+        best, cost = first, self.cost(first)
         self._note(cost.total, "first plan")
         if not best:
             return SearchResult(best, cost, "nothing to do", self.stats, start)
@@ -168,7 +191,7 @@ class AnytimeSearch:
     def _round(self, size: int) -> str:
         """Neighbourhoods of ``size`` rooms around seeds until every room was in one
         ('improved' or 'unchanged'); the round starts again on each improved plan. Ends
-        early with 'time budget' or 'optimal'."""
+        early with 'time budget' or 'optimal'. ``parallel`` sub-problems run at once."""
         improved = False
         while True:
             plan = self.best
@@ -176,55 +199,89 @@ class AnytimeSearch:
             self.rng.shuffle(seeds)
             covered: set[str] = set()
             tried: set[tuple[tuple[str, ...], frozenset[int]]] = set()
-            for k, i in seeds:
+            batch: list[Neighbourhood] = []
+            restart = False
+            for n, (k, i) in enumerate(seeds):
+                if plan[k][i][2] not in covered:
+                    hood = self._neighbourhood(plan, k, i, size)
+                    covered.update(hood.rooms)
+                    if (hood.robots, hood.removed) not in tried:
+                        tried.add((hood.robots, hood.removed))
+                        batch.append(hood)
+                if len(batch) < self.options.parallel and n + 1 < len(seeds):
+                    continue
                 if self.left() <= 0:
                     return "time budget"
-                if plan[k][i][2] in covered:
-                    continue
-                hood = self._neighbourhood(plan, k, i, size)
-                covered.update(hood.rooms)
-                if (hood.robots, hood.removed) in tried:
-                    continue
-                tried.add((hood.robots, hood.removed))
-                if self._try(plan, hood):
-                    improved = True
+                if batch and self._try_batch(plan, batch):
+                    improved = restart = True
                     if self.proves_optimal(self.best_cost.total):
                         return "optimal"
                     break
-            else:
+                batch = []
+            if not restart:
                 return "improved" if improved else "unchanged"
 
-    def _try(self, plan: Plan, hood: Neighbourhood) -> bool:
-        """Solve the sub-problem of ``hood`` and keep the spliced plan if it is cheaper."""
+    def _try_batch(self, plan: Plan, hoods: list[Neighbourhood]) -> bool:
+        """Solve the sub-problems of ``hoods`` (ENHSP runs side by side) and keep the
+        cheapest spliced plan if it beats the best one."""
+        subs = [sub for hood in hoods if (sub := self._sub_problem(plan, hood)) is not None]
+        if not subs:
+            return False
+        timeout = min(self.options.sub_timeout, self.left())
+        if timeout <= 0.05:
+            return False
+        with self.times.timed("planner"):
+            if len(subs) == 1:
+                solved = [self._solve(subs[0], timeout)]
+            else:
+                with ThreadPoolExecutor(max_workers=len(subs)) as pool:
+                    solved = list(pool.map(lambda sub: self._solve(sub, timeout), subs))
+        self.stats.subproblems += len(subs)
+        best: tuple[Plan, PlanCost, _Sub] | None = None
+        for sub, steps in zip(subs, solved, strict=True):
+            if steps is None:
+                continue
+            candidate = self.canonical(splice(sub.opened, steps, self.model.start_location))
+            if not self.rules.valid(candidate):
+                continue
+            cost = self.cost(candidate)
+            if best is None or cost.total < best[1].total:
+                best = (candidate, cost, sub)
+        if best is None or not best[1].total < self.best_cost.total * (1 - EPSILON) - EPSILON:
+            return False
+        candidate, cost, sub = best
+        self.best, self.best_cost = candidate, cost
+        self.stats.improvements += 1
+        self._note(cost.total, f"{len(sub.hood.robots)} robots, {len(sub.hood.rooms)} rooms")
+        return True
+
+    def _sub_problem(self, plan: Plan, hood: Neighbourhood) -> _Sub | None:
+        """The sub-problem of ``hood``: the plan opened, its goals, its costs, its PDDL text."""
         opened = cut(plan, set(hood.removed), set(hood.robots))
-        head_state = self.rules.run(opened.head)
+        try:
+            head_state = self.rules.run(opened.head)
+        except PlanError:
+            return None
         goals = self._sub_goals(plan, hood, head_state)
         # rooms nobody has to enter may be passed through (a detour can be cheaper than a direct move)
         entered = {m[2] for step in plan for m in step}
         free = [x for x in self.waypoints if x not in entered or x in hood.rooms]
-        table = self.model.subtable(opened.head, hood.robots, (*hood.rooms, *free), goals)
-        timeout = min(self.options.sub_timeout, self.left())
-        if timeout <= 0.05:
-            return False
-        task = write_task(table, goals, self.options.encoding, "sub", self.options.min_gain, ends=hood.ends)
+        with self.times.timed("oracle"):
+            table = self.model.subtable(opened.head, hood.robots, (*hood.rooms, *free), goals)
+        with self.times.timed("encode"):
+            task = write_task(table, goals, self.options.encoding, "sub", self.options.min_gain, ends=hood.ends)
+        return _Sub(hood, opened, task)
+
+    def _solve(self, sub: _Sub, timeout: float) -> list[Step] | None:
+        """ENHSP's optimal plan of a sub-problem (None if it found none in time)."""
         try:
-            solved = task.solve(self.options.planner, timeout)
+            return sub.task.decode(sub.task.solve(self.options.planner, timeout))
         except PlannerError:
-            return False
-        finally:
-            self.stats.subproblems += 1
-        candidate = splice(opened, task.decode(solved), self.model.start_location)
-        try:
-            self.rules.check(candidate)
-        except PlanError:
-            return False
-        cost = self.model.plan_cost(candidate)
-        if cost.total < self.best_cost.total * (1 - EPSILON) - EPSILON:
-            self.best, self.best_cost = candidate, cost
-            self.stats.improvements += 1
-            self._note(cost.total, f"{len(hood.robots)} robots, {len(hood.rooms)} rooms")
-            return True
-        return False
+            return None
+
+    def cost(self, plan: Plan) -> PlanCost:
+        with self.times.timed("oracle"):
+            return self.model.plan_cost(plan)
 
     def _sub_goals(self, plan: Plan, hood: Neighbourhood, state: State) -> Goals:
         """What the opened moves achieved that is still to do after the head."""
@@ -322,9 +379,10 @@ def search(
     progress: Progress | None = None,
     proves_optimal: Callable[[float], bool] | None = None,
     first: Plan | None = None,
+    times: StageTimes | None = None,
 ) -> SearchResult:
     """Run the anytime search (see the module docstring)."""
-    return AnytimeSearch(model, goals, options, progress, proves_optimal).run(first)
+    return AnytimeSearch(model, goals, options, progress, proves_optimal, times).run(first)
 
 
 def _close_under_pairs(windows: dict[str, list[int]], routes: dict[str, list[tuple[int, str]]]) -> None:

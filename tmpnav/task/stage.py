@@ -12,13 +12,17 @@ like this function.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
-from tmpnav.results import StageTimes, TaskCounts, TaskResult
+from tmpnav.results import BoundSummary, SearchSummary, StageTimes, TaskCounts, TaskResult
+from tmpnav.task.bound import lower_bound
 from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import EncodedTask, encode_task
 from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
-from tmpnav.types import CostTable, Goals, PlannerOptions, Scenario
+from tmpnav.task.model import CostModel
+from tmpnav.task.search import Progress, SearchOptions, search
+from tmpnav.types import CostTable, Goals, PlannerOptions, PlanStatus, Scenario
 
 
 @dataclass(frozen=True)
@@ -88,13 +92,77 @@ def _result(table: CostTable, memo: Memo, encoded: EncodedTask | None) -> TaskRe
     order = canonical_order(list(memo.steps), table.robots)
     steps = tuple(memo.steps[i] for i in order)
     actions, pair_actions, reshaped = memo.sizes
+    step_costs = tuple(step_cost(table, s) for s in steps)
+    optimal = memo.status == PlanStatus.SOLVED_OPTIMALLY
+    cost = float(sum(step_costs))
     return TaskResult(
         status=memo.status,
         engine=memo.engine,
         steps=steps,
         action_names=tuple(memo.actions[i][0] for i in order),
-        step_costs=tuple(step_cost(table, s) for s in steps),
+        step_costs=step_costs,
         counts=TaskCounts(len(table.single), len(table.pair), actions, pair_actions, reshaped),
         plan_hit=encoded is None,
         encoded=encoded,
+        search=SearchSummary(mode="exact", costs="table", stopped="solved"),
+        bound=BoundSummary(cost, "exact", 0.0, True) if optimal else None,
+    )
+
+
+def plan_anytime(
+    model: CostModel,
+    goals: Goals,
+    planner: PlannerOptions,
+    bound_table: Callable[[], CostTable] | None = None,
+    times: StageTimes | None = None,
+    progress: Progress | None = None,
+    costs: str = "table",
+) -> TaskResult:
+    """The anytime search's plan (:mod:`tmpnav.task.search`) on ``model``, with the certified
+    lower bound of ``bound_table`` (every plan's cost is at least the bound of that table)."""
+    times = times if times is not None else StageTimes()
+    bound = None
+    if bound_table is not None:
+        with times.timed("bound"):
+            table = bound_table()
+            if planner.encoding != "mixed":
+                table = replace(table, pair={})
+            bound = lower_bound(table, goals, planner.pair_min_gain)
+    options = SearchOptions(
+        planner=planner.name if planner.name.startswith("enhsp") else "enhsp-blind",
+        encoding=planner.encoding if planner.encoding in ("single", "mixed") else "mixed",
+        min_gain=planner.pair_min_gain,
+        budget=planner.time_budget,
+        sub_timeout=min(planner.timeout, 60.0),
+    )
+    value = bound.value if bound is not None else None
+    report = progress
+
+    def noted(t: float, cost: float, _: float | None, what: str) -> None:
+        if report is not None:
+            report(t, cost, value, what)
+
+    result = search(model, goals, options, noted, bound.proves_optimal if bound is not None else None, times=times)
+    plan, cost = result.plan, result.cost
+    proved = bound is not None and bound.proves_optimal(cost.total)
+    stats = result.stats
+    return TaskResult(
+        status=PlanStatus.SOLVED_OPTIMALLY if proved else PlanStatus.SOLVED_SATISFICING,
+        engine=f"anytime search: OR-Tools start, {options.planner} on sub-problems",
+        steps=plan,
+        action_names=tuple("goto_room" if len(step) == 1 else "goto_room_pair" for step in plan),
+        step_costs=cost.steps,
+        counts=TaskCounts(0, 0, 0, sum(len(step) == 2 for step in plan), 0),
+        plan_hit=False,
+        search=SearchSummary(
+            mode="anytime",
+            costs=costs,
+            stopped=result.stopped,
+            start=result.start,
+            subproblems=stats.subproblems,
+            improvements=stats.improvements,
+            seconds=stats.history[-1][0] if stats.history else 0.0,
+            history=tuple(stats.history),
+        ),
+        bound=None if bound is None else BoundSummary(bound.value, bound.relaxation, bound.gap(cost.total), proved),
     )

@@ -1,0 +1,254 @@
+"""The cost table, computed lazily: the moves the anytime search uses, when it uses them.
+
+The exact task planner needs every paired move before it starts (rooms^4 of them). The
+anytime search (:mod:`tmpnav.task.search`) does not: it starts from the single moves
+between the goal rooms and asks for paired moves only inside its sub-problems, a few rooms
+and robots at a time. :class:`CanonicalCosts` answers those questions with the table's
+semantics (:mod:`tmpnav.oracle.table`): every move starts from its robot's canonical state
+at its origin, pairs from two uncorrelated canonical states, and every cost is the oracle's
+exact cost, cached on disk per request as always. It is the ``--costs table`` model of the
+anytime search (:class:`tmpnav.task.model.CostModel`).
+
+Which paired moves exist (the plan space): pairs of moves that the encoding's entry rules
+allow together and whose two robots start within ``pair_radius`` of each other and end
+within ``pair_radius`` of each other (nearest pose instantiations or start poses; the
+twice the mutual sensor's range by default). Robots farther apart see each other for a short part
+of the move at best. :meth:`CanonicalCosts.pair_bounds` gives a lower bound on the cost of
+each of them, without joint simulation, for the certified lower bound of the whole task.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+
+from tmpnav.oracle.oracle import Oracle
+from tmpnav.oracle.requests import Request, StartState
+from tmpnav.oracle.table import arrival_state, build_table, initial_state, start_locations
+from tmpnav.task.encodings import ENCODINGS
+from tmpnav.task.model import PlanCost, head_locations, sub_moves
+from tmpnav.task.plans import Plan
+from tmpnav.types import CostTable, Goals, MoveKey
+from tmpnav.world import World
+
+Pair = tuple[MoveKey, MoveKey]
+
+
+class CanonicalCosts:
+    """Action costs from canonical start states, computed on demand (see the module docstring)."""
+
+    def __init__(self, oracle: Oracle, world: World, min_gain: float, pair_radius: float | None = None):
+        self.oracle = oracle
+        scenario = oracle.ctx.scenario
+        self.scenario = scenario
+        self.robots = tuple(r.name for r in scenario.robots)
+        self.start_location = start_locations(scenario, world)
+        self.min_gain = min_gain
+        self.pair_radius = 2 * scenario.models.mutual_sensor.range if pair_radius is None else pair_radius
+        self.single: dict[MoveKey, float | None] = {}  # None: no such move (unreachable)
+        self.pair: dict[Pair, float | None] = {}  # None: not offered (saves too little, or no motion)
+        self.canonical: dict[tuple[str, str], StartState] = {
+            (r, self.start_location[r]): initial_state(scenario, oracle.ctx.roadmap.starts[r], r) for r in self.robots
+        }
+        self._near = _Nearness(oracle, self.start_location)
+
+    # ------------------------------------------------------------------ CostModel
+
+    def singles(self, goals: Goals) -> CostTable:
+        """Every single move between the robots' starts and the goal rooms (one cached table)."""
+        table = build_table(self.oracle, self.oracle_world, "goals")
+        for move, cost in table.single.items():
+            self.single.setdefault(move, cost)
+        return table
+
+    @property
+    def oracle_world(self) -> World:
+        return self.oracle.ctx.world
+
+    def plan_cost(self, plan: Plan) -> PlanCost:
+        self._ensure_singles([m for step in plan for m in step])
+        self._ensure_pairs([(step[0], step[1]) for step in plan if len(step) == 2])
+        costs = []
+        for step in plan:
+            c = self.single.get(step[0]) if len(step) == 1 else self.pair.get((step[0], step[1]))
+            costs.append(math.inf if c is None else c)
+        return PlanCost(float(sum(costs)), tuple(costs))
+
+    def subtable(self, head: Plan, robots: Sequence[str], rooms: Sequence[str], goals: Goals) -> CostTable:
+        at = head_locations(head, self.start_location, robots)
+        moves = sub_moves(at, rooms)
+        self._ensure_singles(moves)
+        single = {m: c for m in moves if (c := self.single.get(m)) is not None}
+        keep = ENCODINGS["mixed"].pair_filter(goals, at)
+        assert keep is not None
+        wanted = [
+            _ordered(m1, m2, self.robots)
+            for i, m1 in enumerate(single)
+            for m2 in list(single)[i + 1 :]
+            if m1[0] != m2[0] and keep(m1, m2) and self.in_pair_space(m1, m2)
+        ]
+        self._ensure_pairs(wanted)
+        pair = {p: c for p in wanted if (c := self.pair.get(p)) is not None}
+        locations = tuple(dict.fromkeys([*rooms, *at.values()]))
+        return CostTable(tuple(robots), tuple(rooms), locations, at, single, pair)
+
+    def seen(self) -> CostTable:
+        """The costs computed so far: the single and paired moves the search saw."""
+        single = {m: c for m, c in self.single.items() if c is not None}
+        pair = {p: c for p, c in self.pair.items() if c is not None}
+        rooms = tuple(r.name for r in self.scenario.rooms)
+        locations = tuple(dict.fromkeys([*rooms, *self.start_location.values()]))
+        return CostTable(self.robots, rooms, locations, dict(self.start_location), single, pair)
+
+    # ------------------------------------------------------------------ the plan space of pairs
+
+    def in_pair_space(self, m1: MoveKey, m2: MoveKey) -> bool:
+        """Do the two robots start, and end, within ``pair_radius`` of each other?"""
+        return self._near.distance(m1[1], m2[1]) <= self.pair_radius and self._near.distance(
+            m1[2], m2[2]
+        ) <= self.pair_radius
+
+    def pair_space(self, goals: Goals) -> list[Pair]:
+        """Every pair of single moves of the goal table in the plan space."""
+        keep = ENCODINGS["mixed"].pair_filter(goals, self.start_location)
+        assert keep is not None
+        by_robot: dict[str, list[MoveKey]] = {}
+        for m, c in self.single.items():
+            if c is not None:
+                by_robot.setdefault(m[0], []).append(m)
+        out = []
+        for i, r1 in enumerate(self.robots):
+            for r2 in self.robots[i + 1 :]:
+                for m1 in by_robot.get(r1, ()):
+                    for m2 in by_robot.get(r2, ()):
+                        if self.in_pair_space(m1, m2) and keep(m1, m2):
+                            out.append((m1, m2))
+        return out
+
+    def bound_table(self, goals: Goals) -> CostTable:
+        """The single moves between the goal rooms and every pair of the plan space, each
+        at its exact cost or, when it was never simulated, at a lower bound of it
+        (:mod:`tmpnav.oracle.bounds`): what :func:`tmpnav.task.bound.lower_bound` needs to
+        bound every plan of the anytime search."""
+        singles = self.singles(goals)
+        space = self.pair_space(goals)
+        todo = [p for p in space if p not in self.pair]
+        self._ensure_canonical({(m[0], m[1]) for p in todo for m in p})
+        requests = [
+            Request(
+                (m1[0], m2[0]),
+                (self.canonical[(m1[0], m1[1])], self.canonical[(m2[0], m2[1])]),
+                (m1[2], m2[2]),
+                bound_only=True,
+            )
+            for m1, m2 in todo
+        ]
+        bounds = dict(zip(todo, self.oracle.evaluate(requests), strict=True))
+        pair: dict[Pair, float] = {}
+        for p in space:
+            if p in bounds:
+                res = bounds[p]
+                if res is not None:
+                    pair[p] = res.cost
+            elif (c := self.pair.get(p)) is not None:
+                pair[p] = c
+        single = {m: c for m, c in self.single.items() if c is not None and m in singles.single}
+        return CostTable(singles.robots, singles.rooms, singles.locations, singles.start_location, single, pair)
+
+    # ------------------------------------------------------------------ computing
+
+    def _ensure_singles(self, moves: Iterable[MoveKey]) -> None:
+        todo = [m for m in dict.fromkeys(moves) if m not in self.single]
+        if not todo:
+            return
+        self._ensure_canonical({(r, o) for r, o, _ in todo})
+        ready = [m for m in todo if (m[0], m[1]) in self.canonical]
+        for m in todo:
+            if (m[0], m[1]) not in self.canonical:
+                self.single[m] = None  # its robot can never be at the origin
+        results = self.oracle.evaluate([Request((r,), (self.canonical[(r, o)],), (t,)) for r, o, t in ready])
+        for m, res in zip(ready, results, strict=True):
+            self.single[m] = None if res is None else res.cost
+
+    def _ensure_canonical(self, states: set[tuple[str, str]]) -> None:
+        """Canonical states at rooms: where a robot arrives driving there from its start."""
+        missing = sorted(s for s in states if s not in self.canonical)
+        if not missing:
+            return
+        requests = [Request((r,), (self.canonical[(r, self.start_location[r])],), (room,)) for r, room in missing]
+        for (r, room), res in zip(missing, self.oracle.evaluate(requests), strict=True):
+            if res is not None:
+                self.canonical[(r, room)] = arrival_state(res)
+                self.single.setdefault((r, self.start_location[r], room), res.cost)
+
+    def _ensure_pairs(self, pairs: Iterable[Pair]) -> None:
+        todo = [p for p in dict.fromkeys(pairs) if p not in self.pair]
+        if not todo:
+            return
+        self._ensure_singles([m for p in todo for m in p])
+        self._ensure_canonical({(m[0], m[1]) for p in todo for m in p})
+        ready = [
+            p
+            for p in todo
+            if all(self.single.get(m) is not None and (m[0], m[1]) in self.canonical for m in p)
+        ]
+        requests = [
+            Request(
+                (m1[0], m2[0]),
+                (self.canonical[(m1[0], m1[1])], self.canonical[(m2[0], m2[1])]),
+                (m1[2], m2[2]),
+                min_gain=self.min_gain if self.min_gain > 0 else None,
+            )
+            for m1, m2 in ready
+        ]
+        for p in todo:
+            self.pair[p] = None
+        for (m1, m2), res in zip(ready, self.oracle.evaluate(requests), strict=True):
+            if res is None or res.pruned:
+                continue
+            alone = self.single[m1] + self.single[m2]  # type: ignore[operator]
+            if _offered(res.cost, alone, self.min_gain):
+                self.pair[(m1, m2)] = res.cost
+
+
+def _offered(cost: float, alone: float, min_gain: float) -> bool:
+    """The encoding's test (:func:`tmpnav.task.encodings.offered_pairs`), on scaled costs."""
+    from tmpnav.task.encodings import scaled
+
+    a, c = scaled(alone), scaled(cost)
+    return c < a and c <= (1.0 - min_gain) * a
+
+
+def _ordered(m1: MoveKey, m2: MoveKey, robots: tuple[str, ...]) -> Pair:
+    """The pair with the robot first in the scenario's order first (the table's convention)."""
+    return (m1, m2) if robots.index(m1[0]) < robots.index(m2[0]) else (m2, m1)
+
+
+class _Nearness:
+    """Distances between locations: between their nearest pose instantiations (a start
+    location: its robot's start pose), in metres, straight line."""
+
+    def __init__(self, oracle: Oracle, start_location: dict[str, str]):
+        roadmap = oracle.ctx.roadmap
+        self.points: dict[str, np.ndarray] = {
+            room: roadmap.nodes[list(nodes)] for room, nodes in roadmap.instantiations.items()
+        }
+        for r, loc in start_location.items():
+            if loc not in self.points:
+                self.points[loc] = roadmap.nodes[[roadmap.starts[r]]]
+        self._memo: dict[tuple[str, str], float] = {}
+
+    def distance(self, a: str, b: str) -> float:
+        if a == b:
+            return 0.0
+        key = (a, b) if a < b else (b, a)
+        if key not in self._memo:
+            pa, pb = self.points.get(a), self.points.get(b)
+            if pa is None or pb is None:
+                self._memo[key] = math.inf
+            else:
+                d = np.hypot(pa[:, None, 0] - pb[None, :, 0], pa[:, None, 1] - pb[None, :, 1])
+                self._memo[key] = float(d.min())
+        return self._memo[key]
