@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # imported lazily: `import tmpnav` stays fast
     from tmpnav.export.nav2 import Waypoint
+    from tmpnav.results import PlanReport
     from tmpnav.rooms.proposal import Proposal
     from tmpnav.types import Scenario, TrajectoryStep
 
@@ -59,7 +60,7 @@ class Step:
 class PlanResult:
     """A plan and what comes with it. ``report`` is the pipeline's full report."""
 
-    report: Any
+    report: PlanReport
 
     @property
     def scenario(self) -> Scenario:
@@ -68,7 +69,7 @@ class PlanResult:
     @property
     def status(self) -> str:
         """``solved-optimally`` or ``solved-satisficing``."""
-        return str(getattr(self.report.status, "value", self.report.status))
+        return self.report.status.value
 
     @property
     def planner_cost(self) -> float:
@@ -83,10 +84,10 @@ class PlanResult:
         return [
             Step(
                 index=int(a.index),
-                moves=tuple(_move(m) for m in a.moves),
+                moves=tuple((str(robot), str(origin), str(target)) for robot, origin, target in a.moves),
                 planner_cost=float(a.planner_cost),
                 resimulated_cost=float(a.resimulated_cost),
-                goal_poses=tuple(tuple(float(v) for v in p) for p in a.goal_poses),  # type: ignore[misc]
+                goal_poses=tuple((float(x), float(y), float(theta)) for x, y, theta in a.goal_poses),
             )
             for a in self.report.actions
         ]
@@ -117,13 +118,6 @@ class PlanResult:
     def export_nav2(self, directory: str | Path) -> list[Path]:
         """Write each robot's waypoint files for nav2 into ``directory``; returns the paths."""
         return export_nav2(self.document(), directory)
-
-
-def _move(move: Any) -> tuple[str, str, str]:
-    if isinstance(move, tuple):
-        robot, origin, target = move
-        return str(robot), str(origin), str(target)
-    return str(move.robot), str(move.origin), str(move.target)
 
 
 def plan(
