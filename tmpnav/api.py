@@ -13,6 +13,9 @@
     proposal = tmpnav.segment_map("map.yaml", min_area=3.0)  # rooms, doors, landmark candidates
     tmpnav.write_skeleton(proposal, "scenario.yaml")
 
+A path ``configs/NAME.yaml`` (or ``configs/office/office.yaml``) names a scenario or map shipped
+with tmpnav when there is no such file under the working directory, as on the command line.
+
 Errors are the library's typed exceptions (:mod:`tmpnav.errors`): ``ScenarioError`` lists every
 problem of a scenario or map, ``PlannerError`` and its subclasses say how planning failed.
 """
@@ -38,7 +41,14 @@ def load(path: str | Path) -> Scenario:
     problem at once in a :class:`~tmpnav.errors.ScenarioError`)."""
     from tmpnav.pipeline import load_world
 
-    return load_world(path)[0]
+    return load_world(_shipped_or(path))[0]
+
+
+def _shipped_or(path: str | Path) -> Path:
+    """``path``, or the shipped file ``configs/...`` names when there is no such file here."""
+    from tmpnav.shipped import resolve
+
+    return resolve(Path(path))
 
 
 @dataclass(frozen=True)
@@ -149,7 +159,7 @@ def plan(
         workers=workers,
         executor=executor,
     )
-    return PlanResult(run(Path(scenario), options))
+    return PlanResult(run(_shipped_or(scenario), options))
 
 
 def export_nav2(plan_json: str | Path | dict[str, Any], directory: str | Path) -> list[Path]:
@@ -166,7 +176,7 @@ def segment_map(map_yaml: str | Path, *, min_area: float = 3.0, max_rooms: int |
     from tmpnav.rooms.proposal import propose, read_map
     from tmpnav.rooms.segment import SegmentParams
 
-    spec, grid = read_map(Path(map_yaml))
+    spec, grid = read_map(_shipped_or(map_yaml))
     return propose(spec, grid, SegmentParams(min_area=min_area, max_rooms=max_rooms))
 
 

@@ -141,3 +141,10 @@ def test_scenario_names_are_valid_names() -> None:
     assert scenario_name("depot scenario") == "depot-scenario"
     assert scenario_name("2nd floor") == "map-2nd-floor"
     assert scenario_name("étage_1") == "étage_1"
+
+
+def test_the_shipped_map_is_found_from_any_directory(tmp_path: Path) -> None:
+    """As for scenarios, configs/... names the shipped file when there is none under the working directory."""
+    proc = tmpnav("rooms", "configs/office/office.yaml", "--max-rooms", "3", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert [r["name"] for r in yaml.safe_load(proc.stdout)["rooms"]] == ["R1", "R2", "R3"]
