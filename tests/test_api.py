@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -62,3 +64,27 @@ def test_segment_map_and_write_skeleton(tmp_path: Path) -> None:
     path = tmpnav.write_skeleton(proposal, tmp_path / "office.yaml")
     scenario = tmpnav.load(path)
     assert scenario.name == "office" and len(scenario.rooms) == 4
+
+
+def test_a_path_under_configs_names_a_shipped_file_from_any_directory(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)  # no configs/ here: the shipped scenario and map are used
+    assert tmpnav.load("configs/two-rooms.yaml").name == tmpnav.load(ROOT / "configs" / "two-rooms.yaml").name
+    assert len(tmpnav.segment_map("configs/office/office.yaml").rooms) == 8
+
+
+@pytest.mark.slow
+def test_the_readme_snippet_runs_outside_the_checkout(tmp_path: Path) -> None:
+    """README's "Python API" block, as a user pastes it, in a directory that is not the checkout."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    snippet = re.search(r"## Python API\n\n```python\n(.*?)```", readme, re.S)
+    assert snippet is not None
+    env = {**os.environ, "TMPNAV_CACHE_DIR": str(tmp_path / "cache")}
+    proc = subprocess.run(
+        [sys.executable, "-c", snippet[1]], capture_output=True, text=True, cwd=tmp_path, env=env, timeout=600
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.startswith("solved-optimally ")
+    assert (tmp_path / "out" / "plan.json").is_file() and (tmp_path / "out" / "nav2" / "r1.csv").is_file()
+    assert len(tmpnav.load(tmp_path / "office-rooms.yaml").rooms) == 8

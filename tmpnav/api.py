@@ -13,6 +13,9 @@
     proposal = tmpnav.segment_map("map.yaml", min_area=3.0)  # rooms, doors, landmark candidates
     tmpnav.write_skeleton(proposal, "scenario.yaml")
 
+A path ``configs/NAME.yaml`` (or ``configs/office/office.yaml``) names a scenario or map shipped
+with tmpnav when there is no such file under the working directory, as on the command line.
+
 Errors are the library's typed exceptions (:mod:`tmpnav.errors`): ``ScenarioError`` lists every
 problem of a scenario or map, ``PlannerError`` and its subclasses say how planning failed.
 """
@@ -26,6 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # imported lazily: `import tmpnav` stays fast
     from tmpnav.export.nav2 import Waypoint
+    from tmpnav.results import PlanReport
     from tmpnav.rooms.proposal import Proposal
     from tmpnav.types import Scenario, TrajectoryStep
 
@@ -37,7 +41,14 @@ def load(path: str | Path) -> Scenario:
     problem at once in a :class:`~tmpnav.errors.ScenarioError`)."""
     from tmpnav.pipeline import load_world
 
-    return load_world(path)[0]
+    return load_world(_shipped_or(path))[0]
+
+
+def _shipped_or(path: str | Path) -> Path:
+    """``path``, or the shipped file ``configs/...`` names when there is no such file here."""
+    from tmpnav.shipped import resolve
+
+    return resolve(Path(path))
 
 
 @dataclass(frozen=True)
@@ -59,7 +70,7 @@ class Step:
 class PlanResult:
     """A plan and what comes with it. ``report`` is the pipeline's full report."""
 
-    report: Any
+    report: PlanReport
 
     @property
     def scenario(self) -> Scenario:
@@ -68,7 +79,7 @@ class PlanResult:
     @property
     def status(self) -> str:
         """``solved-optimally`` or ``solved-satisficing``."""
-        return str(getattr(self.report.status, "value", self.report.status))
+        return self.report.status.value
 
     @property
     def planner_cost(self) -> float:
@@ -83,10 +94,10 @@ class PlanResult:
         return [
             Step(
                 index=int(a.index),
-                moves=tuple(_move(m) for m in a.moves),
+                moves=tuple((str(robot), str(origin), str(target)) for robot, origin, target in a.moves),
                 planner_cost=float(a.planner_cost),
                 resimulated_cost=float(a.resimulated_cost),
-                goal_poses=tuple(tuple(float(v) for v in p) for p in a.goal_poses),  # type: ignore[misc]
+                goal_poses=tuple((float(x), float(y), float(theta)) for x, y, theta in a.goal_poses),
             )
             for a in self.report.actions
         ]
@@ -119,13 +130,6 @@ class PlanResult:
         return export_nav2(self.document(), directory)
 
 
-def _move(move: Any) -> tuple[str, str, str]:
-    if isinstance(move, tuple):
-        robot, origin, target = move
-        return str(robot), str(origin), str(target)
-    return str(move.robot), str(move.origin), str(move.target)
-
-
 def plan(
     scenario: str | Path,
     *,
@@ -155,7 +159,7 @@ def plan(
         workers=workers,
         executor=executor,
     )
-    return PlanResult(run(Path(scenario), options))
+    return PlanResult(run(_shipped_or(scenario), options))
 
 
 def export_nav2(plan_json: str | Path | dict[str, Any], directory: str | Path) -> list[Path]:
@@ -172,7 +176,7 @@ def segment_map(map_yaml: str | Path, *, min_area: float = 3.0, max_rooms: int |
     from tmpnav.rooms.proposal import propose, read_map
     from tmpnav.rooms.segment import SegmentParams
 
-    spec, grid = read_map(Path(map_yaml))
+    spec, grid = read_map(_shipped_or(map_yaml))
     return propose(spec, grid, SegmentParams(min_area=min_area, max_rooms=max_rooms))
 
 

@@ -209,12 +209,13 @@ class _Team:
                 self.belief = ekf.update_landmark(self.belief, i, landmarks[lm], z, q_lm)
         if not self.mutual or len(moving) < 2:
             return
-        sensor, q_mu = models.mutual_sensor, models.mutual_sensor.Q
+        q_mu = models.mutual_sensor.Q
         chol_mu = np.linalg.cholesky(q_mu)
+        robots = self.scenario.robots
         for i in moving:
             for j in (j for j in moving if j != i):
-                radius = self.scenario.robots[i].radius + self.scenario.robots[j].radius
-                sensing = MutualSensing(sensor.range, sensor.fov, radius)  # config 1 senses whatever the scenario says
+                # config 1 senses whatever the scenario's switch says
+                sensing = MutualSensing.of_sensor(self.scenario, robots[i].name, robots[j].name)
                 if sensing.visible(self.world, truth[i : i + 1], truth[j : j + 1])[0]:
                     z = noisy_observation(mutual_obs(truth[i], truth[j]), chol_mu, self.draws.mutual[i, j, step])
                     self.belief = ekf.update_mutual(self.belief, i, j, z, q_mu)

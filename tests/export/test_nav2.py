@@ -20,7 +20,7 @@ import pytest
 import yaml
 
 from tmpnav.errors import InputError
-from tmpnav.export.nav2 import CSV_COLUMNS, files, waypoints
+from tmpnav.export.nav2 import CSV_COLUMNS, files, waypoints, write_nav2
 
 ROOT = Path(__file__).resolve().parents[2]
 TWO_ROOMS = ROOT / "tests" / "fixtures" / "two_rooms.yaml"
@@ -207,3 +207,16 @@ def test_export_needs_an_output_directory() -> None:
     assert proc.stderr.strip().splitlines() == [
         "error: --export needs -o DIR: the waypoint files go to DIR/nav2/ (see 'tmpnav plan --help')"
     ]
+
+
+def test_a_failed_export_leaves_the_earlier_files_as_they_were(tmp_path: Path) -> None:
+    """The files are written through tmpnav.atomic: all or none, errors name the file asked for."""
+    folder = tmp_path / "nav2"
+    folder.mkdir()
+    (folder / "r1.csv").write_text("earlier\n")
+    (folder / "r2.rviz_waypoints.yaml").mkdir()  # a rename over a directory fails late
+    with pytest.raises(OSError) as caught:
+        write_nav2(plan_doc(), folder)
+    assert caught.value.filename == str(folder / "r2.rviz_waypoints.yaml")
+    assert (folder / "r1.csv").read_text() == "earlier\n"
+    assert sorted(p.name for p in folder.iterdir()) == ["r1.csv", "r2.rviz_waypoints.yaml"]

@@ -89,6 +89,23 @@ def test_the_skeleton_of_the_shipped_map_plans_as_written(tmp_path: Path) -> Non
     assert sorted({to for a in doc["actions"] for to in a["to"]}) == sorted(doc["goals"]["visit"])
 
 
+@pytest.mark.slow
+def test_the_skeleton_of_a_generated_map_plans_as_written(
+    corridor: tuple[GeneratedMap, Path], tmp_path: Path
+) -> None:
+    """Issue 15: on a generated map with known rooms, the written scenario validates and plans."""
+    g, map_yaml = corridor
+    out = tmp_path / "depot.yaml"
+    assert tmpnav("rooms", map_yaml, "-o", out).returncode == 0
+    assert len(load_world(out)[0].rooms) == len(g.truth.rooms)  # no room left out
+    proc = tmpnav("plan", out, "--cache-dir", tmp_path / "cache", "-q", "--format", "json")
+    assert proc.returncode == 0, proc.stderr
+    doc = yaml.safe_load(proc.stdout)  # JSON is YAML
+    assert doc["status"] == "solved-optimally"
+    assert len(doc["goals"]["visit"]) == 2
+    assert sorted({to for a in doc["actions"] for to in a["to"]}) == sorted(doc["goals"]["visit"])
+
+
 def write_map(folder: Path, pixels: np.ndarray) -> Path:
     folder.mkdir(parents=True, exist_ok=True)
     Image.fromarray(pixels, mode="L").save(folder / "m.pgm")
@@ -141,3 +158,10 @@ def test_scenario_names_are_valid_names() -> None:
     assert scenario_name("depot scenario") == "depot-scenario"
     assert scenario_name("2nd floor") == "map-2nd-floor"
     assert scenario_name("étage_1") == "étage_1"
+
+
+def test_the_shipped_map_is_found_from_any_directory(tmp_path: Path) -> None:
+    """As for scenarios, configs/... names the shipped file when there is none under the working directory."""
+    proc = tmpnav("rooms", "configs/office/office.yaml", "--max-rooms", "3", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert [r["name"] for r in yaml.safe_load(proc.stdout)["rooms"]] == ["R1", "R2", "R3"]

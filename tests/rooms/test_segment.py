@@ -79,10 +79,15 @@ def test_rooms_of_generated_maps_are_found(noise: float, wall_gaps: float, resol
 
 
 @pytest.mark.parametrize("layout", ["corridor", "bsp", "hall"])
-def test_every_door_of_generated_maps_is_found(layout: str) -> None:
+@pytest.mark.parametrize(
+    ("noise", "wall_gaps", "resolution"),
+    [(0.002, 0.01, 0.05), (0.01, 0.03, 0.05), (0.005, 0.02, 0.1)],
+    ids=["typical", "noisy", "coarse"],
+)
+def test_every_door_of_generated_maps_is_found(layout: str, noise: float, wall_gaps: float, resolution: float) -> None:
     width_errors = []
     for seed in range(5):
-        g, grid, truths = generated(layout, seed, noise=0.005, wall_gaps=0.02)
+        g, grid, truths = generated(layout, seed, noise=noise, wall_gaps=wall_gaps, resolution=resolution)
         seg, best = scored(grid, truths)
         doors = find_doors(seg)
         for door in g.truth.doors:

@@ -11,6 +11,9 @@ runs the real command line on it. What a user must see, for every case:
 
 Most cases run in-process through click's CliRunner (fast); a few run ``python -m tmpnav``
 in a subprocess, the closest check that nothing else reaches the terminal.
+
+Why one module of more than 400 lines: it is a catalogue, one short case per broken key, run
+by the same few checks; split, the cases of one section of the format would be apart.
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tmpnav.world.geometry import wrap_angle, wrap_angle_scalar
@@ -37,6 +37,7 @@ def test_wrap_angle_is_idempotent_and_preserves_the_angle(a: float) -> None:
     assert np.isclose(np.cos(w), np.cos(a), atol=1e-9) and np.isclose(np.sin(w), np.sin(a), atol=1e-9)
 
 
+@settings(deadline=None)  # the first example loads (or compiles) the numba function: 0.25 s on a busy machine
 @given(st.floats(-1e6, 1e6) | st.sampled_from(EDGES))
 def test_the_compiled_twin_gives_the_same_bits(a: float) -> None:
     assert wrap_angle_scalar(a) == float(wrap_angle(a))

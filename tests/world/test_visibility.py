@@ -194,6 +194,7 @@ def test_mutual_sensing_between_two_robots(tmp_path: Path) -> None:
     assert MutualSensing.between(scenario, b, a) == sensing
     off = replace(scenario, models=replace(scenario.models, mutual_observations=False))
     assert MutualSensing.between(off, a, b) is None
+    assert MutualSensing.of_sensor(off, a, b) == MutualSensing.of_sensor(scenario, a, b) == sensing
 
 
 def test_mutual_sensing_along_sequences_agrees_with_pose_pairs(world: World) -> None:

@@ -159,13 +159,7 @@ def propagate_rollout(
             np.asarray(belief.cov, dtype=float)[None],
             np.ascontiguousarray(np.asarray(noise.mutual, dtype=float).transpose(2, 0, 1, 3))[None],
         ),
-        sequences=Sequences(
-            group=np.zeros(1, dtype=np.int64),
-            motions=np.arange(n, dtype=np.int64)[None],
-            restart=np.zeros(1, dtype=np.int64),
-            horizon=np.array([T], dtype=np.int64),
-            mutual_offset=np.zeros(1, dtype=np.int64),
-        ),
+        sequences=Sequences.one(n, T),
         mutual_visible=np.ascontiguousarray(observed_mutually(rollout, models).transpose(2, 0, 1)),
     )
     result = propagate_sequences(batch)

@@ -116,6 +116,18 @@ class Sequences(NamedTuple):
     horizon: np.ndarray  # (C,) int64
     mutual_offset: np.ndarray  # (C,) int64
 
+    @staticmethod
+    def one(n: int, horizon: int) -> Sequences:
+        """A single simulation: robot i moves along motion i from group 0's belief for
+        ``horizon`` steps, mutual visibility from row 0."""
+        return Sequences(
+            group=np.zeros(1, dtype=np.int64),
+            motions=np.arange(n, dtype=np.int64)[None],
+            restart=np.zeros(1, dtype=np.int64),
+            horizon=np.array([horizon], dtype=np.int64),
+            mutual_offset=np.zeros(1, dtype=np.int64),
+        )
+
 
 @dataclass(frozen=True, eq=False)
 class SequenceBatch:

@@ -62,8 +62,9 @@ def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_rooms: 
     from tmpnav.rooms.skeleton import save, skeleton
     from tmpnav.rooms.verify import verify
     from tmpnav.scenario import display_path
+    from tmpnav.shipped import resolve
 
-    spec, grid = read_map(map_yaml)
+    spec, grid = read_map(resolve(map_yaml))
     proposal, warnings = verify(propose(spec, grid, SegmentParams(min_area=min_area, max_rooms=max_rooms)))
     for warning in warnings:  # not expected: the proposal is built to pass
         click.echo(f"warning: {warning}", err=True)

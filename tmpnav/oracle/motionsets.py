@@ -210,13 +210,7 @@ def trajectory(
     n = len(motions)
     table = MotionTable(motions, lib.world.landmark_xy.shape[0], lib.scenario.models.dt)
     h = int(table.arrays.steps.max(initial=0))
-    one = Sequences(
-        group=np.zeros(1, dtype=np.int64),
-        motions=np.arange(n, dtype=np.int64)[None],
-        restart=np.zeros(1, dtype=np.int64),
-        horizon=np.array([h], dtype=np.int64),
-        mutual_offset=np.zeros(1, dtype=np.int64),
-    )
+    one = Sequences.one(n, h)
     run = table.propagate(lib, n, [GroupStart(mean0, cov0, 0)], one, np.ascontiguousarray(mvis), mu_noise[None])
     arrival = run.arrival_xy[0]
     terms = tuple(

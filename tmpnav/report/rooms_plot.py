@@ -1,12 +1,14 @@
 """``tmpnav rooms -o rooms.png``: the segmentation over the map, to check it before planning.
 
 Each room's cells in a colour of its own under its outline (the polygon written to the
-scenario), with its name at its roomiest spot; doors from jamb to jamb; landmark candidates
-by kind; the placeholder robot. Rooms no robot reaches from the placeholder are hatched.
+scenario), with its name at its roomiest spot (below the placeholder robot, which stands at
+the roomiest spot of its room); doors from jamb to jamb; landmark candidates by kind; the
+placeholder robot. Rooms no robot reaches from the placeholder are hatched.
 """
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +20,7 @@ from tmpnav.report import figures as fg
 from tmpnav.rooms.proposal import ROBOT_RADIUS, Proposal
 
 KIND_MARKERS = {"pillar": "o", "obstacle": "s", "door-frame": "P", "corner": "^"}
+LABEL_BELOW_ROBOT = 18.0  # points: a room's name drawn this far below a robot standing on its spot
 
 
 def plot_rooms(proposal: Proposal, path: Path, title: str) -> None:
@@ -29,7 +32,7 @@ def plot_rooms(proposal: Proposal, path: Path, title: str) -> None:
     width = 12.0 if aspect < 1.2 else max(5.0, 9.0 / aspect)
     fig, ax = plt.subplots(figsize=(width, max(3.5, width * aspect + 1.2)))
     _draw_segmentation(ax, proposal)
-    _draw_rooms(ax, proposal)
+    _draw_rooms(ax, proposal, proposal.robot_pose[:2])
     _draw_doors_and_landmarks(ax, proposal)
     x, y, _ = proposal.robot_pose
     ax.add_patch(Circle((x, y), ROBOT_RADIUS, color=fg.robot_color(0), zorder=7))
@@ -78,13 +81,26 @@ def _draw_segmentation(ax: Axes, proposal: Proposal) -> None:
     )
 
 
-def _draw_rooms(ax: Axes, proposal: Proposal) -> None:
-    """Outlines (hatched: left out, unreachable) and names at the roomiest spots."""
+def _draw_rooms(ax: Axes, proposal: Proposal, robot_xy: tuple[float, float]) -> None:
+    """Outlines (hatched: left out, unreachable) and names at the roomiest spots; where the
+    robot stands on that spot, the name goes below it so that the robot does not hide it."""
     for room in proposal.rooms:
         hatch = None if room.reachable else "//"
         ax.add_patch(Polygon(room.polygon, closed=True, fill=False, ec="black", lw=1.0, zorder=2, hatch=hatch))
         label = {"boxstyle": "round,pad=0.2", "fc": "white", "ec": "none", "alpha": 0.8}
-        ax.annotate(room.name, room.spot, ha="center", va="center", fontsize=10, weight="bold", zorder=6, bbox=label)
+        under = math.dist(room.spot, robot_xy) < 3 * ROBOT_RADIUS
+        ax.annotate(
+            room.name,
+            room.spot,
+            xytext=(0.0, -LABEL_BELOW_ROBOT if under else 0.0),
+            textcoords="offset points",
+            ha="center",
+            va="top" if under else "center",
+            fontsize=10,
+            weight="bold",
+            zorder=6,
+            bbox=label,
+        )
 
 
 def _draw_doors_and_landmarks(ax: Axes, proposal: Proposal) -> None:

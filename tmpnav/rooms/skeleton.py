@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from tmpnav import __version__
+from tmpnav.atomic import write_file
 from tmpnav.rooms.proposal import DEEP_DOOR, ROBOT_RADIUS, Proposal, RoomProposal
 
 WIDTH = 100  # characters per line of a wrapped polygon
@@ -175,15 +176,5 @@ def scenario_name(stem: str) -> str:
 
 
 def save(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically: a temporary file beside it (created with the
-    umask's permissions, as ``path`` would be) renamed over it."""
-    import os
-
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
-    try:
-        with open(tmp, "x", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    """Write ``text`` to ``path`` all or nothing (:func:`tmpnav.atomic.write_file`)."""
+    write_file(path, text)

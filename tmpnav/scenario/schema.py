@@ -5,6 +5,11 @@ A schema is a tree of specs (:class:`Section`, :class:`NamedList`, :class:`Numbe
 defaults and collects every problem at once, each with the key path where it was found.
 The same tree produces the reference table of the scenario format (:func:`reference_rows`),
 so the documentation cannot drift from what the loader accepts.
+
+Why one module of more than 400 lines: it is a small self-contained library, one short class
+per kind of YAML value (its check, its unit conversion, its reference text) over the shared
+:class:`Ctx`, read one class at a time; ``Section`` and ``NamedList`` nest any of them, so the
+pieces of a split would import each other back. What tmpnav's scenario *is* lives in format.py.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ from scipy import ndimage
 from tmpnav.errors import Problem
 from tmpnav.scenario import display_path
 from tmpnav.scenario.extent import model_ranges, move_sizes, plan_sizes
-from tmpnav.types import Scenario
+from tmpnav.types import RobotSpec, Scenario
 from tmpnav.world.build import World
 from tmpnav.world.geometry import polygon_area
 
@@ -41,6 +41,43 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
         + move_sizes(scenario, width, height)
         + plan_sizes(scenario)
     ]
+    problems += _room_outlines(scenario, world, inside, extent, problem)
+    for lm in scenario.landmarks:
+        if not inside(lm.position):
+            problems.append(
+                problem(
+                    f"landmarks.{lm.name}.position",
+                    f"{list(lm.position)} is outside the map {extent}; expected a point inside the map",
+                )
+            )
+    for door in scenario.doors:
+        for p in door.segment:
+            if not inside(p):
+                problems.append(
+                    problem(
+                        f"doors.{door.name}.segment",
+                        f"point {list(p)} is outside the map {extent}; expected a door inside the map",
+                    )
+                )
+                break
+    start_problems, starts_ok = _starts(scenario, world, inside, extent, problem)
+    problems += start_problems
+    problems += _overlapping(scenario, problem)
+    if any(p.path.startswith("rooms.") for p in problems):
+        return problems
+    problems += _reachability(scenario, world, starts_ok, problem)
+    return problems
+
+
+def _room_outlines(
+    scenario: Scenario,
+    world: World,
+    inside: Callable[[tuple[float, float]], bool],
+    extent: str,
+    problem: Callable[[str, str], Problem],
+) -> list[Problem]:
+    """Room polygons outside the map, crossing themselves, or of (almost) zero area."""
+    problems = []
     for room in scenario.rooms:
         path = f"rooms.{room.name}.polygon"
         outside = [p for p in room.polygon if not inside(p)]
@@ -60,24 +97,18 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
             )
         elif abs(polygon_area(np.array(room.polygon))) < world.grid.resolution**2:
             problems.append(problem(path, "has (almost) zero area; expected a polygon enclosing a region"))
-    for lm in scenario.landmarks:
-        if not inside(lm.position):
-            problems.append(
-                problem(
-                    f"landmarks.{lm.name}.position",
-                    f"{list(lm.position)} is outside the map {extent}; expected a point inside the map",
-                )
-            )
-    for door in scenario.doors:
-        for p in door.segment:
-            if not inside(p):
-                problems.append(
-                    problem(
-                        f"doors.{door.name}.segment",
-                        f"point {list(p)} is outside the map {extent}; expected a door inside the map",
-                    )
-                )
-                break
+    return problems
+
+
+def _starts(
+    scenario: Scenario,
+    world: World,
+    inside: Callable[[tuple[float, float]], bool],
+    extent: str,
+    problem: Callable[[str, str], Problem],
+) -> tuple[list[Problem], list[RobotSpec]]:
+    """Start poses outside the map or in collision, and the robots whose start is fine."""
+    problems = []
     starts_ok = []
     for robot in scenario.robots:
         path = f"robots.{robot.name}.pose"
@@ -98,11 +129,7 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
             )
         else:
             starts_ok.append(robot)
-    problems += _overlapping(scenario, problem)
-    if any(p.path.startswith("rooms.") for p in problems):
-        return problems
-    problems += _reachability(scenario, world, starts_ok, problem)
-    return problems
+    return problems, starts_ok
 
 
 def _overlapping(scenario: Scenario, problem: Callable[[str, str], Problem]) -> list[Problem]:

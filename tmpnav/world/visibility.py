@@ -92,11 +92,17 @@ class MutualSensing(NamedTuple):
     def between(scenario: Scenario, robot_a: str, robot_b: str) -> MutualSensing | None:
         """The sensing between two robots of a scenario; None when its models switch
         mutual observations off (the robots then never see each other)."""
-        models = scenario.models
-        if not models.mutual_observations:
+        if not scenario.models.mutual_observations:
             return None
+        return MutualSensing.of_sensor(scenario, robot_a, robot_b)
+
+    @staticmethod
+    def of_sensor(scenario: Scenario, robot_a: str, robot_b: str) -> MutualSensing:
+        """The scenario's mutual sensor between two of its robots, whether or not its models
+        switch mutual observations on (``tmpnav simulate`` runs with them on and off)."""
+        sensor = scenario.models.mutual_sensor
         radii = scenario.robot(robot_a).radius + scenario.robot(robot_b).radius
-        return MutualSensing(models.mutual_sensor.range, models.mutual_sensor.fov, radii)
+        return MutualSensing(sensor.range, sensor.fov, radii)
 
     def visible(self, world: World, observer: np.ndarray, target: np.ndarray) -> np.ndarray:
         """Whether robots at poses ``observer`` (k, 3) see robots at ``target`` (k, 3)."""

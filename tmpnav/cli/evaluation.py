@@ -1,0 +1,150 @@
+"""``tmpnav simulate`` and ``tmpnav bench``: the paper's evaluation (Fig. 3), from the command line.
+
+``simulate`` executes a plan with simulated noise (tmpnav/execution.py), ``bench`` times planning
+runs against the number of rooms or robots (tmpnav/bench/). Registered on the group of
+:mod:`tmpnav.cli.commands` when :mod:`tmpnav.cli` is imported.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import click
+
+from tmpnav.cli.commands import cli
+from tmpnav.cli.options import (
+    SCENARIO_ARG,
+    encoding_choice,
+    oracle_options,
+    output_option,
+    plan_options,
+    report_errors,
+    writing,
+)
+
+
+@cli.command()
+@SCENARIO_ARG
+@click.option("--sessions", type=click.IntRange(min=1), default=25, show_default=True, help="Simulated executions.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
+@output_option(True, "Directory for errors.csv, errors.png, summary.md.")
+@click.option(
+    "--replan",
+    is_flag=True,
+    help="Run the task planner even if the cache remembers its plan for this exact problem.",
+)
+@oracle_options
+@report_errors
+def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw: Any) -> None:
+    """Execute the plan in simulation, with and without mutual observations.
+
+    Each session samples the true initial poses from the initial beliefs, applies noisy
+    controls (a waypoint follower steering on the estimate) and noisy observations, and
+    runs the EKF with mutual observations (config 1) and without (config 2), on the same
+    random draws. Prints the worst-case position error per robot and its reduction.
+    """
+    from tmpnav.execution import error_summary, execute
+    from tmpnav.pipeline import plan as run_plan
+
+    report = run_plan(scenario, plan_options(kw))
+    result = execute(report, sessions, seed)
+    lines = error_summary(result, sessions)
+    if output is not None:
+        from tmpnav.report.outputs import write_execution_outputs
+
+        with writing(output):
+            written = write_execution_outputs(report, result, sessions, output)
+        lines += [f"wrote {path}" for path in written]
+    click.echo("\n".join(lines))
+
+
+@cli.command()
+@click.option(
+    "--rooms",
+    "rooms_text",
+    default="2..10",
+    show_default=True,
+    help="Rooms to visit: a range A..B[:STEP] (step 2 by default) or a list A,B,C.",
+)
+@click.option(
+    "--robots",
+    "robots_text",
+    default="2",
+    show_default=True,
+    help="Robots: a range or a list; several values make a robots experiment.",
+)
+@click.option(
+    "--sessions",
+    type=click.IntRange(min=1),
+    default=25,
+    show_default=True,
+    help="Sessions (random goal draws) per point.",
+)
+@click.option(
+    "--encoding",
+    "encodings",
+    multiple=True,
+    type=encoding_choice(),
+    help="Encodings to compare on the same draws (repeat the option); default: mixed.",
+)
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
+@click.option(
+    "--timeout",
+    type=click.FloatRange(min=0, min_open=True),
+    default=300.0,
+    show_default=True,
+    help="Seconds a run may take before it is recorded as a timeout.",
+)
+@click.option(
+    "--scenario",
+    type=click.Path(path_type=Path, dir_okay=False),
+    help="World to use; {robots} in it becomes the number of robots (default: the shipped "
+    "configs/corridor-{robots}robots.yaml).",
+)
+@click.option("--workers", type=click.IntRange(min=1), help="Oracle worker processes per run (default: all cores).")
+@output_option(True, "Directory for bench.csv, bench.png, summary.md.", default=Path("bench-out"), show_default=True)
+@click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
+@click.option(
+    "--replot",
+    is_flag=True,
+    help="Run nothing: rewrite summary.md and bench.png from the bench.csv in -o DIR (give the run's --timeout).",
+)
+@report_errors
+def bench(
+    rooms_text: str,
+    robots_text: str,
+    sessions: int,
+    encodings: tuple[str, ...],
+    seed: int,
+    timeout: float,
+    scenario: Path | None,
+    workers: int | None,
+    output: Path,
+    quiet: bool,
+    replot: bool,
+) -> None:
+    """Planning time against the number of rooms (Fig. 3(b)) or of robots (Fig. 3(c)).
+
+    Every run plans in its own process: cold (empty cache), warm (cost table and task
+    plan from the cache) and replan (cost table from the cache, the task planner runs
+    again); runs longer than --timeout are recorded as timeouts. Writes bench.csv,
+    bench.png and summary.md.
+    """
+    from tmpnav.bench import experiment
+
+    written: list[Path] = []
+    if replot:
+        run = experiment.replot(output / experiment.BENCH_CSV)
+    else:
+        spec = experiment.BenchSpec.parse(
+            rooms_text, robots_text, sessions, list(encodings), seed, timeout, scenario, workers
+        )
+        run = experiment.run(spec, None if quiet else (lambda line: click.echo(line, err=True)))
+        with writing(output):
+            written.append(experiment.write_csv(run, output))
+    with writing(output):
+        text, figures = experiment.write_summary(run, output, timeout)
+    click.echo(text)
+    for path in [*written, *figures]:
+        click.echo(f"wrote {path}")
