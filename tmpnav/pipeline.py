@@ -22,7 +22,6 @@ from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
 from tmpnav.errors import InputError, ScenarioError
 from tmpnav.results import CacheUse, PlanReport, StageTimes, TaskResult
-from tmpnav.task.modes import exact_fits
 from tmpnav.types import CostTable, Goals, Roadmap, Scenario
 from tmpnav.world import MapImageError, World
 
@@ -30,11 +29,9 @@ from tmpnav.world import MapImageError, World
 SearchProgress = Callable[[float, float, float | None, str], None]
 
 if TYPE_CHECKING:
-    from tmpnav.attachment.canonical import CanonicalCosts
     from tmpnav.oracle.oracle import Oracle
     from tmpnav.roadmap.store import RoadmapStore
     from tmpnav.task.encode import EncodedTask
-    from tmpnav.task.model import CostModel
 
 
 def load_world(path: str | Path) -> tuple[Scenario, World]:
@@ -149,6 +146,7 @@ def prepare(
 
     The caller must close ``prepared.oracle`` (executor and cache), see :func:`close`.
     """
+    from tmpnav.attachment.strategy import full_table
     from tmpnav.roadmap.store import RoadmapStore
 
     with times.timed("load"):
@@ -169,24 +167,6 @@ def prepare(
         raise
     warnings = tuple(store.warnings) if store is not None else ()
     return Prepared(scenario, world, roadmap, roadmap_hit, cache, warnings, oracle, table)
-
-
-def full_table(scenario: Scenario, world: World, oracle: Oracle, times: StageTimes) -> CostTable:
-    """Every cost the encoding may need, before the exact planner runs (stage ``oracle``)."""
-    from tmpnav.oracle.table import build_table, start_locations
-    from tmpnav.task.encodings import ENCODINGS
-
-    with times.timed("oracle"):
-        sp = scenario.planner
-        want = ENCODINGS[sp.encoding].table_request(scenario.goals, start_locations(scenario, world), sp.pair_min_gain)
-        return build_table(
-            oracle,
-            world,
-            want.destinations,
-            want.pair_filter,
-            filter_key=want.filter_key,
-            pair_min_gain=want.pair_min_gain,
-        )
 
 
 def close(oracle: Oracle) -> None:
@@ -212,24 +192,21 @@ def plan(
     motions and beliefs. ``loaded`` skips loading when the caller already has the world."""
     from tmpnav.attachment.canonical import CanonicalCosts
     from tmpnav.attachment.carried import CarriedCosts
+    from tmpnav.attachment.strategy import plan_scenario
     from tmpnav.resimulate import resimulate
-    from tmpnav.task.stage import TaskProblem, plan_task
 
     options = options or PlanOptions()
     times = StageTimes()
     prep = prepare(path, options, times, loaded, with_table=False)
     scenario, oracle = prep.scenario, prep.oracle
     try:
-        sp = scenario.planner
-        canonical = CanonicalCosts(oracle, prep.world, sp.pair_min_gain)
+        canonical = CanonicalCosts(oracle, prep.world, scenario.planner.pair_min_gain)
         carried = CarriedCosts(oracle, canonical)
-        if search_mode(scenario) == "exact":
-            table = full_table(scenario, prep.world, oracle, times)
-            store = oracle.cache if options.use_cache else None
-            task = plan_task(TaskProblem.of(scenario, table), store, options.replan, times)
-        else:
-            model = carried if sp.costs == "carried" else canonical
-            table, task = _plan_anytime(scenario, canonical, model, times, options.search_progress)
+        store = oracle.cache if options.use_cache else None
+        planned = plan_scenario(
+            scenario, prep.world, canonical, carried, store, options.replan, times, options.search_progress
+        )
+        table, task = planned.table, planned.task
         with times.timed("resimulate"):
             resim = resimulate(carried, list(task.steps), list(task.step_costs), list(task.action_names))
     finally:
@@ -247,35 +224,6 @@ def plan(
         cache=_cache_use(prep, task, options.use_cache),
         oracle=oracle.stats,
     )
-
-
-def search_mode(scenario: Scenario) -> str:
-    """``exact`` or ``anytime``: the scenario's choice, or for ``auto`` exact where it fits."""
-    sp = scenario.planner
-    if sp.encoding == "paper":
-        if sp.search == "anytime":
-            raise InputError("the anytime search plans the single and mixed encodings, not the paper's")
-        return "exact"
-    if sp.search != "auto":
-        return sp.search
-    return "exact" if exact_fits(len(scenario.goals.all_rooms), len(scenario.robots)) else "anytime"
-
-
-def _plan_anytime(
-    scenario: Scenario,
-    canonical: CanonicalCosts,
-    model: CostModel,
-    times: StageTimes,
-    progress: SearchProgress | None,
-) -> tuple[CostTable, TaskResult]:
-    """The anytime search on ``model``'s lazily computed costs; the lower bound over the
-    canonical table; the canonical costs it saw."""
-    from tmpnav.task.stage import plan_anytime
-
-    sp, goals = scenario.planner, scenario.goals
-    bound = (lambda: canonical.bound_table(goals)) if sp.costs == "table" else None
-    task = plan_anytime(model, goals, sp, bound, times, progress, costs=sp.costs)
-    return canonical.seen(), task
 
 
 def pddl_texts(report: PlanReport) -> tuple[str, str]:

@@ -87,7 +87,7 @@ class CanonicalCosts:
             _ordered(m1, m2, self.robots)
             for i, m1 in enumerate(single)
             for m2 in list(single)[i + 1 :]
-            if m1[0] != m2[0] and keep(m1, m2) and self.in_pair_space(m1, m2)
+            if m1[0] != m2[0] and keep(m1, m2)
         ]
         self._ensure_pairs(wanted)
         pair = {p: c for p in wanted if (c := self.pair.get(p)) is not None}

@@ -49,7 +49,7 @@ from tmpnav.oracle.table import arrival_state
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.model import PlanCost, sub_moves
 from tmpnav.task.plans import Plan, Step
-from tmpnav.types import CostTable, CostTerms, Goals, MoveKey, Scenario, TrajectoryStep, cov3, vec3
+from tmpnav.types import CostTable, CostTerms, Goals, MotionResult, MoveKey, Scenario, TrajectoryStep, cov3, vec3
 from tmpnav.world.visibility import MutualSensing
 
 
@@ -137,6 +137,7 @@ class CarriedCosts:
         self.min_gain = canonical.min_gain
         self.start = Team.at_start(self.lib, self.scenario)
         self._memo: dict[bytes, tuple[StepOutcome, list[int]]] = {}
+        self._pruned: set[bytes] = set()  # paired steps the oracle proved unable to save min_gain
         self.steps_simulated = 0
 
     # ------------------------------------------------------------------ CostModel
@@ -199,7 +200,7 @@ class CarriedCosts:
             _ordered(m1, m2, self.robots)
             for i, m1 in enumerate(moves)
             for m2 in moves[i + 1 :]
-            if m1[0] != m2[0] and keep(m1, m2) and self.canonical.in_pair_space(m1, m2)
+            if m1[0] != m2[0] and keep(m1, m2)
         ]
         requests = []
         for m1, m2 in wanted:
@@ -234,15 +235,48 @@ class CarriedCosts:
             self._memo[key] = (outcome, sub)
         return self._apply(team, sub, outcome)
 
-    def _run(self, team: Team, step: Step, idx: list[int], sub: list[int], record: bool) -> StepOutcome:
+    def advance_many(
+        self, team: Team, steps: Sequence[Step], min_gain: float | None = None
+    ) -> list[StepOutcome | None]:
+        """Every step of ``steps`` run on ``team`` (its oracle requests in one batch); None
+        for a step whose robots cannot reach their rooms, and with ``min_gain`` for a paired
+        step the oracle proves unable to save that much over its two moves made alone from
+        ``team`` (it is then not simulated)."""
+        todo: dict[int, tuple[list[int], list[int], bytes]] = {}
+        out: list[StepOutcome | None] = [None] * len(steps)
+        for n, step in enumerate(steps):
+            idx = [team.names.index(m[0]) for m in step]
+            sub = team.partners(idx)
+            key = self._key(team, step, sub)
+            if key in self._memo:
+                out[n] = self._apply(team, sub, self._memo[key][0])
+            elif key not in self._pruned:
+                todo[n] = (idx, sub, key)
+        requests = []
+        for n in todo:
+            req = team.request([m[0] for m in steps[n]], [m[2] for m in steps[n]])
+            gain = min_gain if min_gain and len(steps[n]) == 2 and req.joint_cov is None else None
+            requests.append(Request(req.robots, req.starts, req.rooms, req.joint_cov, min_gain=gain))
+        for (n, (idx, sub, key)), result in zip(todo.items(), self.oracle.evaluate(requests), strict=True):
+            if result is None or result.pruned:
+                if result is not None:
+                    self._pruned.add(key)
+                continue
+            outcome = self._run(team, steps[n], idx, sub, False, result)
+            self._memo[key] = (outcome, sub)
+            out[n] = self._apply(team, sub, outcome)
+        return out
+
+    def _run(
+        self, team: Team, step: Step, idx: list[int], sub: list[int], record: bool, result: MotionResult | None = None
+    ) -> StepOutcome:
         lib = self.lib
         robots = tuple(m[0] for m in step)
         request = team.request(robots, [m[2] for m in step])
-        result = self.oracle.evaluate([request])[0]
         if result is None:
-            raise Unreachable(
-                f"{', '.join(robots)} cannot reach {', '.join(request.rooms)} from where they are"
-            )
+            result = self.oracle.evaluate([request])[0]
+        if result is None:
+            raise Unreachable(f"{', '.join(robots)} cannot reach {', '.join(request.rooms)} from where they are")
         motions = []
         for j in sub:
             if j in idx:

@@ -74,6 +74,8 @@ def _search(report: PlanReport) -> list[str]:
     lines = []
     if search is not None:
         line = f"search: {search.mode}, costs {search.costs}"
+        if search.mode == "exact" and search.start:
+            line += f"; {search.start}"
         if search.mode == "anytime":
             line += (
                 f"; first plan by {search.start}; {_plural(search.subproblems, 'sub-problem')} solved by ENHSP, "

@@ -15,11 +15,17 @@
 SEARCHES = ("auto", "exact", "anytime")
 COSTS = ("table", "carried")
 
-#: ``auto`` plans exactly up to this many goal rooms with two robots (fewer with more robots):
-#: the exact search costs every paired move first, about rooms^4 x robots^2 of them
+#: ``auto`` plans exactly with table costs up to this many goal rooms with two robots (fewer
+#: with more robots): the exact search costs every paired move first, about rooms^4 x robots^2
 EXACT_ROOMS = 8
 
+#: ``auto`` plans exactly with carried costs up to these sizes (goal rooms, robots): the
+#: belief space is unfolded context by context (5 rooms, 2 robots: about 2,500 contexts)
+EXACT_CARRIED = ((5, 2), (4, 3), (3, 4))
 
-def exact_fits(rooms: int, robots: int) -> bool:
+
+def exact_fits(rooms: int, robots: int, costs: str = "table") -> bool:
     """Does ``auto`` choose the exact search for this many goal rooms and robots?"""
+    if costs == "carried":
+        return any(rooms <= n and robots <= r for n, r in EXACT_CARRIED)
     return rooms <= EXACT_ROOMS and rooms * robots <= 2 * EXACT_ROOMS

@@ -150,19 +150,25 @@ class AnytimeSearch:
         """The plan's steps in the canonical order of commuting steps (tmpnav.task.decode)."""
         return tuple(plan[i] for i in canonical_order(list(plan), self.model.robots))
 
-    def run(self, first: Plan | None = None, start: str = "given") -> SearchResult:
-        """Search from ``first`` (or from OR-Tools' routes) until the plan is proved
-        optimal, a local optimum, or the budget is spent."""
+    def run(self, seeds: dict[str, Plan] | None = None) -> SearchResult:
+        """Search from the cheapest of OR-Tools' routes and the ``seeds`` (name -> plan,
+        e.g. the exact plan of the cost table) until the plan is proved optimal, a local
+        optimum, or the budget is spent."""
         with self.times.timed("oracle"):
             singles = self.model.singles(self.goals)
         self._distances(singles)
         taken = set(self.goals.all_rooms) | set(self.model.start_location.values())
         self.waypoints = tuple(dict.fromkeys(t for _, _, t in singles.single if t not in taken))
-        if first is None:
-            first, start = self.first_plan(singles)
-        first = self.canonical(first)
-        self.rules.check(first)
-        best, cost = first, self.cost(first)
+        plan, start = self.first_plan(singles)
+        best, cost = plan, self.cost(plan)
+        for name, seed in (seeds or {}).items():
+            seed = self.canonical(seed)
+            if not self.rules.valid(seed):
+                continue
+            seed_cost = self.cost(seed)
+            if seed_cost.total < cost.total:
+                best, cost, start = seed, seed_cost, name
+        self.rules.check(best)
         self._note(cost.total, "first plan")
         if not best:
             return SearchResult(best, cost, "nothing to do", self.stats, start)
@@ -378,11 +384,11 @@ def search(
     options: SearchOptions,
     progress: Progress | None = None,
     proves_optimal: Callable[[float], bool] | None = None,
-    first: Plan | None = None,
+    seeds: dict[str, Plan] | None = None,
     times: StageTimes | None = None,
 ) -> SearchResult:
     """Run the anytime search (see the module docstring)."""
-    return AnytimeSearch(model, goals, options, progress, proves_optimal, times).run(first)
+    return AnytimeSearch(model, goals, options, progress, proves_optimal, times).run(seeds)
 
 
 def _close_under_pairs(windows: dict[str, list[int]], routes: dict[str, list[tuple[int, str]]]) -> None:

@@ -21,7 +21,9 @@ from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import EncodedTask, encode_task
 from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
 from tmpnav.task.model import CostModel
+from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.search import Progress, SearchOptions, search
+from tmpnav.task.unfolded import BeliefGraph, write_unfolded
 from tmpnav.types import CostTable, Goals, PlannerOptions, PlanStatus, Scenario
 
 
@@ -117,6 +119,7 @@ def plan_anytime(
     times: StageTimes | None = None,
     progress: Progress | None = None,
     costs: str = "table",
+    seeds: dict[str, Plan] | None = None,
 ) -> TaskResult:
     """The anytime search's plan (:mod:`tmpnav.task.search`) on ``model``, with the certified
     lower bound of ``bound_table`` (every plan's cost is at least the bound of that table)."""
@@ -142,7 +145,8 @@ def plan_anytime(
         if report is not None:
             report(t, cost, value, what)
 
-    result = search(model, goals, options, noted, bound.proves_optimal if bound is not None else None, times=times)
+    proves = bound.proves_optimal if bound is not None else None
+    result = search(model, goals, options, noted, proves, seeds=seeds, times=times)
     plan, cost = result.plan, result.cost
     proved = bound is not None and bound.proves_optimal(cost.total)
     stats = result.stats
@@ -165,4 +169,43 @@ def plan_anytime(
             history=tuple(stats.history),
         ),
         bound=None if bound is None else BoundSummary(bound.value, bound.relaxation, bound.gap(cost.total), proved),
+    )
+
+
+def plan_unfolded(
+    graph: BeliefGraph,
+    robots: tuple[str, ...],
+    locations: tuple[str, ...],
+    rules: Rules,
+    planner: PlannerOptions,
+    times: StageTimes | None = None,
+) -> TaskResult:
+    """ENHSP's optimal plan over an unfolded belief space (:mod:`tmpnav.task.unfolded`): the
+    plan of least cost with carried-over beliefs."""
+    times = times if times is not None else StageTimes()
+    with times.timed("encode"):
+        task = write_unfolded(graph, robots, locations, rules)
+    engine = planner.name if planner.name.startswith("enhsp") else "enhsp-blind"
+    with times.timed("planner"):
+        solved = task.solve(engine, planner.timeout)
+    edges = task.decode(solved)
+    steps = tuple(e.step for e in edges)
+    costs = tuple(e.cost for e in edges)
+    optimal = solved.status == PlanStatus.SOLVED_OPTIMALLY
+    total = float(sum(costs))
+    return TaskResult(
+        status=solved.status,
+        engine=solved.engine,
+        steps=steps,
+        action_names=tuple("goto_room" if len(s) == 1 else "goto_room_pair" for s in steps),
+        step_costs=costs,
+        counts=TaskCounts(0, 0, len(graph.edges), sum(len(e.step) == 2 for e in graph.edges), 0),
+        plan_hit=False,
+        search=SearchSummary(
+            mode="exact",
+            costs="carried",
+            stopped="solved",
+            start=f"belief space unfolded: {graph.n_contexts} contexts, {len(graph.edges)} actions",
+        ),
+        bound=BoundSummary(total, "exact", 0.0, True) if optimal else None,
     )
