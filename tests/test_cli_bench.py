@@ -42,7 +42,9 @@ def test_bench_rooms_compares_encodings(tmp_path: Path) -> None:
     rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
     assert len(rows) == 2 * 2 * 2 * 3  # points x sessions x encodings x (cold, warm, replan)
     assert all(r["status"].startswith("solved") for r in rows), rows
-    assert all(r["table_cache_hit"] == "True" for r in rows if r["phase"] in ("warm", "replan"))
+    # the paper's encoding costs the whole table first (cached as one entry); mixed, with
+    # carried costs by default, costs what its search asks for (each answer cached)
+    assert all(r["table_cache_hit"] == "True" for r in rows if r["phase"] in ("warm", "replan") and r["encoding"] == "paper")
     assert all(r["plan_cache_hit"] == "True" for r in rows if r["phase"] == "warm")
     assert all(r["plan_cache_hit"] == "False" for r in rows if r["phase"] in ("cold", "replan"))
     costs: dict[tuple[str, str, str], set[str]] = {}

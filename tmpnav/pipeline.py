@@ -85,6 +85,14 @@ def apply_options(scenario: Scenario, options: PlanOptions) -> Scenario:
         time_budget=options.time_budget if options.time_budget is not None else planner.time_budget,
         costs=options.costs or planner.costs,
     )
+    if planner.encoding == "paper":
+        # the paper's encoding is the paper's model: every action costed from canonical states
+        if options.costs == "carried" or options.search == "anytime":
+            raise InputError(
+                "the paper's encoding is planned exactly with table costs; "
+                "use --encoding mixed for --search anytime or --costs carried"
+            )
+        planner = replace(planner, costs="table", search="exact")
     models = scenario.models
     if options.mutual_observations is not None:
         models = replace(models, mutual_observations=options.mutual_observations)

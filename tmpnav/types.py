@@ -198,7 +198,7 @@ class PlannerOptions:
     pair_min_gain: float = 0.05  # mixed: minimum relative saving of a paired move
     search: str = "auto"  # exact | anytime | auto (tmpnav.task.stage)
     time_budget: float = 60.0  # s, the anytime search's budget
-    costs: str = "table"  # table (canonical start states) | carried (the beliefs the robots carry)
+    costs: str = "carried"  # carried (the beliefs the robots carry; default) | table (canonical start states)
 
 
 @dataclass(frozen=True)

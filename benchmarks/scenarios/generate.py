@@ -807,11 +807,15 @@ def sparse_warehouse() -> dict[str, bytes]:
     raster = sparse_raster()
     pillars = [(x, y) for y in PILLAR_Y for x in PILLAR_X]
     centre = (SPARSE_HALL / 2, SPARSE_HALL / 2)
+    # only the pillars along the south wall and the west and east columns carry a tag: the
+    # middle and the north of the hall have no landmark at all
+    tagged = [(k, (x, y)) for k, (x, y) in enumerate(pillars) if y == PILLAR_Y[0] or x in (PILLAR_X[0], PILLAR_X[-1])]
+    tagged = [(k, xy) for k, xy in tagged if xy[1] != PILLAR_Y[-1]]
     marks = [
         landmark(f"pillar{k + 1}", "pillar", pillar_landmark(x, y, 0.25, centre), f"pillar at {pt((x, y))}")
-        for k, (x, y) in enumerate(pillars)
+        for k, (x, y) in tagged
     ]
-    tags = [pillar_landmark(x, y, 0.25, centre) for x, y in pillars]
+    tags = [pillar_landmark(x, y, 0.25, centre) for _, (x, y) in tagged]
     places, gaps = [], []
     for name, x, y in SPARSE_PLACES:
         gaps.append(min(math.hypot(x - tx, y - ty) for tx, ty in tags))
@@ -819,8 +823,13 @@ def sparse_warehouse() -> dict[str, bytes]:
     spec = Spec(
         header=[
             "A landmark-sparse warehouse from a ROS map_server map (sparse-warehouse/map.yaml +",
-            "map.pgm): a 50 m x 50 m hall of open floor whose only landmarks are 16 pillars",
-            "(0.5 m square) on an irregular grid, 7 to 15 m apart (x 7, 21, 30, 43; y 6, 20, 28, 42).",
+            "map.pgm): a 50 m x 50 m hall of open floor with 16 pillars (0.5 m square) on an",
+            "irregular grid, 7 to 15 m apart (x 7, 21, 30, 43; y 6, 20, 28, 42). Only 8 of them carry",
+            "a landmark tag: the four along the south wall (y 6) and two each in the west and east",
+            "columns (x 7 and 43, y 20 and 28). The middle and the north of the hall have none, so",
+            "the belief a robot carries into a place depends on the way it came: canonical start",
+            "states (--costs table) misjudge the plans there, the beliefs carried step to step",
+            "(--costs carried) do not.",
             "A few walls and racks: a partition from the west wall (y 24, x 0..12), an office in the",
             "north-west corner (door on its south side), two rack rows in the north-east",
             "(x 33..47) and a fence from the east wall (y 10, x 40..50).",
@@ -836,12 +845,12 @@ def sparse_warehouse() -> dict[str, bytes]:
             "Units: metres, radians.",
         ],
         name="sparse-warehouse",
-        description="Open 50 m x 50 m hall from a ROS map, pillars 7-15 m apart as the only landmarks, "
-        "3 robots, 8 places",
+        description="Open 50 m x 50 m hall from a ROS map, landmarks on 8 pillars along its south, west and east "
+        "sides only, 3 robots, 8 places",
         map_lines=["  ros: sparse-warehouse/map.yaml"],
         rooms=[Group("places to visit, in the gaps between pillars", places)],
         doors=[],
-        landmarks=[Group("pillars, south to north, west to east", marks)],
+        landmarks=[Group("tagged pillars, south to north, west to east", marks)],
         robots=[
             Group(
                 "along the south wall, facing north",

@@ -9,20 +9,17 @@ at its origin, pairs from two uncorrelated canonical states, and every cost is t
 exact cost, cached on disk per request as always. It is the ``--costs table`` model of the
 anytime search (:class:`tmpnav.task.model.CostModel`).
 
-Which paired moves exist (the plan space): pairs of moves that the encoding's entry rules
-allow together and whose two robots start within ``pair_radius`` of each other and end
-within ``pair_radius`` of each other (nearest pose instantiations or start poses; the
-twice the mutual sensor's range by default). Robots farther apart see each other for a short part
-of the move at best. :meth:`CanonicalCosts.pair_bounds` gives a lower bound on the cost of
-each of them, without joint simulation, for the certified lower bound of the whole task.
+Which paired moves exist (the plan space): every pair of moves that the encoding's entry
+rules allow together and that saves ``pair_min_gain``, as in the exact search.
+:meth:`CanonicalCosts.bound_table` bounds every one of them without joint simulation (the
+pair's cost until its robots can first see each other, :mod:`tmpnav.oracle.bounds`) when
+there are few enough; the certified lower bound of the whole task is computed from it.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-
-import numpy as np
 
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
@@ -39,20 +36,18 @@ Pair = tuple[MoveKey, MoveKey]
 class CanonicalCosts:
     """Action costs from canonical start states, computed on demand (see the module docstring)."""
 
-    def __init__(self, oracle: Oracle, world: World, min_gain: float, pair_radius: float | None = None):
+    def __init__(self, oracle: Oracle, world: World, min_gain: float):
         self.oracle = oracle
         scenario = oracle.ctx.scenario
         self.scenario = scenario
         self.robots = tuple(r.name for r in scenario.robots)
         self.start_location = start_locations(scenario, world)
         self.min_gain = min_gain
-        self.pair_radius = 2 * scenario.models.mutual_sensor.range if pair_radius is None else pair_radius
         self.single: dict[MoveKey, float | None] = {}  # None: no such move (unreachable)
         self.pair: dict[Pair, float | None] = {}  # None: not offered (saves too little, or no motion)
         self.canonical: dict[tuple[str, str], StartState] = {
             (r, self.start_location[r]): initial_state(scenario, oracle.ctx.roadmap.starts[r], r) for r in self.robots
         }
-        self._near = _Nearness(oracle, self.start_location)
 
     # ------------------------------------------------------------------ CostModel
 
@@ -104,36 +99,36 @@ class CanonicalCosts:
 
     # ------------------------------------------------------------------ the plan space of pairs
 
-    def in_pair_space(self, m1: MoveKey, m2: MoveKey) -> bool:
-        """Do the two robots start, and end, within ``pair_radius`` of each other?"""
-        return self._near.distance(m1[1], m2[1]) <= self.pair_radius and self._near.distance(
-            m1[2], m2[2]
-        ) <= self.pair_radius
-
-    def pair_space(self, goals: Goals) -> list[Pair]:
-        """Every pair of single moves of the goal table in the plan space."""
+    def pair_space(self, goals: Goals, max_pairs: int) -> list[Pair] | None:
+        """Every pair of single moves of the goal table that the entry rules allow together;
+        None when there are more than ``max_pairs``."""
         keep = ENCODINGS["mixed"].pair_filter(goals, self.start_location)
         assert keep is not None
         by_robot: dict[str, list[MoveKey]] = {}
         for m, c in self.single.items():
             if c is not None:
                 by_robot.setdefault(m[0], []).append(m)
-        out = []
+        sizes = [len(by_robot.get(r, ())) for r in self.robots]
+        if sum(a * b for i, a in enumerate(sizes) for b in sizes[i + 1 :]) > 4 * max_pairs:
+            return None  # the rules keep about a quarter at most: too many to bound one by one
+        out: list[Pair] = []
         for i, r1 in enumerate(self.robots):
             for r2 in self.robots[i + 1 :]:
                 for m1 in by_robot.get(r1, ()):
-                    for m2 in by_robot.get(r2, ()):
-                        if self.in_pair_space(m1, m2) and keep(m1, m2):
-                            out.append((m1, m2))
+                    out.extend((m1, m2) for m2 in by_robot.get(r2, ()) if keep(m1, m2))
+                    if len(out) > max_pairs:
+                        return None
         return out
 
-    def bound_table(self, goals: Goals) -> CostTable:
-        """The single moves between the goal rooms and every pair of the plan space, each
-        at its exact cost or, when it was never simulated, at a lower bound of it
+    def bound_table(self, goals: Goals, max_pairs: int) -> CostTable | None:
+        """The single moves between the goal rooms and every pair of the plan space, each at
+        its exact cost or, when it was never simulated jointly, at a lower bound of it
         (:mod:`tmpnav.oracle.bounds`): what :func:`tmpnav.task.bound.lower_bound` needs to
-        bound every plan of the anytime search."""
+        bound every plan. None when the plan space has more than ``max_pairs`` pairs."""
         singles = self.singles(goals)
-        space = self.pair_space(goals)
+        space = self.pair_space(goals, max_pairs)
+        if space is None:
+            return None
         todo = [p for p in space if p not in self.pair]
         self._ensure_canonical({(m[0], m[1]) for p in todo for m in p})
         requests = [
@@ -189,11 +184,7 @@ class CanonicalCosts:
             return
         self._ensure_singles([m for p in todo for m in p])
         self._ensure_canonical({(m[0], m[1]) for p in todo for m in p})
-        ready = [
-            p
-            for p in todo
-            if all(self.single.get(m) is not None and (m[0], m[1]) in self.canonical for m in p)
-        ]
+        ready = [p for p in todo if all(self.single.get(m) is not None and (m[0], m[1]) in self.canonical for m in p)]
         requests = [
             Request(
                 (m1[0], m2[0]),
@@ -224,31 +215,3 @@ def _offered(cost: float, alone: float, min_gain: float) -> bool:
 def _ordered(m1: MoveKey, m2: MoveKey, robots: tuple[str, ...]) -> Pair:
     """The pair with the robot first in the scenario's order first (the table's convention)."""
     return (m1, m2) if robots.index(m1[0]) < robots.index(m2[0]) else (m2, m1)
-
-
-class _Nearness:
-    """Distances between locations: between their nearest pose instantiations (a start
-    location: its robot's start pose), in metres, straight line."""
-
-    def __init__(self, oracle: Oracle, start_location: dict[str, str]):
-        roadmap = oracle.ctx.roadmap
-        self.points: dict[str, np.ndarray] = {
-            room: roadmap.nodes[list(nodes)] for room, nodes in roadmap.instantiations.items()
-        }
-        for r, loc in start_location.items():
-            if loc not in self.points:
-                self.points[loc] = roadmap.nodes[[roadmap.starts[r]]]
-        self._memo: dict[tuple[str, str], float] = {}
-
-    def distance(self, a: str, b: str) -> float:
-        if a == b:
-            return 0.0
-        key = (a, b) if a < b else (b, a)
-        if key not in self._memo:
-            pa, pb = self.points.get(a), self.points.get(b)
-            if pa is None or pb is None:
-                self._memo[key] = math.inf
-            else:
-                d = np.hypot(pa[:, None, 0] - pb[None, :, 0], pa[:, None, 1] - pb[None, :, 1])
-                self._memo[key] = float(d.min())
-        return self._memo[key]

@@ -17,23 +17,31 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from tmpnav.attachment.canonical import CanonicalCosts
 from tmpnav.attachment.carried import CarriedCosts
+from tmpnav.attachment.floors import motion_floors
+from tmpnav.attachment.remember import recall, remember, search_key
 from tmpnav.attachment.unfold import unfold
 from tmpnav.errors import InputError
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.table import build_table, start_locations
 from tmpnav.results import StageTimes, TaskResult
+from tmpnav.task.bound import Bound, lower_bound
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.memo import EntryStore
 from tmpnav.task.modes import exact_fits
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.search import Progress
+from tmpnav.task.solve import engine_class, reads_pddl_text
 from tmpnav.task.stage import TaskProblem, plan_anytime, plan_task, plan_unfolded
 from tmpnav.types import CostTable, Scenario
 from tmpnav.world import World
+
+#: paired moves beyond which the bound of the table gives way to the motion floors: bounding
+#: each pair without joint simulation takes about 0.2 ms (20 rooms and 2 robots: 130,000 pairs)
+MAX_BOUND_PAIRS = 25_000
 
 
 @dataclass(frozen=True)
@@ -48,12 +56,7 @@ def search_mode(scenario: Scenario) -> str:
     """``exact`` or ``anytime``: the scenario's choice, or for ``auto`` exact where it fits."""
     sp = scenario.planner
     if sp.encoding == "paper":
-        if sp.search == "anytime" or sp.costs == "carried":
-            raise InputError(
-                "the paper's encoding is planned exactly with table costs only; "
-                "use --encoding mixed for --search anytime or --costs carried"
-            )
-        return "exact"
+        return "exact"  # with table costs (tmpnav.pipeline.apply_options)
     if sp.search != "auto":
         return sp.search
     fits = exact_fits(len(scenario.goals.all_rooms), len(scenario.robots), sp.costs)
@@ -86,19 +89,46 @@ def plan_scenario(
     progress: Progress | None,
 ) -> Planned:
     """The task plan of ``scenario`` (see the module docstring)."""
-    sp, goals, oracle = scenario.planner, scenario.goals, canonical.oracle
+    sp, oracle = scenario.planner, canonical.oracle
     mode = search_mode(scenario)
+    if not (mode == "exact" and sp.costs == "table"):
+        _check_engine(sp.name)
     if mode == "exact" and sp.costs == "table":
         table = full_table(scenario, world, oracle, times)
         return Planned(table, plan_task(TaskProblem.of(scenario, table), store, replan, times))
+    key = search_key(scenario, oracle.context)
+    model = carried if sp.costs == "carried" else canonical
+    if store is not None and not replan:
+        with times.timed("planner"):
+            found = recall(store, key, model)
+        if found is not None:
+            return Planned(canonical.seen(), found)
+    task = _search(scenario, world, mode, canonical, carried, store, replan, times, progress)
+    if store is not None:
+        remember(store, key, task)
+    return Planned(canonical.seen(), task)
+
+
+def _search(
+    scenario: Scenario,
+    world: World,
+    mode: str,
+    canonical: CanonicalCosts,
+    carried: CarriedCosts,
+    store: EntryStore | None,
+    replan: bool,
+    times: StageTimes,
+    progress: Progress | None,
+) -> TaskResult:
+    """The unfolded search (exact, carried costs) or the anytime search."""
+    sp, goals, oracle = scenario.planner, scenario.goals, canonical.oracle
     if mode == "exact":
         with times.timed("oracle"):
             graph = unfold(carried, goals, sp.pair_min_gain)
         if graph is not None:
             locations = tuple(dict.fromkeys([*goals.all_rooms, *canonical.start_location.values()]))
             rules = Rules(canonical.start_location, goals)
-            task = plan_unfolded(graph, canonical.robots, locations, rules, sp, times)
-            return Planned(canonical.seen(), task)
+            return plan_unfolded(graph, canonical.robots, locations, rules, sp, times)
         if sp.search == "exact":
             raise InputError(
                 f"the belief space of {len(goals.all_rooms)} goal rooms and {len(scenario.robots)} robots is too "
@@ -110,6 +140,37 @@ def plan_scenario(
         exact = plan_task(TaskProblem.of(scenario, table), store, replan, times)
         seeds["the exact plan of the cost table"] = exact.steps
     model = carried if sp.costs == "carried" else canonical
-    bound = (lambda: canonical.bound_table(goals)) if sp.costs == "table" else None
-    task = plan_anytime(model, goals, sp, bound, times, progress, costs=sp.costs, seeds=seeds)
-    return Planned(canonical.seen(), task)
+    return plan_anytime(
+        model, goals, sp, lambda: certified_bound(scenario, canonical), times, progress, sp.costs, seeds
+    )
+
+
+def _check_engine(planner: str) -> None:
+    """The unfolded and the anytime search give ENHSP tmpnav's own PDDL text: they need an
+    ENHSP engine (an unknown name is the planner's error, exit code 4)."""
+    if not reads_pddl_text(planner):
+        engine_class(planner)  # raises PlannerUnavailableError for a name unified-planning does not know
+        raise InputError(
+            f"planner {planner!r} is not an ENHSP engine; the anytime search and carried costs run ENHSP "
+            "(enhsp-blind, enhsp-opt, enhsp): use one of them, or --costs table --search exact for other engines"
+        )
+
+
+def certified_bound(scenario: Scenario, canonical: CanonicalCosts) -> Bound:
+    """A lower bound on the cost of every plan of the anytime search's plan space.
+
+    With table costs and at most :data:`MAX_BOUND_PAIRS` paired moves possible, the bound of
+    the table with every pair at its cost or its lower bound (:func:`tmpnav.task.bound.lower_bound`);
+    otherwise, and with carried costs (where a move's cost depends on the beliefs it starts
+    from), the bound of the moves' motion floors (:mod:`tmpnav.attachment.floors`), which
+    hold in every context and for every paired move."""
+    sp, goals = scenario.planner, scenario.goals
+    if sp.costs == "table":
+        table = canonical.bound_table(goals, MAX_BOUND_PAIRS)
+        if table is not None:
+            if sp.encoding != "mixed":
+                table = replace(table, pair={})
+            return lower_bound(table, goals, sp.pair_min_gain)
+    floors = motion_floors(scenario, canonical.oracle.ctx.roadmap, canonical.start_location, goals)
+    bound = lower_bound(floors, goals, 0.0)
+    return replace(bound, relaxation=f"motion floors, {bound.relaxation}")

@@ -15,8 +15,24 @@ from pathlib import Path
 from tmpnav.atomic import write_file, write_files
 from tmpnav.bench.runs import make_jobs, parse_counts, run_jobs, scenario_for
 from tmpnav.bench.table import Row, medians, read_csv, summary_markdown, to_csv
+from tmpnav.errors import InputError
 
 BENCH_CSV, BENCH_PNG, SUMMARY_MD = "bench.csv", "bench.png", "summary.md"
+
+
+def check_variant(text: str) -> str:
+    """A variant of ``--encoding``: ENCODING[:COSTS[:SEARCH]], each part a known choice."""
+    from tmpnav.task.encodings import ENCODINGS
+    from tmpnav.task.modes import COSTS, SEARCHES
+
+    parts = text.split(":")
+    choices = (tuple(ENCODINGS), COSTS, SEARCHES)
+    if len(parts) > 3 or any(p not in options for p, options in zip(parts, choices, strict=False)):
+        raise InputError(
+            f"--encoding {text!r}: expected ENCODING[:COSTS[:SEARCH]] with ENCODING one of "
+            f"{', '.join(ENCODINGS)}, COSTS one of {', '.join(COSTS)}, SEARCH one of {', '.join(SEARCHES)}"
+        )
+    return text
 
 
 @dataclass(frozen=True)
@@ -31,6 +47,7 @@ class BenchSpec:
     timeout: float
     scenario: Path | None  # None: the shipped corridor of each robot count
     workers: int | None
+    time_budget: float | None = None  # the anytime search's budget (None: the scenario's)
 
     @classmethod
     def parse(
@@ -43,17 +60,19 @@ class BenchSpec:
         timeout: float,
         scenario: Path | None,
         workers: int | None,
+        time_budget: float | None = None,
     ) -> BenchSpec:
         """The spec of the command line's options (``--rooms 2..10``, ``--robots 2,4``)."""
         return cls(
             parse_counts(rooms, "--rooms"),
             parse_counts(robots, "--robots"),
             sessions,
-            encodings or ["mixed"],
+            [check_variant(e) for e in encodings] or ["mixed"],
             seed,
             timeout,
             scenario,
             workers,
+            time_budget,
         )
 
     @property
@@ -87,7 +106,7 @@ def run(spec: BenchSpec, progress: Callable[[str], None] | None = None) -> Bench
         spec.scenario,
         lambda path: [room.name for room in load(path).rooms],
     )
-    table = run_jobs(jobs, spec.timeout, spec.workers, progress)
+    table = run_jobs(jobs, spec.timeout, spec.workers, progress, spec.time_budget)
     return Bench(spec.experiment, table, spec.encodings, spec.sessions)
 
 

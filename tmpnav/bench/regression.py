@@ -39,20 +39,55 @@ class Case:
     visit: tuple[str, ...] | None = None  # replaces the scenario's goals when given
     encoding: str | None = None
     why: str = ""
+    costs: str = "carried"
+    search: str | None = None  # None: auto
 
 
 CASES = (
-    Case("fig2", "configs/corridor.yaml", why="the paper's Fig. 2 swap: one paired move"),
-    Case("odd-rooms", "configs/corridor-2robots.yaml", ("L2", "L5", "L9"), why="an odd number of rooms, mixed"),
+    # recorded with table costs and the exact search before carried costs became the default
+    Case(
+        "fig2", "configs/corridor.yaml", why="the paper's Fig. 2 swap: one paired move", costs="table", search="exact"
+    ),
+    Case(
+        "odd-rooms",
+        "configs/corridor-2robots.yaml",
+        ("L2", "L5", "L9"),
+        why="an odd number of rooms, mixed",
+        costs="table",
+        search="exact",
+    ),
     Case(
         "odd-rooms-paper",
         "configs/corridor-2robots.yaml",
         ("L2", "L5", "L9"),
         "paper",
         why="the same with the paper's encoding: the extra visit",
+        costs="table",
+        search="exact",
     ),
-    Case("three-robots", "configs/corridor-3robots.yaml", why="three robots on the corridor"),
-    Case("ros-map", "configs/office-ros.yaml", why="a ROS map_server office, three robots"),
+    Case(
+        "three-robots",
+        "configs/corridor-3robots.yaml",
+        why="three robots on the corridor",
+        costs="table",
+        search="exact",
+    ),
+    Case(
+        "ros-map", "configs/office-ros.yaml", why="a ROS map_server office, three robots", costs="table", search="exact"
+    ),
+    # the defaults: carried-over beliefs, the search auto chooses
+    Case("fig2-carried", "configs/corridor.yaml", why="the Fig. 2 swap with carried beliefs: the unfolded search"),
+    Case(
+        "sparse-carried",
+        "configs/sparse-warehouse.yaml",
+        ("P1", "P3", "P5", "P8"),
+        why="four places of the landmark-sparse hall, three robots: the unfolded search",
+    ),
+    Case(
+        "sparse-anytime",
+        "configs/sparse-warehouse.yaml",
+        why="all eight places of the landmark-sparse hall: the anytime search with carried beliefs",
+    ),
 )
 
 
@@ -60,13 +95,16 @@ def run_case(case: Case) -> dict[str, Any]:
     """Plan a case without any cache; the plan and costs as they are recorded."""
     goals = Goals(visit=case.visit, per_robot=()) if case.visit else None
     scenario = shipped.configs_dir() / Path(case.scenario).name
-    report = plan(scenario, PlanOptions(encoding=case.encoding, goals=goals, use_cache=False))
+    options = PlanOptions(encoding=case.encoding, goals=goals, use_cache=False, costs=case.costs, search=case.search)
+    report = plan(scenario, options)
     return {
         "name": case.name,
         "scenario": case.scenario,
         "why": case.why,
         "encoding": report.encoding,
         "planner": report.planner,
+        "costs": report.scenario.planner.costs,
+        "search": report.scenario.planner.search,
         "goals": list(report.scenario.goals.all_rooms),
         "steps": [[list(m) for m in a.moves] for a in report.actions],
         "goal_nodes": [list(a.goal_nodes) for a in report.actions],

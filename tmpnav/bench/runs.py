@@ -104,14 +104,15 @@ def make_jobs(
     return out
 
 
-def run_job(job: Job, timeout: float, workers: int | None) -> WorkerResult:
+def run_job(job: Job, timeout: float, workers: int | None, time_budget: float | None = None) -> WorkerResult:
     """Run one job's three phases in a worker process; a run past the limit is a timeout."""
     payload = {
         "scenario": str(job.scenario),
         "rooms": list(job.goals),
-        "encoding": job.encoding,
+        "encoding": job.encoding,  # a variant: ENCODING[:COSTS[:SEARCH]]
         "planner_timeout": timeout,
         "workers": workers,
+        "time_budget": time_budget,
     }
     # Its own session, so that a run killed at its time limit (or by Ctrl-C) takes its
     # oracle worker processes and its JVM with it. Its output goes to files, not pipes: a
@@ -181,6 +182,9 @@ def rows(job: Job, result: WorkerResult) -> list[Row]:
             "joint_factorized": oracle.get("joint_factorized"),
             "table_cache_hit": oracle.get("table_cache_hit"),
             "plan_cache_hit": r.get("plan_cache_hit"),
+            "peak_rss_mb": _num(r.get("peak_rss_mb")),
+            "bound": _num(r.get("bound")),
+            "stopped": r.get("stopped"),
         }
         out.append({k: "" if v is None else str(v) for k, v in row.items()})
     return out
@@ -195,7 +199,11 @@ def _num(v: object) -> str:
 
 
 def run_jobs(
-    job_list: list[Job], timeout: float, workers: int | None, progress: Callable[[str], None] | None = None
+    job_list: list[Job],
+    timeout: float,
+    workers: int | None,
+    progress: Callable[[str], None] | None = None,
+    time_budget: float | None = None,
 ) -> list[Row]:
     """Run the jobs one after the other (timings on a shared machine would not mean much
     otherwise). A point where an encoding already timed out GIVE_UP_AFTER times records
@@ -210,7 +218,7 @@ def run_jobs(
         if timeouts.get(point, 0) >= GIVE_UP_AFTER:
             result = {phase: {"status": "timeout"} for phase in PHASES}
         else:
-            result = run_job(job, timeout, workers)
+            result = run_job(job, timeout, workers, time_budget)
             if result["cold"].get("status") == "timeout":
                 timeouts[point] = timeouts.get(point, 0) + 1
         new = rows(job, result)

@@ -36,7 +36,12 @@ COLUMNS = (
     "joint_factorized",
     "table_cache_hit",
     "plan_cache_hit",
+    "peak_rss_mb",
+    "bound",
+    "stopped",
 )
+#: columns that bench.csv files written before them lack (read back as empty)
+LATER_COLUMNS = ("bound_s", "peak_rss_mb", "bound", "stopped")
 #: a run's phases, in the order they run. cold: empty cache; warm: everything cached;
 #: replan: costs cached, the task planner runs again
 PHASES = ("cold", "warm", "replan")
@@ -79,7 +84,10 @@ def read_csv(path: Path) -> list[Row]:
             header = reader.fieldnames or []
     except OSError as err:
         raise InputError(f"--replot: cannot read {path}: {err.strerror}") from None
-    missing = [c for c in COLUMNS if c not in header]
+    missing = [c for c in COLUMNS if c not in header and c not in LATER_COLUMNS]
+    for row in table:
+        for c in LATER_COLUMNS:
+            row.setdefault(c, "")
     if missing or not table:
         what = f"misses the columns {', '.join(missing)}" if missing else "has no rows"
         raise InputError(f"--replot: {path} is not a tmpnav bench.csv: it {what}")

@@ -86,8 +86,12 @@ def run(job: dict[str, Any]) -> dict[str, Any]:
             if phase != "cold" and out["cold"].get("status") not in SOLVED:
                 out[phase] = dict(out["cold"], wall=0.0)
                 continue
+            encoding, costs, search = variant(job["encoding"])
             options = PlanOptions(
-                encoding=job["encoding"],
+                encoding=encoding,
+                costs=costs,
+                search=search,
+                time_budget=job.get("time_budget"),
                 planner=job.get("planner"),
                 timeout=job.get("planner_timeout"),
                 goals=goals,
@@ -97,6 +101,7 @@ def run(job: dict[str, Any]) -> dict[str, Any]:
             )
             start = time.perf_counter()
             watchdog.start(phase)
+            memory = PeakMemory()
             try:
                 report = plan(job["scenario"], options)
             except TmpnavError as err:
@@ -104,13 +109,76 @@ def run(job: dict[str, Any]) -> dict[str, Any]:
                     phase, {"status": type(err).__name__, "error": str(err), "wall": time.perf_counter() - start}
                 )
                 continue
-            watchdog.stop(phase, measured(report))
+            finally:
+                memory.stop()
+            watchdog.stop(phase, {**measured(report), "peak_rss_mb": memory.peak_mb})
     return out
+
+
+def variant(text: str) -> tuple[str, str | None, str | None]:
+    """``ENCODING[:COSTS[:SEARCH]]`` (``mixed``, ``mixed:table``, ``mixed:carried:anytime``)."""
+    parts = text.split(":")
+    return parts[0], (parts[1] or None) if len(parts) > 1 else None, (parts[2] or None) if len(parts) > 2 else None
+
+
+class PeakMemory:
+    """The largest resident memory of this process and all its descendants together (oracle
+    workers, ENHSP's JVMs), sampled every 0.2 s from /proc (Linux; elsewhere nothing)."""
+
+    def __init__(self) -> None:
+        self.peak = 0
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    @property
+    def peak_mb(self) -> float | None:
+        return self.peak / 2**20 if self.peak else None
+
+    def stop(self) -> None:
+        self._done.set()
+        self._thread.join()
+        self._sample()
+
+    def _run(self) -> None:
+        while not self._done.wait(0.2):
+            self._sample()
+
+    def _sample(self) -> None:
+        self.peak = max(self.peak, sum(_rss(pid) for pid in _tree(os.getpid())))
+
+
+def _tree(pid: int) -> list[int]:
+    out, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        out.append(p)
+        try:
+            for task in os.listdir(f"/proc/{p}/task"):
+                with open(f"/proc/{p}/task/{task}/children") as fh:
+                    todo.extend(int(c) for c in fh.read().split())
+        except OSError:
+            continue
+    return out
+
+
+def _rss(pid: int) -> int:
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            for line in fh:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError):
+        pass
+    return 0
 
 
 def measured(report: PlanReport) -> dict[str, Any]:
     """What a run reports to the bench: status, stage times, costs, counters."""
+    bound, search = report.task.bound, report.task.search
     return {
+        "bound": None if bound is None else bound.value,
+        "stopped": None if search is None else f"{search.mode}/{search.costs}/{search.stopped}",
         "status": report.status.value,
         "times": report.times.seconds,
         "planner_cost": report.planner_cost,

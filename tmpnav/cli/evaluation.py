@@ -15,7 +15,6 @@ import click
 from tmpnav.cli.commands import cli
 from tmpnav.cli.options import (
     SCENARIO_ARG,
-    encoding_choice,
     oracle_options,
     output_option,
     plan_options,
@@ -85,8 +84,15 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
     "--encoding",
     "encodings",
     multiple=True,
-    type=encoding_choice(),
-    help="Encodings to compare on the same draws (repeat the option); default: mixed.",
+    metavar="ENCODING[:COSTS[:SEARCH]]",
+    help="Variants to compare on the same draws (repeat the option): an encoding, optionally with "
+    "--costs and --search values, e.g. mixed (the default), paper, mixed:table, mixed:table:anytime.",
+)
+@click.option(
+    "--time-budget",
+    type=click.FloatRange(min=0, min_open=True),
+    metavar="S",
+    help="The anytime search's budget in every run (default: the scenario's planner.time_budget).",
 )
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
 @click.option(
@@ -116,6 +122,7 @@ def bench(
     robots_text: str,
     sessions: int,
     encodings: tuple[str, ...],
+    time_budget: float | None,
     seed: int,
     timeout: float,
     scenario: Path | None,
@@ -138,7 +145,7 @@ def bench(
         run = experiment.replot(output / experiment.BENCH_CSV)
     else:
         spec = experiment.BenchSpec.parse(
-            rooms_text, robots_text, sessions, list(encodings), seed, timeout, scenario, workers
+            rooms_text, robots_text, sessions, list(encodings), seed, timeout, scenario, workers, time_budget
         )
         run = experiment.run(spec, None if quiet else (lambda line: click.echo(line, err=True)))
         with writing(output):

@@ -368,8 +368,8 @@ PLANNER = Section(
         ),
         "costs": Field(
             Choice(choices=COSTS_CHOICES),
-            "what an action costs the planner: table (every move from a canonical start state) or carried (from the beliefs the robots carry at that point of the plan, as executed)",
-            default="table",
+            "what an action costs the planner: carried (from the beliefs the robots carry at that point of the plan, as executed) or table (every move from a canonical start state, the earlier default)",
+            default="carried",
         ),
     }
 )

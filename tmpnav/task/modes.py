@@ -13,7 +13,7 @@
 """
 
 SEARCHES = ("auto", "exact", "anytime")
-COSTS = ("table", "carried")
+COSTS = ("carried", "table")
 
 #: ``auto`` plans exactly with table costs up to this many goal rooms with two robots (fewer
 #: with more robots): the exact search costs every paired move first, about rooms^4 x robots^2

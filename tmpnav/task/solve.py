@@ -151,7 +151,7 @@ def _freeze(problem: Problem) -> None:
     problem.__class__ = frozen
 
 
-def _engine_class(planner: str) -> type[Engine]:
+def engine_class(planner: str) -> type[Engine]:
     """The unified-planning engine class registered as ``planner``; raises when there is none."""
     env = environment()
     if planner not in env.factory.engines:
@@ -212,7 +212,7 @@ def solve(problem: Problem, planner: str, timeout: float) -> SolveResult:
     """Run ``planner`` on ``problem`` within ``timeout`` seconds; raise on any failure."""
     from unified_planning.exceptions import UPException
 
-    engine_cls = _engine_class(planner)
+    engine_cls = engine_class(planner)
     _freeze(problem)
     if not engine_cls.supports(problem.kind):
         raise PlannerUnavailableError(
@@ -249,7 +249,7 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
     from unified_planning.engines import PlanGenerationResultStatus as St
     from unified_planning.engines.pddl_planner import run_command
 
-    engine_cls = _engine_class(planner)
+    engine_cls = engine_class(planner)
     engine = engine_cls()
     with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp, java_options():
         d, p, plan_file = (os.path.join(tmp, n) for n in ("domain.pddl", "problem.pddl", "plan.txt"))

@@ -13,10 +13,10 @@ like this function.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 from tmpnav.results import BoundSummary, SearchSummary, StageTimes, TaskCounts, TaskResult
-from tmpnav.task.bound import lower_bound
+from tmpnav.task.bound import Bound
 from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import EncodedTask, encode_task
 from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
@@ -115,22 +115,19 @@ def plan_anytime(
     model: CostModel,
     goals: Goals,
     planner: PlannerOptions,
-    bound_table: Callable[[], CostTable] | None = None,
+    bound: Callable[[], Bound] | None = None,
     times: StageTimes | None = None,
     progress: Progress | None = None,
     costs: str = "table",
     seeds: dict[str, Plan] | None = None,
 ) -> TaskResult:
-    """The anytime search's plan (:mod:`tmpnav.task.search`) on ``model``, with the certified
-    lower bound of ``bound_table`` (every plan's cost is at least the bound of that table)."""
+    """The anytime search's plan (:mod:`tmpnav.task.search`) on ``model``, with a certified
+    lower bound on every plan's cost (``bound``, computed before the search starts)."""
     times = times if times is not None else StageTimes()
-    bound = None
-    if bound_table is not None:
+    proof = None
+    if bound is not None:
         with times.timed("bound"):
-            table = bound_table()
-            if planner.encoding != "mixed":
-                table = replace(table, pair={})
-            bound = lower_bound(table, goals, planner.pair_min_gain)
+            proof = bound()
     options = SearchOptions(
         planner=planner.name if planner.name.startswith("enhsp") else "enhsp-blind",
         encoding=planner.encoding if planner.encoding in ("single", "mixed") else "mixed",
@@ -138,17 +135,17 @@ def plan_anytime(
         budget=planner.time_budget,
         sub_timeout=min(planner.timeout, 60.0),
     )
-    value = bound.value if bound is not None else None
+    value = proof.value if proof is not None else None
     report = progress
 
     def noted(t: float, cost: float, _: float | None, what: str) -> None:
         if report is not None:
             report(t, cost, value, what)
 
-    proves = bound.proves_optimal if bound is not None else None
+    proves = proof.proves_optimal if proof is not None else None
     result = search(model, goals, options, noted, proves, seeds=seeds, times=times)
     plan, cost = result.plan, result.cost
-    proved = bound is not None and bound.proves_optimal(cost.total)
+    proved = proof is not None and proof.proves_optimal(cost.total)
     stats = result.stats
     return TaskResult(
         status=PlanStatus.SOLVED_OPTIMALLY if proved else PlanStatus.SOLVED_SATISFICING,
@@ -168,7 +165,7 @@ def plan_anytime(
             seconds=stats.history[-1][0] if stats.history else 0.0,
             history=tuple(stats.history),
         ),
-        bound=None if bound is None else BoundSummary(bound.value, bound.relaxation, bound.gap(cost.total), proved),
+        bound=None if proof is None else BoundSummary(proof.value, proof.relaxation, proof.gap(cost.total), proved),
     )
 
 
