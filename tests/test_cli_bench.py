@@ -44,7 +44,9 @@ def test_bench_rooms_compares_encodings(tmp_path: Path) -> None:
     assert all(r["status"].startswith("solved") for r in rows), rows
     # the paper's encoding costs the whole table first (cached as one entry); mixed, with
     # carried costs by default, costs what its search asks for (each answer cached)
-    assert all(r["table_cache_hit"] == "True" for r in rows if r["phase"] in ("warm", "replan") and r["encoding"] == "paper")
+    assert all(
+        r["table_cache_hit"] == "True" for r in rows if r["phase"] in ("warm", "replan") and r["encoding"] == "paper"
+    )
     assert all(r["plan_cache_hit"] == "True" for r in rows if r["phase"] == "warm")
     assert all(r["plan_cache_hit"] == "False" for r in rows if r["phase"] in ("cold", "replan"))
     costs: dict[tuple[str, str, str], set[str]] = {}

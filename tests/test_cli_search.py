@@ -15,7 +15,16 @@ CORRIDOR = ROOT / "configs" / "corridor-2robots.yaml"
 @pytest.mark.slow
 def test_anytime_with_table_costs_reports_the_search_and_its_bound(tmp_path: Path) -> None:
     proc = tmpnav(
-        "plan", str(CORRIDOR), "--search", "anytime", "--costs", "table", "--cache-dir", str(tmp_path), "--format", "json"
+        "plan",
+        str(CORRIDOR),
+        "--search",
+        "anytime",
+        "--costs",
+        "table",
+        "--cache-dir",
+        str(tmp_path),
+        "--format",
+        "json",
     )
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)

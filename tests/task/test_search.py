@@ -34,8 +34,15 @@ def instance(seed: int) -> tuple[CostTable, Goals]:
 
 def solve(seed: int) -> tuple[float, float, float, tuple]:
     table, goals = instance(seed)
-    result = search(TableModel(table, MIN_GAIN), goals, SearchOptions(budget=120, seed=seed, min_gain=MIN_GAIN, parallel=1))
-    return result.cost.total, exact_optimum(table, goals, MIN_GAIN), lower_bound(table, goals, MIN_GAIN).value, result.plan
+    result = search(
+        TableModel(table, MIN_GAIN), goals, SearchOptions(budget=120, seed=seed, min_gain=MIN_GAIN, parallel=1)
+    )
+    return (
+        result.cost.total,
+        exact_optimum(table, goals, MIN_GAIN),
+        lower_bound(table, goals, MIN_GAIN).value,
+        result.plan,
+    )
 
 
 @pytest.mark.slow
