@@ -84,7 +84,7 @@ def test_at_24_rooms_the_search_is_no_worse_than_or_tools_routing() -> None:
     on the single moves (guided local search, 2,000 solutions), and within the bound."""
     table, goals = building_instance(random.Random(5), 24, 3)
     routes = solve_routes(without_pairs(table), goals, time_limit=60, solution_limit=2000)
-    result = search(TableModel(table, MIN_GAIN), goals, SearchOptions(budget=60, min_gain=MIN_GAIN))
+    result = search(TableModel(table, MIN_GAIN), goals, SearchOptions(budget=15, min_gain=MIN_GAIN))
     assert routes.found
     assert result.cost.total <= routes.cost + 1e-9
     assert lower_bound(table, goals, MIN_GAIN).value <= result.cost.total + 1e-9

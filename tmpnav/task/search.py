@@ -66,6 +66,9 @@ class SearchOptions:
     routing_time: float | None = None  # OR-Tools' time limit; None: a quarter of the budget, 1-10 s
     seed: int = 0
     parallel: int = min(2, os.cpu_count() or 1)  # sub-problems ENHSP solves at once
+    #: the model's costs are context-free (a cost table): a sub-problem that is the whole
+    #: problem, solved optimally by ENHSP, proves the plan optimal
+    whole_is_exact: bool = True
 
 
 @dataclass
@@ -178,8 +181,23 @@ class AnytimeSearch:
         self._note(cost.total, "first plan")
         if not best:
             return SearchResult(best, cost, "nothing to do", self.stats, start)
-        stopped = self._improve_until_done(best, cost)
+        self.best, self.best_cost = best, cost
+        if self.options.whole_is_exact and self._fits_one_neighbourhood(best):
+            # the whole problem is one sub-problem: ENHSP's optimal plan of it is the optimum
+            whole = Neighbourhood(
+                tuple(self.model.robots),
+                frozenset(range(len(best))),
+                tuple(dict.fromkeys(m[2] for step in best for m in step)),
+                {},
+            )
+            if self._try_batch(best, [whole], keep_equal=True):
+                return SearchResult(self.best, self.best_cost, "optimal", self.stats, start)
+        stopped = self._improve_until_done(self.best, self.best_cost)
         return SearchResult(self.best, self.best_cost, stopped, self.stats, start)
+
+    def _fits_one_neighbourhood(self, plan: Plan) -> bool:
+        rooms = {m[2] for step in plan for m in step}
+        return len(rooms) <= self.options.sizes[-1] and len(self.model.robots) <= self.options.sub_robots
 
     # ------------------------------------------------------------------ improve
 
@@ -233,9 +251,10 @@ class AnytimeSearch:
             if not restart:
                 return "improved" if improved else "unchanged"
 
-    def _try_batch(self, plan: Plan, hoods: list[Neighbourhood]) -> bool:
+    def _try_batch(self, plan: Plan, hoods: list[Neighbourhood], keep_equal: bool = False) -> bool:
         """Solve the sub-problems of ``hoods`` (ENHSP runs side by side) and keep the
-        cheapest spliced plan if it beats the best one."""
+        cheapest spliced plan if it beats the best one (or ties it, with ``keep_equal``:
+        then True means ENHSP solved them)."""
         subs = [sub for hood in hoods if (sub := self._sub_problem(plan, hood)) is not None]
         if not subs:
             return False
@@ -259,8 +278,10 @@ class AnytimeSearch:
             cost = self.cost(candidate)
             if best is None or cost.total < best[1].total:
                 best = (candidate, cost, sub)
-        if best is None or not best[1].total < self.best_cost.total * (1 - EPSILON) - EPSILON:
+        if best is None:
             return False
+        if not best[1].total < self.best_cost.total * (1 - EPSILON) - EPSILON:
+            return keep_equal and best[1].total <= self.best_cost.total * (1 + EPSILON) + EPSILON
         candidate, cost, sub = best
         self.best, self.best_cost = candidate, cost
         self.stats.improvements += 1

@@ -134,6 +134,7 @@ def plan_anytime(
         min_gain=planner.pair_min_gain,
         budget=planner.time_budget,
         sub_timeout=min(planner.timeout, 60.0),
+        whole_is_exact=costs == "table",
     )
     value = proof.value if proof is not None else None
     report = progress
@@ -145,7 +146,7 @@ def plan_anytime(
     proves = proof.proves_optimal if proof is not None else None
     result = search(model, goals, options, noted, proves, seeds=seeds, times=times)
     plan, cost = result.plan, result.cost
-    proved = proof is not None and proof.proves_optimal(cost.total)
+    proved = result.stopped == "optimal"
     stats = result.stats
     return TaskResult(
         status=PlanStatus.SOLVED_OPTIMALLY if proved else PlanStatus.SOLVED_SATISFICING,
@@ -165,8 +166,16 @@ def plan_anytime(
             seconds=stats.history[-1][0] if stats.history else 0.0,
             history=tuple(stats.history),
         ),
-        bound=None if proof is None else BoundSummary(proof.value, proof.relaxation, proof.gap(cost.total), proved),
+        bound=_summary(proof, cost.total, proved),
     )
+
+
+def _summary(proof: Bound | None, cost: float, proved: bool) -> BoundSummary | None:
+    """The bound as reported: ENHSP's own proof when its optimal search covered the whole
+    problem, else the certified relaxation."""
+    if proved and (proof is None or not proof.proves_optimal(cost)):
+        return BoundSummary(cost, "exact (ENHSP's optimal search of the whole problem)", 0.0, True)
+    return None if proof is None else BoundSummary(proof.value, proof.relaxation, proof.gap(cost), proved)
 
 
 def plan_unfolded(
