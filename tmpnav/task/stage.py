@@ -111,6 +111,11 @@ def _result(table: CostTable, memo: Memo, encoded: EncodedTask | None) -> TaskRe
     )
 
 
+#: neighbourhood sizes of the anytime search with carried costs: a sub-problem costs more
+#: there (its paired moves are simulated from the robots' beliefs at that point of the plan)
+CARRIED_SIZES = (6, 8)
+
+
 def plan_anytime(
     model: CostModel,
     goals: Goals,
@@ -135,6 +140,7 @@ def plan_anytime(
         budget=planner.time_budget,
         sub_timeout=min(planner.timeout, 60.0),
         whole_is_exact=costs == "table",
+        sizes=(4, 6, 8) if costs == "table" else CARRIED_SIZES,
     )
     value = proof.value if proof is not None else None
     report = progress
