@@ -16,13 +16,15 @@ same numbers), so a remembered plan is reported exactly as a searched one.
 from __future__ import annotations
 
 import hashlib
+import math
 from functools import lru_cache
 from pathlib import Path
 
 from tmpnav.results import JSON, BoundSummary, SearchSummary, TaskCounts, TaskResult
 from tmpnav.task.memo import EntryStore
 from tmpnav.task.model import CostModel
-from tmpnav.types import MoveKey, PlanStatus, Scenario
+from tmpnav.task.plans import Rules
+from tmpnav.types import Goals, MoveKey, PlanStatus, Scenario
 
 VERSION = "search-plan/1"
 
@@ -73,8 +75,9 @@ def remember(store: EntryStore, key: str, task: TaskResult) -> None:
     store.put_many({key: entry})
 
 
-def recall(store: EntryStore, key: str, model: CostModel) -> TaskResult | None:
-    """The remembered result, its costs from ``model``; None on a miss or a damaged entry."""
+def recall(store: EntryStore, key: str, model: CostModel, goals: Goals) -> TaskResult | None:
+    """The remembered result, its costs from ``model``; None on a miss or an entry that is
+    damaged or is not a plan of these goals."""
     entry = store.get_many([key]).get(key)
     if not isinstance(entry, dict):
         return None
@@ -97,9 +100,16 @@ def recall(store: EntryStore, key: str, model: CostModel) -> TaskResult | None:
         names = tuple(str(n) for n in entry["names"])
         engine = str(entry["engine"])
         bound_value = None if b is None else (float(b["value"]), str(b["relaxation"]), bool(b["proved"]))
-    except (KeyError, TypeError, ValueError):
+    except (KeyError, TypeError, ValueError, IndexError):
+        return None
+    shapes = all(1 <= len(step) <= 2 and all(len(m) == 3 for m in step) for step in steps)
+    if not shapes or not {m[0] for step in steps for m in step} <= set(model.robots):
+        return None
+    if not Rules(model.start_location, goals).valid(steps):
         return None
     cost = model.plan_cost(steps)
+    if not math.isfinite(cost.total):
+        return None
     bound = None
     if bound_value is not None:
         value, relaxation, proved = bound_value

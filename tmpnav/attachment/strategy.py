@@ -100,7 +100,7 @@ def plan_scenario(
     model = carried if sp.costs == "carried" else canonical
     if store is not None and not replan:
         with times.timed("planner"):
-            found = recall(store, key, model)
+            found = recall(store, key, model, scenario.goals)
         if found is not None:
             return Planned(canonical.seen(), found)
     task = _search(scenario, world, mode, canonical, carried, store, replan, times, progress)
