@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 
+from tmpnav.attachment.floors import motion_floors
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import arrival_state, build_table, initial_state, start_locations
@@ -31,6 +32,11 @@ from tmpnav.types import CostTable, Goals, MoveKey
 from tmpnav.world import World
 
 Pair = tuple[MoveKey, MoveKey]
+
+#: up to this many single moves the search starts from all of them (robots x rooms^2)
+FULL_SINGLES = 6000
+#: beyond, from each goal room only to this many nearest ones (and from each start to all)
+NEAREST = 10
 
 
 class CanonicalCosts:
@@ -52,11 +58,29 @@ class CanonicalCosts:
     # ------------------------------------------------------------------ CostModel
 
     def singles(self, goals: Goals) -> CostTable:
-        """Every single move between the robots' starts and the goal rooms (one cached table)."""
-        table = build_table(self.oracle, self.oracle_world, "goals")
-        for move, cost in table.single.items():
-            self.single.setdefault(move, cost)
-        return table
+        """The single moves the search starts from: every move between the robots' starts
+        and the goal rooms (one cached table) up to :data:`FULL_SINGLES` moves; beyond, each
+        robot's moves from its start to every goal room and from each goal room to its
+        :data:`NEAREST` nearest goal rooms (by motion floor). A move left out is costed
+        when a sub-problem asks for it."""
+        rooms = tuple(dict.fromkeys(goals.all_rooms))
+        if len(self.robots) * (len(rooms) + 1) * len(rooms) <= FULL_SINGLES:
+            table = build_table(self.oracle, self.oracle_world, "goals")
+            for move, cost in table.single.items():
+                self.single.setdefault(move, cost)
+            return table
+        floors = motion_floors(self.scenario, self.oracle.ctx.roadmap, self.start_location, goals).single
+        moves: list[MoveKey] = []
+        for r in self.robots:
+            start = self.start_location[r]
+            moves.extend((r, start, t) for t in rooms if t != start)
+            for o in rooms:
+                near = sorted((floors.get((r, o, t), math.inf), t) for t in rooms if t not in (o, start))
+                moves.extend((r, o, t) for _, t in near[:NEAREST])
+        self._ensure_singles(moves)
+        single = {m: c for m in moves if (c := self.single.get(m)) is not None}
+        locations = tuple(dict.fromkeys([*rooms, *self.start_location.values()]))
+        return CostTable(self.robots, rooms, locations, dict(self.start_location), single, {})
 
     @property
     def oracle_world(self) -> World:
@@ -125,6 +149,9 @@ class CanonicalCosts:
         its exact cost or, when it was never simulated jointly, at a lower bound of it
         (:mod:`tmpnav.oracle.bounds`): what :func:`tmpnav.task.bound.lower_bound` needs to
         bound every plan. None when the plan space has more than ``max_pairs`` pairs."""
+        rooms = tuple(dict.fromkeys(goals.all_rooms))
+        if len(self.robots) * (len(rooms) + 1) * len(rooms) > FULL_SINGLES:
+            return None  # the search starts from some single moves only: they cannot bound every plan
         singles = self.singles(goals)
         space = self.pair_space(goals, max_pairs)
         if space is None:

@@ -10,6 +10,7 @@ single-robot and joint evaluations that need it.
 from __future__ import annotations
 
 import hashlib
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -62,6 +63,13 @@ def stable_seed(*parts: object) -> int:
     return int.from_bytes(digest[:8], "little") >> 1
 
 
+#: nominal motions kept in memory (least recently used dropped first): a motion of a few
+#: hundred steps with its landmark visibility takes 10-20 kB, and a building of 60 rooms and
+#: 8 robots asks for over 100,000 of them
+MAX_MOTIONS = 8192
+_MISSING = object()
+
+
 class MotionLibrary:
     """Memoised nominal motions of one scenario, world and roadmap."""
 
@@ -71,14 +79,20 @@ class MotionLibrary:
         self.roadmap = roadmap
         self.graph = RoadmapGraph(roadmap)
         self.visibility = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
-        self._motions: dict[tuple[str, int, float, int], NominalMotion | None] = {}
+        self._motions: OrderedDict[tuple[str, int, float, int], NominalMotion | None] = OrderedDict()
 
     def motion(self, robot: str, start: int, heading: float, goal: int) -> NominalMotion | None:
         """The nominal motion start -> goal, or None if the roadmap does not connect them."""
         key = (robot, start, heading, goal)
-        if key not in self._motions:
-            self._motions[key] = self._compute(robot, start, heading, goal)
-        return self._motions[key]
+        found = self._motions.get(key, _MISSING)
+        if found is _MISSING:
+            found = self._compute(robot, start, heading, goal)
+            self._motions[key] = found
+            if len(self._motions) > MAX_MOTIONS:
+                self._motions.popitem(last=False)
+        else:
+            self._motions.move_to_end(key)
+        return found  # type: ignore[return-value]
 
     def prepare(self, starts: list[int]) -> None:
         """Run Dijkstra from many start nodes at once."""
