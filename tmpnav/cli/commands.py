@@ -392,11 +392,18 @@ def _one_line_warning(
 
 def main() -> None:
     """Console entry point: warnings and command-line mistakes become one line each, never
-    a traceback (click's own usage errors included: ``error: ... (see 'tmpnav plan --help')``)."""
+    a traceback (click's own usage errors included: ``error: ... (see 'tmpnav plan --help')``).
+
+    Every run is guarded (tmpnav.lifetime): SIGTERM ends it as cleanly as Ctrl-C, and no process
+    it started outlives it, however it ends.
+    """
     import warnings
+
+    from tmpnav.lifetime import Terminated, end_as_terminated, guard
 
     warnings.showwarning = _one_line_warning
     try:
+        guard()
         code = cli.main(prog_name="tmpnav", standalone_mode=False)
     except click.exceptions.NoArgsIsHelpError as err:  # a bare `tmpnav`: the help, as asked
         click.echo(err.format_message())
@@ -408,7 +415,10 @@ def main() -> None:
     except click.ClickException as err:
         click.echo(f"error: {err.format_message()}", err=True)
         sys.exit(err.exit_code)
-    except click.Abort:
+    except (click.Abort, KeyboardInterrupt):  # KeyboardInterrupt: Ctrl-C before click ran
         click.echo("error: interrupted", err=True)
         sys.exit(130)
+    except Terminated:
+        click.echo("error: terminated (SIGTERM)", err=True)
+        end_as_terminated()
     sys.exit(code if isinstance(code, int) else 0)

@@ -67,6 +67,10 @@ is refused the same way, with the estimate and the cap:
 keep a 2-core, 24 GB machine from running out of memory. Limits marked *fixed* are where
 the models stop meaning anything; they cannot be lifted.
 
+However a run ends (an error, Ctrl-C, SIGTERM, SIGKILL), no process it started outlives it
+(the oracle's workers, ENHSP's JVM: tmpnav/lifetime.py), and the files of its output folder
+are written all or nothing: a killed run leaves the earlier files as they were.
+
 This file is generated from the code (tmpnav/scenario/reference.py); a test keeps it in step.
 
 | exit code | when | limit | lift with |
