@@ -222,6 +222,24 @@ def test_too_many_goal_rooms_are_refused_before_the_oracle(
     assert problem.rest == message
 
 
+def test_the_encoding_of_the_command_line_is_held_to_the_cap(tmp_path: Path) -> None:
+    """The caps were checked against the scenario's own encoding only: a scenario of 100 goal
+    rooms with the single encoding validated, and `plan --encoding mixed` listed 100 million
+    pairs of moves until memory ran out (MemoryError at 3.7 GB, exit 1). The oracle checks
+    the scenario in force, before it lists a move."""
+    doc = many_goal_rooms(100, 2)
+    doc["planner"] = {"encoding": "single"}
+    write_yaml(tmp_path / "scenario.yaml", doc)
+    assert run(["validate", "scenario.yaml"], tmp_path)[0] == 0
+    code, out, err, took = run(["plan", "scenario.yaml", "--encoding", "mixed", "--no-cache"], tmp_path, memory_gb=2.0)
+    [problem] = reported(code, out, err)
+    assert problem.rest == (
+        "goals: with the mixed encoding needs about 100,020,000 cost-table entries; the cap is 5,000,000 (fewer "
+        "goal rooms or robots, or the single encoding, or raise the cap: TMPNAV_MAX_TABLE_ENTRIES=100020000)"
+    )
+    assert took < 60
+
+
 def test_60_rooms_and_8_robots_fit_the_goal_cap(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The size the planner is meant to reach: the single encoding passes every cap."""
     monkeypatch.chdir(tmp_path)
