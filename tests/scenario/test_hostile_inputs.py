@@ -88,6 +88,10 @@ CASES = [
          "1e-06 rad/s with models.dt 0.5 s makes about 25,132,806 control steps"),
     Case("ros-image-20000-square", ros_image(b"P5\n20000 20000\n255\n"), "image",
          "map.pgm has 20000 x 20000 pixels: 400,000,000 grid cells; the cap is 64,000,000", file="map.yaml"),
+    Case("ros-image-a-device", lambda doc, folder: base_as_ros_map(doc, folder, image="/dev/zero"), "image",
+         "image file is not a regular file: /dev/zero", file="map.yaml"),
+    Case("ros-map-yaml-a-device", nested("map", {"ros": "/dev/zero"}), "map.ros",
+         "'/dev/zero': map file is not a regular file (/dev/zero)"),
     # (7) values beyond where the model means anything
     Case("covariance-1e100", change("robots", "r1", covariance=[[1e100, 0, 0], [0, 1e100, 0], [0, 0, 0.003]]),
          "robots.r1.covariance", "position variance 1e+100 m² (standard deviation 1e+50 m) is wider than the map "
@@ -176,6 +180,18 @@ def test_refusals_take_little_time_and_memory(case_id: str, seconds: float, tmp_
     check_case(case, tmp_path, reported(code, out, err))
     assert took < seconds
     assert "DecompressionBomb" not in err
+
+
+def test_a_scenario_that_never_ends_is_refused_after_the_cap(tmp_path: Path) -> None:
+    """/dev/zero has no size to check first: it used to be read until memory ran out
+    (MemoryError after 3.5 GB, exit 1). Now it is read no further than the yaml_bytes cap."""
+    code, out, err, took = run(["validate", "/dev/zero"], tmp_path, memory_gb=2.0)
+    [problem] = reported(code, out, err)
+    assert (problem.file, problem.line) == ("/dev/zero", None)
+    assert problem.rest.startswith(
+        "is at least 16,000,001 bytes of YAML; the cap is 16,000,000 (a YAML file this large is not a scenario"
+    )
+    assert took < 30
 
 
 @pytest.mark.parametrize(
