@@ -127,16 +127,15 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
     report = run_plan(scenario, plan_options(kw))
     written: list[Path] = []
     if output is not None:
+        from tmpnav.export.nav2 import files as nav2_files
         from tmpnav.report.outputs import write_outputs
 
         pddl = pddl_texts(report)
+        nav2: dict[str, str] = {}  # the plan and its waypoints are one group: all written, or none
+        if "nav2" in exports:
+            nav2 = {f"nav2/{name}": text for name, text in nav2_files(plan_document(report)).items()}
         with writing(output):
-            written = write_outputs(report, output, pddl)
-    if "nav2" in exports and output is not None:
-        from tmpnav.export.nav2 import write_nav2
-
-        with writing(output):
-            written += write_nav2(plan_document(report), output / "nav2")
+            written = write_outputs(report, output, pddl, nav2)
     if fmt == "json":
         click.echo(dumps(plan_document(report)))
     else:

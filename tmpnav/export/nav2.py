@@ -26,7 +26,6 @@ which for a ROS map is the frame of its map_server map):
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -174,18 +173,8 @@ def files(doc: dict[str, Any]) -> dict[str, str]:
 
 
 def write_nav2(doc: dict[str, Any], directory: Path) -> list[Path]:
-    """Write the export into ``directory`` (created if missing), all files or none; returns them."""
-    directory.mkdir(parents=True, exist_ok=True)
-    staged: list[tuple[Path, Path]] = []
-    try:
-        for name, text in files(doc).items():
-            tmp = directory / f".{name}.{os.getpid()}.tmp"
-            staged.append((tmp, directory / name))
-            with open(tmp, "x", encoding="utf-8") as fh:
-                fh.write(text)
-        for tmp, target in staged:
-            os.replace(tmp, target)
-    finally:
-        for tmp, _ in staged:
-            tmp.unlink(missing_ok=True)
-    return [target for _, target in staged]
+    """Write the export into ``directory`` (created if missing), all files or none
+    (tmpnav.atomic); returns them."""
+    from tmpnav.atomic import write_files
+
+    return write_files(directory, files(doc))

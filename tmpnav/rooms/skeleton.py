@@ -175,15 +175,7 @@ def scenario_name(stem: str) -> str:
 
 
 def save(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` atomically: a temporary file beside it (created with the
-    umask's permissions, as ``path`` would be) renamed over it."""
-    import os
+    """Write ``text`` to ``path`` all or nothing (tmpnav.atomic)."""
+    from tmpnav.atomic import write_file
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.parent / f".{path.name}.{os.getpid()}.tmp"
-    try:
-        with open(tmp, "x", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    write_file(path, text)
