@@ -180,6 +180,14 @@ def test_a_cache_directory_that_cannot_exist_is_exit_code_8(tmp_path: Path) -> N
         (("plan", str(TWO_ROOMS), "--bogus"), "No such option '--bogus'"),
         (("frobnicate",), "No such command 'frobnicate'"),
         (("simulate", str(TWO_ROOMS), "--sessions", "0"), "'--sessions': 0 is not in the range"),
+        # NaN passed click's ranges (it compares false with every bound): a NaN gain dropped
+        # every paired move; every number option now refuses NaN and infinities
+        (("plan", str(TWO_ROOMS), "--pair-min-gain", "nan"), "'--pair-min-gain': 'nan' is not a finite number"),
+        (("plan", str(TWO_ROOMS), "--timeout", "nan"), "'--timeout': 'nan' is not a finite number"),
+        (("export-pddl", str(TWO_ROOMS), "-o", "x", "--timeout", "inf"), "'--timeout': 'inf' is not a finite"),
+        (("plan", str(TWO_ROOMS), "--timeout", "2e6"), "'--timeout': 2000000.0 is not in the range 0<x<=1000000.0"),
+        (("bench", "--timeout", "NaN"), "'--timeout': 'NaN' is not a finite number"),
+        (("rooms", "map.yaml", "--min-area", "nan"), "'--min-area': 'nan' is not a finite number"),
     ],
 )
 def test_command_line_mistakes_are_one_line_with_exit_code_2(args: tuple[str, ...], fragment: str) -> None:

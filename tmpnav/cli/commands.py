@@ -17,6 +17,7 @@ from tmpnav.cli.options import (
     output_option,
     plan_options,
     report_errors,
+    timeout_range,
     writing,
 )
 from tmpnav.errors import EXIT_CODES
@@ -267,7 +268,7 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
 @click.option(
     "--timeout",
-    type=click.FloatRange(min=0, min_open=True),
+    type=timeout_range(),
     default=300.0,
     show_default=True,
     help="Seconds a run may take before it is recorded as a timeout.",

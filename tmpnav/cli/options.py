@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import math
 import os
 import sys
 import traceback
@@ -111,6 +112,26 @@ def writing(output: Path) -> Iterator[None]:
         raise OutputError(f"cannot write {target}: {err.strerror or err}") from None
 
 
+class FiniteRange(click.FloatRange):
+    """click's FloatRange without NaN and infinities: NaN compares false with every bound,
+    so FloatRange let ``--pair-min-gain nan`` through (and it dropped every paired move)."""
+
+    name = "finite float range"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        number = click.FLOAT.convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return super().convert(number, param, ctx)
+
+
+def timeout_range() -> FiniteRange:
+    """Seconds: more than 0, at most the scenario format's limit (planner.timeout)."""
+    from tmpnav.scenario.format import MAX_TIMEOUT
+
+    return FiniteRange(min=0, min_open=True, max=MAX_TIMEOUT)
+
+
 def encoding_choice() -> click.Choice:
     """The registered task encodings (tmpnav.task.encodings.ENCODINGS)."""
     from tmpnav.task.encodings import ENCODINGS
@@ -128,12 +149,10 @@ def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
             metavar="NAME",
             help="unified-planning engine (overrides planner.name), e.g. enhsp-blind (default), enhsp-opt, enhsp.",
         ),
-        click.option(
-            "--timeout", type=click.FloatRange(min=0, min_open=True), metavar="S", help="Planner time limit in seconds."
-        ),
+        click.option("--timeout", type=timeout_range(), metavar="S", help="Planner time limit in seconds."),
         click.option(
             "--pair-min-gain",
-            type=click.FloatRange(0, 1),
+            type=FiniteRange(0, 1),
             metavar="G",
             help="Mixed encoding: minimum relative saving of a paired move.",
         ),

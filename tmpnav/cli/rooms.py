@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from tmpnav.cli.commands import cli
-from tmpnav.cli.options import report_errors, unwritable, writing
+from tmpnav.cli.options import FiniteRange, report_errors, unwritable, writing
 
 
 def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path, ...]) -> dict[str, Path]:
@@ -39,7 +39,7 @@ def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path
 )
 @click.option(
     "--min-area",
-    type=click.FloatRange(min=0, min_open=True),
+    type=FiniteRange(min=0, min_open=True),
     default=3.0,
     show_default=True,
     metavar="M2",

@@ -94,6 +94,7 @@ FIXED_LIMITS = [
     ("cost weights `M_u`, `M_G`, `M_Sigma` (all zero, or one too large)", "one > 0, each ≤ 1e6"),
     ("a 16-bit ROS image in `raw` mode, or an image that is neither 8- nor 16-bit grey/colour", "8 or 16 bits"),
     ("other numeric ranges of the scenario format", "[scenario.md](scenario.md)"),
+    ("a number on the command line that is not finite (`--timeout nan`, `--pair-min-gain inf`)", "finite"),
 ]
 
 
