@@ -53,7 +53,13 @@ def validate(scenario: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@output_option(False, "PNG file to write.", default=Path("world.png"), show_default=True)
+@output_option(
+    False,
+    "Picture to write; its suffix names the format (.png, .svg, .pdf, ...).",
+    figure=True,
+    default=Path("world.png"),
+    show_default=True,
+)
 @report_errors
 def show(scenario: Path, output: Path) -> None:
     """Draw the world: map, rooms, doors, landmarks, robots with 2-sigma start ellipses."""
@@ -68,7 +74,13 @@ def show(scenario: Path, output: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@output_option(False, "PNG file to write.", default=Path("roadmap.png"), show_default=True)
+@output_option(
+    False,
+    "Picture to write; its suffix names the format (.png, .svg, .pdf, ...).",
+    figure=True,
+    default=Path("roadmap.png"),
+    show_default=True,
+)
 @report_errors
 def roadmap(scenario: Path, output: Path) -> None:
     """Build the probabilistic roadmap (OMPL PRM) and draw it over the map."""

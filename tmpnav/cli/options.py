@@ -90,16 +90,26 @@ def unwritable(path: Path, directory: bool) -> str | None:
     return None
 
 
-def output_option(directory: bool, help_text: str, **kwargs: Any) -> Callable[..., Any]:
-    """``-o/--output``, checked before any work is done (a directory, or a file)."""
+def output_option(directory: bool, help_text: str, figure: bool = False, **kwargs: Any) -> Callable[..., Any]:
+    """``-o/--output``, checked before any work is done (a directory, or a file; with
+    ``figure``, a picture whose suffix names a format tmpnav writes)."""
 
     def check(ctx: click.Context, param: click.Parameter, value: Path | None) -> Path | None:
-        if value is not None and (why := unwritable(value, directory)):
+        if value is not None and (why := unwritable(value, directory) or (figure and not_a_picture(value))):
             raise click.BadParameter(why, ctx=ctx, param=param)
         return value
 
     kind = click.Path(path_type=Path, file_okay=not directory, dir_okay=directory)
     return click.option("-o", "--output", type=kind, callback=check, help=help_text, **kwargs)
+
+
+def not_a_picture(path: Path) -> str | None:
+    """Why ``path`` cannot name a picture (its suffix names no format tmpnav writes), or None."""
+    from tmpnav.report import figure_format, figure_suffixes
+
+    if figure_format(path.name) is None:
+        return f"{path}: expected a picture file ending in {figure_suffixes()}"
+    return None
 
 
 @contextlib.contextmanager

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from tmpnav.errors import EXIT_CODES
+from tmpnav.report import FIGURE_FORMATS
 from tmpnav.scenario.extent import MIN_RANGE_CAP
 from tmpnav.scenario.format import MAX_COORDINATE, MAX_ROOM_POINTS, ROS_MAP, SCENARIO
 from tmpnav.scenario.limits import CAPS, YAML_MAX_DEPTH
@@ -95,6 +96,10 @@ FIXED_LIMITS = [
     ("a 16-bit ROS image in `raw` mode, or an image that is neither 8- nor 16-bit grey/colour", "8 or 16 bits"),
     ("other numeric ranges of the scenario format", "[scenario.md](scenario.md)"),
     ("a number on the command line that is not finite (`--timeout nan`, `--pair-min-gain inf`)", "finite"),
+    (
+        "a picture to write (`show`, `roadmap`, `rooms -o`) whose suffix names no format",
+        ", ".join(f".{f}" for f in FIGURE_FORMATS),
+    ),
 ]
 
 
