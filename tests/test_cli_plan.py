@@ -101,6 +101,29 @@ def test_unknown_planner(cache_dir: Path) -> None:
     assert_clean_failure(proc, PlannerUnavailableError.exit_code, "unknown planner")
 
 
+def test_validate_names_an_unknown_planner(tmp_path: Path) -> None:
+    """validate used to say ok; plan then failed after the roadmap and the oracle."""
+    scenario = tmp_path / "scenario.yaml"
+    scenario.write_text(TWO_ROOMS.read_text() + "planner: {name: no-such-planner}\n")
+    proc = tmpnav("validate", str(scenario), cwd=tmp_path)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.startswith(
+        f"error: scenario.yaml:{len(TWO_ROOMS.read_text().splitlines()) + 1}: planner.name: unknown planner 'no-such-planner'; installed unified-planning "
+        "planners: enhsp, enhsp-opt"
+    ), proc.stderr
+    assert len(proc.stderr.splitlines()) == 1 and proc.stdout == ""
+
+
+@pytest.mark.parametrize("where", ["scenario", "option"])
+def test_an_unknown_planner_is_refused_before_any_work(where: str, tmp_path: Path) -> None:
+    scenario = tmp_path / "scenario.yaml"
+    scenario.write_text(TWO_ROOMS.read_text() + ("planner: {name: no-such-planner}\n" if where == "scenario" else ""))
+    option = ("--planner", "no-such-planner") if where == "option" else ()
+    proc = tmpnav("plan", str(scenario), *option, "--cache-dir", str(tmp_path / "cache"), "-q", cwd=tmp_path)
+    assert_clean_failure(proc, PlannerUnavailableError.exit_code, "unknown planner 'no-such-planner'; installed")
+    assert not (tmp_path / "cache").exists()  # no roadmap grown, no cost computed
+
+
 @pytest.mark.slow
 def test_planner_crash(cache_dir: Path) -> None:
     env = dict(os.environ, TMPNAV_JAVA_OPTIONS="-XX:+NoSuchJvmOption")

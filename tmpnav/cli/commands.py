@@ -20,6 +20,7 @@ from tmpnav.cli.options import (
     timeout_range,
     writing,
 )
+from tmpnav.cli.planners import check_planner
 from tmpnav.errors import EXIT_CODES
 
 EPILOG = "Exit codes: " + "; ".join(f"{code} {meaning}" for code, meaning in EXIT_CODES.items())
@@ -41,9 +42,18 @@ def cli() -> None:
 @report_errors
 def validate(scenario: Path) -> None:
     """Check a scenario file and report every problem (exit code 2 if any)."""
+    from tmpnav.cli.planners import planner_problems
+    from tmpnav.errors import ScenarioError
     from tmpnav.pipeline import load_world
+    from tmpnav.scenario import load_partial
 
-    sc, world = load_world(scenario)
+    try:
+        sc, world = load_world(scenario)
+    except ScenarioError as err:
+        partial, _ = load_partial(scenario)  # read again, only to add the planner's name to the list
+        raise ScenarioError([*err.problems, *(planner_problems(partial) if partial else [])]) from None
+    if problems := planner_problems(sc):
+        raise ScenarioError(problems)
     rows, cols = world.grid.shape
     click.echo(
         f"{scenario}: ok: {len(sc.rooms)} rooms, {len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
@@ -137,6 +147,7 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
 
     if exports and output is None:
         raise click.UsageError("--export needs -o DIR: the waypoint files go to DIR/nav2/")
+    check_planner(scenario, kw["planner_name"])
     report = run_plan(scenario, plan_options(kw))
     written: list[Path] = []
     if output is not None:
@@ -167,6 +178,7 @@ def export_pddl(scenario: Path, output: Path, **kw: Any) -> None:
     from tmpnav.pipeline import export_problem
     from tmpnav.task.export import pddl_texts, write_pddl
 
+    check_planner(scenario, kw["planner_name"])
     encoded = export_problem(scenario, plan_options(kw))
     texts = pddl_texts(encoded)
     with writing(output):
@@ -236,6 +248,7 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
     from tmpnav.execution import error_summary, execute
     from tmpnav.pipeline import plan as run_plan
 
+    check_planner(scenario, kw["planner_name"])
     report = run_plan(scenario, plan_options(kw))
     result = execute(report, sessions, seed)
     lines = error_summary(result, sessions)

@@ -100,6 +100,7 @@ FIXED_LIMITS = [
         "a picture to write (`show`, `roadmap`, `rooms -o`) whose suffix names no format",
         ", ".join(f".{f}" for f in FIGURE_FORMATS),
     ),
+    ("`planner.name` that names no installed planner (`validate`; `plan` exits with 4)", "installed engines"),
 ]
 
 
