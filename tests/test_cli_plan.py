@@ -107,8 +107,9 @@ def test_validate_names_an_unknown_planner(tmp_path: Path) -> None:
     scenario.write_text(TWO_ROOMS.read_text() + "planner: {name: no-such-planner}\n")
     proc = tmpnav("validate", str(scenario), cwd=tmp_path)
     assert proc.returncode == 2, proc.stderr
+    line = len(TWO_ROOMS.read_text().splitlines()) + 1  # the line added above
     assert proc.stderr.startswith(
-        f"error: scenario.yaml:{len(TWO_ROOMS.read_text().splitlines()) + 1}: planner.name: unknown planner 'no-such-planner'; installed unified-planning "
+        f"error: scenario.yaml:{line}: planner.name: unknown planner 'no-such-planner'; installed unified-planning "
         "planners: enhsp, enhsp-opt"
     ), proc.stderr
     assert len(proc.stderr.splitlines()) == 1 and proc.stdout == ""
