@@ -116,26 +116,19 @@ def _start_sentinel() -> None:
         return
     token = f"{os.getpid()}-{secrets.token_hex(8)}"
     try:
-        with signals_held():  # a pre-exec function means fork() and its handlers
-            _sentinel = subprocess.Popen(
-                [sys.executable, "-m", "tmpnav.lifetime", token, str(os.getpid())],
-                stdin=subprocess.DEVNULL,
-                stdout=subprocess.DEVNULL,
-                stderr=subprocess.DEVNULL,
-                close_fds=True,
-                start_new_session=True,
-                preexec_fn=_notify_on_parent_death,  # no thread runs yet: a pre-exec function is safe
-            )
+        # no pre-exec function: Python code between fork and exec can hang on a lock that
+        # another thread (numpy's BLAS pool, started at import) held at the fork
+        _sentinel = subprocess.Popen(
+            [sys.executable, "-m", "tmpnav.lifetime", token, str(os.getpid())],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            close_fds=True,
+            start_new_session=True,
+        )
     except OSError:  # no sentinel (no memory, no processes left): the run goes on unguarded
         return
     os.environ[ENV] = token  # after the sentinel started: it does not carry the token itself
-
-
-def _notify_on_parent_death() -> None:
-    """In the sentinel before it executes: the death signal blocked (it waits for it, and
-    must not die of it before it waits), then asked for when its parent ends."""
-    signal.pthread_sigmask(signal.SIG_BLOCK, {DEATH_SIGNAL})
-    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, DEATH_SIGNAL, 0, 0, 0)
 
 
 def carriers(token: str) -> Iterator[int]:
@@ -174,10 +167,14 @@ def end_carriers(token: str, rounds: int = 20) -> int:
 
 
 def _sentinel_main(token: str, parent: int) -> None:
-    """Wait for the run's process to end, then end what it left running."""
+    """Wait for the run's process to end, then end what it left running.
+
+    The death signal is blocked first (it is waited for, and must not end the sentinel
+    before), then asked for from the kernel for when the parent ends."""
     for sig in (signal.SIGINT, signal.SIGHUP, signal.SIGQUIT):
         signal.signal(sig, signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_SETMASK, {DEATH_SIGNAL})  # only: the run held SIGTERM while it started us
+    signal.pthread_sigmask(signal.SIG_SETMASK, {DEATH_SIGNAL})
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, DEATH_SIGNAL, 0, 0, 0)
     if os.getppid() == parent:  # else the run ended before the kernel was asked to tell us
         signal.sigwait({DEATH_SIGNAL})
     end_carriers(token)
