@@ -81,6 +81,25 @@ def test_unsolvable(walled: Path, cache_dir: Path) -> None:
     assert_clean_failure(proc, UnsolvableError.exit_code, "found no plan")
 
 
+def test_a_roadmap_that_cuts_a_goal_off_its_robot_is_bad_input_not_unsolvable(tmp_path: Path) -> None:
+    """Found by the fuzzer (tests/fuzz/RESULTS.md): with 150 milestones this seed's roadmap
+    never enters room B from r1's side, though free space does; the planner then said "no
+    plan ... (a goal room that its robot cannot reach?)", exit 6, after costing every move.
+    Now: one line naming the room, the robot and the fix, before the oracle."""
+    from tests.scenario.helpers import base_scenario, write_yaml
+
+    doc = base_scenario()
+    doc["roadmap"] = {"samples": 150, "instantiations": 2, "seed": 6692373}
+    write_yaml(tmp_path / "scenario.yaml", doc)
+    proc = tmpnav("plan", "scenario.yaml", "--no-cache", "-q", cwd=tmp_path)
+    assert_clean_failure(
+        proc,
+        2,
+        "room 'B': none of its pose instantiations connects to robot r1's start through the roadmap, though free "
+        "space joins them; increase roadmap.samples (now 150)",
+    )
+
+
 @pytest.mark.slow
 def test_timeout(cache_dir: Path) -> None:
     # --replan: the cache already remembers this problem's plan from the tests above

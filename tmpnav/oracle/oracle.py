@@ -9,11 +9,12 @@ from typing import Any
 
 import numpy as np
 
-from tmpnav.errors import InputError, Problem, ScenarioError
+from tmpnav.errors import InputError, Problem, RoadmapError, ScenarioError
 from tmpnav.oracle.cache import NullCache
 from tmpnav.oracle.evaluate import EvalStats, Request
 from tmpnav.oracle.executors import OracleContext, Progress, SerialExecutor
 from tmpnav.oracle.keys import context_digest, from_json, request_key, to_json
+from tmpnav.roadmap.reach import roadmap_cuts
 from tmpnav.scenario import display_path
 from tmpnav.scenario.extent import plan_sizes
 from tmpnav.types import MotionResult, Scenario
@@ -26,6 +27,15 @@ def check_plan_sizes(scenario: Scenario) -> None:
     problems = [Problem(file, path, message, scenario.line_of(path)) for path, message in plan_sizes(scenario)]
     if problems:
         raise ScenarioError(problems)
+
+
+def check_reachable(ctx: OracleContext) -> None:
+    """Raise RoadmapError (exit 2) when the roadmap cuts a goal room off from the robot that
+    must visit it though free space joins them, instead of costing every move and hearing
+    "no plan" from ENHSP."""
+    why = roadmap_cuts(ctx.scenario, ctx.world, ctx.roadmap)
+    if why is not None:
+        raise RoadmapError(why)
 
 
 @dataclass
@@ -53,7 +63,8 @@ class OracleStats:
 class Oracle:
     """Evaluates actions (see :mod:`tmpnav.oracle.evaluate`) with caching and parallelism.
 
-    Refuses (ScenarioError) a scenario whose cost table would pass the resource caps: the
+    Refuses a scenario whose cost table would pass the resource caps (ScenarioError), or
+    whose goals the roadmap cannot serve (RoadmapError), before it computes anything. The
     scenario it is given is the one in force, with the command line's encoding and goals
     (``plan --encoding mixed``, the bench's goal draws), which validation never saw.
     """
@@ -64,7 +75,8 @@ class Oracle:
         self.executor = executor if executor is not None else SerialExecutor()
         try:
             check_plan_sizes(ctx.scenario)
-        except ScenarioError:
+            check_reachable(ctx)
+        except InputError:
             self.executor.close()
             self.cache.close()
             raise
