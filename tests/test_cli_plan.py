@@ -101,6 +101,26 @@ def test_a_roadmap_that_cuts_a_goal_off_its_robot_is_bad_input_not_unsolvable(tm
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="task layer: the paper encoding writes pairs missing from the cost table as free joint actions "
+    "(tests/fuzz/RESULTS.md, last row); remove this mark with the fix",
+)
+def test_the_paper_encoding_offers_no_pair_the_oracle_could_not_cost(tmp_path: Path) -> None:
+    """Found by `make fuzz`: with one pose instantiation per room the oracle cannot put
+    both robots in room B at once, the table has no cost for that pair, and the paper
+    encoding gave it cost 0: ENHSP chose it and decoding failed (internal error, exit 1)."""
+    from tests.scenario.helpers import base_scenario, write_yaml
+
+    doc = base_scenario()
+    doc["roadmap"] = {"samples": 500, "instantiations": 1, "seed": 0}
+    doc["planner"] = {"encoding": "paper"}
+    write_yaml(tmp_path / "scenario.yaml", doc)
+    proc = tmpnav("plan", "scenario.yaml", "--no-cache", "-q", "--executor", "serial", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.slow
 def test_timeout(cache_dir: Path) -> None:
     # --replan: the cache already remembers this problem's plan from the tests above
     proc = tmpnav("plan", str(TWO_ROOMS), "--timeout", "0.001", "--replan", "--cache-dir", str(cache_dir), "-q")
