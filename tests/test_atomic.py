@@ -50,6 +50,29 @@ def test_a_failing_content_leaves_the_earlier_files_and_no_new_folder(tmp_path: 
     assert not (tmp_path / "new").exists()
 
 
+def test_a_group_reaches_into_sub_folders_and_removes_those_it_made_on_failure(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    (out / "nav2").mkdir(parents=True)
+    (out / "nav2" / f".r1.csv.tmpnav-{dead_pid()}-0123abcd.tmp").write_text("left by a killed run")
+    written = write_files(out, {"plan.json": "{}", "nav2/r1.csv": "x", "deep/er/f.txt": "f"})
+    assert written == [out / "plan.json", out / "nav2" / "r1.csv", out / "deep" / "er" / "f.txt"]
+    assert names(out / "nav2") == ["r1.csv"]  # the leftover is gone
+
+    def broken(path: Path) -> None:
+        raise RuntimeError("cannot draw")
+
+    with pytest.raises(RuntimeError):
+        write_files(out, {"plan.json": "{new}", "new/a.txt": "a", "new/b/c.txt": broken})
+    assert names(out) == ["deep", "nav2", "plan.json"] and (out / "plan.json").read_text() == "{}"
+
+
+@pytest.mark.parametrize("name", ["../escape.txt", "/etc/passwd", "a/../../b", ""])
+def test_a_name_must_stay_inside_the_folder(name: str, tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="is not a file name inside"):
+        write_files(tmp_path / "out", {name: "x"})
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_late_rename_failure_restores_the_earlier_set_and_names_the_file(tmp_path: Path) -> None:
     for name in ("a.txt", "b.txt"):
         (tmp_path / name).write_text(f"old {name}")

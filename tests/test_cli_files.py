@@ -127,3 +127,53 @@ def test_a_rename_that_fails_late_restores_the_earlier_plan(cache: Path, tmp_pat
     assert now == {k: v for k, v in earlier.items() if k != "problem.pddl"}
     assert json.loads(now["plan.json"])["mutual_observations"] is True  # the earlier plan, not the new one
     assert sorted(os.listdir(out)) == ["domain.pddl", "plan.json", "plan.png", "problem.pddl"]
+
+
+@pytest.mark.parametrize(
+    ("command", "name", "magic"),
+    [("show", "world.svg", b"<?xml"), ("show", "world.JPG", b"\xff\xd8\xff"), ("roadmap", "roadmap.pdf", b"%PDF")],
+)
+def test_a_picture_is_written_in_the_format_its_suffix_names(
+    command: str, name: str, magic: bytes, tmp_path: Path
+) -> None:
+    """`show -o x.svg` and `roadmap -o r.pdf` used to write PNG bytes under those names."""
+    proc = tmpnav(command, str(TWO_ROOMS), "-o", str(tmp_path / name))
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / name).read_bytes().startswith(magic)
+
+
+@pytest.mark.parametrize("name", ["world.txt", "world"])
+def test_a_picture_name_without_a_known_format_is_refused_before_any_work(name: str, tmp_path: Path) -> None:
+    proc = tmpnav("show", str(TWO_ROOMS), "-o", str(tmp_path / name))
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.startswith(
+        f"error: Invalid value for '-o' / '--output': {tmp_path / name}: expected a picture file ending in .png, .svg"
+    ), proc.stderr
+    assert len(proc.stderr.splitlines()) == 1 and list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_the_plan_and_its_waypoints_are_written_all_or_nothing(cache: Path, tmp_path: Path) -> None:
+    """The nav2 files were a second write with temporary files of their own: a killed run's
+    leftovers in nav2/ stayed for good, and a failure there left the new plan beside the
+    earlier waypoints. Now the plan and its waypoints are one group of tmpnav.atomic."""
+    out = tmp_path / "out"
+    first = tmpnav("plan", str(TWO_ROOMS), "--cache-dir", str(cache), "-q", "-o", str(out), "--export", "nav2")
+    assert first.returncode == 0, first.stderr
+    earlier = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    leftover = out / "nav2" / f".r1.csv.tmpnav-{dead_pid()}-0123abcd.tmp"
+    leftover.write_text("index,x")
+    (out / "nav2" / "r2.csv").unlink()
+    (out / "nav2" / "r2.csv").mkdir()  # the last file of the group cannot be replaced
+    proc = tmpnav(
+        "plan", str(TWO_ROOMS), "--cache-dir", str(cache), "-q", "-o", str(out), "--export", "nav2",
+        "--no-mutual-observations",
+    )  # fmt: skip
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.strip() == f"error: cannot write {out / 'nav2' / 'r2.csv'}: Is a directory"
+    now = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    assert now == {k: v for k, v in earlier.items() if k != Path("nav2/r2.csv")}  # the earlier plan, whole
+    (out / "nav2" / "r2.csv").rmdir()
+    again = tmpnav("plan", str(TWO_ROOMS), "--cache-dir", str(cache), "-q", "-o", str(out), "--export", "nav2")
+    assert again.returncode == 0, again.stderr
+    assert sorted(p.name for p in (out / "nav2").iterdir()) == sorted(str(k.name) for k in earlier if k.parent.name)

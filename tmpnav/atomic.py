@@ -38,18 +38,20 @@ STALE_AFTER = 24 * 3600.0  # s: a temporary file this old is stale whatever its 
 def write_files(directory: Path, contents: Mapping[str, Content]) -> list[Path]:
     """Write every ``name -> content`` into ``directory`` (created if missing), all or nothing.
 
-    Returns the paths written, in the order of ``contents``. On any error no file of this
-    write is left behind, the earlier files are as they were, and the error propagates (an
-    ``OSError`` names the target file).
+    A name may lead into a sub-folder (``nav2/r1.csv``: the plan and its waypoint files are
+    one group). Returns the paths written, in the order of ``contents``. On any error no
+    file of this write is left behind, the earlier files are as they were, the folders this
+    write created are removed, and the error propagates (an ``OSError`` names the target file).
     """
     directory = Path(directory)
-    created = not directory.exists()
-    directory.mkdir(parents=True, exist_ok=True)
-    remove_stale(directory)
+    targets = [_inside(directory, name) for name in contents]
+    created: list[Path] = []  # folders this write made, outermost first
     staged: list[tuple[Path, Path]] = []  # (temporary file, target)
     try:
-        for name, content in contents.items():
-            target = directory / name
+        for folder in dict.fromkeys(t.parent for t in targets):
+            created += _make_folder(folder)
+            remove_stale(folder)
+        for target, content in zip(targets, contents.values(), strict=True):
             tmp = _temporary(target, "tmp")
             staged.append((tmp, target))
             try:
@@ -59,11 +61,26 @@ def write_files(directory: Path, contents: Mapping[str, Content]) -> list[Path]:
         _commit(staged)
     except BaseException:
         _discard(tmp for tmp, _ in staged)
-        if created:
+        for folder in reversed(created):
             with contextlib.suppress(OSError):
-                directory.rmdir()
+                folder.rmdir()
         raise
     return [target for _, target in staged]
+
+
+def _inside(directory: Path, name: str) -> Path:
+    """``directory / name`` for a relative name that stays inside ``directory``."""
+    relative = Path(name)
+    if relative.is_absolute() or ".." in relative.parts or not relative.parts:
+        raise ValueError(f"{name!r} is not a file name inside {directory}")
+    return directory / relative
+
+
+def _make_folder(folder: Path) -> list[Path]:
+    """Create ``folder`` and its missing parents; returns those created, outermost first."""
+    missing = [p for p in (folder, *folder.parents) if not p.exists()][::-1]
+    folder.mkdir(parents=True, exist_ok=True)
+    return missing
 
 
 def write_file(path: Path, content: Content) -> Path:

@@ -107,4 +107,6 @@ EXIT_CODES: dict[int, str] = {
     PlannerCrashError.exit_code: "the planner process crashed",
     CacheError.exit_code: "the cache directory is unusable",
     130: "interrupted (Ctrl-C)",
+    143: "terminated (SIGTERM; a parent process sees it killed by the signal): the processes it started "
+    "are stopped and earlier outputs kept, as after Ctrl-C",
 }

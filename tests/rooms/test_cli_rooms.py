@@ -147,7 +147,7 @@ def test_bad_input_is_one_line(tmp_path: Path) -> None:
     one_error(tmpnav("rooms", tmp_path / "missing.yaml"), "file not found")
     unknown = write_map(tmp_path / "unknown", np.full((40, 40), UNKNOWN, dtype=np.uint8))
     one_error(tmpnav("rooms", unknown), "no free area large enough for a room")
-    one_error(tmpnav("rooms", OFFICE_MAP, "-o", tmp_path / "x.txt"), "expected a .yaml scenario or a .png picture")
+    one_error(tmpnav("rooms", OFFICE_MAP, "-o", tmp_path / "x.txt"), "expected a .yaml scenario or a picture (.png")
     one_error(tmpnav("rooms", OFFICE_MAP, "-o", tmp_path / "a.png", "-o", tmp_path / "b.png"), "written once")
     one_error(tmpnav("rooms", OFFICE_MAP, "--min-area", "0"), "--min-area")
     (tmp_path / "bad.yaml").write_text("image: m.pgm\nresolution: -1\norigin: [0, 0, 0]\n")

@@ -88,6 +88,10 @@ CASES = [
          "1e-06 rad/s with models.dt 0.5 s makes about 25,132,806 control steps"),
     Case("ros-image-20000-square", ros_image(b"P5\n20000 20000\n255\n"), "image",
          "map.pgm has 20000 x 20000 pixels: 400,000,000 grid cells; the cap is 64,000,000", file="map.yaml"),
+    Case("ros-image-a-device", lambda doc, folder: base_as_ros_map(doc, folder, image="/dev/zero"), "image",
+         "image file is not a regular file: /dev/zero", file="map.yaml"),
+    Case("ros-map-yaml-a-device", nested("map", {"ros": "/dev/zero"}), "map.ros",
+         "'/dev/zero': map file is not a regular file (/dev/zero)"),
     # (7) values beyond where the model means anything
     Case("covariance-1e100", change("robots", "r1", covariance=[[1e100, 0, 0], [0, 1e100, 0], [0, 0, 0.003]]),
          "robots.r1.covariance", "position variance 1e+100 m² (standard deviation 1e+50 m) is wider than the map "
@@ -178,6 +182,18 @@ def test_refusals_take_little_time_and_memory(case_id: str, seconds: float, tmp_
     assert "DecompressionBomb" not in err
 
 
+def test_a_scenario_that_never_ends_is_refused_after_the_cap(tmp_path: Path) -> None:
+    """/dev/zero has no size to check first: it used to be read until memory ran out
+    (MemoryError after 3.5 GB, exit 1). Now it is read no further than the yaml_bytes cap."""
+    code, out, err, took = run(["validate", "/dev/zero"], tmp_path, memory_gb=2.0)
+    [problem] = reported(code, out, err)
+    assert (problem.file, problem.line) == ("/dev/zero", None)
+    assert problem.rest.startswith(
+        "is at least 16,000,001 bytes of YAML; the cap is 16,000,000 (a YAML file this large is not a scenario"
+    )
+    assert took < 30
+
+
 @pytest.mark.parametrize(
     "case_id", ["dt-1e-6", "covariance-1e160", "m-sigma-1e300", "sensor-noise-1e-300", "robots-on-the-same-spot"]
 )
@@ -220,6 +236,24 @@ def test_too_many_goal_rooms_are_refused_before_the_oracle(
     result = CliRunner().invoke(cli, ["validate", "scenario.yaml"])
     [problem] = reported(result.exit_code, result.stdout, result.stderr)
     assert problem.rest == message
+
+
+def test_the_encoding_of_the_command_line_is_held_to_the_cap(tmp_path: Path) -> None:
+    """The caps were checked against the scenario's own encoding only: a scenario of 100 goal
+    rooms with the single encoding validated, and `plan --encoding mixed` listed 100 million
+    pairs of moves until memory ran out (MemoryError at 3.7 GB, exit 1). The oracle checks
+    the scenario in force, before it lists a move."""
+    doc = many_goal_rooms(100, 2)
+    doc["planner"] = {"encoding": "single"}
+    write_yaml(tmp_path / "scenario.yaml", doc)
+    assert run(["validate", "scenario.yaml"], tmp_path)[0] == 0
+    code, out, err, took = run(["plan", "scenario.yaml", "--encoding", "mixed", "--no-cache"], tmp_path, memory_gb=2.0)
+    [problem] = reported(code, out, err)
+    assert problem.rest == (
+        "goals: with the mixed encoding needs about 100,020,000 cost-table entries; the cap is 5,000,000 (fewer "
+        "goal rooms or robots, or the single encoding, or raise the cap: TMPNAV_MAX_TABLE_ENTRIES=100020000)"
+    )
+    assert took < 60
 
 
 def test_60_rooms_and_8_robots_fit_the_goal_cap(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

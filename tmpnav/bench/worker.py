@@ -191,9 +191,15 @@ def measured(report: PlanReport) -> dict[str, Any]:
 
 
 def main() -> None:
-    job = json.loads(sys.stdin.read())
-    warm_up()
-    print(json.dumps(run(job)), flush=True)
+    from tmpnav.lifetime import Terminated, end_as_terminated, guard
+
+    guard()  # the run's JVMs end with it, when the bench kills it at its time limit too
+    try:
+        job = json.loads(sys.stdin.read())
+        warm_up()
+        print(json.dumps(run(job)), flush=True)
+    except Terminated:
+        end_as_terminated()
 
 
 if __name__ == "__main__":

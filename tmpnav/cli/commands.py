@@ -18,6 +18,7 @@ from tmpnav.cli.options import (
     report_errors,
     writing,
 )
+from tmpnav.cli.planners import check_planner
 from tmpnav.errors import EXIT_CODES
 
 EPILOG = "Exit codes: " + "; ".join(f"{code} {meaning}" for code, meaning in EXIT_CODES.items())
@@ -39,9 +40,18 @@ def cli() -> None:
 @report_errors
 def validate(scenario: Path) -> None:
     """Check a scenario file and report every problem (exit code 2 if any)."""
+    from tmpnav.cli.planners import planner_problems
+    from tmpnav.errors import ScenarioError
     from tmpnav.pipeline import load_world
+    from tmpnav.scenario import load_partial
 
-    sc, world = load_world(scenario)
+    try:
+        sc, world = load_world(scenario)
+    except ScenarioError as err:
+        partial, _ = load_partial(scenario)  # read again, only to add the planner's name to the list
+        raise ScenarioError([*err.problems, *(planner_problems(partial) if partial else [])]) from None
+    if problems := planner_problems(sc):
+        raise ScenarioError(problems)
     rows, cols = world.grid.shape
     click.echo(
         f"{scenario}: ok: {len(sc.rooms)} rooms, {len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
@@ -51,7 +61,13 @@ def validate(scenario: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@output_option(False, "PNG file to write.", default=Path("world.png"), show_default=True)
+@output_option(
+    False,
+    "Picture to write; its suffix names the format (.png, .svg, .pdf, ...).",
+    figure=True,
+    default=Path("world.png"),
+    show_default=True,
+)
 @report_errors
 def show(scenario: Path, output: Path) -> None:
     """Draw the world: map, rooms, doors, landmarks, robots with 2-sigma start ellipses."""
@@ -66,7 +82,13 @@ def show(scenario: Path, output: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@output_option(False, "PNG file to write.", default=Path("roadmap.png"), show_default=True)
+@output_option(
+    False,
+    "Picture to write; its suffix names the format (.png, .svg, .pdf, ...).",
+    figure=True,
+    default=Path("roadmap.png"),
+    show_default=True,
+)
 @report_errors
 def roadmap(scenario: Path, output: Path) -> None:
     """Build the probabilistic roadmap (OMPL PRM) and draw it over the map."""
@@ -123,19 +145,19 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
 
     if exports and output is None:
         raise click.UsageError("--export needs -o DIR: the waypoint files go to DIR/nav2/")
+    check_planner(scenario, kw["planner_name"])
     report = run_plan(scenario, plan_options(kw))
     written: list[Path] = []
     if output is not None:
+        from tmpnav.export.nav2 import files as nav2_files
         from tmpnav.report.outputs import write_outputs
 
         pddl = pddl_texts(report)
+        nav2: dict[str, str] = {}  # the plan and its waypoints are one group: all written, or none
+        if "nav2" in exports:
+            nav2 = {f"nav2/{name}": text for name, text in nav2_files(plan_document(report)).items()}
         with writing(output):
-            written = write_outputs(report, output, pddl)
-    if "nav2" in exports and output is not None:
-        from tmpnav.export.nav2 import write_nav2
-
-        with writing(output):
-            written += write_nav2(plan_document(report), output / "nav2")
+            written = write_outputs(report, output, pddl, nav2)
     if fmt == "json":
         click.echo(dumps(plan_document(report)))
     else:
@@ -154,6 +176,7 @@ def export_pddl(scenario: Path, output: Path, **kw: Any) -> None:
     from tmpnav.pipeline import export_problem
     from tmpnav.task.export import pddl_texts, write_pddl
 
+    check_planner(scenario, kw["planner_name"])
     encoded = export_problem(scenario, plan_options(kw))
     texts = pddl_texts(encoded)
     with writing(output):
@@ -265,11 +288,18 @@ def _one_line_warning(
 
 def main() -> None:
     """Console entry point: warnings and command-line mistakes become one line each, never
-    a traceback (click's own usage errors included: ``error: ... (see 'tmpnav plan --help')``)."""
+    a traceback (click's own usage errors included: ``error: ... (see 'tmpnav plan --help')``).
+
+    Every run is guarded (tmpnav.lifetime): SIGTERM ends it as cleanly as Ctrl-C, and no process
+    it started outlives it, however it ends.
+    """
     import warnings
+
+    from tmpnav.lifetime import Terminated, end_as_terminated, guard
 
     warnings.showwarning = _one_line_warning
     try:
+        guard()
         code = cli.main(prog_name="tmpnav", standalone_mode=False)
     except click.exceptions.NoArgsIsHelpError as err:  # a bare `tmpnav`: the help, as asked
         click.echo(err.format_message())
@@ -281,7 +311,10 @@ def main() -> None:
     except click.ClickException as err:
         click.echo(f"error: {err.format_message()}", err=True)
         sys.exit(err.exit_code)
-    except click.Abort:
+    except (click.Abort, KeyboardInterrupt):  # KeyboardInterrupt: Ctrl-C before click ran
         click.echo("error: interrupted", err=True)
         sys.exit(130)
+    except Terminated:
+        click.echo("error: terminated (SIGTERM)", err=True)
+        end_as_terminated()
     sys.exit(code if isinstance(code, int) else 0)

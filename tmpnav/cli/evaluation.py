@@ -19,8 +19,10 @@ from tmpnav.cli.options import (
     output_option,
     plan_options,
     report_errors,
+    timeout_range,
     writing,
 )
+from tmpnav.cli.planners import check_planner
 
 
 @cli.command()
@@ -46,6 +48,7 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
     from tmpnav.execution import error_summary, execute
     from tmpnav.pipeline import plan as run_plan
 
+    check_planner(scenario, kw["planner_name"])
     report = run_plan(scenario, plan_options(kw))
     result = execute(report, sessions, seed)
     lines = error_summary(result, sessions)
@@ -90,14 +93,14 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
 )
 @click.option(
     "--time-budget",
-    type=click.FloatRange(min=0, min_open=True),
+    type=timeout_range(),
     metavar="S",
     help="The anytime search's budget in every run (default: the scenario's planner.time_budget).",
 )
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
 @click.option(
     "--timeout",
-    type=click.FloatRange(min=0, min_open=True),
+    type=timeout_range(),
     default=300.0,
     show_default=True,
     help="Seconds a run may take before it is recorded as a timeout.",

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import math
 import os
 import sys
 import traceback
@@ -90,16 +91,26 @@ def unwritable(path: Path, directory: bool) -> str | None:
     return None
 
 
-def output_option(directory: bool, help_text: str, **kwargs: Any) -> Callable[..., Any]:
-    """``-o/--output``, checked before any work is done (a directory, or a file)."""
+def output_option(directory: bool, help_text: str, figure: bool = False, **kwargs: Any) -> Callable[..., Any]:
+    """``-o/--output``, checked before any work is done (a directory, or a file; with
+    ``figure``, a picture whose suffix names a format tmpnav writes)."""
 
     def check(ctx: click.Context, param: click.Parameter, value: Path | None) -> Path | None:
-        if value is not None and (why := unwritable(value, directory)):
+        if value is not None and (why := unwritable(value, directory) or (figure and not_a_picture(value))):
             raise click.BadParameter(why, ctx=ctx, param=param)
         return value
 
     kind = click.Path(path_type=Path, file_okay=not directory, dir_okay=directory)
     return click.option("-o", "--output", type=kind, callback=check, help=help_text, **kwargs)
+
+
+def not_a_picture(path: Path) -> str | None:
+    """Why ``path`` cannot name a picture (its suffix names no format tmpnav writes), or None."""
+    from tmpnav.report import figure_format, figure_suffixes
+
+    if figure_format(path.name) is None:
+        return f"{path}: expected a picture file ending in {figure_suffixes()}"
+    return None
 
 
 @contextlib.contextmanager
@@ -110,6 +121,26 @@ def writing(output: Path) -> Iterator[None]:
     except OSError as err:
         target = err.filename or output
         raise OutputError(f"cannot write {target}: {err.strerror or err}") from None
+
+
+class FiniteRange(click.FloatRange):
+    """click's FloatRange without NaN and infinities: NaN compares false with every bound,
+    so FloatRange let ``--pair-min-gain nan`` through (and it dropped every paired move)."""
+
+    name = "finite float range"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        number = click.FLOAT.convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return super().convert(number, param, ctx)
+
+
+def timeout_range() -> FiniteRange:
+    """Seconds: more than 0, at most the scenario format's limit (planner.timeout)."""
+    from tmpnav.scenario.format import MAX_TIMEOUT
+
+    return FiniteRange(min=0, min_open=True, max=MAX_TIMEOUT)
 
 
 def encoding_choice() -> click.Choice:
@@ -129,9 +160,7 @@ def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
             metavar="NAME",
             help="unified-planning engine (overrides planner.name), e.g. enhsp-blind (default), enhsp-opt, enhsp.",
         ),
-        click.option(
-            "--timeout", type=click.FloatRange(min=0, min_open=True), metavar="S", help="Planner time limit in seconds."
-        ),
+        click.option("--timeout", type=timeout_range(), metavar="S", help="Planner time limit in seconds."),
         click.option(
             "--search",
             type=click.Choice(list(SEARCHES)),
@@ -140,7 +169,7 @@ def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
         ),
         click.option(
             "--time-budget",
-            type=click.FloatRange(min=0, min_open=True),
+            type=timeout_range(),
             metavar="S",
             help="Anytime search: seconds to improve the plan (default 60, or planner.time_budget).",
         ),
@@ -151,7 +180,7 @@ def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
         ),
         click.option(
             "--pair-min-gain",
-            type=click.FloatRange(0, 1),
+            type=FiniteRange(0, 1),
             metavar="G",
             help="Mixed encoding: minimum relative saving of a paired move.",
         ),

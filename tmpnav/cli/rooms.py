@@ -7,17 +7,21 @@ from pathlib import Path
 import click
 
 from tmpnav.cli.commands import cli
-from tmpnav.cli.options import report_errors, unwritable, writing
+from tmpnav.cli.options import FiniteRange, report_errors, unwritable, writing
 
 
 def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path, ...]) -> dict[str, Path]:
-    """``-o`` of ``tmpnav rooms``: at most one .yaml scenario and one .png picture, writable."""
-    kinds = {".yaml": "scenario", ".yml": "scenario", ".png": "picture"}
+    """``-o`` of ``tmpnav rooms``: at most one .yaml scenario and one picture (.png, .svg,
+    ...: see tmpnav.report.FIGURE_FORMATS), writable."""
+    from tmpnav.report import figure_format, figure_suffixes
+
     out: dict[str, Path] = {}
     for path in value:
-        kind = kinds.get(path.suffix.lower())
-        if kind is None:
-            raise click.BadParameter(f"{path}: expected a .yaml scenario or a .png picture", ctx=ctx, param=param)
+        kind = "scenario" if path.suffix.lower() in (".yaml", ".yml") else "picture"
+        if kind == "picture" and figure_format(path.name) is None:
+            raise click.BadParameter(
+                f"{path}: expected a .yaml scenario or a picture ({figure_suffixes()})", ctx=ctx, param=param
+            )
         if kind in out:
             raise click.BadParameter(f"{path}: a {kind} is written once ({out[kind]})", ctx=ctx, param=param)
         if why := unwritable(path, False):
@@ -35,11 +39,12 @@ def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path
     multiple=True,
     type=click.Path(path_type=Path, dir_okay=False),
     callback=_rooms_outputs,
-    help="scenario.yaml to write (default: print it), and/or rooms.png: the segmentation over the map.",
+    help="scenario.yaml to write (default: print it), and/or a picture (rooms.png, .svg, .pdf, ...): the "
+    "segmentation over the map.",
 )
 @click.option(
     "--min-area",
-    type=click.FloatRange(min=0, min_open=True),
+    type=FiniteRange(min=0, min_open=True),
     default=3.0,
     show_default=True,
     metavar="M2",

@@ -6,8 +6,10 @@ optional dependency (``pip install tmpnav[ray]``) and is imported only here.
 
 Local workers never outlive the process that started them, however it ends: on Linux the
 operating system kills them when it dies (``PR_SET_PDEATHSIG``, SIGKILL included), elsewhere a
-watchdog thread in each worker notices that its parent is gone; SIGTERM and Ctrl-C in the
-parent terminate them before it exits.
+watchdog thread in each worker notices that its parent is gone. An exception in the parent
+while they compute (Ctrl-C's KeyboardInterrupt, the command line's SIGTERM,
+tmpnav.lifetime.Terminated) terminates them before it propagates. No signal handler here:
+one that shut the pool down could run while the interrupted code held the pool's lock.
 """
 
 from __future__ import annotations
@@ -23,10 +25,10 @@ import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
-from types import FrameType
 from typing import Any
 
 from tmpnav.errors import InputError
+from tmpnav.lifetime import signals_held
 from tmpnav.oracle.evaluate import EvalStats, Request, evaluate
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.types import MotionResult, Roadmap, Scenario
@@ -146,9 +148,11 @@ def _watch_parent(parent: int) -> None:
 
 def _init_worker(ctx: OracleContext, parent: int) -> None:
     global _WORKER_CTX
-    _die_with_parent(parent)
+    # a SIGTERM handler the parent had came along with the fork: a worker just ends
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     # Ctrl-C is the parent's business (it cancels the pool); workers stay quiet
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _die_with_parent(parent)
     _WORKER_CTX = ctx
 
 
@@ -161,9 +165,7 @@ class ProcessExecutor:
     """Local worker processes (``--workers N``); the context is sent once per worker.
 
     The pool lives until :meth:`close`, so the nominal motions a worker computed for one
-    wave of requests (singles, then pairs) are still in its memory for the next. While it
-    lives, SIGTERM terminates the workers first and then ends this process as SIGTERM
-    would have (the handler is installed only from the main thread).
+    wave of requests (singles, then pairs) are still in its memory for the next.
     """
 
     name = "processes"
@@ -172,8 +174,6 @@ class ProcessExecutor:
         self.workers = workers
         self._pool: ProcessPoolExecutor | None = None
         self._ctx: OracleContext | None = None
-        self._previous_sigterm: Any = None  # the handler ours replaced, while ours is installed
-        self._sigterm_installed = False
 
     def _get_pool(self, ctx: OracleContext) -> ProcessPoolExecutor:
         if self._pool is None or self._ctx is not ctx:
@@ -184,7 +184,6 @@ class ProcessExecutor:
                 self.workers, mp_context=mp, initializer=_init_worker, initargs=(ctx, os.getpid())
             )
             self._ctx = ctx
-            self._install_sigterm()
         return self._pool
 
     def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome:
@@ -193,8 +192,10 @@ class ProcessExecutor:
             return SerialExecutor().run(ctx, requests, progress)
         pool = self._get_pool(ctx)
         try:
+            with signals_held():  # the first blocks fork the workers
+                results = pool.map(_work, todo)
             parts = []
-            for k, part in enumerate(pool.map(_work, todo)):
+            for k, part in enumerate(results):
                 parts.append(part)
                 if progress:
                     progress(k + 1, len(todo))
@@ -203,29 +204,9 @@ class ProcessExecutor:
             raise
         return _merge(parts, order)
 
-    def _install_sigterm(self) -> None:
-        """Route SIGTERM through :meth:`_on_sigterm` (only the main thread may, and a
-        process that ignores SIGTERM keeps ignoring it)."""
-        if threading.current_thread() is not threading.main_thread():
-            return
-        if signal.getsignal(signal.SIGTERM) is signal.SIG_IGN:
-            return
-        self._previous_sigterm = signal.signal(signal.SIGTERM, self._on_sigterm)
-        self._sigterm_installed = True
-
-    def _on_sigterm(self, signum: int, frame: FrameType | None) -> None:
-        previous = self._previous_sigterm
-        self._terminate()  # also puts the previous handler back
-        if callable(previous):
-            previous(signum, frame)
-        else:  # the default action: end this process, reported as killed by SIGTERM
-            signal.signal(signal.SIGTERM, signal.SIG_DFL)
-            os.kill(os.getpid(), signum)
-
     def _terminate(self) -> None:
         """Stop the workers now (cancelling queued blocks) and reap them."""
         pool, self._pool = self._pool, None
-        self._restore_sigterm()
         if pool is None:
             return
         # ProcessPoolExecutor has no public way to stop running tasks before Python 3.14
@@ -240,17 +221,10 @@ class ProcessExecutor:
                 if process.is_alive():
                     process.kill()
 
-    def _restore_sigterm(self) -> None:
-        if self._sigterm_installed and threading.current_thread() is threading.main_thread():
-            previous = self._previous_sigterm
-            signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
-            self._sigterm_installed, self._previous_sigterm = False, None
-
     def close(self) -> None:
         if self._pool is not None:
             self._pool.shutdown()
             self._pool = None
-        self._restore_sigterm()
 
 
 class RayExecutor:

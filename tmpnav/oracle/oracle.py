@@ -9,12 +9,33 @@ from typing import Any
 
 import numpy as np
 
-from tmpnav.errors import InputError
+from tmpnav.errors import InputError, Problem, RoadmapError, ScenarioError
 from tmpnav.oracle.cache import NullCache
 from tmpnav.oracle.evaluate import EvalStats, Request
 from tmpnav.oracle.executors import OracleContext, Progress, SerialExecutor
 from tmpnav.oracle.keys import context_digest, from_json, request_key, to_json
-from tmpnav.types import MotionResult
+from tmpnav.roadmap.reach import roadmap_cuts
+from tmpnav.scenario import display_path
+from tmpnav.scenario.extent import plan_sizes
+from tmpnav.types import MotionResult, Scenario
+
+
+def check_plan_sizes(scenario: Scenario) -> None:
+    """Raise ScenarioError when goal rooms x robots or the cost table's estimated entries
+    pass their caps (tmpnav.scenario.limits) for this scenario, overrides included."""
+    file = display_path(scenario.source)
+    problems = [Problem(file, path, message, scenario.line_of(path)) for path, message in plan_sizes(scenario)]
+    if problems:
+        raise ScenarioError(problems)
+
+
+def check_reachable(ctx: OracleContext) -> None:
+    """Raise RoadmapError (exit 2) when the roadmap cuts a goal room off from the robot that
+    must visit it though free space joins them, instead of costing every move and hearing
+    "no plan" from ENHSP."""
+    why = roadmap_cuts(ctx.scenario, ctx.world, ctx.roadmap)
+    if why is not None:
+        raise RoadmapError(why)
 
 
 @dataclass
@@ -40,12 +61,25 @@ class OracleStats:
 
 
 class Oracle:
-    """Evaluates actions (see :mod:`tmpnav.oracle.evaluate`) with caching and parallelism."""
+    """Evaluates actions (see :mod:`tmpnav.oracle.evaluate`) with caching and parallelism.
+
+    Refuses a scenario whose cost table would pass the resource caps (ScenarioError), or
+    whose goals the roadmap cannot serve (RoadmapError), before it computes anything. The
+    scenario it is given is the one in force, with the command line's encoding and goals
+    (``plan --encoding mixed``, the bench's goal draws), which validation never saw.
+    """
 
     def __init__(self, ctx: OracleContext, cache: Any = None, executor: Any = None, progress: Progress | None = None):
         self.ctx = ctx
         self.cache = cache if cache is not None else NullCache()
         self.executor = executor if executor is not None else SerialExecutor()
+        try:
+            check_plan_sizes(ctx.scenario)
+            check_reachable(ctx)
+        except InputError:
+            self.executor.close()
+            self.cache.close()
+            raise
         self.progress = progress
         self.context = context_digest(ctx.scenario, ctx.world, ctx.roadmap)
         self.stats = OracleStats()

@@ -18,6 +18,8 @@ from matplotlib.patches import Ellipse, Polygon
 from numpy.typing import NDArray
 
 from tmpnav.atomic import write_file
+from tmpnav.errors import OutputError
+from tmpnav.report import figure_format, figure_suffixes
 from tmpnav.types import Roadmap, RosMap, Scenario
 from tmpnav.world import World
 from tmpnav.world.grid import OccupancyGrid
@@ -218,17 +220,22 @@ def step_badge(ax: Axes, xy: tuple[float, float], text: str, color: str, offset:
     )
 
 
-def render(fig: Figure, path: Path, dpi: int = 110) -> None:
-    """Write the figure as a PNG to ``path`` (a temporary file of :mod:`tmpnav.atomic`) and close it."""
+def render(fig: Figure, path: Path, dpi: int = 110, fmt: str = "png") -> None:
+    """Write the figure in format ``fmt`` to ``path`` (a temporary file of :mod:`tmpnav.atomic`,
+    whose suffix says nothing) and close it."""
     try:
-        fig.savefig(path, dpi=dpi, bbox_inches="tight", format="png")
+        fig.savefig(path, dpi=dpi, bbox_inches="tight", format=fmt)
     finally:
         plt.close(fig)
 
 
 def save(fig: Figure, path: Path, dpi: int = 110) -> None:
-    """Write the figure to ``path`` atomically (all or nothing) and close it."""
+    """Write the figure to ``path`` atomically (all or nothing), in the format its suffix
+    names (``world.svg`` is an SVG, see FIGURE_FORMATS), and close it."""
     try:
-        write_file(path, lambda tmp: render(fig, tmp, dpi))
+        fmt = figure_format(Path(path).name)
+        if fmt is None:
+            raise OutputError(f"cannot write {path}: expected a picture file ending in {figure_suffixes()}")
+        write_file(path, lambda tmp: render(fig, tmp, dpi, fmt))
     finally:
         plt.close(fig)

@@ -8,6 +8,7 @@ while writing leaves the files of the earlier run as they were.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -25,15 +26,20 @@ PLAN_JSON = "plan.json"
 PLAN_PNG = "plan.png"
 
 
-def write_outputs(report: PlanReport, out_dir: Path, pddl: tuple[str, str] | None) -> list[Path]:
+def write_outputs(
+    report: PlanReport, out_dir: Path, pddl: tuple[str, str] | None, extra: Mapping[str, Content] | None = None
+) -> list[Path]:
     """Write plan.json, plan.png and, when ``pddl`` = (domain, problem) is given, domain.pddl and
-    problem.pddl into ``out_dir`` (created if missing). Returns the paths written, in that order."""
+    problem.pddl into ``out_dir`` (created if missing), with the ``extra`` files (names
+    relative to ``out_dir``: ``nav2/r1.csv``) in the same group. Returns the paths written,
+    in that order."""
     contents: dict[str, Content] = {
         PLAN_JSON: dumps(plan_document(report)),
         PLAN_PNG: lambda tmp: fg.render(plan_figure(report), tmp),
     }
     if pddl is not None:
         contents.update(zip(PDDL_FILES, pddl, strict=True))
+    contents.update(extra or {})
     return write_files(out_dir, contents)
 
 

@@ -122,9 +122,9 @@ def move_sizes(scenario: Scenario, width: float, height: float) -> list[Finding]
 def plan_sizes(scenario: Scenario) -> list[Finding]:
     """Goal rooms x robots and the estimated cost-table entries, against their caps.
 
-    Depends on the encoding and the goals: validation checks the scenario's own; a
-    caller that overrides them (``plan --encoding``, bench's goal draws) runs it again
-    on the overridden scenario.
+    Depends on the encoding and the goals: validation checks the scenario's own, and the
+    oracle checks the scenario in force (``plan --encoding``, the bench's goal draws)
+    before it lists a single move (tmpnav.oracle.oracle.check_plan_sizes).
     """
     goal_rooms = set(scenario.goals.visit)
     for _, rooms in scenario.goals.per_robot:

@@ -87,7 +87,7 @@ YAML_BYTES = Cap(
     "yaml_bytes",
     16_000_000,
     "bytes of YAML",
-    "a YAML file is read whole into memory before it is parsed",
+    "a YAML file is read whole into memory before it is parsed (a device or a pipe no further than the cap)",
 )
 YAML_NODES = Cap(
     "yaml_nodes",

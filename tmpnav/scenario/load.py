@@ -55,11 +55,7 @@ class YamlDoc:
         self.lines: dict[tuple[Any, ...], int] = {}
         self.duplicates: list[tuple[tuple[Any, ...], int]] = []
         try:
-            size = path.stat().st_size
-            if size > YAML_BYTES.value():
-                message = "is " + YAML_BYTES.refusal(size, "a YAML file this large is not a scenario or map file")
-                raise ScenarioError([Problem(self.name, "", message)])
-            text = path.read_text(encoding="utf-8")
+            text = self._read(path)
         except FileNotFoundError:
             raise ScenarioError([Problem(self.name, "", "file not found")]) from None
         except IsADirectoryError:
@@ -72,6 +68,22 @@ class YamlDoc:
             raise ScenarioError([Problem(self.name, "", _yaml_message(err), _yaml_line(err))]) from None
         if node is not None:
             self._index(node, ())
+
+    def _read(self, path: Path) -> str:
+        """The file's text, refused unread when larger than the yaml_bytes cap. A file whose
+        size says nothing (/dev/zero, a pipe) is read no further than the cap."""
+        cap = YAML_BYTES.value()
+        advice = "a YAML file this large is not a scenario or map file"
+        size = path.stat().st_size
+        if size > cap:
+            raise ScenarioError([Problem(self.name, "", "is " + YAML_BYTES.refusal(size, advice))])
+        with open(path, "rb") as fh:
+            data = fh.read(cap + 1)
+        if len(data) > cap:
+            raise ScenarioError(
+                [Problem(self.name, "", "is at least " + YAML_BYTES.refusal(len(data), advice, at_least=True))]
+            )
+        return data.decode("utf-8")
 
     def _index(self, node: yaml.Node, raw: tuple[Any, ...]) -> None:
         self.lines[raw] = node.start_mark.line + 1
@@ -172,11 +184,16 @@ def _ros_map(doc: YamlDoc, section: dict[str, Any]) -> tuple[RosMap | None, list
             Problem(
                 doc.name,
                 "map.ros",
-                f"{section['ros']!r}: map file not found ({display_path(map_path)})",
+                f"{section['ros']!r}: map file {_missing(map_path)} ({display_path(map_path)})",
                 doc.line(("map", "ros")),
             )
         ]
     return read_ros_map(map_path)
+
+
+def _missing(path: Path) -> str:
+    """Why a file named by a scenario is not there to read: not found, or not a file."""
+    return "is not a regular file" if path.exists() else "not found"
 
 
 def read_ros_map(map_path: Path) -> tuple[RosMap | None, list[Problem]]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from tmpnav.errors import EXIT_CODES
+from tmpnav.report import FIGURE_FORMATS
 from tmpnav.scenario.extent import MIN_RANGE_CAP
 from tmpnav.scenario.format import MAX_COORDINATE, MAX_ROOM_POINTS, ROS_MAP, SCENARIO
 from tmpnav.scenario.limits import CAPS, YAML_MAX_DEPTH
@@ -67,6 +68,10 @@ is refused the same way, with the estimate and the cap:
 keep a 2-core, 24 GB machine from running out of memory. Limits marked *fixed* are where
 the models stop meaning anything; they cannot be lifted.
 
+However a run ends (an error, Ctrl-C, SIGTERM, SIGKILL), no process it started outlives it
+(the oracle's workers, ENHSP's JVM: tmpnav/lifetime.py), and the files of its output folder
+are written all or nothing: a killed run leaves the earlier files as they were.
+
 This file is generated from the code (tmpnav/scenario/reference.py); a test keeps it in step.
 
 | exit code | when | limit | lift with |
@@ -90,6 +95,12 @@ FIXED_LIMITS = [
     ("cost weights `M_u`, `M_G`, `M_Sigma` (all zero, or one too large)", "one > 0, each ≤ 1e6"),
     ("a 16-bit ROS image in `raw` mode, or an image that is neither 8- nor 16-bit grey/colour", "8 or 16 bits"),
     ("other numeric ranges of the scenario format", "[scenario.md](scenario.md)"),
+    ("a number on the command line that is not finite (`--timeout nan`, `--pair-min-gain inf`)", "finite"),
+    (
+        "a picture to write (`show`, `roadmap`, `rooms -o`) whose suffix names no format",
+        ", ".join(f".{f}" for f in FIGURE_FORMATS),
+    ),
+    ("`planner.name` that names no installed planner (`validate`; `plan` exits with 4)", "installed engines"),
 ]
 
 

@@ -64,7 +64,8 @@ def read_image(spec: RosMap) -> np.ndarray:
     where = display_path(spec.yaml_path)
     image = display_path(spec.image_path)
     if not spec.image_path.is_file():
-        raise MapImageError(Problem(where, "image", f"image file not found: {image}"))
+        why = "is not a regular file" if spec.image_path.exists() else "not found"
+        raise MapImageError(Problem(where, "image", f"image file {why}: {image}"))
     try:
         with _own_size_cap(), Image.open(spec.image_path) as img:
             cols, rows = img.size

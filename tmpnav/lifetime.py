@@ -1,0 +1,184 @@
+"""No process outlives the tmpnav run that started it, however the run ends.
+
+A run starts processes whose start it does not control: ENHSP's JVM (unified-planning
+starts it in a session of its own, so neither Ctrl-C in the terminal nor a signal to
+tmpnav's process group reaches it), Ray's local instance, the bench's runs. When tmpnav
+ends by a signal it cannot catch (SIGKILL, the out-of-memory killer), or by one it can
+but while the JVM runs, nothing in tmpnav is left to stop them: the JVM searched on,
+holding hundreds of MB, until its own time limit.
+
+So the command line marks each run (:func:`guard`): an environment variable holding a
+token of the run, which every program it starts inherits, and a small sentinel process,
+started first, in a session of its own (signals to tmpnav's process group leave it
+alone). Linux tells the sentinel when the run's process ends, whatever the cause (the
+parent-death signal); the sentinel then kills every process that still carries the
+run's token, and exits. After a normal end there are none, and it exits at once. The
+oracle's forked workers do not exec, so they keep the environment tmpnav started with:
+they end with tmpnav by their own parent-death signal (tmpnav.oracle.executors).
+
+SIGTERM becomes :class:`Terminated`, raised in the main thread like Ctrl-C's
+KeyboardInterrupt, so that a terminated run cleans up as an interrupted one does (the
+oracle's workers stopped, temporary output files removed, the earlier outputs kept).
+The cleanup is bounded: a second SIGTERM, or CLEANUP_SECONDS after the first, ends the
+process at once. Forked children (the oracle's workers) start with SIGTERM's default.
+
+The sentinel needs Linux (prctl and /proc); elsewhere :func:`guard` only handles SIGTERM.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import secrets
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from types import FrameType
+
+#: the environment variable that marks the processes of a run
+ENV = "TMPNAV_RUN"
+#: prctl(2) option: the signal a process gets when its parent ends (Linux)
+PR_SET_PDEATHSIG = 1
+#: the sentinel learns of the run's end by this signal (blocked, then waited for)
+DEATH_SIGNAL = signal.SIGUSR1
+#: seconds a terminated run may take to clean up before it ends regardless
+CLEANUP_SECONDS = 10.0
+
+_sentinel: subprocess.Popen[bytes] | None = None
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived: end the run as Ctrl-C would, then end as terminated by SIGTERM.
+
+    A BaseException, like KeyboardInterrupt and SystemExit, so that ``except Exception``
+    does not swallow it."""
+
+
+def guard() -> None:
+    """Mark this process as a run: SIGTERM raises :class:`Terminated`, and (on Linux) a
+    sentinel ends the processes the run started once the run's process ends.
+
+    For command-line entry points, called first, before any thread starts; once per process.
+    """
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:  # a process told to ignore SIGTERM keeps ignoring it
+        signal.signal(signal.SIGTERM, _raise_terminated)
+        os.register_at_fork(after_in_child=_default_sigterm)
+    _start_sentinel()
+
+
+def _raise_terminated(signum: int, frame: FrameType | None) -> None:
+    """The first SIGTERM: unwind (Terminated), within CLEANUP_SECONDS; the next one kills."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    timer = threading.Timer(CLEANUP_SECONDS, os.kill, (os.getpid(), signal.SIGTERM))
+    timer.daemon = True
+    timer.start()
+    raise Terminated()
+
+
+def _default_sigterm() -> None:
+    with contextlib.suppress(ValueError):  # not the main thread: cannot happen after fork
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def end_as_terminated() -> None:
+    """End this process as SIGTERM's default action does (its parent sees "killed by SIGTERM")."""
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    os.kill(os.getpid(), signal.SIGTERM)
+    time.sleep(5)  # the signal is delivered at once; never reached in practice
+    os._exit(128 + signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM while this thread forks: CPython runs its at-fork handlers
+    (logging's, threading's) right after fork(), and KeyboardInterrupt or Terminated raised
+    in one of them is printed as "Exception ignored" and lost; the run went on to its end.
+    Held, a signal is delivered when the block ends, to ordinary code."""
+    held = {signal.SIGINT, signal.SIGTERM}
+    if threading.current_thread() is not threading.main_thread():
+        yield  # Python runs signal handlers in the main thread only
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _start_sentinel() -> None:
+    global _sentinel
+    if _sentinel is not None or not sys.platform.startswith("linux") or not Path("/proc/self/environ").exists():
+        return
+    token = f"{os.getpid()}-{secrets.token_hex(8)}"
+    try:
+        # no pre-exec function: Python code between fork and exec can hang on a lock that
+        # another thread (numpy's BLAS pool, started at import) held at the fork
+        _sentinel = subprocess.Popen(
+            [sys.executable, "-m", "tmpnav.lifetime", token, str(os.getpid())],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            close_fds=True,
+            start_new_session=True,
+        )
+    except OSError:  # no sentinel (no memory, no processes left): the run goes on unguarded
+        return
+    os.environ[ENV] = token  # after the sentinel started: it does not carry the token itself
+
+
+def carriers(token: str) -> Iterator[int]:
+    """The processes (other than this one) whose environment holds the run's ``token``.
+
+    /proc/PID/environ is the environment a process was started with; processes of other
+    users cannot be read and are never ours."""
+    entry = f"{ENV}={token}".encode()
+    me = os.getpid()
+    for name in os.listdir("/proc"):
+        if not name.isdigit() or int(name) == me:
+            continue
+        try:
+            with open(f"/proc/{name}/environ", "rb") as fh:
+                environment = fh.read()
+        except OSError:
+            continue
+        if entry in environment.split(b"\0"):
+            yield int(name)
+
+
+def end_carriers(token: str, rounds: int = 20) -> int:
+    """Kill every process that carries ``token``, again until none is left (a process may
+    start another while it is being killed); returns how many were killed."""
+    killed = 0
+    for _ in range(rounds):
+        found = list(carriers(token))
+        if not found:
+            break
+        for pid in found:
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.kill(pid, signal.SIGKILL)
+                killed += 1
+        time.sleep(0.05)
+    return killed
+
+
+def _sentinel_main(token: str, parent: int) -> None:
+    """Wait for the run's process to end, then end what it left running.
+
+    The death signal is blocked first (it is waited for, and must not end the sentinel
+    before), then asked for from the kernel for when the parent ends."""
+    for sig in (signal.SIGINT, signal.SIGHUP, signal.SIGQUIT):
+        signal.signal(sig, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_SETMASK, {DEATH_SIGNAL})
+    ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, DEATH_SIGNAL, 0, 0, 0)
+    if os.getppid() == parent:  # else the run ended before the kernel was asked to tell us
+        signal.sigwait({DEATH_SIGNAL})
+    end_carriers(token)
+
+
+if __name__ == "__main__":
+    _sentinel_main(sys.argv[1], int(sys.argv[2]))
