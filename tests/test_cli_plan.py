@@ -101,11 +101,6 @@ def test_a_roadmap_that_cuts_a_goal_off_its_robot_is_bad_input_not_unsolvable(tm
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason="task layer: the paper encoding writes pairs missing from the cost table as free joint actions "
-    "(tests/fuzz/RESULTS.md, last row); remove this mark with the fix",
-)
 def test_the_paper_encoding_offers_no_pair_the_oracle_could_not_cost(tmp_path: Path) -> None:
     """Found by `make fuzz`: with one pose instantiation per room the oracle cannot put
     both robots in room B at once, the table has no cost for that pair, and the paper

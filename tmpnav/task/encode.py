@@ -144,14 +144,18 @@ class ProblemBuilder:
             self.problem.set_initial_value(move_cost(*args), cost((r, origin, dest)))
 
     def set_pair_costs(self, values: dict[tuple[str, ...], int]) -> None:
-        """``pair-cost`` for every combination of its six arguments (0 where the moves do not
-        exist; can_move keeps those actions out): this is the size that makes the paper's
-        encoding slow with many robots."""
+        """``pair-cost`` for every combination of its six arguments: the pair's cost, or
+        where the oracle has none (both robots would end on one pose) a cost above every plan
+        that avoids it, so the optimal search never takes it. This full grounding is the
+        size that makes the paper's encoding slow with many robots (a static predicate
+        naming the pairs that exist would be exact, but ENHSP's grounder runs out of memory
+        on a six-argument predicate)."""
         pair_cost = self.problem.fluent("pair-cost")
         robots, locs = self.robots, self.locs
+        never = sum(values.values()) + 1
         for r1, f1, t1, r2, f2, t2 in itertools.product(robots, locs, locs, robots, locs, locs):
             args = (robots[r1], locs[f1], locs[t1], robots[r2], locs[f2], locs[t2])
-            self.problem.set_initial_value(pair_cost(*args), values.get((r1, f1, t1, r2, f2, t2), 0))
+            self.problem.set_initial_value(pair_cost(*args), values.get((r1, f1, t1, r2, f2, t2), never))
 
     def add_pair_action(self, m1: MoveKey, m2: MoveKey, cost: int) -> None:
         """One grounded action moving two robots together, with goto_room's entry rules."""

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+from tmpnav.errors import UnsolvableError
 from tmpnav.results import BoundSummary, SearchSummary, StageTimes, TaskCounts, TaskResult
 from tmpnav.task.bound import Bound
 from tmpnav.task.decode import canonical_order, step_cost
@@ -72,11 +73,17 @@ def plan_task(
         encoded = task.encode()
     with times.timed("planner"):
         solved = encoded.solve(task.planner.name, task.planner.timeout)
+    steps = tuple(encoded.decode(solved))
+    if any(len(step) == 2 and step not in task.table.pair and step[::-1] not in task.table.pair for step in steps):
+        raise UnsolvableError(
+            "no plan of the paper's encoding avoids a pair of moves the oracle cannot make "
+            "(both robots would end on one pose instantiation): use --encoding mixed, or more roadmap.instantiations"
+        )
     memo = Memo(
         status=solved.status,
         engine=solved.engine,
         actions=solved.actions,
-        steps=tuple(encoded.decode(solved)),
+        steps=steps,
         sizes=(encoded.n_actions, len(encoded.pair_actions), len(encoded.potentials)),
     )
     if store is not None and key is not None:
