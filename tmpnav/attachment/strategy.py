@@ -17,6 +17,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 from tmpnav.attachment.canonical import CanonicalCosts
@@ -121,7 +122,7 @@ def _search(
     progress: Progress | None,
 ) -> TaskResult:
     """The unfolded search (exact, carried costs) or the anytime search."""
-    sp, goals, oracle = scenario.planner, scenario.goals, canonical.oracle
+    sp, goals = scenario.planner, scenario.goals
     if mode == "exact":
         with times.timed("oracle"):
             graph = unfold(carried, goals, sp.pair_min_gain)
@@ -134,15 +135,59 @@ def _search(
                 f"the belief space of {len(goals.all_rooms)} goal rooms and {len(scenario.robots)} robots is too "
                 "large to unfold; plan it with --search anytime (or auto)"
             )
+    bound = lambda: certified_bound(scenario, canonical)  # noqa: E731
+    if sp.costs == "table":
+        return plan_anytime(canonical, goals, sp, bound, times, progress, "table")
+    return _carried_anytime(scenario, world, canonical, carried, store, replan, times, progress, bound)
+
+
+def _carried_anytime(
+    scenario: Scenario,
+    world: World,
+    canonical: CanonicalCosts,
+    carried: CarriedCosts,
+    store: EntryStore | None,
+    replan: bool,
+    times: StageTimes,
+    progress: Progress | None,
+    bound: Callable[[], Bound],
+) -> TaskResult:
+    """The anytime search with carried costs, in two phases: first with table costs (each
+    computed once and shared by every sub-problem) for up to half the budget, then with
+    carried costs from the cheapest of its plan, OR-Tools' routes and (where quick) the
+    exact plan of the table, every plan costed as executed."""
+    sp, goals = scenario.planner, scenario.goals
     seeds: dict[str, Plan] = {}
-    if sp.costs == "carried" and exact_fits(len(goals.all_rooms), len(scenario.robots), "table"):
-        table = full_table(scenario, world, oracle, times)
-        exact = plan_task(TaskProblem.of(scenario, table), store, replan, times)
-        seeds["the exact plan of the cost table"] = exact.steps
-    model = carried if sp.costs == "carried" else canonical
-    return plan_anytime(
-        model, goals, sp, lambda: certified_bound(scenario, canonical), times, progress, sp.costs, seeds
+    if exact_fits(len(goals.all_rooms), len(scenario.robots), "table"):
+        table = full_table(scenario, world, canonical.oracle, times)
+        seeds["the exact plan of the cost table"] = plan_task(
+            TaskProblem.of(scenario, table), store, replan, times
+        ).steps
+    left = sp.time_budget - sum(v for k, v in times.seconds.items() if k not in ("load", "total"))
+    labelled = _labelled(progress, "table costs")
+    first = plan_anytime(canonical, goals, sp, None, times, labelled, "table", budget=left / 2)
+    assert first.search is not None
+    seeds["the anytime search's plan with table costs"] = first.steps
+    task = plan_anytime(carried, goals, sp, bound, times, progress, "carried", seeds)
+    assert task.search is not None
+    search = replace(
+        task.search,
+        start=f"{task.search.start}; before it, the search with table costs: "
+        f"{first.search.subproblems} sub-problems, stopped: {first.search.stopped}",
+        subproblems=task.search.subproblems + first.search.subproblems,
     )
+    return replace(task, search=search)
+
+
+def _labelled(progress: Progress | None, label: str) -> Progress | None:
+    if progress is None:
+        return None
+    report = progress
+
+    def show(t: float, best: float, bound: float | None, what: str) -> None:
+        report(t, best, bound, f"{what}; {label}")
+
+    return show
 
 
 def _check_engine(planner: str) -> None:
