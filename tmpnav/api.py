@@ -23,6 +23,7 @@ problem of a scenario or map, ``PlannerError`` and its subclasses say how planni
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -138,6 +139,9 @@ def plan(
     timeout: float | None = None,
     pair_min_gain: float | None = None,
     mutual_observations: bool | None = None,
+    search: str | None = None,
+    time_budget: float | None = None,
+    costs: str | None = None,
     cache_dir: str | Path | None = None,
     use_cache: bool = True,
     workers: int | None = None,
@@ -148,18 +152,40 @@ def plan(
     from tmpnav.pipeline import PlanOptions
     from tmpnav.pipeline import plan as run
 
+    _check_choices(search=search, costs=costs, timeout=timeout, time_budget=time_budget, pair_min_gain=pair_min_gain)
     options = PlanOptions(
         encoding=encoding,
         planner=planner,
         timeout=timeout,
         pair_min_gain=pair_min_gain,
         mutual_observations=mutual_observations,
+        search=search,
+        time_budget=time_budget,
+        costs=costs,
         cache_dir=Path(cache_dir) if cache_dir is not None else None,
         use_cache=use_cache,
         workers=workers,
         executor=executor,
     )
     return PlanResult(run(_shipped_or(scenario), options))
+
+
+def _check_choices(**values: object) -> None:
+    """The keyword arguments of :func:`plan`, checked as the command line checks its options."""
+    from tmpnav.errors import InputError
+    from tmpnav.task.modes import COSTS, SEARCHES
+
+    choices = {"search": SEARCHES, "costs": COSTS}
+    for name, value in values.items():
+        if value is None:
+            continue
+        if name in choices and value not in choices[name]:
+            raise InputError(f"plan(): {name}={value!r} is not one of {', '.join(choices[name])}")
+        if name not in choices:
+            number = value if isinstance(value, int | float) else math.nan
+            low_ok = number >= 0 if name == "pair_min_gain" else number > 0
+            if not (math.isfinite(number) and low_ok and (name != "pair_min_gain" or number <= 1)):
+                raise InputError(f"plan(): {name}={value!r} is not a finite number in its range")
 
 
 def export_nav2(plan_json: str | Path | dict[str, Any], directory: str | Path) -> list[Path]:
