@@ -220,8 +220,9 @@ def many_goal_rooms(rooms: int, robots: int) -> dict[str, Any]:
 @pytest.mark.parametrize(
     ("rooms", "robots", "message"),
     [
-        (200, 2, "goals: with the mixed encoding needs about 1,600,080,000 cost-table entries; the cap is 5,000,000 "
-         "(fewer goal rooms or robots, or the single encoding, or raise the cap: TMPNAV_MAX_TABLE_ENTRIES=1600080000)"),
+        (200, 2, "goals: with the mixed encoding and the exact search needs about 1,600,080,000 cost-table entries; "
+         "the cap is 5,000,000 (--search anytime, fewer goal rooms or robots, or the single encoding, or raise the cap: "
+         "TMPNAV_MAX_TABLE_ENTRIES=1600080000)"),
         (1700, 3, "goals: names 1700 goal rooms for 3 robots: 5,100 goal rooms x robots; the cap is 5,000 "
          "(fewer goal rooms or robots, or raise the cap: TMPNAV_MAX_GOAL_ASSIGNMENTS=5100)"),
     ],
@@ -230,9 +231,12 @@ def many_goal_rooms(rooms: int, robots: int) -> dict[str, Any]:
 def test_too_many_goal_rooms_are_refused_before_the_oracle(
     rooms: int, robots: int, message: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """Before: 200 goal rooms took 9.3 GB, then MemoryError after 85 s."""
+    """Before: 200 goal rooms took 9.3 GB, then MemoryError after 85 s (the exact search with
+    table costs lists every pair of moves first)."""
     monkeypatch.chdir(tmp_path)
-    write_yaml(tmp_path / "scenario.yaml", many_goal_rooms(rooms, robots))
+    doc = many_goal_rooms(rooms, robots)
+    doc["planner"] = {"costs": "table", "search": "exact"}
+    write_yaml(tmp_path / "scenario.yaml", doc)
     result = CliRunner().invoke(cli, ["validate", "scenario.yaml"])
     [problem] = reported(result.exit_code, result.stdout, result.stderr)
     assert problem.rest == message
@@ -247,13 +251,24 @@ def test_the_encoding_of_the_command_line_is_held_to_the_cap(tmp_path: Path) -> 
     doc["planner"] = {"encoding": "single"}
     write_yaml(tmp_path / "scenario.yaml", doc)
     assert run(["validate", "scenario.yaml"], tmp_path)[0] == 0
-    code, out, err, took = run(["plan", "scenario.yaml", "--encoding", "mixed", "--no-cache"], tmp_path, memory_gb=2.0)
+    command = ["plan", "scenario.yaml", "--encoding", "mixed", "--costs", "table", "--search", "exact", "--no-cache"]
+    code, out, err, took = run(command, tmp_path, memory_gb=2.0)
     [problem] = reported(code, out, err)
     assert problem.rest == (
-        "goals: with the mixed encoding needs about 100,020,000 cost-table entries; the cap is 5,000,000 (fewer "
-        "goal rooms or robots, or the single encoding, or raise the cap: TMPNAV_MAX_TABLE_ENTRIES=100020000)"
+        "goals: with the mixed encoding and the exact search needs about 100,020,000 cost-table entries; the cap is "
+        "5,000,000 (--search anytime, fewer goal rooms or robots, or the single encoding, or raise the cap: "
+        "TMPNAV_MAX_TABLE_ENTRIES=100020000)"
     )
     assert took < 60
+
+
+def test_the_anytime_search_takes_200_goal_rooms(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The searches other than the exact one with table costs cost paired moves only as they
+    need them: only the single moves count against the cap."""
+    monkeypatch.chdir(tmp_path)
+    write_yaml(tmp_path / "scenario.yaml", many_goal_rooms(200, 2))
+    result = CliRunner().invoke(cli, ["validate", "scenario.yaml"])
+    assert (result.exit_code, result.stderr) == (0, "")
 
 
 def test_60_rooms_and_8_robots_fit_the_goal_cap(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -117,7 +117,8 @@ TABLE_ENTRIES = Cap(
     "table_entries",
     5_000_000,
     "cost-table entries",
-    "the oracle lists every candidate move and pair of moves in memory, hundreds of bytes each",
+    "the exact search with table costs lists every candidate move and pair of moves in memory, hundreds of "
+    "bytes each (the other searches count their single moves only)",
 )
 
 #: every cap, in the order of docs/limits.md
