@@ -197,7 +197,7 @@ class PlannerOptions:
     timeout: float  # s
     pair_min_gain: float = 0.05  # mixed: minimum relative saving of a paired move
     search: str = "auto"  # exact | anytime | auto (tmpnav.task.stage)
-    time_budget: float = 60.0  # s, the anytime search's budget
+    time_budget: float | None = None  # s, the anytime search's budget for the run; None: by size
     costs: str = "carried"  # carried (the beliefs the robots carry; default) | table (canonical start states)
 
 

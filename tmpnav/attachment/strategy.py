@@ -32,7 +32,7 @@ from tmpnav.results import StageTimes, TaskResult
 from tmpnav.task.bound import Bound, lower_bound
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.memo import EntryStore
-from tmpnav.task.modes import exact_fits
+from tmpnav.task.modes import exact_fits, time_budget
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.search import Progress
 from tmpnav.task.solve import engine_class, reads_pddl_text
@@ -163,7 +163,8 @@ def _carried_anytime(
         seeds["the exact plan of the cost table"] = plan_task(
             TaskProblem.of(scenario, table), store, replan, times
         ).steps
-    left = sp.time_budget - sum(v for k, v in times.seconds.items() if k not in ("load", "total"))
+    whole = time_budget(len(goals.all_rooms), len(scenario.robots), sp.time_budget)
+    left = whole - sum(v for k, v in times.seconds.items() if k not in ("load", "total"))
     labelled = _labelled(progress, "table costs")
     first = plan_anytime(canonical, goals, sp, None, times, labelled, "table", budget=left / 2)
     assert first.search is not None

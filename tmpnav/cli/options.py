@@ -171,7 +171,8 @@ def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
             "--time-budget",
             type=timeout_range(),
             metavar="S",
-            help="Anytime search: seconds to improve the plan (default 60, or planner.time_budget).",
+            help="Anytime search: seconds for the whole run (default: planner.time_budget, or 0.25 s per goal "
+            "room and robot, 10-180 s).",
         ),
         click.option(
             "--costs",

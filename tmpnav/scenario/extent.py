@@ -153,7 +153,9 @@ def plan_sizes(scenario: Scenario) -> list[Finding]:
             (
                 "goals",
                 f"with the {encoding} encoding and the exact search needs about "
-                + TABLE_ENTRIES.refusal(entries, "--search anytime, fewer goal rooms or robots, or the single encoding"),
+                + TABLE_ENTRIES.refusal(
+                    entries, "--search anytime, fewer goal rooms or robots, or the single encoding"
+                ),
             )
         ]
     return []

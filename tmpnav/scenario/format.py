@@ -363,8 +363,8 @@ PLANNER = Section(
         ),
         "time_budget": Field(
             Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
-            "anytime search: time budget; it stops earlier when the plan is proved optimal or no neighbourhood improves it",
-            default=60.0,
+            "anytime search: time budget for the whole run; it stops earlier when the plan is proved optimal or no neighbourhood improves it (default: 0.25 s per goal room and robot, from 10 s to 180 s)",
+            default=None,
         ),
         "costs": Field(
             Choice(choices=COSTS_CHOICES),

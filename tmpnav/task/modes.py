@@ -29,3 +29,17 @@ def exact_fits(rooms: int, robots: int, costs: str = "table") -> bool:
     if costs == "carried":
         return any(rooms <= n and robots <= r for n, r in EXACT_CARRIED)
     return rooms <= EXACT_ROOMS and rooms * robots <= 2 * EXACT_ROOMS
+
+
+#: the default time budget of the anytime search: this many seconds per goal room and robot,
+#: clamped (20 rooms and 2 robots: 10 s; 40 and 4: 40 s; 60 and 8: 120 s)
+BUDGET_PER_ROOM_ROBOT = 0.25
+BUDGET_RANGE = (10.0, 180.0)
+
+
+def time_budget(rooms: int, robots: int, given: float | None) -> float:
+    """The anytime search's budget for a run: ``given``, or by the problem's size."""
+    if given is not None:
+        return given
+    low, high = BUDGET_RANGE
+    return min(high, max(low, BUDGET_PER_ROOM_ROBOT * rooms * robots))

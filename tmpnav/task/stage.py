@@ -22,6 +22,7 @@ from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import EncodedTask, encode_task
 from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
 from tmpnav.task.model import CostModel
+from tmpnav.task.modes import time_budget
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.search import Progress, SearchOptions, search
 from tmpnav.task.unfolded import BeliefGraph, write_unfolded
@@ -140,7 +141,8 @@ def plan_anytime(
     """The anytime search's plan (:mod:`tmpnav.task.search`) on ``model``, with a certified
     lower bound on every plan's cost (``bound``, computed before the search starts).
 
-    ``budget``: seconds for the search (default: ``planner.time_budget`` less the time the
+    ``budget``: seconds for the search (default: ``planner.time_budget``, or by the
+    problem's size (:func:`tmpnav.task.modes.time_budget`), less the time the
     run has spent so far, as ``times`` counts it, so the budget holds for the whole run)."""
     times = times if times is not None else StageTimes()
     proof = None
@@ -148,7 +150,8 @@ def plan_anytime(
         with times.timed("bound"):
             proof = bound()
     if budget is None:
-        budget = planner.time_budget - sum(v for k, v in times.seconds.items() if k not in ("load", "total"))
+        whole = time_budget(len(goals.all_rooms), len(model.robots), planner.time_budget)
+        budget = whole - sum(v for k, v in times.seconds.items() if k not in ("load", "total"))
     options = SearchOptions(
         planner=planner.name if planner.name.startswith("enhsp") else "enhsp-blind",
         encoding=planner.encoding if planner.encoding in ("single", "mixed") else "mixed",
