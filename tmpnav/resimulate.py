@@ -14,7 +14,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from tmpnav.attachment.carried import CarriedCosts, Team, _belief
+from tmpnav.attachment.carried import CarriedCosts
+from tmpnav.attachment.team import Team, belief_step
 from tmpnav.errors import TmpnavError
 from tmpnav.types import Belief, CostTerms, MoveKey, PlannedAction, TrajectoryStep
 
@@ -43,7 +44,7 @@ def resimulate(
     """Run the plan's actions in order on the team's joint belief."""
     team: Team = carried.start
     trajectories = {
-        r: [_belief(0.0, team.mean, team.cov, i, team.node[i])] for i, r in enumerate(team.names)
+        r: [belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i, r in enumerate(team.names)
     }
     terms: dict[str, list[CostTerms]] = {r: [] for r in team.names}
     actions: list[PlannedAction] = []

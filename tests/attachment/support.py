@@ -6,7 +6,8 @@ import math
 from dataclasses import replace
 
 from tmpnav.attachment.canonical import CanonicalCosts
-from tmpnav.attachment.carried import CarriedCosts, Team
+from tmpnav.attachment.carried import CarriedCosts
+from tmpnav.attachment.team import Team
 from tmpnav.oracle.executors import OracleContext
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.pipeline import load_world

@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from tests.attachment.support import carried_problem
-from tmpnav.attachment.carried import CarriedCosts, Team, _mutual, _stationary
+from tmpnav.attachment.carried import CarriedCosts
+from tmpnav.attachment.team import Team, mutual_sensing, stationary
 from tmpnav.oracle.motionsets import trajectory
 from tmpnav.resimulate import resimulate
 from tmpnav.task.plans import Plan
@@ -39,10 +40,10 @@ def full_team_step(carried: CarriedCosts, team: Team, step: tuple) -> tuple[floa
         if r in robots:
             motions.append(lib.motion(r, team.node[j], team.heading[j], result.goal_nodes[robots.index(r)]))
         else:
-            motions.append(_stationary(lib, r, team.node[j], team.heading[j]))
+            motions.append(stationary(lib, r, team.node[j], team.heading[j]))
     h = max(m.n_steps for m in motions)
     idx = [team.names.index(r) for r in robots]
-    mvis, noise = _mutual(lib, motions, idx, robots, request.starts, h)
+    mvis, noise = mutual_sensing(lib, motions, idx, robots, request.starts, h)
     run = trajectory(lib, motions, team.mean, team.cov, mvis, noise)
     cost = sum(run.terms[i].total(carried.scenario.cost) for i in idx)
     node = tuple(m.path[-1] for m in motions)

@@ -220,9 +220,9 @@ def many_goal_rooms(rooms: int, robots: int) -> dict[str, Any]:
 @pytest.mark.parametrize(
     ("rooms", "robots", "message"),
     [
-        (200, 2, "goals: with the mixed encoding and the exact search needs about 1,600,080,000 cost-table entries; "
-         "the cap is 5,000,000 (--search anytime, fewer goal rooms or robots, or the single encoding, or raise the cap: "
-         "TMPNAV_MAX_TABLE_ENTRIES=1600080000)"),
+        (200, 2, "goals: with the mixed encoding and the exact search needs about 1,600,080,000 cost-table "
+         "entries; the cap is 5,000,000 (--search anytime, fewer goal rooms or robots, or the single encoding, "
+         "or raise the cap: TMPNAV_MAX_TABLE_ENTRIES=1600080000)"),
         (1700, 3, "goals: names 1700 goal rooms for 3 robots: 5,100 goal rooms x robots; the cap is 5,000 "
          "(fewer goal rooms or robots, or raise the cap: TMPNAV_MAX_GOAL_ASSIGNMENTS=5100)"),
     ],

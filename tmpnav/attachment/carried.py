@@ -39,75 +39,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from tmpnav.attachment.canonical import CanonicalCosts, _offered, _ordered
+from tmpnav.attachment.team import Team, belief_step, mutual_sensing, stationary
 from tmpnav.errors import TmpnavError
 from tmpnav.oracle.executors import library
-from tmpnav.oracle.motions import MotionLibrary, NominalMotion
 from tmpnav.oracle.motionsets import trajectory
 from tmpnav.oracle.oracle import Oracle
-from tmpnav.oracle.requests import Request, StartState, mutual_seed
+from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import arrival_state
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.model import PlanCost, sub_moves
 from tmpnav.task.plans import Plan, Step
-from tmpnav.types import CostTable, CostTerms, Goals, MotionResult, MoveKey, Scenario, TrajectoryStep, cov3, vec3
-from tmpnav.world.visibility import MutualSensing
-
-
-@dataclass(frozen=True, eq=False)
-class Team:
-    """Where the robots are and what they believe, between two plan steps."""
-
-    names: tuple[str, ...]
-    node: tuple[int, ...]
-    heading: tuple[float, ...]
-    mean: np.ndarray  # (3N,) the team's joint belief
-    cov: np.ndarray  # (3N, 3N)
-    t: float = 0.0
-
-    @staticmethod
-    def at_start(lib: MotionLibrary, scenario: Scenario) -> Team:
-        names = tuple(r.name for r in scenario.robots)
-        cov = np.zeros((3 * len(names), 3 * len(names)))
-        for i, r in enumerate(names):
-            cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = scenario.robot(r).cov
-        return Team(
-            names,
-            tuple(lib.roadmap.starts[r] for r in names),
-            tuple(scenario.robot(r).pose.theta for r in names),
-            np.concatenate([scenario.robot(r).pose.as_array() for r in names]),
-            cov,
-        )
-
-    def cols(self, idx: Sequence[int]) -> np.ndarray:
-        return np.concatenate([np.arange(3 * i, 3 * i + 3) for i in idx]) if idx else np.zeros(0, dtype=int)
-
-    def start_state(self, i: int) -> StartState:
-        """Robot i's own state: its node, heading and marginal belief."""
-        return StartState(
-            self.node[i],
-            float(self.heading[i]),
-            vec3(self.mean[3 * i : 3 * i + 3]),
-            cov3(self.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]),
-        )
-
-    def request(self, robots: Sequence[str], rooms: Sequence[str]) -> Request:
-        """The oracle's request for ``robots`` moving into ``rooms`` from where they are,
-        their joint covariance included when earlier steps correlated them."""
-        idx = [self.names.index(r) for r in robots]
-        sub_cov = self.cov[np.ix_(self.cols(idx), self.cols(idx))]
-        correlated = len(idx) > 1 and bool(np.any(sub_cov[:3, 3:] != 0.0))
-        joint = tuple(tuple(float(v) for v in row) for row in sub_cov) if correlated else None
-        return Request(tuple(robots), tuple(self.start_state(i) for i in idx), tuple(rooms), joint)
-
-    def partners(self, idx: Sequence[int]) -> list[int]:
-        """``idx`` and every robot correlated with one of them, in team order."""
-        out = set(idx)
-        for i in idx:
-            block = self.cov[3 * i : 3 * i + 3]
-            for j in range(len(self.names)):
-                if j not in out and np.any(block[:, 3 * j : 3 * j + 3] != 0.0):
-                    out.add(j)
-        return sorted(out)
+from tmpnav.types import CostTable, CostTerms, Goals, MotionResult, MoveKey, TrajectoryStep, vec3
 
 
 @dataclass(frozen=True, eq=False)
@@ -285,10 +227,10 @@ class CarriedCosts:
                 assert m is not None  # the oracle just planned it
                 motions.append(m)
             else:
-                motions.append(_stationary(lib, team.names[j], team.node[j], team.heading[j]))
+                motions.append(stationary(lib, team.names[j], team.node[j], team.heading[j]))
         h = max(m.n_steps for m in motions)
         movers = [sub.index(j) for j in idx]
-        mvis, mu_noise = _mutual(lib, motions, movers, robots, request.starts, h)
+        mvis, mu_noise = mutual_sensing(lib, motions, movers, robots, request.starts, h)
         cols = team.cols(sub)
         run = trajectory(lib, motions, team.mean[cols], team.cov[np.ix_(cols, cols)], mvis, mu_noise)
         dt = self.scenario.models.dt
@@ -299,7 +241,7 @@ class CarriedCosts:
                 m = motions[s]
                 reached = dict(zip(m.node_steps.tolist(), m.path, strict=False))
                 trajectories[team.names[j]] = [
-                    _belief(team.t + q * dt, run.means[q], run.covs[q], s, reached.get(q)) for q in range(1, h + 1)
+                    belief_step(team.t + q * dt, run.means[q], run.covs[q], s, reached.get(q)) for q in range(1, h + 1)
                 ]
         self.steps_simulated += 1
         new = Team(
@@ -366,47 +308,3 @@ def _location(start: str, head: Plan, robot: str) -> str:
             if r == robot:
                 where = t
     return where
-
-
-def _stationary(lib: MotionLibrary, robot: str, node: int, heading: float) -> NominalMotion:
-    """A robot that stays put during a step: no steps, no observations."""
-    x, y = lib.roadmap.nodes[node]
-    return NominalMotion(
-        robot=robot,
-        path=(node,),
-        controls=np.zeros((0, 2)),
-        poses=np.array([[x, y, heading]]),
-        node_steps=np.zeros(1, dtype=int),
-        lm_visible=np.zeros((1, lib.world.landmark_xy.shape[0]), dtype=bool),
-        noise_seed=0,
-    )
-
-
-def _mutual(
-    lib: MotionLibrary,
-    motions: list[NominalMotion],
-    movers: list[int],
-    robots: tuple[str, ...],
-    starts: tuple[StartState, ...],
-    h: int,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Who sees whom among the moving robots, and the draws the oracle used for them."""
-    n = len(motions)
-    mvis = np.zeros((h + 1, n, n), dtype=bool)
-    mu_noise = np.zeros((h + 1, n, n, 2))
-    if len(movers) == 2:
-        a, b = movers
-        sensing = MutualSensing.between(lib.scenario, *robots)
-        if sensing is not None:
-            pa, pb = motions[a].padded(h)[1], motions[b].padded(h)[1]
-            mvis[:, a, b] = sensing.visible(lib.world, pa, pb)
-            mvis[:, b, a] = sensing.visible(lib.world, pb, pa)
-        draws = np.random.default_rng(mutual_seed(lib, robots, starts)).standard_normal((h + 1, 2, 2, 2))
-        mu_noise[:, a, b], mu_noise[:, b, a] = draws[:, 0, 1], draws[:, 1, 0]
-    return mvis, mu_noise
-
-
-def _belief(t: float, mean: np.ndarray, cov: np.ndarray, i: int, node: int | None) -> TrajectoryStep:
-    m = mean[3 * i : 3 * i + 3]
-    c = cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
-    return TrajectoryStep(t=round(float(t), 9), mean=vec3(m), cov=cov3(c), node=None if node is None else int(node))

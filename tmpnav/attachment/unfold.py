@@ -25,7 +25,8 @@ import hashlib
 import numpy as np
 
 from tmpnav.attachment.canonical import _offered
-from tmpnav.attachment.carried import CarriedCosts, Team
+from tmpnav.attachment.carried import CarriedCosts
+from tmpnav.attachment.team import Team
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.plans import Rules, State, Step
 from tmpnav.task.unfolded import BeliefGraph, Edge

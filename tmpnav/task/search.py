@@ -24,7 +24,6 @@ the plan space) says how far from optimal it can be.
 
 from __future__ import annotations
 
-import math
 import os
 import random
 import time
@@ -36,6 +35,7 @@ from tmpnav.errors import PlannerError
 from tmpnav.results import StageTimes
 from tmpnav.task.decode import canonical_order
 from tmpnav.task.model import CostModel, PlanCost
+from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.pddl_text import PddlTask, write_task
 from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_origins
 from tmpnav.task.routing import solve_routes
@@ -101,14 +101,6 @@ class _Sub:
     task: PddlTask
 
 
-@dataclass(frozen=True)
-class Neighbourhood:
-    robots: tuple[str, ...]
-    removed: frozenset[int]  # step indices opened
-    rooms: tuple[str, ...]  # rooms the opened moves of ``robots`` entered
-    ends: dict[str, str]  # robot -> where it must end (it has moves after its stretch)
-
-
 class AnytimeSearch:
     """One run of the anytime search on a cost model."""
 
@@ -129,7 +121,7 @@ class AnytimeSearch:
         self.rng = random.Random(options.seed)
         self.stats = SearchStats()
         self.t0 = time.perf_counter()
-        self.near: dict[str, dict[str, float]] = {}
+        self.near = Closeness(CostTable((), (), (), {}, {}, {}), model.start_location, model.robots)
         self.waypoints: tuple[str, ...] = ()
 
     def elapsed(self) -> float:
@@ -167,7 +159,7 @@ class AnytimeSearch:
         optimum, or the budget is spent."""
         with self.times.timed("oracle"):
             singles = self.model.singles(self.goals)
-        self._distances(singles)
+        self.near = Closeness(singles, self.model.start_location, self.model.robots)
         taken = set(self.goals.all_rooms) | set(self.model.start_location.values())
         self.waypoints = tuple(dict.fromkeys(t for _, _, t in singles.single if t not in taken))
         plan, start = self.first_plan(singles)
@@ -235,7 +227,7 @@ class AnytimeSearch:
             restart = False
             for n, (k, i) in enumerate(seeds):
                 if plan[k][i][2] not in covered:
-                    hood = self._neighbourhood(plan, k, i, size)
+                    hood = neighbourhood(plan, k, i, size, self.near, self.rng, self._robots_for(size))
                     covered.update(hood.rooms)
                     if (hood.robots, hood.removed) not in tried:
                         tried.add((hood.robots, hood.removed))
@@ -332,73 +324,14 @@ class AnytimeSearch:
                     per_robot.setdefault(r, []).append(x)
         return Goals(tuple(dict.fromkeys(visit)), tuple((r, tuple(xs)) for r, xs in per_robot.items()))
 
-    # ------------------------------------------------------------------ neighbourhoods
-
-    def _distances(self, singles: CostTable) -> None:
-        """Room closeness for choosing neighbourhoods: the cheapest single move either way."""
-        near: dict[str, dict[str, float]] = {}
-        for (_, a, b), c in singles.single.items():
-            for x, y in ((a, b), (b, a)):
-                row = near.setdefault(x, {})
-                row[y] = min(row.get(y, math.inf), c)
-        self.near = near
-
-    def _d(self, a: str, b: str) -> float:
-        return 0.0 if a == b else self.near.get(a, {}).get(b, math.inf)
-
-    def _neighbourhood(self, plan: Plan, k: int, i: int, size: int) -> Neighbourhood:
-        """Robots near the seed move ``plan[k][i]`` and a stretch of each one's route."""
-        routes: dict[str, list[tuple[int, str]]] = {r: [] for r in self.model.robots}
-        for idx, step in enumerate(plan):
-            for r, _, x in step:
-                routes[r].append((idx, x))
-        r0, _, x0 = plan[k][i]
-        start = self.model.start_location
-        others = sorted(
-            (min([self._d(x0, start[r])] + [self._d(x0, x) for _, x in route]), self.rng.random(), r)
-            for r, route in routes.items()
-            if r != r0
-        )
-        most = max(1, self.options.sub_robots)
-        n_robots = most if size == self.options.sizes[-1] else self.rng.randint(min(2, len(routes)), most)
-        robots = [r0] + [r for d, _, r in others[: n_robots - 1] if math.isfinite(d)]
-        windows: dict[str, list[int]] = {}
-        for r in robots:
-            route = routes[r]
-            if not route:
-                windows[r] = [0, -1]  # an idle robot: an empty stretch that can take rooms
-                continue
-            anchor = next(p for p, (idx, _) in enumerate(route) if idx == k) if r == r0 else min(
-                range(len(route)), key=lambda p: self._d(x0, route[p][1])
-            )
-            windows[r] = [anchor, anchor]
-        total = sum(hi - lo + 1 for lo, hi in windows.values())
-        while total < size:
-            options = []
-            for r, (lo, hi) in windows.items():
-                route = routes[r]
-                if lo > 0:
-                    options.append((self._d(x0, route[lo - 1][1]), r, -1))
-                if hi + 1 < len(route):
-                    options.append((self._d(x0, route[hi + 1][1]), r, +1))
-            if not options:
-                break
-            _, r, side = min(options)
-            windows[r][0 if side < 0 else 1] += side
-            total += 1
-        _close_under_pairs(windows, routes)
-        removed: set[int] = set()
-        rooms: list[str] = []
-        ends: dict[str, str] = {}
-        for r, (lo, hi) in windows.items():
-            route = routes[r]
-            removed.update(idx for idx, _ in route[lo : hi + 1])
-            rooms.extend(x for _, x in route[lo : hi + 1])
-            if hi + 1 < len(route):
-                ends[r] = route[hi][1]
-        return Neighbourhood(tuple(robots), frozenset(removed), tuple(dict.fromkeys(rooms)), ends)
-
     # ------------------------------------------------------------------ progress
+
+    def _robots_for(self, size: int) -> int:
+        """Robots of a neighbourhood: all allowed in the largest ones, 2 or more otherwise."""
+        most = max(1, self.options.sub_robots)
+        if size == self.options.sizes[-1]:
+            return most
+        return self.rng.randint(min(2, len(self.model.robots)), most)
 
     def _note(self, cost: float, what: str) -> None:
         t = self.elapsed()
@@ -418,19 +351,3 @@ def search(
 ) -> SearchResult:
     """Run the anytime search (see the module docstring)."""
     return AnytimeSearch(model, goals, options, progress, proves_optimal, times).run(seeds)
-
-
-def _close_under_pairs(windows: dict[str, list[int]], routes: dict[str, list[tuple[int, str]]]) -> None:
-    """Widen the robots' stretches until every opened paired step is opened for both of its
-    robots when both take part (a robot's opened moves must be one stretch of its route)."""
-    position = {r: {idx: p for p, (idx, _) in enumerate(route)} for r, route in routes.items()}
-    changed = True
-    while changed:
-        changed = False
-        opened = {idx for r, (lo, hi) in windows.items() for idx, _ in routes[r][lo : hi + 1]}
-        for r, window in windows.items():
-            for idx in opened:
-                p = position[r].get(idx)
-                if p is not None and not window[0] <= p <= window[1]:
-                    window[0], window[1] = min(window[0], p), max(window[1], p)
-                    changed = True
