@@ -127,6 +127,10 @@ def _result(table: CostTable, memo: Memo, encoded: EncodedTask | None) -> TaskRe
 CARRIED_SIZES = (3, 4, 6)
 
 
+#: seconds of the run's budget kept for what runs after the search's budget is spent
+BUDGET_MARGIN = 0.5
+
+
 def plan_anytime(
     model: CostModel,
     goals: Goals,
@@ -151,7 +155,8 @@ def plan_anytime(
             proof = bound()
     if budget is None:
         whole = time_budget(len(goals.all_rooms), len(model.robots), planner.time_budget)
-        budget = whole - sum(v for k, v in times.seconds.items() if k not in ("load", "total"))
+        # leave time for what follows the search: its last sub-problem, the re-simulation
+        budget = whole - sum(v for k, v in times.seconds.items() if k not in ("load", "total")) - BUDGET_MARGIN
     options = SearchOptions(
         planner=planner.name if planner.name.startswith("enhsp") else "enhsp-blind",
         encoding=planner.encoding if planner.encoding in ("single", "mixed") else "mixed",
