@@ -10,8 +10,13 @@ What is measured, each into its own folder:
 - oracle/: the cost table of 2 robots x 10 rooms (mixed encoding), cold, with 1 worker and
   with all workers: joint evaluations per second, and how many joint evaluations the
   factorisation and the pair bound saved;
-- rooms/, robots/: ``tmpnav bench`` (paper Fig. 3(b), (c)), mixed against the paper's
-  encoding on the same goal draws;
+- rooms/, robots/: ``tmpnav bench`` (paper Fig. 3(b), (c)): the default (carried beliefs),
+  table costs with the anytime and with the exact search, and the paper's encoding, on the
+  same goal draws;
+- scale-20/, scale-40/, scale-60/, growth/, routing/: building scale (the office and the
+  20-room building), and tmpnav against OR-Tools' routing on the same single-move table;
+- carried/: the same tasks planned with table costs and with carried beliefs: executed
+  cost, uncertainty along the way and simulated worst-case errors (benchmarks/bench_carried.py);
 - simulate/: ``tmpnav simulate`` on the corridor (paper Fig. 3(a)).
 
 Each folder gets the command that produced it (command.txt) and the machine it ran on, with
@@ -119,20 +124,53 @@ print(json.dumps(rows))
     return {"rows": rows}
 
 
-def bench(out: Path, robots: str, rooms: str, sessions: str, timeout: str) -> None:
-    """``tmpnav bench``, the default encoding against the paper's on the same goal draws."""
-    cmd = [*TMPNAV, "bench", "--robots", robots, "--rooms", rooms, "--sessions", sessions]
-    cmd += ["--encoding", "mixed", "--encoding", "paper", "--timeout", timeout]
+def bench(
+    out: Path,
+    robots: str,
+    rooms: str,
+    sessions: str,
+    timeout: str,
+    variants: tuple[str, ...] = ("mixed", "paper"),
+    scenario: str | None = None,
+) -> None:
+    """``tmpnav bench``: the variants (the first is the default) on the same goal draws."""
+    cmd = [*TMPNAV, "bench", "--robots", robots, "--rooms", rooms, "--sessions", sessions, "--timeout", timeout]
+    for v in variants:
+        cmd += ["--encoding", v]
+    if scenario is not None:
+        cmd += ["--scenario", scenario]
     run([*cmd, "-o", str(out.relative_to(ROOT)), "-q"], out, out / "log.txt")
+
+
+#: the variants compared at the paper's sizes: the default (carried beliefs, auto search),
+#: table costs with the anytime search, the exact plan of the table (the earlier default) and
+#: the paper's encoding
+VARIANTS = ("mixed", "mixed:table:anytime", "mixed:table:exact", "paper")
+BUILDING = "configs/building-{robots}robots.yaml"
+
+
+def scale(base: Path, quick: bool) -> None:
+    """Building scale: 20 rooms and 2 robots, 40 and 4, 60 and 8; the growth from 10 to 40
+    rooms with 4 robots; tmpnav against OR-Tools on the 20-room building's table."""
+    both = ("mixed", "mixed:table")
+    bench(base / "scale-20", "2", "20", "1" if quick else "5", "600", both, "configs/building-20.yaml")
+    if not quick:  # the quick version (make bench) stops at 20 rooms
+        bench(base / "scale-40", "4", "40", "3", "600", both, BUILDING)
+        bench(base / "scale-60", "8", "60", "2", "900", both, BUILDING)
+        bench(base / "growth", "4", "10..40:10", "3", "600", ("mixed",), BUILDING)
+    out = base / "routing"
+    run([sys.executable, "benchmarks/bench_routing.py", "-o", str(out.relative_to(ROOT))], out, out / "log.txt")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="the reduced version (make bench)")
-    parser.add_argument("--only", nargs="*", default=None, help="belief oracle rooms robots simulate")
+    parser.add_argument(
+        "--only", nargs="*", default=None, help="belief oracle rooms robots scale carried simulate"
+    )
     args = parser.parse_args()
     base = ROOT / "benchmarks" / ("quick" if args.quick else "full")
-    only = set(args.only or ["belief", "oracle", "rooms", "robots", "simulate"])
+    only = set(args.only or ["belief", "oracle", "rooms", "robots", "scale", "carried", "simulate"])
     base.mkdir(parents=True, exist_ok=True)
     if "belief" in only:
         out = base / "belief"
@@ -145,11 +183,17 @@ def main() -> None:
     # speed-up at that point is a lower bound (60 s / the default's median).
     timeout = "60"
     if "rooms" in only:
-        sessions, rooms = ("2", "2,10") if args.quick else ("25", "2..10")
-        bench(base / "rooms", "2", rooms, sessions, timeout)
+        sessions, rooms = ("2", "2,10") if args.quick else ("10", "2..10")
+        bench(base / "rooms", "2", rooms, sessions, timeout, VARIANTS)
     if "robots" in only:
-        sessions, robots = ("1", "2,4") if args.quick else ("25", "2,4,6")
-        bench(base / "robots", robots, "8", sessions, timeout)
+        sessions, robots = ("1", "2,4") if args.quick else ("10", "2,4,6")
+        bench(base / "robots", robots, "8", sessions, timeout, VARIANTS)
+    if "scale" in only:
+        scale(base, args.quick)
+    if "carried" in only:
+        out = base / "carried"
+        cmd = [sys.executable, "benchmarks/bench_carried.py", "-o", str(out.relative_to(ROOT))]
+        run([*cmd, "--sessions", "5" if args.quick else "25"], out, out / "log.txt")
     if "simulate" in only:
         out = base / "simulate"
         sessions = "5" if args.quick else "25"
