@@ -48,3 +48,12 @@ def test_read_csv_round_trips_and_rejects_other_files(tmp_path: Path) -> None:
         read_csv(other)
     with pytest.raises(InputError, match="cannot read"):
         read_csv(tmp_path / "missing.csv")
+
+
+def test_a_stage_the_solved_runs_skipped_shows_a_dash_not_a_timeout() -> None:
+    table = [row("mixed", phase, "solved-optimally", "2.0") for phase in PHASES]
+    warm = next(r for r in table if r["phase"] == "warm")
+    warm["oracle_s"] = warm["encode_s"] = ""  # a warm run reads the plan: no oracle, no encoding
+    text = summary_markdown(table, "robots", default="mixed", timeout=60.0)
+    line = next(x for x in text.splitlines() if "| warm |" in x)
+    assert "timeout" not in line and line.count("| - |") == 2

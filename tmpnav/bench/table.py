@@ -145,7 +145,9 @@ def _summary_row(
     point: int, enc: str, phase: str, e: PointStats, default: str, mine: float | None, timeout: float | None
 ) -> str:
     not_run = e.solved == 0 and phase != "cold"  # a cold run past the limit skips the others
-    cells = [_s(e.medians.get(s)) for s in ("total", "roadmap", "oracle", "encode", "planner")]
+    # a stage without a median: no run finished (timeout), or the solved runs skipped it (-)
+    missing = "timeout" if e.solved == 0 else "-"
+    cells = [_s(e.medians.get(s), missing) for s in ("total", "roadmap", "oracle", "encode", "planner")]
     ratio = ""
     if not_run:
         ratio, cells = "not run: the cold runs timed out", ["-"] * len(cells)
@@ -156,5 +158,5 @@ def _summary_row(
     return f"| {point} | {enc} | {phase} | {e.solved}/{e.runs} | " + " | ".join(cells) + f" | {ratio} |"
 
 
-def _s(v: float | None) -> str:
-    return "timeout" if v is None else f"{v:.2f}"
+def _s(v: float | None, missing: str = "timeout") -> str:
+    return missing if v is None else f"{v:.2f}"
