@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -36,3 +37,22 @@ def test_a_warm_run_reads_the_plan_and_a_damaged_entry_is_a_miss(search: str, tm
         cache.close()
     again = plan(TWO_ROOMS, options)
     assert not again.task.plan_hit and moves(again) == moves(cold)
+
+
+@pytest.mark.slow
+def test_a_plan_cut_short_by_its_budget_is_read_again_only_with_no_larger_budget(tmp_path: Path) -> None:
+    options = PlanOptions(cache_dir=tmp_path, executor="serial", search="anytime", time_budget=5.0)
+    cold = plan(TWO_ROOMS, options)
+    key = search_key(cold.scenario, context_digest(cold.scenario, cold.world, cold.roadmap))
+    cache = DiskCache(tmp_path)
+    try:
+        entry = cache.get_many([key])[key]
+        assert entry["budget"] == 5.0
+        # as if the search had been cut short: a plan that depends on the budget
+        cache.put_many({key: {**entry, "search": {**entry["search"], "stopped": "time budget"}}})
+    finally:
+        cache.close()
+    assert plan(TWO_ROOMS, options).task.plan_hit
+    assert plan(TWO_ROOMS, replace(options, time_budget=4.0)).task.plan_hit
+    longer = plan(TWO_ROOMS, replace(options, time_budget=50.0))
+    assert not longer.task.plan_hit and moves(longer) == moves(cold)

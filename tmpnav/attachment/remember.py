@@ -3,8 +3,11 @@
 Both searches are deterministic: OR-Tools stops after a fixed number of solutions, the
 neighbourhoods come from a seeded generator, ENHSP and the oracle give the same answers to
 the same questions. So a run whose inputs are identical to an earlier one reads its plan
-instead of searching again -- unless the earlier search stopped at its time budget, where
-the plan depends on the machine's speed; those are never stored.
+instead of searching again. A plan is remembered with the run's time budget: unless it was
+proved optimal, it may depend on that budget (a search cut short by it, or a first phase
+cut short, depends on the machine's speed too), so it is read again only by a run whose
+budget is no larger -- the same run repeated gives the same plan at once, a larger budget
+searches again.
 
 The key covers the oracle's context (its code, the world, the roadmap, the models and
 weights), the robots, the goals, the planner options that shape the search (engine,
@@ -26,7 +29,9 @@ from tmpnav.task.model import CostModel
 from tmpnav.task.plans import Rules
 from tmpnav.types import Goals, MoveKey, PlanStatus, Scenario
 
-VERSION = "search-plan/1"
+VERSION = "search-plan/2"
+#: a search that ended like this gives the same plan under any budget
+FINAL = ("optimal", "solved", "nothing to do")
 
 
 @lru_cache(maxsize=1)
@@ -48,12 +53,13 @@ def search_key(scenario: Scenario, context: str) -> str:
     return hashlib.sha256(repr((*parts, sp.search, sp.costs)).encode()).hexdigest()
 
 
-def remember(store: EntryStore, key: str, task: TaskResult) -> None:
-    """Store ``task`` unless its search stopped at the time budget."""
+def remember(store: EntryStore, key: str, task: TaskResult, budget: float) -> None:
+    """Store ``task``, found within ``budget`` seconds (the run's whole time budget)."""
     s = task.search
-    if s is None or s.stopped == "time budget":
+    if s is None:
         return
     entry: JSON = {
+        "budget": budget,
         "status": task.status.value,
         "engine": task.engine,
         "steps": [[list(m) for m in step] for step in task.steps],
@@ -75,13 +81,15 @@ def remember(store: EntryStore, key: str, task: TaskResult) -> None:
     store.put_many({key: entry})
 
 
-def recall(store: EntryStore, key: str, model: CostModel, goals: Goals) -> TaskResult | None:
-    """The remembered result, its costs from ``model``; None on a miss or an entry that is
-    damaged or is not a plan of these goals."""
+def recall(store: EntryStore, key: str, model: CostModel, goals: Goals, budget: float) -> TaskResult | None:
+    """The remembered result, its costs from ``model``; None on a miss, on an entry that is
+    damaged or is not a plan of these goals, or on a plan cut short by a smaller budget."""
     entry = store.get_many([key]).get(key)
     if not isinstance(entry, dict):
         return None
     try:
+        if entry["search"]["stopped"] not in FINAL and not budget <= float(entry["budget"]):
+            return None
         steps: tuple[tuple[MoveKey, ...], ...] = tuple(
             tuple((str(m[0]), str(m[1]), str(m[2])) for m in step) for step in entry["steps"]
         )

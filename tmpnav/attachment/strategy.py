@@ -99,14 +99,15 @@ def plan_scenario(
         return Planned(table, plan_task(TaskProblem.of(scenario, table), store, replan, times))
     key = search_key(scenario, oracle.context)
     model = carried if sp.costs == "carried" else canonical
+    budget = time_budget(len(scenario.goals.all_rooms), len(scenario.robots), sp.time_budget)
     if store is not None and not replan:
         with times.timed("planner"):
-            found = recall(store, key, model, scenario.goals)
+            found = recall(store, key, model, scenario.goals, budget)
         if found is not None:
             return Planned(canonical.seen(), found)
     task = _search(scenario, world, mode, canonical, carried, store, replan, times, progress)
     if store is not None:
-        remember(store, key, task)
+        remember(store, key, task, budget)
     return Planned(canonical.seen(), task)
 
 
