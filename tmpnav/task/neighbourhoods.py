@@ -5,7 +5,10 @@ closest to x0 take part, and each one's stretch grows, one room at a time, on wh
 of whichever robot the next room is closest to x0, until the neighbourhood holds ``size``
 rooms. Closeness is the cheapest single move between two rooms, either way. A paired step
 opened for one of its robots is opened for the other too when both take part, so that each
-robot's opened moves stay one stretch of its route.
+robot's opened moves stay one stretch of its route. Where paired steps interleave, that
+closure can pull in long stretches (24 rooms for a size of 8 on a 40-room building, whose
+sub-problem asked the oracle for 840,000 paired moves): past ``size`` + :data:`SLACK` rooms
+the robot farthest from x0 leaves the neighbourhood, down to the seed's robot alone.
 """
 
 from __future__ import annotations
@@ -16,6 +19,10 @@ from dataclasses import dataclass
 
 from tmpnav.task.plans import Plan
 from tmpnav.types import CostTable
+
+
+#: rooms a neighbourhood may hold beyond its size after its paired steps are closed
+SLACK = 2
 
 
 @dataclass(frozen=True)
@@ -58,6 +65,30 @@ def neighbourhood(
         if r != r0
     )
     robots = [r0] + [r for dist, _, r in others[: n_robots - 1] if math.isfinite(dist)]
+    while True:
+        windows = _windows(robots, routes, r0, k, x0, d)
+        _grow(windows, routes, x0, size, d)
+        _close_under_pairs(windows, routes)
+        if len(robots) == 1 or sum(hi - lo + 1 for lo, hi in windows.values()) <= size + SLACK:
+            break
+        robots = robots[:-1]
+    removed: set[int] = set()
+    rooms: list[str] = []
+    ends: dict[str, str] = {}
+    for r, (lo, hi) in windows.items():
+        route = routes[r]
+        removed.update(idx for idx, _ in route[lo : hi + 1])
+        rooms.extend(x for _, x in route[lo : hi + 1])
+        if hi + 1 < len(route):
+            ends[r] = route[hi][1]
+    return Neighbourhood(tuple(robots), frozenset(removed), tuple(dict.fromkeys(rooms)), ends)
+
+
+def _windows(
+    robots: list[str], routes: dict[str, list[tuple[int, str]]], r0: str, k: int, x0: str, d: Closeness
+) -> dict[str, list[int]]:
+    """Each robot's stretch to start from: the seed move for its robot, the room closest
+    to x0 for the others, an empty stretch for an idle robot."""
     windows: dict[str, list[int]] = {}
     for r in robots:
         route = routes[r]
@@ -69,18 +100,7 @@ def neighbourhood(
         else:
             anchor = min(range(len(route)), key=lambda p: d(x0, route[p][1]))
         windows[r] = [anchor, anchor]
-    _grow(windows, routes, x0, size, d)
-    _close_under_pairs(windows, routes)
-    removed: set[int] = set()
-    rooms: list[str] = []
-    ends: dict[str, str] = {}
-    for r, (lo, hi) in windows.items():
-        route = routes[r]
-        removed.update(idx for idx, _ in route[lo : hi + 1])
-        rooms.extend(x for _, x in route[lo : hi + 1])
-        if hi + 1 < len(route):
-            ends[r] = route[hi][1]
-    return Neighbourhood(tuple(robots), frozenset(removed), tuple(dict.fromkeys(rooms)), ends)
+    return windows
 
 
 def _grow(
