@@ -43,9 +43,7 @@ def resimulate(
 ) -> Resimulation:
     """Run the plan's actions in order on the team's joint belief."""
     team: Team = carried.start
-    trajectories = {
-        r: [belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i, r in enumerate(team.names)
-    }
+    trajectories = {r: [belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i, r in enumerate(team.names)}
     terms: dict[str, list[CostTerms]] = {r: [] for r in team.names}
     actions: list[PlannedAction] = []
     for k, moves in enumerate(plan):

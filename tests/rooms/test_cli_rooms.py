@@ -90,9 +90,7 @@ def test_the_skeleton_of_the_shipped_map_plans_as_written(tmp_path: Path) -> Non
 
 
 @pytest.mark.slow
-def test_the_skeleton_of_a_generated_map_plans_as_written(
-    corridor: tuple[GeneratedMap, Path], tmp_path: Path
-) -> None:
+def test_the_skeleton_of_a_generated_map_plans_as_written(corridor: tuple[GeneratedMap, Path], tmp_path: Path) -> None:
     """Issue 15: on a generated map with known rooms, the written scenario validates and plans."""
     g, map_yaml = corridor
     out = tmp_path / "depot.yaml"

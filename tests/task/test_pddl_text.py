@@ -24,9 +24,34 @@ ROOT = Path(__file__).resolve().parents[2]
 
 #: every identifier of tmpnav's domains and of PDDL that a scenario might use as a name
 DOMAIN_WORDS = (
-    "robot", "location", "goto_room", "goto_room_pair_1", "robot_in", "can_move", "target", "visited",
-    "visited_by", "act-cost", "move-cost", "pair-cost", "total-cost", "object", "number", "and", "not",
-    "define", "domain", "problem", "either", "when", "increase", "rob_r1", "loc_a", "a__b", "A", "a",
+    "robot",
+    "location",
+    "goto_room",
+    "goto_room_pair_1",
+    "robot_in",
+    "can_move",
+    "target",
+    "visited",
+    "visited_by",
+    "act-cost",
+    "move-cost",
+    "pair-cost",
+    "total-cost",
+    "object",
+    "number",
+    "and",
+    "not",
+    "define",
+    "domain",
+    "problem",
+    "either",
+    "when",
+    "increase",
+    "rob_r1",
+    "loc_a",
+    "a__b",
+    "A",
+    "a",
 )
 
 

@@ -71,7 +71,6 @@ class Team:
         return sorted(out)
 
 
-
 def stationary(lib: MotionLibrary, robot: str, node: int, heading: float) -> NominalMotion:
     """A robot that stays put during a step: no steps, no observations."""
     x, y = lib.roadmap.nodes[node]

@@ -127,6 +127,7 @@ CAPS: tuple[Cap, ...] = (YAML_BYTES, YAML_NODES, MAP_CELLS, MOVE_STEPS, GOAL_ASS
 #: nesting deeper than this is refused outright (no scenario needs more than 6 levels)
 YAML_MAX_DEPTH = 32
 
+
 def encoding_table(encoding: str) -> tuple[str, bool]:
     """(where a robot may move: goals | all-rooms, whether pairs are costed) of an encoding,
     from the encodings' registry (tmpnav/task/encodings.py imports no planning library)."""

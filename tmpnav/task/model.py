@@ -105,9 +105,7 @@ class TableModel:
         keep = ENCODINGS["mixed"].pair_filter(goals, at)
         assert keep is not None
         pair = {
-            (m1, m2): c
-            for (m1, m2), c in self.table.pair.items()
-            if m1 in single and m2 in single and keep(m1, m2)
+            (m1, m2): c for (m1, m2), c in self.table.pair.items() if m1 in single and m2 in single and keep(m1, m2)
         }
         locations = tuple(dict.fromkeys([*rooms, *at.values()]))
         return CostTable(tuple(robots), tuple(rooms), locations, at, single, pair)

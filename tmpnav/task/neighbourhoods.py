@@ -20,7 +20,6 @@ from dataclasses import dataclass
 from tmpnav.task.plans import Plan
 from tmpnav.types import CostTable
 
-
 #: rooms a neighbourhood may hold beyond its size after its paired steps are closed
 SLACK = 2
 
