@@ -96,7 +96,7 @@ def figure(runs: list[dict], path: Path) -> None:
         for i in range(len(names)):
             ax.text(x[i] - 0.2, planner[i], f"{planner[i]:.0f}", ha="center", va="bottom", fontsize=8)
             ax.text(x[i] + 0.2, executed[i], f"{executed[i]:.0f}", ha="center", va="bottom", fontsize=8)
-        ax.set_xticks(x, [_label(n) for n in names])
+        ax.set_xticks(x, [_label(n).replace(" --time", "\n--time") for n in names])
         ax.set_ylabel("plan cost")
         ax.set_title("planner's cost against executed cost")
         ax.legend(fontsize=8)
