@@ -97,32 +97,43 @@ def plan_scenario(
     if mode == "exact" and sp.costs == "table":
         table = full_table(scenario, world, oracle, times)
         return Planned(table, plan_task(TaskProblem.of(scenario, table), store, replan, times))
+    run = _Run(scenario, world, canonical, carried, store, replan, times, progress)
     key = search_key(scenario, oracle.context)
     model = carried if sp.costs == "carried" else canonical
-    budget = time_budget(len(scenario.goals.all_rooms), len(scenario.robots), sp.time_budget)
     if store is not None and not replan:
         with times.timed("planner"):
-            found = recall(store, key, model, scenario.goals, budget)
+            found = recall(store, key, model, scenario.goals, run.budget)
         if found is not None:
             return Planned(canonical.seen(), found)
-    task = _search(scenario, world, mode, canonical, carried, store, replan, times, progress)
+    task = _search(run, mode)
     if store is not None:
-        remember(store, key, task, budget)
+        remember(store, key, task, run.budget)
     return Planned(canonical.seen(), task)
 
 
-def _search(
-    scenario: Scenario,
-    world: World,
-    mode: str,
-    canonical: CanonicalCosts,
-    carried: CarriedCosts,
-    store: EntryStore | None,
-    replan: bool,
-    times: StageTimes,
-    progress: Progress | None,
-) -> TaskResult:
+@dataclass(frozen=True)
+class _Run:
+    """What a search of the task stage works with."""
+
+    scenario: Scenario
+    world: World
+    canonical: CanonicalCosts
+    carried: CarriedCosts
+    store: EntryStore | None
+    replan: bool
+    times: StageTimes
+    progress: Progress | None
+
+    @property
+    def budget(self) -> float:
+        """The anytime search's time budget for the whole run."""
+        sp, goals = self.scenario.planner, self.scenario.goals
+        return time_budget(len(goals.all_rooms), len(self.scenario.robots), sp.time_budget)
+
+
+def _search(run: _Run, mode: str) -> TaskResult:
     """The unfolded search (exact, carried costs) or the anytime search."""
+    scenario, canonical, carried, times = run.scenario, run.canonical, run.carried, run.times
     sp, goals = scenario.planner, scenario.goals
     if mode == "exact":
         with times.timed("oracle"):
@@ -138,39 +149,29 @@ def _search(
             )
     bound = lambda: certified_bound(scenario, canonical)  # noqa: E731
     if sp.costs == "table":
-        return plan_anytime(canonical, goals, sp, bound, times, progress, "table")
-    return _carried_anytime(scenario, world, canonical, carried, store, replan, times, progress, bound)
+        return plan_anytime(canonical, goals, sp, bound, times, run.progress, "table")
+    return _carried_anytime(run, bound)
 
 
-def _carried_anytime(
-    scenario: Scenario,
-    world: World,
-    canonical: CanonicalCosts,
-    carried: CarriedCosts,
-    store: EntryStore | None,
-    replan: bool,
-    times: StageTimes,
-    progress: Progress | None,
-    bound: Callable[[], Bound],
-) -> TaskResult:
+def _carried_anytime(run: _Run, bound: Callable[[], Bound]) -> TaskResult:
     """The anytime search with carried costs, in two phases: first with table costs (each
     computed once and shared by every sub-problem) for up to half the budget, then with
     carried costs from the cheapest of its plan, OR-Tools' routes and (where quick) the
     exact plan of the table, every plan costed as executed."""
+    scenario, times = run.scenario, run.times
     sp, goals = scenario.planner, scenario.goals
     seeds: dict[str, Plan] = {}
     if exact_fits(len(goals.all_rooms), len(scenario.robots), "table"):
-        table = full_table(scenario, world, canonical.oracle, times)
+        table = full_table(scenario, run.world, run.canonical.oracle, times)
         seeds["the exact plan of the cost table"] = plan_task(
-            TaskProblem.of(scenario, table), store, replan, times
+            TaskProblem.of(scenario, table), run.store, run.replan, times
         ).steps
-    whole = time_budget(len(goals.all_rooms), len(scenario.robots), sp.time_budget)
-    left = whole - sum(v for k, v in times.seconds.items() if k not in ("load", "total"))
-    labelled = _labelled(progress, "table costs")
-    first = plan_anytime(canonical, goals, sp, None, times, labelled, "table", budget=left / 2)
+    left = run.budget - sum(v for k, v in times.seconds.items() if k not in ("load", "total"))
+    labelled = _labelled(run.progress, "table costs")
+    first = plan_anytime(run.canonical, goals, sp, None, times, labelled, "table", budget=left / 2)
     assert first.search is not None
     seeds["the anytime search's plan with table costs"] = first.steps
-    task = plan_anytime(carried, goals, sp, bound, times, progress, "carried", seeds)
+    task = plan_anytime(run.carried, goals, sp, bound, times, run.progress, "carried", seeds)
     assert task.search is not None
     search = replace(
         task.search,
