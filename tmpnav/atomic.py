@@ -27,6 +27,8 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
+from tmpnav.lifetime import check_signals
+
 #: what a file is written from: its text (UTF-8), its bytes, or a function that writes it
 #: to the path it is given (a figure's ``savefig``)
 Content = str | bytes | Callable[[Path], None]
@@ -58,6 +60,7 @@ def write_files(directory: Path, contents: Mapping[str, Content]) -> list[Path]:
                 _stage(tmp, content)
             except OSError as err:
                 raise _about(err, target) from None
+        check_signals()  # an interrupt that the drawing code swallowed: keep the earlier files
         _commit(staged)
     except BaseException:
         _discard(tmp for tmp, _ in staged)

@@ -19,6 +19,14 @@ they end with tmpnav by their own parent-death signal (tmpnav.oracle.executors).
 SIGTERM becomes :class:`Terminated`, raised in the main thread like Ctrl-C's
 KeyboardInterrupt, so that a terminated run cleans up as an interrupted one does (the
 oracle's workers stopped, temporary output files removed, the earlier outputs kept).
+
+Either signal is also remembered (:func:`signalled`): Python raises the signal's exception
+wherever the main thread is, and some code turns it into another one or drops it. A C
+extension being imported at that instant (matplotlib's, for the figure) fails as
+``ImportError: initialization failed``; a library may catch it with ``except Exception``.
+The command line reports any exception after a signal as that signal's end, and the
+all-or-nothing writes (tmpnav.atomic) call :func:`check_signals` before they commit, so a
+run whose interrupt was swallowed still ends as interrupted, its earlier outputs kept.
 The cleanup is bounded: a second SIGTERM, or CLEANUP_SECONDS after the first, ends the
 process at once. Forked children (the oracle's workers) start with SIGTERM's default.
 
@@ -50,6 +58,8 @@ DEATH_SIGNAL = signal.SIGUSR1
 CLEANUP_SECONDS = 10.0
 
 _sentinel: subprocess.Popen[bytes] | None = None
+#: the signal (SIGINT or SIGTERM) that asked this run to end, once one has
+_signalled: signal.Signals | None = None
 
 
 class Terminated(BaseException):
@@ -68,11 +78,42 @@ def guard() -> None:
     if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:  # a process told to ignore SIGTERM keeps ignoring it
         signal.signal(signal.SIGTERM, _raise_terminated)
         os.register_at_fork(after_in_child=_default_sigterm)
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # likewise for SIGINT
+        signal.signal(signal.SIGINT, _raise_interrupted)
+        os.register_at_fork(after_in_child=_default_sigint)
     _start_sentinel()
+
+
+def signalled() -> signal.Signals | None:
+    """The signal (SIGINT or SIGTERM) that asked this run to end, or None."""
+    return _signalled
+
+
+def check_signals() -> None:
+    """Raise the exception of a signal that arrived, in case the code that was running when
+    it did swallowed it (see the module docstring); nothing when no signal came."""
+    if _signalled == signal.SIGINT:
+        raise KeyboardInterrupt
+    if _signalled == signal.SIGTERM:
+        raise Terminated()
+
+
+def _raise_interrupted(signum: int, frame: FrameType | None) -> None:
+    """Ctrl-C: Python's own KeyboardInterrupt, remembered."""
+    global _signalled
+    _signalled = _signalled or signal.SIGINT
+    raise KeyboardInterrupt
+
+
+def _default_sigint() -> None:
+    with contextlib.suppress(ValueError):
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def _raise_terminated(signum: int, frame: FrameType | None) -> None:
     """The first SIGTERM: unwind (Terminated), within CLEANUP_SECONDS; the next one kills."""
+    global _signalled
+    _signalled = signal.SIGTERM
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     timer = threading.Timer(CLEANUP_SECONDS, os.kill, (os.getpid(), signal.SIGTERM))
     timer.daemon = True

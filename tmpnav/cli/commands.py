@@ -295,12 +295,13 @@ def main() -> None:
     """
     import warnings
 
-    from tmpnav.lifetime import Terminated, end_as_terminated, guard
+    from tmpnav.lifetime import Terminated, check_signals, end_as_terminated, guard
 
     warnings.showwarning = _one_line_warning
     try:
         guard()
         code = cli.main(prog_name="tmpnav", standalone_mode=False)
+        check_signals()  # a Ctrl-C that some library swallowed still ends the run as interrupted
     except click.exceptions.NoArgsIsHelpError as err:  # a bare `tmpnav`: the help, as asked
         click.echo(err.format_message())
         sys.exit(0)

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 import click
 
 from tmpnav.errors import OutputError, ScenarioError, TmpnavError
+from tmpnav.lifetime import check_signals
 from tmpnav.task.modes import COSTS, SEARCHES
 
 if TYPE_CHECKING:
@@ -31,7 +32,13 @@ def report_errors(func: Callable[..., Any]) -> Callable[..., Any]:
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         try:
-            return func(*args, **kwargs)
+            try:
+                return func(*args, **kwargs)
+            except Exception:
+                # after Ctrl-C or SIGTERM, whatever ends the run is the signal's doing: a C extension
+                # imported at that instant fails as "ImportError: initialization failed" (tmpnav.lifetime)
+                check_signals()
+                raise
         except ScenarioError as err:
             for problem in err.problems:
                 click.echo(f"error: {problem}", err=True)
