@@ -45,7 +45,7 @@ def run(scenario: str, sessions: int) -> dict:
     for name, choice in MODES.items():
         with tempfile.TemporaryDirectory() as cache:
             start = time.perf_counter()
-            report = plan(ROOT / scenario, PlanOptions(cache_dir=Path(cache), **choice))
+            report = plan(ROOT / scenario, PlanOptions.of(cache_dir=Path(cache), **choice))
             seconds = time.perf_counter() - start
         result = execute(report, sessions, seed=0)
         out["plans"][name] = {

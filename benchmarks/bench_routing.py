@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT))
 
 from tmpnav.attachment.canonical import CanonicalCosts  # noqa: E402
 from tmpnav.attachment.carried import CarriedCosts  # noqa: E402
-from tmpnav.pipeline import PlanOptions, close, plan, prepare  # noqa: E402
+from tmpnav.pipeline import PlanOptions, plan, prepare  # noqa: E402
 from tmpnav.results import StageTimes  # noqa: E402
 from tmpnav.task.plans import with_origins  # noqa: E402
 from tmpnav.task.routing import solve_routes  # noqa: E402
@@ -33,7 +33,7 @@ from tmpnav.task.routing import solve_routes  # noqa: E402
 def run(scenario: str, seconds: float) -> dict:
     out: dict = {"scenario": scenario, "or_tools_seconds": seconds}
     with tempfile.TemporaryDirectory() as cache:
-        prep = prepare(ROOT / scenario, PlanOptions(cache_dir=Path(cache)), StageTimes(), with_table=False)
+        prep = prepare(ROOT / scenario, PlanOptions.of(cache_dir=Path(cache)), StageTimes())
         try:
             canonical = CanonicalCosts(prep.oracle, prep.world, prep.scenario.planner.pair_min_gain)
             singles = canonical.singles(prep.scenario.goals)
@@ -48,11 +48,11 @@ def run(scenario: str, seconds: float) -> dict:
                 "status": routes.status,
             }
         finally:
-            close(prep.oracle)
+            prep.oracle.close()
     for costs in ("table", "carried"):
         with tempfile.TemporaryDirectory() as cache:
             start = time.perf_counter()
-            report = plan(ROOT / scenario, PlanOptions(cache_dir=Path(cache), costs=costs, search="anytime"))
+            report = plan(ROOT / scenario, PlanOptions.of(cache_dir=Path(cache), costs=costs, search="anytime"))
             out[f"tmpnav_{costs}"] = {
                 "planner_cost": report.planner_cost,
                 "executed_cost": report.resimulated_cost,

@@ -74,20 +74,20 @@ def oracle_throughput(out: Path) -> dict:
     code = r"""
 import json, os, sys, time
 from pathlib import Path
-from tmpnav.pipeline import load_world, apply_options, roadmap_for, make_oracle, PlanOptions
+from tmpnav.pipeline import load_world, apply_options, roadmap_for, make_oracle, Execution, Overrides
 from tmpnav.oracle.table import build_table, start_locations
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.types import Goals
 from tmpnav.bench.worker import warm_up
 warm_up()
 s, w = load_world("configs/corridor-2robots.yaml")
-s = apply_options(s, PlanOptions(goals=Goals(visit=tuple(f"L{i}" for i in range(1, 11)), per_robot=())))
+s = apply_options(s, Overrides(goals=Goals(visit=tuple(f"L{i}" for i in range(1, 11)), per_robot=())))
 rm, _ = roadmap_for(s, w, None)
 want = ENCODINGS["mixed"].table_request(s.goals, start_locations(s, w), 0.0)
 rows = []
 for workers in (1, os.cpu_count() or 1):
     for prune in (None, 0.05):
-        o = make_oracle(s, w, rm, PlanOptions(use_cache=False, executor="processes", workers=workers))
+        o = make_oracle(s, w, rm, Execution(use_cache=False, executor="processes", workers=workers))
         t = time.perf_counter()
         build_table(o, w, want.destinations, want.pair_filter, pair_min_gain=prune)
         dt = time.perf_counter() - t

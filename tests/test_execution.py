@@ -42,7 +42,7 @@ def test_mutual_observations_cut_the_worst_error_of_the_landmark_starved_robot(t
 
     r2 starts in L10, out of every landmark's range; with mutual observations its error
     never exceeds what it starts with, without them it grows along the corridor."""
-    report = plan(ROOT / "configs" / "corridor.yaml", PlanOptions(cache_dir=tmp_path))
+    report = plan(ROOT / "configs" / "corridor.yaml", PlanOptions.of(cache_dir=tmp_path))
     result = execute(report, sessions=25)
     assert result.starved == "r2"
     assert result.reduction("r2") >= 80.0

@@ -6,7 +6,7 @@ The pipeline (one subpackage per stage, joined in :mod:`tmpnav.pipeline`)::
       -> oracle (+ disk cache) -> task (PDDL via unified-planning, ENHSP) -> report
 """
 
-__version__ = "0.1.0"
+from tmpnav.version import __version__
 
 #: the Python API (tmpnav.api), imported on first use so that `import tmpnav` stays fast
 _API = ("PlanResult", "Step", "export_nav2", "load", "plan", "segment_map", "write_skeleton")

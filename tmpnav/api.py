@@ -153,7 +153,7 @@ def plan(
     from tmpnav.pipeline import plan as run
 
     _check_choices(search=search, costs=costs, timeout=timeout, time_budget=time_budget, pair_min_gain=pair_min_gain)
-    options = PlanOptions(
+    options = PlanOptions.of(
         encoding=encoding,
         planner=planner,
         timeout=timeout,
@@ -172,8 +172,8 @@ def plan(
 
 def _check_choices(**values: object) -> None:
     """The keyword arguments of :func:`plan`, checked as the command line checks its options."""
+    from tmpnav.choices import COSTS, SEARCHES
     from tmpnav.errors import InputError
-    from tmpnav.task.modes import COSTS, SEARCHES
 
     choices = {"search": SEARCHES, "costs": COSTS}
     for name, value in values.items():

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import sqlite3
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -122,8 +123,6 @@ class CacheDir:
 
     def info(self) -> CacheInfo:
         """Location, size and content of the cache (the database is opened read-only)."""
-        from tmpnav.oracle.cache import count_entries
-
         files = self.database_files()
         roadmaps = [p for p in self.roadmap_files() if p.suffix == ".npz"]
         entries, error = count_entries(self.database) if self.database.exists() else (0, None)
@@ -164,3 +163,17 @@ def _size(path: Path) -> int:
         return path.stat().st_size
     except OSError:
         return 0
+
+
+def count_entries(path: Path) -> tuple[int | None, str | None]:
+    """How many entries the cost database at ``path`` holds (its table ``entries``,
+    tmpnav.oracle.cache), read-only: (count, None), or (None, why) when it is unreadable."""
+    try:
+        conn = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=10.0)
+        try:
+            (entries,) = conn.execute("SELECT count(*) FROM entries").fetchone()
+        finally:
+            conn.close()
+    except sqlite3.DatabaseError as err:
+        return None, f"unreadable: {err}"
+    return int(entries), None

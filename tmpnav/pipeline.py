@@ -2,10 +2,11 @@
 
 ::
 
-    scenario -> world      load_world        scenario/, world/
+    scenario -> world      load_world        scenario/, world/ (the command line's overrides
+                                             applied, everything checked once)
     -> roadmap             roadmap_for       roadmap/ (grown, or read from the cache directory)
-    -> cost table          prepare           oracle/ (belief/ inside), what the encoding asks for
-    -> task plan           plan_task         task/ (memo lookup, encode, solve, decode)
+    -> task plan           plan_stage        planning/: the search and costs of tmpnav.choices,
+                                             task/ on attachment/'s cost models (oracle/ inside)
     -> re-simulation       resimulate        the plan run with beliefs carried step to step
     -> PlanReport                            report/ writes it (JSON, text, figure)
 """
@@ -13,20 +14,18 @@
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from tmpnav import scenario as scenario_stage
 from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
-from tmpnav.errors import InputError, ScenarioError
-from tmpnav.results import CacheUse, PlanReport, StageTimes, TaskResult
-from tmpnav.types import CostTable, Goals, Roadmap, Scenario
+from tmpnav.choices import Costs, Search, choose, paper_conflict
+from tmpnav.errors import InputError, Problem, ScenarioError
+from tmpnav.results import CacheUse, PlanReport, SearchProgress, StageTimes
+from tmpnav.types import Goals, Roadmap, Scenario
 from tmpnav.world import MapImageError, World
-
-#: progress of the anytime search: (seconds, best plan cost, lower bound or None, what happened)
-SearchProgress = Callable[[float, float, float | None, str], None]
 
 if TYPE_CHECKING:
     from tmpnav.oracle.oracle import Oracle
@@ -34,24 +33,9 @@ if TYPE_CHECKING:
     from tmpnav.task.encode import EncodedTask
 
 
-def load_world(path: str | Path) -> tuple[Scenario, World]:
-    """Stages 1-2 with every input problem reported at once (ScenarioError)."""
-    scenario, problems = scenario_stage.load_partial(path)
-    if scenario is None:
-        raise ScenarioError(problems)
-    try:
-        world = world_stage.build(scenario)
-    except MapImageError as err:
-        raise ScenarioError([*problems, err.problem]) from None
-    problems += world_stage.check(scenario, world)
-    if problems:
-        raise ScenarioError(problems)
-    return scenario, world
-
-
 @dataclass(frozen=True)
-class PlanOptions:
-    """Command-line choices that override the scenario, and how to run the oracle."""
+class Overrides:
+    """Command-line choices that override the scenario's (None: the scenario's own)."""
 
     encoding: str | None = None
     planner: str | None = None
@@ -59,45 +43,117 @@ class PlanOptions:
     pair_min_gain: float | None = None
     mutual_observations: bool | None = None
     goals: Goals | None = None
+    search: Search | None = None
+    time_budget: float | None = None
+    costs: Costs | None = None
+
+
+@dataclass(frozen=True)
+class Execution:
+    """Where a run keeps and computes its costs: the cache directory, the oracle's executor."""
+
     cache_dir: Path | None = None  # None: the default cache directory (tmpnav.cachedir)
     use_cache: bool = True
     replan: bool = False  # run the task planner even when the cache remembers its plan
     executor: str = "processes"
     workers: int | None = None
     ray_address: str | None = None
-    progress: Callable[[int, int], None] | None = None
-    search: str | None = None  # exact | anytime | auto
-    time_budget: float | None = None
-    costs: str | None = None  # table | carried
-    search_progress: SearchProgress | None = None  # (seconds, best cost, bound, what happened)
 
 
-def apply_options(scenario: Scenario, options: PlanOptions) -> Scenario:
-    """The scenario with the command line's overrides."""
-    planner = scenario.planner
+@dataclass(frozen=True)
+class Reporters:
+    """Who is told how a run goes."""
+
+    oracle: Callable[[int, int], None] | None = None  # (requests done, requests in all)
+    search: SearchProgress | None = None  # the anytime search's progress
+
+
+@dataclass(frozen=True)
+class PlanOptions:
+    """How to plan: the scenario's overrides, where costs are kept and computed, who is told."""
+
+    overrides: Overrides = Overrides()
+    execution: Execution = Execution()
+    reporters: Reporters = Reporters()
+
+    @classmethod
+    def of(cls, **keywords: object) -> PlanOptions:
+        """The options from flat keywords, each the name of a field of :class:`Overrides`,
+        :class:`Execution` or :class:`Reporters` (``progress`` and ``search_progress`` name the
+        reporters): ``PlanOptions.of(costs="table", use_cache=False)``."""
+        return cls().but(**keywords)
+
+    def but(self, **keywords: object) -> PlanOptions:
+        """These options with the fields that ``keywords`` name (as in :meth:`of`) changed."""
+        keywords = {{"progress": "oracle", "search_progress": "search"}.get(k, k): v for k, v in keywords.items()}
+        parts = {}
+        for name in ("overrides", "execution", "reporters"):
+            part = getattr(self, name)
+            names = {f.name for f in fields(part)}
+            parts[name] = replace(part, **{k: keywords.pop(k) for k in list(keywords) if k in names})
+        if keywords:
+            raise TypeError(f"unknown plan options: {', '.join(sorted(keywords))}")
+        return PlanOptions(**parts)
+
+
+def load_world(path: str | Path, overrides: Overrides | None = None) -> tuple[Scenario, World]:
+    """Stages 1-2: the scenario in force (``overrides`` applied) and its world, every input
+    problem reported at once (ScenarioError), the caps on the plan's size included."""
+    scenario, problems = scenario_stage.load_partial(path)
+    if scenario is None:
+        raise ScenarioError(problems)
+    scenario = apply_options(scenario, overrides or Overrides())
+    try:
+        world = world_stage.build(scenario)
+    except MapImageError as err:
+        raise ScenarioError([*problems, err.problem]) from None
+    problems += world_stage.check(scenario, world) + _size_problems(scenario)
+    if problems:
+        raise ScenarioError(problems)
+    return scenario, world
+
+
+def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
+    """The scenario with the command line's overrides (InputError for choices that conflict)."""
+    o, planner = overrides, scenario.planner
     planner = replace(
         planner,
-        encoding=options.encoding or planner.encoding,
-        name=options.planner or planner.name,
-        timeout=options.timeout if options.timeout is not None else planner.timeout,
-        pair_min_gain=options.pair_min_gain if options.pair_min_gain is not None else planner.pair_min_gain,
-        search=options.search or planner.search,
-        time_budget=options.time_budget if options.time_budget is not None else planner.time_budget,
-        costs=options.costs or planner.costs,
+        encoding=o.encoding or planner.encoding,
+        name=o.planner or planner.name,
+        timeout=o.timeout if o.timeout is not None else planner.timeout,
+        pair_min_gain=o.pair_min_gain if o.pair_min_gain is not None else planner.pair_min_gain,
+        search=o.search or planner.search,
+        time_budget=o.time_budget if o.time_budget is not None else planner.time_budget,
+        costs=o.costs or planner.costs,
     )
-    if planner.encoding == "paper":
-        # the paper's encoding is the paper's model: every action costed from canonical states
-        if options.costs == "carried" or options.search == "anytime":
-            raise InputError(
-                "the paper's encoding is planned exactly with table costs; "
-                "use --encoding mixed for --search anytime or --costs carried"
-            )
-        planner = replace(planner, costs="table", search="exact")
+    if (why := paper_conflict(planner.encoding, o.search, o.costs)) is not None:
+        raise InputError(why)
+    if planner.encoding == "paper":  # the paper's model, as tmpnav.choices.choose plans it
+        choice = choose(planner.encoding, planner.search, planner.costs, 0, 0)
+        planner = replace(planner, costs=choice.costs, search=choice.mode)
     models = scenario.models
-    if options.mutual_observations is not None:
-        models = replace(models, mutual_observations=options.mutual_observations)
-    goals = options.goals or scenario.goals
-    return replace(scenario, planner=planner, models=models, goals=goals)
+    if o.mutual_observations is not None:
+        models = replace(models, mutual_observations=o.mutual_observations)
+    if o.goals is not None and (unknown := [g for g in o.goals.all_rooms if g not in {r.name for r in scenario.rooms}]):
+        raise InputError(f"goal rooms {', '.join(unknown)} are not rooms of scenario {scenario.name!r}")
+    return replace(scenario, planner=planner, models=models, goals=o.goals or scenario.goals)
+
+
+def in_force(scenario: Scenario, overrides: Overrides) -> Scenario:
+    """A scenario loaded earlier, with ``overrides`` applied and its plan sizes checked."""
+    scenario = apply_options(scenario, overrides)
+    if problems := _size_problems(scenario):
+        raise ScenarioError(problems)
+    return scenario
+
+
+def _size_problems(scenario: Scenario) -> list[Problem]:
+    """Goal rooms x robots and the cost table's estimated entries against their caps
+    (tmpnav.scenario.limits)."""
+    from tmpnav.scenario.extent import plan_sizes
+
+    file = scenario_stage.display_path(scenario.source)
+    return [Problem(file, p, message, scenario.line_of(p)) for p, message in plan_sizes(scenario)]
 
 
 def roadmap_for(scenario: Scenario, world: World, store: RoadmapStore | None) -> tuple[Roadmap, bool]:
@@ -117,20 +173,22 @@ def roadmap_for(scenario: Scenario, world: World, store: RoadmapStore | None) ->
     return roadmap, False
 
 
-def make_oracle(scenario: Scenario, world: World, roadmap: Roadmap, options: PlanOptions) -> Oracle:
+def make_oracle(
+    scenario: Scenario, world: World, roadmap: Roadmap, execution: Execution, progress: Reporters | None = None
+) -> Oracle:
     """The cost oracle of this world and roadmap: its cache (the cost database, or none) and executor."""
     from tmpnav.oracle.cache import DiskCache, NullCache
     from tmpnav.oracle.executors import OracleContext, make_executor
     from tmpnav.oracle.oracle import Oracle
 
-    cache = DiskCache(CacheDir.at(options.cache_dir).root) if options.use_cache else NullCache()
-    executor = make_executor(options.executor, options.workers, options.ray_address)
-    return Oracle(OracleContext(scenario, world, roadmap), cache, executor, options.progress)
+    cache = DiskCache(CacheDir.at(execution.cache_dir).root) if execution.use_cache else NullCache()
+    executor = make_executor(execution.executor, execution.workers, execution.ray_address)
+    return Oracle(OracleContext(scenario, world, roadmap), cache, executor, progress.oracle if progress else None)
 
 
 @dataclass(frozen=True)
 class Prepared:
-    """The stages up to the cost table, shared by ``plan`` and ``export-pddl``."""
+    """The stages before the task plan, shared by ``plan`` and ``export-pddl``."""
 
     scenario: Scenario
     world: World
@@ -138,59 +196,47 @@ class Prepared:
     roadmap_hit: bool
     cache: CacheDir | None
     roadmap_warnings: tuple[str, ...]
-    oracle: Oracle  # open: the caller closes it (see close)
-    table: CostTable | None  # None when prepared without it (the anytime search costs lazily)
+    oracle: Oracle  # open: the caller closes it
 
 
 def prepare(
-    path: str | Path,
-    options: PlanOptions,
-    times: StageTimes,
-    loaded: tuple[Scenario, World] | None = None,
-    with_table: bool = True,
+    path: str | Path, options: PlanOptions, times: StageTimes, loaded: tuple[Scenario, World] | None = None
 ) -> Prepared:
-    """Load, grow (or read) the roadmap, and (``with_table``) compute the cost table the
-    encoding asks for; without it, ``prepared.table`` is None.
-
-    The caller must close ``prepared.oracle`` (executor and cache), see :func:`close`.
-    """
-    from tmpnav.attachment.strategy import full_table
+    """Load (or take ``loaded``, the overrides applied), grow or read the roadmap, open the
+    oracle. The caller must close ``prepared.oracle`` (executor and cache)."""
+    from tmpnav.roadmap.reach import check_reachable
     from tmpnav.roadmap.store import RoadmapStore
 
+    run = options.execution
     with times.timed("load"):
-        scenario, world = loaded if loaded is not None else load_world(path)
-        scenario = apply_options(scenario, options)
-        _check_goals(scenario)
-    cache = CacheDir.at(options.cache_dir) if options.use_cache else None
+        if loaded is None:
+            scenario, world = load_world(path, options.overrides)
+        else:
+            scenario, world = in_force(loaded[0], options.overrides), loaded[1]
+    cache = CacheDir.at(run.cache_dir) if run.use_cache else None
     if cache is not None:
         cache.ensure()  # an unusable cache directory fails now, not after the roadmap
     store = RoadmapStore(cache) if cache is not None else None
     with times.timed("roadmap"):
         roadmap, roadmap_hit = roadmap_for(scenario, world, store)
-    oracle = make_oracle(scenario, world, roadmap, options)
-    try:
-        table = full_table(scenario, world, oracle, times) if with_table else None
-    except BaseException:
-        close(oracle)
-        raise
+        check_reachable(scenario, world, roadmap)
+    oracle = make_oracle(scenario, world, roadmap, run, options.reporters)
     warnings = tuple(store.warnings) if store is not None else ()
-    return Prepared(scenario, world, roadmap, roadmap_hit, cache, warnings, oracle, table)
-
-
-def close(oracle: Oracle) -> None:
-    """Stop the oracle's executor and close its cache."""
-    oracle.executor.close()
-    oracle.cache.close()
+    return Prepared(scenario, world, roadmap, roadmap_hit, cache, warnings, oracle)
 
 
 def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
     """The encoded task problem with its computed costs (``tmpnav export-pddl``)."""
+    from tmpnav.planning.exact import full_table
     from tmpnav.task.stage import TaskProblem
 
-    prep = prepare(path, options, StageTimes())
-    close(prep.oracle)
-    assert prep.table is not None
-    return TaskProblem.of(prep.scenario, prep.table).encode()
+    times = StageTimes()
+    prep = prepare(path, options, times)
+    try:
+        table = full_table(prep.scenario, prep.world, prep.oracle, times)
+    finally:
+        prep.oracle.close()
+    return TaskProblem.of(prep.scenario, table).encode()
 
 
 def plan(
@@ -198,51 +244,49 @@ def plan(
 ) -> PlanReport:
     """Plan a scenario end to end: the task-level optimal plan for the roadmap, with its
     motions and beliefs. ``loaded`` skips loading when the caller already has the world."""
-    from tmpnav.attachment.canonical import CanonicalCosts
-    from tmpnav.attachment.carried import CarriedCosts
-    from tmpnav.attachment.strategy import plan_scenario
+    from tmpnav.planning import TaskRun, plan_stage
     from tmpnav.resimulate import resimulate
+    from tmpnav.task.search import SearchRun
 
     options = options or PlanOptions()
     times = StageTimes()
-    prep = prepare(path, options, times, loaded, with_table=False)
-    scenario, oracle = prep.scenario, prep.oracle
+    prep = prepare(path, options, times, loaded)
     try:
-        canonical = CanonicalCosts(oracle, prep.world, scenario.planner.pair_min_gain)
-        carried = CarriedCosts(oracle, canonical)
-        store = oracle.cache if options.use_cache else None
-        planned = plan_scenario(
-            scenario, prep.world, canonical, carried, store, options.replan, times, options.search_progress
-        )
-        table, task = planned.table, planned.task
+        store = prep.oracle.cache if options.execution.use_cache else None
+        watch = SearchRun(times, options.reporters.search)
+        run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch)
+        planned = plan_stage(run)
         with times.timed("resimulate"):
-            resim = resimulate(carried, list(task.steps), list(task.step_costs), list(task.action_names))
+            resim = resimulate(run.carried, planned.task)
     finally:
-        close(oracle)
+        prep.oracle.close()
     times.close()
     return PlanReport(
-        scenario=scenario,
+        scenario=prep.scenario,
         world=prep.world,
         roadmap=prep.roadmap,
-        table=table,
-        task=task,
+        table=planned.table,
+        task=planned.task,
         actions=tuple(resim.actions),
         trajectories=resim.trajectories,
         times=times,
-        cache=_cache_use(prep, task, options.use_cache),
-        oracle=oracle.stats,
+        cache=_cache_use(prep, planned.task.plan_hit, options.execution.use_cache),
+        oracle=prep.oracle.stats.counts(),
     )
 
 
 def pddl_texts(report: PlanReport) -> tuple[str, str]:
-    """The PDDL domain and problem behind a report's plan (encoded again when it was remembered)."""
+    """The PDDL domain and problem behind a report's plan (encoded again when the planner's
+    own problem is not at hand: a remembered plan, a search over sub-problems)."""
     from tmpnav.task.export import pddl_texts as texts
-    from tmpnav.task.stage import TaskProblem, encoded_problem
+    from tmpnav.task.stage import TaskProblem
 
-    return texts(encoded_problem(TaskProblem.of(report.scenario, report.table), report.task))
+    if report.task.pddl is not None:
+        return report.task.pddl()
+    return texts(TaskProblem.of(report.scenario, report.table).encode())
 
 
-def _cache_use(prep: Prepared, task: TaskResult, enabled: bool) -> CacheUse:
+def _cache_use(prep: Prepared, plan_hit: bool, enabled: bool) -> CacheUse:
     stats = prep.oracle.stats
     return CacheUse(
         enabled=enabled,
@@ -251,14 +295,6 @@ def _cache_use(prep: Prepared, task: TaskResult, enabled: bool) -> CacheUse:
         misses=stats.cache_misses,
         roadmap_hit=prep.roadmap_hit,
         table_hit=stats.table_hit,
-        plan_hit=task.plan_hit,
+        plan_hit=plan_hit,
         warnings=(*prep.roadmap_warnings, *prep.oracle.cache.stats.warnings),
     )
-
-
-def _check_goals(scenario: Scenario) -> None:
-    """Goals must name rooms of the scenario (the bench may override them)."""
-    rooms = {r.name for r in scenario.rooms}
-    unknown = [g for g in scenario.goals.all_rooms if g not in rooms]
-    if unknown:
-        raise InputError(f"goal rooms {', '.join(unknown)} are not rooms of scenario {scenario.name!r}")

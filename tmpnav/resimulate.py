@@ -5,9 +5,9 @@ its robots actually are, with their actual beliefs, cross-correlations included,
 oracle picks its goal instantiations again from there (paper: "this instantiation becomes
 the start node" of the next move). The whole team is one joint EKF state: robots that do
 not move in an action stay still, neither observe nor are observed, and their beliefs
-change only through their correlations with the robots that move. The step itself is
-:meth:`tmpnav.attachment.carried.CarriedCosts.advance`, the same code that costs plans for
-the planner with ``--costs carried``; here it also records every control step.
+change only through their correlations with the robots that move. The steps are
+:meth:`tmpnav.attachment.carried.CarriedCosts.replay`, the same code that costs plans for
+the planner with ``--costs carried``, recording every control step.
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 
 from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.team import Team, belief_step
-from tmpnav.errors import TmpnavError
-from tmpnav.types import Belief, CostTerms, MoveKey, PlannedAction, TrajectoryStep
+from tmpnav.results import TaskResult
+from tmpnav.types import Belief, CostTerms, PlannedAction, TrajectoryStep
 
 
 @dataclass
@@ -35,22 +35,14 @@ class Resimulation:
         return sum(a.resimulated_cost for a in self.actions)
 
 
-def resimulate(
-    carried: CarriedCosts,
-    plan: list[tuple[MoveKey, ...]],
-    planner_costs: list[float],
-    action_names: list[str],
-) -> Resimulation:
-    """Run the plan's actions in order on the team's joint belief."""
+def resimulate(carried: CarriedCosts, task: TaskResult) -> Resimulation:
+    """Run the task plan's actions in order on the team's joint belief."""
     team: Team = carried.start
     trajectories = {r: [belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i, r in enumerate(team.names)}
     terms: dict[str, list[CostTerms]] = {r: [] for r in team.names}
     actions: list[PlannedAction] = []
-    for k, moves in enumerate(plan):
-        try:
-            outcome = carried.advance(team, moves, record=True)
-        except TmpnavError as err:
-            raise TmpnavError(f"plan step {k + 1}: {err}") from None
+    outcomes = carried.replay(task.steps)
+    for k, (moves, outcome) in enumerate(zip(task.steps, outcomes, strict=True)):
         assert outcome.trajectories is not None
         for r, steps in outcome.trajectories.items():
             trajectories[r].extend(steps)
@@ -59,9 +51,9 @@ def resimulate(
         actions.append(
             PlannedAction(
                 index=k + 1,
-                name=action_names[k],
+                name=task.action_names[k],
                 moves=tuple(moves),
-                planner_cost=planner_costs[k],
+                planner_cost=task.step_costs[k],
                 resimulated_cost=outcome.cost,
                 goal_nodes=outcome.goal_nodes,
                 paths=outcome.paths,

@@ -1,30 +1,36 @@
 """What a planning run returns: the task stage's result and the pipeline's report.
 
-``TaskResult`` is what :func:`tmpnav.task.stage.plan_task` returns (the ordered plan steps, their
-costs as the planner saw them, how big the task problem was, whether the plan came from the
-cache); ``PlanReport`` is what :func:`tmpnav.pipeline.plan` returns and every writer of
-``report/`` reads (plan.json, the terminal summary, plan.png). Both are typed values: the
-report code reads attributes, never dictionary keys.
+``TaskResult`` is what every task planner returns (:data:`tmpnav.planning.PLANNERS`: the ordered
+plan steps, their costs as the planner saw them, how big the task problem was, whether the plan
+came from the cache); ``PlanReport`` is what :func:`tmpnav.pipeline.plan` returns and every
+writer of ``report/`` reads (plan.json, the terminal summary, plan.png). Both are plain typed
+values: the report code reads attributes, never dictionary keys, and this module imports no
+class of the oracle or the task stage (it sits below them: they return its values).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
+from tmpnav.choices import COSTS, SEARCH_MODES, STOP_REASONS, Costs, SearchMode, StopReason
 from tmpnav.types import CostTable, MoveKey, PlannedAction, PlanStatus, Roadmap, Scenario, TrajectoryStep
 
-if TYPE_CHECKING:  # annotations only: these modules import this one's stages
-    from tmpnav.oracle.oracle import OracleStats
-    from tmpnav.task.encode import EncodedTask
+if TYPE_CHECKING:  # annotations only: the world is stage 2, built before this module's values
     from tmpnav.world import World
 
 #: a JSON value (plan.json, cache entries), as the standard library's ``json`` reads and writes it
 JSON = dict[str, "JSON"] | list["JSON"] | str | int | float | bool | None
+
+#: progress of the anytime search: (seconds since the run started, best plan cost, lower
+#: bound or None, what happened)
+SearchProgress = Callable[[float, float, float | None, str], None]
+
+_Name = TypeVar("_Name", bound=str)
 
 #: the pipeline's stages in the order they run; a run's ``total`` is all of them but ``load``.
 #: In the anytime search the stages interleave: ``oracle`` counts the costs it asks for,
@@ -34,9 +40,15 @@ STAGES = ("load", "roadmap", "oracle", "encode", "planner", "bound", "resimulate
 
 @dataclass
 class StageTimes:
-    """Seconds spent in each stage of a run (keys of :data:`STAGES`), filled in as it runs."""
+    """Seconds spent in each stage of a run (keys of :data:`STAGES`), filled in as it runs, and
+    the run's clock (:meth:`elapsed`), started when the run starts."""
 
     seconds: dict[str, float] = field(default_factory=dict)
+    started: float = field(default_factory=time.perf_counter, compare=False, repr=False)
+
+    def elapsed(self) -> float:
+        """Wall-clock seconds since the run started: the one clock of its progress."""
+        return time.perf_counter() - self.started
 
     def add(self, stage: str, dt: float) -> None:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + dt
@@ -50,9 +62,14 @@ class StageTimes:
         finally:
             self.add(stage, time.perf_counter() - start)
 
+    def spent(self) -> float:
+        """Seconds of every stage so far but ``load`` (scenario parsing and world building):
+        what a run's time budget counts."""
+        return sum(v for k, v in self.seconds.items() if k not in ("load", "total"))
+
     def close(self) -> None:
-        """Record ``total``: every stage but ``load`` (scenario parsing and world building)."""
-        self.seconds["total"] = sum(v for k, v in self.seconds.items() if k not in ("load", "total"))
+        """Record ``total``: :meth:`spent`, once the run is done."""
+        self.seconds["total"] = self.spent()
 
 
 @dataclass(frozen=True)
@@ -70,14 +87,44 @@ class TaskCounts:
 class SearchSummary:
     """How the task plan was found (plan.json ``search``)."""
 
-    mode: str  # "exact": one optimal ENHSP search over the whole table; "anytime": tmpnav.task.search
-    costs: str  # "table" (canonical start states) | "carried" (the beliefs the robots carry)
-    stopped: str  # exact: "solved"; anytime: "optimal" | "converged" | "time budget" | "nothing to do"
+    mode: SearchMode  # "exact": one optimal ENHSP search; "anytime": tmpnav.task.search
+    costs: Costs  # "table" (canonical start states) | "carried" (the beliefs the robots carry)
+    stopped: StopReason  # exact: "solved"; anytime: "optimal" | "converged" | "time budget" | "nothing to do"
     start: str = ""  # anytime: how the first plan was found
     subproblems: int = 0  # anytime: sub-problems ENHSP solved
     improvements: int = 0  # anytime: plans kept because they were cheaper
     seconds: float = 0.0  # the search's own time
     history: tuple[tuple[float, float], ...] = ()  # (seconds, best cost) at each improvement
+
+    def to_json(self) -> dict[str, JSON]:
+        """As plan.json's ``search`` (and the remembered plans) hold it."""
+        return {
+            "mode": self.mode,
+            "costs": self.costs,
+            "stopped": self.stopped,
+            "start": self.start,
+            "subproblems": self.subproblems,
+            "improvements": self.improvements,
+            "seconds": self.seconds,
+            "history": [[t, c] for t, c in self.history],
+        }
+
+    @staticmethod
+    def from_json(entry: dict[str, JSON]) -> SearchSummary:
+        """The summary :meth:`to_json` wrote; KeyError, TypeError or ValueError when it is not one."""
+        history = entry["history"]
+        if not isinstance(history, list):
+            raise TypeError("history")
+        return SearchSummary(
+            _one_of(entry["mode"], SEARCH_MODES),
+            _one_of(entry["costs"], COSTS),
+            _one_of(entry["stopped"], STOP_REASONS),
+            str(entry["start"]),
+            int(_number(entry["subproblems"])),
+            int(_number(entry["improvements"])),
+            _number(entry["seconds"]),
+            tuple(_pair(h) for h in history),
+        )
 
 
 @dataclass(frozen=True)
@@ -101,9 +148,11 @@ class TaskResult:
     step_costs: tuple[float, ...]  # each step's cost in the cost table, as the planner saw it
     counts: TaskCounts
     plan_hit: bool  # the plan was remembered for this exact problem; nothing was encoded or solved
-    encoded: EncodedTask | None = field(default=None, repr=False, compare=False)  # None after a plan_hit
     search: SearchSummary | None = None
     bound: BoundSummary | None = None
+    #: the PDDL domain and problem the planner solved, written on demand; None when the plan was
+    #: remembered or found by a search over sub-problems (tmpnav.pipeline.pddl_texts encodes it then)
+    pddl: Callable[[], tuple[str, str]] | None = field(default=None, repr=False, compare=False)
 
     @property
     def planner_cost(self) -> float:
@@ -125,6 +174,23 @@ class CacheUse:
 
 
 @dataclass(frozen=True)
+class OracleCounts:
+    """What the cost oracle did during a run (plan.json ``oracle``)."""
+
+    table_cache_hit: bool  # the whole cost table was loaded
+    requests: int
+    cache_hits: int
+    cache_misses: int
+    single_simulations: int
+    joint_simulations: int
+    joint_factorized: int  # pairs that never saw each other: sums of single simulations
+    pairs_pruned: int  # pairs proved unable to save pair_min_gain, never simulated jointly
+
+    def as_dict(self) -> dict[str, int | bool]:
+        return dict(vars(self))
+
+
+@dataclass(frozen=True)
 class PlanReport:
     """Everything ``tmpnav plan`` reports (the JSON schema is docs/plan-json.md)."""
 
@@ -137,7 +203,7 @@ class PlanReport:
     trajectories: dict[str, list[TrajectoryStep]]  # robot -> belief at every control step
     times: StageTimes
     cache: CacheUse
-    oracle: OracleStats
+    oracle: OracleCounts
 
     @property
     def encoding(self) -> str:
@@ -158,3 +224,22 @@ class PlanReport:
     @property
     def resimulated_cost(self) -> float:
         return float(sum(a.resimulated_cost for a in self.actions))
+
+
+def _one_of(value: JSON, choices: tuple[_Name, ...]) -> _Name:
+    for choice in choices:
+        if value == choice:
+            return choice
+    raise ValueError(f"{value!r} is not one of {choices}")
+
+
+def _number(value: JSON) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise TypeError(f"{value!r} is not a number")
+    return float(value)
+
+
+def _pair(value: JSON) -> tuple[float, float]:
+    if not isinstance(value, list) or len(value) != 2:
+        raise TypeError(f"{value!r} is not a pair of numbers")
+    return _number(value[0]), _number(value[1])

@@ -14,6 +14,8 @@ from typing import TypeVar
 
 import numpy as np
 
+from tmpnav.choices import Costs, Search
+
 Point = tuple[float, float]
 Polygon = tuple[Point, ...]
 
@@ -196,9 +198,9 @@ class PlannerOptions:
     encoding: str  # paper | single | mixed
     timeout: float  # s
     pair_min_gain: float = 0.05  # mixed: minimum relative saving of a paired move
-    search: str = "auto"  # exact | anytime | auto (tmpnav.task.stage)
+    search: Search = "auto"  # exact | anytime | auto (tmpnav.choices)
     time_budget: float | None = None  # s, the anytime search's budget for the run; None: by size
-    costs: str = "carried"  # carried (the beliefs the robots carry; default) | table (canonical start states)
+    costs: Costs = "carried"  # carried (the beliefs the robots carry; default) | table (canonical start states)
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,6 @@ from tests.attachment.support import carried_problem
 from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.team import Team, mutual_sensing, stationary
 from tmpnav.oracle.motionsets import trajectory
-from tmpnav.resimulate import resimulate
 from tmpnav.task.plans import Plan
 
 #: three robots on the corridor: r1 and r3 see each other in their paired move, then r1
@@ -85,8 +84,10 @@ def test_a_plan_costed_again_simulates_nothing(three: CarriedCosts) -> None:
     assert shorter.steps == first.steps[:2] and three.steps_simulated == before
 
 
-def test_the_resimulation_is_the_planners_cost(three: CarriedCosts) -> None:
+def test_the_replay_is_the_planners_cost(three: CarriedCosts) -> None:
+    """The re-simulation replays the plan (tmpnav.resimulate): the same costs, with every control step."""
     cost = three.plan_cost(PLAN)
-    resim = resimulate(three, list(PLAN), list(cost.steps), ["goto_room"] * len(PLAN))
-    assert [a.resimulated_cost for a in resim.actions] == list(cost.steps)
-    assert all(len(resim.trajectories[r]) > 1 for r in ("r1", "r2", "r3"))
+    replayed = three.replay(PLAN)
+    assert [o.cost for o in replayed] == list(cost.steps)
+    assert all(o.trajectories is not None and all(len(t) > 1 for t in o.trajectories.values()) for o in replayed)
+    assert {r for o in replayed for r in o.trajectories or {}} == {"r1", "r2", "r3"}

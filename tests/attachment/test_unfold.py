@@ -14,6 +14,7 @@ from tests.attachment.support import carried_problem, cheapest_plan_by_enumerati
 from tmpnav.attachment.unfold import unfold
 from tmpnav.pipeline import PlanOptions, plan
 from tmpnav.task.plans import Rules
+from tmpnav.task.search import SearchRun
 from tmpnav.task.stage import plan_unfolded
 
 CASES = [
@@ -32,10 +33,7 @@ def test_the_unfolded_plan_is_the_cheapest_of_every_plan(config: str, rooms: tup
     best, best_plan, plans = cheapest_plan_by_enumeration(carried, scenario.goals, gain)
     graph = unfold(carried, scenario.goals, gain)
     assert graph is not None
-    locations = tuple(dict.fromkeys([*rooms, *carried.start_location.values()]))
-    result = plan_unfolded(
-        graph, carried.robots, locations, Rules(carried.start_location, scenario.goals), scenario.planner
-    )
+    result = plan_unfolded(graph, Rules(carried.start_location, scenario.goals), scenario.planner, SearchRun())
     assert plans > 10
     assert result.planner_cost == pytest.approx(best, rel=1e-9), (result.steps, best_plan)
     assert carried.plan_cost(result.steps).total == pytest.approx(best, rel=1e-9)
@@ -48,7 +46,7 @@ def test_five_rooms_through_the_pipeline(tmp_path: object) -> None:
     rooms = ("P1", "P2", "P3", "P5", "P8")
     scenario, world, carried = carried_problem("sparse-warehouse.yaml", rooms, 2)
     best, _, _ = cheapest_plan_by_enumeration(carried, scenario.goals, scenario.planner.pair_min_gain)
-    report = plan(scenario.source, PlanOptions(use_cache=False, workers=1), loaded=(scenario, world))
+    report = plan(scenario.source, PlanOptions.of(use_cache=False, workers=1), loaded=(scenario, world))
     assert report.task.search is not None and report.task.search.mode == "exact"
     assert report.task.bound is not None and report.task.bound.proved_optimal
     assert report.planner_cost == pytest.approx(best, rel=1e-9)

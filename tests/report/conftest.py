@@ -55,7 +55,7 @@ def plan_report(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
     folder = tmp_path_factory.mktemp("three-rooms")
     scenario = folder / "three_rooms.yaml"
     scenario.write_text(THREE_ROOMS)
-    return plan(scenario, PlanOptions(cache_dir=folder / "cache", executor="serial"))
+    return plan(scenario, PlanOptions.of(cache_dir=folder / "cache", executor="serial"))
 
 
 @pytest.fixture(scope="session")

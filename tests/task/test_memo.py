@@ -41,11 +41,11 @@ def stored(cache_dir: Path, report) -> tuple[str, object]:
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory: pytest.TempPathFactory):
     cache = tmp_path_factory.mktemp("cache")
-    options = PlanOptions(cache_dir=cache, executor="serial", costs="table", search="exact")
+    options = PlanOptions.of(cache_dir=cache, executor="serial", costs="table", search="exact")
     cold = plan(TWO_ROOMS, options)
     warm = plan(TWO_ROOMS, options)
-    replanned = plan(TWO_ROOMS, dataclasses.replace(options, replan=True))
-    uncached = plan(TWO_ROOMS, PlanOptions(use_cache=False, executor="serial", costs="table", search="exact"))
+    replanned = plan(TWO_ROOMS, options.but(replan=True))
+    uncached = plan(TWO_ROOMS, PlanOptions.of(use_cache=False, executor="serial", costs="table", search="exact"))
     return cache, cold, warm, replanned, uncached
 
 
@@ -53,7 +53,7 @@ def test_the_second_run_reads_the_plan_and_plans_the_same(runs) -> None:
     _, cold, warm, replanned, uncached = runs
     assert not cold.cache.plan_hit and warm.cache.plan_hit
     assert not replanned.cache.plan_hit and not uncached.cache.plan_hit
-    assert warm.task.plan_hit and warm.task.encoded is None and warm.times.seconds["encode"] == 0.0
+    assert warm.task.plan_hit and warm.task.pddl is None and warm.times.seconds["encode"] == 0.0
     assert summary(warm) == summary(cold) == summary(replanned) == summary(uncached)
     assert warm.task.counts == cold.task.counts
 
@@ -99,7 +99,7 @@ def test_an_entry_that_does_not_fit_is_a_miss(runs, damage) -> None:
 
 
 def test_a_damaged_entry_makes_the_planner_run_again(tmp_path: Path) -> None:
-    options = PlanOptions(cache_dir=tmp_path, executor="serial", costs="table", search="exact")
+    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", costs="table", search="exact")
     first = plan(TWO_ROOMS, options)
     key, entry = stored(tmp_path, first)
     cache = DiskCache(tmp_path)

@@ -10,7 +10,7 @@ from tests.task.test_optimality import random_table
 from tmpnav.oracle.cache import DiskCache
 from tmpnav.results import StageTimes
 from tmpnav.task.decode import step_cost
-from tmpnav.task.stage import TaskProblem, encoded_problem, plan_task
+from tmpnav.task.stage import TaskProblem, plan_task
 from tmpnav.types import PlannerOptions
 
 pytestmark = pytest.mark.slow
@@ -27,13 +27,13 @@ def test_plan_task_solves_then_remembers(tmp_path: Path) -> None:
         again = plan_task(task, store, replan=True)
     finally:
         store.close()
-    assert not cold.plan_hit and cold.encoded is not None and warm.plan_hit and warm.encoded is None
+    assert not cold.plan_hit and cold.pddl is not None and warm.plan_hit and warm.pddl is None
     assert not again.plan_hit
     assert cold.steps == warm.steps == again.steps and cold.action_names == warm.action_names
     assert cold.step_costs == tuple(step_cost(table, s) for s in cold.steps)
     assert cold.counts == warm.counts and cold.counts.single_moves == len(table.single)
     assert {"encode", "planner"} <= set(cold_times.seconds) and warm_times.seconds["encode"] == 0.0
-    assert encoded_problem(task, warm).n_actions == cold.counts.actions  # encoded again on demand
+    assert task.encode().n_actions == cold.counts.actions  # encoded again on demand
 
 
 def test_without_a_store_nothing_is_remembered() -> None:

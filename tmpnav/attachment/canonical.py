@@ -22,6 +22,7 @@ import math
 from collections.abc import Iterable, Sequence
 
 from tmpnav.attachment.floors import motion_floors
+from tmpnav.choices import Costs
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import arrival_state, build_table, initial_state, start_locations
@@ -41,6 +42,8 @@ NEAREST = 10
 
 class CanonicalCosts:
     """Action costs from canonical start states, computed on demand (see the module docstring)."""
+
+    costs: Costs = "table"
 
     def __init__(self, oracle: Oracle, world: World, min_gain: float):
         self.oracle = oracle

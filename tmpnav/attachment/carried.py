@@ -11,8 +11,8 @@ part in the observations; their beliefs change only through their correlations w
 robots that move. A step's cost is the weighted cost of its robots' motions.
 
 This is also what the re-simulation of the final plan does (:mod:`tmpnav.resimulate` calls
-:meth:`CarriedCosts.advance` with ``record=True``), so with ``--costs carried`` the cost the
-planner minimises is the executed cost, number for number.
+:meth:`CarriedCosts.replay`, which runs the same steps and records every control step), so
+with ``--costs carried`` the cost the planner minimises is the executed cost, number for number.
 
 Two facts keep it fast without changing any number:
 
@@ -40,6 +40,7 @@ import numpy as np
 
 from tmpnav.attachment.canonical import CanonicalCosts, _offered, _ordered
 from tmpnav.attachment.team import Team, belief_step, mutual_sensing, stationary
+from tmpnav.choices import Costs
 from tmpnav.errors import TmpnavError
 from tmpnav.oracle.executors import library
 from tmpnav.oracle.motionsets import trajectory
@@ -63,11 +64,13 @@ class StepOutcome:
     paths: tuple[tuple[int, ...], ...]
     goal_poses: tuple[tuple[float, float, float], ...]
     team: Team  # the state after the step
-    trajectories: dict[str, list[TrajectoryStep]] | None = None  # with record=True: each mover's beliefs
+    trajectories: dict[str, list[TrajectoryStep]] | None = None  # replayed steps: each mover's beliefs
 
 
 class CarriedCosts:
     """Plan costs with carried-over beliefs (the module docstring); a :class:`~tmpnav.task.model.CostModel`."""
+
+    costs: Costs = "carried"
 
     def __init__(self, oracle: Oracle, canonical: CanonicalCosts):
         self.oracle = oracle
@@ -162,20 +165,36 @@ class CarriedCosts:
 
     # ------------------------------------------------------------------ one step
 
-    def advance(self, team: Team, step: Step, record: bool = False) -> StepOutcome:
+    def advance(self, team: Team, step: Step) -> StepOutcome:
         """Run one plan step on ``team`` (raises TmpnavError if its robots cannot reach
-        their rooms). ``record``: also return each moving robot's belief at every control step."""
+        their rooms)."""
         robots = tuple(m[0] for m in step)
         idx = [team.names.index(r) for r in robots]
         sub = team.partners(idx)
         key = self._key(team, step, sub)
-        if not record and key in self._memo:
+        if key in self._memo:
             outcome, _ = self._memo[key]
             return self._apply(team, sub, outcome)
-        outcome = self._run(team, step, idx, sub, record)
-        if not record:
-            self._memo[key] = (outcome, sub)
+        outcome = self._run(team, step, idx, sub, False)
+        self._memo[key] = (outcome, sub)
         return self._apply(team, sub, outcome)
+
+    def replay(self, plan: Plan) -> list[StepOutcome]:
+        """Run the plan's steps in order from the start, as :meth:`plan_cost` does, and record
+        each moving robot's belief at every control step (``StepOutcome.trajectories``).
+        Raises TmpnavError naming the first step whose robots cannot reach their rooms."""
+        team, outcomes = self.start, []
+        for k, step in enumerate(plan):
+            robots = tuple(m[0] for m in step)
+            idx = [team.names.index(r) for r in robots]
+            sub = team.partners(idx)
+            try:
+                outcome = self._apply(team, sub, self._run(team, step, idx, sub, True))
+            except TmpnavError as err:
+                raise TmpnavError(f"plan step {k + 1}: {err}") from None
+            outcomes.append(outcome)
+            team = outcome.team
+        return outcomes
 
     def advance_many(
         self, team: Team, steps: Sequence[Step], min_gain: float | None = None

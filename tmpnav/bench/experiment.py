@@ -22,8 +22,7 @@ BENCH_CSV, BENCH_PNG, SUMMARY_MD = "bench.csv", "bench.png", "summary.md"
 
 def check_variant(text: str) -> str:
     """A variant of ``--encoding``: ENCODING[:COSTS[:SEARCH]], each part a known choice."""
-    from tmpnav.task.encodings import ENCODINGS
-    from tmpnav.task.modes import COSTS, SEARCHES
+    from tmpnav.choices import COSTS, ENCODINGS, SEARCHES
 
     parts = text.split(":")
     choices = (tuple(ENCODINGS), COSTS, SEARCHES)

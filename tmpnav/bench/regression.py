@@ -97,7 +97,7 @@ def run_case(case: Case) -> dict[str, Any]:
     """Plan a case without any cache; the plan and costs as they are recorded."""
     goals = Goals(visit=case.visit, per_robot=()) if case.visit else None
     scenario = shipped.configs_dir() / Path(case.scenario).name
-    options = PlanOptions(
+    options = PlanOptions.of(
         encoding=case.encoding,
         goals=goals,
         use_cache=False,

@@ -41,7 +41,7 @@ WARM_UP = "two-rooms.yaml"  # a shipped scenario
 
 def warm_up() -> None:
     """Plan a tiny scenario once: imports, compiled kernels and the first JVM start are then paid."""
-    plan(shipped.configs_dir() / WARM_UP, PlanOptions(use_cache=False, executor="serial"))
+    plan(shipped.configs_dir() / WARM_UP, PlanOptions.of(use_cache=False, executor="serial"))
 
 
 class Watchdog:
@@ -87,7 +87,7 @@ def run(job: dict[str, Any]) -> dict[str, Any]:
                 out[phase] = dict(out["cold"], wall=0.0)
                 continue
             encoding, costs, search = variant(job["encoding"])
-            options = PlanOptions(
+            options = PlanOptions.of(
                 encoding=encoding,
                 costs=costs,
                 search=search,

@@ -8,7 +8,6 @@ from typing import Any
 
 import click
 
-from tmpnav import __version__
 from tmpnav.cli.options import (
     CACHE_DIR_OPTION,
     SCENARIO_ARG,
@@ -20,6 +19,7 @@ from tmpnav.cli.options import (
 )
 from tmpnav.cli.planners import check_planner
 from tmpnav.errors import EXIT_CODES
+from tmpnav.version import __version__
 
 EPILOG = "Exit codes: " + "; ".join(f"{code} {meaning}" for code, meaning in EXIT_CODES.items())
 
@@ -270,7 +270,7 @@ def doctor() -> None:
 @report_errors
 def reference() -> None:
     """Print the scenario format reference (every key, unit, default) as Markdown."""
-    from tmpnav.scenario.reference import markdown
+    from tmpnav.report.reference import markdown
 
     click.echo(markdown(), nl=False)
 

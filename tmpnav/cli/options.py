@@ -15,9 +15,9 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
+from tmpnav.choices import COSTS, SEARCHES
 from tmpnav.errors import OutputError, ScenarioError, TmpnavError
 from tmpnav.lifetime import check_signals
-from tmpnav.task.modes import COSTS, SEARCHES
 
 if TYPE_CHECKING:
     from tmpnav.pipeline import PlanOptions
@@ -151,8 +151,8 @@ def timeout_range() -> FiniteRange:
 
 
 def encoding_choice() -> click.Choice:
-    """The registered task encodings (tmpnav.task.encodings.ENCODINGS)."""
-    from tmpnav.task.encodings import ENCODINGS
+    """The task encodings (tmpnav.choices.ENCODINGS)."""
+    from tmpnav.choices import ENCODINGS
 
     return click.Choice(list(ENCODINGS))
 
@@ -227,26 +227,29 @@ def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
 
 def plan_options(kw: dict[str, Any]) -> PlanOptions:
     """The pipeline's options from the values of :func:`oracle_options` (and ``--replan``)."""
-    from tmpnav.pipeline import PlanOptions
+    from tmpnav.pipeline import Execution, Overrides, PlanOptions, Reporters
 
-    return PlanOptions(
+    overrides = Overrides(
         encoding=kw["encoding"],
         planner=kw["planner_name"],
         timeout=kw["timeout"],
         pair_min_gain=kw["pair_min_gain"],
         mutual_observations=False if kw["no_mutual_observations"] else None,
+        search=kw["search"],
+        time_budget=kw["time_budget"],
+        costs=kw["costs"],
+    )
+    execution = Execution(
         cache_dir=kw["cache_dir"],
         use_cache=not kw["no_cache"],
         replan=kw.get("replan", False),
         executor=kw["executor"],
         workers=kw["workers"],
         ray_address=kw["ray_address"],
-        progress=None if kw["quiet"] else progress_bar("oracle"),
-        search=kw["search"],
-        time_budget=kw["time_budget"],
-        costs=kw["costs"],
-        search_progress=None if kw["quiet"] else search_progress(),
     )
+    quiet = kw["quiet"]
+    reporters = Reporters(None if quiet else progress_bar("oracle"), None if quiet else search_progress())
+    return PlanOptions(overrides, execution, reporters)
 
 
 def search_progress() -> Callable[[float, float, float | None, str], None]:

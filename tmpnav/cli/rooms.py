@@ -65,7 +65,7 @@ def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_rooms: 
     from tmpnav.rooms.proposal import propose, read_map
     from tmpnav.rooms.segment import SegmentParams
     from tmpnav.rooms.skeleton import save, skeleton
-    from tmpnav.rooms.verify import verify
+    from tmpnav.rooms_check import verify
     from tmpnav.scenario import display_path
     from tmpnav.shipped import resolve
 

@@ -181,17 +181,3 @@ class DiskCache:
         if self._conn is not None:
             self._conn.close()
             self._conn = None
-
-
-def count_entries(path: Path) -> tuple[int | None, str | None]:
-    """How many entries the database at ``path`` holds, read-only: (count, None), or
-    (None, why) when it is unreadable."""
-    try:
-        conn = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=10.0)
-        try:
-            (entries,) = conn.execute("SELECT count(*) FROM entries").fetchone()
-        finally:
-            conn.close()
-    except sqlite3.DatabaseError as err:
-        return None, f"unreadable: {err}"
-    return int(entries), None

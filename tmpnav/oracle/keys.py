@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import hashlib
 from functools import lru_cache
-from pathlib import Path
 from typing import Any
 
+from tmpnav.digest import source_digest
 from tmpnav.oracle.requests import Request
 from tmpnav.oracle.results import pruned_result
 from tmpnav.types import CostTerms, MotionResult, Roadmap, Scenario
@@ -46,19 +46,10 @@ CODE_FILES = (
 #: the modules whose results are cached: their imports, followed through CODE_FILES, are
 #: what decides a result (tests/oracle/test_keys.py checks CODE_FILES against them)
 RESULT_ENTRY_POINTS = ("oracle/evaluate.py", "oracle/table.py", "oracle/keys.py")
-#: imported by those modules without deciding results: orchestration, or content already
-#: covered by the world's fingerprint (tests/oracle/test_keys.py checks the two lists)
-NOT_RESULT_CODE = ("oracle/oracle.py", "world/build.py")
-
-
-def source_digest(files: tuple[str, ...]) -> Any:
-    """A SHA-256 over the names and bytes of tmpnav source files (paths relative to the package)."""
-    root = Path(__file__).resolve().parent.parent
-    h = hashlib.sha256()
-    for rel in files:
-        h.update(rel.encode())
-        h.update((root / rel).read_bytes())
-    return h
+#: imported by those modules without deciding results: orchestration, content already
+#: covered by the world's fingerprint, the digest that keys the code itself, and the names of
+#: the task's choices that types.py annotates with (tests/oracle/test_keys.py checks the lists)
+NOT_RESULT_CODE = ("oracle/oracle.py", "world/build.py", "digest.py", "choices.py")
 
 
 @lru_cache(maxsize=1)

@@ -1,41 +1,49 @@
-"""The oracle: evaluations through the disk cache, misses on an executor."""
+"""The oracle: evaluations through the disk cache, misses on an executor.
+
+It only computes costs: the scenario it is given has been checked by the load stage (its
+sizes against the caps, tmpnav.scenario.extent) and its roadmap by the roadmap stage (every
+goal room reachable, tmpnav.roadmap.reach), both in :mod:`tmpnav.pipeline`.
+"""
 
 from __future__ import annotations
 
 import math
 import time
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
-from tmpnav.errors import InputError, Problem, RoadmapError, ScenarioError
-from tmpnav.oracle.cache import NullCache
+from tmpnav.errors import InputError
+from tmpnav.oracle.cache import CacheStats, NullCache
 from tmpnav.oracle.evaluate import EvalStats, Request
-from tmpnav.oracle.executors import OracleContext, Progress, SerialExecutor
+from tmpnav.oracle.executors import OracleContext, Outcome, Progress, SerialExecutor
 from tmpnav.oracle.keys import context_digest, from_json, request_key, to_json
-from tmpnav.roadmap.reach import roadmap_cuts
-from tmpnav.scenario import display_path
-from tmpnav.scenario.extent import plan_sizes
-from tmpnav.types import MotionResult, Scenario
+from tmpnav.results import OracleCounts
+from tmpnav.types import MotionResult
 
 
-def check_plan_sizes(scenario: Scenario) -> None:
-    """Raise ScenarioError when goal rooms x robots or the cost table's estimated entries
-    pass their caps (tmpnav.scenario.limits) for this scenario, overrides included."""
-    file = display_path(scenario.source)
-    problems = [Problem(file, path, message, scenario.line_of(path)) for path, message in plan_sizes(scenario)]
-    if problems:
-        raise ScenarioError(problems)
+class CostCache(Protocol):
+    """Where the oracle's results are kept between runs: ``DiskCache`` (the cost database of the
+    cache directory) or ``NullCache`` (none), in :mod:`tmpnav.oracle.cache`."""
+
+    stats: CacheStats
+
+    def get_many(self, keys: Iterable[str]) -> dict[str, Any]: ...
+
+    def put_many(self, items: dict[str, Any]) -> None: ...
+
+    def close(self) -> None: ...
 
 
-def check_reachable(ctx: OracleContext) -> None:
-    """Raise RoadmapError (exit 2) when the roadmap cuts a goal room off from the robot that
-    must visit it though free space joins them, instead of costing every move and hearing
-    "no plan" from ENHSP."""
-    why = roadmap_cuts(ctx.scenario, ctx.world, ctx.roadmap)
-    if why is not None:
-        raise RoadmapError(why)
+class Executor(Protocol):
+    """Where the evaluations the cache misses run: in this process, in local worker processes,
+    or on Ray (:mod:`tmpnav.oracle.executors`); every executor gives bit-identical results."""
+
+    def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome: ...
+
+    def close(self) -> None: ...
 
 
 @dataclass
@@ -47,42 +55,41 @@ class OracleStats:
     sims: EvalStats = field(default_factory=EvalStats)
     table_hit: bool = False  # the whole cost table came from the cache
 
-    def as_dict(self) -> dict[str, Any]:
-        return {
-            "table_cache_hit": self.table_hit,
-            "requests": self.requests,
-            "cache_hits": self.cache_hits,
-            "cache_misses": self.cache_misses,
-            "single_simulations": self.sims.single_sims,
-            "joint_simulations": self.sims.joint_sims,
-            "joint_factorized": self.sims.joint_factorized,
-            "pairs_pruned": self.sims.pairs_pruned,
-        }
+    def counts(self) -> OracleCounts:
+        """The counters as the run's report holds them."""
+        return OracleCounts(
+            table_cache_hit=self.table_hit,
+            requests=self.requests,
+            cache_hits=self.cache_hits,
+            cache_misses=self.cache_misses,
+            single_simulations=self.sims.single_sims,
+            joint_simulations=self.sims.joint_sims,
+            joint_factorized=self.sims.joint_factorized,
+            pairs_pruned=self.sims.pairs_pruned,
+        )
 
 
 class Oracle:
-    """Evaluates actions (see :mod:`tmpnav.oracle.evaluate`) with caching and parallelism.
+    """Evaluates actions (see :mod:`tmpnav.oracle.evaluate`) with caching and parallelism."""
 
-    Refuses a scenario whose cost table would pass the resource caps (ScenarioError), or
-    whose goals the roadmap cannot serve (RoadmapError), before it computes anything. The
-    scenario it is given is the one in force, with the command line's encoding and goals
-    (``plan --encoding mixed``, the bench's goal draws), which validation never saw.
-    """
-
-    def __init__(self, ctx: OracleContext, cache: Any = None, executor: Any = None, progress: Progress | None = None):
+    def __init__(
+        self,
+        ctx: OracleContext,
+        cache: CostCache | None = None,
+        executor: Executor | None = None,
+        progress: Progress | None = None,
+    ):
         self.ctx = ctx
-        self.cache = cache if cache is not None else NullCache()
-        self.executor = executor if executor is not None else SerialExecutor()
-        try:
-            check_plan_sizes(ctx.scenario)
-            check_reachable(ctx)
-        except InputError:
-            self.executor.close()
-            self.cache.close()
-            raise
+        self.cache: CostCache = cache if cache is not None else NullCache()
+        self.executor: Executor = executor if executor is not None else SerialExecutor()
         self.progress = progress
         self.context = context_digest(ctx.scenario, ctx.world, ctx.roadmap)
         self.stats = OracleStats()
+
+    def close(self) -> None:
+        """Stop the executor and close the cache."""
+        self.executor.close()
+        self.cache.close()
 
     def evaluate(self, requests: list[Request]) -> list[MotionResult | None]:
         """Results in request order; None where the robots cannot reach their rooms.

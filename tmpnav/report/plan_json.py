@@ -16,9 +16,9 @@ from dataclasses import asdict
 
 import numpy as np
 
-from tmpnav import __version__
 from tmpnav.results import JSON, STAGES, CacheUse, PlanReport
 from tmpnav.types import PlannedAction, Roadmap, TrajectoryStep
+from tmpnav.version import __version__
 
 SCHEMA = "tmpnav-plan/1"
 _T_TOL = 1e-6  # s, trajectory times are rounded to 1e-9 s by the re-simulation

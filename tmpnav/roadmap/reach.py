@@ -15,9 +15,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from tmpnav.errors import RoadmapError
 from tmpnav.roadmap.graph import RoadmapGraph
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
+
+
+def check_reachable(scenario: Scenario, world: World, roadmap: Roadmap) -> None:
+    """Raise RoadmapError (exit 2) when the roadmap cuts a goal room off from the robot that
+    must visit it though free space joins them, instead of costing every move and hearing
+    "no plan" from ENHSP."""
+    why = roadmap_cuts(scenario, world, roadmap)
+    if why is not None:
+        raise RoadmapError(why)
 
 
 def roadmap_cuts(scenario: Scenario, world: World, roadmap: Roadmap) -> str | None:

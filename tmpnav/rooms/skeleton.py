@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from tmpnav import __version__
 from tmpnav.atomic import write_file
 from tmpnav.rooms.proposal import DEEP_DOOR, ROBOT_RADIUS, Proposal, RoomProposal
+from tmpnav.version import __version__
 
 WIDTH = 100  # characters per line of a wrapped polygon
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 
+from tmpnav.choices import choose
 from tmpnav.scenario.limits import (
     GOAL_ASSIGNMENTS,
     MOVE_STEPS,
@@ -122,9 +123,9 @@ def move_sizes(scenario: Scenario, width: float, height: float) -> list[Finding]
 def plan_sizes(scenario: Scenario) -> list[Finding]:
     """Goal rooms x robots and the estimated cost-table entries, against their caps.
 
-    Depends on the encoding and the goals: validation checks the scenario's own, and the
-    oracle checks the scenario in force (``plan --encoding``, the bench's goal draws)
-    before it lists a single move (tmpnav.oracle.oracle.check_plan_sizes).
+    Depends on the encoding and the goals, so the load stage checks the scenario in force,
+    the command line's overrides applied (``plan --encoding``, the bench's goal draws):
+    :func:`tmpnav.pipeline.load_world`.
     """
     goal_rooms = set(scenario.goals.visit)
     for _, rooms in scenario.goals.per_robot:
@@ -162,13 +163,6 @@ def plan_sizes(scenario: Scenario) -> list[Finding]:
 
 
 def _lists_the_whole_table(scenario: Scenario, rooms: int) -> bool:
-    """Does the search in force cost every paired move first? Only the exact search with table
-    costs does (tmpnav.attachment.strategy.search_mode); the paper's encoding always does."""
-    from tmpnav.task.modes import exact_fits
-
+    """Does the search in force cost every paired move first (:func:`tmpnav.choices.choose`)?"""
     sp = scenario.planner
-    if sp.encoding == "paper":
-        return True
-    if sp.costs != "table":
-        return False
-    return sp.search == "exact" or (sp.search == "auto" and exact_fits(rooms, len(scenario.robots), "table"))
+    return choose(sp.encoding, sp.search, sp.costs, rooms, len(scenario.robots)).lists_whole_table

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from tmpnav.choices import COSTS, ENCODINGS, SEARCHES
 from tmpnav.scenario.limits import MAP_CELLS, grid_cells
 from tmpnav.scenario.schema import (
     Choice,
@@ -30,12 +31,10 @@ from tmpnav.scenario.schema import (
     Text,
     Vector,
 )
-from tmpnav.task.encodings import ENCODINGS
-from tmpnav.task.modes import COSTS, SEARCHES
 
 DEG = math.pi / 180.0
 
-#: the task encodings: the task stage's registry is the one list (it imports no planning library)
+#: the task stage's choices (tmpnav.choices)
 ENCODING_CHOICES = tuple(ENCODINGS)
 SEARCH_CHOICES = SEARCHES
 COSTS_CHOICES = COSTS

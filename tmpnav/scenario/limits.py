@@ -19,6 +19,7 @@ import math
 import os
 from dataclasses import dataclass
 
+from tmpnav.choices import ENCODINGS
 from tmpnav.errors import InputError
 
 
@@ -129,13 +130,9 @@ YAML_MAX_DEPTH = 32
 
 
 def encoding_table(encoding: str) -> tuple[str, bool]:
-    """(where a robot may move: goals | all-rooms, whether pairs are costed) of an encoding,
-    from the encodings' registry (tmpnav/task/encodings.py imports no planning library)."""
-    from tmpnav.task.encodings import ENCODINGS
-    from tmpnav.types import Goals
-
-    enc = ENCODINGS.get(encoding, ENCODINGS["mixed"])
-    return enc.destinations, enc.pair_filter(Goals((), ()), {}) is not None
+    """(where a robot may move: goals | all-rooms, whether pairs are costed) of an encoding."""
+    spec = ENCODINGS.get(encoding, ENCODINGS["mixed"])
+    return spec.destinations, spec.pairs
 
 
 def grid_cells(width: float, height: float, resolution: float) -> float:

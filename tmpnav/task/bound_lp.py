@@ -135,13 +135,19 @@ class _Program:
     """
 
     def __init__(self, table: CostTable, goals: Goals, min_gain: float, rows: list[Row], enter: dict[str, set[str]]):
-        from scipy.sparse import coo_array
-
         self.robots, self.locs = table.robots, list(table.locations)
         for _, o, x in table.single:
             self.locs += [y for y in (o, x) if y not in self.locs]
         loc = {x: i for i, x in enumerate(self.locs)}
         self.start = np.array([loc[table.start_location[r]] for r in self.robots])
+        self._columns(table, min_gain, enter, loc)
+        self._equalities(rows, loc)
+        self._inequalities(table, goals, loc)
+        # cut (robot, k, W) -> its row's columns and values, and the rounds it has stayed slack
+        self.cuts: dict[tuple[int, int, frozenset[int]], tuple[Ints, Floats, int]] = {}
+
+    def _columns(self, table: CostTable, min_gain: float, enter: dict[str, set[str]], loc: dict[str, int]) -> None:
+        """The columns (single moves, then the useful pairs) and their incidence arrays."""
 
         def usable(m: MoveKey) -> bool:
             r, o, x = m
@@ -150,14 +156,17 @@ class _Program:
         columns: list[tuple[tuple[MoveKey, ...], float]] = [((m,), c) for m, c in table.single.items() if usable(m)]
         self.n_single = len(columns)
         columns += [(q, c) for q, c in _useful_pairs(table, min_gain).items() if usable(q[0]) and usable(q[1])]
+        self.n_columns = len(columns)
         self.cost = np.array([c for _, c in columns], dtype=float)
         inc = [(j, self.robots.index(r), loc[o], loc[t]) for j, (moves, _) in enumerate(columns) for r, o, t in moves]
         self.col, self.rob, self.org, self.tgt = np.array(inc, dtype=np.int64).reshape(-1, 4).T
         single_index = {moves[0]: j for j, (moves, _) in enumerate(columns[: self.n_single])}
         self._move_single = np.array([single_index[m] for moves, _ in columns for m in moves], dtype=np.int64)
-        n_r, n_l, n = len(self.robots), len(self.locs), len(columns)
 
-        # equalities: one row per required entry
+    def _equalities(self, rows: list[Row], loc: dict[str, int]) -> None:
+        """One row per required entry."""
+        from scipy.sparse import coo_array
+
         eq_index = {(None if r is None else self.robots.index(r), loc[x]): i for i, (r, x) in enumerate(rows)}
         hits = [
             (eq_index[key], j)
@@ -166,10 +175,15 @@ class _Program:
             if key in eq_index
         ]
         i_eq, j_eq = zip(*hits, strict=True) if hits else ((), ())
-        self.a_eq = coo_array((np.ones(len(i_eq)), (i_eq, j_eq)), shape=(len(rows), n)).tocsc()
+        self.a_eq = coo_array((np.ones(len(i_eq)), (i_eq, j_eq)), shape=(len(rows), self.n_columns)).tocsc()
         self.b_eq = np.ones(len(rows))
 
-        # inequalities: flow (r, o) out - in <= [o is s_r]; in (r, o) <= 1; first visitors of o <= 1
+    def _inequalities(self, table: CostTable, goals: Goals, loc: dict[str, int]) -> None:
+        """Flow (r, o) out - in <= [o is s_r]; in (r, o) <= 1; first visitors of o <= 1; and who
+        moved first: a pair in which exactly one of its robots leaves its start."""
+        from scipy.sparse import coo_array
+
+        n_r, n_l = len(self.robots), len(self.locs)
         targets = {(self.robots.index(r), loc[x]) for r, xs in goals.per_robot for x in xs}
         starts = {loc[s] for s in table.start_location.values()}
         first = np.array(
@@ -185,18 +199,15 @@ class _Program:
         v_ub = np.concatenate(
             [np.ones(len(self.col)), -np.ones(len(self.col)), np.ones(len(self.col)), np.ones(int(first.sum()))]
         )
-        # who moved first: a pair in which exactly one of its robots leaves its start
         a, b = np.flatnonzero(self.col >= self.n_single).reshape(-1, 2).T  # a pair's two incidences
         one_starts = (self.org[a] == self.start[self.rob[a]]) != (self.org[b] == self.start[self.rob[b]])
         i_ub = np.concatenate([i_ub, 2 * n_r * n_l + n_l + self.rob[a][one_starts] * n_r + self.rob[b][one_starts]])
         j_ub = np.concatenate([j_ub, self.col[a][one_starts]])
         v_ub = np.concatenate([v_ub, np.ones(int(one_starts.sum()))])
         n_ub = 2 * n_r * n_l + n_l + n_r * n_r
-        self.a_fixed = coo_array((v_ub, (i_ub, j_ub)), shape=(n_ub, n)).tocsc()
+        self.a_fixed = coo_array((v_ub, (i_ub, j_ub)), shape=(n_ub, self.n_columns)).tocsc()
         self.b_fixed = np.concatenate([np.zeros(n_r * n_l), np.ones(n_r * n_l + n_l + n_r * n_r)])
         self.b_fixed[np.arange(n_r) * n_l + self.start] = 1.0
-        # cut (robot, k, W) -> its row's columns and values, and the rounds it has stayed slack
-        self.cuts: dict[tuple[int, int, frozenset[int]], tuple[Ints, Floats, int]] = {}
 
     def ub_matrix(self) -> tuple[SparseMatrix, Floats]:
         """The <= rows: the fixed ones, then the cuts (one sparse matrix, CSC for column slicing)."""

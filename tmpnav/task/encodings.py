@@ -6,9 +6,10 @@
 
 :data:`ENCODINGS` is the registry: the pipeline asks an encoding for its
 :class:`TableRequest` (which moves and pairs the oracle must cost), :func:`tmpnav.task.encode.encode`
-lets it write its costs into the problem, and the command line and the scenario format take
-their choices from the registry's keys. A new encoding is a subclass registered here with
-its domain file in pddl/.
+lets it write its costs into the problem. Its names, one-line docs and destinations are those
+of :data:`tmpnav.choices.ENCODINGS`, where the command line and the scenario format read
+them. A new encoding is a name there and a subclass registered here, with its domain file in
+pddl/.
 
 In ``single`` and ``mixed`` a robot only enters a room nobody has visited, or one of its
 own target rooms (goals.robots) it has not visited itself. So every room of goals.visit
@@ -23,8 +24,7 @@ plan cost is always the table's own.
 Costs are written as integers in thousandths (``COST_SCALE``): unified-planning warns on
 every float constant it cannot represent exactly, and ENHSP reads integers exactly.
 
-This module imports no planning library: the scenario format and the command line read
-the registry without loading unified-planning.
+This module imports no planning library.
 """
 
 from __future__ import annotations
@@ -32,15 +32,15 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.resources import files
-from typing import Literal, Protocol
+from typing import Protocol
 
+from tmpnav.choices import ENCODINGS as SPECS
+from tmpnav.choices import Destinations
 from tmpnav.types import CostTable, Goals, MoveKey
 
 COST_SCALE = 1000
 
 PairFilter = Callable[[MoveKey, MoveKey], bool]
-#: where a robot may move to: the goal rooms it may serve, or every room (the oracle's modes)
-Destinations = Literal["goals", "all-rooms"]
 
 
 def scaled(cost: float) -> int:
@@ -171,19 +171,19 @@ def offered_pairs(table: CostTable, min_gain: float) -> dict[tuple[MoveKey, Move
     return out
 
 
+def _registered(cls: type[Encoding], name: str, domain_file: str) -> Encoding:
+    """The encoding ``name`` of :data:`tmpnav.choices.ENCODINGS` (its doc and destinations)."""
+    spec = SPECS[name]
+    return cls(name, domain_file, spec.doc, spec.destinations)
+
+
+#: the registry: one entry per name of :data:`tmpnav.choices.ENCODINGS`, in its order
 ENCODINGS: dict[str, Encoding] = {
     e.name: e
     for e in (
-        PaperEncoding(
-            "paper", "paper.pddl", "the paper's goto_room for a pair of robots, both move in every action", "all-rooms"
-        ),
-        SingleEncoding("single", "single.pddl", "one goto_room per robot, no mutual-observation credit", "goals"),
-        MixedEncoding(
-            "mixed",
-            "mixed.pddl",
-            "single moves plus paired moves where mutual observations lower the joint cost",
-            "goals",
-        ),
+        _registered(PaperEncoding, "paper", "paper.pddl"),
+        _registered(SingleEncoding, "single", "single.pddl"),
+        _registered(MixedEncoding, "mixed", "mixed.pddl"),
     )
 }
 

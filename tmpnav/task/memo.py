@@ -25,7 +25,7 @@ from importlib import metadata
 from importlib.resources import files
 from typing import Protocol
 
-from tmpnav.oracle.keys import source_digest
+from tmpnav.digest import source_digest
 from tmpnav.results import JSON
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.types import CostTable, Goals, MoveKey, PlanStatus

@@ -7,9 +7,9 @@ Two models implement it:
 
 * :class:`TableModel` (here): a fixed cost table, the planner's model of ``--costs table``
   and of the tests' random tables; every move costs the same wherever it is made;
-* the oracle's models (:mod:`tmpnav.oracle.lazy`, :mod:`tmpnav.oracle.carried`), which call
-  the semantic attachment on demand: with canonical start states, or with the beliefs the
-  robots carry at that point of the plan.
+* the oracle's models (:mod:`tmpnav.attachment.canonical`, :mod:`tmpnav.attachment.carried`),
+  which call the semantic attachment on demand: with canonical start states, or with the
+  beliefs the robots carry at that point of the plan.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
+from tmpnav.choices import Costs
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.types import CostTable, Goals, MoveKey
@@ -41,6 +42,9 @@ class CostModel(Protocol):
 
     robots: tuple[str, ...]
     start_location: dict[str, str]
+    #: "table": a move costs the same wherever in the plan it is made (so one optimal search of
+    #: the whole problem proves a plan optimal); "carried": it depends on the beliefs it starts from
+    costs: Costs
 
     def singles(self, goals: Goals) -> CostTable:
         """Every single move between the robots' starts and the goal rooms (no pairs)."""
@@ -78,6 +82,8 @@ def sub_moves(at: dict[str, str], rooms: Sequence[str]) -> list[MoveKey]:
 
 class TableModel:
     """A fixed cost table: a move costs the same wherever in the plan it is made."""
+
+    costs: Costs = "table"
 
     def __init__(self, table: CostTable, min_gain: float = 0.0):
         self.table = table

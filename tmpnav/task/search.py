@@ -29,10 +29,12 @@ import random
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from typing import Literal
 
+from tmpnav.choices import StopReason
 from tmpnav.errors import PlannerError
-from tmpnav.results import StageTimes
+from tmpnav.results import SearchProgress, StageTimes
 from tmpnav.task.decode import canonical_order
 from tmpnav.task.model import CostModel, PlanCost
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
@@ -48,8 +50,25 @@ EPSILON = 1e-9
 #: robots it reaches in 0.1-1.2 s the routes it reaches in 10 s (within 0.02%)
 ROUTING_SOLUTIONS = 500
 
-#: progress callback: (seconds since the start, best plan cost, lower bound or None, what happened)
-Progress = Callable[[float, float, float | None, str], None]
+
+@dataclass(frozen=True)
+class SearchRun:
+    """What a search runs with beside its problem: the run's stage times (and so its clock) and
+    who is told of its progress."""
+
+    times: StageTimes = field(default_factory=StageTimes)
+    progress: SearchProgress | None = None
+    label: str = ""  # added to every event told (the phase of a search in two phases)
+    bound: float | None = None  # the lower bound told with every event
+
+    def bounded(self, bound: float | None) -> SearchRun:
+        """The same run, telling ``bound`` with its events."""
+        return replace(self, bound=bound)
+
+    def note(self, best: float, what: str) -> None:
+        """Tell of an event: the run's time (one clock for all its phases), the best cost, the bound."""
+        if self.progress is not None:
+            self.progress(self.times.elapsed(), best, self.bound, f"{what}; {self.label}" if self.label else what)
 
 
 @dataclass(frozen=True)
@@ -87,7 +106,7 @@ class SearchStats:
 class SearchResult:
     plan: Plan
     cost: PlanCost
-    stopped: str  # "optimal" | "converged" | "time budget" | "nothing to do"
+    stopped: StopReason  # "optimal" | "converged" | "time budget" | "nothing to do"
     stats: SearchStats
     start: str  # how the first plan was found
 
@@ -109,14 +128,13 @@ class AnytimeSearch:
         model: CostModel,
         goals: Goals,
         options: SearchOptions,
-        progress: Progress | None = None,
+        run: SearchRun | None = None,
         proves_optimal: Callable[[float], bool] | None = None,
-        times: StageTimes | None = None,
     ):
         self.model, self.goals, self.options = model, goals, options
-        self.times = times if times is not None else StageTimes()
+        self.watch = run if run is not None else SearchRun()
+        self.times = self.watch.times
         self.rules = Rules(model.start_location, goals)
-        self.progress = progress
         self.proves_optimal = proves_optimal or (lambda cost: False)
         self.rng = random.Random(options.seed)
         self.stats = SearchStats()
@@ -195,7 +213,7 @@ class AnytimeSearch:
 
     # ------------------------------------------------------------------ improve
 
-    def _improve_until_done(self, best: Plan, cost: PlanCost) -> str:
+    def _improve_until_done(self, best: Plan, cost: PlanCost) -> StopReason:
         self.best, self.best_cost = best, cost
         size_index = 0
         while True:
@@ -212,7 +230,7 @@ class AnytimeSearch:
             else:
                 return "converged"
 
-    def _round(self, size: int) -> str:
+    def _round(self, size: int) -> Literal["improved", "unchanged", "time budget", "optimal"]:
         """Neighbourhoods of ``size`` rooms around seeds until every room was in one
         ('improved' or 'unchanged'); the round starts again on each improved plan. Ends
         early with 'time budget' or 'optimal'. ``parallel`` sub-problems run at once."""
@@ -334,20 +352,17 @@ class AnytimeSearch:
         return self.rng.randint(min(2, len(self.model.robots)), most)
 
     def _note(self, cost: float, what: str) -> None:
-        t = self.elapsed()
-        self.stats.history.append((round(t, 3), cost))
-        if self.progress is not None:
-            self.progress(t, cost, None, what)
+        self.stats.history.append((round(self.elapsed(), 3), cost))
+        self.watch.note(cost, what)
 
 
 def search(
     model: CostModel,
     goals: Goals,
     options: SearchOptions,
-    progress: Progress | None = None,
+    run: SearchRun | None = None,
     proves_optimal: Callable[[float], bool] | None = None,
     seeds: dict[str, Plan] | None = None,
-    times: StageTimes | None = None,
 ) -> SearchResult:
     """Run the anytime search (see the module docstring)."""
-    return AnytimeSearch(model, goals, options, progress, proves_optimal, times).run(seeds)
+    return AnytimeSearch(model, goals, options, run, proves_optimal).run(seeds)

@@ -1,18 +1,19 @@
-"""Stage 6: the task stage's entry point, from a cost table to the ordered plan steps.
+"""The task searches, each from its problem to a :class:`~tmpnav.results.TaskResult`.
 
-:func:`plan_task` owns everything between the oracle and the re-simulation: the lookup of
-a remembered plan (:mod:`~tmpnav.task.memo`), encoding (:mod:`~tmpnav.task.encode`),
-solving (:mod:`~tmpnav.task.solve`), decoding and ordering the plan's steps
-(:mod:`~tmpnav.task.decode`) and their costs as the planner saw them. A new planner plugs
-in behind :func:`~tmpnav.task.solve.solve` (registered in ``EXTRA_ENGINES``); one that
-needs more than a PDDL problem (a search over sub-problems, a cost model that carries
-beliefs) takes a :class:`TaskProblem` and returns a :class:`~tmpnav.results.TaskResult`,
-like this function.
+* :func:`plan_task`, the exact search over a cost table: the lookup of a remembered plan
+  (:mod:`~tmpnav.task.memo`), encoding (:mod:`~tmpnav.task.encode`), solving
+  (:mod:`~tmpnav.task.solve`), decoding and ordering the plan's steps (:mod:`~tmpnav.task.decode`)
+  and their costs as the planner saw them;
+* :func:`plan_anytime`, the anytime search (:mod:`~tmpnav.task.search`) on a cost model;
+* :func:`plan_unfolded`, ENHSP over an unfolded belief space (:mod:`~tmpnav.task.unfolded`).
+
+They know tables, cost models and plans, never the oracle: :mod:`tmpnav.planning` runs them
+for a run. A new PDDL engine plugs in behind :func:`~tmpnav.task.solve.solve` (registered in
+``EXTRA_ENGINES``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 from tmpnav.errors import UnsolvableError
@@ -20,11 +21,11 @@ from tmpnav.results import BoundSummary, SearchSummary, StageTimes, TaskCounts, 
 from tmpnav.task.bound import Bound
 from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import EncodedTask, encode_task
+from tmpnav.task.export import pddl_texts
 from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
 from tmpnav.task.model import CostModel
-from tmpnav.task.modes import time_budget
 from tmpnav.task.plans import Plan, Rules
-from tmpnav.task.search import Progress, SearchOptions, search
+from tmpnav.task.search import SearchOptions, SearchRun, search
 from tmpnav.task.unfolded import BeliefGraph, write_unfolded
 from tmpnav.types import CostTable, Goals, PlannerOptions, PlanStatus, Scenario
 
@@ -92,11 +93,6 @@ def plan_task(
     return _result(task.table, memo, encoded)
 
 
-def encoded_problem(task: TaskProblem, result: TaskResult) -> EncodedTask:
-    """The problem behind ``result``: the one solved, or encoded again after a remembered plan."""
-    return result.encoded if result.encoded is not None else task.encode()
-
-
 def _result(table: CostTable, memo: Memo, encoded: EncodedTask | None) -> TaskResult:
     """The memo's steps in canonical order, with their table costs."""
     order = canonical_order(list(memo.steps), table.robots)
@@ -113,9 +109,9 @@ def _result(table: CostTable, memo: Memo, encoded: EncodedTask | None) -> TaskRe
         step_costs=step_costs,
         counts=TaskCounts(len(table.single), len(table.pair), actions, pair_actions, reshaped),
         plan_hit=encoded is None,
-        encoded=encoded,
         search=SearchSummary(mode="exact", costs="table", stopped="solved"),
         bound=BoundSummary(cost, "exact", 0.0, True) if optimal else None,
+        pddl=None if encoded is None else lambda: pddl_texts(encoded),
     )
 
 
@@ -127,68 +123,55 @@ def _result(table: CostTable, memo: Memo, encoded: EncodedTask | None) -> TaskRe
 CARRIED_SIZES = (3, 4, 6)
 
 
-#: seconds of the run's budget kept for what runs after the search's budget is spent
-BUDGET_MARGIN = 0.5
+@dataclass(frozen=True)
+class AnytimeTask:
+    """What the anytime search plans: the goals on a cost model, with the planner options."""
+
+    model: CostModel
+    goals: Goals
+    planner: PlannerOptions  # engine (an ENHSP one), encoding (single or mixed), time limit, pair_min_gain
+
+    def options(self, budget: float) -> SearchOptions:
+        """The search's options: with costs that depend on the context (carried beliefs), smaller
+        neighbourhoods, and no proof of optimality from one search of the whole problem."""
+        p, context_free = self.planner, self.model.costs == "table"
+        return SearchOptions(
+            planner=p.name,
+            encoding=p.encoding,
+            min_gain=p.pair_min_gain,
+            budget=max(budget, 0.0),
+            sub_timeout=min(p.timeout, 60.0),
+            whole_is_exact=context_free,
+            sizes=SearchOptions.sizes if context_free else CARRIED_SIZES,
+        )
 
 
 def plan_anytime(
-    model: CostModel,
-    goals: Goals,
-    planner: PlannerOptions,
-    bound: Callable[[], Bound] | None = None,
-    times: StageTimes | None = None,
-    progress: Progress | None = None,
-    costs: str = "table",
+    task: AnytimeTask,
+    run: SearchRun,
+    budget: float,
+    bound: Bound | None = None,
     seeds: dict[str, Plan] | None = None,
-    budget: float | None = None,
 ) -> TaskResult:
-    """The anytime search's plan (:mod:`tmpnav.task.search`) on ``model``, with a certified
-    lower bound on every plan's cost (``bound``, computed before the search starts).
-
-    ``budget``: seconds for the search (default: ``planner.time_budget``, or by the
-    problem's size (:func:`tmpnav.task.modes.time_budget`), less the time the
-    run has spent so far, as ``times`` counts it, so the budget holds for the whole run)."""
-    times = times if times is not None else StageTimes()
-    proof = None
-    if bound is not None:
-        with times.timed("bound"):
-            proof = bound()
-    if budget is None:
-        whole = time_budget(len(goals.all_rooms), len(model.robots), planner.time_budget)
-        # leave time for what follows the search: its last sub-problem, the re-simulation
-        budget = whole - sum(v for k, v in times.seconds.items() if k not in ("load", "total")) - BUDGET_MARGIN
-    options = SearchOptions(
-        planner=planner.name if planner.name.startswith("enhsp") else "enhsp-blind",
-        encoding=planner.encoding if planner.encoding in ("single", "mixed") else "mixed",
-        min_gain=planner.pair_min_gain,
-        budget=max(budget, 0.0),
-        sub_timeout=min(planner.timeout, 60.0),
-        whole_is_exact=costs == "table",
-        sizes=SearchOptions.sizes if costs == "table" else CARRIED_SIZES,
-    )
-    value = proof.value if proof is not None else None
-    report = progress
-
-    def noted(t: float, cost: float, _: float | None, what: str) -> None:
-        if report is not None:
-            report(t, cost, value, what)
-
-    proves = proof.proves_optimal if proof is not None else None
-    result = search(model, goals, options, noted, proves, seeds=seeds, times=times)
+    """The anytime search's plan (:mod:`tmpnav.task.search`) of ``task`` within ``budget``
+    seconds, from the cheapest of OR-Tools' routes and the ``seeds``; ``bound``, a certified
+    lower bound on every plan's cost, can prove a plan optimal and gives the gap."""
+    proves, told = (bound.proves_optimal, bound.value) if bound is not None else (None, None)
+    result = search(task.model, task.goals, task.options(budget), run.bounded(told), proves, seeds)
     plan, cost = result.plan, result.cost
     proved = result.stopped == "optimal"
     stats = result.stats
     return TaskResult(
         status=PlanStatus.SOLVED_OPTIMALLY if proved else PlanStatus.SOLVED_SATISFICING,
-        engine=f"anytime search: OR-Tools start, {options.planner} on sub-problems",
+        engine=f"anytime search: OR-Tools start, {task.planner.name} on sub-problems",
         steps=plan,
-        action_names=tuple("goto_room" if len(step) == 1 else "goto_room_pair" for step in plan),
+        action_names=action_names(plan),
         step_costs=cost.steps,
         counts=TaskCounts(0, 0, 0, sum(len(step) == 2 for step in plan), 0),
         plan_hit=False,
         search=SearchSummary(
             mode="anytime",
-            costs=costs,
+            costs=task.model.costs,
             stopped=result.stopped,
             start=result.start,
             subproblems=stats.subproblems,
@@ -196,8 +179,13 @@ def plan_anytime(
             seconds=stats.history[-1][0] if stats.history else 0.0,
             history=tuple(stats.history),
         ),
-        bound=_summary(proof, cost.total, proved),
+        bound=_summary(bound, cost.total, proved),
     )
+
+
+def action_names(plan: Plan) -> tuple[str, ...]:
+    """The domain's action of each step: ``goto_room`` for one robot, ``goto_room_pair`` for two."""
+    return tuple("goto_room" if len(step) == 1 else "goto_room_pair" for step in plan)
 
 
 def _summary(proof: Bound | None, cost: float, proved: bool) -> BoundSummary | None:
@@ -208,22 +196,15 @@ def _summary(proof: Bound | None, cost: float, proved: bool) -> BoundSummary | N
     return None if proof is None else BoundSummary(proof.value, proof.relaxation, proof.gap(cost), proved)
 
 
-def plan_unfolded(
-    graph: BeliefGraph,
-    robots: tuple[str, ...],
-    locations: tuple[str, ...],
-    rules: Rules,
-    planner: PlannerOptions,
-    times: StageTimes | None = None,
-) -> TaskResult:
+def plan_unfolded(graph: BeliefGraph, rules: Rules, planner: PlannerOptions, run: SearchRun) -> TaskResult:
     """ENHSP's optimal plan over an unfolded belief space (:mod:`tmpnav.task.unfolded`): the
     plan of least cost with carried-over beliefs."""
-    times = times if times is not None else StageTimes()
-    with times.timed("encode"):
+    robots = tuple(rules.start_location)
+    locations = tuple(dict.fromkeys([*rules.goals.all_rooms, *rules.start_location.values()]))
+    with run.times.timed("encode"):
         task = write_unfolded(graph, robots, locations, rules)
-    engine = planner.name if planner.name.startswith("enhsp") else "enhsp-blind"
-    with times.timed("planner"):
-        solved = task.solve(engine, planner.timeout)
+    with run.times.timed("planner"):
+        solved = task.solve(planner.name, planner.timeout)
     edges = task.decode(solved)
     steps = tuple(e.step for e in edges)
     costs = tuple(e.cost for e in edges)
@@ -233,7 +214,7 @@ def plan_unfolded(
         status=solved.status,
         engine=solved.engine,
         steps=steps,
-        action_names=tuple("goto_room" if len(s) == 1 else "goto_room_pair" for s in steps),
+        action_names=action_names(steps),
         step_costs=costs,
         counts=TaskCounts(0, 0, len(graph.edges), sum(len(e.step) == 2 for e in graph.edges), 0),
         plan_hit=False,

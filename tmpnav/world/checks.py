@@ -3,7 +3,9 @@
 Run by ``tmpnav validate`` and before every plan: things outside the map, robots starting
 in collision or on top of each other, rooms that are degenerate, self-intersecting, too
 cramped for a robot, or unreachable; model values that stop being meaningful at the
-map's size, and the resource caps estimated from it (tmpnav.scenario.extent).
+map's size, and the control steps of a move estimated from it (tmpnav.scenario.extent).
+The caps on the plan's size, which depend on the command line's overrides, are checked
+with them by the load stage (:func:`tmpnav.pipeline.load_world`).
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from scipy import ndimage
 
 from tmpnav.errors import Problem
 from tmpnav.scenario import display_path
-from tmpnav.scenario.extent import model_ranges, move_sizes, plan_sizes
+from tmpnav.scenario.extent import model_ranges, move_sizes
 from tmpnav.types import RobotSpec, Scenario
 from tmpnav.world.build import World
 from tmpnav.world.geometry import polygon_area
@@ -37,9 +39,7 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
     width, height = xmax - xmin, ymax - ymin
     problems = [
         problem(path, message)
-        for path, message in model_ranges(scenario, width, height)
-        + move_sizes(scenario, width, height)
-        + plan_sizes(scenario)
+        for path, message in model_ranges(scenario, width, height) + move_sizes(scenario, width, height)
     ]
     problems += _room_outlines(scenario, world, inside, extent, problem)
     for lm in scenario.landmarks:

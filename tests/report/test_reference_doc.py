@@ -7,8 +7,8 @@ from pathlib import Path
 from click.testing import CliRunner
 
 from tmpnav.cli import cli
+from tmpnav.report.reference import markdown
 from tmpnav.scenario.format import ROS_MAP, SCENARIO
-from tmpnav.scenario.reference import markdown
 from tmpnav.scenario.schema import reference_rows
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "scenario.md"
@@ -44,11 +44,11 @@ LIMITS = DOC.parent / "limits.md"
 
 
 def test_docs_limits_md_is_up_to_date() -> None:
-    from tmpnav.scenario.reference import limits_markdown
+    from tmpnav.report.reference import limits_markdown
 
     assert LIMITS.read_text(encoding="utf-8") == limits_markdown(), (
         "docs/limits.md differs from the caps and exit codes in the code: run `python -c "
-        "\"from tmpnav.scenario.reference import limits_markdown; print(limits_markdown(), end='')\"` "
+        "\"from tmpnav.report.reference import limits_markdown; print(limits_markdown(), end='')\"` "
         "> docs/limits.md` and commit the result"
     )
 

@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import replace
 from pathlib import Path
 
 import pytest
 
-from tmpnav.attachment.remember import search_key
 from tmpnav.oracle.cache import DiskCache
 from tmpnav.oracle.keys import context_digest
 from tmpnav.pipeline import PlanOptions, plan
+from tmpnav.planning.remember import search_key
 
 ROOT = Path(__file__).resolve().parents[2]
 TWO_ROOMS = ROOT / "tests" / "fixtures" / "two_rooms.yaml"
@@ -23,7 +22,7 @@ def moves(report) -> list:
 @pytest.mark.slow
 @pytest.mark.parametrize("search", ["exact", "anytime"])
 def test_a_warm_run_reads_the_plan_and_a_damaged_entry_is_a_miss(search: str, tmp_path: Path) -> None:
-    options = PlanOptions(cache_dir=tmp_path, executor="serial", search=search)
+    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", search=search)
     cold = plan(TWO_ROOMS, options)
     warm = plan(TWO_ROOMS, options)
     assert not cold.task.plan_hit and warm.task.plan_hit
@@ -41,7 +40,7 @@ def test_a_warm_run_reads_the_plan_and_a_damaged_entry_is_a_miss(search: str, tm
 
 @pytest.mark.slow
 def test_a_plan_cut_short_by_its_budget_is_read_again_only_with_no_larger_budget(tmp_path: Path) -> None:
-    options = PlanOptions(cache_dir=tmp_path, executor="serial", search="anytime", time_budget=5.0)
+    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", search="anytime", time_budget=5.0)
     cold = plan(TWO_ROOMS, options)
     key = search_key(cold.scenario, context_digest(cold.scenario, cold.world, cold.roadmap))
     cache = DiskCache(tmp_path)
@@ -53,6 +52,6 @@ def test_a_plan_cut_short_by_its_budget_is_read_again_only_with_no_larger_budget
     finally:
         cache.close()
     assert plan(TWO_ROOMS, options).task.plan_hit
-    assert plan(TWO_ROOMS, replace(options, time_budget=4.0)).task.plan_hit
-    longer = plan(TWO_ROOMS, replace(options, time_budget=50.0))
+    assert plan(TWO_ROOMS, options.but(time_budget=4.0)).task.plan_hit
+    longer = plan(TWO_ROOMS, options.but(time_budget=50.0))
     assert not longer.task.plan_hit and moves(longer) == moves(cold)

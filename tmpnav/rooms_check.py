@@ -1,6 +1,9 @@
 """Check that a proposed scenario validates and that its roadmap connects every room, growing the
 roadmap until it does: the skeleton ``tmpnav rooms`` writes must plan as written.
 
+The proposal is :mod:`tmpnav.rooms`' (a ROS map read into rooms, doors and landmarks: the step
+before stage 1); the check runs stages 1-3 on it, so it sits beside the pipeline, not in rooms/.
+
 A room reached only through a narrow doorway needs many PRM milestones before one lands in the
 doorway; the number per m² that suits an office leaves such a room out. The roadmap is grown
 (OMPL, seeded, as ``tmpnav plan`` grows it) with ``SAMPLES_STEPS`` times the proposed number in
@@ -14,6 +17,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from tmpnav.errors import RoadmapError, ScenarioError
+from tmpnav.pipeline import load_world
+from tmpnav.roadmap import build_roadmap
 from tmpnav.rooms.proposal import Proposal
 from tmpnav.rooms.skeleton import save, skeleton_in
 
@@ -24,9 +29,6 @@ MAX_SAMPLES = 12000
 def verify(proposal: Proposal) -> tuple[Proposal, list[str]]:
     """The proposal with a roadmap size that connects every room, and what is still wrong
     (empty when the scenario validates and its roadmap connects)."""
-    from tmpnav.pipeline import load_world
-    from tmpnav.roadmap import build_roadmap
-
     with tempfile.TemporaryDirectory(prefix="tmpnav-rooms-") as folder:
         path = Path(folder) / "scenario.yaml"
         save(path, skeleton_in(proposal, Path(folder), "check"))

@@ -11,7 +11,8 @@ searches again.
 
 The key covers the oracle's context (its code, the world, the roadmap, the models and
 weights), the robots, the goals, the planner options that shape the search (engine,
-encoding, pair_min_gain, search, costs) and the code of the task and attachment stages. On
+encoding, pair_min_gain, search, costs) and the code of the task stage (task/, attachment/,
+planning/). On
 a hit the plan's costs are computed again by the cost model (from the oracle's cache: the
 same numbers), so a remembered plan is reported exactly as a searched one.
 """
@@ -21,8 +22,8 @@ from __future__ import annotations
 import hashlib
 import math
 from functools import lru_cache
-from pathlib import Path
 
+from tmpnav.digest import folders_digest
 from tmpnav.results import JSON, BoundSummary, SearchSummary, TaskCounts, TaskResult
 from tmpnav.task.memo import EntryStore
 from tmpnav.task.model import CostModel
@@ -36,13 +37,7 @@ FINAL = ("optimal", "solved", "nothing to do")
 
 @lru_cache(maxsize=1)
 def _code_version() -> str:
-    root = Path(__file__).resolve().parent.parent
-    h = hashlib.sha256()
-    for folder in ("task", "attachment"):
-        for path in sorted((root / folder).glob("*.py")):
-            h.update(f"{folder}/{path.name}".encode())
-            h.update(path.read_bytes())
-    return h.hexdigest()
+    return folders_digest(("task", "attachment", "planning"))
 
 
 def search_key(scenario: Scenario, context: str) -> str:
@@ -64,16 +59,7 @@ def remember(store: EntryStore, key: str, task: TaskResult, budget: float) -> No
         "engine": task.engine,
         "steps": [[list(m) for m in step] for step in task.steps],
         "names": list(task.action_names),
-        "search": {
-            "mode": s.mode,
-            "costs": s.costs,
-            "stopped": s.stopped,
-            "start": s.start,
-            "subproblems": s.subproblems,
-            "improvements": s.improvements,
-            "seconds": s.seconds,
-            "history": [list(h) for h in s.history],
-        },
+        "search": s.to_json(),
         "bound": None
         if task.bound is None
         else {"value": task.bound.value, "relaxation": task.bound.relaxation, "proved": task.bound.proved_optimal},
@@ -93,17 +79,10 @@ def recall(store: EntryStore, key: str, model: CostModel, goals: Goals, budget: 
         steps: tuple[tuple[MoveKey, ...], ...] = tuple(
             tuple((str(m[0]), str(m[1]), str(m[2])) for m in step) for step in entry["steps"]
         )
-        s, b = entry["search"], entry["bound"]
-        search = SearchSummary(
-            str(s["mode"]),
-            str(s["costs"]),
-            str(s["stopped"]),
-            str(s["start"]),
-            int(s["subproblems"]),
-            int(s["improvements"]),
-            float(s["seconds"]),
-            tuple((float(t), float(c)) for t, c in s["history"]),
-        )
+        if not isinstance(entry["search"], dict):
+            return None
+        search = SearchSummary.from_json(entry["search"])
+        b = entry["bound"]
         status = PlanStatus(entry["status"])
         names = tuple(str(n) for n in entry["names"])
         engine = str(entry["engine"])
@@ -124,4 +103,4 @@ def recall(store: EntryStore, key: str, model: CostModel, goals: Goals, budget: 
         gap = max(0.0, (cost.total - value) / cost.total) if cost.total > 0 else 0.0
         bound = BoundSummary(value, relaxation, gap, proved)
     counts = TaskCounts(0, 0, 0, sum(len(x) == 2 for x in steps), 0)
-    return TaskResult(status, engine, steps, names, cost.steps, counts, True, None, search, bound)
+    return TaskResult(status, engine, steps, names, cost.steps, counts, plan_hit=True, search=search, bound=bound)

@@ -1,4 +1,6 @@
-"""The scenario format reference, generated from the schema (docs/scenario.md)."""
+"""The scenario format reference (docs/scenario.md) and the limits (docs/limits.md), generated
+from the schema, the caps and the exit codes: a report about the format, so it lives with the
+reports (it reads every stage's limits; no stage reads it)."""
 
 from __future__ import annotations
 
@@ -72,7 +74,7 @@ However a run ends (an error, Ctrl-C, SIGTERM, SIGKILL), no process it started o
 (the oracle's workers, ENHSP's JVM: tmpnav/lifetime.py), and the files of its output folder
 are written all or nothing: a killed run leaves the earlier files as they were.
 
-This file is generated from the code (tmpnav/scenario/reference.py); a test keeps it in step.
+This file is generated from the code (tmpnav/report/reference.py); a test keeps it in step.
 
 | exit code | when | limit | lift with |
 |---|---|---|---|

@@ -1,0 +1,134 @@
+"""The task stage's choices, in one place: encodings, costs, searches, objectives, and the rule
+that picks a search.
+
+A leaf module (it imports nothing of tmpnav): the scenario format, its checks, the command
+line, the planning stage and the reports all take their choices and their names from here,
+so a choice is added once. What each choice *does* lives in its registry: the encodings in
+:data:`tmpnav.task.encodings.ENCODINGS`, the task planners in
+:data:`tmpnav.planning.PLANNERS` (one per search and costs).
+
+``COSTS``, what an action costs the planner:
+
+* ``carried``: from the beliefs the robots carry at that point of the plan (the paper's
+  semantic attachment, :mod:`tmpnav.attachment.carried`); the default;
+* ``table``: every move from a canonical start state (:mod:`tmpnav.oracle.table`): the
+  paper's cost table, faster, far off where landmarks are sparse.
+
+``SEARCHES``, how the task plan is searched:
+
+* ``exact``: one optimal ENHSP search (over the whole cost table, or over the unfolded belief
+  space with carried costs);
+* ``anytime``: large-neighbourhood search, ENHSP on sub-problems, with a certified lower bound;
+* ``auto``: ``exact`` where it finishes quickly (:func:`exact_fits`), else ``anytime``.
+
+``OBJECTIVES``, what the plan minimises: ``cost``, the paper's sum of action costs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+Costs = Literal["carried", "table"]
+Search = Literal["auto", "exact", "anytime"]
+SearchMode = Literal["exact", "anytime"]  # the search that runs (``auto`` resolved)
+Objective = Literal["cost"]
+#: where a robot may move to: the goal rooms it may serve, or every room (the oracle's modes)
+Destinations = Literal["goals", "all-rooms"]
+#: how a search ended: the exact search "solved"; the anytime search "optimal" (proved by its
+#: bound or by one optimal search of the whole problem), "converged" (every neighbourhood tried
+#: without improvement), "time budget", or "nothing to do" (no move needed)
+StopReason = Literal["solved", "optimal", "converged", "time budget", "nothing to do"]
+
+COSTS: tuple[Costs, ...] = get_args(Costs)
+SEARCHES: tuple[Search, ...] = get_args(Search)
+SEARCH_MODES: tuple[SearchMode, ...] = get_args(SearchMode)
+OBJECTIVES: tuple[Objective, ...] = get_args(Objective)
+STOP_REASONS: tuple[StopReason, ...] = get_args(StopReason)
+
+
+@dataclass(frozen=True)
+class EncodingSpec:
+    """What the scenario format and its checks know of an encoding (the encoding itself is
+    :class:`tmpnav.task.encodings.Encoding`, registered under the same name)."""
+
+    name: str
+    doc: str  # one line, for --help and the reference
+    destinations: Destinations
+    pairs: bool  # are paired moves costed jointly by the oracle?
+
+
+# fmt: off
+ENCODINGS: dict[str, EncodingSpec] = {
+    e.name: e
+    for e in (
+        EncodingSpec("paper", "the paper's goto_room for a pair of robots, both move in every action", "all-rooms", True),
+        EncodingSpec("single", "one goto_room per robot, no mutual-observation credit", "goals", False),
+        EncodingSpec("mixed", "single moves plus paired moves where mutual observations lower the joint cost", "goals", True),
+    )
+}
+# fmt: on
+
+#: ``auto`` plans exactly with table costs up to this many goal rooms with two robots (fewer
+#: with more robots): the exact search costs every paired move first, about rooms^4 x robots^2
+EXACT_ROOMS = 8
+
+#: ``auto`` plans exactly with carried costs up to these sizes (goal rooms, robots): the
+#: belief space is unfolded context by context (5 rooms, 2 robots: about 2,500 contexts)
+EXACT_CARRIED = ((5, 2), (4, 3), (3, 4))
+
+#: the default time budget of the anytime search: this many seconds per goal room and robot,
+#: clamped (20 rooms and 2 robots: 10 s; 40 and 4: 40 s; 60 and 8: 120 s)
+BUDGET_PER_ROOM_ROBOT = 0.25
+BUDGET_RANGE = (10.0, 180.0)
+
+
+def exact_fits(rooms: int, robots: int, costs: Costs) -> bool:
+    """Does ``auto`` choose the exact search for this many goal rooms and robots?"""
+    if costs == "carried":
+        return any(rooms <= n and robots <= r for n, r in EXACT_CARRIED)
+    return rooms <= EXACT_ROOMS and rooms * robots <= 2 * EXACT_ROOMS
+
+
+def time_budget(rooms: int, robots: int, given: float | None) -> float:
+    """The anytime search's budget for a run: ``given``, or by the problem's size."""
+    if given is not None:
+        return given
+    low, high = BUDGET_RANGE
+    return min(high, max(low, BUDGET_PER_ROOM_ROBOT * rooms * robots))
+
+
+@dataclass(frozen=True)
+class TaskChoice:
+    """The search and the costs a run plans with."""
+
+    mode: SearchMode
+    costs: Costs
+
+    @property
+    def lists_whole_table(self) -> bool:
+        """Does this search cost every paired move before it starts? Only the exact search with
+        table costs does; the others cost paired moves as their sub-problems ask."""
+        return self.mode == "exact" and self.costs == "table"
+
+
+def choose(encoding: str, search: Search, costs: Costs, rooms: int, robots: int) -> TaskChoice:
+    """The one rule that picks a run's search: the paper's encoding is the paper's model (the
+    exact search with table costs); otherwise the search asked for, and for ``auto`` the exact
+    search where it finishes quickly (:func:`exact_fits`)."""
+    if encoding == "paper":
+        return TaskChoice("exact", "table")
+    if search == "auto":
+        return TaskChoice("exact" if exact_fits(rooms, robots, costs) else "anytime", costs)
+    return TaskChoice(search, costs)
+
+
+def paper_conflict(encoding: str, search: Search | None, costs: Costs | None) -> str | None:
+    """Why a search or costs asked for explicitly cannot go with ``encoding``, or None: the paper's
+    encoding plans exactly with table costs only."""
+    if encoding == "paper" and (costs == "carried" or search == "anytime"):
+        return (
+            "the paper's encoding is planned exactly with table costs; "
+            "use --encoding mixed for --search anytime or --costs carried"
+        )
+    return None

@@ -1,0 +1,72 @@
+"""The one value a task planner works with: :class:`TaskRun`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from tmpnav.attachment.canonical import CanonicalCosts
+from tmpnav.attachment.carried import CarriedCosts
+from tmpnav.choices import TaskChoice, choose, time_budget
+from tmpnav.results import StageTimes, TaskResult
+from tmpnav.task.memo import EntryStore
+from tmpnav.task.search import SearchRun
+from tmpnav.types import CostTable, Goals, PlannerOptions, Scenario
+from tmpnav.world import World
+
+if TYPE_CHECKING:
+    from tmpnav.oracle.oracle import Oracle
+
+
+@dataclass(frozen=True)
+class TaskRun:
+    """A run's task stage: the scenario in force, the search and costs chosen for it, the cost
+    models on its oracle, where plans are remembered, and the run's clock and progress."""
+
+    scenario: Scenario
+    world: World
+    choice: TaskChoice
+    canonical: CanonicalCosts  # costs from canonical start states, computed as asked
+    carried: CarriedCosts  # costs from the beliefs the robots carry (the re-simulation's too)
+    store: EntryStore | None  # the cost database, which remembers task plans; None: --no-cache
+    replan: bool  # search again even when the store remembers the plan
+    search: SearchRun  # the run's clock (its stage times) and who is told of the search's progress
+
+    @classmethod
+    def of(
+        cls, scenario: Scenario, world: World, oracle: Oracle, store: EntryStore | None, replan: bool, search: SearchRun
+    ) -> TaskRun:
+        """The task stage of a run whose oracle is open: its cost models on that oracle."""
+        sp = scenario.planner
+        choice = choose(sp.encoding, sp.search, sp.costs, len(scenario.goals.all_rooms), len(scenario.robots))
+        canonical = CanonicalCosts(oracle, world, sp.pair_min_gain)
+        return cls(scenario, world, choice, canonical, CarriedCosts(oracle, canonical), store, replan, search)
+
+    @property
+    def goals(self) -> Goals:
+        return self.scenario.goals
+
+    @property
+    def planner(self) -> PlannerOptions:
+        return self.scenario.planner
+
+    @property
+    def times(self) -> StageTimes:
+        return self.search.times
+
+    @property
+    def budget(self) -> float:
+        """The run's time budget for the anytime search (the whole run counts against it)."""
+        return time_budget(len(self.goals.all_rooms), len(self.scenario.robots), self.planner.time_budget)
+
+    def left(self) -> float:
+        """Seconds of the budget not yet spent by the run's stages."""
+        return self.budget - self.times.spent()
+
+
+@dataclass(frozen=True)
+class Planned:
+    """The task stage's result and the costs behind it."""
+
+    table: CostTable  # the table costs the planner saw (the lazily computed ones for anytime)
+    task: TaskResult
