@@ -164,3 +164,21 @@ def _strongly_connected(edges: dict[str, set[str]]) -> list[list[str]]:
         if v not in index:
             visit(v)
     return out
+
+
+#: the task stage's packages: functions short enough to read in one screen
+STAGE_6 = ("task", "attachment", "planning")
+MAX_FUNCTION_LINES = 60
+
+
+def test_no_function_of_stage_6_is_longer_than_a_screen() -> None:
+    long = [
+        f"{path.relative_to(PACKAGE.parent)}:{node.lineno}: {node.name} ({node.end_lineno - node.lineno + 1} lines)"
+        for folder in STAGE_6
+        for path in sorted((PACKAGE / folder).glob("*.py"))
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef)
+        and node.end_lineno is not None
+        and node.end_lineno - node.lineno + 1 > MAX_FUNCTION_LINES
+    ]
+    assert not long, f"functions over {MAX_FUNCTION_LINES} lines:\n" + "\n".join(long)
