@@ -255,15 +255,15 @@ def configs(output: Path | None) -> None:
 @cli.command()
 @report_errors
 def doctor() -> None:
-    """Check that everything tmpnav runs on is here (Java 17+ for ENHSP, OMPL, numba)."""
+    """Check what tmpnav runs on: which Java runs ENHSP, and the key packages."""
     from importlib.metadata import version
 
-    from tmpnav.task.solve import JAVA_MIN, check_java, java_version
+    from tmpnav.java import require
 
-    check_java()
-    click.echo(f"java: {java_version()} (ENHSP needs {JAVA_MIN}+): ok")
-    for package in ("unified-planning", "up-enhsp", "ompl", "filterpy", "numba", "numpy"):
-        click.echo(f"{package}: {version(package)}")
+    java = require()  # exit code 4, with what to install, when no Java 17+ is here
+    click.echo(f"java: {java.describe()}: runs ENHSP")
+    packages = ("unified-planning", "up-enhsp", "ompl", "filterpy", "numba", "numpy")
+    click.echo("packages: " + ", ".join(f"{package} {version(package)}" for package in packages))
 
 
 @cli.command()
