@@ -288,7 +288,8 @@ def _raise_on_failure(planner: str, status: object, no_plan: bool, timeout: floa
 
     if status == St.TIMEOUT:
         raise PlannerTimeoutError(
-            f"planner {planner!r} found no plan within the time limit of {timeout:g} s (--timeout)"
+            f"planner {planner!r} found no plan within the time limit of {timeout:g} s "
+            "(--planner-timeout, planner.timeout)"
         )
     if status in (St.UNSOLVABLE_PROVEN, St.UNSOLVABLE_INCOMPLETELY):
         raise UnsolvableError(
