@@ -1,5 +1,8 @@
 """The terminal summary of a plan: what ``tmpnav plan`` prints (plain text, no colours).
 
+Under the header, a ``warning:`` line for each reason to doubt the plan (tmpnav.report.quality):
+a lower bound far below its cost, a robot more uncertain than a door it passes allows.
+
 Example (the paper's Fig. 2 task, ``tmpnav plan configs/corridor.yaml``)::
 
     corridor (configs/corridor.yaml): encoding mixed, planner enhsp-opt, solved-optimally
@@ -28,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from tmpnav.report.plan_json import action_spans
+from tmpnav.report.quality import warning_lines
 from tmpnav.results import STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
 
@@ -65,6 +69,7 @@ def _header(report: PlanReport) -> list[str]:
         f"{sc.name} ({_display_path(sc.source)}): encoding {report.encoding}, planner {report.planner}, {status}",
         f"{len(sc.robots)} robots, mutual observations {mutual}; goals: {_goals(report)}",
         *_search(report),
+        *warning_lines(report),
     ]
 
 
