@@ -48,9 +48,9 @@ demo: $(RUNTIME)
 	@$(BIN)/tmpnav doctor
 	$(BIN)/tmpnav validate configs/corridor.yaml
 	$(BIN)/tmpnav show configs/corridor.yaml -o out/world.png
-	@test -n "$$(ls tmpnav/belief/__pycache__/*.nbi 2>/dev/null)" \
-		|| echo "(the first plan compiles the EKF kernel with numba: about 15-20 s more, in the oracle time)"
-	$(BIN)/tmpnav plan configs/corridor.yaml -o out/
+	@first=$$(ls tmpnav/belief/__pycache__/*.nbi >/dev/null 2>&1 || echo "   # first run: numba compiles, +15-20 s of oracle time"); \
+		echo "$(BIN)/tmpnav plan configs/corridor.yaml -o out/$$first"
+	@$(BIN)/tmpnav plan configs/corridor.yaml -o out/
 
 # pytest's exit code 5 means "no tests collected": not a failure of the suite.
 test: $(STAMP)

