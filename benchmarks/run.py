@@ -184,7 +184,7 @@ def main() -> None:
     # speed-up at that point is a lower bound (60 s / the default's median).
     timeout = "60"
     if "rooms" in only:
-        sessions, rooms = ("2", "2,10") if args.quick else ("10", "2..10")
+        sessions, rooms = ("2", "2,10") if args.quick else ("10", "2..10:2")
         bench(base / "rooms", "2", rooms, sessions, timeout, VARIANTS)
     if "rooms10" in only:  # the issue-11 target point alone: 10 rooms, 2 robots, every variant
         bench(base / "rooms-10", "2", "10", "2" if args.quick else "5", timeout, VARIANTS)

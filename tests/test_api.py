@@ -74,15 +74,36 @@ def test_a_path_under_configs_names_a_shipped_file_from_any_directory(
     assert len(tmpnav.segment_map("configs/office/office.yaml").rooms) == 8
 
 
+def beside_the_clone(tmp_path: Path) -> Path:
+    """A folder that holds the clone under the name a `git clone` gives it, tmpnav (a link here):
+    Python puts the working directory first on sys.path, where that folder, with no __init__.py,
+    is a namespace package named tmpnav."""
+    (tmp_path / "tmpnav").symlink_to(ROOT, target_is_directory=True)
+    return tmp_path
+
+
+def test_import_tmpnav_from_the_folder_that_holds_the_clone(tmp_path: Path) -> None:
+    code = "import tmpnav; print(tmpnav.__file__); print(tmpnav.load('configs/two-rooms.yaml').name)"
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=beside_the_clone(tmp_path))
+    assert proc.returncode == 0, (
+        f"{proc.stderr}\n(the clone folder was imported as tmpnav: is .venv's tmpnav-checkout.pth missing? "
+        "`make` writes it, README 'Python API')"
+    )
+    found, name = proc.stdout.split()
+    assert Path(found).resolve() == ROOT / "tmpnav" / "__init__.py" and name == "two-rooms"
+
+
 @pytest.mark.slow
 def test_the_readme_snippet_runs_outside_the_checkout(tmp_path: Path) -> None:
-    """README's "Python API" block, as a user pastes it, in a directory that is not the checkout."""
+    """README's "Python API" block, as a user pastes it, in a directory that is not the checkout
+    but holds it: the folder a `git clone` was run in."""
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     snippet = re.search(r"## Python API\n\n```python\n(.*?)```", readme, re.S)
     assert snippet is not None
     env = {**os.environ, "TMPNAV_CACHE_DIR": str(tmp_path / "cache")}
+    cwd = beside_the_clone(tmp_path)
     proc = subprocess.run(
-        [sys.executable, "-c", snippet[1]], capture_output=True, text=True, cwd=tmp_path, env=env, timeout=600
+        [sys.executable, "-c", snippet[1]], capture_output=True, text=True, cwd=cwd, env=env, timeout=600
     )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.startswith("solved-optimally ")

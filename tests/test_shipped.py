@@ -59,3 +59,11 @@ def test_commands_find_shipped_scenarios_outside_the_checkout(tmp_path: Path) ->
     copied = tmpnav("configs", "-o", "configs", cwd=tmp_path)
     assert copied.returncode == 0 and (tmp_path / "configs" / "office" / "office.yaml").is_file()
     assert tmpnav("validate", "configs/office-ros.yaml", cwd=tmp_path).stdout.startswith("configs/office-ros.yaml: ok")
+
+
+def test_every_shipped_scenario_says_what_it_is() -> None:
+    """`tmpnav configs` lists each with its description: none may be blank."""
+    from tmpnav.scenario import load
+
+    blank = [p.name for p in shipped.scenarios() if not load(p).description.strip()]
+    assert blank == []

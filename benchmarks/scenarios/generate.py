@@ -585,7 +585,7 @@ def office_header(robots: int, rooms: int, landmarks: int) -> list[str]:
         "Robots start in the corridors and the lobby, so every room to visit needs a real visit;",
         "building-2robots, -4robots and -8robots share the world, and each team is the first",
         "robots of the larger one. Used by `tmpnav bench --scenario",
-        "configs/building-{robots}robots.yaml --robots 2,4,8 --rooms 10..60`.",
+        "configs/building-{robots}robots.yaml --robots 2,4,8 --rooms 10..60:10`.",
         "Default task (goals, at the end): visit 20 rooms spread evenly over A, B and C (tmpnav",
         "plans it with the anytime search); the bench draws its own rooms.",
         "",

@@ -1,4 +1,4 @@
-"""``tmpnav bench`` internals: a run killed at its time limit leaves no process behind."""
+"""``tmpnav bench`` internals: ranges of counts, and a run killed at its time limit leaves no process behind."""
 
 from __future__ import annotations
 
@@ -7,7 +7,10 @@ import subprocess
 import sys
 import time
 
+import pytest
+
 from tmpnav.bench.runs import kill_group
+from tmpnav.errors import InputError
 
 #: a run that starts a helper process (as the oracle starts its worker pool) and hangs
 HANGING_RUN = (
@@ -49,3 +52,17 @@ def test_killing_a_run_kills_the_processes_it_started() -> None:
         time.sleep(0.05)
     assert not alive(helper)
     assert proc.returncode is not None
+
+
+def test_a_range_is_every_count_from_a_to_b_unless_it_names_its_step() -> None:
+    from tmpnav.bench.runs import parse_counts
+
+    assert parse_counts("2..4", "--rooms") == [2, 3, 4]
+    assert parse_counts("2..10:2", "--rooms") == [2, 4, 6, 8, 10]
+    assert parse_counts("10..40:10", "--rooms") == [10, 20, 30, 40]
+    assert parse_counts("2,4,6", "--robots") == [2, 4, 6] and parse_counts("5", "--rooms") == [5]
+    with pytest.raises(InputError, match=r"steps of 2 from 2 stop at 8, not 9; write 2\.\.8:2 or a list"):
+        parse_counts("2..9:2", "--rooms")
+    for bad in ("2..4:0", "two..ten", "0..3", "4..2"):
+        with pytest.raises(InputError, match="--rooms"):
+            parse_counts(bad, "--rooms")

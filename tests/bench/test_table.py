@@ -57,3 +57,16 @@ def test_a_stage_the_solved_runs_skipped_shows_a_dash_not_a_timeout() -> None:
     text = summary_markdown(table, "robots", default="mixed", timeout=60.0)
     line = next(x for x in text.splitlines() if "| warm |" in x)
     assert "timeout" not in line and [c.strip() for c in line.split("|")].count("-") == 2
+
+
+def test_one_encoding_has_no_speed_up_column_and_no_empty_cell() -> None:
+    table = [row("mixed", phase, "solved-optimally", "2.0") for phase in PHASES]
+    text = summary_markdown(table, "robots", default="mixed", timeout=60.0)
+    assert "speed-up" not in text
+    for line in text.splitlines():
+        assert "||" not in line.replace(" ", "") and line.count("|") == 10, line
+    both = table + [row("paper", phase, "solved-optimally", "4.0") for phase in PHASES]
+    lines = summary_markdown(both, "robots", default="mixed", timeout=60.0).splitlines()
+    assert lines[0].endswith("| speed-up of mixed |") and all(line.count("|") == 11 for line in lines)
+    assert not [line for line in lines if "| |" in line or "||" in line.replace(" ", "")]
+    assert any("| 2.0x |" in line for line in lines) and any("1.0x (reference)" in line for line in lines)

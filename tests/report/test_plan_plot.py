@@ -87,3 +87,64 @@ def test_ellipse_steps_skip_turning_on_the_spot() -> None:
     assert not set(chosen) & set(range(1, 10))  # turning in place adds no ellipse
     assert np.diff([(still + moving)[i].mean[0] for i in chosen[1:]]).min() >= 1.0 - 1e-9
     assert ellipse_steps([], 1.0) == []
+
+
+@pytest.mark.slow
+def test_each_robots_ellipses_in_its_own_colour(plan_report: Any) -> None:
+    from matplotlib.colors import to_rgb
+    from matplotlib.patches import Ellipse
+
+    from tmpnav.report.figures import darker, robot_color
+    from tmpnav.report.plan_plot import plan_figure
+
+    fig = plan_figure(plan_report)
+    edges = {tuple(round(c, 3) for c in p.get_edgecolor()[:3]) for p in fig.axes[0].patches if isinstance(p, Ellipse)}
+    for index in range(2):
+        assert tuple(round(c, 3) for c in darker(robot_color(index))) in edges
+        assert tuple(round(c, 3) for c in to_rgb("#e41a1c")) not in edges  # the one red edge of every robot
+
+
+@pytest.mark.slow
+def test_the_plan_says_when_and_in_what_units(plan_report: Any) -> None:
+    from tmpnav.report.plan_json import action_spans
+    from tmpnav.report.plan_plot import arrivals, plan_figure
+
+    ax = plan_figure(plan_report).axes[0]
+    title = ax.get_title()
+    duration = action_spans(plan_report)[-1][1]
+    assert "cost (unit-less)" in title and f", {duration:.1f} s," in title
+    found = arrivals(plan_report)
+    assert [(a.step, a.robot) for a in found] == [(a.index, m[0]) for a in plan_report.actions for m in a.moves]
+    assert max(a.t for a in found if a.t is not None) == pytest.approx(duration, abs=1e-6)
+    notes = {t.get_text() for t in ax.texts}
+    assert all(f"{a.t:.1f} s" in notes for a in found)
+
+
+def test_room_names_that_would_stick_out_of_a_cropped_view_are_hidden() -> None:
+    import matplotlib.pyplot as plt
+
+    from tmpnav.report.figures import ROOM_LABEL, keep_labels_inside
+
+    fig, ax = plt.subplots(figsize=(4, 3))
+    ax.set_xlim(0, 10)
+    ax.set_ylim(0, 10)
+    ax.set_aspect("equal")
+    inside = ax.text(1, 9, "L1", fontsize=11, va="top", gid=ROOM_LABEL)
+    edge = ax.text(9.8, 9, "L3", fontsize=11, va="top", gid=ROOM_LABEL)
+    other = ax.text(9.8, 5, "not a room name", gid="note")
+    keep_labels_inside(ax)
+    assert inside.get_visible() and not edge.get_visible() and other.get_visible()
+    plt.close(fig)
+
+
+def test_start_ellipses_too_small_to_see_are_magnified_and_the_title_says_so(tmp_path: Path) -> None:
+    from tmpnav.pipeline import load_world
+    from tmpnav.report import figures as fg
+
+    root = Path(__file__).resolve().parents[2]
+    scenario, _ = load_world(root / "configs" / "corridor.yaml")
+    assert fg.start_sigma2(scenario.robots[0].cov) == pytest.approx(0.2)  # 2σ of 0.1 m: a few pixels over 50 m
+    assert fg.start_magnification(scenario, 50.0) == 4 and fg.start_magnification(scenario, 5.0) == 1
+    from tmpnav.report.world_plot import _robots_and_rooms
+
+    assert "2 robots (2σ start ellipses: r1 0.20 m, r2 0.20 m, drawn 4x)" in _robots_and_rooms(scenario, 4)

@@ -71,7 +71,26 @@ def test_times_and_cache(lines: list[str], plan_report: Any) -> None:
         assert float(value) == pytest.approx(seconds[name.strip("()")], abs=5e-3)
     cache_line = lines[i + 2]
     hits, misses = plan_report.cache.hits, plan_report.cache.misses
-    assert re.match(rf"oracle cache \(.+\): {hits} hits?, {misses} miss(es)? \(\d+% hits\); roadmap grown", cache_line)
+    assert re.fullmatch(rf"cache \(.+\): roadmap grown; move costs: {hits} from cache, {misses} computed", cache_line)
+
+
+def test_the_cache_line_says_one_thing(plan_report: Any) -> None:
+    """A cost table read from the cache and costs computed after it are one story, not a hit
+    ratio next to "cost table from cache"."""
+
+    def line(**changes: Any) -> str:
+        cache = dataclasses.replace(plan_report.cache, **changes)
+        return plan_summary(dataclasses.replace(plan_report, cache=cache)).splitlines()[-1]
+
+    warm = line(hits=0, misses=0, roadmap_hit=True, table_hit=True, plan_hit=True)
+    assert warm.endswith(
+        ": roadmap from cache; move costs: cost table from cache; task plan from cache (--replan runs the planner)"
+    )
+    more = line(hits=427, misses=12097, roadmap_hit=True, table_hit=True)
+    assert more.endswith(
+        ": roadmap from cache; move costs: cost table from cache, then 427 more from cache and 12097 computed"
+    )
+    assert "%" not in more and "hit" not in more
 
 
 def test_plain_text(plan_report: Any) -> None:
@@ -91,5 +110,5 @@ def test_satisficing_and_cache_off(plan_report: Any) -> None:
     )
     text = plan_summary(other)
     assert "solved-satisficing (not proven optimal)" in text.splitlines()[0]
-    assert "oracle cache: off" in text
+    assert "cache: off (" in text
     assert "cache warning: cache is read-only" in text

@@ -35,18 +35,30 @@ WorkerResult = dict[str, dict[str, object]]
 
 
 def parse_counts(text: str, option: str) -> list[int]:
-    """``2..10`` (every second number, as the paper), ``2..10:1``, or ``2,4,6``."""
+    """``2..4`` (every count from 2 to 4), ``2..10:2`` (every second one: 2, 4, ..., 10, as the
+    paper), or a list ``2,4,6``. A range whose step passes over its end (``2..9:2``) is refused,
+    so that the last point is always the one asked for."""
     try:
         if ".." in text:
-            span, _, step = text.partition(":")
+            span, colon, step_text = text.partition(":")
             lo, hi = (int(v) for v in span.split(".."))
-            values = list(range(lo, hi + 1, int(step) if step else 2))
+            step = int(step_text) if colon else 1
+            if step < 1:
+                raise ValueError
+            values = list(range(lo, hi + 1, step))
         else:
             values = [int(v) for v in text.split(",") if v.strip()]
     except ValueError:
-        raise InputError(f"{option} {text!r} is not a range A..B[:STEP] or a list A,B,C of integers") from None
+        raise InputError(
+            f"{option} {text!r} is not a range A..B[:STEP] (STEP >= 1) or a list A,B,C of integers"
+        ) from None
     if not values or min(values) < 1:
         raise InputError(f"{option} {text!r} must name positive integers")
+    if ".." in text and values[-1] != hi:
+        raise InputError(
+            f"{option} {text!r}: steps of {step} from {lo} stop at {values[-1]}, not {hi}; "
+            f"write {lo}..{values[-1]}:{step} or a list"
+        )
     return values
 
 

@@ -118,7 +118,8 @@ def medians(table: list[Row], axis: str) -> Medians:
 
 
 def summary_markdown(table: list[Row], axis: str, default: str = "mixed", timeout: float | None = None) -> str:
-    """A Markdown table of medians per point, with the speed-up of ``default`` over the others.
+    """A Markdown table of medians per point, with the speed-up of ``default`` over the others
+    (a column only when there are others: no column is ever empty).
 
     Where another encoding never finished, its speed-up is a lower bound: the time limit
     over ``default``'s median."""
@@ -126,36 +127,44 @@ def summary_markdown(table: list[Row], axis: str, default: str = "mixed", timeou
     encodings = sorted({k[0] for k in med})
     points = sorted({k[2] for k in med})
     label = "rooms" if axis == "rooms" else "robots"
-    lines = [
-        f"| {label} | encoding | cache | solved | median total (s) | roadmap | oracle | encode | planner "
-        f"| speed-up of {default} |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-    ]
+    compare = len(encodings) > 1
+    head = f"| {label} | encoding | cache | solved | median total (s) | roadmap | oracle | encode | planner |"
+    lines = [head + (f" speed-up of {default} |" if compare else ""), "|---" * (9 + compare) + "|"]
     for point in points:
         for enc in encodings:
             for phase in PHASES:
                 e = med.get((enc, phase, point))
                 if e is not None:
                     mine = med[(default, phase, point)].total if (default, phase, point) in med else None
-                    lines.append(_summary_row(point, enc, phase, e, default, mine, timeout))
+                    lines.append(_summary_row(point, enc, phase, e, default, mine, timeout, compare))
     return "\n".join(lines) + "\n"
 
 
 def _summary_row(
-    point: int, enc: str, phase: str, e: PointStats, default: str, mine: float | None, timeout: float | None
+    point: int,
+    enc: str,
+    phase: str,
+    e: PointStats,
+    default: str,
+    mine: float | None,
+    timeout: float | None,
+    compare: bool = True,
 ) -> str:
     not_run = e.solved == 0 and phase != "cold"  # a cold run past the limit skips the others
     # a stage without a median: no run finished (timeout), or the solved runs skipped it (-)
     missing = "timeout" if e.solved == 0 else "-"
     cells = [_s(e.medians.get(s), missing) for s in ("total", "roadmap", "oracle", "encode", "planner")]
-    ratio = ""
+    ratio = "-"
     if not_run:
         ratio, cells = "not run: the cold runs timed out", ["-"] * len(cells)
+    elif enc == default and e.total:
+        ratio = "1.0x (reference)"
     elif enc != default and mine and e.total:
         ratio = f"{e.total / mine:.1f}x"
     elif enc != default and mine and e.solved == 0:
         ratio = f"> {timeout / mine:.0f}x (timeout)" if timeout else "> timeout"
-    return f"| {point} | {enc} | {phase} | {e.solved}/{e.runs} | " + " | ".join(cells) + f" | {ratio} |"
+    row = f"| {point} | {enc} | {phase} | {e.solved}/{e.runs} | " + " | ".join(cells) + " |"
+    return row + (f" {ratio} |" if compare else "")
 
 
 def _s(v: float | None, missing: str = "timeout") -> str:

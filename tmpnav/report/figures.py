@@ -13,6 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse, Polygon
 from numpy.typing import NDArray
@@ -26,10 +27,17 @@ from tmpnav.world.grid import OccupancyGrid
 
 ROBOT_COLORS = ("#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 LANDMARK_MARKERS = ("*", "P", "X", "D", "p", "h", "s", "^")
+ROOM_LABEL = "room-label"  # gid of the room names (keep_labels_inside)
 
 
 def robot_color(index: int) -> str:
     return ROBOT_COLORS[index % len(ROBOT_COLORS)]
+
+
+def darker(color: str, factor: float = 0.6) -> tuple[float, float, float]:
+    """``color`` darkened towards black: an outline that stands out against its own fill."""
+    r, g, b = to_rgb(color)
+    return r * factor, g * factor, b * factor
 
 
 def new_axes(
@@ -110,14 +118,22 @@ def draw_map(ax: Axes, world: World) -> None:
     )
 
 
-def draw_rooms(ax: Axes, scenario: Scenario) -> None:
+def draw_rooms(ax: Axes, scenario: Scenario, view: tuple[float, float, float, float] | None = None) -> None:
+    """Rooms, each named in the top-left corner of its part inside ``view`` (xmin, ymin, xmax, ymax;
+    None: the whole room), away from robots and paths; :func:`keep_labels_inside` then hides a
+    name that still sticks out of the axes."""
     for room in scenario.rooms:
         poly = np.array(room.polygon)
         ax.add_patch(Polygon(poly, closed=True, facecolor="#fdf6e3", edgecolor="#b58900", lw=0.8, alpha=0.55, zorder=1))
-        # the label sits in the room's top-left corner, away from robots and paths
+        x0, y0 = poly[:, 0].min(), poly[:, 1].min()
+        x1, y1 = poly[:, 0].max(), poly[:, 1].max()
+        if view is not None:
+            x0, y0, x1, y1 = max(x0, view[0]), max(y0, view[1]), min(x1, view[2]), min(y1, view[3])
+        if x1 - x0 < 0.5 or y1 - y0 < 0.5:  # (almost) out of view
+            continue
         ax.text(
-            poly[:, 0].min() + 0.25,
-            poly[:, 1].max() - 0.25,
+            x0 + 0.25,
+            y1 - 0.25,
             room.name,
             ha="left",
             va="top",
@@ -125,7 +141,25 @@ def draw_rooms(ax: Axes, scenario: Scenario) -> None:
             color="#7a5c00",
             weight="bold",
             zorder=2,
+            gid=ROOM_LABEL,
         )
+
+
+def keep_labels_inside(ax: Axes) -> None:
+    """Hide the room names that do not fit wholly inside the axes (a room at the edge of a
+    cropped view): a name cut in half reads as another name."""
+    fig = ax.get_figure(root=True)
+    if fig is None:
+        return
+    fig.draw_without_rendering()  # lays the figure out: the equal aspect shrinks the axes
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    box = ax.get_window_extent(renderer).padded(-2.0)
+    for text in ax.texts:
+        if text.get_gid() != ROOM_LABEL:
+            continue
+        extent = text.get_window_extent(renderer)
+        inside = box.x0 <= extent.x0 and extent.x1 <= box.x1 and box.y0 <= extent.y0 and extent.y1 <= box.y1
+        text.set_visible(inside)
 
 
 def draw_doors(ax: Axes, scenario: Scenario) -> None:
@@ -181,16 +215,47 @@ def covariance_ellipse(
     return Ellipse((float(mean[0]), float(mean[1])), width, height, angle=angle, **style)
 
 
-def draw_robot_start(ax: Axes, scenario: Scenario, index: int) -> None:
+def start_sigma2(cov: NDArray[np.float64]) -> float:
+    """The 2-sigma radius (m) of a start belief along its most uncertain (x, y) direction."""
+    return 2.0 * float(np.sqrt(max(np.linalg.eigvalsh(np.asarray(cov)[:2, :2]).max(), 0.0)))
+
+
+def draw_robot_start(ax: Axes, scenario: Scenario, index: int, magnify: float = 1.0) -> None:
+    """A robot at its start: its footprint (outline), heading, and the 2-sigma ellipse of its start
+    belief filled in its colour on top, so that an ellipse smaller than the robot still shows
+    (``magnify``: drawn that many times its size, which the caller says in the title)."""
     robot = scenario.robots[index]
     color = robot_color(index)
     x, y, th = robot.pose.x, robot.pose.y, robot.pose.theta
-    ax.add_patch(plt.Circle((x, y), robot.radius, color=color, alpha=0.85, zorder=7))
+    ax.add_patch(plt.Circle((x, y), robot.radius, fill=False, ec=color, lw=1.2, zorder=7))
     ax.arrow(x, y, 0.8 * np.cos(th), 0.8 * np.sin(th), width=0.06, color=color, zorder=7, length_includes_head=True)
-    ax.add_patch(covariance_ellipse(np.array([x, y]), robot.cov, 2.0, fill=False, ec=color, lw=1.5, zorder=7))
+    cov = np.asarray(robot.cov, dtype=float) * magnify**2
+    ellipse = covariance_ellipse(np.array([x, y]), cov, 2.0, fc=(*to_rgb(color), 0.55), ec=darker(color))
+    ellipse.set_linewidth(1.4)
+    ellipse.set_zorder(7.5)
+    ax.add_patch(ellipse)
+    x0, x1 = ax.get_xlim()
+    right = x > x1 - 0.1 * (x1 - x0)  # near the right edge: the name goes to the left, inside the axes
     ax.annotate(
-        robot.name, (x, y), xytext=(8, 8), textcoords="offset points", color=color, fontsize=11, weight="bold", zorder=8
+        robot.name,
+        (x, y),
+        xytext=(-8 if right else 8, 8),
+        textcoords="offset points",
+        ha="right" if right else "left",
+        color=color,
+        fontsize=11,
+        weight="bold",
+        zorder=8,
     )
+
+
+def start_magnification(scenario: Scenario, view_width: float, share: float = 0.015) -> int:
+    """How many times to draw the start ellipses so that the largest spans at least ``share`` of
+    the view's width (a 0.2 m ellipse on a 50 m map is a few pixels); 1 when it already does."""
+    largest = max((start_sigma2(r.cov) for r in scenario.robots), default=0.0)
+    if largest <= 0.0:
+        return 1
+    return max(1, int(np.ceil(share * view_width / largest)))
 
 
 def draw_instantiations(ax: Axes, roadmap: Roadmap, ms: float = 3.0, label: str | None = None) -> None:
@@ -216,6 +281,24 @@ def step_badge(ax: Axes, xy: tuple[float, float], text: str, color: str, offset:
         color=color,
         bbox={"boxstyle": "circle,pad=0.25", "fc": "white", "ec": color, "lw": 1.4},
         arrowprops=None if offset == (0, 0) else {"arrowstyle": "-", "color": color, "lw": 0.8},
+        zorder=9,
+    )
+
+
+def badge_note(
+    ax: Axes, xy: tuple[float, float], text: str, color: str, offset: tuple[float, float] = (0, 0)
+) -> None:
+    """A small note (an arrival time) to the lower right of a :func:`step_badge` at ``xy``."""
+    ax.annotate(
+        text,
+        xy,
+        xytext=(offset[0] + 9, offset[1] - 9),
+        textcoords="offset points",
+        ha="left",
+        va="top",
+        fontsize=7,
+        color=darker(color, 0.8),
+        bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8},
         zorder=9,
     )
 

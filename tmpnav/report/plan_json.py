@@ -16,6 +16,7 @@ from dataclasses import asdict
 
 import numpy as np
 
+from tmpnav.report.quality import plan_warnings
 from tmpnav.results import JSON, STAGES, CacheUse, PlanReport
 from tmpnav.types import PlannedAction, Roadmap, TrajectoryStep
 from tmpnav.version import __version__
@@ -170,6 +171,10 @@ def plan_document(report: PlanReport) -> dict[str, JSON]:
         "task": {k: _plain(v) for k, v in asdict(report.task.counts).items()},
         "search": _search(report),
         "bound": _bound(report),
+        "warnings": [
+            {"kind": w.kind, "robot": w.robot, "value": number(w.value), "limit": number(w.limit), "message": w.message}
+            for w in plan_warnings(report)
+        ],
     }
 
 

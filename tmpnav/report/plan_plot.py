@@ -1,12 +1,16 @@
 """plan.png: the task-motion plan drawn as in the paper's Fig. 2.
 
 The map with rooms, doors and landmarks; each robot's re-simulated belief mean in its colour
-with 2-sigma ellipses of the (x, y) covariance along it; the rooms' pose instantiations as
-small black dots; the start poses; and a numbered badge at every plan step's goal.
+with 2-sigma ellipses of the (x, y) covariance along it, in the same colour; the rooms' pose
+instantiations as small black dots; the start poses; a numbered badge at every plan step's
+goal with the time the robot gets there; the costs (unit-less) and the plan's duration in the
+title. Each element is one small function over the axes, so that another (a schedule, risk
+markers) is one more function called from :func:`plan_figure`.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -19,13 +23,11 @@ from matplotlib.patches import Ellipse
 from numpy.typing import NDArray
 
 from tmpnav.report import figures as fg
+from tmpnav.report.plan_json import action_spans
 from tmpnav.results import PlanReport
 from tmpnav.types import TrajectoryStep
 
 N_SIGMA = 2.0
-#: ellipse outline as in the paper's Fig. 2 (red), filled in the robot's colour: a red outline stands out
-#: against every robot's line, even where an ellipse is only a few centimetres wide
-ELLIPSE_EDGE = "#e41a1c"
 MAX_ELLIPSES = 45  # per robot: more and they merge into a band
 WIDE = 0.45  # height / width of the view under which the figure is wider and the legend goes below
 #: offsets (points) of a badge that would hide another badge or a start marker; robot names sit up-right
@@ -78,6 +80,8 @@ def goal_steps(report: PlanReport, robot: str) -> set[int]:
 
 
 def _draw_beliefs(ax: Axes, report: PlanReport, spacing: float) -> None:
+    """Each robot's belief mean, and its 2-sigma ellipses in its own colour: filled lightly, outlined
+    darker, so that two robots' ellipses in one corridor can be told apart."""
     for index, robot in enumerate(r.name for r in report.scenario.robots):
         steps = report.trajectories.get(robot, [])
         if not steps:
@@ -85,14 +89,17 @@ def _draw_beliefs(ax: Axes, report: PlanReport, spacing: float) -> None:
         color = fg.robot_color(index)
         xy = np.array([s.mean[:2] for s in steps], dtype=float)
         # later robots are drawn thinner on top, so robots that share a corridor both stay visible
-        lw = max(1.1, 2.4 - 0.9 * index)
-        ax.plot(xy[:, 0], xy[:, 1], "-", color=color, lw=lw, zorder=5 + 0.01 * index, solid_capstyle="round")
+        ax.plot(xy[:, 0], xy[:, 1], "-", color=color, lw=_line_width(index), zorder=5 + 0.01 * index)
         for i in ellipse_steps(steps, spacing, goal_steps(report, robot)):
             patch = fg.covariance_ellipse(np.array(steps[i].mean), np.array(steps[i].cov), N_SIGMA, lw=0.9)
             patch.set_facecolor((*to_rgb(color), 0.25))
-            patch.set_edgecolor(ELLIPSE_EDGE)
+            patch.set_edgecolor(fg.darker(color))
             patch.set_zorder(5.5)  # above the lines: the small ellipses of a well-localized robot stay visible
             ax.add_patch(patch)
+
+
+def _line_width(index: int) -> float:
+    return max(1.1, 2.4 - 0.9 * index)
 
 
 def plan_extent(
@@ -144,18 +151,47 @@ def _widen(
     return xmin - left, ymin, xmax + right, ymax
 
 
+@dataclass(frozen=True)
+class Arrival:
+    """A robot at the goal of one of its plan steps: where, and when (s from the plan's start)."""
+
+    step: int  # the plan step's index (1-based)
+    robot: str
+    xy: tuple[float, float]
+    t: float | None  # None when the trajectory does not pass the goal node (should not happen)
+
+
+def arrivals(report: PlanReport) -> list[Arrival]:
+    """Every robot's arrival at each of its plan steps' goals, in plan order."""
+    out: list[Arrival] = []
+    cursor: dict[str, int] = {}
+    for action in report.actions:
+        for move, pose, path in zip(action.moves, action.goal_poses, action.paths, strict=True):
+            robot = move[0]
+            steps = report.trajectories.get(robot, [])
+            i = cursor.get(robot, 0)
+            for node in path[1:]:
+                i = next((j for j in range(i + 1, len(steps)) if steps[j].node == node), i)
+            cursor[robot] = i
+            t = float(steps[i].t - steps[0].t) if steps else None
+            out.append(Arrival(action.index, robot, (float(pose[0]), float(pose[1])), t))
+    return out
+
+
 def _draw_step_badges(ax: Axes, report: PlanReport) -> None:
-    """Numbered badges at every plan step's goal, nudged apart when two fall on the same spot."""
+    """Numbered badges at every plan step's goal with the robot's arrival time beside, nudged apart
+    when two fall on the same spot."""
     names = [r.name for r in report.scenario.robots]
     placed = [(r.pose.x, r.pose.y) for r in report.scenario.robots]  # keep the start markers readable
-    for action in report.actions:
-        for move, pose in zip(action.moves, action.goal_poses, strict=True):
-            robot = move[0]
-            x, y = float(pose[0]), float(pose[1])
-            crowded = sum(1 for px, py in placed if (px - x) ** 2 + (py - y) ** 2 < 0.8**2)
-            offset = (0.0, 0.0) if not crowded else NUDGES[(crowded - 1) % len(NUDGES)]
-            fg.step_badge(ax, (x, y), str(action.index), fg.robot_color(names.index(robot)), offset)
-            placed.append((x, y))
+    for arrival in arrivals(report):
+        x, y = arrival.xy
+        crowded = sum(1 for px, py in placed if (px - x) ** 2 + (py - y) ** 2 < 0.8**2)
+        offset = (0.0, 0.0) if not crowded else NUDGES[(crowded - 1) % len(NUDGES)]
+        color = fg.robot_color(names.index(arrival.robot))
+        fg.step_badge(ax, (x, y), str(arrival.step), color, offset)
+        if arrival.t is not None:
+            fg.badge_note(ax, (x, y), f"{arrival.t:.1f} s", color, offset)
+        placed.append((x, y))
 
 
 def _legend(ax: Axes, report: PlanReport, spacing: float) -> None:
@@ -168,19 +204,18 @@ def _legend(ax: Axes, report: PlanReport, spacing: float) -> None:
     extra: list[tuple[Artist, str]] = []
     for index, robot in enumerate(r.name for r in report.scenario.robots):
         if report.trajectories.get(robot):
+            color = fg.robot_color(index)
+            extra.append((Line2D([], [], color=color, lw=_line_width(index)), f"{robot}: belief mean"))
             extra.append(
-                (Line2D([], [], color=fg.robot_color(index), lw=max(1.1, 2.4 - 0.9 * index)), f"{robot}: belief mean")
+                (
+                    Ellipse((0, 0), 1, 0.6, fc=(*to_rgb(color), 0.25), ec=fg.darker(color), lw=0.9),
+                    f"{robot}: {N_SIGMA:g}σ (x, y) covariance, every {spacing:.1f} m",
+                )
             )
     extra.append(
         (
-            Ellipse((0, 0), 1, 0.6, fc=(0.3, 0.3, 0.3, 0.25), ec=ELLIPSE_EDGE, lw=0.9),
-            f"{N_SIGMA:g}σ (x, y) covariance, every {spacing:.1f} m",
-        )
-    )
-    extra.append(
-        (
             Line2D([], [], marker="o", ms=11, mfc="white", mec="black", ls="none"),
-            "goal of plan step k (numbered)",
+            "goal of plan step k, and when the robot gets there",
         )
     )
     extra.append((Line2D([], [], marker="o", ms=9, color="#777777", ls="none"), "start pose (2σ initial ellipse)"))
@@ -216,10 +251,12 @@ def _title(report: PlanReport) -> str:
     status = report.status.value
     mutual = "with mutual observations" if sc.models.mutual_observations else "without mutual observations"
     n = len(report.actions)
+    spans = action_spans(report)
+    duration = f", {spans[-1][1] - spans[0][0]:.1f} s" if spans else ""
     return (
-        f"{sc.name}: {n} plan step{'s' if n != 1 else ''}, {mutual}\n"
-        f"cost: planner {report.planner_cost:.3f}, re-simulated {report.resimulated_cost:.3f} "
-        f"({report.encoding} encoding, {report.planner}, {status})"
+        f"{sc.name}: {n} plan step{'s' if n != 1 else ''}{duration}, {mutual}\n"
+        f"cost (unit-less): planner {report.planner_cost:.3f}, "
+        f"re-simulated {report.resimulated_cost:.3f} ({report.encoding} encoding, {report.planner}, {status})"
     )
 
 
@@ -235,7 +272,7 @@ def plan_figure(report: PlanReport, crop: bool = True) -> Figure:
     width = 15.0 if (ymax - ymin) / max(xmax - xmin, 1e-9) < WIDE else 12.0
     fig, ax = fg.new_axes(world, width=width, extent=extent, max_height=9.0)
     fg.draw_map(ax, world)
-    fg.draw_rooms(ax, sc)
+    fg.draw_rooms(ax, sc, extent)
     fg.draw_doors(ax, sc)
     fg.draw_instantiations(ax, report.roadmap, label="pose instantiations")
     fg.draw_landmarks(ax, sc)
@@ -251,6 +288,7 @@ def plan_figure(report: PlanReport, crop: bool = True) -> Figure:
             text.set_clip_on(True)
     ax.set_title(_title(report), fontsize=10)
     _legend(ax, report, spacing)
+    fg.keep_labels_inside(ax)
     return fig
 
 

