@@ -8,6 +8,7 @@ import click
 
 from tmpnav.cli.commands import cli
 from tmpnav.cli.options import FiniteRange, report_errors, unwritable, writing
+from tmpnav.rooms import MAX_AREA
 
 
 def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path, ...]) -> dict[str, Path]:
@@ -51,26 +52,44 @@ def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path
     help="Smaller regions join their neighbour (a closet, a niche) or are left out.",
 )
 @click.option(
-    "--max-rooms", type=click.IntRange(min=1), metavar="N", help="Join the least separated rooms down to N rooms."
+    "--max-area",
+    type=FiniteRange(min=0, min_open=True),
+    default=MAX_AREA,
+    show_default=True,
+    metavar="M2",
+    help="A larger room is a hall (a warehouse floor, a depot) and is split into places of at most this "
+    "size: aisles between racks, aisle fronts, parts of open floor.",
+)
+@click.option(
+    "--max-rooms",
+    type=click.IntRange(min=1),
+    metavar="N",
+    help="Join the least separated rooms down to N rooms (none is then split into places).",
 )
 @report_errors
-def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_rooms: int | None) -> None:
+def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_area: float, max_rooms: int | None) -> None:
     """Segment a ROS map_server map into rooms and write a scenario skeleton.
 
-    Finds the rooms and open areas (distance-transform watershed), the doors between them and
-    landmark candidates (pillars, isolated obstacles, door frames, corners), and writes a
-    scenario that validates and plans as written: rooms R1..Rn with polygons, doors, landmarks,
-    a placeholder robot and two goal rooms, with comments saying what to check.
+    Finds the rooms (distance-transform watershed), splits halls larger than --max-area into
+    places along the medial axis of their free space, finds the doors between rooms, the
+    connections between places and landmark candidates (pillars, isolated obstacles, door
+    frames, corners), and writes a scenario that validates and plans as written: rooms R1..Rn
+    and places P1..Pm with polygons, doors, landmarks, a placeholder robot and two goal rooms
+    (with halls: two robots and four goal places), with comments saying what to check.
     """
+    if max_area <= min_area:
+        message = f"{max_area:g} m² is not larger than --min-area {min_area:g} m²"
+        raise click.BadParameter(message, param_hint="'--max-area'")
     from tmpnav.rooms.proposal import propose, read_map
     from tmpnav.rooms.segment import SegmentParams
-    from tmpnav.rooms.skeleton import save, skeleton
+    from tmpnav.rooms.skeleton import save, skeleton, summary
     from tmpnav.rooms.verify import verify
     from tmpnav.scenario import display_path
     from tmpnav.shipped import resolve
 
     spec, grid = read_map(resolve(map_yaml))
-    proposal, warnings = verify(propose(spec, grid, SegmentParams(min_area=min_area, max_rooms=max_rooms)))
+    params = SegmentParams(min_area=min_area, max_area=max_area, max_rooms=max_rooms)
+    proposal, warnings = verify(propose(spec, grid, params))
     for warning in warnings:  # not expected: the proposal is built to pass
         click.echo(f"warning: {warning}", err=True)
     left_out = [r.name for r in proposal.rooms if not r.reachable]
@@ -82,10 +101,7 @@ def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_rooms: 
         )
     target = outputs.get("scenario")
     text = skeleton(proposal, target)
-    found = (
-        f"{len(proposal.usable_rooms)} rooms, {len(proposal.doors)} doors, "
-        f"{len(proposal.landmarks)} landmark candidates"
-    )
+    found = summary(proposal)
     if target is None:
         click.echo(text, nl=False)
     else:
