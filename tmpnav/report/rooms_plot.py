@@ -39,7 +39,8 @@ def plot_rooms(proposal: Proposal, path: Path, title: str) -> None:
     _draw_segmentation(ax, proposal)
     _draw_halls(ax, proposal)
     robots = [r.pose[:2] for r in proposal.robots]
-    _draw_rooms(ax, proposal, robots)
+    points_per_m = fig.get_figwidth() * 72 * ax.get_position().width / max(xmax - xmin, 1e-9)
+    _draw_rooms(ax, proposal, robots, max(LABEL_BELOW_ROBOT, ROBOT_RADIUS * points_per_m + 6))
     _draw_doors_and_landmarks(ax, proposal)
     for k, robot in enumerate(proposal.robots):
         x, y, _ = robot.pose
@@ -94,14 +95,15 @@ def _draw_segmentation(ax: Axes, proposal: Proposal) -> None:
 
 
 def _draw_halls(ax: Axes, proposal: Proposal) -> None:
-    """Each hall's outline, thick, and its name in its upper left corner."""
+    """Each hall's outline, thick, and its name just inside its upper left corner (the legend
+    says how large it is and how many places it was split into)."""
     for hall in proposal.halls:
         ax.add_patch(Polygon(hall.polygon, closed=True, fill=False, ec=HALL_COLOUR, lw=3.0, zorder=3))
         corner = hall.polygon[np.argmax(hall.polygon[:, 1] - hall.polygon[:, 0] * 1e-3)]
         ax.annotate(
-            f"{hall.name}: {hall.area:.0f} m², {len(hall.places)} places",
+            hall.name,
             corner,
-            xytext=(4, -4),
+            xytext=(5, -5),
             textcoords="offset points",
             ha="left",
             va="top",
@@ -109,13 +111,12 @@ def _draw_halls(ax: Axes, proposal: Proposal) -> None:
             color=HALL_COLOUR,
             weight="bold",
             zorder=6,
-            bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": HALL_COLOUR, "alpha": 0.9},
         )
 
 
-def _draw_rooms(ax: Axes, proposal: Proposal, robots: list[tuple[float, float]]) -> None:
+def _draw_rooms(ax: Axes, proposal: Proposal, robots: list[tuple[float, float]], below: float) -> None:
     """Outlines (hatched: left out, unreachable) and names at the spots; where a robot stands
-    on that spot, the name goes below it so that the robot does not hide it."""
+    on that spot, the name goes ``below`` points below it so that the robot does not hide it."""
     for room in proposal.rooms:
         hatch = None if room.reachable else "//"
         lw = 0.6 if room.hall else 1.0
@@ -125,7 +126,7 @@ def _draw_rooms(ax: Axes, proposal: Proposal, robots: list[tuple[float, float]])
         ax.annotate(
             room.name,
             room.spot,
-            xytext=(0.0, -LABEL_BELOW_ROBOT if under else 0.0),
+            xytext=(0.0, -below if under else 0.0),
             textcoords="offset points",
             ha="center",
             va="top" if under else "center",
@@ -166,9 +167,10 @@ def _legend(ax: Axes, proposal: Proposal) -> list:
     links = len(proposal.connections)
     handles: list = [Line2D([], [], color=DOOR_COLOUR, lw=3.0, label=f"door ({len(proposal.doors) - links})")]
     if proposal.halls:
+        handles.append(Line2D([], [], color=LINK_COLOUR, lw=1.6, ls=(0, (3, 2)), label=f"connection ({links})"))
         handles += [
-            Line2D([], [], color=LINK_COLOUR, lw=1.6, ls=(0, (3, 2)), label=f"connection ({links})"),
-            Line2D([], [], color=HALL_COLOUR, lw=3.0, label=f"hall ({len(proposal.halls)})"),
+            Line2D([], [], color=HALL_COLOUR, lw=3.0, label=f"{h.name}: hall of {h.area:.0f} m², {len(h.places)} places")
+            for h in proposal.halls
         ]
     marks = ax.get_legend_handles_labels()[0]
     if marks:

@@ -9,7 +9,7 @@ the door leaf the scenario format wants (``doors[].segment``), and its length th
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import ndimage
@@ -46,9 +46,10 @@ def find_doors(
 
     ``pairs``, if given, says which pairs of rooms to look at. ``solid``, if given, marks cells a
     door must not be carved through (racks, pillars): a border is cut where it crosses them, and
-    a door whose carved strip would touch one is dropped. A door between rooms
-    runs along a doorway, free by definition; a connection between two places of a hall runs
-    across open floor, where a pillar may stand on it.
+    a door is shortened until the strip world.build carves for it misses them (or dropped). A
+    door between rooms runs along a doorway, free by definition; a connection between two places
+    of a hall runs across open floor, where a pillar may stand on it, and may meet a wall at a
+    slant.
     """
     doors = []
     for pair, cells in borders(seg.labels).items():
@@ -57,8 +58,10 @@ def find_doors(
         if solid is not None:
             cells = cells[~solid[cells[:, 0], cells[:, 1]]]
         for part in _stretches(cells):
-            door = _door(seg, pair, part)
-            if door.width >= min_width and (solid is None or _clear(door, solid, seg.grid)):
+            door: DoorCandidate | None = _door(seg, pair, part)
+            if door is not None and solid is not None:
+                door = _kept_clear(door, solid, seg.grid, min_width)
+            if door is not None and door.width >= min_width:
                 doors.append(door)
     return sorted(doors, key=lambda d: (d.rooms, d.centre[1], d.centre[0]))
 
@@ -90,6 +93,8 @@ def borders(labels: np.ndarray) -> dict[tuple[int, int], np.ndarray]:
         keys += [key, key]
         cells += [ij, ij + np.array([di, dj])]
     key, cell = np.concatenate(keys), np.concatenate(cells)
+    if key.size == 0:
+        return {}
     order = np.argsort(key, kind="stable")
     key, cell = key[order], cell[order]
     uniq, start = np.unique(key, return_index=True)
@@ -97,10 +102,25 @@ def borders(labels: np.ndarray) -> dict[tuple[int, int], np.ndarray]:
     return {(int(k // base), int(k % base)): np.unique(g, axis=0) for k, g in zip(uniq, groups, strict=True)}
 
 
-def _clear(door: DoorCandidate, solid: np.ndarray, grid: OccupancyGrid) -> bool:
-    """Whether the strip world.build carves for ``door`` (``DOOR_THICKNESS`` and a cell either
-    side, flat caps) misses every ``solid`` cell."""
-    a, b = (np.array(p, dtype=float) for p in door.segment)
+def _kept_clear(door: DoorCandidate, solid: np.ndarray, grid: OccupancyGrid, min_width: float) -> DoorCandidate | None:
+    """``door`` (its ends to the centimetre, as the scenario has them) shortened a cell at a time
+    at whichever end the strip world.build carves for it touches a ``solid`` cell, or None when
+    it is narrower than ``min_width`` before that strip comes clear."""
+    a, b = (np.round(np.array(p, dtype=float), 2) for p in door.segment)
+    while (width := float(np.hypot(*(b - a)))) >= min_width:
+        hits = _solid_in_strip(a, b, solid, grid)
+        if hits.size == 0:
+            return replace(door, segment=((float(a[0]), float(a[1])), (float(b[0]), float(b[1]))), width=width)
+        along = (hits - a) @ (b - a) / width**2
+        step = grid.resolution * (b - a) / width
+        a = np.round(a + step, 2) if (along < 0.5).any() else a
+        b = np.round(b - step, 2) if (along >= 0.5).any() else b
+    return None
+
+
+def _solid_in_strip(a: np.ndarray, b: np.ndarray, solid: np.ndarray, grid: OccupancyGrid) -> np.ndarray:
+    """Centres (m, 2) of the ``solid`` cells in the strip world.build carves for an open door
+    from a to b (``DOOR_THICKNESS`` and a cell either side, flat caps)."""
     r = grid.resolution
     thickness = DOOR_THICKNESS + 2 * r
     i0, j0, _ = grid.cells(np.minimum(a, b) - thickness)
@@ -109,7 +129,8 @@ def _clear(door: DoorCandidate, solid: np.ndarray, grid: OccupancyGrid) -> bool:
     xs, ys = grid.cell_centers()
     strip = np.zeros(solid[window].shape, dtype=bool)
     fill_segment(strip, xs[window[1]], ys[window[0]], a, b, thickness, True, flat_caps=True)
-    return not np.any(strip & solid[window])
+    i, j = np.nonzero(strip & solid[window])
+    return np.column_stack([xs[window[1]][j], ys[window[0]][i]])
 
 
 def _door(seg: Segmentation, pair: tuple[int, int], part: np.ndarray) -> DoorCandidate:

@@ -146,8 +146,9 @@ def _room_note(p: Proposal, room: RoomProposal) -> str:
         for name, d in p.doors.items()
         if room.label in d.rooms
     ]
-    place = f"a place of {room.hall}: " if room.hall else ""
-    return f"{place}{room.area:.1f} m², {room.width:.1f} m wide; doors: {', '.join(doors) or 'none'}"
+    if room.hall:  # a place's widest disc reaches into its neighbours: its width says little
+        return f"a place of {room.hall}: {room.area:.1f} m²; doors: {', '.join(doors) or 'none'}"
+    return f"{room.area:.1f} m², {room.width:.1f} m wide; doors: {', '.join(doors) or 'none'}"
 
 
 def _doors(p: Proposal) -> list[str]:
