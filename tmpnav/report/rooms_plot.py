@@ -168,10 +168,9 @@ def _legend(ax: Axes, proposal: Proposal) -> list:
     handles: list = [Line2D([], [], color=DOOR_COLOUR, lw=3.0, label=f"door ({len(proposal.doors) - links})")]
     if proposal.halls:
         handles.append(Line2D([], [], color=LINK_COLOUR, lw=1.6, ls=(0, (3, 2)), label=f"connection ({links})"))
-        handles += [
-            Line2D([], [], color=HALL_COLOUR, lw=3.0, label=f"{h.name}: hall of {h.area:.0f} m², {len(h.places)} places")
-            for h in proposal.halls
-        ]
+        for hall in proposal.halls:
+            label = f"{hall.name}: hall of {hall.area:.0f} m², {len(hall.places)} places"
+            handles.append(Line2D([], [], color=HALL_COLOUR, lw=3.0, label=label))
     marks = ax.get_legend_handles_labels()[0]
     if marks:
         handles += [Line2D([], [], ls="none", label="landmark candidates:"), *marks]
