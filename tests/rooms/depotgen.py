@@ -38,18 +38,23 @@ def depot(
     resolution: float = 0.05,
     noise: float = 0.002,
     wall_gaps: float = 0.01,
+    office: bool = True,
 ) -> Depot:
-    """A depot hall of ``width`` x ``height`` m with racks, pillars, pallets and an office."""
+    """A depot hall of ``width`` x ``height`` m with racks, pillars, pallets and (unless not
+    ``office``) an office on its top wall."""
     rng = np.random.default_rng(seed)
     wall = 0.15
-    office = (0.0, height, min(6.0, width / 3), height + 4.0)
-    cells = {"H": (0.0, 0.0, width, height), "O": office}
-    canvas = Canvas(width, office[3], resolution, margin=1.0)
+    cells = {"H": (0.0, 0.0, width, height)}
+    if office:
+        cells["O"] = (0.0, height, min(6.0, width / 3), height + 4.0)
+    canvas = Canvas(width, max(r[3] for r in cells.values()), resolution, margin=1.0)
     building = Building(rooms={k: _inside(r, wall) for k, r in cells.items()}, wall=wall)
-    x = float(rng.uniform(1.0, office[2] - 1.9))
-    door = (x, height - wall, x + 0.9, height + wall)
-    building.doors.append(TrueDoor(("O", "H"), (x + 0.45, height), 0.9))
-    _draw(canvas, cells, building, [("O", "H", door)])
+    x = float(rng.uniform(1.0, min(6.0, width / 3) - 1.9))  # drawn either way: the same racks for a seed
+    openings = []
+    if office:
+        openings.append(("O", "H", (x, height - wall, x + 0.9, height + wall)))
+        building.doors.append(TrueDoor(("O", "H"), (x + 0.45, height), 0.9))
+    _draw(canvas, cells, building, openings)
     hall = building.rooms["H"]
     racks, aisles, staging = _racks(rng, hall)
     for rack in racks:

@@ -16,8 +16,9 @@ from tests.rooms.depotgen import Depot, depot
 from tests.rooms.mapgen import FREE, OCCUPIED, generate, rect_mask
 from tmpnav.rooms.medial import axis_graph, medial_axis
 from tmpnav.rooms.places import PlaceParams, lloyd, merge_small, split_hall
-from tmpnav.rooms.proposal import Proposal, propose, read_map
+from tmpnav.rooms.proposal import Proposal, propose, read_map, working_grid
 from tmpnav.rooms.segment import SegmentParams, segment, speckle_cells, speckles
+from tmpnav.world.grid import OccupancyGrid
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -29,7 +30,7 @@ def proposal_of(g: Depot, folder: Path, **params: float) -> Proposal:
 
 def aisle_places(p: Proposal, g: Depot, aisle: str) -> tuple[list[str], float]:
     """The places lying at least 60% in ``aisle``, and the share of the aisle they cover."""
-    grid = p.grid
+    grid = p.segmentation.grid
     inside = rect_mask(g.aisles[aisle], grid.shape, grid.origin, grid.resolution) & ~grid.occupied  # type: ignore[index]
     names, covered = [], 0
     for place in p.places:
@@ -102,7 +103,17 @@ def test_rooms_no_larger_than_max_area_are_not_split(tmp_path: Path) -> None:
             spec, grid = read_map(generate(layout, seed).write_ros(folder, "m"))
             p = propose(spec, grid)
             assert not p.halls and not p.connections
-            assert np.array_equal(p.segmentation.labels, segment(grid).labels)
+            assert np.array_equal(p.segmentation.labels, _cropped(segment(grid).labels, grid, p.segmentation.grid))
+
+
+def _cropped(labels: np.ndarray, grid: OccupancyGrid, box: OccupancyGrid) -> np.ndarray:
+    """``labels`` of ``grid`` within the part ``box`` of it, nothing outside it."""
+    top, left = (round((b - a) / grid.resolution) for a, b in zip(grid.origin[::-1], box.origin[::-1], strict=True))
+    rows, cols = box.shape
+    inside = np.zeros(labels.shape, dtype=bool)
+    inside[top : top + rows, left : left + cols] = True
+    assert not labels[~inside].any()
+    return labels[top : top + rows, left : left + cols]
 
 
 def test_max_area_decides_what_is_a_hall(tmp_path: Path) -> None:
@@ -180,3 +191,16 @@ def test_depot_pixels_are_a_map() -> None:
     g = depot(0)
     assert set(np.unique(g.pixels)) <= {FREE, OCCUPIED, 205}
     assert g.racks and all(x1 - x0 >= 3.0 for x0, _, x1, _ in g.racks)
+
+
+def test_a_large_map_is_segmented_around_its_free_space_on_coarser_cells() -> None:
+    occupied = np.ones((2500, 2500), dtype=bool)  # unknown around a 90 m x 100 m building
+    occupied[100:1900, 200:2200] = False
+    occupied[1001, 1001] = True  # a speck: its block of 2 x 2 cells is occupied
+    work = working_grid(OccupancyGrid(occupied, (-5.0, -5.0), 0.05))
+    assert work.resolution == pytest.approx(0.1) and work.occupied.size <= 1_000_000
+    assert work.origin == pytest.approx((-5.0 + 190 * 0.05, -5.0 + 90 * 0.05))  # 10 cells of margin
+    i, j, _ = work.cells(np.array([-5.0 + 1001.5 * 0.05, -5.0 + 1001.5 * 0.05]))
+    assert work.occupied[i, j] and np.count_nonzero(~work.occupied) == 900 * 1000 - 1
+    small = OccupancyGrid(occupied[:400, :400], (0.0, 0.0), 0.05)
+    assert working_grid(small).resolution == 0.05

@@ -54,9 +54,7 @@ def plot_rooms(proposal: Proposal, path: Path, title: str) -> None:
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_title(title, fontsize=10)
-    ax.legend(
-        handles=_legend(ax, proposal), loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=9, frameon=False
-    )
+    _legend(ax, proposal)
     fg.save(fig, path)
 
 
@@ -77,6 +75,7 @@ def _draw_segmentation(ax: Axes, proposal: Proposal) -> None:
         interpolation="nearest",
     )
     labels = proposal.segmentation.labels
+    lx0, ly0, lx1, ly1 = proposal.segmentation.grid.extent  # the part of the map segmented
     n = max(int(labels.max()), 1)
     palette = plt.get_cmap("tab20")(np.arange(n) % 20)
     colours = ListedColormap(np.vstack([[0, 0, 0, 0], palette]))  # label k gets colour k, 0 none
@@ -89,7 +88,7 @@ def _draw_segmentation(ax: Axes, proposal: Proposal) -> None:
         alpha=0.45,
         zorder=1,
         origin="lower",
-        extent=extent,
+        extent=(lx0, lx1, ly0, ly1),
         interpolation="nearest",
     )
 
@@ -162,16 +161,21 @@ def _draw_doors_and_landmarks(ax: Axes, proposal: Proposal) -> None:
             )
 
 
-def _legend(ax: Axes, proposal: Proposal) -> list:
-    """Doors, connections and halls (when there are any), then the landmark candidates."""
+def _legend(ax: Axes, proposal: Proposal) -> None:
+    """The landmark candidates by kind; on a map with halls, first the doors, the connections
+    and each hall with its size and places."""
+    if not proposal.halls:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=9, title="landmark candidates", frameon=False)
+        return
     links = len(proposal.connections)
-    handles: list = [Line2D([], [], color=DOOR_COLOUR, lw=3.0, label=f"door ({len(proposal.doors) - links})")]
-    if proposal.halls:
-        handles.append(Line2D([], [], color=LINK_COLOUR, lw=1.6, ls=(0, (3, 2)), label=f"connection ({links})"))
-        for hall in proposal.halls:
-            label = f"{hall.name}: hall of {hall.area:.0f} m², {len(hall.places)} places"
-            handles.append(Line2D([], [], color=HALL_COLOUR, lw=3.0, label=label))
+    handles: list = [
+        Line2D([], [], color=DOOR_COLOUR, lw=3.0, label=f"door ({len(proposal.doors) - links})"),
+        Line2D([], [], color=LINK_COLOUR, lw=1.6, ls=(0, (3, 2)), label=f"connection ({links})"),
+    ]
+    for hall in proposal.halls:
+        label = f"{hall.name}: hall of {hall.area:.0f} m², {len(hall.places)} places"
+        handles.append(Line2D([], [], color=HALL_COLOUR, lw=3.0, label=label))
     marks = ax.get_legend_handles_labels()[0]
     if marks:
         handles += [Line2D([], [], ls="none", label="landmark candidates:"), *marks]
-    return handles
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.0, 1.0), fontsize=9, frameon=False)

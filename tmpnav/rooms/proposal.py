@@ -39,6 +39,7 @@ APART = 2.0  # m: the second robot starts at least this far from the first
 #: a map of more cells is segmented on cells a few times larger, down to this many: the rooms of a
 #: 2000 x 2000 map of 5 cm cells on 10 cm cells (the scenario's check, its roadmap, runs on the map)
 LARGE_MAP = 1_000_000
+MARGIN = 10  # cells kept around the free space of a map
 ROOMY = 0.7  # a place's spot: near its centre, where the clearance is at least this share of its largest
 
 
@@ -76,8 +77,8 @@ class Proposal:
     """What ``tmpnav rooms`` found in a map, ready to be written as a scenario."""
 
     map: RosMap
-    grid: OccupancyGrid
-    segmentation: Segmentation  # rooms and places, as the scenario names them
+    grid: OccupancyGrid  # the map as read
+    segmentation: Segmentation  # rooms and places, as the scenario names them (on working_grid(grid))
     rooms: tuple[RoomProposal, ...]  # rooms, then the places of halls
     doors: dict[str, DoorCandidate]  # D1, D2, ... -> door or connection
     deep_doors: frozenset[str]  # doors to carve DEEP_DOOR deep (noise at the doorway blocks them)
@@ -129,27 +130,27 @@ def read_map(path: Path) -> tuple[RosMap, OccupancyGrid]:
 def propose(spec: RosMap, grid: OccupancyGrid, params: SegmentParams | None = None) -> Proposal:
     """Segment the map, split its halls and propose the scenario's parts (module docstring)."""
     params = params or SegmentParams()
-    grid = working_grid(grid)
-    found = segment(grid, params)
+    work = working_grid(grid)
+    found = segment(work, params)
     if found.n_rooms == 0:
         where = str(spec.yaml_path)
         raise ScenarioError([Problem(where, "", "no free area large enough for a room (see --min-area) in this map")])
     # --max-rooms asks for so many rooms: a room it made by joining others is not split again
     max_area = params.max_area if params.max_rooms is None else math.inf
     layout = lay_out(found, PlaceParams(max_area, params.min_area, ROBOT_RADIUS))
-    clear = clearance(grid)
+    clear = clearance(work)
     rooms = _rooms(layout, clear)
     doors, as_found, connections = named_doors(layout)
     hub = _hub(rooms, list(doors.values()))
-    start = _start(spec, grid, clear, hub)
-    reach, deep, component = reachable_rooms(grid, {r.label: r.polygon for r in rooms}, doors, start, ROBOT_RADIUS)
+    start = _start(spec, work, clear, hub)
+    reach, deep, component = reachable_rooms(work, {r.label: r.polygon for r in rooms}, doors, start, ROBOT_RADIUS)
     reach.add(hub.label)  # the robot starts there, however cluttered it is
     rooms = tuple(replace(r, reachable=r.label in reach) for r in rooms)
     halls = _halls(layout, rooms)
     outlines = {k: rooms[label - 1].polygon for k, label in enumerate(layout.room_label.tolist()) if label}
     outlines.update({k: h.polygon for k, h in zip(layout.hall_names, halls, strict=True)})
     landmarks = _name_landmarks(place_landmarks(layout, find_landmarks(found, as_found, outlines)))
-    robots = _robots(rooms, hub, doors, component, grid, two=bool(halls))
+    robots = _robots(rooms, hub, doors, component, work, two=bool(halls))
     goals = _goals(rooms, robots, HALL_GOALS if halls else ROOM_GOALS)
     free_area = sum(r.area for r in rooms if r.reachable)
     lo, hi = SAMPLES_RANGE
@@ -172,15 +173,25 @@ def propose(spec: RosMap, grid: OccupancyGrid, params: SegmentParams | None = No
 
 
 def working_grid(grid: OccupancyGrid) -> OccupancyGrid:
-    """``grid``, or for a map of more than ``LARGE_MAP`` cells, the grid of blocks of f x f cells
-    (f as small as brings it below ``LARGE_MAP``), a block occupied where any of its cells is."""
-    rows, cols = grid.shape
-    f = math.ceil(math.sqrt(rows * cols / LARGE_MAP))
-    if f < 2:
+    """The part of ``grid`` the rooms are found on: the box around its free cells (with
+    ``MARGIN`` cells of what surrounds them; the rest, unknown or occupied, changes nothing),
+    and for more than ``LARGE_MAP`` cells, the grid of blocks of f x f cells (f as small as brings
+    it below ``LARGE_MAP``), a block occupied where any of its cells is."""
+    free = ~grid.occupied
+    rows, cols = np.nonzero(free.any(axis=1))[0], np.nonzero(free.any(axis=0))[0]
+    if rows.size == 0:
         return grid
-    padded = np.pad(grid.occupied, ((0, -rows % f), (0, -cols % f)), constant_values=True)
-    blocks = np.asarray(padded.reshape(padded.shape[0] // f, f, padded.shape[1] // f, f).any(axis=(1, 3)))
-    return OccupancyGrid(blocks, grid.origin, grid.resolution * f)
+    top, left = max(int(rows[0]) - MARGIN, 0), max(int(cols[0]) - MARGIN, 0)
+    box = slice(top, int(rows[-1]) + MARGIN + 1), slice(left, int(cols[-1]) + MARGIN + 1)
+    x0, y0 = grid.origin
+    r = grid.resolution
+    occupied = grid.occupied[box]
+    f = math.ceil(math.sqrt(occupied.size / LARGE_MAP))
+    if f >= 2:
+        rows_, cols_ = occupied.shape
+        padded = np.pad(occupied, ((0, -rows_ % f), (0, -cols_ % f)), constant_values=True)
+        occupied = np.asarray(padded.reshape(padded.shape[0] // f, f, padded.shape[1] // f, f).any(axis=(1, 3)))
+    return OccupancyGrid(np.ascontiguousarray(occupied), (x0 + left * r, y0 + top * r), r * max(f, 1))
 
 
 def _rooms(layout: Layout, clear: np.ndarray) -> tuple[RoomProposal, ...]:

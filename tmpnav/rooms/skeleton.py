@@ -132,7 +132,7 @@ def _rooms(p: Proposal) -> list[str]:
     if hidden:
         lines.append(
             f"  # Not reachable by a robot of radius {ROBOT_RADIUS:g} m from r1's start (a passage narrower than "
-            f"{2 * ROBOT_RADIUS + 2 * p.grid.resolution:.2f} m?), left out:"
+            f"{2 * ROBOT_RADIUS + 2 * p.map.resolution:.2f} m?), left out:"
         )
         for room in hidden:
             lines.append(f"  # - name: {room.name}  # {_room_note(p, room)}")
