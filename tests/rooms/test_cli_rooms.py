@@ -113,7 +113,7 @@ def test_the_skeleton_of_a_depot_plans_with_two_robots(tmp_path: Path) -> None:
     out, png = tmp_path / "depot.yaml", tmp_path / "rooms.png"
     proc = tmpnav("rooms", map_yaml, "-o", out, "-o", png)
     assert proc.returncode == 0 and proc.stderr == "", proc.stderr
-    assert "1 rooms, 14 places from splitting 1 halls larger than 100 m², 1 doors, " in proc.stdout
+    assert "1 room, 14 places from splitting 1 hall larger than 100 m², 1 door, 27 connections, " in proc.stdout
     text = out.read_text()
     assert "# H1: a hall of" in text and "a second robot" in text and "connection across the open floor" in text
     assert tmpnav("validate", out).returncode == 0

@@ -57,14 +57,15 @@ def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path
     default=MAX_AREA,
     show_default=True,
     metavar="M2",
-    help="A larger room is a hall (a warehouse floor, a depot) and is split into places of at most this "
-    "size: aisles between racks, aisle fronts, parts of open floor.",
+    help="A larger room is a hall (a warehouse floor, a depot) and is split into places of at most about "
+    "this size: aisles between racks, aisle fronts, parts of open floor.",
 )
 @click.option(
     "--max-rooms",
     type=click.IntRange(min=1),
     metavar="N",
-    help="Join the least separated rooms down to N rooms (none is then split into places).",
+    help="Join the least separated rooms down to N rooms; halls are then not split into places.  "
+    "[default: no limit]",
 )
 @report_errors
 def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_area: float, max_rooms: int | None) -> None:

@@ -56,9 +56,14 @@ def summary(p: Proposal) -> str:
     places = len(p.usable_rooms) - rooms
     links = len(p.connections)
     return (
-        f"{rooms} rooms, {places} places from splitting {len(p.halls)} halls larger than {p.max_area:g} m², "
-        f"{len(p.doors) - links} doors, {links} connections, {len(p.landmarks)} landmark candidates"
+        f"{_count(rooms, 'room')}, {_count(places, 'place')} from splitting {_count(len(p.halls), 'hall')} "
+        f"larger than {p.max_area:g} m², {_count(len(p.doors) - links, 'door')}, "
+        f"{_count(links, 'connection')}, {_count(len(p.landmarks), 'landmark candidate')}"
     )
+
+
+def _count(n: int, what: str) -> str:
+    return f"{n} {what}" if n == 1 else f"{n} {what}s"
 
 
 def _header(p: Proposal, map_shown: str) -> str:
@@ -86,16 +91,13 @@ Found {len(usable)} rooms, {len(p.doors)} doors, {len(p.landmarks)} landmark can
 
 def _hall_header(p: Proposal, map_shown: str) -> str:
     """The header of a map with halls: places, connections, two robots."""
-    rooms = [r for r in p.usable_rooms if r.hall is None]
-    places = [r for r in p.usable_rooms if r.hall is not None]
-    halls = ", ".join(h.name for h in p.halls)
-    links = sum(1 for name in p.doors if name in p.connections)
-    robots = " and ".join(r.name for r in p.robots)
+    names = " and ".join(r.name for r in p.robots)
+    robots = f"{names} are placeholders" if len(p.robots) > 1 else f"{names} is a placeholder"
+    spots = "spots" if len(p.robots) > 1 else "spot"
     where = " and ".join(r.room for r in p.robots)
     return f"""\
 Scenario skeleton written by `tmpnav rooms` (tmpnav {__version__}) from the ROS map {map_shown}.
-Found {len(rooms)} rooms, and {len(places)} places from splitting the halls larger than {p.max_area:g} m² ({halls});
-{len(p.doors)} doors ({links} of them connections between places), {len(p.landmarks)} landmark candidates.
+Found {summary(p)}.
 Coordinates: metres, map frame. `tmpnav show THIS_FILE -o world.png` draws it. Check before you plan:
 
 1. rooms: R1.. are rooms, P1.. places in halls (aisles between racks, the fronts of aisles,
@@ -105,9 +107,9 @@ Coordinates: metres, map frame. `tmpnav show THIS_FILE -o world.png` draws it. C
    again with --max-area: smaller gives more, smaller places; --min-area, --max-rooms).
 2. doors: all open. Set `state: closed` on doors that are shut: a closed door is a wall. A
    connection between two places is open floor: leave it open, or delete it.
-3. landmarks: candidates (isolated pillars and obstacles, rack ends, door frames, room
-   corners). Keep those your robots' sensors really recognise, and add the ones you know of.
-4. robots: {robots} are placeholders (radius {ROBOT_RADIUS:g} m) at the roomiest spots of {where}.
+3. landmarks: candidates (isolated pillars and obstacles: pallets, short racks; door frames,
+   room corners). Keep those your robots' sensors really recognise, and add the ones you know of.
+4. robots: {robots} (radius {ROBOT_RADIUS:g} m) at the roomiest {spots} of {where}.
    Put your robots with their real start poses, radii and speeds; add more as r3, r4, ...
 5. goals: pre-filled with the {len(p.goals)} places nearest to the robots so that `tmpnav plan` runs as
    written. Replace them with the places your robots must visit."""
