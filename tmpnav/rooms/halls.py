@@ -50,10 +50,6 @@ class Layout:
                 return int(self.segmentation.labels[a, b])
         raise ValueError(f"room {room} has no cells")
 
-    @property
-    def n_halls(self) -> int:
-        return len(self.hall_names)
-
 
 def lay_out(rooms: Segmentation, params: PlaceParams) -> Layout:
     """Split the halls among ``rooms`` into places and number everything (module docstring)."""
