@@ -204,3 +204,13 @@ def test_a_large_map_is_segmented_around_its_free_space_on_coarser_cells() -> No
     assert work.occupied[i, j] and np.count_nonzero(~work.occupied) == 900 * 1000 - 1
     small = OccupancyGrid(occupied[:400, :400], (0.0, 0.0), 0.05)
     assert working_grid(small).resolution == 0.05
+
+
+def test_a_hall_filling_its_box_keeps_every_place() -> None:
+    """A rectangular hall has no cell outside it in its box: every cell still gets a place."""
+    from scipy import ndimage
+
+    free = np.ones((200, 400), dtype=bool)  # 10 m x 20 m
+    clear = ndimage.distance_transform_edt(np.pad(free, 1))[1:-1, 1:-1] * 0.05
+    labels = split_hall(free, clear, 0.05, PlaceParams(max_area=60.0))
+    assert (labels > 0).all() and labels.max() == 4

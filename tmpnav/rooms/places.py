@@ -87,8 +87,10 @@ def split_hall(mask: np.ndarray, clear: np.ndarray, resolution: float, params: P
     labels = flood(mask, medial_axis(space, clear, resolution), clear, resolution)
     labels = merge_small(labels, params.min_place / cell_area, params.max_area / cell_area)
     labels = split_large(labels, space, params.max_area / cell_area)
-    _, consecutive = np.unique(labels, return_inverse=True)
-    return consecutive.reshape(labels.shape).astype(np.int32)
+    lookup = np.zeros(int(labels.max()) + 1, dtype=np.int32)
+    used = np.unique(labels[labels > 0])
+    lookup[used] = np.arange(1, used.size + 1)  # 0 stays 0: outside the hall, in its box
+    return lookup[labels]
 
 
 def flood(mask: np.ndarray, axis: Axis, clear: np.ndarray, resolution: float) -> np.ndarray:
