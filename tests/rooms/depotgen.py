@@ -1,5 +1,5 @@
 """Open-floor maps with known aisles: a depot hall with rows of racks, for testing how
-``tmpnav rooms`` splits a hall into places.
+``tmpnav rooms`` splits a hall into places; and a small arena like the turtlebot3 sandbox.
 
 Modelled on the public nav2 ``depot`` map (a 30 m x 15 m hall, racks, pillars): a hall whose
 lower part is an open staging area with pillars and a few pallets, and whose upper part holds
@@ -112,3 +112,25 @@ def _staging(canvas: Canvas, rng: np.random.Generator, area: Rect) -> None:
         cx, cy = rng.uniform(x0 + 2.0, x1 - 2.0), rng.uniform(y0 + 1.2, y1 - 1.6)
         w, h = PALLET
         canvas.fill((cx - w / 2, cy - h / 2, cx + w / 2, cy + h / 2), OCCUPIED)
+
+
+def arena(radius: float = 2.6, resolution: float = 0.05) -> GeneratedMap:
+    """A hexagonal arena (``radius`` from its centre to a corner, a 0.1 m wall) with nine round
+    pillars 0.3 m across on a 1.1 m grid, like the turtlebot3 sandbox; unknown around it."""
+    cells = int(2 * (radius + 1.0) / resolution)
+    centre = (np.arange(cells) + 0.5) * resolution - (radius + 1.0)
+    x, y = np.meshgrid(centre, centre[::-1])  # image rows run from the top (highest y) down
+    inside = np.ones(x.shape, dtype=bool)
+    inner = np.ones(x.shape, dtype=bool)
+    for k in range(6):
+        across = x * np.cos(k * np.pi / 3) + y * np.sin(k * np.pi / 3)
+        inside &= across <= radius * np.cos(np.pi / 6)
+        inner &= across <= radius * np.cos(np.pi / 6) - 0.1
+    pixels = np.full(x.shape, 205, dtype=np.uint8)
+    pixels[inside] = OCCUPIED
+    pixels[inner] = 254
+    for i in (-1, 0, 1):
+        for j in (-1, 0, 1):
+            pixels[np.hypot(x - 1.1 * i, y - 1.1 * j) < 0.15] = OCCUPIED
+    origin = (-(radius + 1.0), -(radius + 1.0))
+    return GeneratedMap(pixels, resolution, origin, Building(rooms={}))

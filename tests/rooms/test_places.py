@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.rooms.depotgen import Depot, depot
+from tests.rooms.depotgen import Depot, arena, depot
 from tests.rooms.mapgen import FREE, OCCUPIED, generate, rect_mask
 from tmpnav.rooms.medial import axis_graph, medial_axis
 from tmpnav.rooms.places import PlaceParams, lloyd, merge_small, split_hall
@@ -125,6 +125,23 @@ def test_max_area_decides_what_is_a_hall(tmp_path: Path) -> None:
     assert not whole.halls and len(whole.rooms) == len(g.truth.rooms)
     joined = propose(spec, grid, SegmentParams(max_rooms=2))  # --max-rooms: rooms as asked, none split
     assert not joined.halls and len(joined.rooms) == 2
+
+
+def test_a_small_arena_is_one_room_unless_max_area_says_otherwise(tmp_path: Path) -> None:
+    """The turtlebot3 sandbox: a hexagon some 5 m across with nine pillars (filled in: they split
+    nothing), about 16 m² of floor."""
+    from tmpnav.pipeline import load_world
+    from tmpnav.rooms.skeleton import save, skeleton
+
+    spec, grid = read_map(arena().write_ros(tmp_path, "arena"))
+    assert not propose(spec, grid).halls
+    p = propose(spec, grid, SegmentParams(max_area=5.0))
+    assert len(p.places) >= 3 and all(place.reachable for place in p.places)
+    assert len(p.robots) == 2 and p.connections
+    target = tmp_path / "arena-rooms.yaml"
+    save(target, skeleton(p, target))
+    scenario, _ = load_world(target)  # validates
+    assert len(scenario.rooms) == len(p.places)
 
 
 # --------------------------------------------------------------------------- parts
