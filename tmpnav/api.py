@@ -196,14 +196,16 @@ def export_nav2(plan_json: str | Path | dict[str, Any], directory: str | Path) -
     return write_nav2(doc, Path(directory))
 
 
-def segment_map(map_yaml: str | Path, *, min_area: float = 3.0, max_rooms: int | None = None) -> Proposal:
-    """Rooms, doors, landmark candidates, a placeholder robot and goals for a ROS map, as
-    ``tmpnav rooms`` finds them."""
+def segment_map(
+    map_yaml: str | Path, *, min_area: float = 3.0, max_rooms: int | None = None, max_area: float = 100.0
+) -> Proposal:
+    """Rooms (and the places of halls larger than ``max_area`` m²), doors, landmark candidates,
+    placeholder robots and goals for a ROS map, as ``tmpnav rooms`` finds them."""
     from tmpnav.rooms.proposal import propose, read_map
     from tmpnav.rooms.segment import SegmentParams
 
     spec, grid = read_map(_shipped_or(map_yaml))
-    return propose(spec, grid, SegmentParams(min_area=min_area, max_rooms=max_rooms))
+    return propose(spec, grid, SegmentParams(min_area=min_area, max_area=max_area, max_rooms=max_rooms))
 
 
 def write_skeleton(proposal: Proposal, path: str | Path) -> Path:

@@ -37,8 +37,7 @@ def verify(proposal: Proposal) -> tuple[Proposal, list[str]]:
         except ScenarioError as err:
             return proposal, [f"the scenario does not validate: {p.path}: {p.message}" for p in err.problems]
     problem = ""
-    for factor in SAMPLES_STEPS:
-        samples = min(MAX_SAMPLES, proposal.samples * factor)
+    for samples in sorted({min(MAX_SAMPLES, proposal.samples * factor) for factor in SAMPLES_STEPS}):
         try:
             build_roadmap(world, scenario.robots, replace(scenario.roadmap, samples=samples))
         except RoadmapError as err:

@@ -15,6 +15,7 @@ import pytest
 import yaml
 from PIL import Image
 
+from tests.rooms.depotgen import depot
 from tests.rooms.mapgen import FREE, OCCUPIED, UNKNOWN, GeneratedMap, generate
 from tmpnav.pipeline import load_world
 from tmpnav.rooms.skeleton import scenario_name
@@ -102,6 +103,37 @@ def test_the_skeleton_of_a_generated_map_plans_as_written(corridor: tuple[Genera
     assert doc["status"] == "solved-optimally"
     assert len(doc["goals"]["visit"]) == 2
     assert sorted({to for a in doc["actions"] for to in a["to"]}) == sorted(doc["goals"]["visit"])
+
+
+@pytest.mark.slow
+def test_the_skeleton_of_a_depot_plans_with_two_robots(tmp_path: Path) -> None:
+    """Issue 22: an open hall with racks is split into places; the skeleton, with two robots and
+    four goal places, validates and plans as written (real ENHSP)."""
+    map_yaml = depot(0).write_ros(tmp_path / "map", "depot")
+    out, png = tmp_path / "depot.yaml", tmp_path / "rooms.png"
+    proc = tmpnav("rooms", map_yaml, "-o", out, "-o", png)
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    assert "1 room, 14 places from splitting 1 hall larger than 100 m², 1 door, 27 connections, " in proc.stdout
+    text = out.read_text()
+    assert "# H1: a hall of" in text and "a second robot" in text and "connection across the open floor" in text
+    assert tmpnav("validate", out).returncode == 0
+    proc = tmpnav("plan", out, "--cache-dir", tmp_path / "cache", "-q", "--format", "json")
+    assert proc.returncode == 0, proc.stderr
+    doc = yaml.safe_load(proc.stdout)  # JSON is YAML
+    assert doc["status"] == "solved-optimally"
+    assert len(doc["goals"]["visit"]) == 4 and all(g.startswith("P") for g in doc["goals"]["visit"])
+    assert sorted({to for a in doc["actions"] for to in a["to"]}) == sorted(doc["goals"]["visit"])
+    assert {r for a in doc["actions"] for r in a["robots"]} == {"r1", "r2"}  # a team: both robots work
+    with Image.open(png) as img:
+        assert img.format == "PNG" and img.width > 600
+
+
+def test_bad_max_area_is_one_line(tmp_path: Path) -> None:
+    for value in ("-1", "0", "nan", "inf"):
+        one_error(tmpnav("rooms", OFFICE_MAP, "--max-area", value), "--max-area")
+    one_error(tmpnav("rooms", OFFICE_MAP, "--max-area", "2"), "2 m² is not larger than --min-area 3 m²")
+    one_error(tmpnav("rooms", OFFICE_MAP, "--min-area", "50", "--max-area", "40"), "--max-area")
+    assert not list(tmp_path.iterdir())
 
 
 def write_map(folder: Path, pixels: np.ndarray) -> Path:

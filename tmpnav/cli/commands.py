@@ -113,9 +113,7 @@ def roadmap(scenario: Path, output: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@output_option(
-    True, "Directory for plan.json, plan.png, domain.pddl, problem.pddl.", default_text="write no files"
-)
+@output_option(True, "Directory for plan.json, plan.png, domain.pddl, problem.pddl.", default_text="write no files")
 @option(
     "--format",
     "fmt",

@@ -134,8 +134,7 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
 @click.option(
     "--replot",
     is_flag=True,
-    help="Run nothing: rewrite summary.md and bench.png from the bench.csv in -o DIR (give the run's "
-    "--run-timeout).",
+    help="Run nothing: rewrite summary.md and bench.png from the bench.csv in -o DIR (give the run's --run-timeout).",
 )
 @report_errors
 def bench(

@@ -8,6 +8,7 @@ import click
 
 from tmpnav.cli.commands import cli
 from tmpnav.cli.options import FiniteRange, option, report_errors, unwritable, writing
+from tmpnav.rooms import MAX_AREA
 
 
 def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path, ...]) -> dict[str, Path]:
@@ -52,30 +53,45 @@ def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path
     help="Square metres: smaller regions join their neighbour (a closet, a niche) or are left out.",
 )
 @option(
+    "--max-area",
+    type=FiniteRange(min=0, min_open=True),
+    default=MAX_AREA,
+    show_default=True,
+    metavar="M2",
+    help="Square metres: a larger room is a hall (a warehouse floor, a depot) and is split into places of "
+    "at most about this size: aisles between racks, aisle fronts, parts of open floor.",
+)
+@option(
     "--max-rooms",
     type=click.IntRange(min=1),
     metavar="N",
     default_text="no limit",
-    help="Join the least separated rooms down to N rooms.",
+    help="Join the least separated rooms down to N rooms; halls are then not split into places.",
 )
 @report_errors
-def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_rooms: int | None) -> None:
-    """Find rooms, doors, landmarks in a ROS map; write a scenario.
+def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_area: float, max_rooms: int | None) -> None:
+    """Find rooms, doors, landmarks in a ROS map (halls split into places); write a scenario.
 
-    Finds the rooms and open areas (distance-transform watershed), the doors between them and
-    landmark candidates (pillars, isolated obstacles, door frames, corners), and writes a
-    scenario that validates and plans as written: rooms R1..Rn with polygons, doors, landmarks,
-    a placeholder robot and two goal rooms, with comments saying what to check.
+    Finds the rooms (distance-transform watershed), splits halls larger than --max-area into
+    places along the medial axis of their free space, finds the doors between rooms, the
+    connections between places and landmark candidates (pillars, isolated obstacles, door
+    frames, corners), and writes a scenario that validates and plans as written: rooms R1..Rn
+    and places P1..Pm with polygons, doors, landmarks, a placeholder robot and two goal rooms
+    (with halls: two robots and four goal places), with comments saying what to check.
     """
+    if max_area <= min_area:
+        message = f"{max_area:g} m² is not larger than --min-area {min_area:g} m²"
+        raise click.BadParameter(message, param_hint="'--max-area'")
     from tmpnav.rooms.proposal import propose, read_map
     from tmpnav.rooms.segment import SegmentParams
-    from tmpnav.rooms.skeleton import save, skeleton
+    from tmpnav.rooms.skeleton import save, skeleton, summary
     from tmpnav.rooms_check import verify
     from tmpnav.scenario import display_path
     from tmpnav.shipped import resolve
 
     spec, grid = read_map(resolve(map_yaml))
-    proposal, warnings = verify(propose(spec, grid, SegmentParams(min_area=min_area, max_rooms=max_rooms)))
+    params = SegmentParams(min_area=min_area, max_area=max_area, max_rooms=max_rooms)
+    proposal, warnings = verify(propose(spec, grid, params))
     for warning in warnings:  # not expected: the proposal is built to pass
         click.echo(f"warning: {warning}", err=True)
     left_out = [r.name for r in proposal.rooms if not r.reachable]
@@ -87,10 +103,7 @@ def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_rooms: 
         )
     target = outputs.get("scenario")
     text = skeleton(proposal, target)
-    found = (
-        f"{len(proposal.usable_rooms)} rooms, {len(proposal.doors)} doors, "
-        f"{len(proposal.landmarks)} landmark candidates"
-    )
+    found = summary(proposal)
     if target is None:
         click.echo(text, nl=False)
     else:

@@ -285,9 +285,7 @@ def step_badge(ax: Axes, xy: tuple[float, float], text: str, color: str, offset:
     )
 
 
-def badge_note(
-    ax: Axes, xy: tuple[float, float], text: str, color: str, offset: tuple[float, float] = (0, 0)
-) -> None:
+def badge_note(ax: Axes, xy: tuple[float, float], text: str, color: str, offset: tuple[float, float] = (0, 0)) -> None:
     """A small note (an arrival time) to the lower right of a :func:`step_badge` at ``xy``."""
     ax.annotate(
         text,

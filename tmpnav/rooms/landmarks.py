@@ -17,7 +17,7 @@ import numpy as np
 from scipy import ndimage
 
 from tmpnav.rooms.doors import DoorCandidate
-from tmpnav.rooms.segment import EIGHT, SPECKLE_AREA, Segmentation, removable, speckles
+from tmpnav.rooms.segment import EIGHT, Segmentation, removable, speckle_cells, speckles
 from tmpnav.world.geometry import distance_to_segment, points_in_polygon
 
 PER_ROOM = 2  # isolated obstacles proposed per room ...
@@ -55,7 +55,7 @@ def obstacles(seg: Segmentation) -> list[LandmarkCandidate]:
     """Isolated obstacles up to ``MAX_OBSTACLE_AREA`` (pillars, tables, machines), the largest
     first, at most ``PER_ROOM`` per room or one per ``AREA_PER_LANDMARK`` of its floor."""
     r = seg.grid.resolution
-    isolated = removable(seg.grid, MAX_OBSTACLE_AREA) & ~speckles(seg.grid.occupied, SPECKLE_AREA / r**2)
+    isolated = removable(seg.grid, MAX_OBSTACLE_AREA) & ~speckles(seg.grid.occupied, speckle_cells(r))
     comp, n = ndimage.label(isolated, structure=EIGHT)
     area = np.bincount(comp.ravel(), minlength=n + 1)[1:] * r**2
     boxes = ndimage.find_objects(comp, n)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from tmpnav.world.geometry import polygon_area
+from tmpnav.world.geometry import distance_to_segment, polygon_area
 from tmpnav.world.grid import OccupancyGrid
 
 TOLERANCE = 0.1  # m: largest distance of the simplified outline from the cells' outline
@@ -20,7 +20,7 @@ def outline(mask: np.ndarray, grid: OccupancyGrid, tolerance: float = TOLERANCE)
     make the polygon cross itself (a thin part of a room), the tolerance is halved until it
     does not.
     """
-    from skimage.measure import approximate_polygon, find_contours
+    from skimage.measure._find_contours import find_contours  # skimage.measure would import scipy.signal
 
     box = ndimage.find_objects(mask.astype(np.int8))
     if not box or box[0] is None:
@@ -33,7 +33,7 @@ def outline(mask: np.ndarray, grid: OccupancyGrid, tolerance: float = TOLERANCE)
     corners = np.rint((ring - 0.5) / 2.0)  # cells from the box's lower-left corner
     tol = tolerance / grid.resolution
     while True:
-        simple = _dedup(approximate_polygon(corners, tol)[:-1])  # closed: the last point repeats the first
+        simple = _dedup(simplify(corners, tol)[:-1])  # closed: the last point repeats the first
         if (simple.shape[0] >= 3 and is_simple(simple)) or tol < 0.25:
             break
         tol /= 2
@@ -43,6 +43,25 @@ def outline(mask: np.ndarray, grid: OccupancyGrid, tolerance: float = TOLERANCE)
     r = grid.resolution
     xy = np.column_stack([x0 + (cols.start + simple[:, 1]) * r, y0 + (rows.start + simple[:, 0]) * r])
     return xy if polygon_area(xy) > 0 else xy[::-1]
+
+
+def simplify(chain: np.ndarray, tolerance: float) -> np.ndarray:
+    """The points of ``chain`` (k, 2) that Douglas-Peucker keeps: both ends and, between two kept
+    points, the one farthest from the segment joining them while it lies farther than
+    ``tolerance`` (its distance to the segment, so a point beyond an end counts from that end)."""
+    keep = np.zeros(len(chain), dtype=bool)
+    keep[[0, -1]] = True
+    stack = [(0, len(chain) - 1)]
+    while stack:
+        a, b = stack.pop()
+        if b - a < 2:
+            continue
+        gap = distance_to_segment(chain[a + 1 : b], chain[a], chain[b])
+        k = int(np.argmax(gap))
+        if gap[k] > tolerance:
+            stack += [(a + 1 + k, b), (a, a + 1 + k)]
+            keep[a + 1 + k] = True
+    return chain[keep]
 
 
 def _dedup(points: np.ndarray) -> np.ndarray:

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
+from tmpnav.rooms import MAX_AREA
 from tmpnav.world.grid import OccupancyGrid
 
 EIGHT = np.ones((3, 3), dtype=bool)
@@ -43,6 +44,7 @@ class SegmentParams:
     """Choices of the segmentation; the defaults suit office and warehouse maps."""
 
     min_area: float = 3.0  # m²: a region smaller than this joins its neighbour (or is dropped if alone)
+    max_area: float = MAX_AREA  # m²: a larger room is a hall, split into places (tmpnav.rooms.places)
     max_rooms: int | None = None  # merge the least separated rooms until at most this many remain
     merge_ratio: float = 0.7  # see the module docstring
     fill_area: float = 1.5  # m²: isolated obstacles up to this size do not split rooms
@@ -100,6 +102,12 @@ def close_gaps(occupied: np.ndarray, resolution: float) -> np.ndarray:
     cells = max(1, round(GAP / 2 / resolution))
     square = np.ones((2 * cells + 1, 2 * cells + 1), dtype=bool)  # a disc would leave a thin wall's gap open
     return occupied | ndimage.binary_closing(occupied, structure=square)
+
+
+def speckle_cells(resolution: float) -> float:
+    """``SPECKLE_AREA`` in cells, rounded so that 0.02 m² are 2 cells of 0.1 m (not 1.9999...).
+    The segmentation itself keeps the unrounded figure, with which its results were measured."""
+    return round(SPECKLE_AREA / resolution**2, 6)
 
 
 def speckles(occupied: np.ndarray, max_cells: float) -> np.ndarray:

@@ -33,7 +33,7 @@ def scenario_yaml(proposal: Proposal, name: str, map_ref: str, map_shown: str) -
         "",
         *_landmarks(proposal),
         "",
-        *_robot(proposal),
+        *_robots(proposal),
         "",
         "roadmap:",
         f"  samples: {proposal.samples}  # PRM milestones: tmpnav rooms checked that every room connects with these",
@@ -43,11 +43,33 @@ def scenario_yaml(proposal: Proposal, name: str, map_ref: str, map_shown: str) -
         "goals:",
         f"  visit: [{', '.join(proposal.goals)}]  # pre-filled so that `tmpnav plan` runs as written: put yours",
     ]
+    if proposal.halls:
+        parts[-1] += " (more goals take longer to plan: see `tmpnav plan --help`, --search)"
     return "\n".join(parts) + "\n"
+
+
+def summary(p: Proposal) -> str:
+    """What was found, in one line: rooms (and places from halls), doors, landmark candidates."""
+    rooms = sum(1 for r in p.usable_rooms if r.hall is None)
+    if not p.halls:
+        return f"{rooms} rooms, {len(p.doors)} doors, {len(p.landmarks)} landmark candidates"
+    places = len(p.usable_rooms) - rooms
+    links = len(p.connections)
+    return (
+        f"{_count(rooms, 'room')}, {_count(places, 'place')} from splitting {_count(len(p.halls), 'hall')} "
+        f"larger than {p.max_area:g} m², {_count(len(p.doors) - links, 'door')}, "
+        f"{_count(links, 'connection')}, {_count(len(p.landmarks), 'landmark candidate')}"
+    )
+
+
+def _count(n: int, what: str) -> str:
+    return f"{n} {what}" if n == 1 else f"{n} {what}s"
 
 
 def _header(p: Proposal, map_shown: str) -> str:
     usable = p.usable_rooms
+    if p.halls:
+        return _comment(_hall_header(p, map_shown))
     text = f"""\
 Scenario skeleton written by `tmpnav rooms` (tmpnav {__version__}) from the ROS map {map_shown}.
 Found {len(usable)} rooms, {len(p.doors)} doors, {len(p.landmarks)} landmark candidates. Coordinates: metres, map frame.
@@ -64,6 +86,36 @@ Found {len(usable)} rooms, {len(p.doors)} doors, {len(p.landmarks)} landmark can
    robots with their real start poses, radii and speeds.
 5. goals: pre-filled with the rooms nearest to r1 so that `tmpnav plan` runs as written.
    Replace them with the rooms your robots must visit."""
+    return _comment(text)
+
+
+def _hall_header(p: Proposal, map_shown: str) -> str:
+    """The header of a map with halls: places, connections, two robots."""
+    names = " and ".join(r.name for r in p.robots)
+    robots = f"{names} are placeholders" if len(p.robots) > 1 else f"{names} is a placeholder"
+    spots = "spots" if len(p.robots) > 1 else "spot"
+    where = " and ".join(r.room for r in p.robots)
+    return f"""\
+Scenario skeleton written by `tmpnav rooms` (tmpnav {__version__}) from the ROS map {map_shown}.
+Found {summary(p)}.
+Coordinates: metres, map frame. `tmpnav show THIS_FILE -o world.png` draws it. Check before you plan:
+
+1. rooms: R1.. are rooms, P1.. places in halls (aisles between racks, the fronts of aisles,
+   parts of open floor), both numbered in reading order (top of the map first, left to right).
+   Rename them (a name starts with a letter, then letters, digits, '_' or '-'), delete those
+   nobody needs to visit, join or redraw places as your site names them (or run `tmpnav rooms`
+   again with --max-area: smaller gives more, smaller places; --min-area, --max-rooms).
+2. doors: all open. Set `state: closed` on doors that are shut: a closed door is a wall. A
+   connection between two places is open floor: leave it open, or delete it.
+3. landmarks: candidates (isolated pillars and obstacles: pallets, short racks; door frames,
+   room corners). Keep those your robots' sensors really recognise, and add the ones you know of.
+4. robots: {robots} (radius {ROBOT_RADIUS:g} m) at the roomiest {spots} of {where}.
+   Put your robots with their real start poses, radii and speeds; add more as r3, r4, ...
+5. goals: pre-filled with the {len(p.goals)} places nearest to the robots so that `tmpnav plan` runs as
+   written. Replace them with the places your robots must visit."""
+
+
+def _comment(text: str) -> str:
     return "\n".join(f"# {line}".rstrip() for line in text.splitlines()) + "\n"
 
 
@@ -71,12 +123,18 @@ def _rooms(p: Proposal) -> list[str]:
     lines = ["rooms:"]
     hidden = [r for r in p.rooms if not r.reachable]
     for room in p.usable_rooms:
+        hall = next((h for h in p.halls if h.places[:1] == (room.name,)), None)
+        if hall is not None:
+            lines.append(
+                f"  # {hall.name}: a hall of {hall.area:.1f} m² (larger than --max-area {p.max_area:g} m²), "
+                f"split into places {hall.places[0]}..{hall.places[-1]}"
+            )
         lines.append(f"  - name: {room.name}  # {_room_note(p, room)}")
         lines += _wrap("    polygon: ", room.polygon)
     if hidden:
         lines.append(
             f"  # Not reachable by a robot of radius {ROBOT_RADIUS:g} m from r1's start (a passage narrower than "
-            f"{2 * ROBOT_RADIUS + 2 * p.grid.resolution:.2f} m?), left out:"
+            f"{2 * ROBOT_RADIUS + 2 * p.map.resolution:.2f} m?), left out:"
         )
         for room in hidden:
             lines.append(f"  # - name: {room.name}  # {_room_note(p, room)}")
@@ -90,6 +148,8 @@ def _room_note(p: Proposal, room: RoomProposal) -> str:
         for name, d in p.doors.items()
         if room.label in d.rooms
     ]
+    if room.hall:  # a place's widest disc reaches into its neighbours: its width says little
+        return f"a place of {room.hall}: {room.area:.1f} m²; doors: {', '.join(doors) or 'none'}"
     return f"{room.area:.1f} m², {room.width:.1f} m wide; doors: {', '.join(doors) or 'none'}"
 
 
@@ -100,6 +160,8 @@ def _doors(p: Proposal) -> list[str]:
     for name, d in p.doors.items():
         a, b = p.room(d.rooms[0]).name, p.room(d.rooms[1]).name
         note = f"{a} - {b}, {d.width:.2f} m wide"
+        if name in p.connections:
+            note += f"; a connection across the open floor of {p.room(d.rooms[0]).hall}: keep it open"
         deep = ""
         if name in p.deep_doors:
             deep = f", thickness: {DEEP_DOOR:g}"
@@ -119,14 +181,17 @@ def _landmarks(p: Proposal) -> list[str]:
     return lines
 
 
-def _robot(p: Proposal) -> list[str]:
-    x, y, theta = p.robot_pose
-    return [
-        "robots:",
-        f"  - name: r1  # a placeholder in {p.robot_room}: give your robots' start poses",
-        f"    pose: [{x:.2f}, {y:.2f}, {theta:.2f}]  # x, y (m), heading (rad)",
-        f"    radius: {ROBOT_RADIUS:g}",
-    ]
+def _robots(p: Proposal) -> list[str]:
+    lines = ["robots:"]
+    for k, robot in enumerate(p.robots):
+        x, y, theta = robot.pose
+        note = "give your robots' start poses" if k == 0 else "a second robot: the team shares the goals"
+        lines += [
+            f"  - name: {robot.name}  # a placeholder in {robot.room}: {note}",
+            f"    pose: [{x:.2f}, {y:.2f}, {theta:.2f}]  # x, y (m), heading (rad)",
+            f"    radius: {ROBOT_RADIUS:g}",
+        ]
+    return lines
 
 
 def _points(points: Iterable[Iterable[float]]) -> str:
