@@ -70,7 +70,7 @@ def _rooms_outputs(ctx: click.Context, param: click.Parameter, value: tuple[Path
 )
 @report_errors
 def rooms(map_yaml: Path, outputs: dict[str, Path], min_area: float, max_area: float, max_rooms: int | None) -> None:
-    """Find rooms, doors, landmarks in a ROS map (halls split into places); write a scenario.
+    """Find rooms, places, doors in a ROS map; write a scenario.
 
     Finds the rooms (distance-transform watershed), splits halls larger than --max-area into
     places along the medial axis of their free space, finds the doors between rooms, the
