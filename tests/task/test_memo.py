@@ -10,6 +10,7 @@ import pytest
 from tmpnav.oracle.cache import DiskCache
 from tmpnav.pipeline import PlanOptions, pddl_texts, plan
 from tmpnav.task.memo import entry_to_memo, memo_key, memo_to_entry, table_digest
+from tmpnav.task.stage import TaskProblem
 from tmpnav.types import Goals
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -29,8 +30,7 @@ def summary(report) -> tuple:
 
 def stored(cache_dir: Path, report) -> tuple[str, object]:
     """The memo key of ``report``'s task problem and the entry the cache holds for it."""
-    sc = report.scenario
-    key = memo_key(report.table, sc.goals, sc.planner.encoding, sc.planner.pair_min_gain, sc.planner.name, sc.name)
+    key = TaskProblem.of(report.scenario, report.table).memo_key()
     cache = DiskCache(cache_dir)
     try:
         return key, cache.get_many([key])[key]

@@ -11,8 +11,8 @@ searches again.
 
 The key covers the oracle's context (its code, the world, the roadmap, the models and
 weights), the robots, the goals, the planner options that shape the search (engine,
-encoding, pair_min_gain, search, costs) and the code of the task stage (task/, attachment/,
-planning/). On
+encoding, pair_min_gain, search, costs), the objective (and its price of time) and the code
+of the task stage (task/, attachment/, planning/). On
 a hit the plan's costs are computed again by the cost model (from the oracle's cache: the
 same numbers), so a remembered plan is reported exactly as a searched one.
 """
@@ -45,7 +45,8 @@ def search_key(scenario: Scenario, context: str) -> str:
     sp = scenario.planner
     robots = [(r.name, r.pose, r.covariance, r.radius, r.speed, r.turn_rate) for r in scenario.robots]
     parts = (VERSION, _code_version(), context, robots, scenario.goals, sp.name, sp.encoding, repr(sp.pair_min_gain))
-    return hashlib.sha256(repr((*parts, sp.search, sp.costs)).encode()).hexdigest()
+    time = (sp.objective, repr(scenario.cost.M_T))  # what the plan minimises
+    return hashlib.sha256(repr((*parts, sp.search, sp.costs, *time)).encode()).hexdigest()
 
 
 def remember(store: EntryStore, key: str, task: TaskResult, budget: float) -> None:
