@@ -229,7 +229,7 @@ def prepare(
 
 def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
     """The encoded task problem with its computed costs (``tmpnav export-pddl``)."""
-    from tmpnav.planning.exact import full_table
+    from tmpnav.planning.table import full_table
     from tmpnav.task.stage import TaskProblem
 
     times = StageTimes()

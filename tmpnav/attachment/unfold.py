@@ -169,7 +169,7 @@ class _Unfolding:
         results = self.clock.oracle.evaluate(asked)
         alone = {a[0]: res.cost for a, res in zip(alone_steps, results[len(steps) :], strict=True) if res is not None}
         out = []
-        for step, res in zip(steps, results, strict=True):
+        for step, res in zip(steps, results[: len(steps)], strict=True):
             if res is None or res.pruned:
                 continue
             if len(step) == 2:

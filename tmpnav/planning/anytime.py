@@ -7,8 +7,8 @@ from dataclasses import replace
 
 from tmpnav.choices import exact_fits
 from tmpnav.planning.bound import certified_bound
-from tmpnav.planning.exact import full_table
 from tmpnav.planning.run import Planned, TaskRun
+from tmpnav.planning.table import full_table
 from tmpnav.results import TaskResult
 from tmpnav.task.bound import Bound
 from tmpnav.task.plans import Plan

@@ -68,9 +68,12 @@ def remember(store: EntryStore, key: str, task: TaskResult, budget: float) -> No
     store.put_many({key: entry})
 
 
-def recall(store: EntryStore, key: str, model: CostModel, goals: Goals, budget: float) -> TaskResult | None:
-    """The remembered result, its costs from ``model``; None on a miss, on an entry that is
-    damaged or is not a plan of these goals, or on a plan cut short by a smaller budget."""
+def recall(
+    store: EntryStore, key: str, model: CostModel, goals: Goals, budget: float, span_weight: float = 0.0
+) -> TaskResult | None:
+    """The remembered result, its costs and schedule from ``model`` (its gap on the objective of
+    ``span_weight``); None on a miss, on an entry that is damaged or is not a plan of these
+    goals, or on a plan cut short by a smaller budget."""
     entry = store.get_many([key]).get(key)
     if not isinstance(entry, dict):
         return None
@@ -101,7 +104,8 @@ def recall(store: EntryStore, key: str, model: CostModel, goals: Goals, budget: 
     bound = None
     if bound_value is not None:
         value, relaxation, proved = bound_value
-        gap = max(0.0, (cost.total - value) / cost.total) if cost.total > 0 else 0.0
+        objective = cost.value(span_weight)
+        gap = max(0.0, (objective - value) / objective) if objective > 0 else 0.0
         bound = BoundSummary(value, relaxation, gap, proved)
     counts = TaskCounts(0, 0, 0, sum(len(x) == 2 for x in steps), 0)
-    return TaskResult(status, engine, steps, names, cost.steps, counts, plan_hit=True, search=search, bound=bound)
+    return TaskResult(status, engine, steps, names, cost.steps, counts, True, search, bound, cost.schedule)

@@ -26,6 +26,7 @@ from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_
 from tmpnav.task.model import CostModel, table_schedule
 from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Rules
+from tmpnav.task.schedules import exact_schedule
 from tmpnav.task.search import SearchOptions, SearchRun, search
 from tmpnav.task.unfolded import BeliefGraph, write_unfolded
 from tmpnav.types import CostTable, Goals, PlannerOptions, PlanStatus, Scenario
@@ -102,6 +103,33 @@ def plan_task(
     if store is not None and key is not None:
         store.put_many({key: memo_to_entry(memo)})
     return _result(task, memo, encoded)
+
+
+def plan_schedules(task: TaskProblem, times: StageTimes | None = None) -> TaskResult | None:
+    """The exact plan of ``task`` when its objective prices time: the A* over every schedule of
+    the table (:mod:`tmpnav.task.schedules`; ENHSP's optimal search does not cover a makespan).
+    None when the problem is too large for it. ``times`` gets the ``planner`` stage."""
+    times = times if times is not None else StageTimes()
+    with times.timed("planner"):
+        found = exact_schedule(task.table, task.goals, task.planner.pair_min_gain, task.span_weight)
+    if found is None:
+        return None
+    steps, value = found
+    order = canonical_order(list(steps), task.table.robots)
+    steps = tuple(steps[i] for i in order)
+    step_costs = tuple(step_cost(task.table, s) for s in steps)
+    return TaskResult(
+        status=PlanStatus.SOLVED_OPTIMALLY,
+        engine="tmpnav A* over the schedules of the cost table",
+        steps=steps,
+        action_names=action_names(steps),
+        step_costs=step_costs,
+        counts=TaskCounts(len(task.table.single), len(task.table.pair), 0, sum(len(s) == 2 for s in steps), 0),
+        plan_hit=False,
+        search=SearchSummary(mode="exact", costs="table", stopped="solved"),
+        bound=BoundSummary(value, "exact (A* over every schedule)", 0.0, True),
+        schedule=table_schedule(task.table, steps),
+    )
 
 
 def _result(task: TaskProblem, memo: Memo, encoded: EncodedTask | None) -> TaskResult:
