@@ -44,7 +44,7 @@ def test_writes_all_files(plan_report: PlanReport, tmp_path: Path) -> None:
     assert written == [out / name for name in NAMES]
     assert sorted(os.listdir(out)) == sorted(NAMES)  # no temporary file left
     doc = json.loads((out / "plan.json").read_text(encoding="utf-8"))
-    assert doc["schema"] == "tmpnav-plan/1" and len(doc["actions"]) == len(plan_report.actions)
+    assert doc["schema"] == "tmpnav-plan/2" and len(doc["actions"]) == len(plan_report.actions)
     assert (out / "plan.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (out / "schedule.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (out / "domain.pddl").read_text() == PDDL[0] and (out / "problem.pddl").read_text() == PDDL[1]
