@@ -7,7 +7,7 @@
     print(result.status, result.planner_cost, result.resimulated_cost)
     for step in result.steps:
         print(step.index, step.moves, step.resimulated_cost)
-    result.save("out")                                       # plan.json and plan.png
+    result.save("out")                                       # plan.json, plan.png, schedule.png
     result.export_nav2("out/nav2")                           # waypoint files per robot
 
     proposal = tmpnav.segment_map("map.yaml", min_area=3.0)  # rooms, doors, landmark candidates
@@ -121,7 +121,7 @@ class PlanResult:
         return waypoints(self.document())
 
     def save(self, directory: str | Path) -> list[Path]:
-        """Write plan.json and plan.png into ``directory``; returns the paths."""
+        """Write plan.json, plan.png and schedule.png into ``directory``; returns the paths."""
         from tmpnav.report.outputs import write_outputs
 
         return write_outputs(self.report, Path(directory), None)
