@@ -198,9 +198,10 @@ class Session:
             self._cut(name, len(r.waypoints))
             r.waypoints = []
         if not r.waypoints:
-            self._end(i, r)
+            self._end(r)
 
-    def _end(self, i: int, r: _Robot) -> None:
+    def _end(self, r: _Robot) -> None:
+        """Robot r ends its move now: record it as executed; the robot is ready for its next."""
         m = r.move
         assert m is not None
         dt = self.dt
@@ -243,7 +244,7 @@ class Session:
             if r.move is not None:
                 self._cut(name, len(r.waypoints))
                 r.waypoints = []
-                self._end(i, r)
+                self._end(r)
             for m in r.queue[r.started :]:
                 self._cut(name, len(m.waypoints))
             r.started = len(r.queue)
