@@ -7,12 +7,13 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tmpnav.errors import TmpnavError
 from tmpnav.execution import (
     ARRIVED,
     Draws,
@@ -26,12 +27,14 @@ from tmpnav.execution import (
 )
 from tmpnav.pipeline import PlanOptions, load_world, plan
 from tmpnav.results import PlanReport, Schedule, TimedMove
-from tmpnav.types import Goals
+from tmpnav.types import Goals, Scenario
+from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
 
 ROOT = Path(__file__).resolve().parents[1]
 CORRIDOR = ROOT / "configs" / "corridor.yaml"
 START = np.array([0.0, 0.0])
+World3 = tuple[Scenario, World, LandmarkVisibility]  # the corridor: scenario, world, landmark visibility
 WAYPOINT = np.array([2.0, 0.0])
 
 
@@ -59,7 +62,9 @@ def test_a_waypoint_ahead_is_not_reached() -> None:
 # ---------------------------------------------------------------- the team on one clock, by hand
 
 
-def move(step: int, robot: str, points: Sequence[tuple[float, float]], partner: str | None = None, start: int = 0):  # type: ignore[no-untyped-def]
+def move(
+    step: int, robot: str, points: Sequence[tuple[float, float]], partner: str | None = None, start: int = 0
+) -> QueuedMove:
     """A queued move along ``points`` (corridor coordinates), planned to start at step ``start``."""
     return QueuedMove(
         step=step,
@@ -76,14 +81,14 @@ def move(step: int, robot: str, points: Sequence[tuple[float, float]], partner: 
 
 
 @pytest.fixture(scope="module")
-def corridor_world():  # type: ignore[no-untyped-def]
+def corridor_world() -> World3:
     scenario, world = load_world(CORRIDOR)
     return scenario, world, LandmarkVisibility(world, scenario.models.landmark_sensor.range)
 
 
 def session(
-    corridor_world, queues: dict[str, tuple[QueuedMove, ...]], mutual: bool = True
-) -> dict[tuple[int, str], TimedMove]:  # type: ignore[no-untyped-def]
+    corridor_world: World3, queues: Mapping[str, tuple[QueuedMove, ...]], mutual: bool = True
+) -> dict[tuple[int, str], TimedMove]:
     """(plan step, robot) -> the move as executed, in a session on the corridor (r1 in L1, r2 in L10)."""
     scenario, world, vis = corridor_world
     draws = Draws.draw(0, 0, 2, 2000, world.landmark_xy.shape[0])
@@ -98,7 +103,7 @@ R1_EAST = [(5.0, 9.5), (8.0, 9.5)]
 R2_OUT = [(5.0, 6.5), (5.0, 8.0)]
 
 
-def test_a_robot_waits_for_its_partner_and_the_partner_does_not_wait(corridor_world) -> None:  # type: ignore[no-untyped-def]
+def test_a_robot_waits_for_its_partner_and_the_partner_does_not_wait(corridor_world: World3) -> None:
     ran = session(
         corridor_world,
         {
@@ -115,7 +120,7 @@ def test_a_robot_waits_for_its_partner_and_the_partner_does_not_wait(corridor_wo
     assert schedule.makespan == max(r1.end, r2.end) and schedule.waits("r2") == first.end
 
 
-def test_no_move_starts_before_its_planned_start(corridor_world) -> None:  # type: ignore[no-untyped-def]
+def test_no_move_starts_before_its_planned_start(corridor_world: World3) -> None:
     later = 60  # control steps: later than r1 can be in the corridor
     ran = session(
         corridor_world,
@@ -130,13 +135,23 @@ def test_no_move_starts_before_its_planned_start(corridor_world) -> None:  # typ
     assert ran[(1, "r1")].wait == later * dt - ran[(0, "r1")].end
 
 
-def test_robots_make_their_own_moves_at_once(corridor_world) -> None:  # type: ignore[no-untyped-def]
+def test_robots_make_their_own_moves_at_once(corridor_world: World3) -> None:
     ran = session(
         corridor_world,
         {"r1": (move(0, "r1", R1_OUT),), "r2": (move(1, "r2", R2_OUT),)},
         mutual=False,
     )
     assert ran[(0, "r1")].start == ran[(1, "r2")].start == 0.0  # step 1 does not wait for step 0
+
+
+def test_a_schedule_whose_robots_wait_for_each_other_is_refused(corridor_world: World3) -> None:
+    """r1 would pair with r2 in step 1 first, r2 with r1 in step 2 first: neither can start."""
+    queues = {
+        "r1": (move(1, "r1", R1_OUT, partner="r2"), move(2, "r1", R1_EAST, partner="r2")),
+        "r2": (move(2, "r2", R2_OUT, partner="r1"), move(1, "r2", R2_OUT[::-1], partner="r1")),
+    }
+    with pytest.raises(TmpnavError, match="cannot be executed: r1 at step 2 waits for r2, r2 at step 3 waits for r1"):
+        session(corridor_world, queues)
 
 
 # ---------------------------------------------------------------- planned schedules, executed

@@ -28,6 +28,7 @@ observation noise are indexed by robot and control step), so their comparison is
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -113,7 +114,7 @@ class Session:
         self,
         scenario: Scenario,
         world: World,
-        queues: dict[str, tuple[QueuedMove, ...]],
+        queues: Mapping[str, tuple[QueuedMove, ...]],
         draws: Draws,
         vis: LandmarkVisibility,
         mutual: bool,
