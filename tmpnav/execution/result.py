@@ -38,6 +38,7 @@ class ExecutionResult:
     planned: Schedule  # the plan's schedule
 
     def mean_errors(self, config: int, robot: str) -> np.ndarray:
+        """(points,) m: the robot's position error at each point of its paths, averaged over the sessions."""
         return np.nanmean(self.errors[(config, robot)], axis=0)
 
     def worst(self, config: int, robot: str) -> float:

@@ -74,6 +74,7 @@ class Draws:
 
     @staticmethod
     def draw(seed: int, session: int, n: int, steps: int, landmarks: int) -> Draws:
+        """The draws of session ``session`` for ``n`` robots, ``steps`` control steps and ``landmarks``."""
         rng = np.random.default_rng([seed, session])
         return Draws(
             initial=rng.standard_normal((n, 3)),
@@ -84,6 +85,7 @@ class Draws:
 
     @property
     def steps(self) -> int:
+        """Control steps drawn: a session that needs more is cut there."""
         return int(self.motion.shape[1])
 
 
@@ -151,6 +153,7 @@ class Session:
         return groups
 
     def estimate(self, i: int) -> np.ndarray:
+        """Robot i's estimated pose: its part of the joint belief's mean."""
         return self.belief.mean[3 * i : 3 * i + 3]
 
     # ------------------------------------------------------------------ the run
