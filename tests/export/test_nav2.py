@@ -205,6 +205,22 @@ def test_a_sequential_plan_json_1_gets_its_waits_from_the_steps() -> None:
     assert r1[-1].depart is None and r2[-1].wait is None  # no move leaves from the last goal
 
 
+def test_a_plan_json_1_whose_robots_moved_at_once_takes_its_times_from_the_trajectories() -> None:
+    """A step's t_start that does not fit its trajectories (r2 is at its first node before the
+    step's claimed start) is not used: the step starts when its robots are ready."""
+    doc = plan_doc()
+    doc["actions"][1] = {**doc["actions"][1], "robots": ["r2"], "from": ["r2-start"], "to": ["A"]}
+    doc["actions"][1]["moves"] = doc["actions"][1]["moves"][1:]
+    doc["actions"][0]["t_start"], doc["actions"][1]["t_start"] = 0.0, 2.0  # as if one after the other
+    doc["trajectories"]["r2"] = [doc["trajectories"]["r2"][0], {**doc["trajectories"]["r2"][2], "t": 1.5}]
+    r2 = waypoints(doc)["r2"]
+    assert [(w.kind, w.t, w.depart, w.wait) for w in r2] == [("start", 0.0, 0.0, 0.0), ("goal", 1.5, None, None)]
+    sequential = plan_doc()
+    sequential["actions"][1]["t_start"] = 2.5  # fits: after both are ready, before their first node
+    r1, r2 = waypoints(sequential)["r1"], waypoints(sequential)["r2"]
+    assert [(w.depart, w.wait) for w in (r1[2], r2[0])] == [(2.5, 0.5), (2.5, 2.5)]
+
+
 def scheduled_doc() -> dict[str, Any]:
     """plan_doc as tmpnav-plan/2: r2 stands 2.5 s for r1, and the paired step is held back 0.5 s."""
 

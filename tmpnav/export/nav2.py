@@ -13,8 +13,7 @@ the robot's previous move), ``depart``, the move's planned start (a robot never 
 earlier: the planner may hold a move back to keep clear of another robot), and ``wait``, how
 long the plan has the robot stand there first (for its partner, or held back). They come
 from the document's ``schedule`` (``tmpnav-plan/2``); a ``tmpnav-plan/1`` document has none,
-its plan ran one step after the other, and they are computed from its actions and
-trajectories.
+and they are computed from its actions and trajectories.
 
 Paired moves: the two robots of a paired step move together and observe each other. The
 waypoint each of them leaves from is a synchronisation point, marked ``sync: step-K`` with
@@ -180,11 +179,11 @@ def arrivals(
 
 def move_times(doc: dict[str, Any]) -> dict[str, list[MoveTimes]]:
     """Robot -> the times of its moves, in the order it makes them: from the document's
-    ``schedule`` when it has one, else computed from a plan that ran one step after the other."""
+    ``schedule`` when it has one, else computed from its actions and trajectories."""
     robots = [r["name"] for r in doc["robots"]]
     if doc.get("schedule") is not None:
         return {r: _scheduled(doc, r) for r in robots}
-    return _sequential(doc, robots)
+    return _from_steps(doc, robots)
 
 
 def _scheduled(doc: dict[str, Any], robot: str) -> list[MoveTimes]:
@@ -214,28 +213,35 @@ def _scheduled(doc: dict[str, Any], robot: str) -> list[MoveTimes]:
     return out
 
 
-def _sequential(doc: dict[str, Any], robots: list[str]) -> dict[str, list[MoveTimes]]:
-    """Move times of a plan whose steps ran one after the other (``tmpnav-plan/1``): a step starts
-    at its ``t_start`` (else when the step before it ended), a move ends when its robot's
-    trajectory reaches the goal node, a robot is ready when its previous move ended."""
+def _from_steps(doc: dict[str, Any], robots: list[str]) -> dict[str, list[MoveTimes]]:
+    """Move times of a document without a schedule (``tmpnav-plan/1``), from its actions and
+    trajectories: a move ends when its robot's trajectory reaches the goal node, a robot is
+    ready when its previous move ended, and a step starts at its ``t_start`` (its steps ran one
+    after the other), or when its robots are ready if it has none or that does not fit the
+    trajectories (before its robots are ready, or after they reach their first node)."""
     out: dict[str, list[MoveTimes]] = {r: [] for r in robots}
     cursor, ready = dict.fromkeys(robots, 0), dict.fromkeys(robots, 0.0)
-    previous_end = 0.0
     for action in doc["actions"]:
-        given = _seconds(action.get("t_start"))
-        start = previous_end if given is None else given
-        ends = []
+        matched = {}
         for move in action["moves"]:
             robot = move["robot"]
             steps = doc["trajectories"].get(robot, [])
-            times, cursor[robot] = arrivals(steps, move["path_nodes"][1:], cursor[robot], start, None)
+            matched[robot], cursor[robot] = arrivals(steps, move["path_nodes"][1:], cursor[robot], None, None)
+        together = max(ready[r] for r in matched)
+        first = min((t[0] for t in matched.values() if t and t[0] is not None), default=None)
+        start = _fitting(_seconds(action.get("t_start")), together, first)
+        for robot, times in matched.items():
             end = times[-1] if times else start
             out[robot].append(MoveTimes(ready[robot], start, end))
-            ready[robot] = end if end is not None else ready[robot]
-            ends.append(end)
-        given = _seconds(action.get("t_end"))
-        previous_end = max((e for e in ends if e is not None), default=start) if given is None else given
+            ready[robot] = ready[robot] if end is None else end
     return out
+
+
+def _fitting(given: float | None, ready: float, first: float | None) -> float:
+    """A step's ``t_start`` if it fits between its robots being ready and their first node, else ``ready``."""
+    if given is None or given < ready - _T_TOL or (first is not None and given > first + _T_TOL):
+        return ready
+    return given
 
 
 def _seconds(value: Any) -> float | None:
