@@ -36,7 +36,7 @@ from tmpnav.cli.planners import check_planner
     help="Simulated executions of the plan, each with its own noise.",
 )
 @option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
-@output_option(True, "Directory for errors.csv, errors.png, summary.md.", default_text="write no files")
+@output_option(True, "Directory for errors.csv, sessions.csv, errors.png, summary.md.", default_text="write no files")
 @click.option(
     "--replan",
     is_flag=True,
