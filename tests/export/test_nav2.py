@@ -57,7 +57,9 @@ def read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], Path]:
     out = tmp_path_factory.mktemp("plan")
-    proc = tmpnav("plan", TWO_ROOMS, "-o", out, "--export", "nav2", "--cache-dir", out / "cache", "-q")
+    # the paper's objective with table costs pairs the two robots (the weighted default sends them at once)
+    options = ("--objective", "cost", "--costs", "table")
+    proc = tmpnav("plan", TWO_ROOMS, *options, "-o", out, "--export", "nav2", "--cache-dir", out / "cache", "-q")
     assert proc.returncode == 0, proc.stderr
     for name in ("r1.csv", "r1.follow_waypoints.yaml", "r1.rviz_waypoints.yaml", "r2.csv"):
         assert f"wrote {out / 'nav2' / name}" in proc.stdout

@@ -41,11 +41,12 @@ def stored(cache_dir: Path, report) -> tuple[str, object]:
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory: pytest.TempPathFactory):
     cache = tmp_path_factory.mktemp("cache")
-    options = PlanOptions.of(cache_dir=cache, executor="serial", costs="table", search="exact")
+    # ENHSP's plans are remembered by their PDDL problem: the paper's objective, the exact search on a table
+    options = PlanOptions.of(cache_dir=cache, executor="serial", costs="table", search="exact", objective="cost")
     cold = plan(TWO_ROOMS, options)
     warm = plan(TWO_ROOMS, options)
     replanned = plan(TWO_ROOMS, options.but(replan=True))
-    uncached = plan(TWO_ROOMS, PlanOptions.of(use_cache=False, executor="serial", costs="table", search="exact"))
+    uncached = plan(TWO_ROOMS, options.but(use_cache=False))
     return cache, cold, warm, replanned, uncached
 
 
@@ -99,7 +100,7 @@ def test_an_entry_that_does_not_fit_is_a_miss(runs, damage) -> None:
 
 
 def test_a_damaged_entry_makes_the_planner_run_again(tmp_path: Path) -> None:
-    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", costs="table", search="exact")
+    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", costs="table", search="exact", objective="cost")
     first = plan(TWO_ROOMS, options)
     key, entry = stored(tmp_path, first)
     cache = DiskCache(tmp_path)
