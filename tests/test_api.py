@@ -48,7 +48,7 @@ def test_plan_read_save_and_export(tmp_path: Path) -> None:
     assert all(len(s.goal_poses) == len(s.robots) for s in result.steps)
     assert set(result.trajectories) == {"r1", "r2"}
     written = result.save(tmp_path / "out")
-    assert [p.name for p in written] == ["plan.json", "plan.png"]
+    assert [p.name for p in written] == ["plan.json", "plan.png", "schedule.png"]
     doc = json.loads((tmp_path / "out" / "plan.json").read_text())
     assert doc["cost"]["planner"] == result.planner_cost
     waypoints = result.waypoints()

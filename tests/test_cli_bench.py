@@ -80,6 +80,8 @@ def test_bench_robots(tmp_path: Path) -> None:
     rows = list(csv.DictReader((tmp_path / "bench.csv").open()))
     assert {r["robots"] for r in rows} == {"2", "3"}
     assert all(r["status"].startswith("solved") for r in rows)
+    assert all(float(r["makespan"]) > 0.0 for r in rows)  # the robots moving at once, next to cost and time
+    assert "| makespan (s) |" in (tmp_path / "summary.md").read_text()
 
 
 @pytest.mark.slow

@@ -111,7 +111,7 @@ def test_cache_clear_removes_leftovers_and_set_aside_files(tmp_path: Path) -> No
 
 @pytest.mark.slow
 def test_a_rename_that_fails_late_restores_the_earlier_plan(cache: Path, tmp_path: Path) -> None:
-    """problem.pddl is a directory: plan.json, plan.png and domain.pddl were already replaced
+    """problem.pddl is a directory: plan.json, plan.png, schedule.png and domain.pddl were already replaced
     when its rename fails. They get their earlier content back; the error names problem.pddl."""
     out = tmp_path / "out"
     first = tmpnav("plan", str(TWO_ROOMS), "--cache-dir", str(cache), "-q", "-o", str(out))
@@ -126,7 +126,7 @@ def test_a_rename_that_fails_late_restores_the_earlier_plan(cache: Path, tmp_pat
     now = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
     assert now == {k: v for k, v in earlier.items() if k != "problem.pddl"}
     assert json.loads(now["plan.json"])["mutual_observations"] is True  # the earlier plan, not the new one
-    assert sorted(os.listdir(out)) == ["domain.pddl", "plan.json", "plan.png", "problem.pddl"]
+    assert sorted(os.listdir(out)) == ["domain.pddl", "plan.json", "plan.png", "problem.pddl", "schedule.png"]
 
 
 @pytest.mark.parametrize(

@@ -61,7 +61,7 @@ def test_plan_succeeds_and_prints_a_summary(cache_dir: Path, tmp_path: Path) -> 
     assert proc.returncode == 0, proc.stderr
     assert "nanobind" not in proc.stderr and "Traceback" not in proc.stderr
     assert "r1" in proc.stdout and "r2" in proc.stdout
-    for name in ("plan.json", "plan.png", "domain.pddl", "problem.pddl"):
+    for name in ("plan.json", "plan.png", "schedule.png", "domain.pddl", "problem.pddl"):
         assert (out / name).stat().st_size > 0
     doc = json.loads((out / "plan.json").read_text())
     assert doc["status"].startswith("solved")

@@ -21,6 +21,8 @@ def test_anytime_with_table_costs_reports_the_search_and_its_bound(tmp_path: Pat
         "anytime",
         "--costs",
         "table",
+        "--objective",
+        "cost",
         "--cache-dir",
         str(tmp_path),
         "--format",

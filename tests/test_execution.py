@@ -1,17 +1,40 @@
-"""Plan execution (``tmpnav simulate``): the waypoint switching, and the paper's result."""
+"""Plan execution (``tmpnav simulate``): the waypoint switching, the team executing its schedule
+at once (a robot waits for its partner, and for a move's planned start), the makespan reported,
+and the paper's result on the corridor."""
 
 from __future__ import annotations
 
+import csv
+import dataclasses
+import io
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from tmpnav.execution import ARRIVED, execute, reached
-from tmpnav.pipeline import PlanOptions, plan
+from tmpnav.errors import TmpnavError
+from tmpnav.execution import (
+    ARRIVED,
+    Draws,
+    QueuedMove,
+    Session,
+    error_summary,
+    errors_csv,
+    execute,
+    reached,
+    sessions_csv,
+)
+from tmpnav.pipeline import PlanOptions, load_world, plan
+from tmpnav.results import PlanReport, Schedule, TimedMove
+from tmpnav.types import Goals, Scenario
+from tmpnav.world import World
+from tmpnav.world.visibility import LandmarkVisibility
 
 ROOT = Path(__file__).resolve().parents[1]
+CORRIDOR = ROOT / "configs" / "corridor.yaml"
 START = np.array([0.0, 0.0])
+World3 = tuple[Scenario, World, LandmarkVisibility]  # the corridor: scenario, world, landmark visibility
 WAYPOINT = np.array([2.0, 0.0])
 
 
@@ -36,17 +59,188 @@ def test_a_waypoint_ahead_is_not_reached() -> None:
     assert not reached(est(-0.5, 0.0), START, WAYPOINT)
 
 
+# ---------------------------------------------------------------- the team on one clock, by hand
+
+
+def move(
+    step: int, robot: str, points: Sequence[tuple[float, float]], partner: str | None = None, start: int = 0
+) -> QueuedMove:
+    """A queued move along ``points`` (corridor coordinates), planned to start at step ``start``."""
+    return QueuedMove(
+        step=step,
+        robot=robot,
+        origin="here",
+        target="there",
+        partner=partner,
+        nodes=tuple(range(len(points))),
+        points=np.array(points, dtype=float),
+        start=start,
+        steps=40,
+        arrivals=(None,) * (len(points) - 1),
+    )
+
+
+@pytest.fixture(scope="module")
+def corridor_world() -> World3:
+    scenario, world = load_world(CORRIDOR)
+    return scenario, world, LandmarkVisibility(world, scenario.models.landmark_sensor.range)
+
+
+def session(
+    corridor_world: World3, queues: Mapping[str, tuple[QueuedMove, ...]], mutual: bool = True
+) -> dict[tuple[int, str], TimedMove]:
+    """(plan step, robot) -> the move as executed, in a session on the corridor (r1 in L1, r2 in L10)."""
+    scenario, world, vis = corridor_world
+    draws = Draws.draw(0, 0, 2, 2000, world.landmark_xy.shape[0])
+    trace = Session(scenario, world, queues, draws, vis, mutual).run()
+    assert not trace.truncated
+    return {(m.step, m.robot): m for m in trace.moves}
+
+
+#: r1 drives out of L1 to the corridor alone, then r1 and r2 (from L10) move together
+R1_OUT = [(5.0, 12.5), (5.0, 11.0), (5.0, 9.5)]
+R1_EAST = [(5.0, 9.5), (8.0, 9.5)]
+R2_OUT = [(5.0, 6.5), (5.0, 8.0)]
+
+
+def test_a_robot_waits_for_its_partner_and_the_partner_does_not_wait(corridor_world: World3) -> None:
+    ran = session(
+        corridor_world,
+        {
+            "r1": (move(0, "r1", R1_OUT), move(1, "r1", R1_EAST, partner="r2")),
+            "r2": (move(1, "r2", R2_OUT, partner="r1"),),
+        },
+    )
+    first, r1, r2 = ran[(0, "r1")], ran[(1, "r1")], ran[(1, "r2")]
+    assert first.start == 0.0 and first.end > 0.0
+    assert r1.start == r2.start == first.end  # the paired move starts when r1 is there
+    assert (r1.ready, r1.wait) == (first.end, 0.0)
+    assert (r2.ready, r2.wait) == (0.0, first.end)  # r2 stood in L10 meanwhile
+    schedule = Schedule(("r1", "r2"), (first, r1, r2))
+    assert schedule.makespan == max(r1.end, r2.end) and schedule.waits("r2") == first.end
+
+
+def test_no_move_starts_before_its_planned_start(corridor_world: World3) -> None:
+    later = 60  # control steps: later than r1 can be in the corridor
+    ran = session(
+        corridor_world,
+        {
+            "r1": (move(0, "r1", R1_OUT), move(1, "r1", R1_EAST, partner="r2", start=later)),
+            "r2": (move(1, "r2", R2_OUT, partner="r1", start=later),),
+        },
+    )
+    dt = corridor_world[0].models.dt
+    assert ran[(0, "r1")].end < later * dt
+    assert ran[(1, "r1")].start == ran[(1, "r2")].start == later * dt
+    assert ran[(1, "r1")].wait == later * dt - ran[(0, "r1")].end
+
+
+def test_robots_make_their_own_moves_at_once(corridor_world: World3) -> None:
+    ran = session(
+        corridor_world,
+        {"r1": (move(0, "r1", R1_OUT),), "r2": (move(1, "r2", R2_OUT),)},
+        mutual=False,
+    )
+    assert ran[(0, "r1")].start == ran[(1, "r2")].start == 0.0  # step 1 does not wait for step 0
+
+
+def test_a_schedule_whose_robots_wait_for_each_other_is_refused(corridor_world: World3) -> None:
+    """r1 would pair with r2 in step 1 first, r2 with r1 in step 2 first: neither can start."""
+    queues = {
+        "r1": (move(1, "r1", R1_OUT, partner="r2"), move(2, "r1", R1_EAST, partner="r2")),
+        "r2": (move(2, "r2", R2_OUT, partner="r1"), move(1, "r2", R2_OUT[::-1], partner="r1")),
+    }
+    with pytest.raises(TmpnavError, match="cannot be executed: r1 at step 2 waits for r2, r2 at step 3 waits for r1"):
+        session(corridor_world, queues)
+
+
+# ---------------------------------------------------------------- planned schedules, executed
+
+
+@pytest.fixture(scope="module")
+def corridor(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
+    """The paper's corridor task: one paired move (table costs, as the cost tables plan it)."""
+    return plan(CORRIDOR, PlanOptions.of(cache_dir=tmp_path_factory.mktemp("cache"), costs="table"))
+
+
 @pytest.mark.slow
-def test_mutual_observations_cut_the_worst_error_of_the_landmark_starved_robot(tmp_path: Path) -> None:
-    """The paper's Fig. 3(a) on the corridor: 25 sessions, seeded, so the numbers are exact.
+def test_mutual_observations_cut_the_worst_error_of_the_landmark_starved_robot(corridor: PlanReport) -> None:
+    """The paper's Fig. 3(a) on the corridor: 25 sessions, seeded, so the numbers are exact:
+    those recorded in benchmarks/full/simulate before the team moved at once (one paired move
+    runs the same either way).
 
     r2 starts in L10, out of every landmark's range; with mutual observations its error
     never exceeds what it starts with, without them it grows along the corridor."""
-    report = plan(ROOT / "configs" / "corridor.yaml", PlanOptions.of(cache_dir=tmp_path))
-    result = execute(report, sessions=25)
+    assert [a.moves for a in corridor.actions] == [(("r1", "L1", "L10"), ("r2", "L10", "L1"))]
+    result = execute(corridor, sessions=25)
     assert result.starved == "r2"
     assert result.reduction("r2") >= 80.0
     assert result.worst(1, "r2") <= float(result.mean_errors(1, "r2")[:2].max()) + 1e-12  # before they meet
     assert result.truncated_sessions == 0
     for robot in ("r1", "r2"):
         assert result.worst(1, robot) < result.worst(2, robot)
+    worst = {(c, r): round(result.worst(c, r), 3) for c in (1, 2) for r in ("r1", "r2")}
+    assert worst == {(1, "r1"): 0.222, (2, "r1"): 0.495, (1, "r2"): 0.123, (2, "r2"): 0.654}
+    for config in (1, 2):  # both start at once and nobody waits
+        for schedule in result.schedules[config]:
+            assert [(m.robot, m.start, m.wait) for m in schedule.moves] == [("r1", 0.0, 0.0), ("r2", 0.0, 0.0)]
+            assert schedule.makespan == max(m.end for m in schedule.moves) > 0.0
+
+
+@pytest.fixture(scope="module")
+def waiting(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
+    """r1 goes from L1 to L10 alone, then r1 and r2 leave L10 together: r2 waits for r1."""
+    goals = Goals(visit=(), per_robot=(("r1", ("L2", "L10")), ("r2", ("L1",))))
+    report = plan(CORRIDOR, PlanOptions.of(cache_dir=tmp_path_factory.mktemp("cache"), costs="table", goals=goals))
+    paired = [m for m in report.schedule.moves if m.partner is not None]
+    assert paired and report.schedule.waits("r2") > 0.0, f"the planner no longer makes r2 wait: {report.schedule}"
+    return report
+
+
+@pytest.mark.slow
+def test_a_planned_wait_is_executed_and_the_makespan_reported(waiting: PlanReport) -> None:
+    result = execute(waiting, sessions=2)
+    planned = waiting.schedule
+    r1_first, r1_pair = planned.timeline("r1")
+    for config in (1, 2):
+        for schedule in result.schedules[config]:
+            first, pair = schedule.timeline("r1")
+            (r2,) = schedule.timeline("r2")
+            assert (pair.step, r2.step) == (r1_pair.step, r1_pair.step)
+            assert pair.start == r2.start == max(first.end, r1_pair.start)  # together, never before the plan
+            assert r2.ready == 0.0 and r2.wait == r2.start > 0.0
+        assert result.makespans(config).shape == (2,)
+        assert np.all(result.makespans(config) > r1_first.end)
+    lines = error_summary(result, 2)
+    assert f"makespan (until the last robot is done): planned {planned.makespan:.1f} s" in "\n".join(lines)
+    assert any(line.startswith("waiting for partners") and "r2 " in line for line in lines)
+
+
+@pytest.mark.slow
+def test_a_moved_up_paired_start_waits_only_for_the_partner(waiting: PlanReport) -> None:
+    """With the paired move planned at 0 s, it starts the moment r1 ends its first move."""
+    moves = tuple(dataclasses.replace(m, start=0.0) if m.partner else m for m in waiting.schedule.moves)
+    report = dataclasses.replace(waiting, schedule=Schedule(waiting.schedule.robots, moves))
+    result = execute(report, sessions=1)
+    for config in (1, 2):
+        first, pair = result.schedules[config][0].timeline("r1")
+        (r2,) = result.schedules[config][0].timeline("r2")
+        assert pair.start == r2.start == first.end and pair.wait == 0.0 and r2.wait == first.end
+
+
+@pytest.mark.slow
+def test_errors_and_sessions_csv_carry_the_times(waiting: PlanReport) -> None:
+    result = execute(waiting, sessions=2)
+    rows = list(csv.DictReader(io.StringIO(errors_csv(result, waiting.roadmap))))
+    assert list(rows[0])[-3:] == ["planned_t_s", "mean_t_s", "max_t_s"]
+    r2 = [r for r in rows if r["robot"] == "r2" and r["config"] == "1"]
+    assert r2[0]["planned_t_s"] == r2[0]["mean_t_s"] == "0"
+    assert float(r2[1]["mean_t_s"]) > float(next(m for m in waiting.schedule.timeline("r2")).start)
+    times = [float(r["mean_t_s"]) for r in r2]
+    assert times == sorted(times)
+    sessions = list(csv.DictReader(io.StringIO(sessions_csv(result))))
+    assert len(sessions) == 2 * 2 * 2  # configurations x sessions x robots
+    for row in sessions:
+        assert float(row["planned_makespan_s"]) == pytest.approx(waiting.schedule.makespan)
+        assert 0.0 < float(row["done_s"]) <= float(row["makespan_s"])
+    assert {float(r["wait_s"]) > 0 for r in sessions if r["robot"] == "r2"} == {True}

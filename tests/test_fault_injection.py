@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parent.parent
 #: about 2 s of oracle work on two workers, 1-2 s of ENHSP search, 1 s to draw plan.png:
 #: each stage lasts long enough to be caught in the middle
 SCENARIO = ROOT / "configs" / "corridor-2robots.yaml"
-OUTPUTS = ("domain.pddl", "plan.json", "plan.png", "problem.pddl")
+OUTPUTS = ("domain.pddl", "plan.json", "plan.png", "problem.pddl", "schedule.png")
 #: plan.json keys that describe the plan itself (the others: timings, cache hits)
 PLAN_KEYS = ("status", "goals", "cost", "robots", "actions", "trajectories")
 

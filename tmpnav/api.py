@@ -7,7 +7,7 @@
     print(result.status, result.planner_cost, result.resimulated_cost)
     for step in result.steps:
         print(step.index, step.moves, step.resimulated_cost)
-    result.save("out")                                       # plan.json and plan.png
+    result.save("out")                                       # plan.json, plan.png, schedule.png
     result.export_nav2("out/nav2")                           # waypoint files per robot
 
     proposal = tmpnav.segment_map("map.yaml", min_area=3.0)  # rooms, doors, landmark candidates
@@ -121,7 +121,7 @@ class PlanResult:
         return waypoints(self.document())
 
     def save(self, directory: str | Path) -> list[Path]:
-        """Write plan.json and plan.png into ``directory``; returns the paths."""
+        """Write plan.json, plan.png and schedule.png into ``directory``; returns the paths."""
         from tmpnav.report.outputs import write_outputs
 
         return write_outputs(self.report, Path(directory), None)
@@ -142,6 +142,7 @@ def plan(
     search: str | None = None,
     time_budget: float | None = None,
     costs: str | None = None,
+    objective: str | None = None,
     cache_dir: str | Path | None = None,
     use_cache: bool = True,
     workers: int | None = None,
@@ -152,7 +153,14 @@ def plan(
     from tmpnav.pipeline import PlanOptions
     from tmpnav.pipeline import plan as run
 
-    _check_choices(search=search, costs=costs, timeout=timeout, time_budget=time_budget, pair_min_gain=pair_min_gain)
+    _check_choices(
+        search=search,
+        costs=costs,
+        objective=objective,
+        timeout=timeout,
+        time_budget=time_budget,
+        pair_min_gain=pair_min_gain,
+    )
     options = PlanOptions.of(
         encoding=encoding,
         planner=planner,
@@ -162,6 +170,7 @@ def plan(
         search=search,
         time_budget=time_budget,
         costs=costs,
+        objective=objective,
         cache_dir=Path(cache_dir) if cache_dir is not None else None,
         use_cache=use_cache,
         workers=workers,
@@ -172,10 +181,10 @@ def plan(
 
 def _check_choices(**values: object) -> None:
     """The keyword arguments of :func:`plan`, checked as the command line checks its options."""
-    from tmpnav.choices import COSTS, SEARCHES
+    from tmpnav.choices import COSTS, OBJECTIVES, SEARCHES
     from tmpnav.errors import InputError
 
-    choices = {"search": SEARCHES, "costs": COSTS}
+    choices: dict[str, tuple[str, ...]] = {"search": SEARCHES, "costs": COSTS, "objective": OBJECTIVES}
     for name, value in values.items():
         if value is None:
             continue

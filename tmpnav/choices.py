@@ -21,7 +21,11 @@ so a choice is added once. What each choice *does* lives in its registry: the en
 * ``anytime``: large-neighbourhood search, ENHSP on sub-problems, with a certified lower bound;
 * ``auto``: ``exact`` where it finishes quickly (:func:`exact_fits`), else ``anytime``.
 
-``OBJECTIVES``, what the plan minimises: ``cost``, the paper's sum of action costs.
+``OBJECTIVES``, what the plan minimises (:mod:`tmpnav.task.objectives`):
+
+* ``cost``: the paper's sum of action costs (the team's time does not count);
+* ``weighted``: that sum plus ``cost.M_T`` per second of makespan (the default);
+* ``makespan``: the makespan first, the sum of action costs between plans as fast.
 """
 
 from __future__ import annotations
@@ -32,7 +36,7 @@ from typing import Literal, get_args
 Costs = Literal["carried", "table"]
 Search = Literal["auto", "exact", "anytime"]
 SearchMode = Literal["exact", "anytime"]  # the search that runs (``auto`` resolved)
-Objective = Literal["cost"]
+Objective = Literal["weighted", "cost", "makespan"]
 #: where a robot may move to: the goal rooms it may serve, or every room (the oracle's modes)
 Destinations = Literal["goals", "all-rooms"]
 #: how a search ended: the exact search "solved"; the anytime search "optimal" (proved by its
@@ -123,12 +127,18 @@ def choose(encoding: str, search: Search, costs: Costs, rooms: int, robots: int)
     return TaskChoice(search, costs)
 
 
-def paper_conflict(encoding: str, search: Search | None, costs: Costs | None) -> str | None:
-    """Why a search or costs asked for explicitly cannot go with ``encoding``, or None: the paper's
-    encoding plans exactly with table costs only."""
+def paper_conflict(
+    encoding: str, search: Search | None, costs: Costs | None, objective: Objective | None = None
+) -> str | None:
+    """Why a search, costs or objective asked for explicitly cannot go with ``encoding``, or
+    None: the paper's encoding plans exactly with table costs, for the sum of action costs."""
     if encoding == "paper" and (costs == "carried" or search == "anytime"):
         return (
             "the paper's encoding is planned exactly with table costs; "
             "use --encoding mixed for --search anytime or --costs carried"
+        )
+    if encoding == "paper" and objective not in (None, "cost"):
+        return "the paper's encoding minimises the sum of action costs; use --encoding mixed for --objective " + str(
+            objective
         )
     return None

@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 from tmpnav import scenario as scenario_stage
 from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
-from tmpnav.choices import Costs, Search, choose, paper_conflict
+from tmpnav.choices import Costs, Objective, Search, choose, paper_conflict
 from tmpnav.errors import InputError, Problem, ScenarioError
 from tmpnav.results import CacheUse, PlanReport, SearchProgress, StageTimes
 from tmpnav.types import Goals, Roadmap, Scenario
@@ -46,6 +46,7 @@ class Overrides:
     search: Search | None = None
     time_budget: float | None = None
     costs: Costs | None = None
+    objective: Objective | None = None
 
 
 @dataclass(frozen=True)
@@ -125,12 +126,13 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
         search=o.search or planner.search,
         time_budget=o.time_budget if o.time_budget is not None else planner.time_budget,
         costs=o.costs or planner.costs,
+        objective=o.objective or planner.objective,
     )
-    if (why := paper_conflict(planner.encoding, o.search, o.costs)) is not None:
+    if (why := paper_conflict(planner.encoding, o.search, o.costs, o.objective)) is not None:
         raise InputError(why)
     if planner.encoding == "paper":  # the paper's model, as tmpnav.choices.choose plans it
         choice = choose(planner.encoding, planner.search, planner.costs, 0, 0)
-        planner = replace(planner, costs=choice.costs, search=choice.mode)
+        planner = replace(planner, costs=choice.costs, search=choice.mode, objective="cost")
     models = scenario.models
     if o.mutual_observations is not None:
         models = replace(models, mutual_observations=o.mutual_observations)
@@ -227,7 +229,7 @@ def prepare(
 
 def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
     """The encoded task problem with its computed costs (``tmpnav export-pddl``)."""
-    from tmpnav.planning.exact import full_table
+    from tmpnav.planning.table import full_table
     from tmpnav.task.stage import TaskProblem
 
     times = StageTimes()
@@ -269,6 +271,7 @@ def plan(
         task=planned.task,
         actions=tuple(resim.actions),
         trajectories=resim.trajectories,
+        schedule=resim.schedule,
         times=times,
         cache=_cache_use(prep, planned.task.plan_hit, options.execution.use_cache),
         oracle=prep.oracle.stats.counts(),

@@ -1,32 +1,33 @@
-"""Stage 7: the task-motion plan, re-simulated with beliefs carried from action to action.
+"""Stage 7: the task-motion plan, re-simulated as the team runs it: all robots at once, on one clock.
 
-The plan's actions run in order from the robots' true situation: each action starts where
-its robots actually are, with their actual beliefs, cross-correlations included, and the
-oracle picks its goal instantiations again from there (paper: "this instantiation becomes
-the start node" of the next move). The whole team is one joint EKF state: robots that do
-not move in an action stay still, neither observe nor are observed, and their beliefs
-change only through their correlations with the robots that move. The steps are
-:meth:`tmpnav.attachment.carried.CarriedCosts.replay`, the same code that costs plans for
-the planner with ``--costs carried``, recording every control step.
+The plan's moves run from the robots' true situation (:meth:`CarriedCosts.replay`, the team's
+clock of :mod:`tmpnav.attachment.clock`): each robot makes its moves one after another, a
+paired move starts when both of its robots are free, and every move starts where its robot
+actually is, with its actual belief, cross-correlations included; the oracle picks its goal
+instantiation again from there (paper: "this instantiation becomes the start node" of the
+next move). The whole team is one joint EKF: standing robots keep observing and being
+observed, and any two robots in range and line of sight observe each other. It is the same
+run that costs plans for the planner with ``--costs carried``, recording every control step.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.attachment.team import Team, belief_step
-from tmpnav.results import TaskResult
-from tmpnav.types import Belief, CostTerms, PlannedAction, TrajectoryStep
+from tmpnav.results import Schedule, TaskResult
+from tmpnav.types import Belief, CostTerms, PlannedAction, TrajectoryStep, vec3
 
 
 @dataclass
 class Resimulation:
     """The plan re-simulated: its actions with their costs, each robot's belief at every
-    step, each robot's cost terms per move, and the team's joint belief at the end."""
+    step, each robot's cost terms per move, its schedule and the team's joint belief at the end."""
 
     actions: list[PlannedAction]
     trajectories: dict[str, list[TrajectoryStep]]
+    schedule: Schedule
     terms: dict[str, list[CostTerms]] = field(default_factory=dict)
     final: Belief | None = None
 
@@ -35,30 +36,32 @@ class Resimulation:
         return sum(a.resimulated_cost for a in self.actions)
 
 
-def resimulate(carried: CarriedCosts, task: TaskResult) -> Resimulation:
-    """Run the task plan's actions in order on the team's joint belief."""
-    team: Team = carried.start
-    trajectories = {r: [belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i, r in enumerate(team.names)}
-    terms: dict[str, list[CostTerms]] = {r: [] for r in team.names}
-    actions: list[PlannedAction] = []
-    outcomes = carried.replay(task.steps)
-    for k, (moves, outcome) in enumerate(zip(task.steps, outcomes, strict=True)):
-        assert outcome.trajectories is not None
-        for r, steps in outcome.trajectories.items():
-            trajectories[r].extend(steps)
-        for r, t in zip(outcome.robots, outcome.terms, strict=True):
-            terms[r].append(t)
+def resimulate(carried: CarriedCosts, task: TaskResult, delays: Mapping[int, float] | None = None) -> Resimulation:
+    """Run the task plan on the team's clock (``delays`` hold steps back, in seconds)."""
+    names, weights = carried.start.names, carried.scenario.cost
+    run = carried.replay(task.steps, delays)
+    terms: dict[str, list[CostTerms]] = {r: [] for r in names}
+    by_step: dict[int, list] = {}
+    for move in run.moves:
+        by_step.setdefault(move.step, []).append(move)
+    actions = []
+    for k, moves in enumerate(task.steps):
+        ran = sorted(by_step[k], key=lambda m: [x[0] for x in moves].index(names[m.robot]))
+        for m in ran:
+            assert m.terms is not None
+            terms[names[m.robot]].append(m.terms)
         actions.append(
             PlannedAction(
                 index=k + 1,
                 name=task.action_names[k],
                 moves=tuple(moves),
                 planner_cost=task.step_costs[k],
-                resimulated_cost=outcome.cost,
-                goal_nodes=outcome.goal_nodes,
-                paths=outcome.paths,
-                goal_poses=outcome.goal_poses,
+                resimulated_cost=float(sum(m.cost(weights) for m in ran)),
+                goal_nodes=tuple(int(m.motion.path[-1]) for m in ran),
+                paths=tuple(m.motion.path for m in ran),
+                goal_poses=tuple(vec3(m.motion.poses[-1]) for m in ran),
             )
         )
-        team = outcome.team
-    return Resimulation(actions, trajectories, terms, Belief(team.mean, team.cov))
+    assert run.trajectories is not None
+    team = run.end.team
+    return Resimulation(actions, run.trajectories, run.schedule, terms, Belief(team.mean, team.cov))

@@ -73,6 +73,57 @@ class StageTimes:
 
 
 @dataclass(frozen=True)
+class TimedMove:
+    """One robot's move on the team's clock: when it could start, when it started, when it ended.
+
+    A robot is ``ready`` when its previous move ends (0 for its first); a paired move starts
+    when both robots are ready, so the earlier one waits (``start - ready``); a move may also
+    be held back to keep clear of another robot. Seconds from the start of the plan."""
+
+    step: int  # the plan step (0-based) the move belongs to
+    robot: str
+    origin: str
+    target: str
+    partner: str | None  # the other robot of a paired move
+    ready: float
+    start: float
+    end: float
+
+    @property
+    def wait(self) -> float:
+        return self.start - self.ready
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """The plan as the team runs it: every robot's moves on one clock, all robots at once."""
+
+    robots: tuple[str, ...]
+    moves: tuple[TimedMove, ...]  # in plan order; a paired step has one entry per robot
+
+    @property
+    def makespan(self) -> float:
+        """When the last move ends (0 for a plan without moves)."""
+        return max((m.end for m in self.moves), default=0.0)
+
+    def timeline(self, robot: str) -> tuple[TimedMove, ...]:
+        """The robot's moves in the order it makes them."""
+        return tuple(m for m in self.moves if m.robot == robot)
+
+    def busy(self, robot: str) -> float:
+        """Seconds the robot drives."""
+        return sum(m.end - m.start for m in self.timeline(robot))
+
+    def idle(self, robot: str) -> float:
+        """Seconds of the makespan the robot does not drive: waits, and the time after its last move."""
+        return self.makespan - self.busy(robot)
+
+    def waits(self, robot: str) -> float:
+        """Seconds the robot waits between its moves."""
+        return sum(m.wait for m in self.timeline(robot))
+
+
+@dataclass(frozen=True)
 class TaskCounts:
     """How big the task problem was (plan.json ``task``)."""
 
@@ -150,6 +201,8 @@ class TaskResult:
     plan_hit: bool  # the plan was remembered for this exact problem; nothing was encoded or solved
     search: SearchSummary | None = None
     bound: BoundSummary | None = None
+    #: the steps on the team's clock as the planner saw them (None for a table without durations)
+    schedule: Schedule | None = None
     #: the PDDL domain and problem the planner solved, written on demand; None when the plan was
     #: remembered or found by a search over sub-problems (tmpnav.pipeline.pddl_texts encodes it then)
     pddl: Callable[[], tuple[str, str]] | None = field(default=None, repr=False, compare=False)
@@ -157,6 +210,11 @@ class TaskResult:
     @property
     def planner_cost(self) -> float:
         return float(sum(self.step_costs))
+
+    @property
+    def makespan(self) -> float | None:
+        """When the team ends the plan as the planner saw it (None without durations)."""
+        return self.schedule.makespan if self.schedule is not None else None
 
 
 @dataclass(frozen=True)
@@ -201,6 +259,7 @@ class PlanReport:
     task: TaskResult
     actions: tuple[PlannedAction, ...]  # the plan's steps, re-simulated with carried-over beliefs
     trajectories: dict[str, list[TrajectoryStep]]  # robot -> belief at every control step
+    schedule: Schedule  # the re-simulated plan on the team's clock
     times: StageTimes
     cache: CacheUse
     oracle: OracleCounts

@@ -14,7 +14,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from tmpnav.choices import Costs, Search
+from tmpnav.choices import Costs, Objective, Search
 
 Point = tuple[float, float]
 Polygon = tuple[Point, ...]
@@ -153,11 +153,13 @@ CostValue = TypeVar("CostValue", float, np.ndarray)
 
 @dataclass(frozen=True)
 class CostWeights:
-    """c = M_u*c_u + M_G*c_G + M_Sigma*c_Sigma (paper, section Approach)."""
+    """c = M_u*c_u + M_G*c_G + M_Sigma*c_Sigma (paper, section Approach); M_T weighs the
+    team's time, a second of makespan, in the ``weighted`` objective (tmpnav.task.objectives)."""
 
     M_u: float
     M_G: float
     M_Sigma: float
+    M_T: float = 1.0
 
     def combine(self, c_u: CostValue, c_G: CostValue | float, c_Sigma: CostValue) -> CostValue:
         """The weighted cost M_u c_u + M_G c_G + M_Sigma c_Sigma: the one place it is written.
@@ -201,6 +203,7 @@ class PlannerOptions:
     search: Search = "auto"  # exact | anytime | auto (tmpnav.choices)
     time_budget: float | None = None  # s, the anytime search's budget for the run; None: by size
     costs: Costs = "carried"  # carried (the beliefs the robots carry; default) | table (canonical start states)
+    objective: Objective = "weighted"  # weighted | cost | makespan (tmpnav.choices)
 
 
 @dataclass(frozen=True)
@@ -316,6 +319,7 @@ class MotionResult:
     mutual_steps: int = 0  # steps with at least one mutual observation
     final_headings: tuple[float, ...] = ()  # nominal heading of each robot at its goal
     pruned: bool = False  # a pair proved unable to save min_gain: cost is a lower bound only
+    steps: tuple[int, ...] = ()  # control steps of each robot's motion (its duration is steps x dt)
 
     @property
     def final(self) -> Belief:
@@ -331,8 +335,8 @@ class CostTable:
 
     ``single[(r, origin, target)]`` is the cost of robot r moving alone;
     ``pair[(m1, m2)]`` the joint cost of two moves done together (m1's robot comes first
-    in the scenario's robot order). Locations are rooms plus ``<robot>-start`` for a
-    robot that does not start inside a room.
+    in the scenario's robot order); ``duration`` and ``pair_duration`` how long they take.
+    Locations are rooms plus ``<robot>-start`` for a robot that does not start inside a room.
     """
 
     robots: tuple[str, ...]
@@ -341,6 +345,10 @@ class CostTable:
     start_location: dict[str, str]
     single: dict[MoveKey, float]
     pair: dict[tuple[MoveKey, MoveKey], float]
+    #: seconds each move takes (its motion's control steps x dt); a paired move's two robots
+    #: start together and each ends with its own motion: ``pair_duration[(m1, m2)]`` = (d1, d2)
+    duration: dict[MoveKey, float] = field(default_factory=dict)
+    pair_duration: dict[tuple[MoveKey, MoveKey], tuple[float, float]] = field(default_factory=dict)
 
 
 class PlanStatus(enum.StrEnum):

@@ -2,19 +2,17 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 from tmpnav.attachment.canonical import CanonicalCosts
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.attachment.team import Team
 from tmpnav.oracle.executors import OracleContext
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.pipeline import load_world
 from tmpnav.roadmap import build_roadmap
 from tmpnav.shipped import configs_dir
-from tmpnav.task.encodings import ENCODINGS, scaled
-from tmpnav.task.plans import Plan, PlanError, Rules, State
+from tmpnav.task.encodings import ENCODINGS
+from tmpnav.task.plans import Plan, PlanError, Rules, State, Step
 from tmpnav.types import Goals, Scenario
 from tmpnav.world import World
 
@@ -30,22 +28,19 @@ def carried_problem(config: str, rooms: tuple[str, ...], robots: int) -> tuple[S
     return scenario, world, CarriedCosts(oracle, canonical)
 
 
-def cheapest_plan_by_enumeration(carried: CarriedCosts, goals: Goals, min_gain: float) -> tuple[float, Plan, int]:
-    """Every plan of single moves and paired moves that save ``min_gain`` over the same two
-    moves made alone from the same beliefs, run step by step with carried beliefs: the
-    cheapest one, its cost, and how many complete plans there were."""
+def every_plan(carried: CarriedCosts, goals: Goals) -> list[Plan]:
+    """Every plan of single moves and of paired moves the encoding's filter allows (every
+    order of the steps of different robots too: several orders are one schedule), by the
+    entry rules alone, knowing nothing of the clock or of the unfolded search."""
     rules = Rules(carried.start_location, goals)
     keep = ENCODINGS["mixed"].pair_filter(goals, carried.start_location)
     assert keep is not None
     rooms = tuple(dict.fromkeys(goals.all_rooms))
-    best: list[tuple[float, Plan]] = [(math.inf, ())]
-    count = [0]
+    plans: list[Plan] = []
 
-    def visit(team: Team, state: State, cost: float, prefix: Plan) -> None:
+    def visit(state: State, prefix: Plan) -> None:
         if rules.done(state):
-            count[0] += 1
-            if cost < best[0][0]:
-                best[0] = (cost, prefix)
+            plans.append(prefix)
             return
         singles = [
             ((r, state.at[r], x),)
@@ -53,24 +48,24 @@ def cheapest_plan_by_enumeration(carried: CarriedCosts, goals: Goals, min_gain: 
             for x in rooms
             if x != state.at[r] and rules.may_enter(state, r, x)
         ]
-        alone = {}
-        for step in singles:
-            outcome = carried.advance(team, step)
-            alone[step[0]] = outcome.cost
-            visit(outcome.team, rules.apply(state, step), cost + outcome.cost, (*prefix, step))
-        for i, a in enumerate(singles):
-            for b in singles[i + 1 :]:
-                pair = (a[0], b[0])
-                if a[0][0] == b[0][0] or not keep(*pair):
-                    continue
-                try:
-                    after = rules.apply(state, pair)
-                except PlanError:
-                    continue
-                outcome = carried.advance(team, pair)
-                s = scaled(alone[a[0]]) + scaled(alone[b[0]])
-                if scaled(outcome.cost) < s and scaled(outcome.cost) <= (1 - min_gain) * s:
-                    visit(outcome.team, after, cost + outcome.cost, (*prefix, pair))
+        steps: list[Step] = list(singles)
+        steps += [
+            (a[0], b[0])
+            for i, a in enumerate(singles)
+            for b in singles[i + 1 :]
+            if a[0][0] != b[0][0] and keep(a[0], b[0])
+        ]
+        for step in steps:
+            try:
+                after = rules.apply(state, step)
+            except PlanError:
+                continue
+            visit(after, (*prefix, step))
 
-    visit(carried.start, rules.start(), 0.0, ())
-    return best[0][0], best[0][1], count[0]
+    visit(rules.start(), ())
+    return plans
+
+
+def objective(carried: CarriedCosts, plan: Plan, span_weight: float) -> float:
+    """The plan's objective as the team's clock runs it."""
+    return carried.plan_cost(plan).value(span_weight)

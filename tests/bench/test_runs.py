@@ -6,10 +6,12 @@ import os
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
-from tmpnav.bench.runs import kill_group
+from tmpnav.bench.runs import Job, kill_group, rows
+from tmpnav.bench.table import COLUMNS
 from tmpnav.errors import InputError
 
 #: a run that starts a helper process (as the oracle starts its worker pool) and hangs
@@ -66,3 +68,15 @@ def test_a_range_is_every_count_from_a_to_b_unless_it_names_its_step() -> None:
     for bad in ("2..4:0", "two..ten", "0..3", "4..2"):
         with pytest.raises(InputError, match="--rooms"):
             parse_counts(bad, "--rooms")
+
+
+def test_a_runs_row_records_the_makespan_next_to_cost_and_time() -> None:
+    job = Job("rooms", "mixed", 2, 2, 0, ("L1", "L2"), Path("corridor-2robots.yaml"))
+    measured = {"status": "solved-optimally", "times": {"total": 1.5}, "planner_cost": 10.0, "makespan": 161.5}
+    out = rows(job, {"cold": measured, "warm": measured, "replan": {"status": "timeout"}})
+    assert [list(r) for r in out] == [list(COLUMNS)] * 3 and COLUMNS[-1] == "makespan"
+    assert [(r["total_s"], r["planner_cost"], r["makespan"]) for r in out] == [
+        ("1.5", "10", "161.5"),
+        ("1.5", "10", "161.5"),
+        ("", "", ""),
+    ]

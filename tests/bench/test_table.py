@@ -24,6 +24,7 @@ def row(encoding: str, phase: str, status: str, total: str, session: int = 0) ->
         "phase": phase,
         "status": status,
         "total_s": total,
+        "makespan": "42.5" if total else "",
     }
 
 
@@ -64,9 +65,35 @@ def test_one_encoding_has_no_speed_up_column_and_no_empty_cell() -> None:
     text = summary_markdown(table, "robots", default="mixed", timeout=60.0)
     assert "speed-up" not in text
     for line in text.splitlines():
-        assert "||" not in line.replace(" ", "") and line.count("|") == 10, line
+        assert "||" not in line.replace(" ", "") and line.count("|") == 11, line
     both = table + [row("paper", phase, "solved-optimally", "4.0") for phase in PHASES]
     lines = summary_markdown(both, "robots", default="mixed", timeout=60.0).splitlines()
-    assert lines[0].endswith("| speed-up of mixed |") and all(line.count("|") == 11 for line in lines)
+    assert lines[0].endswith("| speed-up of mixed |") and all(line.count("|") == 12 for line in lines)
     assert not [line for line in lines if "| |" in line or "||" in line.replace(" ", "")]
     assert any("| 2.0x |" in line for line in lines) and any("1.0x (reference)" in line for line in lines)
+
+
+def test_the_summary_shows_each_points_median_makespan() -> None:
+    table = [row("mixed", "cold", "solved-optimally", "2.0", session=s) for s in range(3)]
+    for r, span in zip(table, ("40", "60", "50"), strict=True):
+        r["makespan"] = span
+    header, _, line = summary_markdown(table, "robots", default="mixed", timeout=60.0).splitlines()
+    cells = [c.strip() for c in line.split("|")]
+    assert cells[[c.strip() for c in header.split("|")].index("makespan (s)")] == "50.00"
+
+
+def test_a_bench_csv_written_before_the_makespan_replots(tmp_path: Path) -> None:
+    """``tmpnav bench --replot`` of an older bench.csv: no makespan column, a dash in the summary."""
+    from tmpnav.bench.experiment import replot, write_summary
+
+    old = [c for c in COLUMNS if c != "makespan"]
+    table = [{c: v for c, v in row("mixed", phase, "solved-optimally", "2.0").items() if c in old} for phase in PHASES]
+    path = tmp_path / "bench.csv"
+    path.write_text(",".join(old) + "\n" + "".join(",".join(r[c] for c in old) + "\n" for r in table))
+    assert all(r["makespan"] == "" for r in read_csv(path))
+    text, written = write_summary(replot(path), tmp_path, 60.0)
+    assert [p.name for p in written] == ["bench.png", "summary.md"]
+    header, *rows = [line for line in text.splitlines() if line.startswith("| ") and "---" not in line]
+    column = [c.strip() for c in header.split("|")].index("makespan (s)")
+    assert [[c.strip() for c in r.split("|")][column] for r in rows] == ["-"] * 3
+    assert "makespan" in to_csv(read_csv(path)).splitlines()[0]  # written back with the column

@@ -57,7 +57,9 @@ def read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], Path]:
     out = tmp_path_factory.mktemp("plan")
-    proc = tmpnav("plan", TWO_ROOMS, "-o", out, "--export", "nav2", "--cache-dir", out / "cache", "-q")
+    # the paper's objective with table costs pairs the two robots (the weighted default sends them at once)
+    options = ("--objective", "cost", "--costs", "table")
+    proc = tmpnav("plan", TWO_ROOMS, *options, "-o", out, "--export", "nav2", "--cache-dir", out / "cache", "-q")
     assert proc.returncode == 0, proc.stderr
     for name in ("r1.csv", "r1.follow_waypoints.yaml", "r1.rviz_waypoints.yaml", "r2.csv"):
         assert f"wrote {out / 'nav2' / name}" in proc.stdout
@@ -124,6 +126,12 @@ def test_the_paired_move_is_a_sync_point_on_both_robots(exported: tuple[dict[str
         assert [m[1:] for m in marked] == [(f"step-{k}", partner) for k in paired]
         for index, sync, _ in marked:  # marked on the last waypoint before the paired step
             assert int(rows[index + 1]["step"]) == int(sync.split("-")[1])
+    departs = {}
+    for robot in ("r1", "r2"):  # both robots of a paired step leave at its planned start
+        _, rows = read_csv(folder / f"{robot}.csv")
+        departs[robot] = [(r["sync"], float(r["depart"])) for r in rows if r["sync"]]
+        assert all(float(r["wait"]) >= 0.0 for r in rows if r["depart"])
+    assert departs["r1"] == departs["r2"]
 
 
 def plan_doc() -> dict[str, Any]:
@@ -188,6 +196,99 @@ def test_sync_goes_on_the_waypoint_before_the_paired_step() -> None:
     assert [(w.index, w.sync, w.partner) for w in r2 if w.sync] == [(0, "step-2", "r1")]
     assert r1[1].yaw == pytest.approx(math.pi / 2)  # the via node faces the next one
     assert [w.t for w in r1] == [0.0, 1.0, 2.0, 3.0] and r2[1].t == 3.0
+
+
+def test_a_sequential_plan_json_1_gets_its_waits_from_the_steps() -> None:
+    """tmpnav-plan/1 has no schedule: its steps ran one after the other, so r2 waited in its
+    start pose while r1 made step 1, and both left for step 2 when r1 was done."""
+    r1, r2 = waypoints(plan_doc())["r1"], waypoints(plan_doc())["r2"]
+    assert [(w.index, w.depart, w.wait) for w in r1 if w.depart is not None] == [(0, 0.0, 0.0), (2, 2.0, 0.0)]
+    assert [(w.index, w.depart, w.wait) for w in r2 if w.depart is not None] == [(0, 2.0, 2.0)]
+    assert r1[-1].depart is None and r2[-1].wait is None  # no move leaves from the last goal
+
+
+def test_a_plan_json_1_whose_robots_moved_at_once_takes_its_times_from_the_trajectories() -> None:
+    """A step's t_start that does not fit its trajectories (r2 is at its first node before the
+    step's claimed start) is not used: the step starts when its robots are ready."""
+    doc = plan_doc()
+    doc["actions"][1] = {**doc["actions"][1], "robots": ["r2"], "from": ["r2-start"], "to": ["A"]}
+    doc["actions"][1]["moves"] = doc["actions"][1]["moves"][1:]
+    doc["actions"][0]["t_start"], doc["actions"][1]["t_start"] = 0.0, 2.0  # as if one after the other
+    doc["trajectories"]["r2"] = [doc["trajectories"]["r2"][0], {**doc["trajectories"]["r2"][2], "t": 1.5}]
+    r2 = waypoints(doc)["r2"]
+    assert [(w.kind, w.t, w.depart, w.wait) for w in r2] == [("start", 0.0, 0.0, 0.0), ("goal", 1.5, None, None)]
+    sequential = plan_doc()
+    sequential["actions"][1]["t_start"] = 2.5  # fits: after both are ready, before their first node
+    r1, r2 = waypoints(sequential)["r1"], waypoints(sequential)["r2"]
+    assert [(w.depart, w.wait) for w in (r1[2], r2[0])] == [(2.5, 0.5), (2.5, 2.5)]
+
+
+def scheduled_doc() -> dict[str, Any]:
+    """plan_doc as tmpnav-plan/2: r2 stands 2.5 s for r1, and the paired step is held back 0.5 s."""
+
+    def timed(step: int, frm: str, to: str, partner: str | None, ready: float, start: float, end: float) -> Any:
+        return {"step": step, "from": frm, "to": to, "partner": partner, "ready": ready, "start": start, "end": end}
+
+    doc = plan_doc()
+    doc["schema"] = "tmpnav-plan/2"
+    doc["schedule"] = {
+        "makespan": 3.5,
+        "robots": {
+            "r1": {"moves": [timed(1, "A", "B", None, 0.0, 0.0, 2.0), timed(2, "B", "C", "r2", 2.0, 2.5, 3.5)]},
+            "r2": {"moves": [timed(2, "r2-start", "A", "r1", 0.0, 2.5, 3.25)]},
+        },
+    }
+    for steps in doc["trajectories"].values():
+        for step in steps:
+            step["t"] += 0.5 if step["t"] > 2.0 else 0.0  # the paired step starts at 2.5 s
+    return doc
+
+
+def test_plan_json_2_gives_each_waypoint_its_time_and_each_move_its_wait() -> None:
+    wps = waypoints(scheduled_doc())
+    r1, r2 = wps["r1"], wps["r2"]
+    assert [w.t for w in r1] == [0.0, 1.0, 2.0, 3.5] and [w.t for w in r2] == [0.0, 3.25]  # goals: the moves' ends
+    assert [(w.index, w.depart, w.wait, w.sync) for w in r1 if w.depart is not None] == [
+        (0, 0.0, 0.0, ""),
+        (2, 2.5, 0.5, "step-2"),  # held back: r1 is there at 2 s
+    ]
+    assert [(w.index, w.depart, w.wait, w.sync, w.partner) for w in r2 if w.depart is not None] == [
+        (0, 2.5, 2.5, "step-2", "r1")
+    ]
+
+
+def test_times_and_waits_are_in_the_csv_and_the_yaml_comments() -> None:
+    out = files(scheduled_doc())
+    lines = out["r2.csv"].splitlines()
+    assert "# Planned makespan: 3.5 s (when the last robot is done)." in lines
+    rows = list(csv.DictReader(line for line in lines if not line.startswith("#")))
+    assert list(rows[0]) == list(CSV_COLUMNS) and CSV_COLUMNS[-2:] == ("depart", "wait")
+    before = ("index", "x", "y", "yaw", "frame", "step", "kind", "room", "t", "sync", "partner")
+    assert CSV_COLUMNS[: len(before)] == before  # the columns of earlier exports keep their places
+    assert [(r["t"], r["sync"], r["partner"], r["depart"], r["wait"]) for r in rows] == [
+        ("0.0", "step-2", "r1", "2.5", "2.5"),
+        ("3.25", "", "", "", ""),
+    ]
+    for name in ("r2.follow_waypoints.yaml", "r2.rviz_waypoints.yaml"):
+        assert (
+            "0: step 0, start r2-start, t = 0 s, sync step-2 with r1, depart at t = 2.5 s after a wait of 2.5 s"
+            in (out[name])
+        )
+    assert len(yaml.safe_load(out["r2.follow_waypoints.yaml"])["poses"]) == 2  # the times are comments only
+    assert list(yaml.safe_load(out["r2.rviz_waypoints.yaml"])["waypoints"]) == ["waypoint0", "waypoint1"]
+
+
+def test_a_schedule_of_another_plan_is_refused() -> None:
+    doc = scheduled_doc()
+    doc["schedule"]["robots"]["r2"]["moves"].append(doc["schedule"]["robots"]["r2"]["moves"][0])
+    with pytest.raises(InputError, match="schedule of robot r2 has 2 moves, its actions 1: not the same plan"):
+        waypoints(doc)
+    doc = scheduled_doc()
+    doc["schedule"]["robots"]["r1"]["moves"][1]["to"] = "D"
+    with pytest.raises(InputError, match=r"move 2 goes B -> D, its action B -> C"):
+        waypoints(doc)
+    with pytest.raises(InputError, match="not a complete tmpnav plan document"):
+        waypoints({"schema": "tmpnav-plan/2", "robots": [{"name": "r1"}]})
 
 
 def test_every_robot_gets_three_files() -> None:

@@ -1,8 +1,11 @@
 """One small real plan per test session, shared by the report tests.
 
-Three rooms off a corridor, two robots: r1 must visit C then B, r2 must visit A. The optimal
-plan pairs r1's first move with r2's, then moves r1 alone (so r2 stands still during a step),
-and its re-simulated cost differs from the planner's: every part of the report gets exercised.
+Three rooms off a corridor, two robots: r1 must visit C then B, r2 must visit A. Planned for
+the paper's objective (the sum of action costs, ``--objective cost``) over the cost table
+(``--costs table``), the optimal plan moves r1 alone to C, then pairs r1's move to B with r2's
+move to A: on the team's shared clock r2 waits 15 s for r1 before they start together, and r1
+is idle after its last move until r2 arrives. Every part of the schedule's report (a solo move,
+a paired move, a wait, idle time) gets exercised.
 """
 
 from __future__ import annotations
@@ -51,11 +54,12 @@ goals:
 
 @pytest.fixture(scope="session")
 def plan_report(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
-    """The real plan of the three-rooms scenario (about 2 s: roadmap, oracle, ENHSP, re-simulation)."""
+    """The real plan of the three-rooms scenario (about 3 s: roadmap, oracle, ENHSP, re-simulation)."""
     folder = tmp_path_factory.mktemp("three-rooms")
     scenario = folder / "three_rooms.yaml"
     scenario.write_text(THREE_ROOMS)
-    return plan(scenario, PlanOptions.of(cache_dir=folder / "cache", executor="serial"))
+    options = PlanOptions.of(cache_dir=folder / "cache", executor="serial", costs="table", objective="cost")
+    return plan(scenario, options)
 
 
 @pytest.fixture(scope="session")

@@ -14,7 +14,7 @@ from tmpnav.report.outputs import write_outputs
 from tmpnav.results import PlanReport
 
 PDDL = ("(define (domain rooms))\n", "(define (problem three-rooms) (:domain rooms))\n")
-NAMES = ["plan.json", "plan.png", "domain.pddl", "problem.pddl"]
+NAMES = ["plan.json", "plan.png", "schedule.png", "domain.pddl", "problem.pddl"]
 
 pytestmark = pytest.mark.slow  # every test writes the session's real plan
 
@@ -25,6 +25,7 @@ def earlier_run(out: Path) -> dict[str, bytes]:
     old = {
         "plan.json": b'{"schema": "tmpnav-plan/1", "earlier": true}\n',
         "plan.png": b"\x89PNG\r\n\x1a\nearlier",
+        "schedule.png": b"\x89PNG\r\n\x1a\nearlier schedule",
         "domain.pddl": b"(define (domain earlier))\n",
         "problem.pddl": b"(define (problem earlier))\n",
     }
@@ -43,8 +44,9 @@ def test_writes_all_files(plan_report: PlanReport, tmp_path: Path) -> None:
     assert written == [out / name for name in NAMES]
     assert sorted(os.listdir(out)) == sorted(NAMES)  # no temporary file left
     doc = json.loads((out / "plan.json").read_text(encoding="utf-8"))
-    assert doc["schema"] == "tmpnav-plan/1" and len(doc["actions"]) == len(plan_report.actions)
+    assert doc["schema"] == "tmpnav-plan/2" and len(doc["actions"]) == len(plan_report.actions)
     assert (out / "plan.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (out / "schedule.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert (out / "domain.pddl").read_text() == PDDL[0] and (out / "problem.pddl").read_text() == PDDL[1]
 
 
@@ -58,8 +60,9 @@ def test_files_get_the_umask_mode_not_mkstemp_0600(plan_report: PlanReport, tmp_
 
 
 def test_without_pddl(plan_report: PlanReport, tmp_path: Path) -> None:
-    assert write_outputs(plan_report, tmp_path, None) == [tmp_path / "plan.json", tmp_path / "plan.png"]
-    assert sorted(os.listdir(tmp_path)) == ["plan.json", "plan.png"]
+    written = write_outputs(plan_report, tmp_path, None)
+    assert written == [tmp_path / "plan.json", tmp_path / "plan.png", tmp_path / "schedule.png"]
+    assert sorted(os.listdir(tmp_path)) == ["plan.json", "plan.png", "schedule.png"]
 
 
 def test_replaces_an_earlier_run(plan_report: PlanReport, tmp_path: Path) -> None:
@@ -83,6 +86,30 @@ def test_figure_failure_leaves_the_earlier_run_untouched(
     with pytest.raises(RuntimeError, match="fell over"):
         write_outputs(plan_report, tmp_path, PDDL)
     assert contents(tmp_path) == old  # same files, same bytes, no temporary file
+
+
+def test_a_schedule_figure_that_fails_after_the_plan_figure_leaves_the_earlier_run_untouched(
+    plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """plan.json and plan.png are staged when drawing schedule.png fails: none of the new files
+    replaces an earlier one, and no half-written schedule.png is left."""
+    old = earlier_run(tmp_path)
+    real = figures.render
+    drawn: list[str] = []
+
+    def render_then_fail_on_the_schedule(fig: object, path: Path, dpi: int = 110) -> None:
+        title = fig.axes[0].get_title()  # type: ignore[attr-defined]
+        drawn.append(title)
+        if "schedule of" in title:
+            path.write_bytes(b"\x89PNG half a schedule")
+            raise RuntimeError("the schedule fell over")
+        real(fig, path, dpi)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(figures, "render", render_then_fail_on_the_schedule)
+    with pytest.raises(RuntimeError, match="schedule fell over"):
+        write_outputs(plan_report, tmp_path, PDDL)
+    assert len(drawn) == 2 and "schedule of" not in drawn[0]  # plan.png was drawn first
+    assert contents(tmp_path) == old
 
 
 def test_failure_while_writing_a_file_leaves_no_partial_file(

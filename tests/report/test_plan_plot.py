@@ -106,16 +106,23 @@ def test_each_robots_ellipses_in_its_own_colour(plan_report: Any) -> None:
 
 @pytest.mark.slow
 def test_the_plan_says_when_and_in_what_units(plan_report: Any) -> None:
-    from tmpnav.report.plan_json import action_spans
     from tmpnav.report.plan_plot import arrivals, plan_figure
 
     ax = plan_figure(plan_report).axes[0]
     title = ax.get_title()
-    duration = action_spans(plan_report)[-1][1]
-    assert "cost (unit-less)" in title and f", {duration:.1f} s," in title
+    makespan = plan_report.schedule.makespan
+    assert "cost (unit-less)" in title and f", makespan {makespan:.1f} s (all robots at once)," in title
     found = arrivals(plan_report)
     assert [(a.step, a.robot) for a in found] == [(a.index, m[0]) for a in plan_report.actions for m in a.moves]
-    assert max(a.t for a in found if a.t is not None) == pytest.approx(duration, abs=1e-6)
+    # each badge's time is when the robot's move ends on the shared clock, the schedule's
+    ends = {(m.step + 1, m.robot): m.end for m in plan_report.schedule.moves}
+    assert [a.t for a in found] == [ends[(a.step, a.robot)] for a in found]
+    assert max(a.t for a in found if a.t is not None) == makespan
+    # and the robot's belief is at the goal node then
+    for a in found:
+        at = next(s for s in plan_report.trajectories[a.robot] if abs(s.t - a.t) < 1e-6)
+        action = plan_report.actions[a.step - 1]
+        assert at.node == action.paths[[m[0] for m in action.moves].index(a.robot)][-1]
     notes = {t.get_text() for t in ax.texts}
     assert all(f"{a.t:.1f} s" in notes for a in found)
 

@@ -69,3 +69,22 @@ def test_a_robot_more_uncertain_than_a_door_allows_is_named(plan_report: PlanRep
     assert len(shown) == 2 and all(len(line) <= 100 for line in lines if line.startswith(("warning", "  ")))
     doc = json.loads(dumps(plan_document(poor)))
     assert [w["kind"] for w in doc["warnings"]] == ["door", "door"] and doc["warnings"][0]["robot"] == "r1"
+
+
+@pytest.mark.slow
+def test_with_a_price_on_time_the_gap_is_on_the_objective(plan_report: PlanReport) -> None:
+    planner = dataclasses.replace(plan_report.scenario.planner, objective="weighted")
+    weighted = dataclasses.replace(plan_report, scenario=dataclasses.replace(plan_report.scenario, planner=planner))
+    (warning,) = plan_warnings(with_gap(weighted, 0.87))
+    m_t = weighted.scenario.cost.M_T
+    value = weighted.planner_cost + m_t * weighted.task.makespan
+    assert f"87% below its objective (weighted: cost + {m_t:g} per s of makespan), {value:.3f}" in warning.message
+    assert "no price on the makespan" in warning.message
+
+
+@pytest.mark.slow
+def test_a_door_warning_says_when_on_the_shared_clock_and_which_move(plan_report: PlanReport) -> None:
+    for w in plan_warnings(uncertain(plan_report, 100.0)):
+        t = float(w.message.split(" at t ")[1].split(" s,")[0])
+        move = next(m for m in plan_report.schedule.timeline(str(w.robot)) if m.start < t <= m.end + 0.05)
+        assert f"on its way to {move.target} (step {move.step + 1})" in w.message

@@ -1,4 +1,5 @@
-"""The terminal summary: header, one line per plan step, totals, beliefs, time per stage."""
+"""The terminal summary: header, one line per plan step on the shared clock, totals with the
+makespan and the objective, the robots' time, their beliefs, time per stage."""
 
 from __future__ import annotations
 
@@ -44,6 +45,12 @@ def test_one_line_per_plan_step(lines: list[str], plan_report: Any) -> None:
         assert float(m["planner"]) == pytest.approx(action.planner_cost, abs=5e-4)
         assert float(m["resim"]) == pytest.approx(action.resimulated_cost, abs=5e-4)
         assert float(m["diff"]) == pytest.approx(action.resimulated_cost - action.planner_cost, abs=5e-4)
+    # each step's window on the shared clock: the test plan's r1 drives to C alone, then r1 and
+    # r2 start their paired step together when r1 arrives (r2 waited for it)
+    windows = {(m.step + 1, m.robot): (m.start, m.end) for m in plan_report.schedule.moves}
+    for m, action in zip(steps, plan_report.actions, strict=True):
+        mine = [windows[(action.index, move[0])] for move in action.moves]
+        assert (m["t0"], m["t1"]) == (f"{min(w[0] for w in mine):.1f}", f"{max(w[1] for w in mine):.1f}")
     assert steps[0]["t0"] == "0.0" and steps[0]["t1"] == steps[1]["t0"]
 
 
@@ -54,12 +61,57 @@ def test_totals(lines: list[str], plan_report: Any) -> None:
     assert float(total["resim"]) == pytest.approx(plan_report.resimulated_cost, abs=5e-4)
 
 
+def test_makespan_and_objective(lines: list[str], plan_report: Any) -> None:
+    i = next(i for i, line in enumerate(lines) if line.startswith("total ("))
+    makespan = plan_report.schedule.makespan
+    assert lines[i].endswith(f"  0.0-{makespan:.1f}")
+    assert lines[i + 1] == (
+        f"makespan {makespan:.1f} s; objective cost (the sum of action costs): {plan_report.resimulated_cost:.3f}"
+    )
+
+
+def test_an_objective_that_prices_time_and_a_planner_that_saw_another_schedule(plan_report: Any) -> None:
+    planner = dataclasses.replace(plan_report.scenario.planner, objective="weighted")
+    scenario = dataclasses.replace(plan_report.scenario, planner=planner)
+    task = plan_report.task
+    slower = dataclasses.replace(
+        task.schedule, moves=tuple(dataclasses.replace(m, end=m.end + 2.0) for m in task.schedule.moves)
+    )
+    report = dataclasses.replace(plan_report, scenario=scenario, task=dataclasses.replace(task, schedule=slower))
+    lines = plan_summary(report).splitlines()
+    m_t, makespan = scenario.cost.M_T, plan_report.schedule.makespan
+    line = next(line for line in lines if line.startswith("makespan "))
+    planned = plan_report.planner_cost + m_t * (makespan + 2.0)
+    value = plan_report.resimulated_cost + m_t * makespan
+    assert line == (
+        f"makespan {makespan:.1f} s (planner's schedule: {makespan + 2.0:.1f} s); objective weighted "
+        f"(cost + {m_t:g} per s of makespan): planner {planned:.3f}, re-simulated {value:.3f}"
+    )
+    assert any(line.startswith("lower bound on the objective: ") for line in lines)
+
+
+def test_robots_on_the_shared_clock(lines: list[str], plan_report: Any) -> None:
+    i = lines.index("robot  rooms  busy [s]  waits [s]  idle [s]  control steps")
+    rows = [line.split() for line in lines[i + 1 : i + 3]]
+    schedule, dt = plan_report.schedule, plan_report.scenario.models.dt
+    for row, robot in zip(rows, ["r1", "r2"], strict=True):
+        assert row[0] == robot and int(row[1]) == len(schedule.timeline(robot))
+        busy, waits, idle = (float(x) for x in row[2:5])
+        assert busy == pytest.approx(schedule.busy(robot), abs=0.05)
+        assert waits == pytest.approx(schedule.waits(robot), abs=0.05)
+        assert idle == pytest.approx(schedule.idle(robot), abs=0.05)
+        # control steps: the steps it drives, not every step of the clock its trajectory covers
+        assert int(row[5]) == round(schedule.busy(robot) / dt) < len(plan_report.trajectories[robot]) - 1
+    assert float(rows[1][3]) > 0 and float(rows[0][4]) > 0  # r2 waits for r1; r1 is idle at the end
+    assert lines[i + 3].startswith("(busy: driving, in control steps of 0.5 s; idle: ")
+
+
 def test_beliefs_per_robot(lines: list[str]) -> None:
-    start = next(i for i, line in enumerate(lines) if line.startswith("robot "))
+    start = next(i for i, line in enumerate(lines) if line.startswith("robot  travelled"))
     rows = lines[start + 1 : start + 3]
     assert [r.split()[0] for r in rows] == ["r1", "r2"]
     for row in rows:
-        assert re.search(r"\d+\.\d m\s+\d+\s+\d+\.\d{2} m\s+\d+\.\d{2} m\s+\d+\.\d deg$", row), row
+        assert re.search(r"\d+\.\d m\s+\d+\.\d{2} m\s+\d+\.\d{2} m\s+\d+\.\d deg$", row), row
 
 
 def test_times_and_cache(lines: list[str], plan_report: Any) -> None:

@@ -10,6 +10,7 @@ import pytest
 from tmpnav.oracle.cache import DiskCache
 from tmpnav.pipeline import PlanOptions, pddl_texts, plan
 from tmpnav.task.memo import entry_to_memo, memo_key, memo_to_entry, table_digest
+from tmpnav.task.stage import TaskProblem
 from tmpnav.types import Goals
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -29,8 +30,7 @@ def summary(report) -> tuple:
 
 def stored(cache_dir: Path, report) -> tuple[str, object]:
     """The memo key of ``report``'s task problem and the entry the cache holds for it."""
-    sc = report.scenario
-    key = memo_key(report.table, sc.goals, sc.planner.encoding, sc.planner.pair_min_gain, sc.planner.name, sc.name)
+    key = TaskProblem.of(report.scenario, report.table).memo_key()
     cache = DiskCache(cache_dir)
     try:
         return key, cache.get_many([key])[key]
@@ -41,11 +41,12 @@ def stored(cache_dir: Path, report) -> tuple[str, object]:
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory: pytest.TempPathFactory):
     cache = tmp_path_factory.mktemp("cache")
-    options = PlanOptions.of(cache_dir=cache, executor="serial", costs="table", search="exact")
+    # ENHSP's plans are remembered by their PDDL problem: the paper's objective, the exact search on a table
+    options = PlanOptions.of(cache_dir=cache, executor="serial", costs="table", search="exact", objective="cost")
     cold = plan(TWO_ROOMS, options)
     warm = plan(TWO_ROOMS, options)
     replanned = plan(TWO_ROOMS, options.but(replan=True))
-    uncached = plan(TWO_ROOMS, PlanOptions.of(use_cache=False, executor="serial", costs="table", search="exact"))
+    uncached = plan(TWO_ROOMS, options.but(use_cache=False))
     return cache, cold, warm, replanned, uncached
 
 
@@ -99,7 +100,7 @@ def test_an_entry_that_does_not_fit_is_a_miss(runs, damage) -> None:
 
 
 def test_a_damaged_entry_makes_the_planner_run_again(tmp_path: Path) -> None:
-    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", costs="table", search="exact")
+    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", costs="table", search="exact", objective="cost")
     first = plan(TWO_ROOMS, options)
     key, entry = stored(tmp_path, first)
     cache = DiskCache(tmp_path)

@@ -27,8 +27,9 @@ from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import arrival_state, build_table, initial_state, start_locations
 from tmpnav.task.encodings import ENCODINGS
-from tmpnav.task.model import PlanCost, head_locations, sub_moves
+from tmpnav.task.model import PlanCost, head_locations, robot_ends, sub_moves
 from tmpnav.task.plans import Plan
+from tmpnav.task.timing import schedule
 from tmpnav.types import CostTable, Goals, MoveKey
 from tmpnav.world import World
 
@@ -54,6 +55,9 @@ class CanonicalCosts:
         self.min_gain = min_gain
         self.single: dict[MoveKey, float | None] = {}  # None: no such move (unreachable)
         self.pair: dict[Pair, float | None] = {}  # None: not offered (saves too little, or no motion)
+        self.duration: dict[MoveKey, float] = {}  # seconds each costed single move takes
+        self.pair_duration: dict[Pair, tuple[float, float]] = {}
+        self.dt = scenario.models.dt
         self.canonical: dict[tuple[str, str], StartState] = {
             (r, self.start_location[r]): initial_state(scenario, oracle.ctx.roadmap.starts[r], r) for r in self.robots
         }
@@ -71,6 +75,7 @@ class CanonicalCosts:
             table = build_table(self.oracle, self.oracle_world, "goals")
             for move, cost in table.single.items():
                 self.single.setdefault(move, cost)
+                self.duration.setdefault(move, table.duration[move])
             return table
         floors = motion_floors(self.scenario, self.oracle.ctx.roadmap, self.start_location, goals).single
         moves: list[MoveKey] = []
@@ -83,7 +88,7 @@ class CanonicalCosts:
         self._ensure_singles(moves)
         single = {m: c for m in moves if (c := self.single.get(m)) is not None}
         locations = tuple(dict.fromkeys([*rooms, *self.start_location.values()]))
-        return CostTable(self.robots, rooms, locations, dict(self.start_location), single, {})
+        return CostTable(self.robots, rooms, locations, dict(self.start_location), single, {}, self._durations(single))
 
     @property
     def oracle_world(self) -> World:
@@ -96,7 +101,25 @@ class CanonicalCosts:
         for step in plan:
             c = self.single.get(step[0]) if len(step) == 1 else self.pair.get((step[0], step[1]))
             costs.append(math.inf if c is None else c)
-        return PlanCost(float(sum(costs)), tuple(costs))
+        if not all(math.isfinite(c) for c in costs):
+            return PlanCost.impossible(len(plan))
+        return PlanCost(float(sum(costs)), tuple(costs), schedule(plan, self.robots, self._step_durations))
+
+    def ends(self, head: Plan) -> dict[str, float]:
+        self.plan_cost(head)  # costs (and so times) every move of the head
+        return robot_ends(schedule(head, self.robots, self._step_durations), self.robots)
+
+    def _step_durations(self, step: Sequence[MoveKey]) -> tuple[float, ...] | None:
+        if len(step) == 1:
+            d = self.duration.get(step[0])
+            return None if d is None else (d,)
+        return self.pair_duration.get((step[0], step[1]))
+
+    def _durations(self, single: Iterable[MoveKey]) -> dict[MoveKey, float]:
+        return {m: self.duration[m] for m in single if m in self.duration}
+
+    def _pair_durations(self, pairs: Iterable[Pair]) -> dict[Pair, tuple[float, float]]:
+        return {p: self.pair_duration[p] for p in pairs if p in self.pair_duration}
 
     def subtable(self, head: Plan, robots: Sequence[str], rooms: Sequence[str], goals: Goals) -> CostTable:
         at = head_locations(head, self.start_location, robots)
@@ -114,7 +137,8 @@ class CanonicalCosts:
         self._ensure_pairs(wanted)
         pair = {p: c for p in wanted if (c := self.pair.get(p)) is not None}
         locations = tuple(dict.fromkeys([*rooms, *at.values()]))
-        return CostTable(tuple(robots), tuple(rooms), locations, at, single, pair)
+        timed = self._durations(single), self._pair_durations(pair)
+        return CostTable(tuple(robots), tuple(rooms), locations, at, single, pair, *timed)
 
     def seen(self) -> CostTable:
         """The costs computed so far: the single and paired moves the search saw."""
@@ -122,7 +146,8 @@ class CanonicalCosts:
         pair = {p: c for p, c in self.pair.items() if c is not None}
         rooms = tuple(r.name for r in self.scenario.rooms)
         locations = tuple(dict.fromkeys([*rooms, *self.start_location.values()]))
-        return CostTable(self.robots, rooms, locations, dict(self.start_location), single, pair)
+        timed = self._durations(single), self._pair_durations(pair)
+        return CostTable(self.robots, rooms, locations, dict(self.start_location), single, pair, *timed)
 
     # ------------------------------------------------------------------ the plan space of pairs
 
@@ -196,6 +221,8 @@ class CanonicalCosts:
         results = self.oracle.evaluate([Request((r,), (self.canonical[(r, o)],), (t,)) for r, o, t in ready])
         for m, res in zip(ready, results, strict=True):
             self.single[m] = None if res is None else res.cost
+            if res is not None:
+                self.duration[m] = res.steps[0] * self.dt
 
     def _ensure_canonical(self, states: set[tuple[str, str]]) -> None:
         """Canonical states at rooms: where a robot arrives driving there from its start."""
@@ -207,6 +234,7 @@ class CanonicalCosts:
             if res is not None:
                 self.canonical[(r, room)] = arrival_state(res)
                 self.single.setdefault((r, self.start_location[r], room), res.cost)
+                self.duration.setdefault((r, self.start_location[r], room), res.steps[0] * self.dt)
 
     def _ensure_pairs(self, pairs: Iterable[Pair]) -> None:
         todo = [p for p in dict.fromkeys(pairs) if p not in self.pair]
@@ -232,6 +260,7 @@ class CanonicalCosts:
             alone = self.single[m1] + self.single[m2]  # type: ignore[operator]
             if _offered(res.cost, alone, self.min_gain):
                 self.pair[(m1, m2)] = res.cost
+                self.pair_duration[(m1, m2)] = (res.steps[0] * self.dt, res.steps[1] * self.dt)
 
 
 def _offered(cost: float, alone: float, min_gain: float) -> bool:

@@ -16,6 +16,9 @@ instantiation the robot stands on -- so a lower bound computed from these floors
 (:func:`tmpnav.task.bound.lower_bound`) bounds every plan, including those with paired moves
 that were never simulated. It is weak where uncertainty dominates the cost: it only counts
 driving.
+
+The same paths give each move's time floor, the shortest path at the robot's speed, from
+which :func:`tmpnav.task.bound.makespan_bound` bounds the makespan of every schedule.
 """
 
 from __future__ import annotations
@@ -30,13 +33,34 @@ from tmpnav.types import CostTable, Goals, MoveKey, Roadmap, Scenario
 
 
 def motion_floors(scenario: Scenario, roadmap: Roadmap, start_location: dict[str, str], goals: Goals) -> CostTable:
-    """A cost table of the goal rooms whose every single move costs its motion floor (no pairs)."""
+    """A cost table of the goal rooms whose every single move costs its motion floor (no pairs),
+    and takes its time floor (``duration``): the shortest roadmap path at the robot's speed,
+    which no move beats however it turns (a move drives each edge of length l in
+    ceil(l / (v dt)) >= l / (v dt) steps, and turning on the spot only adds)."""
+    dt = scenario.models.dt
+    driving = _floors(scenario, roadmap, start_location, goals, lambda length, v: length**2 / (length / v + dt))
+    single = {m: scenario.cost.M_u * f for m, f in driving.items()}
+    times = _floors(scenario, roadmap, start_location, goals, lambda length, v: length / v)
     rooms = tuple(dict.fromkeys(goals.all_rooms))
-    dt, w_u = scenario.models.dt, scenario.cost.M_u
+    locations = tuple(dict.fromkeys([*rooms, *start_location.values()]))
+    duration = {m: t for m, t in times.items() if m in single}
+    names = tuple(r.name for r in scenario.robots)
+    return CostTable(names, rooms, locations, dict(start_location), single, {}, duration)
+
+
+def _floors(
+    scenario: Scenario,
+    roadmap: Roadmap,
+    start_location: dict[str, str],
+    goals: Goals,
+    weight: Callable[[np.ndarray, float], np.ndarray],
+) -> dict[MoveKey, float]:
+    """The least sum of ``weight(edge length, speed)`` over the roadmap paths of every move."""
+    rooms = tuple(dict.fromkeys(goals.all_rooms))
     single: dict[MoveKey, float] = {}
     for speed in sorted({r.speed for r in scenario.robots}):
         robots = [r.name for r in scenario.robots if r.speed == speed]
-        dist = _distances(roadmap, speed, dt)
+        dist = _distances(roadmap, weight(roadmap.weights, speed))
         for r in robots:
             origins = {start_location[r]: (roadmap.starts[r],), **{x: roadmap.instantiations[x] for x in rooms}}
             for o, nodes in origins.items():
@@ -46,16 +70,13 @@ def motion_floors(scenario: Scenario, roadmap: Roadmap, start_location: dict[str
                         continue
                     floor = float(reach[:, list(roadmap.instantiations[t])].min())
                     if np.isfinite(floor):
-                        single[(r, o, t)] = w_u * floor
-    locations = tuple(dict.fromkeys([*rooms, *start_location.values()]))
-    return CostTable(tuple(r.name for r in scenario.robots), rooms, locations, dict(start_location), single, {})
+                        single[(r, o, t)] = floor
+    return single
 
 
-def _distances(roadmap: Roadmap, speed: float, dt: float) -> Callable[[tuple[int, ...]], np.ndarray]:
-    """Shortest paths with edge weights l^2 / (l / speed + dt), from given source nodes."""
-    lengths = roadmap.weights
-    w = lengths**2 / (lengths / speed + dt)
-    w = np.maximum(w, 1e-12)  # csgraph drops explicit zeros (a 1e-12 excess is below the bound's rounding)
+def _distances(roadmap: Roadmap, weights: np.ndarray) -> Callable[[tuple[int, ...]], np.ndarray]:
+    """Shortest paths with the given edge weights, from given source nodes."""
+    w = np.maximum(weights, 1e-12)  # csgraph drops explicit zeros (a 1e-12 excess is below the bound's rounding)
     n = roadmap.n_nodes
     rows = np.concatenate([roadmap.edges[:, 0], roadmap.edges[:, 1]])
     cols = np.concatenate([roadmap.edges[:, 1], roadmap.edges[:, 0]])

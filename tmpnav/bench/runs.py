@@ -197,6 +197,7 @@ def rows(job: Job, result: WorkerResult) -> list[Row]:
             "peak_rss_mb": _num(r.get("peak_rss_mb")),
             "bound": _num(r.get("bound")),
             "stopped": r.get("stopped"),
+            "makespan": _num(r.get("makespan")),
         }
         out.append({k: "" if v is None else str(v) for k, v in row.items()})
     return out

@@ -39,9 +39,10 @@ COLUMNS = (
     "peak_rss_mb",
     "bound",
     "stopped",
+    "makespan",
 )
 #: columns that bench.csv files written before them lack (read back as empty)
-LATER_COLUMNS = ("bound_s", "peak_rss_mb", "bound", "stopped")
+LATER_COLUMNS = ("bound_s", "peak_rss_mb", "bound", "stopped", "makespan")
 #: a run's phases, in the order they run. cold: empty cache; warm: everything cached;
 #: replan: costs cached, the task planner runs again
 PHASES = ("cold", "warm", "replan")
@@ -57,6 +58,7 @@ class PointStats:
     medians: dict[str, float | None]  # stage (``total`` included) -> median seconds; None: none solved
     q1: float | None  # quartiles of the total
     q3: float | None
+    makespan: float | None = None  # median s until the plan's last robot is done; None: not recorded
 
     @property
     def total(self) -> float | None:
@@ -106,6 +108,7 @@ def medians(table: list[Row], axis: str) -> Medians:
             vals = [float(r[f"{s}_s"]) for r in ok if r[f"{s}_s"] != ""]
             stages[s] = statistics.median(vals) if vals else None
         totals = sorted(float(r["total_s"]) for r in ok)
+        spans = [float(r["makespan"]) for r in ok if r.get("makespan", "") != ""]
         out[(enc, phase, point)] = PointStats(
             runs=len(runs),
             solved=len(ok),
@@ -113,13 +116,15 @@ def medians(table: list[Row], axis: str) -> Medians:
             medians=stages,
             q1=totals[len(totals) // 4] if totals else None,
             q3=totals[(3 * len(totals)) // 4] if totals else None,
+            makespan=statistics.median(spans) if spans else None,
         )
     return out
 
 
 def summary_markdown(table: list[Row], axis: str, default: str = "mixed", timeout: float | None = None) -> str:
-    """A Markdown table of medians per point, with the speed-up of ``default`` over the others
-    (a column only when there are others: no column is ever empty).
+    """A Markdown table of medians per point: planning times, and the plans' makespan (the robots
+    moving at once; "-" for runs recorded before bench.csv had it), with the speed-up of
+    ``default`` over the others (a column only when there are others: no column is ever empty).
 
     Where another encoding never finished, its speed-up is a lower bound: the time limit
     over ``default``'s median."""
@@ -128,8 +133,11 @@ def summary_markdown(table: list[Row], axis: str, default: str = "mixed", timeou
     points = sorted({k[2] for k in med})
     label = "rooms" if axis == "rooms" else "robots"
     compare = len(encodings) > 1
-    head = f"| {label} | encoding | cache | solved | median total (s) | roadmap | oracle | encode | planner |"
-    lines = [head + (f" speed-up of {default} |" if compare else ""), "|---" * (9 + compare) + "|"]
+    head = (
+        f"| {label} | encoding | cache | solved | median total (s) | roadmap | oracle | encode | planner "
+        "| makespan (s) |"
+    )
+    lines = [head + (f" speed-up of {default} |" if compare else ""), "|---" * (10 + compare) + "|"]
     for point in points:
         for enc in encodings:
             for phase in PHASES:
@@ -154,6 +162,7 @@ def _summary_row(
     # a stage without a median: no run finished (timeout), or the solved runs skipped it (-)
     missing = "timeout" if e.solved == 0 else "-"
     cells = [_s(e.medians.get(s), missing) for s in ("total", "roadmap", "oracle", "encode", "planner")]
+    cells.append(_s(e.makespan, missing))
     ratio = "-"
     if not_run:
         ratio, cells = "not run: the cold runs timed out", ["-"] * len(cells)

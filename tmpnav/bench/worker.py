@@ -174,7 +174,7 @@ def _rss(pid: int) -> int:
 
 
 def measured(report: PlanReport) -> dict[str, Any]:
-    """What a run reports to the bench: status, stage times, costs, counters."""
+    """What a run reports to the bench: status, stage times, costs, makespan, counters."""
     bound, search = report.task.bound, report.task.search
     return {
         "bound": None if bound is None else bound.value,
@@ -183,6 +183,7 @@ def measured(report: PlanReport) -> dict[str, Any]:
         "times": report.times.seconds,
         "planner_cost": report.planner_cost,
         "resimulated_cost": report.resimulated_cost,
+        "makespan": report.schedule.makespan,  # s: the re-simulated plan, the robots moving at once
         "actions": len(report.actions),
         "task": asdict(report.task.counts),
         "oracle": report.oracle.as_dict(),

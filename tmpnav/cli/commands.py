@@ -113,7 +113,9 @@ def roadmap(scenario: Path, output: Path) -> None:
 
 @cli.command()
 @SCENARIO_ARG
-@output_option(True, "Directory for plan.json, plan.png, domain.pddl, problem.pddl.", default_text="write no files")
+@output_option(
+    True, "Directory for plan.json, plan.png, schedule.png, domain.pddl, problem.pddl.", default_text="write no files"
+)
 @option(
     "--format",
     "fmt",
@@ -142,7 +144,8 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
 
     Prints the task-motion plan (per step: robots, from, to, cost), the total cost as
     the planner saw it and as re-simulated with carried-over beliefs, and the time per
-    stage. With -o DIR it also writes plan.json, plan.png and the PDDL files used.
+    stage. With -o DIR it also writes plan.json, plan.png, schedule.png (who moves when)
+    and the PDDL files used.
 
     A cost table and a task plan computed before for the same inputs come from the cache
     (--no-cache: compute everything; --replan: run the task planner again anyway).

@@ -36,7 +36,7 @@ from tmpnav.cli.planners import check_planner
     help="Simulated executions of the plan, each with its own noise.",
 )
 @option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
-@output_option(True, "Directory for errors.csv, errors.png, summary.md.", default_text="write no files")
+@output_option(True, "Directory for errors.csv, sessions.csv, errors.png, summary.md.", default_text="write no files")
 @click.option(
     "--replan",
     is_flag=True,
@@ -47,10 +47,13 @@ from tmpnav.cli.planners import check_planner
 def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw: Any) -> None:
     """Simulate the plan, with and without mutual observations.
 
-    Each session samples the true initial poses from the initial beliefs, applies noisy
-    controls (a waypoint follower steering on the estimate) and noisy observations, and
-    runs the EKF with mutual observations (config 1) and without (config 2), on the same
-    random draws. Prints the worst-case position error per robot and its reduction.
+    Each session samples the true initial poses from the initial beliefs; then every robot
+    follows its own moves at once (a waypoint follower steering on the estimate, noisy
+    controls), a paired move starting when both robots are there and no move before its
+    planned start, with noisy observations of landmarks and of other robots, and the joint
+    EKF with mutual observations (config 1) and without (config 2), on the same random
+    draws. Prints the worst-case position error per robot and its reduction, and the
+    makespan executed against the planned one.
     """
     from tmpnav.execution import error_summary, execute
     from tmpnav.pipeline import plan as run_plan

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from tmpnav.choices import COSTS, SEARCHES
+from tmpnav.choices import COSTS, OBJECTIVES, SEARCHES
 from tmpnav.errors import OutputError, ScenarioError, TmpnavError
 from tmpnav.lifetime import check_signals
 
@@ -266,6 +266,14 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             "the plan, as executed) or table (from one fixed start belief per room: faster, less exact).",
         ),
         option(
+            "--objective",
+            type=click.Choice(list(OBJECTIVES)),
+            default_text=scenario_default("objective"),
+            help="What the plan minimises, the robots moving at once: weighted (the costs of all moves plus "
+            "cost.M_T per second until the last robot is done), cost (the costs of all moves, as in the paper) "
+            "or makespan (the time until the last robot is done first).",
+        ),
+        option(
             "--pair-min-gain",
             type=FiniteRange(0, 1),
             metavar="G",
@@ -332,6 +340,7 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
         search=kw["search"],
         time_budget=kw["time_budget"],
         costs=kw["costs"],
+        objective=kw["objective"],
     )
     execution = Execution(
         cache_dir=kw["cache_dir"],

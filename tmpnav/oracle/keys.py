@@ -93,6 +93,7 @@ def to_json(result: MotionResult | None) -> dict[str, Any]:
         "final_cov": [list(r) for r in result.final_cov],
         "mutual_steps": result.mutual_steps,
         "final_headings": list(result.final_headings),
+        "steps": list(result.steps),
     }
 
 
@@ -112,4 +113,5 @@ def from_json(data: dict[str, Any]) -> MotionResult | None:
         final_cov=tuple(tuple(float(v) for v in row) for row in data["final_cov"]),
         mutual_steps=int(data["mutual_steps"]),
         final_headings=tuple(float(h) for h in data["final_headings"]),
+        steps=tuple(int(n) for n in data["steps"]),
     )

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import OrderedDict
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -22,6 +23,9 @@ from tmpnav.oracle.executors import OracleContext, Outcome, Progress, SerialExec
 from tmpnav.oracle.keys import context_digest, from_json, request_key, to_json
 from tmpnav.results import OracleCounts
 from tmpnav.types import MotionResult
+
+#: results kept in memory for the run (each a few kB: paths and a joint belief)
+MAX_SEEN = 50_000
 
 
 class CostCache(Protocol):
@@ -85,6 +89,8 @@ class Oracle:
         self.progress = progress
         self.context = context_digest(ctx.scenario, ctx.world, ctx.roadmap)
         self.stats = OracleStats()
+        #: results of this run, by key: the searches ask the same questions again (with --no-cache too)
+        self._seen: OrderedDict[str, MotionResult | None] = OrderedDict()
 
     def close(self) -> None:
         """Stop the executor and close the cache."""
@@ -98,9 +104,10 @@ class Oracle:
         """
         start = time.perf_counter()
         keys = [request_key(self.context, self.ctx.scenario, r) for r in requests]
-        cached = self.cache.get_many(keys)
-        missing = sorted({k: i for i, k in enumerate(keys) if k not in cached}.values())
-        results: dict[str, MotionResult | None] = {k: from_json(v) for k, v in cached.items()}
+        results: dict[str, MotionResult | None] = {k: self._seen[k] for k in keys if k in self._seen}
+        cached = self.cache.get_many([k for k in keys if k not in results])
+        missing = sorted({k: i for i, k in enumerate(keys) if k not in cached and k not in results}.values())
+        results.update({k: from_json(v) for k, v in cached.items()})
         if missing:
             todo = [requests[i] for i in missing]
             computed, sims = self.executor.run(self.ctx, todo, self.progress)
@@ -115,6 +122,11 @@ class Oracle:
         self.stats.cache_hits += len(cached)
         self.stats.cache_misses += len(missing)
         self.stats.seconds += time.perf_counter() - start
+        for k in keys:
+            self._seen[k] = results[k]
+            self._seen.move_to_end(k)
+        while len(self._seen) > MAX_SEEN:
+            self._seen.popitem(last=False)
         return [results[k] for k in keys]
 
     def _check_finite(self, request: Request, result: MotionResult | None) -> None:

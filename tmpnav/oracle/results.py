@@ -29,6 +29,7 @@ def motion_result(
         final_cov=tuple(tuple(float(v) for v in row) for row in cov),
         mutual_steps=mutual_steps,
         final_headings=tuple(m.final_heading for m in motions),
+        steps=tuple(m.n_steps for m in motions),
     )
 
 

@@ -94,7 +94,7 @@ def table_key(
     oracle: Oracle, starts: dict[str, str], dests: dict[str, tuple[str, ...]], pairs: bool, filter_key: str
 ) -> str:
     specs = [(r.name, r.pose, r.covariance, r.radius, r.speed, r.turn_rate) for r in oracle.ctx.scenario.robots]
-    parts = ("table/1", oracle.context, specs, sorted(starts.items()), sorted(dests.items()), pairs, filter_key)
+    parts = ("table/2", oracle.context, specs, sorted(starts.items()), sorted(dests.items()), pairs, filter_key)
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 
 
@@ -106,6 +106,8 @@ def _compute_table(
     pair_min_gain: float | None = None,
 ) -> CostTable:
     scenario, roadmap = oracle.ctx.scenario, oracle.ctx.roadmap
+    dt = scenario.models.dt
+    duration: dict[MoveKey, float] = {}
     canonical: dict[tuple[str, str], StartState] = {}
     for r in scenario.robots:
         canonical[(r.name, starts[r.name])] = initial_state(scenario, roadmap.starts[r.name], r.name)
@@ -116,6 +118,7 @@ def _compute_table(
     for key, res in zip(first, oracle.evaluate([_single(canonical, k) for k in first]), strict=True):
         if res is not None:
             singles[key] = res.cost
+            duration[key] = res.steps[0] * dt
             canonical[(key[0], key[2])] = arrival_state(res)
     # wave 2: between destinations, from their canonical starts
     second = [
@@ -128,8 +131,10 @@ def _compute_table(
     for key, res in zip(second, oracle.evaluate([_single(canonical, k) for k in second]), strict=True):
         if res is not None:
             singles[key] = res.cost
+            duration[key] = res.steps[0] * dt
 
     pairs: dict[tuple[MoveKey, MoveKey], float] = {}
+    pair_duration: dict[tuple[MoveKey, MoveKey], tuple[float, float]] = {}
     if pair_filter is not None:
         names = [r.name for r in scenario.robots]
         wanted = [
@@ -153,6 +158,7 @@ def _compute_table(
         for pair, res in zip(wanted, oracle.evaluate(requests), strict=True):
             if res is not None and not res.pruned:
                 pairs[pair] = res.cost
+                pair_duration[pair] = (res.steps[0] * dt, res.steps[1] * dt)
 
     return CostTable(
         robots=tuple(r.name for r in scenario.robots),
@@ -161,6 +167,8 @@ def _compute_table(
         start_location=starts,
         single=singles,
         pair=pairs,
+        duration=duration,
+        pair_duration=pair_duration,
     )
 
 
@@ -170,8 +178,8 @@ def _table_to_json(table: CostTable) -> dict:
         "rooms": list(table.rooms),
         "locations": list(table.locations),
         "start_location": table.start_location,
-        "single": [[*k, v] for k, v in table.single.items()],
-        "pair": [[*m1, *m2, v] for (m1, m2), v in table.pair.items()],
+        "single": [[*k, v, table.duration[k]] for k, v in table.single.items()],
+        "pair": [[*m1, *m2, v, *table.pair_duration[(m1, m2)]] for (m1, m2), v in table.pair.items()],
     }
 
 
@@ -181,8 +189,10 @@ def _table_from_json(d: dict) -> CostTable:
         rooms=tuple(d["rooms"]),
         locations=tuple(d["locations"]),
         start_location=dict(d["start_location"]),
-        single={(r, o, t): float(v) for r, o, t, v in d["single"]},
-        pair={((a, b, c), (e, f, g)): float(v) for a, b, c, e, f, g, v in d["pair"]},
+        single={(r, o, t): float(v) for r, o, t, v, _ in d["single"]},
+        pair={((a, b, c), (e, f, g)): float(v) for a, b, c, e, f, g, v, _, _ in d["pair"]},
+        duration={(r, o, t): float(s) for r, o, t, _, s in d["single"]},
+        pair_duration={((a, b, c), (e, f, g)): (float(s1), float(s2)) for a, b, c, e, f, g, _, s1, s2 in d["pair"]},
     )
 
 

@@ -69,7 +69,7 @@ def plan_stage(run: TaskRun) -> Planned:
     model = run.carried if run.choice.costs == "carried" else run.canonical
     if run.store is not None and not run.replan:
         with run.times.timed("planner"):
-            found = recall(run.store, key, model, run.goals, run.budget)
+            found = recall(run.store, key, model, run.goals, run.budget, run.span_weight)
         if found is not None:
             return Planned(run.canonical.seen(), found)
     planned = entry.plan(run)

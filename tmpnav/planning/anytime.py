@@ -7,8 +7,8 @@ from dataclasses import replace
 
 from tmpnav.choices import exact_fits
 from tmpnav.planning.bound import certified_bound
-from tmpnav.planning.exact import full_table
 from tmpnav.planning.run import Planned, TaskRun
+from tmpnav.planning.table import full_table
 from tmpnav.results import TaskResult
 from tmpnav.task.bound import Bound
 from tmpnav.task.plans import Plan
@@ -22,7 +22,9 @@ BUDGET_MARGIN = 0.5
 def anytime_table(run: TaskRun) -> Planned:
     """The anytime search on table costs, with the certified lower bound of the table."""
     bound = _bound(run)
-    task = plan_anytime(AnytimeTask(run.canonical, run.goals, run.planner), run.search, _left(run), bound)
+    task = plan_anytime(
+        AnytimeTask(run.canonical, run.goals, run.planner, run.span_weight), run.search, _left(run), bound
+    )
     return Planned(run.canonical.seen(), task)
 
 
@@ -37,10 +39,12 @@ def anytime_carried(run: TaskRun) -> Planned:
         exact = plan_task(TaskProblem.of(run.scenario, table), run.store, run.replan, run.times)
         seeds["the exact plan of the cost table"] = exact.steps
     phase = replace(run.search, label="table costs")
-    first = plan_anytime(AnytimeTask(run.canonical, run.goals, run.planner), phase, run.left() / 2)
+    first = plan_anytime(AnytimeTask(run.canonical, run.goals, run.planner, run.span_weight), phase, run.left() / 2)
     seeds["the anytime search's plan with table costs"] = first.steps
     bound = _bound(run)
-    task = plan_anytime(AnytimeTask(run.carried, run.goals, run.planner), run.search, _left(run), bound, seeds)
+    task = plan_anytime(
+        AnytimeTask(run.carried, run.goals, run.planner, run.span_weight), run.search, _left(run), bound, seeds
+    )
     return Planned(run.canonical.seen(), _after(task, first))
 
 

@@ -1,34 +1,25 @@
 """The exact search with table costs: every cost the encoding may need first, then one optimal
-ENHSP search over the whole table (the paper's pipeline; :func:`tmpnav.task.stage.plan_task`)."""
+search over the whole table: ENHSP's for the paper's sum of action costs (the paper's pipeline;
+:func:`tmpnav.task.stage.plan_task`), the A* over every schedule when the objective prices
+the team's time (:func:`tmpnav.task.stage.plan_schedules`)."""
 
 from __future__ import annotations
 
-from tmpnav.oracle.oracle import Oracle
-from tmpnav.oracle.table import build_table, start_locations
+from tmpnav.planning.anytime import anytime_table
 from tmpnav.planning.run import Planned, TaskRun
-from tmpnav.results import StageTimes
-from tmpnav.task.encodings import ENCODINGS
-from tmpnav.task.stage import TaskProblem, plan_task
-from tmpnav.types import CostTable, Scenario
-from tmpnav.world import World
+from tmpnav.planning.table import full_table
+from tmpnav.task.stage import TaskProblem, plan_schedules, plan_task
 
 
 def exact_table(run: TaskRun) -> Planned:
-    """The table of every move and paired move the encoding asks for, and ENHSP's optimal plan on it."""
+    """The table of every move and paired move the encoding asks for, and its optimal plan: ENHSP's
+    for the sum of action costs, the A* over every schedule (tmpnav.task.schedules) when the
+    objective prices time; where that is too large, the anytime search."""
     table = full_table(run.scenario, run.world, run.canonical.oracle, run.times)
-    return Planned(table, plan_task(TaskProblem.of(run.scenario, table), run.store, run.replan, run.times))
-
-
-def full_table(scenario: Scenario, world: World, oracle: Oracle, times: StageTimes) -> CostTable:
-    """Every cost the encoding may need, before the exact planner runs (stage ``oracle``)."""
-    with times.timed("oracle"):
-        sp = scenario.planner
-        want = ENCODINGS[sp.encoding].table_request(scenario.goals, start_locations(scenario, world), sp.pair_min_gain)
-        return build_table(
-            oracle,
-            world,
-            want.destinations,
-            want.pair_filter,
-            filter_key=want.filter_key,
-            pair_min_gain=want.pair_min_gain,
-        )
+    task = TaskProblem.of(run.scenario, table)
+    if not task.span_weight:
+        return Planned(table, plan_task(task, run.store, run.replan, run.times))
+    found = plan_schedules(task, run.times)
+    if found is None:
+        return anytime_table(run)
+    return Planned(table, found)

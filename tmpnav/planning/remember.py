@@ -11,8 +11,8 @@ searches again.
 
 The key covers the oracle's context (its code, the world, the roadmap, the models and
 weights), the robots, the goals, the planner options that shape the search (engine,
-encoding, pair_min_gain, search, costs) and the code of the task stage (task/, attachment/,
-planning/). On
+encoding, pair_min_gain, search, costs), the objective (and its price of time) and the code
+of the task stage (task/, attachment/, planning/). On
 a hit the plan's costs are computed again by the cost model (from the oracle's cache: the
 same numbers), so a remembered plan is reported exactly as a searched one.
 """
@@ -45,7 +45,8 @@ def search_key(scenario: Scenario, context: str) -> str:
     sp = scenario.planner
     robots = [(r.name, r.pose, r.covariance, r.radius, r.speed, r.turn_rate) for r in scenario.robots]
     parts = (VERSION, _code_version(), context, robots, scenario.goals, sp.name, sp.encoding, repr(sp.pair_min_gain))
-    return hashlib.sha256(repr((*parts, sp.search, sp.costs)).encode()).hexdigest()
+    time = (sp.objective, repr(scenario.cost.M_T))  # what the plan minimises
+    return hashlib.sha256(repr((*parts, sp.search, sp.costs, *time)).encode()).hexdigest()
 
 
 def remember(store: EntryStore, key: str, task: TaskResult, budget: float) -> None:
@@ -67,9 +68,12 @@ def remember(store: EntryStore, key: str, task: TaskResult, budget: float) -> No
     store.put_many({key: entry})
 
 
-def recall(store: EntryStore, key: str, model: CostModel, goals: Goals, budget: float) -> TaskResult | None:
-    """The remembered result, its costs from ``model``; None on a miss, on an entry that is
-    damaged or is not a plan of these goals, or on a plan cut short by a smaller budget."""
+def recall(
+    store: EntryStore, key: str, model: CostModel, goals: Goals, budget: float, span_weight: float = 0.0
+) -> TaskResult | None:
+    """The remembered result, its costs and schedule from ``model`` (its gap on the objective of
+    ``span_weight``); None on a miss, on an entry that is damaged or is not a plan of these
+    goals, or on a plan cut short by a smaller budget."""
     entry = store.get_many([key]).get(key)
     if not isinstance(entry, dict):
         return None
@@ -100,7 +104,8 @@ def recall(store: EntryStore, key: str, model: CostModel, goals: Goals, budget: 
     bound = None
     if bound_value is not None:
         value, relaxation, proved = bound_value
-        gap = max(0.0, (cost.total - value) / cost.total) if cost.total > 0 else 0.0
+        objective = cost.value(span_weight)
+        gap = max(0.0, (objective - value) / objective) if objective > 0 else 0.0
         bound = BoundSummary(value, relaxation, gap, proved)
     counts = TaskCounts(0, 0, 0, sum(len(x) == 2 for x in steps), 0)
-    return TaskResult(status, engine, steps, names, cost.steps, counts, plan_hit=True, search=search, bound=bound)
+    return TaskResult(status, engine, steps, names, cost.steps, counts, True, search, bound, cost.schedule)

@@ -10,6 +10,7 @@ from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.choices import TaskChoice, choose, time_budget
 from tmpnav.results import StageTimes, TaskResult
 from tmpnav.task.memo import EntryStore
+from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.search import SearchRun
 from tmpnav.types import CostTable, Goals, PlannerOptions, Scenario
 from tmpnav.world import World
@@ -53,6 +54,11 @@ class TaskRun:
     @property
     def times(self) -> StageTimes:
         return self.search.times
+
+    @property
+    def span_weight(self) -> float:
+        """The objective's price of a second of makespan (tmpnav.task.objectives)."""
+        return OBJECTIVES[self.planner.objective].span_weight(self.scenario.cost)
 
     @property
     def budget(self) -> float:

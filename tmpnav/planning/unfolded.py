@@ -15,7 +15,7 @@ from tmpnav.task.stage import plan_unfolded
 def exact_carried(run: TaskRun) -> Planned:
     """ENHSP's optimal plan over the unfolded belief space: the plan of least executed cost."""
     with run.times.timed("oracle"):
-        graph = unfold(run.carried, run.goals, run.planner.pair_min_gain)
+        graph = unfold(run.carried, run.goals, run.planner.pair_min_gain, run.span_weight)
     if graph is None:
         if run.planner.search == "exact":
             raise InputError(
@@ -24,4 +24,6 @@ def exact_carried(run: TaskRun) -> Planned:
             )
         return anytime_carried(run)
     rules = Rules(run.canonical.start_location, run.goals)
-    return Planned(run.canonical.seen(), plan_unfolded(graph, rules, run.planner, run.search))
+    return Planned(
+        run.canonical.seen(), plan_unfolded(graph, run.carried, rules, run.planner, run.search, run.span_weight)
+    )

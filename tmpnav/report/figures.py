@@ -5,6 +5,7 @@ Figures are drawn with the non-interactive Agg backend and written atomically (:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import matplotlib
@@ -31,7 +32,14 @@ ROOM_LABEL = "room-label"  # gid of the room names (keep_labels_inside)
 
 
 def robot_color(index: int) -> str:
+    """The colour of the robot at ``index`` in the scenario's list of robots."""
     return ROBOT_COLORS[index % len(ROBOT_COLORS)]
+
+
+def robot_colors(names: Sequence[str]) -> dict[str, str]:
+    """Each robot's colour by name, ``names`` in the scenario's order: the one rule every figure
+    of a plan (plan.png, schedule.png) colours its robots by, so a robot keeps its colour."""
+    return {name: robot_color(index) for index, name in enumerate(names)}
 
 
 def darker(color: str, factor: float = 0.6) -> tuple[float, float, float]:

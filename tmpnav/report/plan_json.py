@@ -1,9 +1,11 @@
-"""plan.json: a task-motion plan as plain JSON data (schema ``tmpnav-plan/1``, see docs/plan-json.md).
+"""plan.json: a task-motion plan as plain JSON data (schema ``tmpnav-plan/2``, see docs/plan-json.md).
 
 The document holds what a reader needs to check or redraw a plan without tmpnav: the plan steps
-with their roadmap paths, every robot's re-simulated belief at every control step, and the
+with their roadmap paths, the schedule (every robot's moves on the team's shared clock), every
+robot's re-simulated belief at every control step of that clock, the objective, and the
 counters and timings of the run. Means and covariances keep full float precision (Python's
-shortest round-trip repr); only timings are rounded (to microseconds). Non-finite floats become
+shortest round-trip repr); times on the plan's clock are rounded to 1e-9 s, stage timings to
+microseconds. Non-finite floats become
 ``null`` so the file is strict JSON.
 """
 
@@ -17,12 +19,12 @@ from dataclasses import asdict
 import numpy as np
 
 from tmpnav.report.quality import plan_warnings
-from tmpnav.results import JSON, STAGES, CacheUse, PlanReport
+from tmpnav.report.schedule import driving_steps, objective_values, step_windows
+from tmpnav.results import JSON, STAGES, CacheUse, PlanReport, Schedule, TimedMove
 from tmpnav.types import PlannedAction, Roadmap, TrajectoryStep
 from tmpnav.version import __version__
 
-SCHEMA = "tmpnav-plan/1"
-_T_TOL = 1e-6  # s, trajectory times are rounded to 1e-9 s by the re-simulation
+SCHEMA = "tmpnav-plan/2"
 
 
 def number(value: float | int, digits: int | None = None) -> float | None:
@@ -31,51 +33,6 @@ def number(value: float | int, digits: int | None = None) -> float | None:
     if not math.isfinite(x):
         return None
     return round(x, digits) if digits is not None else x
-
-
-def action_spans(report: PlanReport) -> list[tuple[float, float]] | None:
-    """(t_start, t_end) in seconds of every plan step, or None if the trajectories do not fit the paths.
-
-    The re-simulation runs the steps one after the other; a step lasts as long as its slowest
-    robot. Each moved robot's trajectory passes through its roadmap path's nodes in order, so
-    the step ends when the last of its robots reaches its goal node.
-    """
-    trajectories: dict[str, list[TrajectoryStep]] = report.trajectories
-    cursor = {robot: 0 for robot in trajectories}  # index of the last step consumed per robot
-    t0 = min((steps[0].t for steps in trajectories.values() if steps), default=0.0)
-    spans: list[tuple[float, float]] = []
-    for action in report.actions:
-        t_end = t0
-        robots = [m[0] for m in action.moves]
-        for robot, path in zip(robots, action.paths, strict=True):
-            steps = trajectories.get(robot, [])
-            i = cursor.get(robot, 0)
-            for node in path[1:]:
-                i = next((j for j in range(i + 1, len(steps)) if steps[j].node == node), -1)
-                if i < 0:
-                    return None
-            cursor[robot] = i
-            if path[1:]:
-                t_end = max(t_end, steps[i].t)
-        for robot in robots:  # a robot that arrived early waits in place until the step ends
-            steps = trajectories[robot]
-            while cursor[robot] + 1 < len(steps) and steps[cursor[robot] + 1].t <= t_end + _T_TOL:
-                cursor[robot] += 1
-        spans.append((t0, t_end))
-        t0 = t_end
-    return spans
-
-
-def step_action(t: float, spans: Sequence[tuple[float, float]] | None) -> int | None:
-    """The 1-based plan step a trajectory time belongs to: 0 for the initial belief, None if unknown."""
-    if spans is None:
-        return None
-    if not spans or t <= spans[0][0] + _T_TOL:
-        return 0
-    for k, (start, end) in enumerate(spans, start=1):
-        if start + _T_TOL < t <= end + _T_TOL:
-            return k
-    return None
 
 
 def _points(roadmap: Roadmap, nodes: Sequence[int]) -> list[JSON]:
@@ -112,14 +69,67 @@ def _action(action: PlannedAction, roadmap: Roadmap, span: tuple[float, float] |
     }
 
 
-def _step(step: TrajectoryStep, spans: Sequence[tuple[float, float]] | None) -> JSON:
+def _trajectory(report: PlanReport, robot: str, steps: list[TrajectoryStep]) -> list[JSON]:
+    """A robot's belief at every control step of the shared clock, each with the plan step it drives in."""
+    driving = driving_steps(report.schedule, robot, [s.t for s in steps])
+    return [
+        {
+            "t": number(step.t, 9),
+            "mean": [number(v) for v in step.mean],
+            "cov": [[number(v) for v in row] for row in step.cov],
+            "node": None if step.node is None else int(step.node),
+            "action": action,
+        }
+        for step, action in zip(steps, driving, strict=True)
+    ]
+
+
+def _timed_move(move: TimedMove) -> JSON:
+    """One move of a robot's timeline in plan.json's ``schedule`` (``step`` 1-based, as ``actions[].index``)."""
     return {
-        "t": number(step.t, 9),
-        "mean": [number(v) for v in step.mean],
-        "cov": [[number(v) for v in row] for row in step.cov],
-        "node": None if step.node is None else int(step.node),
-        "action": step_action(step.t, spans),
+        "step": move.step + 1,
+        "from": move.origin,
+        "to": move.target,
+        "partner": move.partner,
+        "ready": number(move.ready, 9),
+        "start": number(move.start, 9),
+        "end": number(move.end, 9),
+        "wait": number(move.wait, 9),
     }
+
+
+def schedule_section(schedule: Schedule) -> JSON:
+    """plan.json's ``schedule``: the makespan, and per robot its moves on the shared clock with
+    the time it drives (``busy``), does not (``idle``, waits included) and waits between moves."""
+    return {
+        "makespan": number(schedule.makespan, 9),
+        "robots": {
+            robot: {
+                "rooms": len(schedule.timeline(robot)),
+                "busy": number(schedule.busy(robot), 9),
+                "idle": number(schedule.idle(robot), 9),
+                "waits": number(schedule.waits(robot), 9),
+                "moves": [_timed_move(m) for m in schedule.timeline(robot)],
+            }
+            for robot in schedule.robots
+        },
+    }
+
+
+def _objective(report: PlanReport) -> tuple[JSON, JSON]:
+    """plan.json's ``makespan`` and ``objective``: each as the planner saw it and re-simulated."""
+    o = objective_values(report)
+    makespan: JSON = {
+        "planner": None if o.planner_makespan is None else number(o.planner_makespan, 9),
+        "resimulated": number(o.makespan, 9),
+    }
+    objective: JSON = {
+        "name": o.name,
+        "span_weight": number(o.span_weight),
+        "planner": None if o.planner_value is None else number(o.planner_value),
+        "resimulated": number(o.value),
+    }
+    return makespan, objective
 
 
 def _goals(report: PlanReport) -> JSON:
@@ -143,9 +153,11 @@ def _roadmap(roadmap: Roadmap) -> JSON:
 def plan_document(report: PlanReport) -> dict[str, JSON]:
     """The JSON-ready document of a :class:`~tmpnav.results.PlanReport` (schema in docs/plan-json.md)."""
     sc = report.scenario
-    spans = action_spans(report)
+    windows = step_windows(report.schedule, len(report.actions))
+    makespan, objective = _objective(report)
     timings: dict[str, JSON] = {stage: number(report.times.seconds.get(stage, 0.0), 6) for stage in (*STAGES, "total")}
     timings.update({k: number(v, 6) for k, v in report.times.seconds.items() if k not in timings})
+    weights = sc.cost
     return {
         "schema": SCHEMA,
         "tmpnav_version": __version__,
@@ -156,14 +168,20 @@ def plan_document(report: PlanReport) -> dict[str, JSON]:
         "mutual_observations": bool(sc.models.mutual_observations),
         "observations": sc.models.observations.value,
         "dt": number(sc.models.dt),
-        "cost_weights": {"M_u": number(sc.cost.M_u), "M_G": number(sc.cost.M_G), "M_Sigma": number(sc.cost.M_Sigma)},
+        "cost_weights": {
+            "M_u": number(weights.M_u),
+            "M_G": number(weights.M_G),
+            "M_Sigma": number(weights.M_Sigma),
+            "M_T": number(weights.M_T),
+        },
         "goals": _goals(report),
         "cost": {"planner": number(report.planner_cost), "resimulated": number(report.resimulated_cost)},
+        "makespan": makespan,
+        "objective": objective,
         "robots": [{"name": r.name, "radius": number(r.radius), "speed": number(r.speed)} for r in sc.robots],
-        "actions": [
-            _action(a, report.roadmap, None if spans is None else spans[k]) for k, a in enumerate(report.actions)
-        ],
-        "trajectories": {robot: [_step(s, spans) for s in steps] for robot, steps in report.trajectories.items()},
+        "actions": [_action(a, report.roadmap, windows[k]) for k, a in enumerate(report.actions)],
+        "schedule": schedule_section(report.schedule),
+        "trajectories": {robot: _trajectory(report, robot, steps) for robot, steps in report.trajectories.items()},
         "roadmap": _roadmap(report.roadmap),
         "timings": timings,
         "cache": _cache(report.cache),

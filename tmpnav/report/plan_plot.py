@@ -3,9 +3,10 @@
 The map with rooms, doors and landmarks; each robot's re-simulated belief mean in its colour
 with 2-sigma ellipses of the (x, y) covariance along it, in the same colour; the rooms' pose
 instantiations as small black dots; the start poses; a numbered badge at every plan step's
-goal with the time the robot gets there; the costs (unit-less) and the plan's duration in the
-title. Each element is one small function over the axes, so that another (a schedule, risk
-markers) is one more function called from :func:`plan_figure`.
+goal with the time the robot gets there on the team's shared clock (the schedule's: all robots
+move at once); the costs (unit-less) and the makespan in the title. Each element is one small
+function over the axes, so that another (risk markers) is one more function called from
+:func:`plan_figure`; the schedule itself has its own figure (:mod:`tmpnav.report.schedule_plot`).
 """
 
 from __future__ import annotations
@@ -23,7 +24,6 @@ from matplotlib.patches import Ellipse
 from numpy.typing import NDArray
 
 from tmpnav.report import figures as fg
-from tmpnav.report.plan_json import action_spans
 from tmpnav.results import PlanReport
 from tmpnav.types import TrajectoryStep
 
@@ -82,11 +82,11 @@ def goal_steps(report: PlanReport, robot: str) -> set[int]:
 def _draw_beliefs(ax: Axes, report: PlanReport, spacing: float) -> None:
     """Each robot's belief mean, and its 2-sigma ellipses in its own colour: filled lightly, outlined
     darker, so that two robots' ellipses in one corridor can be told apart."""
-    for index, robot in enumerate(r.name for r in report.scenario.robots):
+    colors = fg.robot_colors([r.name for r in report.scenario.robots])
+    for index, (robot, color) in enumerate(colors.items()):
         steps = report.trajectories.get(robot, [])
         if not steps:
             continue
-        color = fg.robot_color(index)
         xy = np.array([s.mean[:2] for s in steps], dtype=float)
         # later robots are drawn thinner on top, so robots that share a corridor both stay visible
         ax.plot(xy[:, 0], xy[:, 1], "-", color=color, lw=_line_width(index), zorder=5 + 0.01 * index)
@@ -162,32 +162,26 @@ class Arrival:
 
 
 def arrivals(report: PlanReport) -> list[Arrival]:
-    """Every robot's arrival at each of its plan steps' goals, in plan order."""
-    out: list[Arrival] = []
-    cursor: dict[str, int] = {}
-    for action in report.actions:
-        for move, pose, path in zip(action.moves, action.goal_poses, action.paths, strict=True):
-            robot = move[0]
-            steps = report.trajectories.get(robot, [])
-            i = cursor.get(robot, 0)
-            for node in path[1:]:
-                i = next((j for j in range(i + 1, len(steps)) if steps[j].node == node), i)
-            cursor[robot] = i
-            t = float(steps[i].t - steps[0].t) if steps else None
-            out.append(Arrival(action.index, robot, (float(pose[0]), float(pose[1])), t))
-    return out
+    """Every robot's arrival at each of its plan steps' goals, in plan order, at the time its
+    move ends on the shared clock (the schedule's)."""
+    ends = {(m.step, m.robot): m.end for m in report.schedule.moves}
+    return [
+        Arrival(action.index, move[0], (float(pose[0]), float(pose[1])), ends.get((action.index - 1, move[0])))
+        for action in report.actions
+        for move, pose in zip(action.moves, action.goal_poses, strict=True)
+    ]
 
 
 def _draw_step_badges(ax: Axes, report: PlanReport) -> None:
     """Numbered badges at every plan step's goal with the robot's arrival time beside, nudged apart
     when two fall on the same spot."""
-    names = [r.name for r in report.scenario.robots]
+    colors = fg.robot_colors([r.name for r in report.scenario.robots])
     placed = [(r.pose.x, r.pose.y) for r in report.scenario.robots]  # keep the start markers readable
     for arrival in arrivals(report):
         x, y = arrival.xy
         crowded = sum(1 for px, py in placed if (px - x) ** 2 + (py - y) ** 2 < 0.8**2)
         offset = (0.0, 0.0) if not crowded else NUDGES[(crowded - 1) % len(NUDGES)]
-        color = fg.robot_color(names.index(arrival.robot))
+        color = colors[arrival.robot]
         fg.step_badge(ax, (x, y), str(arrival.step), color, offset)
         if arrival.t is not None:
             fg.badge_note(ax, (x, y), f"{arrival.t:.1f} s", color, offset)
@@ -202,9 +196,9 @@ def _legend(ax: Axes, report: PlanReport, spacing: float) -> None:
             handles.append(handle)
             labels.append(label)
     extra: list[tuple[Artist, str]] = []
-    for index, robot in enumerate(r.name for r in report.scenario.robots):
+    colors = fg.robot_colors([r.name for r in report.scenario.robots])
+    for index, (robot, color) in enumerate(colors.items()):
         if report.trajectories.get(robot):
-            color = fg.robot_color(index)
             extra.append((Line2D([], [], color=color, lw=_line_width(index)), f"{robot}: belief mean"))
             extra.append(
                 (
@@ -251,8 +245,7 @@ def _title(report: PlanReport) -> str:
     status = report.status.value
     mutual = "with mutual observations" if sc.models.mutual_observations else "without mutual observations"
     n = len(report.actions)
-    spans = action_spans(report)
-    duration = f", {spans[-1][1] - spans[0][0]:.1f} s" if spans else ""
+    duration = f", makespan {report.schedule.makespan:.1f} s (all robots at once)" if n else ""
     return (
         f"{sc.name}: {n} plan step{'s' if n != 1 else ''}{duration}, {mutual}\n"
         f"cost (unit-less): planner {report.planner_cost:.3f}, "

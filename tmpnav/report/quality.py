@@ -6,10 +6,13 @@ A plan can be poor in two ways the status line does not show:
   :data:`GAP_WARN`: no plan can cost less than the bound, so the plan may be up to that much too
   expensive. With carried costs the bound counts driving only (motion floors), so part of a
   large gap is the bound's; a search stopped by its time budget says more time may help.
+  With an objective that prices time, the bound and the gap are on the objective (cost plus a
+  price per second of makespan), and the warning says so.
 - **More uncertain than a door allows.** Where a robot's belief mean passes an open door, the
   2-sigma spread of its position across the door (along the door's segment) is compared with
   the room it has there: half the door's width less the robot's radius. Past that, the robot
-  as executed may hit the door frame: the plan relies on a localization it does not have.
+  as executed may hit the door frame: the plan relies on a localization it does not have. The
+  time is on the plan's shared clock (all robots at once), with the move the robot is making.
 
 Thresholds are module constants, documented in docs/plan-json.md (``warnings``).
 """
@@ -24,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tmpnav.choices import time_budget
+from tmpnav.report.schedule import move_at, objective_values
 from tmpnav.results import PlanReport
 from tmpnav.types import Door, TrajectoryStep
 
@@ -68,7 +72,7 @@ def _gap(report: PlanReport) -> PlanWarning | None:
         return None
     text = (
         f"the plan may be far from the best: its lower bound, {bound.value:.3f}, is {100 * bound.gap:.0f}% below "
-        f"its cost, {report.planner_cost:.3f} (warned above {100 * GAP_WARN:.0f}%)."
+        f"{_planned(report)} (warned above {100 * GAP_WARN:.0f}%)."
     )
     if search is not None and search.stopped == "time budget":
         sc = report.scenario
@@ -78,7 +82,19 @@ def _gap(report: PlanReport) -> PlanWarning | None:
         text += " The search stopped improving: try --anytime-budget with more time, or --search exact if small."
     if "floors" in bound.relaxation:
         text += " The bound counts driving only (motion floors), so part of the gap is the bound's."
+    if objective_values(report).span_weight and not bound.relaxation.startswith("exact"):
+        text += " The bound puts no price on the makespan, so the time's share of the objective is in the gap."
     return PlanWarning("gap", None, bound.gap, GAP_WARN, text)
+
+
+def _planned(report: PlanReport) -> str:
+    """What the bound is compared with: the plan's objective as the planner saw it (its cost
+    when the objective puts no price on time)."""
+    o = objective_values(report)
+    if not o.span_weight:
+        return f"its cost, {report.planner_cost:.3f}"
+    value = o.planner_value if o.planner_value is not None else o.value
+    return f"its objective ({o.name}: cost + {o.span_weight:g} per s of makespan), {value:.3f}"
 
 
 def _worst_door(report: PlanReport, robot: str, radius: float) -> PlanWarning | None:
@@ -106,9 +122,12 @@ def _worst_door(report: PlanReport, robot: str, radius: float) -> PlanWarning | 
         return None
     _, door, spread, room, step = worst
     width = 2 * (room + radius)
+    move = move_at(report.schedule, robot, step.t)
+    way = "" if move is None else f" on its way to {move.target} (step {move.step + 1}),"
     text = (
-        f"{robot} passes door {door.name} ({width:.2f} m wide, {room:.2f} m to spare each side) at t {step.t:.1f} s "
-        f"with a {N_SIGMA:g}-sigma position spread of {spread:.2f} m across it: as executed it may hit the frame. "
+        f"{robot} passes door {door.name} ({width:.2f} m wide, {room:.2f} m to spare each side) "
+        f"at t {step.t:.1f} s,{way} with a {N_SIGMA:g}-sigma position spread of {spread:.2f} m across it: "
+        "as executed it may hit the frame. "
         "Try landmarks near that door, a partner robot that sees it there, or less models.motion_noise."
     )
     return PlanWarning("door", robot, spread, room, text)

@@ -1,25 +1,39 @@
 """The terminal summary of a plan: what ``tmpnav plan`` prints (plain text, no colours).
 
 Under the header, a ``warning:`` line for each reason to doubt the plan (tmpnav.report.quality):
-a lower bound far below its cost, a robot more uncertain than a door it passes allows.
+a lower bound far below its cost (or objective), a robot more uncertain than a door it passes
+allows. All robots move at once, on one clock: a step's ``t [s]`` is its window on that clock
+(steps of different robots overlap); under the totals, the makespan and the objective; then
+each robot's rooms and its time driving (``busy``), waiting before its moves and not driving
+(``idle``); ``control steps`` counts the steps it drives.
 
-Example (the paper's Fig. 2 task, ``tmpnav plan configs/corridor.yaml``)::
+Example (the paper's Fig. 2 task, ``tmpnav plan configs/corridor.yaml --costs table``, a
+second time)::
 
-    corridor (configs/corridor.yaml): encoding mixed, planner enhsp-opt, solved-optimally
+    corridor (configs/corridor.yaml): encoding mixed, planner enhsp-blind, solved-optimally
     2 robots, mutual observations on; goals: r1 visits L10; r2 visits L1
+    search: exact, costs table
+    lower bound on the objective: 31.198 (exact); proved optimal
 
     step  moves                            planner cost  re-sim cost     diff  t [s]
-       1  r1: L1 -> L10  &  r2: L10 -> L1        11.278       11.278   +0.000  0.0-24.0
-    total (1 step)                               11.278       11.278   +0.000  0.0-24.0
+       1  r1: L1 -> L10  &  r2: L10 -> L1        10.698       10.698   +0.000  0.0-20.5
+    total (1 step)                               10.698       10.698   +0.000  0.0-20.5
+    makespan 20.5 s; objective weighted (cost + 1 per s of makespan): 31.198
 
-    robot  travelled  control steps  final pos. std  max pos. std  final heading std
-    r1         9.1 m             48          0.27 m        0.28 m            6.3 deg
-    r2         9.7 m             48          0.13 m        0.30 m            2.6 deg
+    robot  rooms  busy [s]  waits [s]  idle [s]  control steps
+    r1         1      18.5        0.0       2.0             37
+    r2         1      20.5        0.0       0.0             41
+    (busy: driving, in control steps of 0.5 s; idle: the rest of the makespan, waits included)
+
+    robot  travelled  final pos. std  max pos. std  final heading std
+    r1         7.1 m          0.21 m        0.21 m            6.4 deg
+    r2         7.6 m          0.12 m        0.16 m            2.3 deg
     (pos. std = sqrt(var x + var y) of the re-simulated belief; travelled: by the belief mean)
 
     time [s]  roadmap  oracle  encode  planner  resimulate   total  (load)
-                 0.58    0.34    0.55     0.59        0.01    2.06    0.19
-    cache (/home/me/.cache/tmpnav): roadmap grown; move costs: 1 from cache, 3 computed
+                 0.00    0.00    0.00     0.00        0.51    0.52    0.05
+    cache (/home/me/.cache/tmpnav): roadmap from cache; move costs: cost table from cache, then 1 more
+    from cache and 0 computed; task plan from cache (--replan runs the planner)
 """
 
 from __future__ import annotations
@@ -30,8 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tmpnav.report.plan_json import action_spans
 from tmpnav.report.quality import warning_lines
+from tmpnav.report.schedule import T_TOL, driving_steps, objective_values, step_windows
 from tmpnav.results import STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
 
@@ -89,7 +103,8 @@ def _search(report: PlanReport) -> list[str]:
         lines.append(line)
     if bound is not None:
         verdict = "proved optimal" if bound.proved_optimal else f"gap {100 * bound.gap:.2f}%"
-        lines.append(f"lower bound: {_cost(bound.value)} ({bound.relaxation}); {verdict}")
+        what = "lower bound on the objective" if objective_values(report).span_weight else "lower bound"
+        lines.append(f"{what}: {_cost(bound.value)} ({bound.relaxation}); {verdict}")
     return lines
 
 
@@ -98,47 +113,79 @@ def _cost(x: float) -> str:
 
 
 def _steps(report: PlanReport) -> list[str]:
-    """One row per plan step and the totals; ``diff`` is re-simulated minus planner cost."""
-    spans = action_spans(report)
+    """One row per plan step and the totals; ``diff`` is re-simulated minus planner cost; ``t [s]``
+    is the step's window on the shared clock (steps of different robots overlap)."""
+    windows = step_windows(report.schedule, len(report.actions))
     moves = ["  &  ".join(f"{r}: {o} -> {t}" for r, o, t in a.moves) for a in report.actions]
     n = len(report.actions)
     total = f"total ({n} step{'s' if n != 1 else ''})"
     width = max([len("moves"), len(total) - 6, *map(len, moves)])
     rows = [f"step  {'moves':<{width}}  planner cost  re-sim cost     diff  t [s]"]
-    for k, (action, text) in enumerate(zip(report.actions, moves, strict=True)):
+    for action, text, window in zip(report.actions, moves, windows, strict=True):
         rows.append(
             f"{action.index:>4}  {text:<{width}}  {_cost(action.planner_cost):>12}  "
             f"{_cost(action.resimulated_cost):>11}  {action.resimulated_cost - action.planner_cost:>+7.3f}  "
-            f"{_span(spans, k, k)}"
+            f"{_window(window)}"
         )
     if not report.actions:
         rows.append("   -  (no moves: the goals hold in the initial state)")
     rows.append(
         f"{total:<{width + 6}}  {_cost(report.planner_cost):>12}  {_cost(report.resimulated_cost):>11}  "
-        f"{report.resimulated_cost - report.planner_cost:>+7.3f}  {_span(spans, 0, n - 1)}"
+        f"{report.resimulated_cost - report.planner_cost:>+7.3f}  {_window((0.0, report.schedule.makespan))}"
     )
+    return [*rows, *_objective(report)]
+
+
+def _window(window: tuple[float, float] | None) -> str:
+    """A time window on the shared clock as ``start-end`` (s), empty when unknown."""
+    return "" if window is None else f"{window[0]:.1f}-{window[1]:.1f}"
+
+
+def _objective(report: PlanReport) -> list[str]:
+    """The makespan (the planner's too, when it saw another) and the objective with its value."""
+    o = objective_values(report)
+    makespan = f"makespan {o.makespan:.1f} s"
+    if o.planner_makespan is not None and abs(o.planner_makespan - o.makespan) > T_TOL:
+        makespan += f" (planner's schedule: {o.planner_makespan:.1f} s)"
+    formula = f"cost + {o.span_weight:g} per s of makespan" if o.span_weight else "the sum of action costs"
+    value = _cost(o.value)
+    if o.planner_value is not None and abs(o.planner_value - o.value) > 5e-4:
+        value = f"planner {_cost(o.planner_value)}, re-simulated {value}"
+    return [f"{makespan}; objective {o.name} ({formula}): {value}"]
+
+
+def _team(report: PlanReport) -> list[str]:
+    """Per robot on the shared clock: rooms reached, seconds driving (busy), waiting for a
+    partner or held back before its moves, not driving within the makespan (idle, waits
+    included), and the control steps it drives."""
+    schedule, dt = report.schedule, report.scenario.models.dt
+    rows = ["robot  rooms  busy [s]  waits [s]  idle [s]  control steps"]
+    for robot in schedule.robots:
+        steps = report.trajectories.get(robot, [])
+        driving = sum(a is not None for a in driving_steps(schedule, robot, [s.t for s in steps]))
+        rows.append(
+            f"{robot:<5}  {len(schedule.timeline(robot)):>5}  {schedule.busy(robot):>8.1f}  "
+            f"{schedule.waits(robot):>9.1f}  {schedule.idle(robot):>8.1f}  {driving:>13}"
+        )
+    rows.append(f"(busy: driving, in control steps of {dt:g} s; idle: the rest of the makespan, waits included)")
     return rows
-
-
-def _span(spans: list[tuple[float, float]] | None, first: int, last: int) -> str:
-    if not spans or last < first:
-        return ""
-    return f"{spans[first][0]:.1f}-{spans[last][1]:.1f}"
 
 
 def _beliefs(report: PlanReport) -> list[str]:
     """Per robot: distance driven by the belief mean, and its position / heading uncertainty."""
-    rows = ["robot  travelled  control steps  final pos. std  max pos. std  final heading std"]
+    rows = ["robot  travelled  final pos. std  max pos. std  final heading std"]
     for robot, steps in report.trajectories.items():
         if not steps:
             continue
         means = np.array([s.mean for s in steps], dtype=float)
         covs = np.array([s.cov for s in steps], dtype=float)
-        travelled = float(np.sum(np.linalg.norm(np.diff(means[:, :2], axis=0), axis=1)))
+        driving = np.array([a is not None for a in driving_steps(report.schedule, robot, [s.t for s in steps])])
+        legs = np.linalg.norm(np.diff(means[:, :2], axis=0), axis=1)
+        travelled = float(np.sum(legs[driving[1:]]))  # standing, the mean only shifts with observations
         pos_std = np.sqrt(np.clip(covs[:, 0, 0] + covs[:, 1, 1], 0.0, None))  # sqrt(trace of the (x, y) block)
         heading_std = math.degrees(math.sqrt(max(covs[-1, 2, 2], 0.0)))
         rows.append(
-            f"{robot:<5}  {travelled:>7.1f} m  {len(steps) - 1:>13}  {pos_std[-1]:>12.2f} m  {pos_std.max():>10.2f} m"
+            f"{robot:<5}  {travelled:>7.1f} m  {pos_std[-1]:>12.2f} m  {pos_std.max():>10.2f} m"
             f"  {heading_std:>13.1f} deg"
         )
     rows.append("(pos. std = sqrt(var x + var y) of the re-simulated belief; travelled: by the belief mean)")
@@ -180,6 +227,7 @@ def _cache_line(report: PlanReport) -> str:
 
 
 def plan_summary(report: PlanReport) -> str:
-    """The plan at a glance: header, one line per plan step, totals, beliefs, time per stage."""
-    blocks = [_header(report), _steps(report), _beliefs(report), _times(report)]
+    """The plan at a glance: header, one line per plan step, totals with the makespan and the
+    objective, the robots on the shared clock, their beliefs, time per stage."""
+    blocks = [_header(report), _steps(report), _team(report), _beliefs(report), _times(report)]
     return "\n\n".join("\n".join(block) for block in blocks)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from tmpnav.choices import COSTS, ENCODINGS, SEARCHES
+from tmpnav.choices import COSTS, ENCODINGS, OBJECTIVES, SEARCHES
 from tmpnav.scenario.limits import MAP_CELLS, grid_cells
 from tmpnav.scenario.schema import (
     Choice,
@@ -38,6 +38,7 @@ DEG = math.pi / 180.0
 ENCODING_CHOICES = tuple(ENCODINGS)
 SEARCH_CHOICES = SEARCHES
 COSTS_CHOICES = COSTS
+OBJECTIVE_CHOICES = OBJECTIVES
 
 #: points of a room outline: rooms are tested for self-intersection pair by pair
 MAX_ROOM_POINTS = 1000
@@ -213,7 +214,7 @@ def _noise_within_range(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple
 
 
 def _some_weight(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
-    if not any(section.values()):
+    if not any(v for k, v in section.items() if k != "M_T"):
         ctx.add(path, raw, "weights M_u, M_G and M_Sigma are all 0, so every plan would cost 0; expected one above 0")
 
 
@@ -302,6 +303,11 @@ COST = Section(
         "M_u": Field(WEIGHT, "weight of the control usage c_u", default=1.0),
         "M_G": Field(WEIGHT, "weight of the distance to goal c_G", default=1.0),
         "M_Sigma": Field(WEIGHT, "weight of the uncertainty c_Sigma (time integral of trace(Sigma))", default=1.0),
+        "M_T": Field(
+            WEIGHT,
+            "cost of one second of the team's makespan in the weighted objective (planner.objective)",
+            default=1.0,
+        ),
     },
     post=_some_weight,
 )
@@ -367,6 +373,11 @@ PLANNER = Section(
             Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
             "anytime search: time budget for the whole run; it stops earlier when the plan is proved optimal or no neighbourhood improves it (default: 0.25 s per goal room and robot, from 10 s to 180 s)",
             default=None,
+        ),
+        "objective": Field(
+            Choice(choices=OBJECTIVE_CHOICES),
+            "what the plan minimises: weighted (the sum of action costs plus cost.M_T per second of makespan), cost (the paper's sum of action costs) or makespan (the team's time first, then the sum)",
+            default="weighted",
         ),
         "costs": Field(
             Choice(choices=COSTS_CHOICES),

@@ -366,7 +366,7 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
             observations=ObservationMode(models["observations"]),
             seed=models["seed"],
         ),
-        cost=CostWeights(d["cost"]["M_u"], d["cost"]["M_G"], d["cost"]["M_Sigma"]),
+        cost=CostWeights(d["cost"]["M_u"], d["cost"]["M_G"], d["cost"]["M_Sigma"], d["cost"]["M_T"]),
         roadmap=RoadmapParams(**d["roadmap"]),
         goals=Goals(
             visit=tuple(d["goals"]["visit"]),

@@ -244,3 +244,28 @@ def _able_to_enter(table: CostTable, goals: Goals) -> dict[str, set[str]]:
         if o not in starts or (r, o) in targets:
             out.setdefault(o, set()).add(r)
     return out
+
+
+def makespan_bound(table: CostTable, goals: Goals) -> float:
+    """A lower bound on the makespan of every schedule whose moves take at least
+    ``table.duration`` (time floors, tmpnav.attachment.floors), the robots moving at once.
+
+    Every required entry (:func:`required_entries`) is made by some robot. (1) The robot that
+    enters room x gets there at the earliest after driving there directly from its start
+    (shortest times obey the triangle inequality; waiting only adds), so the makespan is at
+    least the largest, over x, of the quickest such arrival. (2) Every entry takes at least
+    the quickest move into its room from anywhere; the robots share that work, so the
+    makespan is at least its sum divided by the number of robots. 0 without durations."""
+    rows = required_entries(table, goals)
+    if not rows or not table.duration:
+        return 0.0
+    into: dict[Row, float] = {}
+    direct: dict[Row, float] = {}
+    for (r, o, x), d in table.duration.items():
+        for row in ((None, x), (r, x)):
+            into[row] = min(into.get(row, math.inf), d)
+            if o == table.start_location[r]:
+                direct[row] = min(direct.get(row, math.inf), d)
+    arrival = max((direct.get(row, 0.0) for row in rows), default=0.0)
+    work = sum(into.get(row, 0.0) for row in rows) / max(1, len(table.robots))
+    return max(arrival, work)

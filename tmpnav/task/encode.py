@@ -23,7 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
-from tmpnav.errors import PlannerCrashError
+from tmpnav.errors import InputError, PlannerCrashError
 from tmpnav.task.encodings import ENCODINGS, Encoding
 from tmpnav.task.names import PddlNames
 from tmpnav.task.pddl_text import TEXT_ENCODINGS, PddlTask, write_task
@@ -104,12 +104,25 @@ class EncodedProblem:
 
 
 def encode_task(
-    table: CostTable, goals: Goals, encoding: str, planner: str, name: str = "tmpnav", min_gain: float = 0.0
+    table: CostTable,
+    goals: Goals,
+    encoding: str,
+    planner: str,
+    name: str = "tmpnav",
+    min_gain: float = 0.0,
+    span_weight: float = 0.0,
 ) -> EncodedTask:
     """The task problem for ``planner``: PDDL text written by tmpnav when the planner is an
-    ENHSP engine and the encoding is ``single`` or ``mixed``, else a unified-planning problem."""
+    ENHSP engine and the encoding is ``single`` or ``mixed``, else a unified-planning problem.
+    A price on time (``span_weight``, tmpnav.task.objectives) needs the text: the robots'
+    clocks are numeric fluents that only tmpnav's writer adds."""
     if encoding in TEXT_ENCODINGS and reads_pddl_text(planner):
-        return write_task(table, goals, encoding, name, min_gain)
+        return write_task(table, goals, encoding, name, min_gain, span_weight=span_weight)
+    if span_weight:
+        raise InputError(
+            f"the objective prices the team's time, which only tmpnav's PDDL text for ENHSP holds: use an ENHSP "
+            f"planner with the single or mixed encoding (not {planner!r} with {encoding!r}), or --objective cost"
+        )
     return encode(table, goals, encoding, name, min_gain)
 
 

@@ -86,14 +86,18 @@ def table_digest(table: CostTable) -> str:
         sorted(table.start_location.items()),
         sorted((k, repr(v)) for k, v in table.single.items()),
         sorted((k, repr(v)) for k, v in table.pair.items()),
+        sorted((k, repr(v)) for k, v in table.duration.items()),
+        sorted((k, repr(v)) for k, v in table.pair_duration.items()),
     )
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 
 
-def memo_key(table: CostTable, goals: Goals, encoding: str, min_gain: float, planner: str, name: str) -> str:
+def memo_key(
+    table: CostTable, goals: Goals, encoding: str, min_gain: float, planner: str, name: str, span_weight: float = 0.0
+) -> str:
     """The key of the task problem these inputs make, with the engine that solves it."""
     parts = (VERSION, _code_version(), table_digest(table), goals, encoding, repr(min_gain), planner, name)
-    return hashlib.sha256(repr(parts).encode()).hexdigest()
+    return hashlib.sha256(repr((*parts, repr(span_weight))).encode()).hexdigest()
 
 
 def memo_to_entry(memo: Memo) -> JSON:

@@ -20,17 +20,32 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from tmpnav.choices import Costs
+from tmpnav.results import Schedule
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.plans import Plan, Rules
+from tmpnav.task.timing import schedule, table_durations
 from tmpnav.types import CostTable, Goals, MoveKey
 
 
 @dataclass(frozen=True)
 class PlanCost:
-    """A plan's cost under a model: the total and each step's share."""
+    """A plan's cost under a model: the total and each step's share, and when the team ends it
+    (its schedule: every robot at once, on one clock; None without durations)."""
 
     total: float
     steps: tuple[float, ...]
+    schedule: Schedule | None = None
+
+    @property
+    def makespan(self) -> float:
+        """When the last robot ends its last move (inf for an impossible plan; 0 without durations)."""
+        if not math.isfinite(self.total):
+            return math.inf
+        return self.schedule.makespan if self.schedule is not None else 0.0
+
+    def value(self, span_weight: float) -> float:
+        """The objective: the total plus ``span_weight`` per second of makespan (tmpnav.task.objectives)."""
+        return self.total + span_weight * self.makespan if span_weight else self.total
 
     @classmethod
     def impossible(cls, n: int) -> PlanCost:
@@ -56,9 +71,13 @@ class CostModel(Protocol):
 
     def subtable(self, head: Plan, robots: Sequence[str], rooms: Sequence[str], goals: Goals) -> CostTable:
         """The moves of ``robots`` into ``rooms`` from where they are after ``head``, and the
-        paired moves among them, costed from the robots' states after ``head``. The table's
-        ``start_location`` is each robot's location after ``head``; ``goals`` are the
-        sub-problem's (they decide which pairs can ever happen)."""
+        paired moves among them, costed from the robots' states after ``head``, with their
+        durations. The table's ``start_location`` is each robot's location after ``head``;
+        ``goals`` are the sub-problem's (they decide which pairs can ever happen)."""
+        ...
+
+    def ends(self, head: Plan) -> dict[str, float]:
+        """When each robot ends its moves of ``head`` (seconds), the team moving at once."""
         ...
 
 
@@ -93,7 +112,7 @@ class TableModel:
 
     def singles(self, goals: Goals) -> CostTable:
         t = self.table
-        return CostTable(t.robots, t.rooms, t.locations, t.start_location, t.single, {})
+        return CostTable(t.robots, t.rooms, t.locations, t.start_location, t.single, {}, t.duration)
 
     def plan_cost(self, plan: Plan) -> PlanCost:
         costs = []
@@ -103,18 +122,38 @@ class TableModel:
             else:
                 m1, m2 = step
                 costs.append(self.table.pair.get((m1, m2), self.table.pair.get((m2, m1), math.inf)))
-        return PlanCost(float(sum(costs)), tuple(costs))
+        return PlanCost(float(sum(costs)), tuple(costs), table_schedule(self.table, plan))
+
+    def ends(self, head: Plan) -> dict[str, float]:
+        """When each robot ends its moves of ``head`` (seconds; 0 without durations)."""
+        return robot_ends(table_schedule(self.table, head), self.robots)
 
     def subtable(self, head: Plan, robots: Sequence[str], rooms: Sequence[str], goals: Goals) -> CostTable:
         at = head_locations(head, self.start_location, robots)
-        single = {m: self.table.single[m] for m in sub_moves(at, rooms) if m in self.table.single}
+        t = self.table
+        single = {m: t.single[m] for m in sub_moves(at, rooms) if m in t.single}
         keep = ENCODINGS["mixed"].pair_filter(goals, at)
         assert keep is not None
-        pair = {
-            (m1, m2): c for (m1, m2), c in self.table.pair.items() if m1 in single and m2 in single and keep(m1, m2)
-        }
+        pair = {(m1, m2): c for (m1, m2), c in t.pair.items() if m1 in single and m2 in single and keep(m1, m2)}
         locations = tuple(dict.fromkeys([*rooms, *at.values()]))
-        return CostTable(tuple(robots), tuple(rooms), locations, at, single, pair)
+        duration = {m: t.duration[m] for m in single if m in t.duration}
+        pair_duration = {p: t.pair_duration[p] for p in pair if p in t.pair_duration}
+        return CostTable(tuple(robots), tuple(rooms), locations, at, single, pair, duration, pair_duration)
+
+
+def table_schedule(table: CostTable, plan: Plan) -> Schedule | None:
+    """The plan's schedule with the table's durations (None when the table has none)."""
+    if not table.duration:
+        return None
+    return schedule(plan, table.robots, table_durations(table))
+
+
+def robot_ends(found: Schedule | None, robots: Sequence[str]) -> dict[str, float]:
+    """When each robot ends its last move of a schedule (0 for none, or without a schedule)."""
+    ends = dict.fromkeys(robots, 0.0)
+    for m in found.moves if found is not None else ():
+        ends[m.robot] = max(ends[m.robot], m.end)
+    return ends
 
 
 def plan_rules(model: CostModel, goals: Goals) -> Rules:

@@ -16,6 +16,17 @@ parser and checks that the two problems have the same plans and costs.
 Object names come from :mod:`tmpnav.task.names`, so no user name can collide with the
 domain's identifiers. The paper's encoding needs a six-argument cost function over every
 combination of its arguments and stays on the unified-planning path.
+
+With a price on time (``span_weight`` > 0: the objectives of :mod:`tmpnav.task.objectives`)
+the problem also holds the team's clock: a fluent ``(clock ?r)`` per robot, the time its
+last move ends, and ``(span)``, the latest of them, the makespan so far. A move of robot r
+from o to x takes ``(duration r o x)``; a paired move starts when both of its robots are
+free, so it sets both clocks from the later one. Each move is written as two actions, one
+that ends within the span and one that extends it, the second paying ``span_weight`` per
+second it adds (a paired move: four, by which robot is free later). The plan's total cost
+is then its action costs plus ``span_weight`` times its makespan, the team moving at once
+(tmpnav.task.timing), and ENHSP's uniform-cost search finds its minimum: every action's
+cost is non-negative, however it depends on the clocks.
 """
 
 from __future__ import annotations
@@ -24,7 +35,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from tmpnav.errors import PlannerCrashError
-from tmpnav.task.encodings import ENCODINGS, Encoding
+from tmpnav.task.encodings import COST_SCALE, ENCODINGS, Encoding
 from tmpnav.task.names import PddlNames
 from tmpnav.task.solve import SolveResult, solve_text
 from tmpnav.types import CostTable, Goals, MoveKey
@@ -33,7 +44,8 @@ from tmpnav.types import CostTable, Goals, MoveKey
 TEXT_ENCODINGS = ("single", "mixed")
 
 _DOMAIN_HEAD = """(define (domain {name})
- (:requirements :strips :typing :negative-preconditions :disjunctive-preconditions :conditional-effects :action-costs)
+ (:requirements :strips :typing :negative-preconditions :disjunctive-preconditions :conditional-effects
+   :action-costs{numeric})
  (:types robot location)
  (:constants
    {robots} - robot
@@ -48,16 +60,50 @@ _DOMAIN_HEAD = """(define (domain {name})
  )
  (:functions
    (move-cost ?r - robot ?from - location ?to - location)
-   (total-cost)
+   (total-cost){clock_functions}
  )
- (:action goto_room
+"""
+
+_MOVE = """ (:action {name}
   :parameters (?r - robot ?from - location ?to - location)
-  :precondition (and (robot_in ?r ?from) (can_move ?r ?from ?to)
+  :precondition (and (robot_in ?r ?from) (can_move ?r ?from ?to){when}
                      (or (not (visited ?to)) (and (target ?r ?to) (not (visited_by ?r ?to)))))
   :effect (and (not (robot_in ?r ?from)) (robot_in ?r ?to) (visited ?to)
-               (when (target ?r ?to) (visited_by ?r ?to))
-               (increase (total-cost) (move-cost ?r ?from ?to))))
+               (when (target ?r ?to) (visited_by ?r ?to)){clock}
+               (increase (total-cost) {cost})))
 """
+
+_CLOCK_FUNCTIONS = """
+   (clock ?r - robot)
+   (span)
+   (duration ?r - robot ?from - location ?to - location)"""
+_END = "(+ (clock ?r) (duration ?r ?from ?to))"
+
+
+def _move_actions(span_weight: float) -> str:
+    """``goto_room`` (and, with a price on time, ``goto_room_late``: the move that ends after the span)."""
+    if not span_weight:
+        return _MOVE.format(name="goto_room", when="", clock="", cost="(move-cost ?r ?from ?to)")
+    clock = "\n               (increase (clock ?r) (duration ?r ?from ?to))"
+    within = _MOVE.format(
+        name="goto_room",
+        when=f"\n                     (<= {_END} (span))",
+        clock=clock,
+        cost="(move-cost ?r ?from ?to)",
+    )
+    late = _MOVE.format(
+        name="goto_room_late",
+        when=f"\n                     (>= {_END} (span))",
+        clock=clock + f"\n               (assign (span) {_END})",
+        cost=f"(+ (move-cost ?r ?from ?to) (* {_number(span_weight)} (- {_END} (span))))",
+    )
+    return within + late
+
+
+def _number(x: float) -> str:
+    """A PDDL number: no exponent, no needless digits."""
+    text = f"{x:.6f}".rstrip("0").rstrip(".")
+    return text if text not in ("", "-0") else "0"
 
 
 @dataclass
@@ -90,7 +136,7 @@ class PddlTask:
         name = name.lower()
         if name in self.pair_actions:
             return self.pair_actions[name]
-        if name == "goto_room" and len(params) == 3:
+        if name in ("goto_room", "goto_room_late") and len(params) == 3:
             try:
                 robot = self.names.robot_named(params[0])
                 return ((robot, self.names.location_named(params[1]), self.names.location_named(params[2])),)
@@ -105,10 +151,11 @@ class PddlTask:
 class TextBuilder:
     """A problem being written as text: the calls of :class:`~tmpnav.task.encodings.CostSink`."""
 
-    def __init__(self, encoding: Encoding, table: CostTable, goals: Goals):
+    def __init__(self, encoding: Encoding, table: CostTable, goals: Goals, span_weight: float = 0.0):
         if encoding.name not in TEXT_ENCODINGS:
             raise ValueError(f"the {encoding.name!r} encoding is written through unified-planning")
         self.table, self.goals = table, goals
+        self.span_weight = span_weight * COST_SCALE  # in the problem's cost units, per second
         self.names = PddlNames.of(table.robots, table.locations)
         self.targets = {(r, room) for r, rooms in goals.per_robot for room in rooms}
         self.potentials: dict[str, int] = {}
@@ -124,7 +171,7 @@ class TextBuilder:
 
     def add_pair_action(self, m1: MoveKey, m2: MoveKey, cost: int) -> None:
         rob, loc = self.names.robot, self.names.location
-        name = f"goto_room_pair_{len(self.pair_actions) + 1}"
+        name = f"goto_room_pair_{len({v for v in self.pair_actions.values()}) + 1}"
         pre, dels, adds = [], [], []
         for r, origin, dest in (m1, m2):
             pre.append(f"(robot_in {rob[r]} {loc[origin]})")
@@ -137,23 +184,49 @@ class TextBuilder:
             adds.append(f"(robot_in {rob[r]} {loc[dest]}) (visited {loc[dest]})")
             if (r, dest) in self.targets:
                 adds.append(f"(visited_by {rob[r]} {loc[dest]})")
+        if not self.span_weight:
+            self._pair_text(name, (m1, m2), pre, [*dels, *adds], str(cost))
+            return
+        d1, d2 = self._pair_durations(m1, m2)
+        for later, (ra, da), (rb, db) in (("a", (m1[0], d1), (m2[0], d2)), ("b", (m2[0], d2), (m1[0], d1))):
+            ca, cb, end = f"(clock {rob[ra]})", f"(clock {rob[rb]})", f"(+ (clock {rob[ra]}) {_number(max(d1, d2))})"
+            clocks = [f"(>= {ca} {cb})"]
+            moved = [*dels, *adds, f"(increase {ca} {_number(da)})", f"(assign {cb} (+ {ca} {_number(db)}))"]
+            self._pair_text(f"{name}_{later}", (m1, m2), [*pre, *clocks, f"(<= {end} (span))"], moved, str(cost))
+            late = f"(+ {cost} (* {_number(self.span_weight)} (- {end} (span))))"
+            extend = [*moved, f"(assign (span) {end})"]
+            self._pair_text(f"{name}_{later}_late", (m1, m2), [*pre, *clocks, f"(>= {end} (span))"], extend, late)
+
+    def _pair_text(self, name: str, pair: tuple[MoveKey, MoveKey], pre: list[str], eff: list[str], cost: str) -> None:
         self.pair_texts.append(
             f" (:action {name}\n  :parameters ()\n  :precondition (and {' '.join(pre)})\n"
-            f"  :effect (and {' '.join(dels)} {' '.join(adds)} (increase (total-cost) {cost})))\n"
+            f"  :effect (and {' '.join(eff)} (increase (total-cost) {cost})))\n"
         )
-        self.pair_actions[name] = (m1, m2)
+        self.pair_actions[name] = pair
+
+    def _pair_durations(self, m1: MoveKey, m2: MoveKey) -> tuple[float, float]:
+        t = self.table
+        if (m1, m2) in t.pair_duration:
+            return t.pair_duration[(m1, m2)]
+        d2, d1 = t.pair_duration.get((m2, m1), (0.0, 0.0))
+        return d1, d2
 
     def domain_text(self, name: str) -> str:
+        timed = bool(self.span_weight)
         head = _DOMAIN_HEAD.format(
             name=f"{name}-domain",
+            numeric=" :numeric-fluents" if timed else "",
             robots=" ".join(self.names.robot.values()),
             locations=" ".join(self.names.location.values()),
+            clock_functions=_CLOCK_FUNCTIONS if timed else "",
         )
-        return head + "".join(self.pair_texts) + ")\n"
+        return head + _move_actions(self.span_weight) + "".join(self.pair_texts) + ")\n"
 
-    def problem_text(self, name: str, ends: dict[str, str] | None = None) -> str:
+    def problem_text(self, name: str, ends: dict[str, str] | None = None, clocks: Clocks | None = None) -> str:
         rob, loc = self.names.robot, self.names.location
         table, init = self.table, []
+        if self.span_weight:
+            init += self._clock_facts(clocks or Clocks())
         for r, where in table.start_location.items():
             init.append(f"(robot_in {rob[r]} {loc[where]}) (visited {loc[where]})")
             if (r, where) in self.targets:
@@ -167,6 +240,22 @@ class TextBuilder:
                     cost = self.move_cost((r, origin, dest)) if (r, origin, dest) in table.single else 0
                     init.append(f"(= (move-cost {rob[r]} {loc[origin]} {loc[dest]}) {cost})")
         goal = [f"(visited {loc[room]})" for room in self.goals.visit]
+        return self._problem(name, init, goal, ends)
+
+    def _clock_facts(self, clocks: Clocks) -> list[str]:
+        """The clocks at the start (each robot's, and the span) and the duration of every move."""
+        rob, loc, t = self.names.robot, self.names.location, self.table
+        facts = [f"(= (clock {rob[r]}) {_number(clocks.start.get(r, 0.0))})" for r in t.robots]
+        facts.append(f"(= (span) {_number(clocks.span)})")
+        for r in t.robots:
+            for origin in t.locations:
+                for dest in t.locations:
+                    d = t.duration.get((r, origin, dest), 0.0)
+                    facts.append(f"(= (duration {rob[r]} {loc[origin]} {loc[dest]}) {_number(d)})")
+        return facts
+
+    def _problem(self, name: str, init: list[str], goal: list[str], ends: dict[str, str] | None) -> str:
+        rob, loc = self.names.robot, self.names.location
         goal += [f"(visited_by {rob[r]} {loc[room]})" for r, room in sorted(self.targets)]
         goal += [f"(robot_in {rob[r]} {loc[where]})" for r, where in sorted((ends or {}).items())]
         return (
@@ -178,6 +267,15 @@ class TextBuilder:
         )
 
 
+@dataclass(frozen=True)
+class Clocks:
+    """The team's clock where a problem starts: when each robot is free, and the span so far
+    (a sub-problem of the anytime search starts where the plan before it left the team)."""
+
+    start: dict[str, float] = field(default_factory=dict)
+    span: float = 0.0
+
+
 def write_task(
     table: CostTable,
     goals: Goals,
@@ -185,24 +283,28 @@ def write_task(
     name: str = "tmpnav",
     min_gain: float = 0.0,
     ends: dict[str, str] | None = None,
+    span_weight: float = 0.0,
+    clocks: Clocks | None = None,
 ) -> PddlTask:
     """The PDDL text of ``encoding`` (``single`` or ``mixed``) for the cost table and the goals.
 
     ``min_gain`` (mixed): a pair move enters the problem only if it saves at least this
     fraction of its two single moves (0: any saving), as in :func:`tmpnav.task.encode.encode`.
     ``ends`` (a sub-problem of the anytime search): robot -> the location it must end in.
+    ``span_weight``: the objective's price of a second of makespan (0: none, no clocks);
+    ``clocks``: where the team's clock starts (default: every robot free at 0).
     """
     enc = ENCODINGS[encoding] if isinstance(encoding, str) else encoding
-    builder = TextBuilder(enc, table, goals)
+    builder = TextBuilder(enc, table, goals, span_weight)
     enc.add_costs(builder, table, goals, min_gain)
     pname = _problem_name(name)
     return PddlTask(
         domain=builder.domain_text(pname),
-        problem=builder.problem_text(pname, ends),
+        problem=builder.problem_text(pname, ends, clocks),
         names=builder.names,
         pair_actions=builder.pair_actions,
         potentials=builder.potentials,
-        n_actions=len(table.single) + len(builder.pair_actions),
+        n_actions=len(table.single) + len(set(builder.pair_actions.values())),
     )
 
 

@@ -26,6 +26,13 @@ break the triangle inequality, or necessary when a move is missing. So the best
 routes may cost more than the best single-move plan; on tables whose costs obey the
 triangle inequality they cost the same (tests/task/test_routing.py).
 
+Time. With ``span_weight`` > 0 (an objective that prices the team's time,
+tmpnav.task.objectives) the model also has a time dimension: each arc takes the move's
+duration (the table's ``duration``, in centiseconds), every route starts at 0, and the
+global span cost prices the latest end, the makespan of the routes run at once, at
+``span_weight`` per second (OR-Tools' min-max routing when the arc costs are left out:
+``arc_costs=False``).
+
 Search: a first solution (``PATH_CHEAPEST_ARC`` by default), then guided local search
 until the time limit (or ``solution_limit`` solutions). OR-Tools' local search is
 single-threaded and deterministic up to its stopping point: with a ``solution_limit``
@@ -46,6 +53,8 @@ from tmpnav.task.bound import required_entries
 from tmpnav.task.encodings import COST_SCALE
 from tmpnav.types import CostTable, Goals, MoveKey
 
+#: OR-Tools' time unit: a hundredth of a second
+TIME_UNIT = 0.01
 #: OR-Tools' first-solution strategies that tmpnav offers (names of its enum)
 FIRST_SOLUTION = ("PATH_CHEAPEST_ARC", "PARALLEL_CHEAPEST_INSERTION", "SAVINGS", "GLOBAL_CHEAPEST_ARC")
 
@@ -82,11 +91,15 @@ def solve_routes(
     time_limit: float,
     solution_limit: int | None = None,
     first_solution: str = "PATH_CHEAPEST_ARC",
+    span_weight: float = 0.0,
+    arc_costs: bool = True,
 ) -> Routes:
     """Routes for the robots that visit every goal, by OR-Tools within ``time_limit`` s.
 
     ``solution_limit`` stops the search after that many solutions (reproducible runs);
-    ``first_solution`` is one of ``FIRST_SOLUTION``. See the module docstring for the model.
+    ``first_solution`` is one of ``FIRST_SOLUTION``; ``span_weight`` prices a second of the
+    routes' makespan, ``arc_costs=False`` leaves the moves' costs out (min-max routing). See
+    the module docstring for the model.
     """
     if first_solution not in FIRST_SOLUTION:
         raise ValueError(f"first_solution {first_solution!r} is not one of {', '.join(FIRST_SOLUTION)}")
@@ -100,9 +113,11 @@ def solve_routes(
     if not all(allowed):
         return Routes({}, math.inf, "NO_ROBOT_CAN_ENTER", "infeasible")
     waypoints: list[tuple[str | None, str]] = [(None, x) for x in _waypoints(table, goals)]
-    model = _Model(table, tasks + waypoints, allowed + [_allowed(table, None, x) for _, x in waypoints])
+    model = _Model(table, tasks + waypoints, allowed + [_allowed(table, None, x) for _, x in waypoints], arc_costs)
     for node in range(model.first_task + len(tasks), len(model.location)):
         model.routing.AddDisjunction([model.manager.NodeToIndex(node)], 0)  # optional, free to skip
+    if span_weight > 0 and table.duration:
+        model.add_time(span_weight)
     return model.solve(time_limit, solution_limit, first_solution)
 
 
@@ -125,7 +140,9 @@ def _allowed(table: CostTable, robot: str | None, room: str) -> list[int]:
 class _Model:
     """The OR-Tools routing model of one task problem (nodes: starts, ends, tasks)."""
 
-    def __init__(self, table: CostTable, tasks: list[tuple[str | None, str]], allowed: list[list[int]]):
+    def __init__(
+        self, table: CostTable, tasks: list[tuple[str | None, str]], allowed: list[list[int]], arc_costs: bool = True
+    ):
         from ortools.constraint_solver import pywrapcp
 
         self.table, self.tasks = table, tasks
@@ -138,7 +155,7 @@ class _Model:
         self.manager = pywrapcp.RoutingIndexManager(len(self.location), n_v, starts, ends)
         self.routing = pywrapcp.RoutingModel(self.manager)
         for v, r in enumerate(table.robots):
-            callback = self.routing.RegisterTransitMatrix(self._matrix(r))
+            callback = self.routing.RegisterTransitMatrix(self._matrix(r) if arc_costs else self._zeros())
             self.routing.SetArcCostEvaluatorOfVehicle(callback, v)
         for node in range(self.first_task, len(self.location)):
             # VehicleVar's domain, not SetAllowedVehiclesForIndex: that binding rejects Python lists
@@ -159,6 +176,28 @@ class _Model:
                 row[j] = missing if cost is None else round(cost * COST_SCALE)
             rows.append(row)
         return rows
+
+    def _zeros(self) -> list[list[int]]:
+        n = len(self.location)
+        return [[0] * n for _ in range(n)]
+
+    def add_time(self, span_weight: float) -> None:
+        """A time dimension (each arc: its move's duration) whose global span costs
+        ``span_weight`` per second, in the arc costs' units (thousandths)."""
+        n, callbacks, longest = len(self.location), [], 1
+        for r in self.table.robots:
+            rows = []
+            for i in range(n):
+                row = [0] * n
+                for j in range(self.first_task, n):
+                    d = self.table.duration.get((r, self.location[i], self.location[j]))
+                    row[j] = 0 if d is None else round(d / TIME_UNIT)
+                rows.append(row)
+                longest += max(row)
+            callbacks.append(self.routing.RegisterTransitMatrix(rows))
+        self.routing.AddDimensionWithVehicleTransits(callbacks, 0, longest, True, "time")
+        per_unit = span_weight * COST_SCALE * TIME_UNIT
+        self.routing.GetDimensionOrDie("time").SetGlobalSpanCostCoefficient(max(1, round(per_unit)))
 
     def _forbid_missing_moves(self) -> None:
         """Remove each arc i -> j from every vehicle whose table has no such move."""

@@ -38,7 +38,7 @@ from tmpnav.results import SearchProgress, StageTimes
 from tmpnav.task.decode import canonical_order
 from tmpnav.task.model import CostModel, PlanCost
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
-from tmpnav.task.pddl_text import PddlTask, write_task
+from tmpnav.task.pddl_text import Clocks, PddlTask, write_task
 from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_origins
 from tmpnav.task.routing import solve_routes
 from tmpnav.types import CostTable, Goals
@@ -90,6 +90,9 @@ class SearchOptions:
     #: the model's costs are context-free (a cost table): a sub-problem that is the whole
     #: problem, solved optimally by ENHSP, proves the plan optimal
     whole_is_exact: bool = True
+    #: the objective's price of a second of makespan (tmpnav.task.objectives): plans are
+    #: compared by their cost plus this times their makespan, the team moving at once
+    span_weight: float = 0.0
 
 
 @dataclass
@@ -158,7 +161,11 @@ class AnytimeSearch:
         limit = opts.routing_time if opts.routing_time is not None else min(10.0, max(1.0, opts.budget / 4))
         with self.times.timed("planner"):
             routes = solve_routes(
-                singles, self.goals, time_limit=max(0.1, min(limit, self.left())), solution_limit=ROUTING_SOLUTIONS
+                singles,
+                self.goals,
+                time_limit=max(0.1, min(limit, self.left())),
+                solution_limit=ROUTING_SOLUTIONS,
+                span_weight=opts.span_weight,
             )
         if not routes.found:
             raise PlannerError(
@@ -187,10 +194,10 @@ class AnytimeSearch:
             if not self.rules.valid(seed):
                 continue
             seed_cost = self.cost(seed)
-            if seed_cost.total < cost.total:
+            if self.value(seed_cost) < self.value(cost):
                 best, cost, start = seed, seed_cost, name
         self.rules.check(best)
-        self._note(cost.total, "first plan")
+        self._note(self.value(cost), "first plan")
         if not best:
             return SearchResult(best, cost, "nothing to do", self.stats, start)
         self.best, self.best_cost = best, cost
@@ -217,7 +224,7 @@ class AnytimeSearch:
         self.best, self.best_cost = best, cost
         size_index = 0
         while True:
-            if self.proves_optimal(self.best_cost.total):
+            if self.proves_optimal(self.value(self.best_cost)):
                 return "optimal"
             outcome = self._round(self.options.sizes[size_index])
             self.stats.rounds += 1
@@ -256,7 +263,7 @@ class AnytimeSearch:
                     return "time budget"
                 if batch and self._try_batch(plan, batch):
                     improved = restart = True
-                    if self.proves_optimal(self.best_cost.total):
+                    if self.proves_optimal(self.value(self.best_cost)):
                         return "optimal"
                     break
                 batch = []
@@ -288,16 +295,17 @@ class AnytimeSearch:
             if not self.rules.valid(candidate):
                 continue
             cost = self.cost(candidate)
-            if best is None or cost.total < best[1].total:
+            if best is None or self.value(cost) < self.value(best[1]):
                 best = (candidate, cost, sub)
         if best is None:
             return False
-        if not best[1].total < self.best_cost.total * (1 - EPSILON) - EPSILON:
-            return keep_equal and best[1].total <= self.best_cost.total * (1 + EPSILON) + EPSILON
+        new, old = self.value(best[1]), self.value(self.best_cost)
+        if not new < old * (1 - EPSILON) - EPSILON:
+            return keep_equal and new <= old * (1 + EPSILON) + EPSILON
         candidate, cost, sub = best
         self.best, self.best_cost = candidate, cost
         self.stats.improvements += 1
-        self._note(cost.total, f"{len(sub.hood.robots)} robots, {len(sub.hood.rooms)} rooms")
+        self._note(self.value(cost), f"{len(sub.hood.robots)} robots, {len(sub.hood.rooms)} rooms")
         return True
 
     def _sub_problem(self, plan: Plan, hood: Neighbourhood) -> _Sub | None:
@@ -313,9 +321,27 @@ class AnytimeSearch:
         free = [x for x in self.waypoints if x not in entered or x in hood.rooms]
         with self.times.timed("oracle"):
             table = self.model.subtable(opened.head, hood.robots, (*hood.rooms, *free), goals)
+            clocks = self._clocks(opened, hood) if self.options.span_weight else None
+        opts = self.options
         with self.times.timed("encode"):
-            task = write_task(table, goals, self.options.encoding, "sub", self.options.min_gain, ends=hood.ends)
+            task = write_task(table, goals, opts.encoding, "sub", opts.min_gain, hood.ends, opts.span_weight, clocks)
         return _Sub(hood, opened, task)
+
+    def _clocks(self, opened: Cut, hood: Neighbourhood) -> Clocks:
+        """Where the team's clock stands for a sub-problem: each of its robots free when its moves
+        before the sub-problem end, plus the time its moves after it take (they follow what the
+        sub-problem gives it); the span, the end of the other robots' moves in the current plan."""
+        schedule = self.best_cost.schedule
+        if schedule is None:
+            return Clocks()
+        ends = self.model.ends(opened.head)
+        start = {}
+        for r in hood.robots:
+            timeline = schedule.timeline(r)
+            last = max((m.end for m in timeline if m.step in hood.removed), default=ends[r])
+            start[r] = ends[r] + max(0.0, max((m.end for m in timeline), default=0.0) - last)
+        others = [m.end for m in schedule.moves if m.robot not in hood.robots]
+        return Clocks(start, max(others, default=0.0))
 
     def _solve(self, sub: _Sub, timeout: float) -> list[Step] | None:
         """ENHSP's optimal plan of a sub-problem (None if it found none in time)."""
@@ -327,6 +353,10 @@ class AnytimeSearch:
     def cost(self, plan: Plan) -> PlanCost:
         with self.times.timed("oracle"):
             return self.model.plan_cost(plan)
+
+    def value(self, cost: PlanCost) -> float:
+        """The objective of a plan of this cost (tmpnav.task.objectives)."""
+        return cost.value(self.options.span_weight)
 
     def _sub_goals(self, plan: Plan, hood: Neighbourhood, state: State) -> Goals:
         """What the opened moves achieved that is still to do after the head."""

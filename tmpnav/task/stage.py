@@ -23,8 +23,10 @@ from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import EncodedTask, encode_task
 from tmpnav.task.export import pddl_texts
 from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
-from tmpnav.task.model import CostModel
+from tmpnav.task.model import CostModel, table_schedule
+from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Rules
+from tmpnav.task.schedules import exact_schedule
 from tmpnav.task.search import SearchOptions, SearchRun, search
 from tmpnav.task.unfolded import BeliefGraph, write_unfolded
 from tmpnav.types import CostTable, Goals, PlannerOptions, PlanStatus, Scenario
@@ -38,20 +40,30 @@ class TaskProblem:
     goals: Goals
     planner: PlannerOptions  # engine, encoding, time limit, pair_min_gain
     name: str  # the scenario's name: the PDDL problem's name
+    span_weight: float = 0.0  # the objective's price of a second of makespan (tmpnav.task.objectives)
 
     @classmethod
     def of(cls, scenario: Scenario, table: CostTable) -> TaskProblem:
-        """The task problem of a scenario (its goals and planner options) over a cost table."""
-        return cls(table, scenario.goals, scenario.planner, scenario.name)
+        """The task problem of a scenario (its goals, planner options and objective) over a cost table."""
+        span = OBJECTIVES[scenario.planner.objective].span_weight(scenario.cost)
+        return cls(table, scenario.goals, scenario.planner, scenario.name, span)
 
     def encode(self) -> EncodedTask:
         """This task in the planner options' encoding, ready for the planner they name."""
         p = self.planner
-        return encode_task(self.table, self.goals, p.encoding, p.name, name=self.name, min_gain=p.pair_min_gain)
+        return encode_task(
+            self.table,
+            self.goals,
+            p.encoding,
+            p.name,
+            name=self.name,
+            min_gain=p.pair_min_gain,
+            span_weight=self.span_weight,
+        )
 
     def memo_key(self) -> str:
         p = self.planner
-        return memo_key(self.table, self.goals, p.encoding, p.pair_min_gain, p.name, self.name)
+        return memo_key(self.table, self.goals, p.encoding, p.pair_min_gain, p.name, self.name, self.span_weight)
 
 
 def plan_task(
@@ -70,7 +82,7 @@ def plan_task(
             memo = entry_to_memo(found, task.table) if found is not None else None
     if memo is not None:
         times.seconds.setdefault("encode", 0.0)
-        return _result(task.table, memo, None)
+        return _result(task, memo, None)
     with times.timed("encode"):
         encoded = task.encode()
     with times.timed("planner"):
@@ -90,17 +102,46 @@ def plan_task(
     )
     if store is not None and key is not None:
         store.put_many({key: memo_to_entry(memo)})
-    return _result(task.table, memo, encoded)
+    return _result(task, memo, encoded)
 
 
-def _result(table: CostTable, memo: Memo, encoded: EncodedTask | None) -> TaskResult:
-    """The memo's steps in canonical order, with their table costs."""
+def plan_schedules(task: TaskProblem, times: StageTimes | None = None) -> TaskResult | None:
+    """The exact plan of ``task`` when its objective prices time: the A* over every schedule of
+    the table (:mod:`tmpnav.task.schedules`; ENHSP's optimal search does not cover a makespan).
+    None when the problem is too large for it. ``times`` gets the ``planner`` stage."""
+    times = times if times is not None else StageTimes()
+    with times.timed("planner"):
+        found = exact_schedule(task.table, task.goals, task.planner.pair_min_gain, task.span_weight)
+    if found is None:
+        return None
+    steps, value = found
+    order = canonical_order(list(steps), task.table.robots)
+    steps = tuple(steps[i] for i in order)
+    step_costs = tuple(step_cost(task.table, s) for s in steps)
+    return TaskResult(
+        status=PlanStatus.SOLVED_OPTIMALLY,
+        engine="tmpnav A* over the schedules of the cost table",
+        steps=steps,
+        action_names=action_names(steps),
+        step_costs=step_costs,
+        counts=TaskCounts(len(task.table.single), len(task.table.pair), 0, sum(len(s) == 2 for s in steps), 0),
+        plan_hit=False,
+        search=SearchSummary(mode="exact", costs="table", stopped="solved"),
+        bound=BoundSummary(value, "exact (A* over every schedule)", 0.0, True),
+        schedule=table_schedule(task.table, steps),
+    )
+
+
+def _result(task: TaskProblem, memo: Memo, encoded: EncodedTask | None) -> TaskResult:
+    """The memo's steps in canonical order, with their table costs and schedule."""
+    table = task.table
     order = canonical_order(list(memo.steps), table.robots)
     steps = tuple(memo.steps[i] for i in order)
     actions, pair_actions, reshaped = memo.sizes
     step_costs = tuple(step_cost(table, s) for s in steps)
     optimal = memo.status == PlanStatus.SOLVED_OPTIMALLY
-    cost = float(sum(step_costs))
+    schedule = table_schedule(table, steps)
+    cost = float(sum(step_costs)) + task.span_weight * (schedule.makespan if schedule is not None else 0.0)
     return TaskResult(
         status=memo.status,
         engine=memo.engine,
@@ -111,6 +152,7 @@ def _result(table: CostTable, memo: Memo, encoded: EncodedTask | None) -> TaskRe
         plan_hit=encoded is None,
         search=SearchSummary(mode="exact", costs="table", stopped="solved"),
         bound=BoundSummary(cost, "exact", 0.0, True) if optimal else None,
+        schedule=schedule,
         pddl=None if encoded is None else lambda: pddl_texts(encoded),
     )
 
@@ -130,6 +172,7 @@ class AnytimeTask:
     model: CostModel
     goals: Goals
     planner: PlannerOptions  # engine (an ENHSP one), encoding (single or mixed), time limit, pair_min_gain
+    span_weight: float = 0.0  # the objective's price of a second of makespan (tmpnav.task.objectives)
 
     def options(self, budget: float) -> SearchOptions:
         """The search's options: with costs that depend on the context (carried beliefs), smaller
@@ -143,6 +186,7 @@ class AnytimeTask:
             sub_timeout=min(p.timeout, 60.0),
             whole_is_exact=context_free,
             sizes=SearchOptions.sizes if context_free else CARRIED_SIZES,
+            span_weight=self.span_weight,
         )
 
 
@@ -179,7 +223,8 @@ def plan_anytime(
             seconds=stats.history[-1][0] if stats.history else 0.0,
             history=tuple(stats.history),
         ),
-        bound=_summary(bound, cost.total, proved),
+        bound=_summary(bound, cost.value(task.span_weight), proved),
+        schedule=cost.schedule,
     )
 
 
@@ -196,33 +241,41 @@ def _summary(proof: Bound | None, cost: float, proved: bool) -> BoundSummary | N
     return None if proof is None else BoundSummary(proof.value, proof.relaxation, proof.gap(cost), proved)
 
 
-def plan_unfolded(graph: BeliefGraph, rules: Rules, planner: PlannerOptions, run: SearchRun) -> TaskResult:
+def plan_unfolded(
+    graph: BeliefGraph,
+    model: CostModel,
+    rules: Rules,
+    planner: PlannerOptions,
+    run: SearchRun,
+    span_weight: float = 0.0,
+) -> TaskResult:
     """ENHSP's optimal plan over an unfolded belief space (:mod:`tmpnav.task.unfolded`): the
-    plan of least cost with carried-over beliefs."""
+    plan of least objective with carried-over beliefs, the team moving at once. Its steps'
+    costs and its schedule are the model's (the edges price time windows, not steps)."""
     robots = tuple(rules.start_location)
     locations = tuple(dict.fromkeys([*rules.goals.all_rooms, *rules.start_location.values()]))
     with run.times.timed("encode"):
         task = write_unfolded(graph, robots, locations, rules)
     with run.times.timed("planner"):
         solved = task.solve(planner.name, planner.timeout)
-    edges = task.decode(solved)
-    steps = tuple(e.step for e in edges)
-    costs = tuple(e.cost for e in edges)
+    steps = tuple(e.step for e in task.decode(solved) if e.step)
+    with run.times.timed("oracle"):
+        cost = model.plan_cost(steps)
     optimal = solved.status == PlanStatus.SOLVED_OPTIMALLY
-    total = float(sum(costs))
     return TaskResult(
         status=solved.status,
         engine=solved.engine,
         steps=steps,
         action_names=action_names(steps),
-        step_costs=costs,
+        step_costs=cost.steps,
         counts=TaskCounts(0, 0, len(graph.edges), sum(len(e.step) == 2 for e in graph.edges), 0),
         plan_hit=False,
         search=SearchSummary(
             mode="exact",
             costs="carried",
             stopped="solved",
-            start=f"belief space unfolded: {graph.n_contexts} contexts, {len(graph.edges)} actions",
+            start=f"belief space unfolded on the team's clock: {graph.n_contexts} contexts, {len(graph.edges)} actions",
         ),
-        bound=BoundSummary(total, "exact", 0.0, True) if optimal else None,
+        bound=BoundSummary(cost.value(span_weight), "exact", 0.0, True) if optimal else None,
+        schedule=cost.schedule,
     )

@@ -109,7 +109,7 @@ def write_unfolded(
         init.append(f"(robot_in {rob[r]} {loc[where]}) (visited {loc[where]})")
         if (r, where) in rules.targets:
             init.append(f"(visited_by {rob[r]} {loc[where]})")
-    goals = _goal(rules.goals, rules, names)
+    goals = _goal(rules.goals, rules, names) + "".join(f" (in c{g})" for g in graph.goal_contexts)
     problem = (
         "(define (problem tmpnav-belief)\n (:domain tmpnav-belief-contexts)\n (:init\n  "
         + "\n  ".join(init)

@@ -1,0 +1,455 @@
+"""The team on one clock: a plan run with every robot moving at once, in one joint EKF.
+
+A task plan is a sequence of steps (one robot's move, or two robots' paired move), but the
+team does not take turns: each robot makes its own moves one after another, and all robots
+move at the same time. A move starts as soon as its robot has ended its previous move; a
+paired move starts when both of its robots have (the earlier one waits); a move may also
+be held back (``delays``: to keep clear of another robot). That is the plan's schedule
+(:mod:`tmpnav.task.timing` for moves of known durations).
+
+:meth:`TeamClock.run` executes it on the control steps of the models' ``dt``, one step for
+the whole team at a time (the compiled kernel of :mod:`tmpnav.belief.kernel`, the same
+prediction and updates as everywhere else):
+
+* every robot that drives applies its control; every robot that stands (waiting for a
+  partner, held back, or done) applies none, so its uncertainty does not grow;
+* every robot observes the landmarks it sees from its nominal pose, moving or standing;
+* any two robots observe each other whenever they are within range and line of sight at
+  the same instant (not only the two of a paired move), which couples their beliefs.
+
+When a move starts, the oracle picks its goal instantiation from the belief the robot has
+at that instant (the paper's semantic attachment: the pose instantiation in which its
+previous move ended starts the next one, with the belief it carries); its nominal motion is
+then driven. A move costs the paper's c = M_u c_u + M_G c_G + M_Sigma c_Sigma over its own
+motion: control usage, the distance between the mean and the goal pose when it arrives,
+and the time integral of trace(Sigma) while it drives. Standing costs nothing in this sum
+(the time it takes shows in the makespan, which the time objectives weigh).
+
+The simulated observation noise is drawn so that a robot sees what the oracle's own
+simulation of its move sees: a move's landmark draws come from its robot's stream for its
+start node, indexed from the move's start, and go on while the robot stands after it; the
+two robots of a paired move share the pair's mutual draws for its duration (so a plan of
+paired moves only, the paper's, runs exactly as the oracle costed it); other mutual
+observations use a stream per ordered pair of robots, by the clock's step.
+
+The clock's state (:class:`ClockState`) is an immutable value: :meth:`TeamClock.dispatch`
+and :meth:`TeamClock.advance` return new ones, so the exact search can branch from a state
+(:mod:`tmpnav.attachment.unfold`).
+"""
+
+from __future__ import annotations
+
+import heapq
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from tmpnav.attachment.team import Team
+from tmpnav.belief.sequences import (
+    EKFConstants,
+    MotionArrays,
+    SequenceBatch,
+    Sequences,
+    StartGroups,
+    propagate_sequences,
+)
+from tmpnav.errors import TmpnavError
+from tmpnav.oracle.motions import MotionLibrary, NominalMotion, stable_seed
+from tmpnav.oracle.oracle import Oracle
+from tmpnav.oracle.requests import Request, StartState, mutual_seed
+from tmpnav.results import Schedule, TimedMove
+from tmpnav.task.plans import Plan, Step
+from tmpnav.types import CostTerms, CostWeights, MotionResult, TrajectoryStep, cov3, vec3
+from tmpnav.world.visibility import MutualSensing
+
+#: steps of one block of the mutual-noise stream of a pair of robots outside paired moves
+MUTUAL_BLOCK = 512
+#: noise streams kept in memory (the oldest dropped first)
+MAX_STREAMS = 4096
+
+
+class Unreachable(TmpnavError):
+    """A plan step whose robots cannot reach their rooms from where they are."""
+
+
+@dataclass(frozen=True, eq=False)
+class Leg:
+    """What a robot does from step ``start`` until its next leg: drive ``motion`` (then stand
+    at its end), or stand at ``node`` (``motion`` None) before its first move."""
+
+    start: int
+    motion: NominalMotion | None
+    node: int
+    heading: float
+    pose: np.ndarray  # (3,) where it stands when not driving
+    noise_seed: int  # its landmark-noise stream, indexed from ``start``
+
+
+@dataclass(frozen=True)
+class Pairing:
+    """Two robots of a paired move: their mutual draws from ``start`` for ``steps`` steps."""
+
+    robots: tuple[int, int]  # team indices, in the order of the oracle's request
+    start: int
+    steps: int
+    seed: int
+
+
+@dataclass(frozen=True, eq=False)
+class MoveRun:
+    """One robot's move on the clock: its plan step, when it could start, started and ends
+    (control steps), its motion, and its cost terms once it has ended."""
+
+    step: int
+    robot: int  # team index
+    ready: int
+    start: int
+    end: int
+    motion: NominalMotion
+    csig_start: float  # the robot's running c_Sigma when the move started
+    terms: CostTerms | None = None  # set when the move has ended
+
+    def cost(self, weights: CostWeights) -> float:
+        assert self.terms is not None, "the move has not ended"
+        return self.terms.total(weights)
+
+
+@dataclass(frozen=True, eq=False)
+class ClockState:
+    """The clock at step ``t``: the team's joint belief, each robot's legs and when it is free,
+    the paired moves' draws, the moves under way and those ended (with their cost)."""
+
+    t: int
+    team: Team
+    legs: tuple[tuple[Leg, ...], ...]
+    free: tuple[int, ...]  # the step at which each robot ends its latest move
+    csig: tuple[float, ...]  # each robot's running c_Sigma over all its steps
+    pairings: tuple[Pairing, ...] = ()
+    open: tuple[MoveRun, ...] = ()  # moves under way
+    closed: tuple[MoveRun, ...] = ()  # moves ended, in the order they ended
+    closed_cost: float = 0.0  # the sum of their costs
+
+    def where(self, i: int) -> tuple[int, float]:
+        """Robot i's node and heading at the end of its latest leg (where its next move starts)."""
+        leg = self.legs[i][-1]
+        return leg.node, leg.heading
+
+
+@dataclass
+class ClockRun:
+    """A plan run on the team's clock: its moves (in plan order), the schedule, the state at the
+    end, and (when recorded) each robot's belief at every control step."""
+
+    moves: list[MoveRun]
+    schedule: Schedule
+    end: ClockState
+    trajectories: dict[str, list[TrajectoryStep]] | None = None
+
+    @property
+    def makespan(self) -> float:
+        return self.schedule.makespan
+
+    def step_costs(self, steps: int, weights: CostWeights) -> list[float]:
+        """Each plan step's cost: the weighted terms of its robots' moves, summed."""
+        costs = [0.0] * steps
+        for move in self.moves:
+            costs[move.step] += move.cost(weights)
+        return costs
+
+
+class TeamClock:
+    """Runs plans of one scenario's team on the shared clock (see the module docstring)."""
+
+    def __init__(self, oracle: Oracle, lib: MotionLibrary, start: Team):
+        self.oracle, self.lib, self.start = oracle, lib, start
+        self.scenario = lib.scenario
+        self.dt = self.scenario.models.dt
+        n = len(start.names)
+        self.sensing = {
+            (i, j): s
+            for i in range(n)
+            for j in range(n)
+            if i != j and (s := MutualSensing.between(self.scenario, start.names[i], start.names[j])) is not None
+        }
+        self.ekf = EKFConstants.of(self.scenario.models, lib.world.landmark_xy)
+        self._noise: dict[int, np.ndarray] = {}  # seed -> the noise stream drawn so far (see _stream)
+
+    # ------------------------------------------------------------------ a whole plan
+
+    def run(self, plan: Plan, delays: Mapping[int, float] | None = None, record: bool = False) -> ClockRun:
+        """Run ``plan`` (see the module docstring); ``delays`` holds plan steps back by that
+        many seconds after they could start. Raises Unreachable for a step whose robots cannot
+        reach their rooms."""
+        names = self.start.names
+        order = [[k for k, step in enumerate(plan) if any(m[0] == r for m in step)] for r in names]
+        done = [0] * len(names)  # each robot's steps dispatched so far
+        held = {k: round(s / self.dt) for k, s in (delays or {}).items()}
+        state = self.initial()
+        trace = _Trace(self, state) if record else None
+        events: list[tuple[int, int]] = []
+
+        def push(k: int, after: int) -> None:
+            heapq.heappush(events, (max(self.ready(state, plan[k]), after) + held.get(k, 0), k))
+
+        for k, step in enumerate(plan):
+            if all(order[names.index(m[0])][0] == k for m in step):
+                push(k, 0)
+        while events:
+            t, batch = events[0][0], []
+            while events and events[0][0] == t:
+                batch.append(heapq.heappop(events)[1])
+            state = self.advance(state, t, trace)
+            state = self.dispatch(state, [(k, plan[k]) for k in batch])
+            for k in batch:
+                for m in plan[k]:
+                    i = names.index(m[0])
+                    done[i] += 1
+                    if done[i] < len(order[i]):
+                        nxt = order[i][done[i]]
+                        if all(done[names.index(r)] == order[names.index(r)].index(nxt) for r, _, _ in plan[nxt]):
+                            push(nxt, t)
+        state = self.advance(state, max(state.free, default=0), trace)
+        return self._result(state, plan, trace)
+
+    def initial(self) -> ClockState:
+        """Every robot at its start, with its initial belief, at step 0."""
+        team = self.start
+        legs = []
+        for i, r in enumerate(team.names):
+            node, heading = team.node[i], team.heading[i]
+            x, y = self.lib.roadmap.nodes[node]
+            seed = stable_seed(self.scenario.models.seed, "landmarks", r, node, "standing")
+            legs.append((Leg(0, None, node, heading, np.array([x, y, heading]), seed),))
+        n = len(team.names)
+        return ClockState(0, team, tuple(legs), (0,) * n, (0.0,) * n)
+
+    def ready(self, state: ClockState, step: Step) -> int:
+        """The step at which all the robots of ``step`` have ended their latest moves."""
+        return max(state.free[self.start.names.index(m[0])] for m in step)
+
+    # ------------------------------------------------------------------ starting moves
+
+    def dispatch(
+        self, state: ClockState, steps: Sequence[tuple[int, Step]], results: Sequence[MotionResult | None] | None = None
+    ) -> ClockState:
+        """Start ``steps`` (plan index, step) at the clock's time: the oracle picks each move's
+        goal instantiation from the robots' beliefs now (one batch of requests, unless their
+        ``results`` are given); their motions become their next legs. Raises Unreachable when
+        a step's robots cannot reach their rooms."""
+        names, t = self.start.names, state.t
+        requests = [self.request(state, step) for _, step in steps]
+        answers = results if results is not None else self.oracle.evaluate(requests)
+        legs, free, pairings, opened = [list(x) for x in state.legs], list(state.free), list(state.pairings), []
+        for (k, step), request, result in zip(steps, requests, answers, strict=True):
+            robots = [m[0] for m in step]
+            if result is None:
+                raise Unreachable(f"{', '.join(robots)} cannot reach {', '.join(request.rooms)} from where they are")
+            for r, start, goal in zip(robots, request.starts, result.goal_nodes, strict=True):
+                i = names.index(r)
+                motion = self.lib.motion(r, start.node, start.heading, goal)
+                assert motion is not None  # the oracle just planned it
+                legs[i].append(Leg(t, motion, goal, motion.final_heading, motion.poses[-1], motion.noise_seed))
+                opened.append(MoveRun(k, i, free[i], t, t + motion.n_steps, motion, state.csig[i]))
+                free[i] = t + motion.n_steps
+            if len(robots) == 2:
+                h = max(free[names.index(r)] for r in robots) - t
+                pair = (names.index(robots[0]), names.index(robots[1]))
+                pairings.append(Pairing(pair, t, h, mutual_seed(self.lib, tuple(robots), request.starts)))
+        state = replace(
+            state,
+            legs=tuple(tuple(x) for x in legs),
+            free=tuple(free),
+            pairings=tuple(pairings),
+            open=(*state.open, *opened),
+        )
+        # a move of no step ends as it starts
+        return self._close(state, state.team.mean[None], state.t, [[c] for c in state.csig])
+
+    def request(self, state: ClockState, step: Step) -> Request:
+        """The oracle's request for ``step`` from where its robots stand now, with their beliefs
+        (joint when they are correlated)."""
+        team, names = state.team, self.start.names
+        idx = [names.index(m[0]) for m in step]
+        starts = []
+        for i in idx:
+            node, heading = state.where(i)
+            mean, cov = team.mean[3 * i : 3 * i + 3], team.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
+            starts.append(StartState(node, float(heading), vec3(mean), cov3(cov)))
+        cols = team.cols(idx)
+        sub = team.cov[np.ix_(cols, cols)]
+        correlated = len(idx) > 1 and bool(np.any(sub[:3, 3:] != 0.0))
+        joint = tuple(tuple(float(v) for v in row) for row in sub) if correlated else None
+        return Request(tuple(m[0] for m in step), tuple(starts), tuple(m[2] for m in step), joint)
+
+    # ------------------------------------------------------------------ the joint EKF
+
+    def advance(self, state: ClockState, until: int, trace: _Trace | None = None) -> ClockState:
+        """The whole team run from the clock's time to step ``until`` (one kernel call); the
+        moves that end on the way are closed with their cost terms."""
+        a, h = state.t, until - state.t
+        if h <= 0:
+            return state
+        n = len(self.start.names)
+        windows = [self._window(state, i, a, until) for i in range(n)]
+        poses = [w[1] for w in windows]
+        visible = np.zeros((h + 1, n, n), dtype=bool)
+        for (i, j), sensing in self.sensing.items():
+            visible[:, i, j] = sensing.visible(self.lib.world, poses[i], poses[j])
+        batch = SequenceBatch(
+            n=n,
+            ekf=self.ekf,
+            motions=MotionArrays.of(
+                [w[0] for w in windows], poses, [w[2] for w in windows], np.arange(n), self.ekf.landmarks.shape[0]
+            ),
+            landmark_noise=np.stack([w[3] for w in windows]),
+            groups=StartGroups(state.team.mean[None], state.team.cov[None], self._mutual_noise(state, a, until)[None]),
+            sequences=Sequences.one(n, h),
+            mutual_visible=visible,
+            c_sigma_history=True,
+        )
+        out = propagate_sequences(batch)
+        assert out.c_sigma_history is not None
+        running = [[state.csig[i] + float(c) for c in out.c_sigma_history[0, :, i]] for i in range(n)]
+        if trace is not None:
+            trace.extend(state, a, out.last_means, out.last_covs)
+        team = state.team
+        nodes = tuple(state.where(i)[0] for i in range(n))
+        headings = tuple(state.where(i)[1] for i in range(n))
+        moved = Team(team.names, nodes, headings, out.last_means[h].copy(), out.last_covs[h].copy(), until * self.dt)
+        state = replace(state, t=until, team=moved, csig=tuple(running[i][h] for i in range(n)))
+        return self._close(state, out.last_means, a, running)
+
+    def _close(self, state: ClockState, means: np.ndarray, a: int, running: Sequence[Sequence[float]]) -> ClockState:
+        """Close the open moves that have ended by the clock's time: their c_Sigma from the
+        running sums, c_G from the mean on arrival (``means``, ``running``: from step ``a``)."""
+        ended = [m for m in state.open if m.end <= state.t]
+        if not ended:
+            return state
+        w, closed = self.scenario.cost, list(state.closed)
+        for m in sorted(ended, key=lambda m: (m.end, m.step, m.robot)):
+            k = m.end - a
+            arrival = means[k, 3 * m.robot : 3 * m.robot + 2]
+            c_sigma = float(running[m.robot][k]) - m.csig_start
+            c_g = float(np.hypot(*(arrival - m.motion.poses[-1, :2])))
+            closed.append(replace(m, terms=CostTerms(m.motion.c_u(self.dt), c_g, c_sigma)))
+        total = state.closed_cost + sum(m.cost(w) for m in closed[len(state.closed) :])
+        still = tuple(m for m in state.open if m.end > state.t)
+        return replace(state, open=still, closed=tuple(closed), closed_cost=total)
+
+    def _window(self, state: ClockState, i: int, a: int, b: int) -> tuple[np.ndarray, ...]:
+        """Robot i's controls (h, 2), nominal poses (h+1, 3), landmark visibility (h+1, L) and
+        landmark draws (h+1, L, 2) over the steps a..b."""
+        L = self.ekf.landmarks.shape[0]
+        controls, poses = np.zeros((b - a, 2)), np.empty((b - a + 1, 3))
+        vis, noise = np.empty((b - a + 1, L), dtype=bool), np.empty((b - a + 1, L, 2))
+        legs = state.legs[i]
+        for n, leg in enumerate(legs):
+            end = legs[n + 1].start if n + 1 < len(legs) else b + 1
+            lo, hi = max(leg.start, a), min(end, b + 1)
+            if lo >= hi:
+                continue
+            k = np.arange(lo, hi) - leg.start  # steps since the leg began
+            rows = slice(lo - a, hi - a)
+            if leg.motion is None:
+                poses[rows] = leg.pose
+                vis[rows] = self.lib.visibility.visible(
+                    leg.pose[None], self.scenario.models.landmark_sensor.fov, min_range=self._radius(i)
+                )[0]
+            else:
+                m = leg.motion
+                last = np.minimum(k, m.n_steps)
+                poses[rows], vis[rows] = m.poses[last], m.lm_visible[last]
+                s = np.arange(lo, min(hi, b))  # the window's transitions s -> s + 1 in this leg
+                drive = s - leg.start < m.n_steps
+                controls[s[drive] - a] = m.controls[s[drive] - leg.start]
+            noise[rows] = self._stream(leg.noise_seed, int(k[-1]) + 1, (L, 2))[k]
+        return controls, poses, vis, noise
+
+    def _radius(self, i: int) -> float:
+        return self.scenario.robot(self.start.names[i]).radius
+
+    def _stream(self, seed: int, rows: int, tail: tuple[int, ...]) -> np.ndarray:
+        """At least the first ``rows`` rows of the standard-normal stream of ``seed``, each of
+        shape ``tail``. Drawn in C order, a stream drawn longer starts with the draws of a
+        shorter one (tmpnav.belief.sequences.standard_normal_draws): so it is kept, and drawn
+        again twice as long when more is needed."""
+        have = self._noise.get(seed)
+        if have is None or have.shape[0] < rows:
+            size = max(rows, 64 if have is None else 2 * have.shape[0])
+            have = self._noise[seed] = np.random.default_rng(seed).standard_normal((size, *tail))
+            if len(self._noise) > MAX_STREAMS:
+                self._noise.pop(next(iter(self._noise)))
+        return have
+
+    def _mutual_noise(self, state: ClockState, a: int, b: int) -> np.ndarray:
+        """(h+1, n, n, 2) draws of every ordered pair's observations over the steps a..b."""
+        n, h = len(self.start.names), b - a
+        out = np.zeros((h + 1, n, n, 2))
+        first = a // MUTUAL_BLOCK
+        for i, j in self.sensing:
+            blocks = [self._pair_block(i, j, k) for k in range(first, b // MUTUAL_BLOCK + 1)]
+            out[:, i, j] = np.concatenate(blocks)[a - first * MUTUAL_BLOCK : b - first * MUTUAL_BLOCK + 1]
+        for p in state.pairings:
+            lo, hi = max(p.start, a), min(p.start + p.steps, b)
+            if lo > hi:
+                continue
+            draws = self._stream(p.seed, p.steps + 1, (2, 2, 2))
+            (x, y), rows, k = p.robots, slice(lo - a, hi - a + 1), slice(lo - p.start, hi - p.start + 1)
+            out[rows, x, y], out[rows, y, x] = draws[k, 0, 1], draws[k, 1, 0]
+        return out
+
+    def _pair_block(self, i: int, j: int, block: int) -> np.ndarray:
+        """Block ``block`` of the draws of robot i observing robot j outside paired moves."""
+        names = self.start.names
+        seed = stable_seed(self.scenario.models.seed, "mutual", names[i], names[j], "clock", block)
+        return self._stream(seed, MUTUAL_BLOCK, (2,))[:MUTUAL_BLOCK]
+
+    # ------------------------------------------------------------------ the result
+
+    def _result(self, state: ClockState, plan: Plan, trace: _Trace | None) -> ClockRun:
+        names, dt = self.start.names, self.dt
+        moves = sorted(state.closed, key=lambda m: (m.step, m.robot))
+        timed = []
+        for m in moves:
+            step = plan[m.step]
+            move = next(x for x in step if x[0] == names[m.robot])
+            partner = next((x[0] for x in step if x[0] != names[m.robot]), None)
+            timed.append(TimedMove(m.step, move[0], move[1], move[2], partner, m.ready * dt, m.start * dt, m.end * dt))
+        trajectories = trace.trajectories() if trace is not None else None
+        return ClockRun(moves, Schedule(names, tuple(timed)), state, trajectories)
+
+
+class _Trace:
+    """Each robot's belief at every control step, as a run goes (the re-simulation's record)."""
+
+    def __init__(self, clock: TeamClock, state: ClockState):
+        self.clock = clock
+        team = state.team
+        self.steps = {i: [_belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i in range(len(team.names))}
+
+    def extend(self, state: ClockState, a: int, means: np.ndarray, covs: np.ndarray) -> None:
+        dt, h = self.clock.dt, means.shape[0] - 1
+        for i, steps in self.steps.items():
+            nodes = _reached(state.legs[i], a, a + h)
+            steps.extend(_belief_step((a + k) * dt, means[k], covs[k], i, nodes.get(a + k)) for k in range(1, h + 1))
+
+    def trajectories(self) -> dict[str, list[TrajectoryStep]]:
+        return {self.clock.start.names[i]: steps for i, steps in self.steps.items()}
+
+
+def _reached(legs: Sequence[Leg], a: int, b: int) -> dict[int, int]:
+    """The roadmap nodes reached along ``legs`` at the steps in (a, b]."""
+    out = {}
+    for leg in legs:
+        if leg.motion is not None:
+            for node, k in zip(leg.motion.path, leg.motion.node_steps.tolist(), strict=False):
+                if a < leg.start + k <= b:
+                    out[leg.start + k] = int(node)
+    return out
+
+
+def _belief_step(t: float, mean: np.ndarray, cov: np.ndarray, i: int, node: int | None) -> TrajectoryStep:
+    m = mean[3 * i : 3 * i + 3]
+    c = cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
+    return TrajectoryStep(t=round(float(t), 9), mean=vec3(m), cov=cov3(c), node=None if node is None else int(node))

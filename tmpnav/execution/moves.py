@@ -1,0 +1,91 @@
+"""Each robot's queue of moves, read from a plan's schedule: what ``tmpnav simulate`` executes.
+
+The plan's schedule (:attr:`tmpnav.results.PlanReport.schedule`) lists every robot's moves on
+the team's clock; the plan's actions give their roadmap paths. A robot's queue is its moves
+in the order it makes them, each with its path, its partner (a paired move), when the plan
+starts it (a move is never started earlier: the planner may hold one back to keep clear of
+another robot) and when the plan expects the robot at each node of its path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from tmpnav.results import PlanReport, TimedMove
+from tmpnav.types import TrajectoryStep
+
+_T_TOL = 1e-6  # s: trajectory times are rounded to 1e-9 s
+
+
+@dataclass(frozen=True, eq=False)
+class QueuedMove:
+    """One move of a robot's queue: its path and when the plan makes it."""
+
+    step: int  # the plan step (0-based) it belongs to
+    robot: str
+    origin: str  # the room it leaves (or ``<robot>-start``)
+    target: str  # the room it goes to
+    partner: str | None  # the other robot of a paired move
+    nodes: tuple[int, ...]  # roadmap path, the start node first
+    points: np.ndarray  # (len(nodes), 2) m: the path's positions
+    start: int  # control steps: the planned start on the team's clock (never started earlier)
+    steps: int  # control steps: the planned duration
+    arrivals: tuple[float | None, ...]  # s: planned arrival at each node after the first (None: not found)
+
+    @property
+    def waypoints(self) -> list[np.ndarray]:
+        """The positions to drive to: the path after its start node."""
+        return [np.asarray(p, dtype=float) for p in self.points[1:]]
+
+
+def queues(report: PlanReport) -> dict[str, tuple[QueuedMove, ...]]:
+    """Robot -> its moves in the order it makes them (every robot of the scenario, idle ones too)."""
+    dt = report.scenario.models.dt
+    out: dict[str, tuple[QueuedMove, ...]] = {}
+    for robot in (r.name for r in report.scenario.robots):
+        steps = report.trajectories.get(robot, [])
+        out[robot] = tuple(_queued(report, m, steps, dt) for m in report.schedule.timeline(robot))
+    return out
+
+
+def _queued(report: PlanReport, move: TimedMove, steps: Sequence[TrajectoryStep], dt: float) -> QueuedMove:
+    action = report.actions[move.step]
+    robots = [m[0] for m in action.moves]
+    if move.robot not in robots:
+        raise ValueError(f"the schedule's move of {move.robot} in step {move.step} is not in the plan's step")
+    nodes = tuple(int(n) for n in action.paths[robots.index(move.robot)])
+    points = np.array([report.roadmap.nodes[n] for n in nodes], dtype=float).reshape(-1, 2)
+    return QueuedMove(
+        step=move.step,
+        robot=move.robot,
+        origin=move.origin,
+        target=move.target,
+        partner=move.partner,
+        nodes=nodes,
+        points=points,
+        start=round(move.start / dt),
+        steps=round((move.end - move.start) / dt),
+        arrivals=planned_arrivals(steps, nodes[1:], move.start, move.end),
+    )
+
+
+def planned_arrivals(
+    steps: Sequence[TrajectoryStep], nodes: Sequence[int], start: float, end: float
+) -> tuple[float | None, ...]:
+    """When the plan's trajectory reaches each of ``nodes`` in order between ``start`` and ``end``
+    (s); None for a node it does not mark there."""
+    out: list[float | None] = []
+    j = 0
+    while j < len(steps) and steps[j].t <= start + _T_TOL:
+        j += 1
+    for node in nodes:
+        k = next((k for k in range(j, len(steps)) if steps[k].t <= end + _T_TOL and steps[k].node == node), None)
+        if k is None:
+            out.append(None)
+            continue
+        out.append(float(steps[k].t))
+        j = k + 1
+    return tuple(out)

@@ -1,0 +1,111 @@
+"""``tmpnav simulate``'s sessions: the schedule executed many times, with and without mutual observations.
+
+Config 1 uses mutual observations, config 2 ignores them; both run on the same draws, session
+by session, so the comparison is paired (paper, Fig. 3(a)). What a session records:
+
+* the position error (distance between the true and the estimated position) when a robot
+  reaches each node of its paths; the worst-case error of a robot is the largest of its
+  average errors over the nodes, as in the paper;
+* when it reached each node, and its moves as executed (:class:`~tmpnav.results.Schedule`):
+  the executed makespan, and how long each robot waited for its partners or for planned starts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from tmpnav.execution.moves import QueuedMove, queues
+from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
+from tmpnav.results import PlanReport, Schedule
+from tmpnav.world.visibility import LandmarkVisibility
+
+CONFIGS = {1: True, 2: False}  # config -> with mutual observations
+
+
+@dataclass
+class ExecutionResult:
+    """Every session's position errors, node times and executed schedule, in both configurations."""
+
+    robots: list[str]
+    nodes: dict[str, list[int]]  # robot -> roadmap node at each recorded point (start first)
+    errors: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions, points) m
+    truncated_sessions: int
+    times: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions, points) s, when reached
+    planned_times: dict[str, list[float | None]]  # robot -> planned arrival at each point (s)
+    schedules: dict[int, list[Schedule]]  # config -> each session's moves as executed
+    planned: Schedule  # the plan's schedule
+
+    def mean_errors(self, config: int, robot: str) -> np.ndarray:
+        """(points,) m: the robot's position error at each point of its paths, averaged over the sessions."""
+        return np.nanmean(self.errors[(config, robot)], axis=0)
+
+    def worst(self, config: int, robot: str) -> float:
+        """The worst-case position error: the largest average error over the path nodes."""
+        return float(np.nanmax(self.mean_errors(config, robot)))
+
+    def reduction(self, robot: str) -> float:
+        """How much lower (%) the worst-case error is with mutual observations."""
+        w1, w2 = self.worst(1, robot), self.worst(2, robot)
+        return 100.0 * (w2 - w1) / w2 if w2 > 0 else 0.0
+
+    @property
+    def starved(self) -> str:
+        """The robot that suffers most without mutual observations (the paper's r')."""
+        return max(self.robots, key=lambda r: self.worst(2, r))
+
+    def makespans(self, config: int) -> np.ndarray:
+        """(sessions,) s: when each session's last move ended."""
+        return np.array([s.makespan for s in self.schedules[config]], dtype=float)
+
+    def waits(self, config: int, robot: str) -> np.ndarray:
+        """(sessions,) s: how long the robot waited before its moves (for a partner or a planned start)."""
+        return np.array([s.waits(robot) for s in self.schedules[config]], dtype=float)
+
+
+def recorded_nodes(moves: dict[str, tuple[QueuedMove, ...]], starts: dict[str, int]) -> dict[str, list[int]]:
+    """Robot -> the roadmap node of each point a session records: its start, then its paths' nodes."""
+    return {r: [starts[r], *(n for m in queue for n in m.nodes[1:])] for r, queue in moves.items()}
+
+
+def execute(report: PlanReport, sessions: int = 25, seed: int = 0) -> ExecutionResult:
+    """Execute ``report``'s schedule ``sessions`` times in both configurations."""
+    scenario, world = report.scenario, report.world
+    robots = [r.name for r in scenario.robots]
+    moves = queues(report)
+    # the draws' length: as many steps as the plan's trajectories hold together, times the
+    # budget (sessions drawn before the team moved at once draw the same numbers)
+    planned = sum(len(t) for t in report.trajectories.values())
+    vis = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
+    traces: dict[int, list[SessionTrace]] = {c: [] for c in CONFIGS}
+    truncated = 0
+    for s in range(sessions):
+        draws = Draws.draw(seed, s, len(robots), STEP_BUDGET * planned + 100, world.landmark_xy.shape[0])
+        cut = False
+        for config, mutual in CONFIGS.items():
+            trace = Session(scenario, world, moves, draws, vis, mutual).run()
+            traces[config].append(trace)
+            cut |= trace.truncated
+        truncated += int(cut)
+    return _result(report, robots, moves, traces, truncated)
+
+
+def _result(
+    report: PlanReport,
+    robots: list[str],
+    moves: dict[str, tuple[QueuedMove, ...]],
+    traces: dict[int, list[SessionTrace]],
+    truncated: int,
+) -> ExecutionResult:
+    names = tuple(robots)
+    return ExecutionResult(
+        robots=robots,
+        nodes=recorded_nodes(moves, report.roadmap.starts),
+        errors={(c, r): np.array([t.errors[r] for t in traces[c]], dtype=float) for c in CONFIGS for r in robots},
+        truncated_sessions=truncated,
+        times={(c, r): np.array([t.times[r] for t in traces[c]], dtype=float) for c in CONFIGS for r in robots},
+        planned_times={r: [0.0, *(t for m in moves[r] for t in m.arrivals)] for r in robots},
+        schedules={c: [t.schedule(names) for t in traces[c]] for c in CONFIGS},
+        planned=report.schedule,
+    )

@@ -1,0 +1,304 @@
+"""One session of ``tmpnav simulate``: the plan's schedule executed by the whole team at once.
+
+Every robot follows its own queue of moves (:mod:`tmpnav.execution.moves`) at the same time,
+on one clock of the models' ``dt``. A robot starts its next move when
+
+* it has reached the end of its previous move (its estimate at the path's last node),
+* for a paired move, its partner has reached the end of its own previous move (the one that
+  is there first waits), and
+* the plan's start time of the move has come (never earlier: the planner may hold a move back
+  to keep clear of another robot).
+
+Each control step, for the whole team together:
+
+1. driving robots drop the waypoints they have reached (the position error recorded at each);
+   a robot that reached its last one ends its move, and moves that may start now start;
+2. every driving robot gets the waypoint controller's command (:mod:`tmpnav.execution.control`),
+   every other robot (waiting, idle, done) none: zero control, so its uncertainty does not grow;
+3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the joint
+   EKF of :mod:`tmpnav.belief.ekf` (the filterpy reference) predicts with the commands;
+4. every robot observes the landmarks it sees from its true pose (range, field of view, line of
+   sight) with sensor noise, moving or standing; with mutual observations (config 1) any two
+   robots observe each other whenever they are in range and line of sight at that instant.
+
+Both configurations of a session use the same random draws (initial poses, control noise and
+observation noise are indexed by robot and control step), so their comparison is paired.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from tmpnav.belief import ekf
+from tmpnav.belief.models import landmark_obs, motion, motion_noise_cov, mutual_obs, noisy_observation
+from tmpnav.errors import TmpnavError
+from tmpnav.execution.control import control, reached
+from tmpnav.execution.moves import QueuedMove
+from tmpnav.results import Schedule, TimedMove
+from tmpnav.types import Belief, Scenario
+from tmpnav.world import World
+from tmpnav.world.visibility import LandmarkVisibility, MutualSensing
+
+#: a move may take this many times its planned steps (or 40 steps per waypoint) before it is cut
+STEP_BUDGET = 6
+
+
+@dataclass
+class SessionTrace:
+    """One session in one configuration: robot -> the position error (m) at each point of its
+    paths and when it got there (s, nan for a point never reached), and the moves as executed."""
+
+    errors: dict[str, list[float]] = field(default_factory=dict)
+    times: dict[str, list[float]] = field(default_factory=dict)
+    moves: list[TimedMove] = field(default_factory=list)
+    truncated: bool = False
+
+    def schedule(self, robots: tuple[str, ...]) -> Schedule:
+        """The moves as executed, in plan order: a schedule like the plan's."""
+        moves = sorted(self.moves, key=lambda m: (m.step, robots.index(m.robot)))
+        return Schedule(robots, tuple(moves))
+
+
+@dataclass(frozen=True)
+class Draws:
+    """A session's random numbers, indexed so that both configurations share them."""
+
+    initial: np.ndarray  # (N, 3)
+    motion: np.ndarray  # (N, S, 2)
+    landmark: np.ndarray  # (N, S, L, 2)
+    mutual: np.ndarray  # (N, N, S, 2)
+
+    @staticmethod
+    def draw(seed: int, session: int, n: int, steps: int, landmarks: int) -> Draws:
+        """The draws of session ``session`` for ``n`` robots, ``steps`` control steps and ``landmarks``."""
+        rng = np.random.default_rng([seed, session])
+        return Draws(
+            initial=rng.standard_normal((n, 3)),
+            motion=rng.standard_normal((n, steps, 2)),
+            landmark=rng.standard_normal((n, steps, landmarks, 2)),
+            mutual=rng.standard_normal((n, n, steps, 2)),
+        )
+
+    @property
+    def steps(self) -> int:
+        """Control steps drawn: a session that needs more is cut there."""
+        return int(self.motion.shape[1])
+
+
+@dataclass
+class _Robot:
+    """Where one robot is in its queue: the move under way, its waypoints left, when it was free."""
+
+    queue: tuple[QueuedMove, ...]
+    started: int = 0  # moves started so far
+    move: QueuedMove | None = None  # the move under way
+    waypoints: list[np.ndarray] = field(default_factory=list)  # of the move under way, not reached yet
+    previous: np.ndarray | None = None  # the last waypoint reached
+    ready: int = 0  # step at which it ended its latest move
+    since: int = 0  # step at which the move under way started
+
+    @property
+    def next(self) -> QueuedMove | None:
+        """The next move to start (None when under way or when its queue is done)."""
+        if self.move is not None or self.started >= len(self.queue):
+            return None
+        return self.queue[self.started]
+
+
+class Session:
+    """The state of one session in one configuration (see the module docstring)."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        world: World,
+        queues: Mapping[str, tuple[QueuedMove, ...]],
+        draws: Draws,
+        vis: LandmarkVisibility,
+        mutual: bool,
+    ):
+        self.scenario, self.world, self.draws, self.vis, self.mutual = scenario, world, draws, vis, mutual
+        self.names = tuple(r.name for r in scenario.robots)
+        self.robots = [_Robot(queues.get(r, ())) for r in self.names]
+        self.dt = scenario.models.dt
+        self.step = 0  # control steps taken (indexes the draws)
+        self.truth, self.belief, self.trace = self._initial()
+        self.sensing = self._sensing()
+
+    def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
+        """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
+        robots = self.scenario.robots
+        n = len(robots)
+        mean = np.concatenate([r.pose.as_array() for r in robots])
+        cov = np.zeros((3 * n, 3 * n))
+        truth = np.empty((n, 3))
+        for i, r in enumerate(robots):
+            cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = r.cov
+            truth[i] = r.pose.as_array() + np.linalg.cholesky(r.cov) @ self.draws.initial[i]
+        errors = {r.name: [float(np.hypot(*(truth[i, :2] - mean[3 * i : 3 * i + 2])))] for i, r in enumerate(robots)}
+        return truth, Belief(mean, cov), SessionTrace(errors, {r.name: [0.0] for r in robots})
+
+    def _sensing(self) -> dict[MutualSensing, list[tuple[int, int]]]:
+        """The ordered pairs of robots that observe each other (config 1), grouped by sensor."""
+        groups: dict[MutualSensing, list[tuple[int, int]]] = {}
+        if self.mutual:  # config 1 senses whatever the scenario's switch says
+            for i, a in enumerate(self.names):
+                for j, b in enumerate(self.names):
+                    if i != j:
+                        groups.setdefault(MutualSensing.of_sensor(self.scenario, a, b), []).append((i, j))
+        return groups
+
+    def estimate(self, i: int) -> np.ndarray:
+        """Robot i's estimated pose: its part of the joint belief's mean."""
+        return self.belief.mean[3 * i : 3 * i + 3]
+
+    # ------------------------------------------------------------------ the run
+
+    def run(self) -> SessionTrace:
+        """Execute the schedule until every robot has made all its moves (or the draws run out)."""
+        while True:
+            self._arrive_and_start()
+            if all(r.move is None and r.next is None for r in self.robots):
+                break
+            if self.step >= self.draws.steps:
+                self._cut_all()
+                break
+            if not any(r.move is not None for r in self.robots):
+                self._check_waiting()
+            u = np.zeros((len(self.names), 2))
+            for i, r in enumerate(self.robots):
+                if r.waypoints:
+                    spec = self.scenario.robots[i]
+                    u[i] = control(self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt)
+            self._move(u)
+            self._observe()
+            self.step += 1
+        return self.trace
+
+    def _arrive_and_start(self) -> None:
+        """Waypoints reached, moves ended, then moves started (a move that starts where it ends
+        ends at once, and the robot's next move may start too)."""
+        while True:
+            for i, r in enumerate(self.robots):
+                if r.move is not None:
+                    self._advance(i, r)
+            if not self._start_moves():
+                return
+
+    def _advance(self, i: int, r: _Robot) -> None:
+        """Drop the waypoints robot i has reached, recording the error at each; end its move when
+        none is left, or cut it when it has run out of its budget."""
+        name = self.names[i]
+        assert r.previous is not None and r.move is not None
+        while r.waypoints and reached(self.estimate(i), r.previous, r.waypoints[0]):
+            r.previous = r.waypoints.pop(0)
+            self.trace.errors[name].append(float(np.hypot(*(self.truth[i, :2] - self.estimate(i)[:2]))))
+            self.trace.times[name].append(self.step * self.dt)
+        if r.waypoints and self.step - r.since >= STEP_BUDGET * max(r.move.steps, 40 * (len(r.move.nodes) - 1)):
+            self._cut(name, len(r.waypoints))
+            r.waypoints = []
+        if not r.waypoints:
+            self._end(r)
+
+    def _end(self, r: _Robot) -> None:
+        """Robot r ends its move now: record it as executed; the robot is ready for its next."""
+        m = r.move
+        assert m is not None
+        dt = self.dt
+        self.trace.moves.append(
+            TimedMove(m.step, m.robot, m.origin, m.target, m.partner, r.ready * dt, r.since * dt, self.step * dt)
+        )
+        r.move, r.ready = None, self.step
+
+    def _start_moves(self) -> bool:
+        """Start every move whose robots are free and whose planned start has come; whether any did."""
+        started = False
+        for r in self.robots:
+            m = r.next
+            if m is None or m.start > self.step:
+                continue
+            if m.partner is not None:
+                other = self.robots[self.names.index(m.partner)]
+                n = other.next
+                if n is None or n.step != m.step or n.start > self.step:
+                    continue  # the partner is not there yet: wait for it
+                self._start(other, n)
+            self._start(r, m)
+            started = True
+        return started
+
+    def _start(self, r: _Robot, m: QueuedMove) -> None:
+        r.move, r.started, r.since = m, r.started + 1, self.step
+        r.waypoints, r.previous = m.waypoints, np.asarray(m.points[0], dtype=float)
+
+    def _cut(self, name: str, points: int) -> None:
+        """Points of a path never reached: no error, no time."""
+        self.trace.truncated = True
+        self.trace.errors[name].extend([math.nan] * points)
+        self.trace.times[name].extend([math.nan] * points)
+
+    def _cut_all(self) -> None:
+        """The draws have run out: every move under way or not started is cut."""
+        for i, r in enumerate(self.robots):
+            name = self.names[i]
+            if r.move is not None:
+                self._cut(name, len(r.waypoints))
+                r.waypoints = []
+                self._end(r)
+            for m in r.queue[r.started :]:
+                self._cut(name, len(m.waypoints))
+            r.started = len(r.queue)
+
+    def _check_waiting(self) -> None:
+        """Nobody drives: some robot must be waiting for a planned start still to come, else the
+        schedule cannot go on (a paired move whose partner waits for another one)."""
+        if any(r.next is not None and r.next.start > self.step for r in self.robots):
+            return
+        stuck = ", ".join(
+            f"{m.robot} at step {m.step + 1} waits for {m.partner}" for r in self.robots if (m := r.next) is not None
+        )
+        raise TmpnavError(f"the plan's schedule cannot be executed: {stuck}")
+
+    # ------------------------------------------------------------------ the team's motion and sensing
+
+    def _move(self, u: np.ndarray) -> None:
+        """The true robots move with noisy controls (none for a robot standing: W(0) = 0); the
+        filter predicts with the commands."""
+        models = self.scenario.models
+        for i in range(len(self.names)):
+            W = motion_noise_cov(u[i], models.motion_noise)
+            noisy = u[i] + np.sqrt(np.diag(W)) * self.draws.motion[i, self.step]
+            self.truth[i] = motion(self.truth[i], noisy, models.dt)
+        self.belief = ekf.predict(self.belief, u, models.dt, models.motion_noise)
+
+    def _observe(self) -> None:
+        """Every robot's landmark observations, then (config 1) every pair's mutual observations."""
+        models, truth, step = self.scenario.models, self.truth, self.step
+        q_lm = models.landmark_sensor.Q
+        chol_lm = np.linalg.cholesky(q_lm)
+        landmarks = self.world.landmark_xy
+        seen = self.vis.visible(truth, models.landmark_sensor.fov)
+        for i in range(len(self.names)):
+            for lm in np.flatnonzero(seen[i]):
+                z = noisy_observation(landmark_obs(truth[i], landmarks[lm]), chol_lm, self.draws.landmark[i, step, lm])
+                self.belief = ekf.update_landmark(self.belief, i, landmarks[lm], z, q_lm)
+        if not self.sensing:
+            return
+        q_mu = models.mutual_sensor.Q
+        chol_mu = np.linalg.cholesky(q_mu)
+        for i, j in self._mutually_visible():
+            z = noisy_observation(mutual_obs(truth[i], truth[j]), chol_mu, self.draws.mutual[i, j, step])
+            self.belief = ekf.update_mutual(self.belief, i, j, z, q_mu)
+
+    def _mutually_visible(self) -> list[tuple[int, int]]:
+        """The ordered pairs (observer, observed) in range and line of sight now, in team order."""
+        out = []
+        for sensing, pairs in self.sensing.items():
+            a, b = np.array(pairs).T
+            seen = sensing.visible(self.world, self.truth[a], self.truth[b])
+            out += [p for p, s in zip(pairs, seen, strict=True) if s]
+        return sorted(out)

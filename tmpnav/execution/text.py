@@ -1,0 +1,96 @@
+"""What ``tmpnav simulate`` prints and writes: the summary (terminal and summary.md), errors.csv
+and sessions.csv."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from tmpnav.execution.result import CONFIGS, ExecutionResult
+from tmpnav.types import Roadmap
+
+
+def error_summary(result: ExecutionResult, sessions: int) -> list[str]:
+    """The worst-case position error per robot in both configurations, the makespan executed
+    against the planned one, and the robots' waits (what ``tmpnav simulate`` prints)."""
+    lines = [f"{sessions} sessions; worst-case position error (largest average error over the path's nodes):"]
+    for robot in result.robots:
+        lines.append(
+            f"  {robot}: with mutual observations {result.worst(1, robot):.3f} m, "
+            f"without {result.worst(2, robot):.3f} m, {result.reduction(robot):.1f}% lower"
+        )
+    starved = result.starved
+    lines.append(
+        f"landmark-starved robot (largest error without mutual observations): {starved}, "
+        f"{result.reduction(starved):.1f}% lower with mutual observations"
+    )
+    lines.append(makespan_line(result))
+    lines += wait_lines(result)
+    if result.truncated_sessions:
+        lines.append(f"note: {result.truncated_sessions} session(s) did not reach every node within the step budget")
+    return lines
+
+
+def makespan_line(result: ExecutionResult) -> str:
+    """Planned makespan, and the executed one's mean and worst over the sessions, per configuration."""
+    parts = []
+    for config, label in ((1, "with mutual observations"), (2, "without")):
+        spans = result.makespans(config)
+        worst = int(np.argmax(spans))
+        parts.append(f"{label} {spans.mean():.1f} s mean, {spans[worst]:.1f} s worst (session {worst + 1})")
+    return f"makespan (until the last robot is done): planned {result.planned.makespan:.1f} s; executed " + "; ".join(
+        parts
+    )
+
+
+def wait_lines(result: ExecutionResult) -> list[str]:
+    """Each robot's waits before its moves, planned and executed (none when nobody waits)."""
+    planned = {r: result.planned.waits(r) for r in result.robots}
+    executed = {r: float(result.waits(1, r).mean()) for r in result.robots}
+    if not any(planned.values()) and not any(executed.values()):
+        return []
+    cells = ", ".join(f"{r} {executed[r]:.1f} s (planned {planned[r]:.1f} s)" for r in result.robots)
+    return [f"waiting for partners and planned starts, mean per session with mutual observations: {cells}"]
+
+
+def errors_csv(result: ExecutionResult, roadmap: Roadmap) -> str:
+    """Average (and spread of) the position error at each node, per robot and configuration,
+    with the planned arrival time there and the executed one (mean and latest over the sessions)."""
+    rows = [
+        "config,mutual_observations,robot,node_index,roadmap_node,x,y,mean_error_m,std_error_m,max_error_m,sessions,"
+        "planned_t_s,mean_t_s,max_t_s"
+    ]
+    for config in CONFIGS:
+        for robot in result.robots:
+            errors, times = result.errors[(config, robot)], result.times[(config, robot)]
+            for k, node in enumerate(result.nodes[robot]):
+                col, t = errors[:, k], times[:, k]
+                x, y = roadmap.nodes[node]
+                planned = result.planned_times[robot][k]
+                rows.append(
+                    f"{config},{'yes' if config == 1 else 'no'},{robot},{k},{node},{x:.4f},{y:.4f},"
+                    f"{np.nanmean(col):.6f},{np.nanstd(col):.6f},{np.nanmax(col):.6f},{int(np.sum(~np.isnan(col)))},"
+                    f"{'' if planned is None else f'{planned:.6g}'},{_seconds(t, np.nanmean)},{_seconds(t, np.nanmax)}"
+                )
+    return "\n".join(rows) + "\n"
+
+
+def sessions_csv(result: ExecutionResult) -> str:
+    """One row per session, configuration and robot: when the robot was done, how long it
+    waited, and the session's makespan next to the planned one."""
+    rows = ["config,mutual_observations,session,robot,done_s,wait_s,makespan_s,planned_makespan_s"]
+    for config in CONFIGS:
+        for s, schedule in enumerate(result.schedules[config]):
+            for robot in result.robots:
+                done = max((m.end for m in schedule.timeline(robot)), default=0.0)
+                rows.append(
+                    f"{config},{'yes' if config == 1 else 'no'},{s + 1},{robot},{done:.6g},"
+                    f"{schedule.waits(robot):.6g},{schedule.makespan:.6g},{result.planned.makespan:.6g}"
+                )
+    return "\n".join(rows) + "\n"
+
+
+def _seconds(times: np.ndarray, statistic: Callable[[np.ndarray], float]) -> str:
+    """A statistic of the sessions' times at a node ("" when no session got there)."""
+    return "" if np.all(np.isnan(times)) else f"{statistic(times):.6g}"

@@ -1,0 +1,92 @@
+"""The plan's schedule as the reports read it: the numbers plan.json, the summary and the figures share.
+
+All robots move at once on one shared clock (:class:`~tmpnav.results.Schedule`, made by the
+team's clock of :mod:`tmpnav.attachment.clock`). The reports need a few readings of it that
+must agree everywhere: each plan step's time window, which plan step a robot is driving in at
+a given control step (and so how many control steps it drives), and the plan's objective with
+its price on time (:mod:`tmpnav.task.objectives`). They are here, once.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from tmpnav.results import PlanReport, Schedule, TimedMove
+from tmpnav.task.objectives import OBJECTIVES
+
+#: s: trajectory times are rounded to 1e-9 s, schedule times are multiples of the control step
+T_TOL = 1e-6
+
+
+def step_windows(schedule: Schedule, n_steps: int) -> list[tuple[float, float] | None]:
+    """(start, end) in seconds of each of ``n_steps`` plan steps on the shared clock: from when
+    its moves start (together, for a paired step) to when its last robot arrives; None for a
+    step without a move in the schedule (never expected)."""
+    windows: list[tuple[float, float] | None] = [None] * n_steps
+    for move in schedule.moves:
+        if not 0 <= move.step < n_steps:
+            continue
+        window = windows[move.step]
+        windows[move.step] = (
+            (move.start, move.end) if window is None else (min(window[0], move.start), max(window[1], move.end))
+        )
+    return windows
+
+
+def driving_steps(schedule: Schedule, robot: str, times: Sequence[float]) -> list[int | None]:
+    """For each time of ``robot``'s trajectory (increasing, s): the 1-based plan step whose move
+    it drives during the control step that ends then (``start < t <= end``), None while it
+    stands (its initial belief, waiting, held back, or done)."""
+    moves = sorted(schedule.timeline(robot), key=lambda m: m.start)
+    out: list[int | None] = []
+    k = 0
+    for t in times:
+        while k < len(moves) and moves[k].end < t - T_TOL:
+            k += 1
+        driving = k < len(moves) and moves[k].start + T_TOL < t
+        out.append(moves[k].step + 1 if driving else None)
+    return out
+
+
+def move_at(schedule: Schedule, robot: str, t: float) -> TimedMove | None:
+    """The move ``robot`` drives at time ``t`` (s), None if it stands then."""
+    return next((m for m in schedule.timeline(robot) if m.start + T_TOL < t <= m.end + T_TOL), None)
+
+
+@dataclass(frozen=True)
+class ObjectiveValues:
+    """What the plan minimised and what it came to: as the planner saw it and as re-simulated.
+
+    ``value = cost + span_weight * makespan`` (:mod:`tmpnav.task.objectives`); the planner's
+    makespan is None when its costs had no durations (then so is its value)."""
+
+    name: str  # weighted | cost | makespan (tmpnav.choices)
+    doc: str
+    span_weight: float  # cost units per second of makespan
+    makespan: float  # s, the re-simulated schedule's
+    planner_makespan: float | None  # s, the planner's schedule's
+    value: float  # of the re-simulated plan
+    planner_value: float | None  # of the plan as the planner saw it
+
+    def differs(self, tol: float = 5e-4) -> bool:
+        """Whether the planner's makespan or value is not the re-simulated one (or unknown)."""
+        if self.planner_makespan is None or self.planner_value is None:
+            return True
+        return abs(self.planner_makespan - self.makespan) > T_TOL or abs(self.planner_value - self.value) > tol
+
+
+def objective_values(report: PlanReport) -> ObjectiveValues:
+    """The objective of ``report``'s plan, planner's and re-simulated."""
+    name = report.scenario.planner.objective
+    objective, weights = OBJECTIVES[name], report.scenario.cost
+    makespan, planned = report.schedule.makespan, report.task.makespan
+    return ObjectiveValues(
+        name=name,
+        doc=objective.doc,
+        span_weight=objective.span_weight(weights),
+        makespan=makespan,
+        planner_makespan=planned,
+        value=objective.value(report.resimulated_cost, makespan, weights),
+        planner_value=None if planned is None else objective.value(report.planner_cost, planned, weights),
+    )
