@@ -143,6 +143,7 @@ def plan(
     time_budget: float | None = None,
     costs: str | None = None,
     objective: str | None = None,
+    max_risk: float | None = None,
     cache_dir: str | Path | None = None,
     use_cache: bool = True,
     workers: int | None = None,
@@ -160,6 +161,7 @@ def plan(
         timeout=timeout,
         time_budget=time_budget,
         pair_min_gain=pair_min_gain,
+        max_risk=max_risk,
     )
     options = PlanOptions.of(
         encoding=encoding,
@@ -171,6 +173,7 @@ def plan(
         time_budget=time_budget,
         costs=costs,
         objective=objective,
+        max_risk=max_risk,
         cache_dir=Path(cache_dir) if cache_dir is not None else None,
         use_cache=use_cache,
         workers=workers,
@@ -193,7 +196,8 @@ def _check_choices(**values: object) -> None:
         if name not in choices:
             number = value if isinstance(value, int | float) else math.nan
             low_ok = number >= 0 if name == "pair_min_gain" else number > 0
-            if not (math.isfinite(number) and low_ok and (name != "pair_min_gain" or number <= 1)):
+            in_range = name not in ("pair_min_gain", "max_risk") or number <= 1
+            if not (math.isfinite(number) and low_ok and in_range):
                 raise InputError(f"plan(): {name}={value!r} is not a finite number in its range")
 
 

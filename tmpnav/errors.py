@@ -89,6 +89,16 @@ class PlannerCrashError(PlannerError):
     exit_code = 7
 
 
+class RiskError(PlannerError):
+    """No plan keeps every move within the chance constraint (planner.max_risk)."""
+
+    exit_code = 9
+
+    def __init__(self, message: str, least: float):
+        super().__init__(message)
+        self.least = least  # the smallest threshold tmpnav found a plan for
+
+
 class CacheError(TmpnavError):
     """The cache directory cannot be used at all (not a directory, not writable)."""
 
@@ -106,6 +116,7 @@ EXIT_CODES: dict[int, str] = {
     UnsolvableError.exit_code: "no plan exists for the goals (proved by the planner)",
     PlannerCrashError.exit_code: "the planner process crashed",
     CacheError.exit_code: "the cache directory is unusable",
+    RiskError.exit_code: "no plan keeps every move within --max-risk (the message names the least that one does)",
     130: "interrupted (Ctrl-C)",
     143: "terminated (SIGTERM; a parent process sees it killed by the signal): the processes it started "
     "are stopped and earlier outputs kept, as after Ctrl-C",

@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
@@ -22,7 +23,7 @@ from tmpnav import scenario as scenario_stage
 from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
 from tmpnav.choices import Costs, Objective, Search, choose, paper_conflict
-from tmpnav.errors import InputError, Problem, ScenarioError
+from tmpnav.errors import InputError, Problem, RiskError, ScenarioError
 from tmpnav.results import CacheUse, PlanReport, SearchProgress, StageTimes
 from tmpnav.types import Goals, Roadmap, Scenario
 from tmpnav.world import MapImageError, World
@@ -47,6 +48,7 @@ class Overrides:
     time_budget: float | None = None
     costs: Costs | None = None
     objective: Objective | None = None
+    max_risk: float | None = None
 
 
 @dataclass(frozen=True)
@@ -127,12 +129,13 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
         time_budget=o.time_budget if o.time_budget is not None else planner.time_budget,
         costs=o.costs or planner.costs,
         objective=o.objective or planner.objective,
+        max_risk=o.max_risk if o.max_risk is not None else planner.max_risk,
     )
     if (why := paper_conflict(planner.encoding, o.search, o.costs, o.objective)) is not None:
         raise InputError(why)
     if planner.encoding == "paper":  # the paper's model, as tmpnav.choices.choose plans it
         choice = choose(planner.encoding, planner.search, planner.costs, 0, 0)
-        planner = replace(planner, costs=choice.costs, search=choice.mode, objective="cost")
+        planner = replace(planner, costs=choice.costs, search=choice.mode, objective="cost", max_risk=None)
     models = scenario.models
     if o.mutual_observations is not None:
         models = replace(models, mutual_observations=o.mutual_observations)
@@ -263,7 +266,7 @@ def plan(
     finally:
         prep.oracle.close()
     times.close()
-    return PlanReport(
+    report = PlanReport(
         scenario=prep.scenario,
         world=prep.world,
         roadmap=prep.roadmap,
@@ -276,6 +279,52 @@ def plan(
         cache=_cache_use(prep, planned.task.plan_hit, options.execution.use_cache),
         oracle=prep.oracle.stats.counts(),
     )
+    check_risk(path, options, report)
+    return report
+
+
+#: re-plans at the threshold the plan of least risk meets, before tmpnav names it (each under
+#: it: the named threshold is one that a plan was found for)
+RISK_RETRIES = 3
+
+
+def check_risk(path: str | Path, options: PlanOptions, report: PlanReport) -> None:
+    """Raise RiskError when a move of ``report``'s plan exceeds the chance constraint: the
+    planner found no plan within it (a move over it costs more than any plan within it,
+    tmpnav.types.RISK_PENALTY). The error names the least threshold tmpnav found a plan for:
+    the plan's largest move bound, rounded up, verified by planning at it (the plan found
+    there is remembered, so that the rerun the message suggests takes no search)."""
+    delta = report.scenario.planner.max_risk
+    worst = report.worst_risk
+    if delta is None or worst <= delta:
+        return
+    asked = delta
+    for _ in range(RISK_RETRIES):
+        least = min(1.0, _round_up(worst))
+        if least >= 1.0:
+            break
+        again = plan(path, options.but(max_risk=least, replan=False))
+        worst = again.worst_risk
+        if worst <= least:
+            raise RiskError(
+                f"no plan keeps every move's collision bound within max_risk {asked:g}: the least "
+                f"tmpnav found is {least:g} (rerun with --max-risk {least:g}, or set planner.max_risk)",
+                least,
+            )
+    raise RiskError(
+        f"no plan keeps every move's collision bound within max_risk {asked:g}: every plan tmpnav "
+        f"found has a move at {min(1.0, worst):.2g} (robots too uncertain where the map leaves them little "
+        'room; see docs/models.md, "Collision bound"): plan without --max-risk',
+        1.0,
+    )
+
+
+def _round_up(p: float) -> float:
+    """``p`` rounded up to two significant digits."""
+    if p <= 0.0:
+        return 0.0
+    scale = 10.0 ** (math.floor(math.log10(p)) - 1)
+    return math.ceil(p / scale - 1e-9) * scale
 
 
 def pddl_texts(report: PlanReport) -> tuple[str, str]:

@@ -60,6 +60,7 @@ def resimulate(carried: CarriedCosts, task: TaskResult, delays: Mapping[int, flo
                 goal_nodes=tuple(int(m.motion.path[-1]) for m in ran),
                 paths=tuple(m.motion.path for m in ran),
                 goal_poses=tuple(vec3(m.motion.poses[-1]) for m in ran),
+                risk=tuple(m.risk for m in ran),
             )
         )
     assert run.trajectories is not None

@@ -10,6 +10,7 @@ class of the oracle or the task stage (it sits below them: they return its value
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -283,6 +284,28 @@ class PlanReport:
     @property
     def resimulated_cost(self) -> float:
         return float(sum(a.resimulated_cost for a in self.actions))
+
+    @property
+    def worst_risk(self) -> float:
+        """The largest collision bound of any move (docs/models.md, "Collision bound")."""
+        return max((p for a in self.actions for p in a.risk), default=0.0)
+
+    @property
+    def risk(self) -> float:
+        """The plan's collision bound: its moves' bounds summed (Boole's inequality), at most 1."""
+        return min(1.0, sum(p for a in self.actions for p in a.risk))
+
+    def largest_std(self) -> dict[str, float]:
+        """Each robot's largest position standard deviation along the plan (m): the square
+        root of the largest eigenvalue of its position covariance at any control step."""
+        out = {}
+        for robot, steps in self.trajectories.items():
+            worst = 0.0
+            for step in steps:
+                (a, b, _), (_, d, _) = step.cov[0], step.cov[1]
+                worst = max(worst, 0.5 * (a + d) + math.sqrt(0.25 * (a - d) ** 2 + b * b))
+            out[robot] = math.sqrt(worst)
+        return out
 
 
 def _one_of(value: JSON, choices: tuple[_Name, ...]) -> _Name:

@@ -151,6 +151,20 @@ class Models:
 CostValue = TypeVar("CostValue", float, np.ndarray)
 
 
+#: what a move costs per unit of probability by which its collision bound exceeds the chance
+#: constraint (planner.max_risk): so much that a plan with a move over the threshold costs more
+#: than any plan within it (the planner keeps within it when it can, and otherwise finds the
+#: plan of least excess, which names the threshold it does meet)
+RISK_PENALTY = 1e12
+
+
+def risk_penalty(risk: float, max_risk: float | None) -> float:
+    """The cost added to a move whose collision bound ``risk`` exceeds ``max_risk``."""
+    if max_risk is None or risk <= max_risk:
+        return 0.0
+    return RISK_PENALTY * (risk - max_risk)
+
+
 @dataclass(frozen=True)
 class CostWeights:
     """c = M_u*c_u + M_G*c_G + M_Sigma*c_Sigma (paper, section Approach); M_T weighs the
@@ -204,6 +218,9 @@ class PlannerOptions:
     time_budget: float | None = None  # s, the anytime search's budget for the run; None: by size
     costs: Costs = "carried"  # carried (the beliefs the robots carry; default) | table (canonical start states)
     objective: Objective = "weighted"  # weighted | cost | makespan (tmpnav.choices)
+    #: the chance constraint: each move's bound on the probability of touching an obstacle,
+    #: and of two robots touching, at most this (None: unconstrained; docs/models.md)
+    max_risk: float | None = None
 
 
 @dataclass(frozen=True)
@@ -320,6 +337,9 @@ class MotionResult:
     final_headings: tuple[float, ...] = ()  # nominal heading of each robot at its goal
     pruned: bool = False  # a pair proved unable to save min_gain: cost is a lower bound only
     steps: tuple[int, ...] = ()  # control steps of each robot's motion (its duration is steps x dt)
+    #: each robot's bound on the probability that its footprint touches an obstacle during the
+    #: move (docs/models.md, "Collision bound"; at most 1)
+    risk: tuple[float, ...] = ()
 
     @property
     def final(self) -> Belief:
@@ -378,3 +398,5 @@ class PlannedAction:
     goal_nodes: tuple[int, ...]
     paths: tuple[tuple[int, ...], ...]
     goal_poses: tuple[tuple[float, float, float], ...]
+    #: each move's bound on the probability that its robot touches an obstacle (docs/models.md)
+    risk: tuple[float, ...] = ()

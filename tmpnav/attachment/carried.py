@@ -72,7 +72,7 @@ class CarriedCosts:
         run = self.run(plan)
         if run is None:
             return PlanCost.impossible(len(plan))
-        costs = run.step_costs(len(plan), self.scenario.cost)
+        costs = run.step_costs(len(plan), self.scenario.cost, self.scenario.planner.max_risk)
         return PlanCost(float(sum(costs)), tuple(costs), run.schedule)
 
     def ends(self, head: Plan) -> dict[str, float]:

@@ -60,7 +60,7 @@ from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState, mutual_seed
 from tmpnav.results import Schedule, TimedMove
 from tmpnav.task.plans import Plan, Step
-from tmpnav.types import CostTerms, CostWeights, MotionResult, TrajectoryStep, cov3, vec3
+from tmpnav.types import CostTerms, CostWeights, MotionResult, TrajectoryStep, cov3, risk_penalty, vec3
 from tmpnav.world.visibility import MutualSensing
 
 #: steps of one block of the mutual-noise stream of a pair of robots outside paired moves
@@ -108,11 +108,15 @@ class MoveRun:
     end: int
     motion: NominalMotion
     csig_start: float  # the robot's running c_Sigma when the move started
+    risk_start: float = 0.0  # and its running collision bound
     terms: CostTerms | None = None  # set when the move has ended
+    risk: float = 0.0  # its collision bound (docs/models.md), set when the move has ended
 
-    def cost(self, weights: CostWeights) -> float:
+    def cost(self, weights: CostWeights, max_risk: float | None = None) -> float:
+        """Its weighted terms, and the penalty of a collision bound over ``max_risk``
+        (tmpnav.types.risk_penalty: 0 within it)."""
         assert self.terms is not None, "the move has not ended"
-        return self.terms.total(weights)
+        return self.terms.total(weights) + risk_penalty(self.risk, max_risk)
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,6 +129,7 @@ class ClockState:
     legs: tuple[tuple[Leg, ...], ...]
     free: tuple[int, ...]  # the step at which each robot ends its latest move
     csig: tuple[float, ...]  # each robot's running c_Sigma over all its steps
+    risk: tuple[float, ...] = ()  # each robot's collision bound summed over its driving steps
     pairings: tuple[Pairing, ...] = ()
     open: tuple[MoveRun, ...] = ()  # moves under way
     closed: tuple[MoveRun, ...] = ()  # moves ended, in the order they ended
@@ -150,12 +155,18 @@ class ClockRun:
     def makespan(self) -> float:
         return self.schedule.makespan
 
-    def step_costs(self, steps: int, weights: CostWeights) -> list[float]:
-        """Each plan step's cost: the weighted terms of its robots' moves, summed."""
+    def step_costs(self, steps: int, weights: CostWeights, max_risk: float | None = None) -> list[float]:
+        """Each plan step's cost: the weighted terms of its robots' moves (with the penalty of
+        a collision bound over ``max_risk``), summed."""
         costs = [0.0] * steps
         for move in self.moves:
-            costs[move.step] += move.cost(weights)
+            costs[move.step] += move.cost(weights, max_risk)
         return costs
+
+    @property
+    def risk(self) -> float:
+        """The plan's collision bound: its moves' bounds summed (Boole's inequality), at most 1."""
+        return min(1.0, sum(m.risk for m in self.moves))
 
 
 class TeamClock:
@@ -222,7 +233,7 @@ class TeamClock:
             seed = stable_seed(self.scenario.models.seed, "landmarks", r, node, "standing")
             legs.append((Leg(0, None, node, heading, np.array([x, y, heading]), seed),))
         n = len(team.names)
-        return ClockState(0, team, tuple(legs), (0,) * n, (0.0,) * n)
+        return ClockState(0, team, tuple(legs), (0,) * n, (0.0,) * n, (0.0,) * n)
 
     def ready(self, state: ClockState, step: Step) -> int:
         """The step at which all the robots of ``step`` have ended their latest moves."""
@@ -250,7 +261,7 @@ class TeamClock:
                 motion = self.lib.motion(r, start.node, start.heading, goal)
                 assert motion is not None  # the oracle just planned it
                 legs[i].append(Leg(t, motion, goal, motion.final_heading, motion.poses[-1], motion.noise_seed))
-                opened.append(MoveRun(k, i, free[i], t, t + motion.n_steps, motion, state.csig[i]))
+                opened.append(MoveRun(k, i, free[i], t, t + motion.n_steps, motion, state.csig[i], state.risk[i]))
                 free[i] = t + motion.n_steps
             if len(robots) == 2:
                 h = max(free[names.index(r)] for r in robots) - t
@@ -264,7 +275,7 @@ class TeamClock:
             open=(*state.open, *opened),
         )
         # a move of no step ends as it starts
-        return self._close(state, state.team.mean[None], state.t, [[c] for c in state.csig])
+        return self._close(state, state.team.mean[None], state.t, [[c] for c in state.csig], [[p] for p in state.risk])
 
     def request(self, state: ClockState, step: Step) -> Request:
         """The oracle's request for ``step`` from where its robots stand now, with their beliefs
@@ -311,18 +322,28 @@ class TeamClock:
         out = propagate_sequences(batch)
         assert out.c_sigma_history is not None
         running = [[state.csig[i] + float(c) for c in out.c_sigma_history[0, :, i]] for i in range(n)]
+        risk = [state.risk[i] + _running_risk(out.last_covs, i, windows[i][4], windows[i][5]) for i in range(n)]
         if trace is not None:
             trace.extend(state, a, out.last_means, out.last_covs)
         team = state.team
         nodes = tuple(state.where(i)[0] for i in range(n))
         headings = tuple(state.where(i)[1] for i in range(n))
         moved = Team(team.names, nodes, headings, out.last_means[h].copy(), out.last_covs[h].copy(), until * self.dt)
-        state = replace(state, t=until, team=moved, csig=tuple(running[i][h] for i in range(n)))
-        return self._close(state, out.last_means, a, running)
+        csig, bound = tuple(running[i][h] for i in range(n)), tuple(float(risk[i][h]) for i in range(n))
+        state = replace(state, t=until, team=moved, csig=csig, risk=bound)
+        return self._close(state, out.last_means, a, running, risk)
 
-    def _close(self, state: ClockState, means: np.ndarray, a: int, running: Sequence[Sequence[float]]) -> ClockState:
-        """Close the open moves that have ended by the clock's time: their c_Sigma from the
-        running sums, c_G from the mean on arrival (``means``, ``running``: from step ``a``)."""
+    def _close(
+        self,
+        state: ClockState,
+        means: np.ndarray,
+        a: int,
+        running: Sequence[Sequence[float]],
+        risk: Sequence[Sequence[float]] | Sequence[np.ndarray],
+    ) -> ClockState:
+        """Close the open moves that have ended by the clock's time: their c_Sigma and
+        collision bound from the running sums, c_G from the mean on arrival (``means``,
+        ``running``, ``risk``: from step ``a``)."""
         ended = [m for m in state.open if m.end <= state.t]
         if not ended:
             return state
@@ -332,16 +353,20 @@ class TeamClock:
             arrival = means[k, 3 * m.robot : 3 * m.robot + 2]
             c_sigma = float(running[m.robot][k]) - m.csig_start
             c_g = float(np.hypot(*(arrival - m.motion.poses[-1, :2])))
-            closed.append(replace(m, terms=CostTerms(m.motion.c_u(self.dt), c_g, c_sigma)))
-        total = state.closed_cost + sum(m.cost(w) for m in closed[len(state.closed) :])
+            bound = min(1.0, float(risk[m.robot][k]) - m.risk_start)
+            closed.append(replace(m, terms=CostTerms(m.motion.c_u(self.dt), c_g, c_sigma), risk=bound))
+        delta = self.scenario.planner.max_risk
+        total = state.closed_cost + sum(m.cost(w, delta) for m in closed[len(state.closed) :])
         still = tuple(m for m in state.open if m.end > state.t)
         return replace(state, open=still, closed=tuple(closed), closed_cost=total)
 
     def _window(self, state: ClockState, i: int, a: int, b: int) -> tuple[np.ndarray, ...]:
-        """Robot i's controls (h, 2), nominal poses (h+1, 3), landmark visibility (h+1, L) and
-        landmark draws (h+1, L, 2) over the steps a..b."""
+        """Robot i's controls (h, 2), nominal poses (h+1, 3), landmark visibility (h+1, L),
+        landmark draws (h+1, L, 2), footprint margins (h+1,) and whether it drove into each
+        row (h+1,) over the steps a..b."""
         L = self.ekf.landmarks.shape[0]
         controls, poses = np.zeros((b - a, 2)), np.empty((b - a + 1, 3))
+        margins, drove = np.full(b - a + 1, np.inf), np.zeros(b - a + 1, dtype=bool)
         vis, noise = np.empty((b - a + 1, L), dtype=bool), np.empty((b - a + 1, L, 2))
         legs = state.legs[i]
         for n, leg in enumerate(legs):
@@ -359,12 +384,13 @@ class TeamClock:
             else:
                 m = leg.motion
                 last = np.minimum(k, m.n_steps)
-                poses[rows], vis[rows] = m.poses[last], m.lm_visible[last]
+                poses[rows], vis[rows], margins[rows] = m.poses[last], m.lm_visible[last], m.margins[last]
                 s = np.arange(lo, min(hi, b))  # the window's transitions s -> s + 1 in this leg
                 drive = s - leg.start < m.n_steps
                 controls[s[drive] - a] = m.controls[s[drive] - leg.start]
+                drove[s[drive] - a + 1] = True
             noise[rows] = self._stream(leg.noise_seed, int(k[-1]) + 1, (L, 2))[k]
-        return controls, poses, vis, noise
+        return controls, poses, vis, noise, margins, drove
 
     def _radius(self, i: int) -> float:
         return self.scenario.robot(self.start.names[i]).radius
@@ -436,6 +462,18 @@ class _Trace:
 
     def trajectories(self) -> dict[str, list[TrajectoryStep]]:
         return {self.clock.start.names[i]: steps for i, steps in self.steps.items()}
+
+
+def _running_risk(covs: np.ndarray, i: int, margins: np.ndarray, drove: np.ndarray) -> np.ndarray:
+    """Robot i's collision bound summed over the rows it drove into (0 at row 0): the bound of
+    :func:`tmpnav.belief.risk.step_bound` at each, from its position covariance in ``covs``
+    (h+1, 3n, 3n) and the ``margins`` of its nominal poses, as the compiled kernel sums it."""
+    block = covs[:, 3 * i : 3 * i + 2, 3 * i : 3 * i + 2]
+    a, b, d = block[:, 0, 0], block[:, 0, 1], block[:, 1, 1]
+    lam = 0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + b * b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        p = np.where(margins <= 0.0, 1.0, np.where(lam > 0.0, np.exp(-(margins**2) / (2.0 * lam)), 0.0))
+    return np.cumsum(np.where(drove, p, 0.0))
 
 
 def _reached(legs: Sequence[Leg], a: int, b: int) -> dict[int, int]:

@@ -204,15 +204,29 @@ def _robot_observation(mean, i, j, pi, pj, e0, e1, max_likelihood, chol, H, cols
 
 
 @nb.njit(cache=True, inline="always")
+def _collision_bound(a, b, d, margin):
+    """The bound on the probability that a disc robot's footprint touches an obstacle at one
+    step (tmpnav.belief.risk): exp(-c^2 / (2 lambda_max)) of its 2x2 position covariance
+    [[a, b], [b, d]] with clearance margin c (m), 1 when c <= 0."""
+    if margin <= 0.0:
+        return 1.0
+    lam = 0.5 * (a + d) + math.sqrt(0.25 * (a - d) * (a - d) + b * b)
+    if lam <= 0.0:
+        return 0.0
+    return math.exp(-margin * margin / (2.0 * lam))
+
+
+@nb.njit(cache=True, inline="always")
 def _propagate_steps(c, n, ekf, motions, lm_noise, groups, seqs, mutual_visible, hist, scratch):
     """Steps restart[c]+1 .. horizon[c] of simulation c, each from the stored state of the
     step before: prediction, landmark updates (robot i ascending, landmark l ascending),
     mutual updates (ordered pairs (i, j), i != j, lexicographic); then the belief and the
-    running cost sums are stored (c_Sigma grows by trace(Sigma_i) dt while robot i moves;
-    its arrival position is its mean after its own last step)."""
-    h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u = hist
+    running sums are stored (c_Sigma grows by trace(Sigma_i) dt while robot i moves, and the
+    collision bound by that of the step's pose and covariance; its arrival position is its
+    mean after its own last step)."""
+    h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk = hist
     work, PHt, K, H, cols, y = scratch
-    m_off, m_T, ctrl, pose, vis, stream = motions  # the fields of MotionArrays, in order
+    m_off, m_T, ctrl, pose, vis, stream, clear = motions  # the fields of MotionArrays, in order
     dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks = ekf  # and of EKFConstants
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
     for k in range(seqs.restart[c], seqs.horizon[c]):
@@ -253,6 +267,11 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, groups, seqs, mutual_visible,
             m = sim[i]
             trace = cov[3 * i, 3 * i] + cov[3 * i + 1, 3 * i + 1] + cov[3 * i + 2, 3 * i + 2]
             h_csig[t, i] = h_csig[k, i] + trace * dt if t <= m_T[m] else h_csig[k, i]
+            if t <= m_T[m]:
+                a, b, d = cov[3 * i, 3 * i], cov[3 * i, 3 * i + 1], cov[3 * i + 1, 3 * i + 1]
+                h_risk[t, i] = h_risk[k, i] + _collision_bound(a, b, d, clear[m_off[m] + m + t])
+            else:
+                h_risk[t, i] = h_risk[k, i]
             arrived = t == m_T[m]
             h_fxy[t, i, 0] = mean[3 * i] if arrived else h_fxy[k, i, 0]
             h_fxy[t, i, 1] = mean[3 * i + 1] if arrived else h_fxy[k, i, 1]
@@ -275,7 +294,8 @@ def run_sequences(n, ekf, motions, lm_noise, groups, seqs, mutual_visible, out):
         T = max(T, seqs.horizon[c])
     h_mean, h_cov, h_csig = np.zeros((T + 1, D)), np.zeros((T + 1, D, D)), np.zeros((T + 1, n))
     h_fxy, h_mut = np.zeros((T + 1, n, 2)), np.zeros(T + 1, dtype=np.int64)
-    hist = (h_mean, h_cov, h_csig, h_fxy, h_mut, np.empty(D), np.empty((D, D)), np.zeros((n, 2)))
+    h_risk = np.zeros((T + 1, n))
+    hist = (h_mean, h_cov, h_csig, h_fxy, h_mut, np.empty(D), np.empty((D, D)), np.zeros((n, 2)), h_risk)
     scratch = (
         np.empty((D, D)),
         np.empty((D, 2)),
@@ -292,6 +312,7 @@ def run_sequences(n, ekf, motions, lm_noise, groups, seqs, mutual_visible, out):
             h_cov[0, :, :] = groups.cov0[g]
             for i in range(n):
                 h_csig[0, i] = 0.0
+                h_risk[0, i] = 0.0
                 h_fxy[0, i, 0] = groups.mean0[g, 3 * i]
                 h_fxy[0, i, 1] = groups.mean0[g, 3 * i + 1]
             h_mut[0] = 0
@@ -302,6 +323,7 @@ def run_sequences(n, ekf, motions, lm_noise, groups, seqs, mutual_visible, out):
         out.c_sigma[c] = h_csig[h]
         out.arrival_xy[c] = h_fxy[h]
         out.mutual_steps[c] = h_mut[h]
+        out.risk[c] = h_risk[h]
         if out.c_sigma_history.shape[0] == C:
             out.c_sigma_history[c, : h + 1] = h_csig[: h + 1]
     return h_mean, h_cov

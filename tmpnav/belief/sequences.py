@@ -68,6 +68,7 @@ class MotionArrays(NamedTuple):
     poses: np.ndarray  # (sum T_m + 1, 3)
     lm_visible: np.ndarray  # (sum T_m + 1, L) bool
     noise_stream: np.ndarray  # (M,) int64
+    margin: np.ndarray  # (sum T_m + 1,) m
 
     @staticmethod
     def of(
@@ -76,9 +77,13 @@ class MotionArrays(NamedTuple):
         lm_visible: Sequence[np.ndarray],
         noise_stream: np.ndarray,
         landmarks: int,
+        margins: Sequence[np.ndarray] | None = None,
     ) -> MotionArrays:
-        """Lay out motions given as per-motion arrays (T_m, 2), (T_m + 1, 3), (T_m + 1, L)."""
+        """Lay out motions given as per-motion arrays (T_m, 2), (T_m + 1, 3), (T_m + 1, L)
+        and (T_m + 1,) clearance margins (none given: no collision bound, margins inf)."""
         steps = np.array([c.shape[0] for c in controls], dtype=np.int64)
+        rows = int((steps + 1).sum())
+        margin = np.full(rows, np.inf) if margins is None else np.concatenate(list(margins)).astype(float)
         return MotionArrays(
             offset=np.concatenate([[0], np.cumsum(steps)[:-1]]).astype(np.int64),
             steps=steps,
@@ -88,6 +93,7 @@ class MotionArrays(NamedTuple):
                 np.concatenate(list(lm_visible)).reshape(int((steps + 1).sum()), landmarks)
             ),
             noise_stream=np.asarray(noise_stream, dtype=np.int64),
+            margin=np.ascontiguousarray(margin.reshape(rows)),
         )
 
 
@@ -191,6 +197,8 @@ class SequenceResults:
     ``c_sigma`` (C, n): c_Sigma of each robot (docs/models.md, "Motion cost");
     ``arrival_xy`` (C, n, 2): each robot's mean position after its own last step;
     ``mutual_steps`` (C,): steps with at least one mutual observation;
+    ``risk`` (C, n): each robot's collision bound, summed over its driving steps (Boole's
+    inequality; tmpnav.belief.risk), not capped at 1;
     ``c_sigma_history`` (C, T+1, n): the running c_Sigma after every step, if asked for;
     ``last_means`` (T+1, 3n), ``last_covs`` (T+1, 3n, 3n): the history of the last
     simulation (its whole trajectory if it started from its group's initial belief).
@@ -202,6 +210,7 @@ class SequenceResults:
     arrival_xy: np.ndarray
     mutual_steps: np.ndarray
     c_sigma_history: np.ndarray | None
+    risk: np.ndarray
     last_means: np.ndarray
     last_covs: np.ndarray
 
@@ -213,6 +222,7 @@ class _KernelOutputs(NamedTuple):
     arrival_xy: np.ndarray
     mutual_steps: np.ndarray
     c_sigma_history: np.ndarray
+    risk: np.ndarray
 
 
 def propagate_sequences(batch: SequenceBatch) -> SequenceResults:
@@ -226,6 +236,7 @@ def propagate_sequences(batch: SequenceBatch) -> SequenceResults:
         np.empty((C, n, 2)),
         np.empty(C, dtype=np.int64),
         np.zeros((C, T + 1, n)) if batch.c_sigma_history else np.zeros((0, 1, n)),
+        np.empty((C, n)),
     )
     last_means, last_covs = run_sequences(
         n, batch.ekf, batch.motions, batch.landmark_noise, batch.groups, batch.sequences, batch.mutual_visible, out
@@ -237,6 +248,7 @@ def propagate_sequences(batch: SequenceBatch) -> SequenceResults:
         arrival_xy=out.arrival_xy,
         mutual_steps=out.mutual_steps,
         c_sigma_history=out.c_sigma_history if batch.c_sigma_history else None,
+        risk=out.risk,
         last_means=last_means,
         last_covs=last_covs,
     )

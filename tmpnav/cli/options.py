@@ -274,6 +274,15 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             "or makespan (the time until the last robot is done first).",
         ),
         option(
+            "--max-risk",
+            type=FiniteRange(min=0, min_open=True, max=1),
+            metavar="DELTA",
+            default_text=scenario_default("max_risk", "none"),
+            help="The chance constraint: the largest probability of collision a move may have (its bound on "
+            "touching a wall, from the robot's uncertainty along the path and the map's clearance; robots "
+            "also keep a margin from each other for it). Moves over it are not offered to the planner.",
+        ),
+        option(
             "--pair-min-gain",
             type=FiniteRange(0, 1),
             metavar="G",
@@ -341,6 +350,7 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
         time_budget=kw["time_budget"],
         costs=kw["costs"],
         objective=kw["objective"],
+        max_risk=kw["max_risk"],
     )
     execution = Execution(
         cache_dir=kw["cache_dir"],

@@ -94,6 +94,7 @@ def to_json(result: MotionResult | None) -> dict[str, Any]:
         "mutual_steps": result.mutual_steps,
         "final_headings": list(result.final_headings),
         "steps": list(result.steps),
+        "risk": list(result.risk),
     }
 
 
@@ -114,4 +115,5 @@ def from_json(data: dict[str, Any]) -> MotionResult | None:
         mutual_steps=int(data["mutual_steps"]),
         final_headings=tuple(float(h) for h in data["final_headings"]),
         steps=tuple(int(n) for n in data["steps"]),
+        risk=tuple(float(p) for p in data.get("risk", ())),
     )

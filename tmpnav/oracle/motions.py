@@ -17,6 +17,7 @@ import numpy as np
 
 from tmpnav.belief.controls import path_controls
 from tmpnav.roadmap import RoadmapGraph
+from tmpnav.roadmap.graph import safe_weights
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
@@ -33,6 +34,7 @@ class NominalMotion:
     node_steps: np.ndarray  # (P,) step at which each path node is reached
     lm_visible: np.ndarray  # (T+1, L)
     noise_seed: int
+    margins: np.ndarray  # (T+1,) the footprint's free margin at each pose (m; World.margins)
 
     @property
     def n_steps(self) -> int:
@@ -77,7 +79,9 @@ class MotionLibrary:
         self.scenario = scenario
         self.world = world
         self.roadmap = roadmap
-        self.graph = RoadmapGraph(roadmap)
+        radius = max(r.radius for r in scenario.robots)
+        safe = scenario.planner.max_risk is not None
+        self.graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius) if safe else None)
         self.visibility = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
         self._motions: OrderedDict[tuple[str, int, float, int], NominalMotion | None] = OrderedDict()
 
@@ -113,6 +117,7 @@ class MotionLibrary:
             poses=pc.poses,
             node_steps=pc.node_steps,
             lm_visible=lm_visible,
+            margins=self.world.margins(pc.poses[:, :2], spec.radius),
             # one stream per robot and start node, drawn step by step: a robot sees the
             # same simulated observations at step k alone or in a pair, whatever its goal,
             # so factorised pairs are exact and motions with a common prefix share it

@@ -126,6 +126,7 @@ class MotionTable:
             [m.lm_visible for m in motions],
             stream,
             landmarks,
+            [m.margins for m in motions],
         )
 
     @staticmethod

@@ -11,7 +11,7 @@ import math
 import time
 from collections import OrderedDict
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
 import numpy as np
@@ -21,6 +21,7 @@ from tmpnav.oracle.cache import CacheStats, NullCache
 from tmpnav.oracle.evaluate import EvalStats, Request
 from tmpnav.oracle.executors import OracleContext, Outcome, Progress, SerialExecutor
 from tmpnav.oracle.keys import context_digest, from_json, request_key, to_json
+from tmpnav.oracle.results import penalised
 from tmpnav.results import OracleCounts
 from tmpnav.types import MotionResult
 
@@ -100,9 +101,15 @@ class Oracle:
     def evaluate(self, requests: list[Request]) -> list[MotionResult | None]:
         """Results in request order; None where the robots cannot reach their rooms.
 
-        Raises InputError if a cost is not a finite number.
+        Raises InputError if a cost is not a finite number. Every request is answered under
+        the scenario's chance constraint (``planner.max_risk``, :class:`Request`): a move over
+        it costs its penalty more (tmpnav.oracle.results.penalised; the cache keeps the bare
+        result).
         """
         start = time.perf_counter()
+        delta = self.ctx.scenario.planner.max_risk
+        if delta is not None:
+            requests = [r if r.max_risk == delta else replace(r, max_risk=delta) for r in requests]
         keys = [request_key(self.context, self.ctx.scenario, r) for r in requests]
         results: dict[str, MotionResult | None] = {k: self._seen[k] for k in keys if k in self._seen}
         cached = self.cache.get_many([k for k in keys if k not in results])
@@ -127,7 +134,7 @@ class Oracle:
             self._seen.move_to_end(k)
         while len(self._seen) > MAX_SEEN:
             self._seen.popitem(last=False)
-        return [results[k] for k in keys]
+        return [penalised(results[k], delta) for k in keys]
 
     def _check_finite(self, request: Request, result: MotionResult | None) -> None:
         """Refuse a cost that is not a finite number (NaN or infinity: the EKF overflowed,

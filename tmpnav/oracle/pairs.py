@@ -19,7 +19,7 @@ from tmpnav.oracle.bounds import cannot_save, pair_lower_bound
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.oracle.motionsets import GroupStart, MotionSet, MotionTable, SetKey, chain_restarts, row_offsets
 from tmpnav.oracle.requests import EvalStats, Request, mutual_seed
-from tmpnav.oracle.results import block_diagonal, motion_result, pruned_result
+from tmpnav.oracle.results import block_diagonal, motion_result, pick, pruned_result
 from tmpnav.oracle.singles import SingleRuns
 from tmpnav.types import CostTerms, MotionResult
 from tmpnav.world.visibility import MutualSensing
@@ -220,6 +220,7 @@ class PairCombos:
         self.c_u = layout.table.c_u[seqs.motions]
         self.c_g = np.hypot(run.arrival_xy[..., 0] - goal_xy[..., 0], run.arrival_xy[..., 1] - goal_xy[..., 1])
         self.c_sigma = run.c_sigma
+        self.risk = run.risk
         self.cost = self.lib.scenario.cost.combine(self.c_u, self.c_g, self.c_sigma).sum(axis=1)
         stats.count_steps(seqs.horizon, seqs.restart)
 
@@ -233,15 +234,15 @@ class PairCombos:
             return pruned_result(req.robots, self.pruned[i])
         g, positions = self.of_request[i]
         s1, s2, _ = self.groups[g]
-        costs = np.empty(positions.size)
+        costs, risks = np.empty(positions.size), np.empty((positions.size, 2))
         for k, p in enumerate(positions):
             row = self.kept_row[g][p]
             if row >= 0:
-                costs[k] = self.cost[row]
+                costs[k], risks[k] = self.cost[row], self.risk[row]
             else:
                 r1, r2 = singles.index(s1, int(self.a[g][p])), singles.index(s2, int(self.b[g][p]))
-                costs[k] = singles.cost[r1] + singles.cost[r2]
-        p = positions[int(np.argmin(costs))]
+                costs[k], risks[k] = singles.cost[r1] + singles.cost[r2], (singles.risk[r1], singles.risk[r2])
+        p = positions[pick(costs, risks, req.max_risk)]
         a, b = int(self.a[g][p]), int(self.b[g][p])
         motions = (s1.motions[a], s2.motions[b])
         weights = self.lib.scenario.cost
@@ -251,9 +252,11 @@ class PairCombos:
                 CostTerms(float(self.c_u[row, j]), float(self.c_g[row, j]), float(self.c_sigma[row, j]))
                 for j in range(2)
             )
-            return motion_result(
-                req.robots, terms, self.mean[row], self.cov[row], int(self.mutual[row]), motions, weights
-            )
+            risk = (float(self.risk[row, 0]), float(self.risk[row, 1]))
+            mean, cov, mutual = self.mean[row], self.cov[row], int(self.mutual[row])
+            return motion_result(req.robots, terms, mean, cov, mutual, motions, weights, risk)
         r1, r2 = singles.index(s1, a), singles.index(s2, b)
         mean, cov = block_diagonal(singles.mean[r1], singles.cov[r1], singles.mean[r2], singles.cov[r2])
-        return motion_result(req.robots, (singles.terms(r1), singles.terms(r2)), mean, cov, 0, motions, weights)
+        terms = (singles.terms(r1), singles.terms(r2))
+        risk = (float(singles.risk[r1]), float(singles.risk[r2]))
+        return motion_result(req.robots, terms, mean, cov, 0, motions, weights, risk)

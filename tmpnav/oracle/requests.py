@@ -29,6 +29,8 @@ class Request:
     its two single moves, its joint simulations are skipped and the result is marked
     ``pruned`` with the bound as its cost (:mod:`tmpnav.oracle.bounds`). ``bound_only``
     (pairs): never simulate jointly; the result is that lower bound, marked ``pruned``.
+    ``max_risk``: the goal instantiation is the cheapest whose collision bound is within it
+    for every robot (the least risky when none is: :func:`tmpnav.oracle.results.pick`).
     """
 
     robots: tuple[str, ...]
@@ -37,6 +39,7 @@ class Request:
     joint_cov: tuple[tuple[float, ...], ...] | None = None
     min_gain: float | None = None  # a pair that provably saves less is not simulated
     bound_only: bool = False  # a pair: its lower bound only, no joint simulation
+    max_risk: float | None = None  # the threshold on each robot's collision bound (None: none)
 
     @property
     def n(self) -> int:

@@ -13,7 +13,7 @@ from tmpnav.belief.sequences import Sequences
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.oracle.motionsets import GroupStart, MotionSet, MotionTable, SetKey, chain_restarts, row_offsets
 from tmpnav.oracle.requests import EvalStats, Request
-from tmpnav.oracle.results import motion_result
+from tmpnav.oracle.results import motion_result, pick
 from tmpnav.types import CostTerms, MotionResult
 
 
@@ -62,6 +62,7 @@ class SingleRuns:
         goal_xy = np.concatenate([ms.goal_xy[sorted(self.wanted[id(ms)])] for ms in sets])
         self.c_u = np.concatenate([ms.c_u[sorted(self.wanted[id(ms)])] for ms in sets])
         self.c_sigma = run.c_sigma[:, 0]
+        self.risk = run.risk[:, 0]
         self.c_g = np.hypot(*(run.arrival_xy[:, 0] - goal_xy).T)
         self.cost = self.lib.scenario.cost.combine(self.c_u, self.c_g, self.c_sigma)
         stats.single_sims += group.shape[0]
@@ -88,6 +89,10 @@ class SingleRuns:
         rows = [(k, self.index(ms, k)) for k in ms.goals_in(self.lib, req.rooms[0])]
         if not rows:
             return None
-        k, r = min(rows, key=lambda kr: self.cost[kr[1]])
+        idx = np.array([r for _, r in rows])
+        k, r = rows[pick(self.cost[idx], self.risk[idx], req.max_risk)]
         weights = self.lib.scenario.cost
-        return motion_result(req.robots, (self.terms(r),), self.mean[r], self.cov[r], 0, (ms.motions[k],), weights)
+        motion = (ms.motions[k],)
+        return motion_result(
+            req.robots, (self.terms(r),), self.mean[r], self.cov[r], 0, motion, weights, (float(self.risk[r]),)
+        )

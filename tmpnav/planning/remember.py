@@ -45,7 +45,7 @@ def search_key(scenario: Scenario, context: str) -> str:
     sp = scenario.planner
     robots = [(r.name, r.pose, r.covariance, r.radius, r.speed, r.turn_rate) for r in scenario.robots]
     parts = (VERSION, _code_version(), context, robots, scenario.goals, sp.name, sp.encoding, repr(sp.pair_min_gain))
-    time = (sp.objective, repr(scenario.cost.M_T))  # what the plan minimises
+    time = (sp.objective, repr(scenario.cost.M_T), repr(sp.max_risk))  # what the plan minimises, within what
     return hashlib.sha256(repr((*parts, sp.search, sp.costs, *time)).encode()).hexdigest()
 
 

@@ -50,9 +50,10 @@ def _action(action: PlannedAction, roadmap: Roadmap, span: tuple[float, float] |
             "goal_pose": [number(v) for v in pose],
             "path_nodes": [int(n) for n in path],
             "path_points": _points(roadmap, path),
+            "risk": None if risk is None else number(risk, 9),
         }
-        for (robot, origin, target), goal, pose, path in zip(
-            parts, action.goal_nodes, action.goal_poses, action.paths, strict=True
+        for (robot, origin, target), goal, pose, path, risk in zip(
+            parts, action.goal_nodes, action.goal_poses, action.paths, _risks(action), strict=True
         )
     ]
     return {
@@ -150,6 +151,21 @@ def _roadmap(roadmap: Roadmap) -> JSON:
     }
 
 
+def _risks(action: PlannedAction) -> tuple[float | None, ...]:
+    return action.risk if action.risk else (None,) * len(action.moves)
+
+
+def risk_section(report: PlanReport) -> JSON:
+    """plan.json's ``risk``: the chance constraint, the plan's collision bound (its moves'
+    summed), the largest move's, and each robot's largest position standard deviation."""
+    return {
+        "max_risk": None if report.scenario.planner.max_risk is None else number(report.scenario.planner.max_risk),
+        "plan": number(report.risk, 9),
+        "largest_move": number(report.worst_risk, 9),
+        "largest_std": {robot: number(s) for robot, s in report.largest_std().items()},
+    }
+
+
 def plan_document(report: PlanReport) -> dict[str, JSON]:
     """The JSON-ready document of a :class:`~tmpnav.results.PlanReport` (schema in docs/plan-json.md)."""
     sc = report.scenario
@@ -178,6 +194,7 @@ def plan_document(report: PlanReport) -> dict[str, JSON]:
         "cost": {"planner": number(report.planner_cost), "resimulated": number(report.resimulated_cost)},
         "makespan": makespan,
         "objective": objective,
+        "risk": risk_section(report),
         "robots": [{"name": r.name, "radius": number(r.radius), "speed": number(r.speed)} for r in sc.robots],
         "actions": [_action(a, report.roadmap, windows[k]) for k, a in enumerate(report.actions)],
         "schedule": schedule_section(report.schedule),

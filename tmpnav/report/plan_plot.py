@@ -159,6 +159,7 @@ class Arrival:
     robot: str
     xy: tuple[float, float]
     t: float | None  # None when the trajectory does not pass the goal node (should not happen)
+    risk: float | None = None  # the move's collision bound
 
 
 def arrivals(report: PlanReport) -> list[Arrival]:
@@ -166,9 +167,9 @@ def arrivals(report: PlanReport) -> list[Arrival]:
     move ends on the shared clock (the schedule's)."""
     ends = {(m.step, m.robot): m.end for m in report.schedule.moves}
     return [
-        Arrival(action.index, move[0], (float(pose[0]), float(pose[1])), ends.get((action.index - 1, move[0])))
+        Arrival(action.index, move[0], (float(pose[0]), float(pose[1])), ends.get((action.index - 1, move[0])), risk)
         for action in report.actions
-        for move, pose in zip(action.moves, action.goal_poses, strict=True)
+        for move, pose, risk in zip(action.moves, action.goal_poses, action.risk or (None,) * len(action.moves))
     ]
 
 
@@ -183,8 +184,11 @@ def _draw_step_badges(ax: Axes, report: PlanReport) -> None:
         offset = (0.0, 0.0) if not crowded else NUDGES[(crowded - 1) % len(NUDGES)]
         color = colors[arrival.robot]
         fg.step_badge(ax, (x, y), str(arrival.step), color, offset)
-        if arrival.t is not None:
-            fg.badge_note(ax, (x, y), f"{arrival.t:.1f} s", color, offset)
+        note = [] if arrival.t is None else [f"{arrival.t:.1f} s"]
+        if arrival.risk is not None:
+            note.append(f"p≤{arrival.risk:.2g}")
+        if note:
+            fg.badge_note(ax, (x, y), ", ".join(note), color, offset)
         placed.append((x, y))
 
 
@@ -249,7 +253,8 @@ def _title(report: PlanReport) -> str:
     return (
         f"{sc.name}: {n} plan step{'s' if n != 1 else ''}{duration}, {mutual}\n"
         f"cost (unit-less): planner {report.planner_cost:.3f}, "
-        f"re-simulated {report.resimulated_cost:.3f} ({report.encoding} encoding, {report.planner}, {status})"
+        f"re-simulated {report.resimulated_cost:.3f} ({report.encoding} encoding, {report.planner}, {status}); "
+        f"collision bound: plan {report.risk:.2g}, largest move {report.worst_risk:.2g} (p≤ at each goal)"
     )
 
 

@@ -173,7 +173,7 @@ def _team(report: PlanReport) -> list[str]:
 
 def _beliefs(report: PlanReport) -> list[str]:
     """Per robot: distance driven by the belief mean, and its position / heading uncertainty."""
-    rows = ["robot  travelled  final pos. std  max pos. std  final heading std"]
+    rows = ["robot  travelled  final pos. std  max pos. std  final heading std  collision bound"]
     for robot, steps in report.trajectories.items():
         if not steps:
             continue
@@ -184,12 +184,24 @@ def _beliefs(report: PlanReport) -> list[str]:
         travelled = float(np.sum(legs[driving[1:]]))  # standing, the mean only shifts with observations
         pos_std = np.sqrt(np.clip(covs[:, 0, 0] + covs[:, 1, 1], 0.0, None))  # sqrt(trace of the (x, y) block)
         heading_std = math.degrees(math.sqrt(max(covs[-1, 2, 2], 0.0)))
+        risks = [p for a in report.actions for (r, _, _), p in zip(a.moves, a.risk, strict=False) if r == robot]
         rows.append(
             f"{robot:<5}  {travelled:>7.1f} m  {pos_std[-1]:>12.2f} m  {pos_std.max():>10.2f} m"
-            f"  {heading_std:>13.1f} deg"
+            f"  {heading_std:>13.1f} deg  {max(risks, default=0.0):>15.2g}"
         )
-    rows.append("(pos. std = sqrt(var x + var y) of the re-simulated belief; travelled: by the belief mean)")
+    rows.append("(pos. std = sqrt(var x + var y) of the re-simulated belief; travelled: by the belief mean;")
+    rows.append(" collision bound: the largest of the robot's moves, docs/models.md)")
+    rows.append(_risk_line(report))
     return rows
+
+
+def _risk_line(report: PlanReport) -> str:
+    """The plan's collision bound against the chance constraint."""
+    delta = report.scenario.planner.max_risk
+    within = "no chance constraint (planner.max_risk, --max-risk)"
+    if delta is not None:
+        within = f"every move within max_risk {delta:g}"
+    return f"collision bound: plan {report.risk:.2g}, largest move {report.worst_risk:.2g}; {within}"
 
 
 def _plural(n: int, word: str) -> str:

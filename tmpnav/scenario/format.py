@@ -379,6 +379,11 @@ PLANNER = Section(
             "what the plan minimises: weighted (the sum of action costs plus cost.M_T per second of makespan), cost (the paper's sum of action costs) or makespan (the team's time first, then the sum)",
             default="weighted",
         ),
+        "max_risk": Field(
+            Number(None, minimum=0.0, exclusive_minimum=True, maximum=1.0),
+            "the chance constraint: the largest probability of collision a move may have (each robot's bound on touching a wall along the move, from its covariance at every step and the map's clearance; also the margin robots keep from each other); moves over it are not offered to the planner; omit for no constraint",
+            default=None,
+        ),
         "costs": Field(
             Choice(choices=COSTS_CHOICES),
             "what an action costs the planner: carried (from the beliefs the robots carry at that point of the plan, as executed) or table (every move from a canonical start state, the earlier default)",

@@ -15,6 +15,7 @@ from tmpnav.world.grid import (
     clearance,
     fill_polygon,
     fill_segment,
+    footprint_margins,
     line_of_sight,
     line_of_sight_traced,
 )
@@ -36,6 +37,10 @@ class World:
         """Whether a disc of ``radius`` centred at each point (..., 2) is collision-free."""
         i, j, inside = self.grid.cells(points)
         return inside & (self.clearance[i, j] >= radius + self.grid.resolution)
+
+    def margins(self, points: np.ndarray, radius: float) -> np.ndarray:
+        """The free margin of a disc of ``radius`` at each point (tmpnav.world.grid.footprint_margins)."""
+        return footprint_margins(self.grid, self.clearance, points, radius)
 
     def line_of_sight(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether segments a[k]-b[k] cross no occupied cell (sphere tracing)."""

@@ -107,6 +107,20 @@ def clearance(grid: OccupancyGrid) -> np.ndarray:
     return ndimage.distance_transform_edt(free)[1:-1, 1:-1] * grid.resolution
 
 
+def footprint_margins(grid: OccupancyGrid, clear: np.ndarray, points: np.ndarray, radius: float) -> np.ndarray:
+    """The free distance a disc of ``radius`` centred at each point (..., 2) has around it, at
+    least: ``clear[cell] - radius - sqrt(2) resolution`` (m; -inf outside the grid).
+
+    ``clear`` (:func:`clearance`) is the distance from a cell's centre to the nearest
+    occupied cell's centre. A point lies within resolution/sqrt(2) of its cell's centre and
+    an occupied cell reaches as far from its own, so the distance from the point to the
+    occupied region is at least ``clear`` less sqrt(2) resolution: a disc moved by less than
+    the margin stays free (docs/models.md, "Collision bound")."""
+    i, j, inside = grid.cells(points)
+    free = clear[np.where(inside, i, 0), np.where(inside, j, 0)] - radius - np.sqrt(2.0) * grid.resolution
+    return np.where(inside, free, -np.inf)
+
+
 def line_of_sight(grid: OccupancyGrid, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Whether segments a[k]-b[k] (k, 2) cross no occupied cell -> (k,) bool.
 
