@@ -124,7 +124,9 @@ def test_the_plan_says_when_and_in_what_units(plan_report: Any) -> None:
         action = plan_report.actions[a.step - 1]
         assert at.node == action.paths[[m[0] for m in action.moves].index(a.robot)][-1]
     notes = {t.get_text() for t in ax.texts}
-    assert all(f"{a.t:.1f} s" in notes for a in found)
+    # with the move's collision bound beside it
+    assert all(f"{a.t:.1f} s, p≤{a.risk:.2g}" in notes for a in found)
+    assert "collision bound: plan" in title
 
 
 def test_room_names_that_would_stick_out_of_a_cropped_view_are_hidden() -> None:

@@ -111,7 +111,7 @@ def test_beliefs_per_robot(lines: list[str]) -> None:
     rows = lines[start + 1 : start + 3]
     assert [r.split()[0] for r in rows] == ["r1", "r2"]
     for row in rows:
-        assert re.search(r"\d+\.\d m\s+\d+\.\d{2} m\s+\d+\.\d{2} m\s+\d+\.\d deg$", row), row
+        assert re.search(r"\d+\.\d m\s+\d+\.\d{2} m\s+\d+\.\d{2} m\s+\d+\.\d deg\s+[\d.e+-]+$", row), row
 
 
 def test_times_and_cache(lines: list[str], plan_report: Any) -> None:
