@@ -1,6 +1,6 @@
 """Plan execution (``tmpnav simulate``): the waypoint switching, the team executing its schedule
 at once (a robot waits for its partner, and for a move's planned start), the makespan reported,
-and the paper's result on the corridor."""
+the wall hits and robot contacts counted, and the paper's result on the corridor."""
 
 from __future__ import annotations
 
@@ -18,7 +18,9 @@ from tmpnav.execution import (
     ARRIVED,
     Draws,
     QueuedMove,
+    Rate,
     Session,
+    SessionTrace,
     error_summary,
     errors_csv,
     execute,
@@ -86,13 +88,26 @@ def corridor_world() -> World3:
     return scenario, world, LandmarkVisibility(world, scenario.models.landmark_sensor.range)
 
 
+def run(
+    corridor_world: World3,
+    queues: Mapping[str, tuple[QueuedMove, ...]],
+    mutual: bool = True,
+    seed: int = 0,
+    alphas: tuple[float, float, float, float] | None = None,
+) -> SessionTrace:
+    """A session on the corridor (r1 in L1, r2 in L10), with other motion noise if given."""
+    scenario, world, vis = corridor_world
+    if alphas is not None:
+        scenario = dataclasses.replace(scenario, models=dataclasses.replace(scenario.models, motion_noise=alphas))
+    draws = Draws.draw(seed, 0, 2, 2000, world.landmark_xy.shape[0])
+    return Session(scenario, world, queues, draws, vis, mutual).run()
+
+
 def session(
     corridor_world: World3, queues: Mapping[str, tuple[QueuedMove, ...]], mutual: bool = True
 ) -> dict[tuple[int, str], TimedMove]:
     """(plan step, robot) -> the move as executed, in a session on the corridor (r1 in L1, r2 in L10)."""
-    scenario, world, vis = corridor_world
-    draws = Draws.draw(0, 0, 2, 2000, world.landmark_xy.shape[0])
-    trace = Session(scenario, world, queues, draws, vis, mutual).run()
+    trace = run(corridor_world, queues, mutual)
     assert not trace.truncated
     return {(m.step, m.robot): m for m in trace.moves}
 
@@ -135,6 +150,23 @@ def test_no_move_starts_before_its_planned_start(corridor_world: World3) -> None
     assert ran[(1, "r1")].wait == later * dt - ran[(0, "r1")].end
 
 
+def test_a_held_back_move_departs_at_its_planned_start_not_when_its_robot_is_ready(
+    corridor_world: World3,
+) -> None:
+    """r1's second move (alone) is held back, as a planner keeping it clear of another robot
+    would: r1 stands where its first move ended until the planned start, then departs at once."""
+    later = 70
+    ran = session(corridor_world, {"r1": (move(0, "r1", R1_OUT), move(1, "r1", R1_EAST, start=later))})
+    dt = corridor_world[0].models.dt
+    first, second = ran[(0, "r1")], ran[(1, "r1")]
+    assert first.end < later * dt
+    assert (second.ready, second.start) == (first.end, later * dt)
+    assert second.wait == later * dt - first.end and second.end > second.start
+    # not held back: it departs the moment r1 is ready
+    ran = session(corridor_world, {"r1": (move(0, "r1", R1_OUT), move(1, "r1", R1_EAST))})
+    assert ran[(1, "r1")].start == ran[(0, "r1")].end
+
+
 def test_robots_make_their_own_moves_at_once(corridor_world: World3) -> None:
     ran = session(
         corridor_world,
@@ -152,6 +184,48 @@ def test_a_schedule_whose_robots_wait_for_each_other_is_refused(corridor_world: 
     }
     with pytest.raises(TmpnavError, match="cannot be executed: r1 at step 2 waits for r2, r2 at step 3 waits for r1"):
         session(corridor_world, queues)
+
+
+# ---------------------------------------------------------------- wall hits and robot contacts
+
+#: r1 out of L1 and west along the corridor 0.4 m from its north wall (clearance 0.35 m against
+#: a radius of 0.25 m: 5 cm of margin), and the same drive along the corridor's middle
+ALONG_THE_WALL = [(5.0, 9.5), (4.0, 10.6), (0.8, 10.6)]
+ALONG_THE_MIDDLE = [(5.0, 9.5), (1.0, 9.5)]
+LARGE_NOISE = (0.3, 0.0, 0.3, 0.05)  # the corridor's: (0.01, 0, 0.02, 0.01)
+
+
+def test_a_robot_driving_along_a_wall_with_large_noise_hits_it(corridor_world: World3) -> None:
+    """The west corridor has no landmark in range, so r1 drives on dead reckoning: in 7 of 8
+    sessions its true pose hits the wall (in the other its start error lies away from it)."""
+    queues = {"r1": (move(0, "r1", R1_OUT), move(1, "r1", ALONG_THE_WALL))}
+    traces = [run(corridor_world, queues, seed=seed, alphas=LARGE_NOISE) for seed in range(8)]
+    assert sum(t.wall_hits["r1"] > 0 for t in traces) >= 7
+    for t in traces:
+        assert not t.truncated and t.wall_hits["r2"] == 0  # r2 stands in L10
+        assert t.contacts == {"r1": 0, "r2": 0}
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_robots_far_from_walls_and_each_other_hit_nothing(corridor_world: World3, seed: int) -> None:
+    queues = {"r1": (move(0, "r1", R1_OUT), move(1, "r1", ALONG_THE_MIDDLE)), "r2": (move(2, "r2", R2_OUT),)}
+    trace = run(corridor_world, queues, seed=seed)
+    assert not trace.truncated
+    assert trace.wall_hits == {"r1": 0, "r2": 0} and trace.contacts == {"r1": 0, "r2": 0}
+
+
+def test_robots_that_come_closer_than_their_radii_touch(corridor_world: World3) -> None:
+    """r2 drives up to 0.4 m from r1, which stands in L1: radii 0.25 m each."""
+    r2_up = [(5.0, 6.5), (5.0, 8.0), (5.0, 9.5), (5.0, 11.0), (5.0, 12.1)]
+    trace = run(corridor_world, {"r2": (move(0, "r2", r2_up),)})
+    assert trace.contacts["r1"] == trace.contacts["r2"] > 0  # every step r2 stands there
+    assert trace.wall_hits == {"r1": 0, "r2": 0}
+
+
+def test_a_rate_of_executions_has_its_clopper_pearson_interval() -> None:
+    assert Rate(0, 25).text() == "0/25 = 0.0% (95% CI 0.0-13.7%)"
+    assert Rate(5, 100).interval == (pytest.approx(0.0164, abs=1e-4), pytest.approx(0.1128, abs=1e-4))
+    assert Rate(25, 25).value == 1.0
 
 
 # ---------------------------------------------------------------- planned schedules, executed
@@ -181,6 +255,11 @@ def test_mutual_observations_cut_the_worst_error_of_the_landmark_starved_robot(c
         assert result.worst(1, robot) < result.worst(2, robot)
     worst = {(c, r): round(result.worst(c, r), 3) for c in (1, 2) for r in ("r1", "r2")}
     assert worst == {(1, "r1"): 0.222, (2, "r1"): 0.495, (1, "r2"): 0.123, (2, "r2"): 0.654}
+    # the paper's plan sends the robots head-on through facing doors at once: they touch in
+    # every execution (what a separation constraint is for), and without mutual observations
+    # the landmark-starved r2 hits walls far more often
+    assert result.contact_rate(1) == Rate(25, 25) and result.wall_rate(1) == Rate(1, 25)
+    assert result.wall_rate(2, "r2").events > result.wall_rate(2, "r1").events
     for config in (1, 2):  # both start at once and nobody waits
         for schedule in result.schedules[config]:
             assert [(m.robot, m.start, m.wait) for m in schedule.moves] == [("r1", 0.0, 0.0), ("r2", 0.0, 0.0)]
@@ -244,3 +323,26 @@ def test_errors_and_sessions_csv_carry_the_times(waiting: PlanReport) -> None:
         assert float(row["planned_makespan_s"]) == pytest.approx(waiting.schedule.makespan)
         assert 0.0 < float(row["done_s"]) <= float(row["makespan_s"])
     assert {float(r["wait_s"]) > 0 for r in sessions if r["robot"] == "r2"} == {True}
+    assert list(sessions[0])[-2:] == ["wall_hits", "contacts"]
+    for row in sessions:
+        key, s = (int(row["config"]), row["robot"]), int(row["session"]) - 1
+        assert (int(row["wall_hits"]), int(row["contacts"])) == (result.wall_hits[key][s], result.contacts[key][s])
+
+
+@pytest.mark.slow
+def test_the_counts_are_rates_of_executions_in_the_summary(waiting: PlanReport) -> None:
+    result = execute(waiting, sessions=2)
+    for config in (1, 2):  # two robots: a contact is r1's and r2's
+        assert np.array_equal(result.contacts[(config, "r1")], result.contacts[(config, "r2")])
+        hit = (result.wall_hits[(config, "r1")] > 0) | (result.wall_hits[(config, "r2")] > 0)
+        assert result.wall_rate(config) == Rate(int(hit.sum()), 2)
+    for counts in (*result.wall_hits.values(), *result.contacts.values()):
+        counts[:] = 0
+    # one session of config 1 in which r2 hit a wall at 3 steps: a rate of 1 in 2, r1 still clean
+    result.wall_hits[(1, "r2")][1] = 3
+    assert result.wall_rate(1) == result.wall_rate(1, "r2") == Rate(1, 2) and result.wall_rate(1, "r1") == Rate(0, 2)
+    assert result.contact_rate(2) == Rate(0, 2)
+    text = "\n".join(error_summary(result, 2))
+    assert "wall hits (executions with a true pose" in text
+    assert "  with mutual observations: 1/2 = 50.0% (95% CI 1.3-98.7%); per robot r1 0, r2 1" in text
+    assert "robot contacts" in text and "  without: 0/2 = 0.0% (95% CI 0.0-84.2%); per robot r1 0, r2 0" in text

@@ -38,6 +38,7 @@ LAYERS: dict[str, int] = {
     "tmpnav.results": 4,  # the values runs return (stage times, task result, report)
     "tmpnav.roadmap": 5,
     "tmpnav.belief": 6,
+    "tmpnav.belief.risk": 6,  # the collision bound: the belief and the map (world) only
     "tmpnav.oracle": 7,
     "tmpnav.task": 8,  # searches over tables and cost models: never the oracle
     "tmpnav.attachment": 9,  # the cost models on the oracle, for the task's searches

@@ -10,12 +10,14 @@ of view and line of sight; any two robots in range and line of sight) with senso
 the joint EKF of :mod:`tmpnav.belief.ekf` (the filterpy reference) estimates the poses.
 
 Config 1 uses mutual observations, config 2 ignores them, on the same random draws
-(:mod:`.result`); :mod:`.text` writes the summary and the CSV files.
+(:mod:`.result`). Every session counts the true poses that hit a wall and the robots that
+touch, which the collision bound (:mod:`tmpnav.belief.risk`) bounds; :mod:`.text` writes the
+summary and the CSV files.
 """
 
 from tmpnav.execution.control import ALIGN, ARRIVED, control, reached
 from tmpnav.execution.moves import QueuedMove, queues
-from tmpnav.execution.result import ExecutionResult, execute
+from tmpnav.execution.result import ExecutionResult, Rate, execute
 from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
 from tmpnav.execution.text import error_summary, errors_csv, sessions_csv
 
@@ -26,6 +28,7 @@ __all__ = [
     "Draws",
     "ExecutionResult",
     "QueuedMove",
+    "Rate",
     "Session",
     "SessionTrace",
     "control",

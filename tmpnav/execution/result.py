@@ -7,7 +7,10 @@ by session, so the comparison is paired (paper, Fig. 3(a)). What a session recor
   reaches each node of its paths; the worst-case error of a robot is the largest of its
   average errors over the nodes, as in the paper;
 * when it reached each node, and its moves as executed (:class:`~tmpnav.results.Schedule`):
-  the executed makespan, and how long each robot waited for its partners or for planned starts.
+  the executed makespan, and how long each robot waited for its partners or for planned starts;
+* the control steps after which a robot's true pose hit a wall, or touched another robot's:
+  the rates of executions with any (:class:`Rate`, with a 95% Clopper-Pearson interval), which
+  the collision bound of docs/models.md keeps at most delta.
 """
 
 from __future__ import annotations
@@ -16,12 +19,34 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tmpnav.belief.risk import clopper_pearson
 from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
 from tmpnav.results import PlanReport, Schedule
 from tmpnav.world.visibility import LandmarkVisibility
 
 CONFIGS = {1: True, 2: False}  # config -> with mutual observations
+
+
+@dataclass(frozen=True)
+class Rate:
+    """Executions (sessions) in which something happened at least once, out of all of them."""
+
+    events: int
+    sessions: int
+
+    @property
+    def value(self) -> float:
+        return self.events / self.sessions if self.sessions else 0.0
+
+    @property
+    def interval(self) -> tuple[float, float]:
+        """The exact 95% confidence interval of the rate (Clopper-Pearson)."""
+        return clopper_pearson(self.events, self.sessions)
+
+    def text(self) -> str:
+        lo, hi = self.interval
+        return f"{self.events}/{self.sessions} = {100 * self.value:.1f}% (95% CI {100 * lo:.1f}-{100 * hi:.1f}%)"
 
 
 @dataclass
@@ -36,6 +61,8 @@ class ExecutionResult:
     planned_times: dict[str, list[float | None]]  # robot -> planned arrival at each point (s)
     schedules: dict[int, list[Schedule]]  # config -> each session's moves as executed
     planned: Schedule  # the plan's schedule
+    wall_hits: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions,) control steps hitting a wall
+    contacts: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions,) control steps touching a robot
 
     def mean_errors(self, config: int, robot: str) -> np.ndarray:
         """(points,) m: the robot's position error at each point of its paths, averaged over the sessions."""
@@ -62,6 +89,19 @@ class ExecutionResult:
     def waits(self, config: int, robot: str) -> np.ndarray:
         """(sessions,) s: how long the robot waited before its moves (for a partner or a planned start)."""
         return np.array([s.waits(robot) for s in self.schedules[config]], dtype=float)
+
+    def wall_rate(self, config: int, robot: str | None = None) -> Rate:
+        """Executions in which the robot's (any robot's, for None) true pose hit a wall."""
+        return self._rate(self.wall_hits, config, robot)
+
+    def contact_rate(self, config: int, robot: str | None = None) -> Rate:
+        """Executions in which the robot (any pair of robots, for None) touched another."""
+        return self._rate(self.contacts, config, robot)
+
+    def _rate(self, counts: dict[tuple[int, str], np.ndarray], config: int, robot: str | None) -> Rate:
+        robots = self.robots if robot is None else [robot]
+        any_event = np.any([counts[(config, r)] > 0 for r in robots], axis=0)
+        return Rate(int(np.sum(any_event)), len(self.schedules[config]))
 
 
 def recorded_nodes(moves: dict[str, tuple[QueuedMove, ...]], starts: dict[str, int]) -> dict[str, list[int]]:
@@ -108,4 +148,6 @@ def _result(
         planned_times={r: [0.0, *(t for m in moves[r] for t in m.arrivals)] for r in robots},
         schedules={c: [t.schedule(names) for t in traces[c]] for c in CONFIGS},
         planned=report.schedule,
+        wall_hits={(c, r): np.array([t.wall_hits[r] for t in traces[c]], dtype=int) for c in CONFIGS for r in robots},
+        contacts={(c, r): np.array([t.contacts[r] for t in traces[c]], dtype=int) for c in CONFIGS for r in robots},
     )

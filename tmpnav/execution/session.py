@@ -19,7 +19,10 @@ Each control step, for the whole team together:
    EKF of :mod:`tmpnav.belief.ekf` (the filterpy reference) predicts with the commands;
 4. every robot observes the landmarks it sees from its true pose (range, field of view, line of
    sight) with sensor noise, moving or standing; with mutual observations (config 1) any two
-   robots observe each other whenever they are in range and line of sight at that instant.
+   robots observe each other whenever they are in range and line of sight at that instant;
+5. the true poses are checked (:meth:`Session._collide`): a robot whose true position hits a
+   wall (:func:`tmpnav.belief.risk.hits_wall`: its cell's clearance at most its radius, or off
+   the map), and two robots whose true positions are closer than their radii added, are counted.
 
 Both configurations of a session use the same random draws (initial poses, control noise and
 observation noise are indexed by robot and control step), so their comparison is paired.
@@ -35,6 +38,7 @@ import numpy as np
 
 from tmpnav.belief import ekf
 from tmpnav.belief.models import landmark_obs, motion, motion_noise_cov, mutual_obs, noisy_observation
+from tmpnav.belief.risk import hits_wall
 from tmpnav.errors import TmpnavError
 from tmpnav.execution.control import control, reached
 from tmpnav.execution.moves import QueuedMove
@@ -50,12 +54,16 @@ STEP_BUDGET = 6
 @dataclass
 class SessionTrace:
     """One session in one configuration: robot -> the position error (m) at each point of its
-    paths and when it got there (s, nan for a point never reached), and the moves as executed."""
+    paths and when it got there (s, nan for a point never reached), and the moves as executed;
+    robot -> the control steps after which its true pose hit a wall (``wall_hits``) and touched
+    another robot's (``contacts``)."""
 
     errors: dict[str, list[float]] = field(default_factory=dict)
     times: dict[str, list[float]] = field(default_factory=dict)
     moves: list[TimedMove] = field(default_factory=list)
     truncated: bool = False
+    wall_hits: dict[str, int] = field(default_factory=dict)
+    contacts: dict[str, int] = field(default_factory=dict)
 
     def schedule(self, robots: tuple[str, ...]) -> Schedule:
         """The moves as executed, in plan order: a schedule like the plan's."""
@@ -128,6 +136,9 @@ class Session:
         self.step = 0  # control steps taken (indexes the draws)
         self.truth, self.belief, self.trace = self._initial()
         self.sensing = self._sensing()
+        self.radii = np.array([r.radius for r in scenario.robots], dtype=float)
+        self.trace.wall_hits = dict.fromkeys(self.names, 0)
+        self.trace.contacts = dict.fromkeys(self.names, 0)
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -176,6 +187,7 @@ class Session:
                     u[i] = control(self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt)
             self._move(u)
             self._observe()
+            self._collide()
             self.step += 1
         return self.trace
 
@@ -293,6 +305,16 @@ class Session:
         for i, j in self._mutually_visible():
             z = noisy_observation(mutual_obs(truth[i], truth[j]), chol_mu, self.draws.mutual[i, j, step])
             self.belief = ekf.update_mutual(self.belief, i, j, z, q_mu)
+
+    def _collide(self) -> None:
+        """Count the true poses, after this control step, that hit a wall, and the robots that touch
+        (closer than their radii added): what the collision bound (docs/models.md) bounds."""
+        walls = hits_wall(self.world.grid, self.world.clearance, self.truth[:, :2], self.radii)
+        gap = np.hypot(*(self.truth[:, None, :2] - self.truth[None, :, :2]).transpose(2, 0, 1))
+        touch = (gap < self.radii[:, None] + self.radii[None, :]) & ~np.eye(len(self.names), dtype=bool)
+        for i, name in enumerate(self.names):
+            self.trace.wall_hits[name] += int(walls[i])
+            self.trace.contacts[name] += int(touch[i].any())
 
     def _mutually_visible(self) -> list[tuple[int, int]]:
         """The ordered pairs (observer, observed) in range and line of sight now, in team order."""

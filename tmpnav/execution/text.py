@@ -27,6 +27,7 @@ def error_summary(result: ExecutionResult, sessions: int) -> list[str]:
     )
     lines.append(makespan_line(result))
     lines += wait_lines(result)
+    lines += collision_lines(result)
     if result.truncated_sessions:
         lines.append(f"note: {result.truncated_sessions} session(s) did not reach every node within the step budget")
     return lines
@@ -54,6 +55,24 @@ def wait_lines(result: ExecutionResult) -> list[str]:
     return [f"waiting for partners and planned starts, mean per session with mutual observations: {cells}"]
 
 
+def collision_lines(result: ExecutionResult) -> list[str]:
+    """Executions in which a true pose hit a wall, and in which two robots touched, per
+    configuration: the rate with its exact 95% interval (Clopper-Pearson), and per robot."""
+    lines = []
+    for what, rate in (
+        (
+            "wall hits (executions with a true pose whose cell's clearance is at most the robot's radius)",
+            result.wall_rate,
+        ),
+        ("robot contacts (executions with two true positions closer than their radii added)", result.contact_rate),
+    ):
+        lines.append(f"{what}:")
+        for config, label in ((1, "with mutual observations"), (2, "without")):
+            robots = ", ".join(f"{r} {rate(config, r).events}" for r in result.robots)
+            lines.append(f"  {label}: {rate(config).text()}; per robot {robots}")
+    return lines
+
+
 def errors_csv(result: ExecutionResult, roadmap: Roadmap) -> str:
     """Average (and spread of) the position error at each node, per robot and configuration,
     with the planned arrival time there and the executed one (mean and latest over the sessions)."""
@@ -78,15 +97,17 @@ def errors_csv(result: ExecutionResult, roadmap: Roadmap) -> str:
 
 def sessions_csv(result: ExecutionResult) -> str:
     """One row per session, configuration and robot: when the robot was done, how long it
-    waited, and the session's makespan next to the planned one."""
-    rows = ["config,mutual_observations,session,robot,done_s,wait_s,makespan_s,planned_makespan_s"]
+    waited, the session's makespan next to the planned one, and the control steps after which
+    the robot's true pose hit a wall (``wall_hits``) or touched another robot (``contacts``)."""
+    rows = ["config,mutual_observations,session,robot,done_s,wait_s,makespan_s,planned_makespan_s,wall_hits,contacts"]
     for config in CONFIGS:
         for s, schedule in enumerate(result.schedules[config]):
             for robot in result.robots:
                 done = max((m.end for m in schedule.timeline(robot)), default=0.0)
                 rows.append(
                     f"{config},{'yes' if config == 1 else 'no'},{s + 1},{robot},{done:.6g},"
-                    f"{schedule.waits(robot):.6g},{schedule.makespan:.6g},{result.planned.makespan:.6g}"
+                    f"{schedule.waits(robot):.6g},{schedule.makespan:.6g},{result.planned.makespan:.6g},"
+                    f"{result.wall_hits[(config, robot)][s]},{result.contacts[(config, robot)][s]}"
                 )
     return "\n".join(rows) + "\n"
 
