@@ -29,7 +29,7 @@ def _expected(covs: np.ndarray, margins: np.ndarray) -> float:
     total = 0.0
     for k in range(1, covs.shape[0]):
         lam = float(np.linalg.eigvalsh(covs[k, :2, :2])[-1])
-        total += 1.0 if margins[k] <= 0 else math.exp(-margins[k] ** 2 / (2 * lam))
+        total += 1.0 if margins[k] <= 0 else math.exp(-(margins[k] ** 2) / (2 * lam))
     return total
 
 

@@ -46,6 +46,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from tmpnav.attachment.team import Team
+from tmpnav.belief.risk import step_bound
 from tmpnav.belief.sequences import (
     EKFConstants,
     MotionArrays,
@@ -468,11 +469,7 @@ def _running_risk(covs: np.ndarray, i: int, margins: np.ndarray, drove: np.ndarr
     """Robot i's collision bound summed over the rows it drove into (0 at row 0): the bound of
     :func:`tmpnav.belief.risk.step_bound` at each, from its position covariance in ``covs``
     (h+1, 3n, 3n) and the ``margins`` of its nominal poses, as the compiled kernel sums it."""
-    block = covs[:, 3 * i : 3 * i + 2, 3 * i : 3 * i + 2]
-    a, b, d = block[:, 0, 0], block[:, 0, 1], block[:, 1, 1]
-    lam = 0.5 * (a + d) + np.sqrt(0.25 * (a - d) ** 2 + b * b)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        p = np.where(margins <= 0.0, 1.0, np.where(lam > 0.0, np.exp(-(margins**2) / (2.0 * lam)), 0.0))
+    p = step_bound(covs[:, 3 * i : 3 * i + 2, 3 * i : 3 * i + 2], margins)
     return np.cumsum(np.where(drove, p, 0.0))
 
 

@@ -31,9 +31,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
 
-from tmpnav.world.grid import OccupancyGrid, clearance
+from tmpnav.world.grid import OccupancyGrid, clearance, footprint_margins
 
 SQRT2 = math.sqrt(2.0)
 
@@ -78,9 +77,7 @@ def margins(grid: OccupancyGrid, positions: np.ndarray, radius: float, clear: np
     position outside the grid gets -inf. ``clear`` is ``clearance(grid)``, computed when not given.
     """
     clear = clearance(grid) if clear is None else clear
-    i, j, inside = grid.cells(np.asarray(positions, dtype=float))
-    d = clear[i, j] - radius - SQRT2 * grid.resolution
-    return np.where(inside, d, -np.inf)
+    return footprint_margins(grid, clear, np.asarray(positions, dtype=float), radius)
 
 
 def step_bound(cov_xy: np.ndarray, margin: np.ndarray | float) -> np.ndarray:
@@ -162,6 +159,8 @@ def separation(delta: float, r_i: float, r_j: float, sigma_i: float, sigma_j: fl
 def clopper_pearson(hits: int, n: int, level: float = 0.95) -> tuple[float, float]:
     """The exact (Clopper-Pearson) confidence interval of a rate seen ``hits`` times in ``n``
     trials: (lower, upper), from the beta distribution's quantiles; (0, 1) when n = 0."""
+    from scipy import stats  # imported here: the clock imports this module, and scipy.stats is slow to load
+
     if n <= 0:
         return 0.0, 1.0
     a = 0.5 * (1.0 - level)

@@ -169,7 +169,9 @@ def arrivals(report: PlanReport) -> list[Arrival]:
     return [
         Arrival(action.index, move[0], (float(pose[0]), float(pose[1])), ends.get((action.index - 1, move[0])), risk)
         for action in report.actions
-        for move, pose, risk in zip(action.moves, action.goal_poses, action.risk or (None,) * len(action.moves))
+        for move, pose, risk in zip(
+            action.moves, action.goal_poses, action.risk or (None,) * len(action.moves), strict=True
+        )
     ]
 
 
