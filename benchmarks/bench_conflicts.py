@@ -4,8 +4,11 @@ For every shipped scenario with two or more robots, plans with the defaults (the
 directory, so remembered plans are reused), checks the re-simulated trajectories with the
 independent checker (:mod:`tmpnav.belief.conflicts`), resolves the conflicts by waits
 (:func:`tmpnav.attachment.conflicts.resolve_conflicts`) and checks the resolved run again.
-Prints a table: conflicts before/after, the waits added, makespan and executed cost
-before/after, the clock runs and the time the resolver took.
+Where waits leave a conflict, resolves again allowing sidesteps
+(:func:`~tmpnav.attachment.conflicts.resolve_with_sidesteps`) and checks that plan, run again
+from scratch, with the independent checker. Prints a table: conflicts as planned, after waits
+(clock runs and seconds), after sidesteps, the sidesteps and waits of the final plan, its
+makespan and executed cost against the planned ones, and the sidestep search's runs and seconds.
 
     python benchmarks/bench_conflicts.py [--only corridor warehouse-2robots] [-o out.json]
 """
@@ -23,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 from tmpnav.attachment.canonical import CanonicalCosts  # noqa: E402
 from tmpnav.attachment.carried import CarriedCosts  # noqa: E402
-from tmpnav.attachment.conflicts import resolve_conflicts  # noqa: E402
+from tmpnav.attachment.conflicts import resolve_conflicts, resolve_with_sidesteps  # noqa: E402
 from tmpnav.belief.conflicts import find_conflicts  # noqa: E402
 from tmpnav.pipeline import Execution, make_oracle, plan  # noqa: E402
 from tmpnav.scenario import load_partial  # noqa: E402
@@ -51,12 +54,15 @@ def measure(path: Path) -> dict:
     try:
         carried = CarriedCosts(oracle, CanonicalCosts(oracle, report.world, report.scenario.planner.pair_min_gain))
         start = time.perf_counter()
-        res = resolve_conflicts(carried, report.task.steps, radii)
+        waits = resolve_conflicts(carried, report.task.steps, radii)
         seconds = time.perf_counter() - start
+        res = resolve_with_sidesteps(carried, report.task.steps, radii)
+        sidestep_seconds = time.perf_counter() - start - seconds
+        again = carried.replay(res.plan, res.delays)  # run from scratch for the independent check
     finally:
         oracle.close()
-    assert res.run.trajectories is not None
-    after = find_conflicts(res.run.trajectories, radii)  # the independent check of the resolved run
+    assert again.trajectories is not None
+    after = find_conflicts(again.trajectories, radii)
     left = [(*c.robots, c.t_from, c.t_to, round(c.closest_distance, 2), round(c.required_separation, 2)) for c in after]
     steps, weights = len(report.task.steps), report.scenario.cost
     return {
@@ -64,7 +70,9 @@ def measure(path: Path) -> dict:
         "robots": len(report.scenario.robots),
         "steps": steps,
         "conflicts_before": len(before),
+        "conflicts_after_waits": len(waits.conflicts_left),
         "conflicts_after": len(after),
+        "sidesteps": len(res.plan) - steps,
         "worst_before": min((c.closest_distance - c.required_separation for c in before), default=None),
         "left": left,
         "waits": len(res.delays),
@@ -72,24 +80,28 @@ def measure(path: Path) -> dict:
         "makespan_before": report.schedule.makespan,
         "makespan_after": res.run.makespan,
         "cost_before": round(report.resimulated_cost, 2),
-        "cost_after": round(sum(res.run.step_costs(steps, weights)), 2),
-        "runs": res.iterations,
+        "cost_after": round(sum(res.run.step_costs(len(res.plan), weights)), 2),
+        "runs": waits.iterations,
         "resolve_seconds": round(seconds, 2),
+        "sidestep_runs": res.iterations,
+        "sidestep_seconds": round(sidestep_seconds, 2),
         "plan_seconds": round(planned, 1),
     }
 
 
 def table(rows: list[dict]) -> str:
     lines = [
-        "| scenario | robots | steps | conflicts before | after | waits (s) | makespan [s] | cost (executed) "
-        "| runs | time [s] |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| scenario | robots | steps | conflicts | after waits | runs, s | after sidesteps | sidesteps "
+        "| waits (s) | makespan [s] | cost (executed) | runs, s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         lines.append(
-            f"| {r['scenario']} | {r['robots']} | {r['steps']} | {r['conflicts_before']} | {r['conflicts_after']} "
-            f"| {r['waits']} ({r['wait_seconds']:g}) | {r['makespan_before']:g} -> {r['makespan_after']:g} "
-            f"| {r['cost_before']:g} -> {r['cost_after']:g} | {r['runs']} | {r['resolve_seconds']:g} |"
+            f"| {r['scenario']} | {r['robots']} | {r['steps']} | {r['conflicts_before']} "
+            f"| {r['conflicts_after_waits']} | {r['runs']}, {r['resolve_seconds']:g} "
+            f"| {r['conflicts_after']} | {r['sidesteps']} | {r['waits']} ({r['wait_seconds']:g}) "
+            f"| {r['makespan_before']:g} -> {r['makespan_after']:g} | {r['cost_before']:g} -> {r['cost_after']:g} "
+            f"| {r['sidestep_runs']}, {r['sidestep_seconds']:g} |"
         )
     return "\n".join(lines)
 

@@ -11,13 +11,14 @@ import pytest
 from tests.attachment.support import carried_problem
 from tmpnav.attachment.canonical import CanonicalCosts
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.attachment.conflicts import resolve_conflicts
+from tmpnav.attachment.conflicts import resolve_conflicts, resolve_with_sidesteps
 from tmpnav.belief.conflicts import find_conflicts
 from tmpnav.oracle.executors import OracleContext
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.pipeline import load_world
 from tmpnav.roadmap import build_roadmap
-from tmpnav.task.plans import Plan
+from tmpnav.task.plans import Plan, Rules
+from tmpnav.types import Goals
 
 #: a + junction of 2 m corridors with a room at each end; r1 goes west to east, r2 south to
 #: north, the same distance: alone on the roadmap they reach the junction together
@@ -77,6 +78,11 @@ goals: {robots: {r1: [E], r2: [W]}}
 """
 
 
+#: the paper's Fig. 2 task as two single moves, both starting at once
+SWAP: Plan = ((("r1", "L1", "L10"),), (("r2", "L10", "L1"),))
+FIG2 = Goals((), (("r1", ("L10",)), ("r2", ("L1",))))
+
+
 def carried_world(tmp_path: Path, text: str) -> CarriedCosts:
     """A world written in code, costed with carried beliefs (no disk cache, serial oracle)."""
     path = tmp_path / "scenario.yaml"
@@ -121,15 +127,33 @@ def test_head_on_in_a_corridor_one_robot_waits_in_the_bay(tmp_path: Path) -> Non
     assert in_corridor and all(x1 > x2 for x1, x2 in in_corridor)  # they passed each other at the bay
 
 
-def test_the_papers_swap_is_found_and_not_hidden() -> None:
+def test_the_papers_swap_is_found_and_not_hidden_by_waits() -> None:
     """The paper's corridor: r1 from L1 to L10 while r2 goes from L10 to L1, through two doors
     facing each other across a 3 m corridor, each robot's goal pose next to where the other
     starts. Their centres come 0.36 m apart (radii 0.25 each); waiting cannot help (one must
     pass the other on one line), so the conflict is returned."""
     _, _, carried = carried_problem("corridor.yaml", ("L10", "L1"), 2)
-    plan: Plan = ((("r1", "L1", "L10"),), (("r2", "L10", "L1"),))
-    res = resolve_conflicts(carried, plan)
+    res = resolve_conflicts(carried, SWAP)
     assert [c.robots for c in res.conflicts_before] == [("r1", "r2")]
     first = res.conflicts_before[0]
     assert first.closest_distance < 0.5 and first.where == pytest.approx((4.9, 9.5), abs=0.3)
-    assert res.conflicts_left and res.iterations > 1
+    assert res.conflicts_left and res.iterations > 1 and res.plan == SWAP
+
+
+def test_the_papers_swap_is_resolved_by_a_sidestep() -> None:
+    """With a sidestep one robot goes through a room no goal names while the other passes:
+    no conflict left, by the independent checker on the sidestepped plan run again."""
+    _, _, carried = carried_problem("corridor.yaml", ("L10", "L1"), 2)
+    res = resolve_with_sidesteps(carried, SWAP)
+    assert res.conflicts_before and res.resolved
+    assert len(res.plan) == 3 and {m[0][2] for m in res.plan} - {"L1", "L10"}  # one move made in two
+    Rules(carried.start_location, FIG2).check(res.plan)  # still a plan of the paper's task
+    again = carried.replay(res.plan, res.delays)
+    assert again.trajectories is not None and find_conflicts(again.trajectories, radii(carried)) == []
+
+
+def test_sidesteps_are_not_made_where_waits_suffice(tmp_path: Path) -> None:
+    carried = carried_world(tmp_path, BAY)
+    plan: Plan = ((("r1", "W", "E"),), (("r2", "B", "W"),))
+    res = resolve_with_sidesteps(carried, plan)
+    assert res.resolved and res.plan == plan and list(res.delays) == [1]

@@ -41,16 +41,19 @@ never hidden.
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 
 from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
 from tmpnav.results import Schedule, TimedMove
+from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Step
 
 #: clock runs the search may make per plan (each is one run of the team's joint EKF)
 MAX_RUNS = 40
+#: siding rooms tried per robot of a conflict that waits cannot resolve
+SIDINGS = 3
 #: times on the clock's grid agree to this (s)
 EPS = 1e-6
 
@@ -59,14 +62,16 @@ EPS = 1e-6
 class Resolution:
     """The plan's waits: ``delays`` (plan step index -> seconds it is held back after it could
     start, for ``TeamClock.run`` and ``resimulate``), the run with them (trajectories
-    recorded), the conflicts still in it, the conflicts of the plan without waits, and how
-    many clock runs the search made."""
+    recorded), the conflicts still in it, the conflicts of the plan as given (no waits), how
+    many clock runs the search made, and the plan the delays belong to: the plan as given,
+    or with sidesteps inserted (:func:`resolve_with_sidesteps`)."""
 
     delays: dict[int, float]
     run: ClockRun
     conflicts_left: list[Conflict]
     iterations: int
-    conflicts_before: list[Conflict] = field(default_factory=list)
+    conflicts_before: list[Conflict]
+    plan: Plan
 
     @property
     def resolved(self) -> bool:
@@ -118,7 +123,7 @@ def resolve_conflicts(
             if _key(child) not in seen:
                 seen.add(_key(child))
                 stack.append(child)
-    return Resolution(best.delays, best.run, best.conflicts, runs, root.conflicts)
+    return Resolution(best.delays, best.run, best.conflicts, runs, root.conflicts, steps)
 
 
 def _radii(clock: TeamClock) -> dict[str, float]:
@@ -169,3 +174,81 @@ def _pointless(schedule: Schedule, move: TimedMove, other: str, t: float) -> boo
     has ended its plan), so the robot would meet it there whenever it came."""
     timeline = schedule.timeline(other)
     return any(m.step == move.step for m in timeline) or all(m.end - EPS <= t for m in timeline)
+
+
+# ---------------------------------------------------------------------- sidesteps
+
+
+def resolve_with_sidesteps(
+    costs: TeamClock | CarriedCosts,
+    plan: Sequence[Step],
+    radii: Mapping[str, float] | None = None,
+    delta: float | None = None,
+    max_runs: int = MAX_RUNS,
+    sidings: int = SIDINGS,
+) -> Resolution:
+    """:func:`resolve_conflicts`, and where waits leave a conflict, a **sidestep**: one robot
+    of the conflict makes its move in two, through a room that no goal names (a siding near
+    where they met), so that the other can pass while it stands there; waits are then
+    searched again on that plan. This is push-and-swap's move (Luna and Bekris, IJCAI 2011):
+    two robots that must swap along one lane cannot pass by waiting, only by one stepping
+    aside. It changes the plan (``Resolution.plan``): the sidestep's motion costs more than
+    the move it replaces, and the task planner did not choose it. Up to ``sidings`` rooms are
+    tried per robot, nearest to where they met; of the plans with the fewest conflicts left,
+    the one of least objective (the scenario's: cost, weighted or makespan) is kept, and its
+    first conflict left, if any, gets the same treatment."""
+    best = resolve_conflicts(costs, plan, radii, delta, max_runs)
+    before, runs = best.conflicts_before, best.iterations
+    clock = costs.clock if isinstance(costs, CarriedCosts) else costs
+    objective = OBJECTIVES[clock.scenario.planner.objective]
+
+    def rank(res: Resolution) -> tuple[int, float]:
+        cost = sum(res.run.step_costs(len(res.plan), clock.scenario.cost))
+        return len(res.conflicts_left), objective.value(cost, res.run.makespan, clock.scenario.cost)
+
+    tried: set[Plan] = {best.plan}
+    while best.conflicts_left:
+        found = []
+        for candidate in _sidestepped(clock, best, sidings):
+            if candidate not in tried:
+                tried.add(candidate)
+                try:
+                    found.append(resolve_conflicts(costs, candidate, radii, delta, max_runs))
+                except Unreachable:
+                    continue
+                runs += found[-1].iterations
+        better = min(found, key=rank, default=None)
+        if better is None or rank(better)[0] >= len(best.conflicts_left):
+            break
+        best = better
+    return replace(best, iterations=runs, conflicts_before=before)
+
+
+def _sidestepped(clock: TeamClock, res: Resolution, sidings: int) -> Iterator[Plan]:
+    """Plans with one robot of the first conflict left making the move that puts it there
+    through a siding room, the robot of lower priority first."""
+    conflict, schedule, plan = res.conflicts_left[0], res.run.schedule, res.plan
+    moves = [_holds(schedule, r, conflict.t_from) or _first(schedule, r) for r in conflict.robots]
+    goals = set(clock.scenario.goals.all_rooms)
+    for move in sorted((m for m in moves if m is not None), key=lambda m: (m.start, m.step), reverse=True):
+        if len(plan[move.step]) != 1:
+            continue  # a paired move is costed as one: it is not split
+        robot, origin, target = plan[move.step][0]
+        rooms = [r for r in clock.scenario.rooms if r.name not in goals | {origin, target}]
+        rooms.sort(key=lambda r: _distance(_centroid(r.polygon), conflict.where))
+        for room in rooms[:sidings]:
+            split = ((robot, origin, room.name),), ((robot, room.name, target),)
+            yield (*plan[: move.step], *split, *plan[move.step + 1 :])
+
+
+def _first(schedule: Schedule, robot: str) -> TimedMove | None:
+    timeline = schedule.timeline(robot)
+    return timeline[0] if timeline else None
+
+
+def _centroid(polygon: Sequence[tuple[float, float]]) -> tuple[float, float]:
+    return (sum(p[0] for p in polygon) / len(polygon), sum(p[1] for p in polygon) / len(polygon))
+
+
+def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
+    return float(((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5)
