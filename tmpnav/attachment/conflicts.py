@@ -34,8 +34,20 @@ costs that the task planner optimised; replanning paths around each other would 
 Waits at the start of moves keep every motion as costed and only shift it in time, so the
 search space is small (one delay per plan step) and each node is one run of the clock.
 Conflicts no wait can resolve (two robots whose paths meet while one of them stands at its
-start, or partners of one paired move) are returned in :attr:`Resolution.conflicts_left`,
-never hidden.
+start, two that swap rooms along one lane, partners of one paired move, robots that end their
+plans closer than their margins) are returned in :attr:`Resolution.conflicts_left`, never
+hidden.
+
+:func:`resolve_with_sidesteps` goes one step further where waits leave a conflict: one robot
+of it makes its move through a siding, a room no goal names, so that the other can pass
+(push-and-swap's move; Luna and Bekris, IJCAI 2011). That changes the plan and its cost (the
+sidestep's motion is the oracle's, and costed as executed, but the task planner did not
+choose it), so it is a separate function, and its :attr:`Resolution.plan` is the plan the
+delays belong to.
+
+Use: ``res = resolve_with_sidesteps(carried, task.steps)`` (or :func:`resolve_conflicts` for
+waits only), then run ``res.plan`` with ``res.delays`` (``CarriedCosts.replay``,
+``resimulate``); ``res.run`` is that run already, recorded.
 """
 
 from __future__ import annotations
