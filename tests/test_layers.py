@@ -39,9 +39,11 @@ LAYERS: dict[str, int] = {
     "tmpnav.roadmap": 5,
     "tmpnav.belief": 6,
     "tmpnav.belief.risk": 6,  # the collision bound: the belief and the map (world) only
+    "tmpnav.belief.conflicts": 6,  # the independent checker: trajectories only, no plan or clock
     "tmpnav.oracle": 7,
     "tmpnav.task": 8,  # searches over tables and cost models: never the oracle
     "tmpnav.attachment": 9,  # the cost models on the oracle, for the task's searches
+    "tmpnav.attachment.conflicts": 9,  # waits that keep robots out of each other's way, on the clock
     "tmpnav.planning": 10,  # stage 6 for a run: the registry of task planners
     "tmpnav.resimulate": 11,
     "tmpnav.pipeline": 12,

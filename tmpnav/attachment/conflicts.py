@@ -1,0 +1,266 @@
+"""Robots in each other's way: conflicts of a plan's schedule resolved by waits.
+
+A plan's schedule (:mod:`tmpnav.attachment.clock`) moves every robot at once along the paths
+the oracle chose for it, without looking at the other robots. Where two robots come closer
+than their radii plus the margin of their uncertainty (:mod:`tmpnav.belief.conflicts`), one
+of them must give way. :func:`resolve_conflicts` gives way by **waits only**: a move is held
+back at its start, where its robot stands in the room or place its previous move ended in
+(``TeamClock.run``'s ``delays``). Paths, goal choices and costs stay the oracle's, so the
+beliefs stay those of the oracle's motions and the cost of the plan is still the cost of the
+plan as executed: the resolved run *is* the re-simulation (with the same delays).
+
+The method is conflict-based search (Sharon et al., "Conflict-based search for optimal
+multi-agent pathfinding", AIJ 2015) over delays, seeded with prioritised planning's order
+(Erdmann and Lozano-Perez 1987; with waits at places where a robot can stand aside, as in
+Phillips and Likhachev's safe-interval path planning, ICRA 2011):
+
+1. run the plan on the team's clock recording the beliefs, and check it with the independent
+   checker; take the earliest conflict, between robots a and b over [t0, t1];
+2. split it in two, as CBS does: either a gives way or b does. A robot gives way by holding
+   back the move that puts it there -- the move it drives at t0, or, when it stands at t0,
+   the move that brought it to where it stands -- until the other robot's conflicting
+   interval has passed: the move then starts at t1 + dt;
+3. the branch of the robot of lower priority is tried first: priority is the plan's order,
+   so the robot whose move started later (the later plan step at a tie) yields, which is
+   prioritised planning; the other branch is tried when that one cannot resolve it -- a
+   robot standing for good (it has ended its plan) in the other's path cannot be waited
+   out, so the move that brought it there is held back and the passer goes first;
+4. a wait changes the beliefs of everything after it (observations, goal choices), so every
+   branch is run and checked again; depth first, until no conflict is left or after
+   ``max_runs`` runs.
+
+Why these and not a search over paths: the roadmap paths are the oracle's, with beliefs and
+costs that the task planner optimised; replanning paths around each other would change both.
+Waits at the start of moves keep every motion as costed and only shift it in time, so the
+search space is small (one delay per plan step) and each node is one run of the clock.
+Conflicts no wait can resolve (two robots whose paths meet while one of them stands at its
+start, two that swap rooms along one lane, partners of one paired move, robots that end their
+plans closer than their margins) are returned in :attr:`Resolution.conflicts_left`, never
+hidden.
+
+:func:`resolve_with_sidesteps` goes one step further where waits leave a conflict: one robot
+of it makes its move through a siding, a room no goal names, so that the other can pass
+(push-and-swap's move; Luna and Bekris, IJCAI 2011). That changes the plan and its cost (the
+sidestep's motion is the oracle's, and costed as executed, but the task planner did not
+choose it), so it is a separate function, and its :attr:`Resolution.plan` is the plan the
+delays belong to.
+
+Use: ``res = resolve_with_sidesteps(carried, task.steps)`` (or :func:`resolve_conflicts` for
+waits only), then run ``res.plan`` with ``res.delays`` (``CarriedCosts.replay``,
+``resimulate``); ``res.run`` is that run already, recorded.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass, replace
+
+from tmpnav.attachment.carried import CarriedCosts
+from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
+from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
+from tmpnav.results import Schedule, TimedMove
+from tmpnav.task.objectives import OBJECTIVES
+from tmpnav.task.plans import Plan, Step
+
+#: clock runs the search may make per plan (each is one run of the team's joint EKF)
+MAX_RUNS = 40
+#: siding rooms tried per robot of a conflict that waits cannot resolve
+SIDINGS = 3
+#: times on the clock's grid agree to this (s)
+EPS = 1e-6
+
+
+@dataclass(frozen=True)
+class Resolution:
+    """The plan's waits: ``delays`` (plan step index -> seconds it is held back after it could
+    start, for ``TeamClock.run`` and ``resimulate``), the run with them (trajectories
+    recorded), the conflicts still in it, the conflicts of the plan as given (no waits), how
+    many clock runs the search made, and the plan the delays belong to: the plan as given,
+    or with sidesteps inserted (:func:`resolve_with_sidesteps`)."""
+
+    delays: dict[int, float]
+    run: ClockRun
+    conflicts_left: list[Conflict]
+    iterations: int
+    conflicts_before: list[Conflict]
+    plan: Plan
+
+    @property
+    def resolved(self) -> bool:
+        return not self.conflicts_left
+
+
+@dataclass(frozen=True)
+class _Node:
+    delays: dict[int, float]
+    run: ClockRun
+    conflicts: list[Conflict]
+
+
+def resolve_conflicts(
+    costs: TeamClock | CarriedCosts,
+    plan: Sequence[Step],
+    radii: Mapping[str, float] | None = None,
+    delta: float | None = None,
+    max_runs: int = MAX_RUNS,
+) -> Resolution:
+    """Waits that keep the robots of ``plan`` out of each other's way (module docstring).
+    ``radii``: robot -> radius (m), the scenario's by default; ``delta``: the risk threshold
+    of the margin, the scenario's ``planner.max_risk`` when it has one, else 0.05. Raises
+    Unreachable when the plan itself cannot be run."""
+    clock = costs.clock if isinstance(costs, CarriedCosts) else costs
+    steps: Plan = tuple(plan)
+    radii = dict(radii) if radii is not None else _radii(clock)
+    risk = delta if delta is not None else float(getattr(clock.scenario.planner, "max_risk", DEFAULT_DELTA))
+
+    def check(delays: dict[int, float]) -> _Node:
+        run = clock.run(steps, delays, record=True)
+        assert run.trajectories is not None
+        return _Node(delays, run, find_conflicts(run.trajectories, radii, risk))
+
+    root = check({})
+    best, runs, longest = root, 1, root.run.makespan + clock.dt
+    stack = [d for d in reversed(list(_branches(root, clock.dt, longest)))]
+    seen = {_key(root.delays), *(_key(d) for d in stack)}
+    while stack and best.conflicts and runs < max_runs:
+        delays = stack.pop()
+        runs += 1
+        try:
+            node = check(delays)
+        except Unreachable:  # a wait changed a belief so much that a goal cannot be reached
+            continue
+        if _better(node, best):
+            best = node
+        for child in reversed(list(_branches(node, clock.dt, longest))):
+            if _key(child) not in seen:
+                seen.add(_key(child))
+                stack.append(child)
+    return Resolution(best.delays, best.run, best.conflicts, runs, root.conflicts, steps)
+
+
+def _radii(clock: TeamClock) -> dict[str, float]:
+    return {r: clock.scenario.robot(r).radius for r in clock.start.names}
+
+
+def _key(delays: Mapping[int, float]) -> tuple[tuple[int, float], ...]:
+    return tuple(sorted((k, round(v, 6)) for k, v in delays.items() if v > EPS))
+
+
+def _better(node: _Node, best: _Node) -> bool:
+    """Fewer conflicts left, then the shorter makespan."""
+    return (len(node.conflicts), node.run.makespan) < (len(best.conflicts), best.run.makespan)
+
+
+def _branches(node: _Node, dt: float, longest: float) -> Iterator[dict[int, float]]:
+    """CBS's split of the node's earliest conflict: the delays with one robot giving way, the
+    robot of lower priority first; none for a robot that cannot give way, or whose wait would
+    be pointless or longer than ``longest``."""
+    if not node.conflicts:
+        return
+    conflict, schedule = node.conflicts[0], node.run.schedule
+    a, b = conflict.robots
+    options = [(_holds(schedule, a, conflict.t_from), a), (_holds(schedule, b, conflict.t_from), b)]
+    options.sort(key=lambda o: (o[0].start, o[0].step) if o[0] is not None else (-1.0, -1), reverse=True)
+    for move, robot in options:
+        other = b if robot == a else a
+        if move is None or _pointless(schedule, move, other, conflict.t_from):
+            continue
+        wait = node.delays.get(move.step, 0.0) + conflict.t_to + dt - move.start
+        if wait <= longest:
+            yield {**node.delays, move.step: round(wait / dt) * dt}
+
+
+def _holds(schedule: Schedule, robot: str, t: float) -> TimedMove | None:
+    """The move that puts ``robot`` where it is at ``t``: the one it drives then, else the one
+    that brought it to where it stands; None while it stands at its start."""
+    timeline = schedule.timeline(robot)
+    driving = next((m for m in timeline if m.start - EPS <= t < m.end - EPS), None)
+    if driving is not None:
+        return driving
+    return next((m for m in reversed(timeline) if m.end - EPS <= t), None)
+
+
+def _pointless(schedule: Schedule, move: TimedMove, other: str, t: float) -> bool:
+    """Whether holding ``move`` back cannot take its robot out of ``other``'s way: the other
+    robot makes the same (paired) move, or stands at ``t`` where it will stand for good (it
+    has ended its plan), so the robot would meet it there whenever it came."""
+    timeline = schedule.timeline(other)
+    return any(m.step == move.step for m in timeline) or all(m.end - EPS <= t for m in timeline)
+
+
+# ---------------------------------------------------------------------- sidesteps
+
+
+def resolve_with_sidesteps(
+    costs: TeamClock | CarriedCosts,
+    plan: Sequence[Step],
+    radii: Mapping[str, float] | None = None,
+    delta: float | None = None,
+    max_runs: int = MAX_RUNS,
+    sidings: int = SIDINGS,
+) -> Resolution:
+    """:func:`resolve_conflicts`, and where waits leave a conflict, a **sidestep**: one robot
+    of the conflict makes its move in two, through a room that no goal names (a siding near
+    where they met), so that the other can pass while it stands there; waits are then
+    searched again on that plan. This is push-and-swap's move (Luna and Bekris, IJCAI 2011):
+    two robots that must swap along one lane cannot pass by waiting, only by one stepping
+    aside. It changes the plan (``Resolution.plan``): the sidestep's motion costs more than
+    the move it replaces, and the task planner did not choose it. Up to ``sidings`` rooms are
+    tried per robot, nearest to where they met; of the plans with the fewest conflicts left,
+    the one of least objective (the scenario's: cost, weighted or makespan) is kept, and its
+    first conflict left, if any, gets the same treatment."""
+    best = resolve_conflicts(costs, plan, radii, delta, max_runs)
+    before, runs = best.conflicts_before, best.iterations
+    clock = costs.clock if isinstance(costs, CarriedCosts) else costs
+    objective = OBJECTIVES[clock.scenario.planner.objective]
+
+    def rank(res: Resolution) -> tuple[int, float]:
+        cost = sum(res.run.step_costs(len(res.plan), clock.scenario.cost))
+        return len(res.conflicts_left), objective.value(cost, res.run.makespan, clock.scenario.cost)
+
+    tried: set[Plan] = {best.plan}
+    while best.conflicts_left:
+        found = []
+        for candidate in _sidestepped(clock, best, sidings):
+            if candidate not in tried:
+                tried.add(candidate)
+                try:
+                    found.append(resolve_conflicts(costs, candidate, radii, delta, max_runs))
+                except Unreachable:
+                    continue
+                runs += found[-1].iterations
+        better = min(found, key=rank, default=None)
+        if better is None or rank(better)[0] >= len(best.conflicts_left):
+            break
+        best = better
+    return replace(best, iterations=runs, conflicts_before=before)
+
+
+def _sidestepped(clock: TeamClock, res: Resolution, sidings: int) -> Iterator[Plan]:
+    """Plans with one robot of the first conflict left making the move that puts it there
+    through a siding room, the robot of lower priority first."""
+    conflict, schedule, plan = res.conflicts_left[0], res.run.schedule, res.plan
+    moves = [_holds(schedule, r, conflict.t_from) or _first(schedule, r) for r in conflict.robots]
+    goals = set(clock.scenario.goals.all_rooms)
+    for move in sorted((m for m in moves if m is not None), key=lambda m: (m.start, m.step), reverse=True):
+        if len(plan[move.step]) != 1:
+            continue  # a paired move is costed as one: it is not split
+        robot, origin, target = plan[move.step][0]
+        rooms = [r for r in clock.scenario.rooms if r.name not in goals | {origin, target}]
+        rooms.sort(key=lambda r: _distance(_centroid(r.polygon), conflict.where))
+        for room in rooms[:sidings]:
+            split = ((robot, origin, room.name),), ((robot, room.name, target),)
+            yield (*plan[: move.step], *split, *plan[move.step + 1 :])
+
+
+def _first(schedule: Schedule, robot: str) -> TimedMove | None:
+    timeline = schedule.timeline(robot)
+    return timeline[0] if timeline else None
+
+
+def _centroid(polygon: Sequence[tuple[float, float]]) -> tuple[float, float]:
+    return (sum(p[0] for p in polygon) / len(polygon), sum(p[1] for p in polygon) / len(polygon))
+
+
+def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
+    return float(((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5)

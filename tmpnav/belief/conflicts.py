@@ -1,0 +1,134 @@
+"""Robots in each other's way: the independent checker over trajectories.
+
+Two robots i, j are in each other's way at an instant when their planned means come closer
+than the sum of their radii plus a margin from their uncertainty:
+
+    ||mu_i - mu_j|| < s_ij,    s_ij = r_i + r_j + k(delta) (sigma_i + sigma_j),
+    k(delta) = sqrt(2 ln(1/delta)),
+
+with sigma = sqrt(lambda_max(Sigma_xy)) the standard deviation of a robot's position along
+its most uncertain direction (the largest eigenvalue of the 2x2 position block of its
+covariance). Outside a conflict the gap m = ||mu_i - mu_j|| - r_i - r_j is at least
+k(delta) (sigma_i + sigma_j), so the chance that the robots touch, bounded by
+exp(-m^2 / (2 (sigma_i + sigma_j)^2)), is at most delta (the plan's risk threshold,
+``planner.max_risk``). The same convention is used by the chance constraints.
+
+The checker knows nothing of plans, clocks or the oracle: it reads trajectories only (each
+robot's :class:`~tmpnav.types.TrajectoryStep` list on one grid of the models' ``dt``, a
+robot's last step holding after its trajectory ends), so it can confirm what the planner or
+the resolver (:mod:`tmpnav.attachment.conflicts`) claims. Consecutive conflicting steps of
+one pair of robots are one :class:`Conflict`. :func:`contacts` checks sampled true
+trajectories (``tmpnav simulate``): there a contact is ||x_i - x_j|| < r_i + r_j, no margin.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from tmpnav.types import TrajectoryStep
+
+#: the plan's risk threshold when the scenario names none (``planner.max_risk``)
+DEFAULT_DELTA = 0.05
+#: two trajectories are on one grid when their times agree to this (s)
+GRID_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class Conflict:
+    """Two robots in each other's way from ``t_from`` to ``t_to`` (s, both conflicting steps):
+    the closest their centres came (m), the separation required at that instant (m), and
+    where it was (the midpoint of the two centres, m)."""
+
+    robots: tuple[str, str]
+    t_from: float
+    t_to: float
+    closest_distance: float
+    required_separation: float
+    where: tuple[float, float]
+
+    @property
+    def shortfall(self) -> float:
+        """How much closer than required the robots came at their closest (m)."""
+        return self.required_separation - self.closest_distance
+
+
+def margin_factor(delta: float) -> float:
+    """k(delta) = sqrt(2 ln(1/delta)): standard deviations of margin for a touch risk of at most delta."""
+    if not 0.0 < delta < 1.0:
+        raise ValueError(f"the risk threshold must be in (0, 1), not {delta}")
+    return math.sqrt(2.0 * math.log(1.0 / delta))
+
+
+def position_sigma(covs: np.ndarray) -> np.ndarray:
+    """sqrt(lambda_max) of the 2x2 position blocks of covariances (..., 3, 3) -> (...,) in m."""
+    xy = np.asarray(covs, dtype=float)[..., :2, :2]
+    a, b, c = xy[..., 0, 0], 0.5 * (xy[..., 0, 1] + xy[..., 1, 0]), xy[..., 1, 1]
+    top = 0.5 * (a + c) + np.sqrt(0.25 * (a - c) ** 2 + b**2)  # closed form of the largest eigenvalue
+    return np.sqrt(np.maximum(top, 0.0))
+
+
+def find_conflicts(
+    trajectories: Mapping[str, Sequence[TrajectoryStep]], radii: Mapping[str, float], delta: float = DEFAULT_DELTA
+) -> list[Conflict]:
+    """Every conflict (module docstring) of the planned beliefs, by start time, then robots.
+    The trajectories must share one time grid from a common start; ValueError otherwise."""
+    names = sorted(trajectories)
+    times = _grid([[s.t for s in trajectories[r]] for r in names])
+    means = _held([np.array([s.mean[:2] for s in trajectories[r]], dtype=float) for r in names], len(times))
+    sigmas = _held([position_sigma(np.array([s.cov for s in trajectories[r]])) for r in names], len(times))
+    k = margin_factor(delta)
+    return _pairs(names, times, means, lambda i, j: radii[names[i]] + radii[names[j]] + k * (sigmas[i] + sigmas[j]))
+
+
+def contacts(positions: Mapping[str, np.ndarray], radii: Mapping[str, float], dt: float) -> list[Conflict]:
+    """Every contact of sampled true trajectories: robot -> (T, 2 or 3) true poses at the
+    steps 0, dt, 2 dt, ... (the last held); a contact is ||x_i - x_j|| < r_i + r_j."""
+    names = sorted(positions)
+    arrays = [np.asarray(positions[r], dtype=float)[:, :2] for r in names]
+    steps = max((len(a) for a in arrays), default=0)
+    times = np.arange(steps) * dt
+    means = _held(arrays, steps)
+    return _pairs(names, times, means, lambda i, j: np.full(steps, radii[names[i]] + radii[names[j]]))
+
+
+def _grid(times: Sequence[Sequence[float]]) -> np.ndarray:
+    """The longest time grid, after checking that every robot's times are a start of it."""
+    longest = np.array(max(times, key=len, default=[]), dtype=float)
+    for t in times:
+        if len(t) == 0 or not np.allclose(t, longest[: len(t)], rtol=0.0, atol=GRID_TOLERANCE):
+            raise ValueError("the trajectories are not on one time grid from one start")
+    return longest
+
+
+def _held(series: Sequence[np.ndarray], steps: int) -> list[np.ndarray]:
+    """Each series padded to ``steps`` rows with its last row (a robot stands where it ended)."""
+    return [np.concatenate([s, np.repeat(s[-1:], steps - len(s), axis=0)]) if len(s) < steps else s for s in series]
+
+
+def _pairs(
+    names: Sequence[str], times: np.ndarray, means: Sequence[np.ndarray], required: Callable[[int, int], np.ndarray]
+) -> list[Conflict]:
+    """The runs of steps at which each pair is closer than ``required(i, j)`` (per step),
+    each reported at its closest instant."""
+    found = []
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            gap = np.hypot(*(means[i] - means[j]).T)
+            need = np.broadcast_to(required(i, j), gap.shape)
+            for lo, hi in _runs(gap < need):
+                c = lo + int(np.argmin(gap[lo:hi]))
+                mid = 0.5 * (means[i][c] + means[j][c])
+                span = (float(times[lo]), float(times[hi - 1]))
+                where = (float(mid[0]), float(mid[1]))
+                found.append(Conflict((names[i], names[j]), *span, float(gap[c]), float(need[c]), where))
+    return sorted(found, key=lambda c: (c.t_from, c.robots))
+
+
+def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
+    """The [lo, hi) index ranges of the runs of True in ``flags``."""
+    edges = np.diff(np.concatenate([[0], flags.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist(), strict=True))
