@@ -18,7 +18,7 @@ from dataclasses import asdict
 
 import numpy as np
 
-from tmpnav.report.quality import plan_warnings
+from tmpnav.report.quality import plan_conflicts, plan_warnings
 from tmpnav.report.schedule import driving_steps, objective_values, step_windows
 from tmpnav.results import JSON, STAGES, CacheUse, PlanReport, Schedule, TimedMove
 from tmpnav.types import PlannedAction, Roadmap, TrajectoryStep
@@ -163,6 +163,17 @@ def risk_section(report: PlanReport) -> JSON:
         "plan": number(report.risk, 9),
         "largest_move": number(report.worst_risk, 9),
         "largest_std": {robot: number(s) for robot, s in report.largest_std().items()},
+        "conflicts": [
+            {
+                "robots": list(c.robots),
+                "t_from": number(c.t_from, 9),
+                "t_to": number(c.t_to, 9),
+                "closest_distance": number(c.closest_distance),
+                "required_separation": number(c.required_separation),
+                "where": [number(v) for v in c.where],
+            }
+            for c in plan_conflicts(report)
+        ],
     }
 
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
 from tmpnav.choices import time_budget
 from tmpnav.report.schedule import move_at, objective_values
 from tmpnav.results import PlanReport
@@ -145,3 +146,13 @@ def _crossings(means: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np
     side_b = move[:, 0] * (b[1] - p[:, 1]) - move[:, 1] * (b[0] - p[:, 0])
     crossing = (side_p * side_q < 0) & (side_a * side_b <= 0)
     return [int(i) + 1 for i in np.nonzero(crossing)[0]]
+
+
+def plan_conflicts(report: PlanReport) -> list[Conflict]:
+    """Robots closer than their radii plus the margin of their uncertainty at one instant, by
+    the independent checker over the re-simulated trajectories (tmpnav.belief.conflicts; the
+    margin's threshold is planner.max_risk, else 0.05). The plan is reported as planned: the
+    resolver of tmpnav.attachment.conflicts is not applied to it yet (docs/planning.md)."""
+    radii = {r.name: r.radius for r in report.scenario.robots}
+    delta = report.scenario.planner.max_risk or DEFAULT_DELTA
+    return find_conflicts(report.trajectories, radii, delta)

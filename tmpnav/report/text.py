@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tmpnav.report.quality import warning_lines
+from tmpnav.report.quality import plan_conflicts, warning_lines
 from tmpnav.report.schedule import T_TOL, driving_steps, objective_values, step_windows
 from tmpnav.results import STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
@@ -201,7 +201,16 @@ def _risk_line(report: PlanReport) -> str:
     within = "no chance constraint (planner.max_risk, --max-risk)"
     if delta is not None:
         within = f"every move within max_risk {delta:g}"
-    return f"collision bound: plan {report.risk:.2g}, largest move {report.worst_risk:.2g}; {within}"
+    conflicts = plan_conflicts(report)
+    close = "no robots in each other's way"
+    if conflicts:
+        first = conflicts[0]
+        close = (
+            f"{len(conflicts)} time{'s' if len(conflicts) != 1 else ''} robots in each other's way (first "
+            f"{' and '.join(first.robots)} at {first.t_from:.1f} s, {first.closest_distance:.2f} m apart for "
+            f"{first.required_separation:.2f} m: docs/planning.md)"
+        )
+    return f"collision bound: plan {report.risk:.2g}, largest move {report.worst_risk:.2g}; {within}; {close}"
 
 
 def _plural(n: int, word: str) -> str:
