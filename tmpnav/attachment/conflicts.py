@@ -111,7 +111,7 @@ def resolve_conflicts(
     clock = costs.clock if isinstance(costs, CarriedCosts) else costs
     steps: Plan = tuple(plan)
     radii = dict(radii) if radii is not None else _radii(clock)
-    risk = delta if delta is not None else float(getattr(clock.scenario.planner, "max_risk", DEFAULT_DELTA))
+    risk = delta if delta is not None else (clock.scenario.planner.max_risk or DEFAULT_DELTA)
 
     def check(delays: dict[int, float]) -> _Node:
         run = clock.run(steps, delays, record=True)
