@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tmpnav.choices import STOP_MEANINGS
 from tmpnav.report.quality import warning_lines
 from tmpnav.report.schedule import T_TOL, driving_steps, objective_values, step_windows
 from tmpnav.results import STAGES, PlanReport
@@ -98,7 +99,7 @@ def _search(report: PlanReport) -> list[str]:
         if search.mode == "anytime":
             line += (
                 f"; first plan by {search.start}; {_plural(search.subproblems, 'sub-problem')} solved by ENHSP, "
-                f"{_plural(search.improvements, 'improvement')}; stopped: {search.stopped}"
+                f"{_plural(search.improvements, 'improvement')}; stopped: {STOP_MEANINGS[search.stopped]}"
             )
         lines.append(line)
     if bound is not None:
