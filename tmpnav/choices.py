@@ -44,6 +44,15 @@ Destinations = Literal["goals", "all-rooms"]
 #: without improvement), "time budget", or "nothing to do" (no move needed)
 StopReason = Literal["solved", "optimal", "converged", "time budget", "nothing to do"]
 
+#: each stop reason as the summary says it
+STOP_MEANINGS: dict[StopReason, str] = {
+    "solved": "solved (one optimal search of the whole problem)",
+    "optimal": "optimal (proved)",
+    "converged": "converged (every neighbourhood tried without improvement: done)",
+    "time budget": "time budget (neighbourhoods left untried: more time may find a better plan)",
+    "nothing to do": "nothing to do",
+}
+
 COSTS: tuple[Costs, ...] = get_args(Costs)
 SEARCHES: tuple[Search, ...] = get_args(Search)
 SEARCH_MODES: tuple[SearchMode, ...] = get_args(SearchMode)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 from tmpnav.attachment.floors import motion_floors
 from tmpnav.planning.run import TaskRun
 from tmpnav.task.bound import Bound, lower_bound, makespan_bound
+from tmpnav.types import CostTable, Goals
 
 #: paired moves beyond which the bound of the table gives way to the motion floors: bounding
 #: each pair without joint simulation takes about 0.2 ms (20 rooms and 2 robots: 130,000 pairs)
@@ -22,8 +24,8 @@ def certified_bound(run: TaskRun) -> Bound:
     cost depends on the beliefs it starts from), the bound of the moves' motion floors
     (:mod:`tmpnav.attachment.floors`), which hold in every context and for every paired move.
     When the objective prices time, plus its price of the makespan's lower bound from the
-    moves' time floors (:func:`tmpnav.task.bound.makespan_bound`): both bounds hold for every
-    plan at once, so their weighted sum bounds its objective."""
+    moves' time floors (:func:`tmpnav.task.bound.makespan_bound`, or :func:`_work_bound` where
+    higher): both bounds hold for every plan at once, so their weighted sum bounds its objective."""
     sp, goals, canonical = run.planner, run.goals, run.canonical
     floors = motion_floors(run.scenario, canonical.oracle.ctx.roadmap, canonical.start_location, goals)
     bound = None
@@ -38,7 +40,18 @@ def certified_bound(run: TaskRun) -> Bound:
         bound = replace(bound, relaxation=f"motion floors, {bound.relaxation}")
     if not run.span_weight:
         return bound
-    span = makespan_bound(floors, goals)
+    span = max(makespan_bound(floors, goals), _work_bound(floors, goals))
     value = bound.value + run.span_weight * span
     parts = {**bound.parts, "makespan": span}
     return replace(bound, value=value, relaxation=f"{bound.relaxation} + makespan floor {span:.1f} s", parts=parts)
+
+
+def _work_bound(floors: CostTable, goals: Goals) -> float:
+    """A lower bound on every schedule's makespan: the relaxation of :func:`lower_bound` over
+    the moves' time floors bounds the summed time of every plan's moves (the argument of
+    tmpnav/task/bound.py holds for any non-negative move prices, and a paired move takes each
+    of its robots at least its own floor), the robots share that driving and each is busy for
+    at most the makespan, so the makespan is at least the sum over the number of robots."""
+    durations = replace(floors, single={m: floors.duration[m] for m in floors.single if m in floors.duration})
+    work = lower_bound(durations, goals, 0.0).value
+    return max(0.0, work) / max(1, len(floors.robots)) if math.isfinite(work) else 0.0

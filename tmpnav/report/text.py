@@ -44,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tmpnav.choices import STOP_MEANINGS
 from tmpnav.report.quality import plan_conflicts, warning_lines
 from tmpnav.report.schedule import T_TOL, driving_steps, objective_values, step_windows
 from tmpnav.results import STAGES, PlanReport
@@ -98,7 +99,7 @@ def _search(report: PlanReport) -> list[str]:
         if search.mode == "anytime":
             line += (
                 f"; first plan by {search.start}; {_plural(search.subproblems, 'sub-problem')} solved by ENHSP, "
-                f"{_plural(search.improvements, 'improvement')}; stopped: {search.stopped}"
+                f"{_plural(search.improvements, 'improvement')}; stopped: {STOP_MEANINGS[search.stopped]}"
             )
         lines.append(line)
     if bound is not None:
@@ -191,26 +192,25 @@ def _beliefs(report: PlanReport) -> list[str]:
         )
     rows.append("(pos. std = sqrt(var x + var y) of the re-simulated belief; travelled: by the belief mean;")
     rows.append(" collision bound: the largest of the robot's moves, docs/models.md)")
-    rows.append(_risk_line(report))
+    rows.extend(_risk_lines(report))
     return rows
 
 
-def _risk_line(report: PlanReport) -> str:
-    """The plan's collision bound against the chance constraint."""
+def _risk_lines(report: PlanReport) -> list[str]:
+    """The plan's collision bound against the chance constraint, and robots in each other's way."""
     delta = report.scenario.planner.max_risk
-    within = "no chance constraint (planner.max_risk, --max-risk)"
-    if delta is not None:
-        within = f"every move within max_risk {delta:g}"
+    within = "no chance constraint (--max-risk)" if delta is None else f"every move within max_risk {delta:g}"
+    lines = [f"collision bound: plan {report.risk:.2g}, largest move {report.worst_risk:.2g}; {within}"]
     conflicts = plan_conflicts(report)
-    close = "no robots in each other's way"
-    if conflicts:
-        first = conflicts[0]
-        close = (
-            f"{len(conflicts)} time{'s' if len(conflicts) != 1 else ''} robots in each other's way (first "
-            f"{' and '.join(first.robots)} at {first.t_from:.1f} s, {first.closest_distance:.2f} m apart for "
-            f"{first.required_separation:.2f} m: docs/planning.md)"
-        )
-    return f"collision bound: plan {report.risk:.2g}, largest move {report.worst_risk:.2g}; {within}; {close}"
+    if not conflicts:
+        return [*lines, "robots in each other's way: none"]
+    first = conflicts[0]
+    lines.append(
+        f"robots in each other's way: {len(conflicts)} (first {' and '.join(first.robots)} at "
+        f"{first.t_from:.1f} s, {first.closest_distance:.2f} m apart, {first.required_separation:.2f} m needed;"
+    )
+    lines.append(' waits cannot resolve it: docs/planning.md, "Robots in each other\'s way")')
+    return lines
 
 
 def _plural(n: int, word: str) -> str:

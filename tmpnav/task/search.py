@@ -60,6 +60,9 @@ class SearchRun:
     progress: SearchProgress | None = None
     label: str = ""  # added to every event told (the phase of a search in two phases)
     bound: float | None = None  # the lower bound told with every event
+    #: ENHSP's plans of the sub-problems solved so far, by their PDDL text (domain, problem):
+    #: shared by the phases of a run (``replace`` keeps the same dict), see :meth:`AnytimeSearch._solve`
+    solved: dict[tuple[str, str], list[Step] | None] = field(default_factory=dict, compare=False, hash=False)
 
     def bounded(self, bound: float | None) -> SearchRun:
         """The same run, telling ``bound`` with its events."""
@@ -99,7 +102,8 @@ class SearchOptions:
 class SearchStats:
     """What the search did (plan.json ``task.search``)."""
 
-    subproblems: int = 0
+    subproblems: int = 0  # sub-problems ENHSP solved
+    reused: int = 0  # sub-problems met again, whose plan ENHSP had already given (not solved again)
     improvements: int = 0
     rounds: int = 0
     history: list[tuple[float, float]] = field(default_factory=list)  # (seconds, best cost)
@@ -277,18 +281,15 @@ class AnytimeSearch:
         subs = [sub for hood in hoods if (sub := self._sub_problem(plan, hood)) is not None]
         if not subs:
             return False
-        timeout = min(self.options.sub_timeout, self.left())
-        if timeout <= 0.05:
+        fresh, known = self._known(subs)
+        solved = self._solve_all(fresh)
+        if solved is None:
             return False
-        with self.times.timed("planner"):
-            if len(subs) == 1:
-                solved = [self._solve(subs[0], timeout)]
-            else:
-                with ThreadPoolExecutor(max_workers=len(subs)) as pool:
-                    solved = list(pool.map(lambda sub: self._solve(sub, timeout), subs))
-        self.stats.subproblems += len(subs)
+        self.stats.reused += len(known)
+        plans = {id(sub): steps for sub, steps in [*zip(fresh, solved, strict=True), *known]}
         best: tuple[Plan, PlanCost, _Sub] | None = None
-        for sub, steps in zip(subs, solved, strict=True):
+        for sub in subs:  # in the neighbourhoods' order, which decides between equal candidates
+            steps = plans[id(sub)]
             if steps is None:
                 continue
             candidate = self.canonical(splice(sub.opened, steps, self.model.start_location))
@@ -307,6 +308,25 @@ class AnytimeSearch:
         self.stats.improvements += 1
         self._note(self.value(cost), f"{len(sub.hood.robots)} robots, {len(sub.hood.rooms)} rooms")
         return True
+
+    def _solve_all(self, subs: list[_Sub]) -> list[list[Step] | None] | None:
+        """ENHSP's plans of ``subs``, side by side (None: no time left to solve them)."""
+        if not subs:
+            return []
+        timeout = min(self.options.sub_timeout, self.left())
+        if timeout <= 0.05:
+            return None
+        with self.times.timed("planner"):
+            if len(subs) == 1:
+                solved = [self._solve(subs[0], timeout)]
+            else:
+                with ThreadPoolExecutor(max_workers=len(subs)) as pool:
+                    solved = list(pool.map(lambda sub: self._solve(sub, timeout), subs))
+        self.stats.subproblems += len(subs)
+        for sub, steps in zip(subs, solved, strict=True):
+            if steps is not None:
+                self.watch.solved[sub.task.texts()] = steps
+        return solved
 
     def _sub_problem(self, plan: Plan, hood: Neighbourhood) -> _Sub | None:
         """The sub-problem of ``hood``: the plan opened, its goals, its costs, its PDDL text."""
@@ -349,6 +369,26 @@ class AnytimeSearch:
             return sub.task.decode(sub.task.solve(self.options.planner, timeout))
         except PlannerError:
             return None
+
+    def _known(self, subs: list[_Sub]) -> tuple[list[_Sub], list[tuple[_Sub, list[Step]]]]:
+        """Split ``subs`` into those to solve and those solved before, with their plans.
+
+        A sub-problem is its PDDL text: the same text is the same problem to ENHSP, whose
+        optimal search is deterministic, so its plan is the one it gave before, and running it
+        again cannot pay. The text holds every cost, the goals, the ends and the clocks, so a
+        neighbourhood met again on an unchanged part of the plan (same robots, rooms, beliefs
+        at its start and, with time priced, the same clocks) is such a sub-problem -- whichever
+        phase met it first: with carried costs, a sub-problem whose robots start from the
+        canonical states (the plan's first moves) is the table phase's one. A sub-problem that
+        found no plan in time is not remembered (a longer timeout might find one)."""
+        fresh, known = [], []
+        for sub in subs:
+            plan = self.watch.solved.get(sub.task.texts())
+            if plan is None:
+                fresh.append(sub)
+            else:
+                known.append((sub, plan))
+        return fresh, known
 
     def cost(self, plan: Plan) -> PlanCost:
         with self.times.timed("oracle"):
