@@ -17,7 +17,7 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from tmpnav import scenario as scenario_stage
 from tmpnav import world as world_stage
@@ -90,12 +90,18 @@ class PlanOptions:
 
     def but(self, **keywords: object) -> PlanOptions:
         """These options with the fields that ``keywords`` name (as in :meth:`of`) changed."""
-        keywords = {{"progress": "oracle", "search_progress": "search"}.get(k, k): v for k, v in keywords.items()}
+        # the reporters by their own names first: "search" also names an override
+        reporters = self.reporters
+        if "progress" in keywords:
+            reporters = replace(reporters, oracle=cast("Callable[[int, int], None] | None", keywords.pop("progress")))
+        if "search_progress" in keywords:
+            reporters = replace(reporters, search=cast("SearchProgress | None", keywords.pop("search_progress")))
         parts = {}
-        for name in ("overrides", "execution", "reporters"):
+        for name in ("overrides", "execution"):
             part = getattr(self, name)
             names = {f.name for f in fields(part)}
             parts[name] = replace(part, **{k: keywords.pop(k) for k in list(keywords) if k in names})
+        parts["reporters"] = reporters
         if keywords:
             raise TypeError(f"unknown plan options: {', '.join(sorted(keywords))}")
         return PlanOptions(**parts)
