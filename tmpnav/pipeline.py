@@ -14,7 +14,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
@@ -29,11 +29,9 @@ from tmpnav.types import Goals, Roadmap, Scenario
 from tmpnav.world import MapImageError, World
 
 if TYPE_CHECKING:
-    from tmpnav.attachment.carried import CarriedCosts
     from tmpnav.oracle.oracle import Oracle
     from tmpnav.roadmap.store import RoadmapStore
     from tmpnav.task.encode import EncodedTask
-    from tmpnav.task.plans import Step
 
 
 @dataclass(frozen=True)
@@ -270,7 +268,7 @@ def plan(
         run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch)
         planned = plan_stage(run)
         with times.timed("resimulate"):
-            resim = resimulate(run.carried, planned.task, keep_apart(run.carried, planned.task.steps))
+            resim = resimulate(run.carried, planned.task)
     finally:
         prep.oracle.close()
     times.close()
@@ -289,24 +287,6 @@ def plan(
     )
     check_risk(path, options, report)
     return report
-
-
-#: clock runs the search for waits may make (tmpnav.attachment.conflicts): a plan without
-#: conflicts takes one, and a conflict that waits resolve is resolved in a few
-WAIT_RUNS = 24
-
-
-def keep_apart(carried: CarriedCosts, steps: Sequence[Step]) -> dict[int, float]:
-    """Waits at the start of moves that keep the robots out of each other's way, where waits can
-    (tmpnav.attachment.conflicts, prioritised planning with CBS's split over delays): the plan
-    is unchanged, some moves start later. None when they resolve nothing (the conflicts left
-    are reported: tmpnav.report.quality.plan_conflicts)."""
-    from tmpnav.attachment.conflicts import resolve_conflicts
-
-    if len({m[0] for step in steps for m in step}) < 2:
-        return {}
-    found = resolve_conflicts(carried, steps, max_runs=WAIT_RUNS)
-    return found.delays if len(found.conflicts_left) < len(found.conflicts_before) else {}
 
 
 #: re-plans at the threshold the plan of least risk meets, before tmpnav names it (each under

@@ -209,7 +209,7 @@ def _risk_lines(report: PlanReport) -> list[str]:
         f"robots in each other's way: {len(conflicts)} (first {' and '.join(first.robots)} at "
         f"{first.t_from:.1f} s, {first.closest_distance:.2f} m apart, {first.required_separation:.2f} m needed;"
     )
-    lines.append(' waits cannot resolve it: docs/planning.md, "Robots in each other\'s way")')
+    lines.append(' not resolved in the plan yet: docs/planning.md, "Robots in each other\'s way")')
     return lines
 
 
