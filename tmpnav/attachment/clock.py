@@ -323,7 +323,13 @@ class TeamClock:
         out = propagate_sequences(batch)
         assert out.c_sigma_history is not None
         running = [[state.csig[i] + float(c) for c in out.c_sigma_history[0, :, i]] for i in range(n)]
-        risk = [state.risk[i] + _running_risk(out.last_covs, i, windows[i][4], windows[i][5]) for i in range(n)]
+        # the collision bound prices moves only under a threshold; without one, only records need it
+        priced = self.scenario.planner.max_risk is not None or trace is not None
+        zero = np.zeros(h + 1)
+        risk = [
+            state.risk[i] + (_running_risk(out.last_covs, i, windows[i][4], windows[i][5]) if priced else zero)
+            for i in range(n)
+        ]
         if trace is not None:
             trace.extend(state, a, out.last_means, out.last_covs)
         team = state.team
