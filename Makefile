@@ -52,9 +52,11 @@ demo: $(RUNTIME)
 		echo "$(BIN)/tmpnav plan configs/corridor.yaml -o out/$$first"
 	@$(BIN)/tmpnav plan configs/corridor.yaml -o out/
 
-# pytest's exit code 5 means "no tests collected": not a failure of the suite.
+# pytest's exit code 5 means "no tests collected": not a failure of the suite. Two processes,
+# each running whole test files (a file's tests share their fixtures and their order): the suite
+# takes 11.4 min instead of about 18 on 2 cores (measured 2026-11-24).
 test: $(STAMP)
-	$(BIN)/pytest -q; rc=$$?; if [ $$rc -eq 5 ]; then exit 0; fi; exit $$rc
+	$(BIN)/pytest -q -n 2 --dist loadfile; rc=$$?; if [ $$rc -eq 5 ]; then exit 0; fi; exit $$rc
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py --quick
