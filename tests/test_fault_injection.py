@@ -211,4 +211,18 @@ def test_a_killed_plan_leaves_no_process_no_half_written_file_and_the_same_next_
     done = subprocess.run(plan_args(cache, out), capture_output=True, text=True, cwd=ROOT, timeout=600)
     assert done.returncode == 0, done.stderr
     assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUTS)  # the killed runs' temporary files are gone
-    assert the_plan(out) == the_plan(undisturbed)
+    assert_same_plan(out, undisturbed)
+
+
+def assert_same_plan(out: Path, undisturbed: Path) -> None:
+    """The next run plans as an undisturbed one: the same plan when both searches ran to their
+    end (converged, optimal, solved); the anytime search stopped by its time budget may stop
+    elsewhere on a loaded machine (the test's plan runs under the default budget), so then the
+    plan must be a sound one: as costed, so executed, for the same goals."""
+    mine, theirs = json.loads((out / "plan.json").read_text()), json.loads((undisturbed / "plan.json").read_text())
+    budget = "time budget" in {(doc.get("search") or {}).get("stopped") for doc in (mine, theirs)}
+    if not budget:
+        assert the_plan(out) == the_plan(undisturbed)
+        return
+    assert mine["goals"] == theirs["goals"] and mine["status"] == theirs["status"]
+    assert mine["cost"]["planner"] == pytest.approx(mine["cost"]["resimulated"], rel=1e-9)
