@@ -254,12 +254,19 @@ def plan(
     path: str | Path, options: PlanOptions | None = None, loaded: tuple[Scenario, World] | None = None
 ) -> PlanReport:
     """Plan a scenario end to end: the task-level optimal plan for the roadmap, with its
-    motions and beliefs. ``loaded`` skips loading when the caller already has the world."""
+    motions and beliefs. ``loaded`` skips loading when the caller already has the world.
+    Raises RiskError when the plan breaks the chance constraint (:func:`check_risk`)."""
+    report = _planned(path, options or PlanOptions(), loaded)
+    check_risk(path, options or PlanOptions(), report)
+    return report
+
+
+def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, World] | None) -> PlanReport:
+    """The plan, whether or not it keeps within the chance constraint."""
     from tmpnav.planning import TaskRun, plan_stage
     from tmpnav.resimulate import resimulate
     from tmpnav.task.search import SearchRun
 
-    options = options or PlanOptions()
     times = StageTimes()
     prep = prepare(path, options, times, loaded)
     try:
@@ -285,7 +292,6 @@ def plan(
         cache=_cache_use(prep, planned.task.plan_hit, options.execution.use_cache),
         oracle=prep.oracle.stats.counts(),
     )
-    check_risk(path, options, report)
     return report
 
 
@@ -309,7 +315,7 @@ def check_risk(path: str | Path, options: PlanOptions, report: PlanReport) -> No
         least = min(1.0, _round_up(worst))
         if least >= 1.0:
             break
-        again = plan(path, options.but(max_risk=least, replan=False))
+        again = _planned(path, options.but(max_risk=least, replan=False), None)
         worst = again.worst_risk
         if worst <= least:
             raise RiskError(
