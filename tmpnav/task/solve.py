@@ -26,6 +26,7 @@ from tmpnav.errors import (
 from tmpnav.java import JAVA_MIN as JAVA_MIN  # re-exported: the oldest Java ENHSP runs on
 from tmpnav.java import find as find_java
 from tmpnav.java import require as require_java
+from tmpnav.task import enhsp_jvm
 from tmpnav.types import PlanStatus
 
 if TYPE_CHECKING:
@@ -221,34 +222,33 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
     """Run the ENHSP engine ``planner`` on PDDL text within ``timeout`` seconds.
 
     The engine is unified-planning's own (up_enhsp's class, registered under ``planner``):
-    its command line, its process handling (``run_command``: a process group, killed at
-    the time limit) and its reading of the result; only the PDDL writing is tmpnav's
-    (:mod:`tmpnav.task.pddl_text`). Plan actions come back as (name, parameters) in
-    ENHSP's spelling.
+    its command line and its reading of the result; only the PDDL writing is tmpnav's
+    (:mod:`tmpnav.task.pddl_text`). ENHSP runs in the run's one JVM
+    (:mod:`tmpnav.task.enhsp_jvm`) or, where that cannot start or ``TMPNAV_ENHSP=process``,
+    as up_enhsp runs it: a process per solve (``run_command``: a process group, killed at
+    the time limit). Plan actions come back as (name, parameters) in ENHSP's spelling.
     """
     from unified_planning.engines import OptimalityGuarantee
     from unified_planning.engines import PlanGenerationResultStatus as St
-    from unified_planning.engines.pddl_planner import run_command
 
     engine_cls = engine_class(planner)
     engine = engine_cls()
-    with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp, java_options():
+    in_jvm = enhsp_jvm.usable()  # before java_options(): a JVM starting now would read them
+    with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp:
         d, p, plan_file = (os.path.join(tmp, n) for n in ("domain.pddl", "problem.pddl", "plan.txt"))
         for path, text in ((d, domain), (p, problem)):
             with open(path, "w", encoding="utf-8") as f:
                 f.write(text)
-        try:
-            timed_out, (out, err), retval = run_command(engine, engine._get_cmd(d, p, plan_file), timeout=timeout)
-        except FileNotFoundError as error:
-            raise PlannerUnavailableError(f"planner {planner!r} could not start: {error}") from None
+        cmd = engine._get_cmd(d, p, plan_file)
+        run = _run_in_jvm if in_jvm else _run_process
+        timed_out, failed, log = run(engine, planner, cmd, timeout)
         plan_text = None
         if os.path.isfile(plan_file):
             with open(plan_file, encoding="utf-8-sig") as f:
                 plan_text = f.read()
-    log = "".join(out) + "".join(e for e in err if "JAVA_TOOL_OPTIONS" not in e)
-    if timed_out and retval != 0:
+    if timed_out:
         status = St.TIMEOUT
-    elif retval != 0:
+    elif failed:
         status = St.INTERNAL_ERROR
     elif plan_text is None:
         status = St.UNSOLVABLE_PROVEN
@@ -259,6 +259,28 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
     _raise_on_failure(planner, status, plan_text is None, timeout, _tail(log))
     assert plan_text is not None
     return SolveResult(_plan_status(status), _plan_actions(plan_text), engine.name, _tail(log))
+
+
+def _run_process(engine: Engine, planner: str, cmd: list[str], timeout: float) -> tuple[bool, bool, str]:
+    """ENHSP as up_enhsp runs it, a ``java`` process: (timed out, failed, log)."""
+    from unified_planning.engines.pddl_planner import run_command
+
+    try:
+        with java_options():
+            timed_out, (out, err), retval = run_command(engine, cmd, timeout=timeout)
+    except FileNotFoundError as error:
+        raise PlannerUnavailableError(f"planner {planner!r} could not start: {error}") from None
+    log = "".join(out) + "".join(e for e in err if "JAVA_TOOL_OPTIONS" not in e)
+    return timed_out and retval != 0, retval != 0, log
+
+
+def _run_in_jvm(engine: Engine, planner: str, cmd: list[str], timeout: float) -> tuple[bool, bool, str]:
+    """ENHSP's ``main`` in the run's JVM, with up_enhsp's arguments: (timed out, failed, log)."""
+    from up_enhsp.enhsp_planner import ENHSP_JAR
+
+    jar = cmd.index(ENHSP_JAR)  # up_enhsp's command is java -jar <jar> <ENHSP's arguments>
+    run = enhsp_jvm.run(cmd[jar + 1 :], timeout)
+    return run.timed_out, run.error is not None, run.error or ""
 
 
 def _plan_actions(text: str) -> tuple[tuple[str, tuple[str, ...]], ...]:

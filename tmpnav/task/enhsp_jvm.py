@@ -1,0 +1,211 @@
+"""ENHSP in one JVM inside the tmpnav process (JPype): a JVM start per run, not per solve.
+
+up_enhsp runs ``java -jar enhsp.jar`` for every solve, about 0.3 s of JVM start each; the
+anytime search solves dozens of small sub-problems, most of which ENHSP itself plans in a
+few milliseconds. Here the JVM starts once, on the first solve, with the Java that
+:func:`tmpnav.java.find` chooses, and each solve calls ENHSP's command-line entry point
+(``main.main``) with the arguments up_enhsp's engine builds: still ENHSP, the same search,
+the same plan file, read by :mod:`tmpnav.task.solve` as before.
+
+What a shared JVM changes, and how this module keeps the old behaviour:
+
+- Lifetime: the JVM is part of this process, so it ends with it, however the run ends.
+  ``-Xrs`` keeps the JVM's hands off SIGINT and SIGTERM (tmpnav.lifetime's handlers stay).
+- Static state: ENHSP keeps registries in static fields, so each concurrent solve has its
+  own *slot*, a class loader of its own over enhsp.jar; a slot is reused by later solves
+  (tested: the same plans as fresh processes, in any order).
+- Output: ENHSP prints its log on the JVM's one ``System.out``, which two solves at once
+  would share; it goes nowhere. A crash is a Java exception, whose text is the log tail.
+- ``System.gc()``: ENHSP asks for a full collection per run; ``-XX:+DisableExplicitGC``.
+- Time limit: ENHSP has none of its own. A solve runs in a thread of its own; at the limit
+  the thread is stopped (``Thread.stop``, which Java 17-19 still honour) and its slot
+  dropped. Where the JVM refuses (Java 20+), the search cannot be stopped: the JVM is then
+  not used again in this run (the process path takes over) and the stray search ends with
+  the process.
+- ``System.exit``: ENHSP calls it only on a bad command line (ours is up_enhsp's) and in
+  error branches of its PDDL library for constructs tmpnav's PDDL does not use; it would end
+  the process. Java 17+ offers no way to refuse it without a compiled SecurityManager.
+
+Only this module imports JPype. ``TMPNAV_ENHSP=process`` turns it off.
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import shlex
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+
+#: environment variable choosing how ENHSP runs: "jvm" (the default) or "process"
+MODE_ENV = "TMPNAV_ENHSP"
+#: JVM options always added: signals stay Python's (tmpnav.lifetime), ENHSP's System.gc()
+#: per run is not a full collection of the shared heap
+FIXED_OPTIONS = ("-Xrs", "-XX:+DisableExplicitGC")
+#: seconds a stopped search has to end before the JVM is given up for the run
+STOP_GRACE = 2.0
+
+
+@dataclass(frozen=True)
+class JvmRun:
+    """What one ENHSP run in the JVM did: finished, or stopped at its time limit; the text
+    of the Java exception it ended with, if any."""
+
+    timed_out: bool
+    error: str | None = None
+
+
+class _Slot:
+    """A class loader of its own over enhsp.jar (ENHSP's static state) and its ``main``."""
+
+    def __init__(self, jar: str) -> None:
+        import jpype
+
+        url = jpype.JClass("java.io.File")(jar).toURI().toURL()
+        parent = jpype.JClass("java.lang.ClassLoader").getPlatformClassLoader()
+        self.loader = jpype.JClass("java.net.URLClassLoader")([url], parent)
+        self.main = jpype.JClass("main", loader=self.loader)
+
+    def close(self) -> None:
+        self.loader.close()
+
+
+class _Jvm:
+    """The process's one JVM: started on first use; ``broken`` says why it is not used."""
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.started = False
+        self.broken: str | None = None
+        self.jar = ""
+        self.slots: queue.LifoQueue[_Slot] = queue.LifoQueue()
+
+    def ready(self) -> bool:
+        """Start the JVM if it has not started; False (and ``broken`` set) if it cannot."""
+        with self.lock:
+            if not self.started and self.broken is None:
+                try:
+                    self.jar = _start()
+                    self.started = True
+                except Exception as err:  # any failure to start means: use processes
+                    self.broken = f"the JVM did not start: {err}"
+            return self.started and self.broken is None
+
+    def slot(self) -> _Slot:
+        try:
+            return self.slots.get_nowait()
+        except queue.Empty:
+            return _Slot(self.jar)
+
+
+_JVM = _Jvm()
+
+
+def forced_process() -> bool:
+    """Whether ``TMPNAV_ENHSP=process`` asks for a ``java`` process per solve."""
+    return os.environ.get(MODE_ENV, "").strip().lower() == "process"
+
+
+def unavailable() -> str | None:
+    """Why ENHSP runs as a process per solve here (None: it runs in the shared JVM)."""
+    if forced_process():
+        return f"{MODE_ENV}=process"
+    try:
+        import jpype  # noqa: F401
+    except ImportError:
+        return "JPype (the JPype1 package) is not installed"
+    if _JVM.broken is not None:
+        return _JVM.broken
+    if libjvm() is None:
+        return "the Java that runs ENHSP has no lib/server/libjvm.so"
+    return None
+
+
+def usable() -> bool:
+    """Whether this solve can run in the shared JVM (starting it now if need be)."""
+    return unavailable() is None and _JVM.ready()
+
+
+def describe() -> str:
+    """One line for ``tmpnav doctor``: how ENHSP runs, and why."""
+    reason = unavailable()
+    if reason is None:
+        return "one JVM for the run, inside tmpnav (JPype); TMPNAV_ENHSP=process: a JVM per solve"
+    return f"a JVM process per solve ({reason})"
+
+
+def libjvm() -> Path | None:
+    """The JVM library of the Java that runs ENHSP (tmpnav.java.find), or None."""
+    from tmpnav.java import find
+
+    java = find()
+    if java is None:
+        return None
+    home = Path(os.path.realpath(java.executable)).parent.parent
+    for candidate in (home / "lib" / "server" / "libjvm.so", home / "jre" / "lib" / "server" / "libjvm.so"):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def _start() -> str:
+    """Start the JVM with ENHSP's JVM options; return the path of enhsp.jar."""
+    import jpype
+    from up_enhsp.enhsp_planner import ENHSP_JAR
+
+    from tmpnav.task.solve import JAVA_OPTIONS
+
+    path = libjvm()
+    if path is None:
+        raise RuntimeError("no libjvm.so")
+    options = shlex.split(os.environ.get("TMPNAV_JAVA_OPTIONS", JAVA_OPTIONS))
+    # JNI_CreateJavaVM also reads JAVA_TOOL_OPTIONS: solve_text starts the JVM before it
+    # sets tmpnav's own there (solve.java_options), so they are not given twice
+    jpype.startJVM(str(path), *options, *FIXED_OPTIONS, classpath=[], interrupt=False, convertStrings=False)
+    system = jpype.JClass("java.lang.System")
+    nowhere = jpype.JClass("java.io.PrintStream")(jpype.JClass("java.io.OutputStream").nullOutputStream())
+    system.setOut(nowhere)  # ENHSP's log: see the module's docstring
+    system.setErr(nowhere)
+    return str(ENHSP_JAR)
+
+
+def run(args: list[str], timeout: float) -> JvmRun:
+    """Run ENHSP's ``main`` with ``args`` (up_enhsp's, without ``java -jar``) in the shared
+    JVM, stopping it after ``timeout`` seconds. Call :func:`usable` first."""
+    slot = _JVM.slot()
+    done = threading.Event()
+    box: dict[str, object] = {}
+
+    def target() -> None:
+        import jpype
+
+        jpype.java.lang.Thread.attachAsDaemon()
+        box["thread"] = jpype.java.lang.Thread.currentThread()
+        try:
+            slot.main.main(args)
+        except Exception as err:  # a Java exception (or ThreadDeath after a stop)
+            box["error"] = f"{type(err).__name__}: {err}"
+        finally:
+            done.set()
+
+    threading.Thread(target=target, name="tmpnav-enhsp", daemon=True).start()
+    if done.wait(timeout):
+        _JVM.slots.put(slot)
+        error = box.get("error")
+        return JvmRun(False, None if error is None else str(error))
+    _stop(box.get("thread"), done)
+    return JvmRun(True)
+
+
+def _stop(thread: object, done: threading.Event) -> None:
+    """Stop a search past its time limit; if the JVM cannot, stop using the JVM this run."""
+    stop = getattr(thread, "stop", None)
+    try:
+        if stop is not None:
+            stop()
+    except Exception:  # Java 20+: UnsupportedOperationException
+        pass
+    if not done.wait(STOP_GRACE):
+        with _JVM.lock:
+            _JVM.broken = "a search could not be stopped at its time limit (Java 20+ has no Thread.stop)"
