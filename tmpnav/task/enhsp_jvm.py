@@ -11,17 +11,19 @@ What a shared JVM changes, and how this module keeps the old behaviour:
 
 - Lifetime: the JVM is part of this process, so it ends with it, however the run ends.
   ``-Xrs`` keeps the JVM's hands off SIGINT and SIGTERM (tmpnav.lifetime's handlers stay).
-- Static state: ENHSP keeps registries in static fields, so each concurrent solve has its
-  own *slot*, a class loader of its own over enhsp.jar; a slot is reused by later solves
-  (tested: the same plans as fresh processes, in any order).
+- Static state: ENHSP keeps registries in static fields (56 of them: predicates, fluents,
+  transitions, types), never reset. Each solve loads ENHSP in a class loader of its own (a
+  *slot*), so it sees fresh statics, as a new process would, and two solves at once do not
+  share them. Reusing a slot would cost 20 ms a solve instead of about 190 ms, but gave other
+  plans than a fresh process, and a wrong "unsolvable", once the domain changed (measured:
+  benchmarks/enhsp/README.md).
 - Output: ENHSP prints its log on the JVM's one ``System.out``, which two solves at once
   would share; it goes nowhere. A crash is a Java exception, whose text is the log tail.
 - ``System.gc()``: ENHSP asks for a full collection per run; ``-XX:+DisableExplicitGC``.
 - Time limit: ENHSP has none of its own. A solve runs in a thread of its own; at the limit
-  the thread is stopped (``Thread.stop``, which Java 17-19 still honour) and its slot
-  dropped. Where the JVM refuses (Java 20+), the search cannot be stopped: the JVM is then
-  not used again in this run (the process path takes over) and the stray search ends with
-  the process.
+  the thread is stopped (``Thread.stop``, which Java 17-19 still honour). Where the JVM
+  refuses (Java 20+), the search cannot be stopped: the JVM is then not used again in this
+  run (the process path takes over) and the stray search ends with the process.
 - ``System.exit``: ENHSP calls it only on a bad command line (ours is up_enhsp's) and in
   error branches of its PDDL library for constructs tmpnav's PDDL does not use; it would end
   the process. Java 17+ offers no way to refuse it without a compiled SecurityManager.
@@ -32,7 +34,6 @@ Only this module imports JPype. ``TMPNAV_ENHSP=process`` turns it off.
 from __future__ import annotations
 
 import os
-import queue
 import shlex
 import threading
 from dataclasses import dataclass
@@ -57,7 +58,7 @@ class JvmRun:
 
 
 class _Slot:
-    """A class loader of its own over enhsp.jar (ENHSP's static state) and its ``main``."""
+    """ENHSP loaded afresh: a class loader of its own over enhsp.jar, and its ``main``."""
 
     def __init__(self, jar: str) -> None:
         import jpype
@@ -79,7 +80,6 @@ class _Jvm:
         self.started = False
         self.broken: str | None = None
         self.jar = ""
-        self.slots: queue.LifoQueue[_Slot] = queue.LifoQueue()
 
     def ready(self) -> bool:
         """Start the JVM if it has not started; False (and ``broken`` set) if it cannot."""
@@ -91,12 +91,6 @@ class _Jvm:
                 except Exception as err:  # any failure to start means: use processes
                     self.broken = f"the JVM did not start: {err}"
             return self.started and self.broken is None
-
-    def slot(self) -> _Slot:
-        try:
-            return self.slots.get_nowait()
-        except queue.Empty:
-            return _Slot(self.jar)
 
 
 _JVM = _Jvm()
@@ -173,7 +167,7 @@ def _start() -> str:
 def run(args: list[str], timeout: float) -> JvmRun:
     """Run ENHSP's ``main`` with ``args`` (up_enhsp's, without ``java -jar``) in the shared
     JVM, stopping it after ``timeout`` seconds. Call :func:`usable` first."""
-    slot = _JVM.slot()
+    slot = _Slot(_JVM.jar)
     done = threading.Event()
     box: dict[str, object] = {}
 
@@ -191,21 +185,25 @@ def run(args: list[str], timeout: float) -> JvmRun:
 
     threading.Thread(target=target, name="tmpnav-enhsp", daemon=True).start()
     if done.wait(timeout):
-        _JVM.slots.put(slot)
+        slot.close()
         error = box.get("error")
         return JvmRun(False, None if error is None else str(error))
-    _stop(box.get("thread"), done)
+    if _stop(box.get("thread"), done):
+        slot.close()
     return JvmRun(True)
 
 
-def _stop(thread: object, done: threading.Event) -> None:
-    """Stop a search past its time limit; if the JVM cannot, stop using the JVM this run."""
+def _stop(thread: object, done: threading.Event) -> bool:
+    """Stop a search past its time limit (True if it stopped); if the JVM cannot, stop
+    using the JVM for the rest of the run."""
     stop = getattr(thread, "stop", None)
     try:
         if stop is not None:
             stop()
     except Exception:  # Java 20+: UnsupportedOperationException
         pass
-    if not done.wait(STOP_GRACE):
-        with _JVM.lock:
-            _JVM.broken = "a search could not be stopped at its time limit (Java 20+ has no Thread.stop)"
+    if done.wait(STOP_GRACE):
+        return True
+    with _JVM.lock:
+        _JVM.broken = "a search could not be stopped at its time limit (Java 20+ has no Thread.stop)"
+    return False

@@ -1,0 +1,115 @@
+"""ENHSP in the run's one JVM (tmpnav.task.enhsp_jvm) against ENHSP as a process per solve.
+
+The JVM is the test process's own: once started it stays for the session, so these tests
+share it (as the sub-problems of a run do).
+"""
+
+from __future__ import annotations
+
+import random
+import threading
+import time
+
+import pytest
+
+from tests.task.instances import small_instance
+from tests.task.test_pddl_text import validate_with_unified_planning
+from tmpnav.errors import PlannerTimeoutError
+from tmpnav.task import enhsp_jvm
+from tmpnav.task.pddl_text import PddlTask, write_task
+from tmpnav.task.solve import solve_text
+
+pytestmark = pytest.mark.skipif(enhsp_jvm.unavailable() is not None, reason=str(enhsp_jvm.unavailable()))
+
+#: a numeric problem whose blind search takes minutes: 5,000 x 5,000 states before the goal
+SLOW_DOMAIN = """(define (domain count) (:requirements :numeric-fluents) (:functions (x) (y))
+  (:action incx :parameters () :precondition (< (x) 100000) :effect (increase (x) 1))
+  (:action incy :parameters () :precondition (< (y) 100000) :effect (increase (y) 1)))"""
+SLOW_PROBLEM = """(define (problem far) (:domain count) (:init (= (x) 0) (= (y) 0))
+  (:goal (and (>= (x) 5000) (>= (y) 5000))))"""
+
+#: (seed, robots, rooms, encoding, planner): sub-problem sized tasks of both encodings
+CASES = [
+    (1, 2, 3, "single", "enhsp-blind"),
+    (2, 2, 4, "mixed", "enhsp-blind"),
+    (3, 3, 3, "mixed", "enhsp-opt"),
+    (4, 2, 4, "mixed", "enhsp"),
+]
+
+
+def _task(seed: int, robots: int, rooms: int, encoding: str) -> PddlTask:
+    table, goals = small_instance(random.Random(seed), robots, rooms, 0.3)
+    return write_task(table, goals, encoding, min_gain=0.0)
+
+
+def _solve(task: PddlTask, planner: str, timeout: float = 60.0) -> tuple[tuple[str, tuple[str, ...]], ...]:
+    return solve_text(task.domain, task.problem, planner, timeout).actions
+
+
+def test_the_jvm_gives_the_plans_of_a_process_per_solve_and_they_validate(monkeypatch: pytest.MonkeyPatch) -> None:
+    tasks = [(_task(*case[:4]), case[4]) for case in CASES]
+    in_jvm = [_solve(task, planner) for task, planner in tasks]
+    assert enhsp_jvm.unavailable() is None  # they ran in the JVM, not in a fallback
+    monkeypatch.setenv(enhsp_jvm.MODE_ENV, "process")
+    assert enhsp_jvm.unavailable() == "TMPNAV_ENHSP=process"
+    in_processes = [_solve(task, planner) for task, planner in tasks]
+    assert in_jvm == in_processes
+    for (task, _), actions in zip(tasks, in_jvm, strict=True):
+        validate_with_unified_planning(task, actions)
+
+
+def test_a_solve_does_not_depend_on_the_solves_before_it() -> None:
+    """ENHSP keeps static state; a slot reused in another order plans the same."""
+    tasks = [_task(*case[:4]) for case in CASES[:3]]
+    forwards = [_solve(task, "enhsp-blind") for task in tasks]
+    backwards = [_solve(task, "enhsp-blind") for task in reversed(tasks)]
+    assert forwards == backwards[::-1]
+
+
+def test_two_solves_at_once_get_their_own_plans() -> None:
+    """The anytime search solves two sub-problems side by side: each in a slot of its own."""
+    tasks = [_task(*case[:4]) for case in CASES[:2]] * 2
+    alone = [_solve(task, "enhsp-blind") for task in tasks]
+    together: list[object] = [None] * len(tasks)
+
+    def solve(i: int) -> None:
+        together[i] = _solve(tasks[i], "enhsp-blind")
+
+    threads = [threading.Thread(target=solve, args=(i,)) for i in range(len(tasks))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert together == alone
+
+
+def test_a_search_past_its_time_limit_is_a_timeout_and_the_run_goes_on() -> None:
+    small = _task(*CASES[0][:4])
+    _solve(small, "enhsp-blind")  # the JVM started: the limit below times ENHSP only
+    start = time.perf_counter()
+    with pytest.raises(PlannerTimeoutError, match="time limit of 1 s"):
+        solve_text(SLOW_DOMAIN, SLOW_PROBLEM, "enhsp-blind", 1.0)
+    assert time.perf_counter() - start < 1.0 + enhsp_jvm.STOP_GRACE + 2.0
+    # Java 17-19 stop the search and keep the JVM; later Javas leave the run to processes
+    assert enhsp_jvm.unavailable() is None or "could not be stopped" in str(enhsp_jvm.unavailable())
+    assert _solve(small, "enhsp-blind")
+
+
+def test_without_the_jvm_the_process_path_plans(monkeypatch: pytest.MonkeyPatch) -> None:
+    task = _task(*CASES[1][:4])
+    expected = _solve(task, "enhsp-blind")
+    monkeypatch.setattr(enhsp_jvm._JVM, "broken", "the JVM did not start: test")
+    assert not enhsp_jvm.usable()
+    assert enhsp_jvm.describe() == "a JVM process per solve (the JVM did not start: test)"
+    called = []
+    monkeypatch.setattr(enhsp_jvm, "run", lambda *a: called.append(a))
+    assert _solve(task, "enhsp-blind") == expected
+    assert not called
+
+
+def test_without_jpype_the_reason_is_said(monkeypatch: pytest.MonkeyPatch) -> None:
+    import sys
+
+    monkeypatch.setitem(sys.modules, "jpype", None)
+    assert enhsp_jvm.unavailable() == "JPype (the JPype1 package) is not installed"
+    assert "a JVM process per solve" in enhsp_jvm.describe()
