@@ -116,7 +116,9 @@ def paused_jvm(folder: Path) -> dict[str, str]:
     does: a planner that never ends on its own (a real search may end early by chance, of
     the pipes a dead tmpnav closed, or of its input files removed in a clean-up)."""
     pause = f"-XX:+UnlockDiagnosticVMOptions -XX:+PauseAtStartup -XX:PauseAtStartupFile={folder / PAUSE_FILE}"
-    return {"TMPNAV_JAVA_OPTIONS": pause}
+    # a JVM process per solve, the path whose lifetime this guards (the in-process JVM ends with
+    # tmpnav by construction: tests/task/test_enhsp_persistent.py signals a run searching in it)
+    return {"TMPNAV_JAVA_OPTIONS": pause, "TMPNAV_ENHSP": "process"}
 
 
 def no_change(folder: Path) -> dict[str, str]:

@@ -49,6 +49,7 @@ def test_doctor_names_the_java_that_runs_enhsp() -> None:
     assert proc.returncode == 0, proc.stderr
     java = proc.stdout.splitlines()[0]
     assert java.startswith("java: Java ") and java.endswith(": runs ENHSP")
+    assert proc.stdout.splitlines()[1].startswith("enhsp: ")  # one JVM for the run, or a JVM per solve
 
 
 @pytest.mark.slow

@@ -7,6 +7,9 @@ share it (as the sub-problems of a run do).
 from __future__ import annotations
 
 import random
+import signal
+import subprocess
+import sys
 import threading
 import time
 
@@ -99,7 +102,7 @@ def test_without_the_jvm_the_process_path_plans(monkeypatch: pytest.MonkeyPatch)
     task = _task(*CASES[1][:4])
     expected = _solve(task, "enhsp-blind")
     monkeypatch.setattr(enhsp_jvm._JVM, "broken", "the JVM did not start: test")
-    assert not enhsp_jvm.usable()
+    assert not enhsp_jvm.usable("")
     assert enhsp_jvm.describe() == "a JVM process per solve (the JVM did not start: test)"
     called = []
     monkeypatch.setattr(enhsp_jvm, "run", lambda *a: called.append(a))
@@ -113,3 +116,38 @@ def test_without_jpype_the_reason_is_said(monkeypatch: pytest.MonkeyPatch) -> No
     monkeypatch.setitem(sys.modules, "jpype", None)
     assert enhsp_jvm.unavailable() == "JPype (the JPype1 package) is not installed"
     assert "a JVM process per solve" in enhsp_jvm.describe()
+
+
+#: a run in miniature: guarded as the command line guards it, ENHSP searching in the JVM
+INTERRUPTED_RUN = f"""
+import sys
+from tmpnav.lifetime import Terminated, guard
+from tmpnav.task.solve import solve_text
+guard()
+try:
+    print("solving", flush=True)
+    solve_text({SLOW_DOMAIN!r}, {SLOW_PROBLEM!r}, "enhsp-blind", 120.0)
+except KeyboardInterrupt:
+    sys.exit(130)
+except Terminated:
+    sys.exit(143)
+"""
+
+
+@pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_during_a_search_in_the_jvm_ends_the_run_at_once(sig: signal.Signals, code: int) -> None:
+    """The JVM (-Xrs) leaves SIGINT and SIGTERM to tmpnav: the run ends as interrupted, now."""
+    proc = subprocess.Popen([sys.executable, "-c", INTERRUPTED_RUN], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == "solving\n"
+        time.sleep(4.0)  # unified-planning imported, the JVM started, ENHSP searching
+        assert proc.poll() is None
+        children = subprocess.run(["pgrep", "-P", str(proc.pid), "java"], capture_output=True, text=True)
+        assert children.stdout == ""  # no java process: ENHSP runs inside
+        start = time.perf_counter()
+        proc.send_signal(sig)
+        assert proc.wait(timeout=10) == code
+        assert time.perf_counter() - start < 3.0
+    finally:
+        proc.kill()
+        proc.wait()

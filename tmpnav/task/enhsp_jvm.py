@@ -81,12 +81,13 @@ class _Jvm:
         self.broken: str | None = None
         self.jar = ""
 
-    def ready(self) -> bool:
-        """Start the JVM if it has not started; False (and ``broken`` set) if it cannot."""
+    def ready(self, options: str) -> bool:
+        """Start the JVM (with JVM ``options``) if it has not started; False (and ``broken``
+        set) if it cannot."""
         with self.lock:
             if not self.started and self.broken is None:
                 try:
-                    self.jar = _start()
+                    self.jar = _start(options)
                     self.started = True
                 except Exception as err:  # any failure to start means: use processes
                     self.broken = f"the JVM did not start: {err}"
@@ -116,9 +117,10 @@ def unavailable() -> str | None:
     return None
 
 
-def usable() -> bool:
-    """Whether this solve can run in the shared JVM (starting it now if need be)."""
-    return unavailable() is None and _JVM.ready()
+def usable(options: str) -> bool:
+    """Whether this solve can run in the shared JVM (starting it now, with the JVM options
+    ``options``, if need be)."""
+    return unavailable() is None and _JVM.ready(options)
 
 
 def describe() -> str:
@@ -143,20 +145,19 @@ def libjvm() -> Path | None:
     return None
 
 
-def _start() -> str:
-    """Start the JVM with ENHSP's JVM options; return the path of enhsp.jar."""
+def _start(options: str) -> str:
+    """Start the JVM with ENHSP's JVM ``options``; return the path of enhsp.jar."""
     import jpype
     from up_enhsp.enhsp_planner import ENHSP_JAR
-
-    from tmpnav.task.solve import JAVA_OPTIONS
 
     path = libjvm()
     if path is None:
         raise RuntimeError("no libjvm.so")
-    options = shlex.split(os.environ.get("TMPNAV_JAVA_OPTIONS", JAVA_OPTIONS))
     # JNI_CreateJavaVM also reads JAVA_TOOL_OPTIONS: solve_text starts the JVM before it
     # sets tmpnav's own there (solve.java_options), so they are not given twice
-    jpype.startJVM(str(path), *options, *FIXED_OPTIONS, classpath=[], interrupt=False, convertStrings=False)
+    jpype.startJVM(
+        str(path), *shlex.split(options), *FIXED_OPTIONS, classpath=[], interrupt=False, convertStrings=False
+    )
     system = jpype.JClass("java.lang.System")
     nowhere = jpype.JClass("java.io.PrintStream")(jpype.JClass("java.io.OutputStream").nullOutputStream())
     system.setOut(nowhere)  # ENHSP's log: see the module's docstring

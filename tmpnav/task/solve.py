@@ -233,7 +233,8 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
 
     engine_cls = engine_class(planner)
     engine = engine_cls()
-    in_jvm = enhsp_jvm.usable()  # before java_options(): a JVM starting now would read them
+    # before java_options(): a JVM starting now would read them from the environment too
+    in_jvm = enhsp_jvm.usable(os.environ.get("TMPNAV_JAVA_OPTIONS", JAVA_OPTIONS))
     with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp:
         d, p, plan_file = (os.path.join(tmp, n) for n in ("domain.pddl", "problem.pddl", "plan.txt"))
         for path, text in ((d, domain), (p, problem)):
