@@ -67,6 +67,7 @@ def test_a_solve_does_not_depend_on_the_solves_before_it() -> None:
     forwards = [_solve(task, "enhsp-blind") for task in tasks]
     backwards = [_solve(task, "enhsp-blind") for task in reversed(tasks)]
     assert forwards == backwards[::-1]
+    assert enhsp_jvm._JVM.slots.qsize() >= 1  # the slot was reused, its statics put back
 
 
 def test_two_solves_at_once_get_their_own_plans() -> None:

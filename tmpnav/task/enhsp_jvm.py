@@ -11,12 +11,13 @@ What a shared JVM changes, and how this module keeps the old behaviour:
 
 - Lifetime: the JVM is part of this process, so it ends with it, however the run ends.
   ``-Xrs`` keeps the JVM's hands off SIGINT and SIGTERM (tmpnav.lifetime's handlers stay).
-- Static state: ENHSP keeps registries in static fields (56 of them: predicates, fluents,
-  transitions, types), never reset. Each solve loads ENHSP in a class loader of its own (a
-  *slot*), so it sees fresh statics, as a new process would, and two solves at once do not
-  share them. Reusing a slot would cost 20 ms a solve instead of about 190 ms, but gave other
-  plans than a fresh process, and a wrong "unsolvable", once the domain changed (measured:
-  benchmarks/enhsp/README.md).
+- Static state: ENHSP keeps registries in static fields (interned predicates, fluents,
+  objects, types, transition ids) and never resets them: reused as they are, they gave other
+  plans than a fresh process, and a wrong "unsolvable", once the domain changed. So each
+  concurrent solve has its own *slot*, ENHSP in a class loader of its own, whose classes are
+  all loaded at once and their static fields recorded; before every solve the slot puts them
+  back as they were (null, a number, or a collection's first contents). A slot with a field
+  of another kind would not be reused (a new slot per solve: about 190 ms instead of 20 ms).
 - Output: ENHSP prints its log on the JVM's one ``System.out``, which two solves at once
   would share; it goes nowhere. A crash is a Java exception, whose text is the log tail.
 - ``System.gc()``: ENHSP asks for a full collection per run; ``-XX:+DisableExplicitGC``.
@@ -33,11 +34,16 @@ Only this module imports JPype. ``TMPNAV_ENHSP=process`` turns it off.
 
 from __future__ import annotations
 
+import functools
 import os
+import queue
 import shlex
 import threading
+import zipfile
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 #: environment variable choosing how ENHSP runs: "jvm" (the default) or "process"
 MODE_ENV = "TMPNAV_ENHSP"
@@ -57,8 +63,28 @@ class JvmRun:
     error: str | None = None
 
 
+class _JavaField(Protocol):
+    """A java.lang.reflect.Field, as JPype shows it."""
+
+    def set(self, owner: None, value: object) -> None: ...
+    def getModifiers(self) -> int: ...
+
+
+class _JavaContainer(Protocol):
+    """A java.util.Collection or Map, as JPype shows it."""
+
+    def clear(self) -> None: ...
+    def addAll(self, contents: object) -> bool: ...  # a Collection's
+    def putAll(self, contents: object) -> None: ...  # a Map's
+
+
+#: a static field of ENHSP's, its first value, and what puts a collection's contents back
+_Static = tuple[_JavaField, object, "Callable[[], None] | None"]
+
+
 class _Slot:
-    """ENHSP loaded afresh: a class loader of its own over enhsp.jar, and its ``main``."""
+    """ENHSP in a class loader of its own over enhsp.jar: its ``main``, and the first values
+    of ENHSP's static fields, put back before every solve (:meth:`reset`)."""
 
     def __init__(self, jar: str) -> None:
         import jpype
@@ -67,9 +93,84 @@ class _Slot:
         parent = jpype.JClass("java.lang.ClassLoader").getPlatformClassLoader()
         self.loader = jpype.JClass("java.net.URLClassLoader")([url], parent)
         self.main = jpype.JClass("main", loader=self.loader)
+        self.statics, self.reusable = _snapshot(self.loader, _class_names(jar))
+
+    def reset(self) -> None:
+        """ENHSP's static fields as they were when its classes were loaded."""
+        for field, value, refill in self.statics:
+            if refill is not None:
+                refill()  # the same collection (final fields too), its first contents
+            if not _is_final(field):
+                field.set(None, value)
 
     def close(self) -> None:
         self.loader.close()
+
+
+@functools.lru_cache(maxsize=1)
+def _class_names(jar: str) -> tuple[str, ...]:
+    """ENHSP's own classes (enhsp.jar, and its PDDL library libs/JPddl_.jar), whose static
+    fields hold its state; the other libraries are generic (collections, parser runtime)."""
+    names = []
+    library = os.path.join(os.path.dirname(jar), "libs", "JPddl_.jar")
+    for path, prefixes in ((jar, ("main.", "planners/")), (library, ("com/hstairs/",))):
+        with zipfile.ZipFile(path) as archive:
+            for name in archive.namelist():
+                if name.endswith(".class") and name.startswith(prefixes):
+                    names.append(name.removesuffix(".class").replace("/", "."))
+    return tuple(names)
+
+
+def _snapshot(loader: object, names: tuple[str, ...]) -> tuple[list[_Static], bool]:
+    """Load and initialise ENHSP's classes in ``loader``; their static fields, each with its
+    value and (for a collection or map) what puts its first contents back; and whether every
+    field is of a kind :meth:`_Slot.reset` puts back (else the slot is not reused)."""
+    import jpype
+
+    forname = jpype.JClass("java.lang.Class").forName
+    static = jpype.JClass("java.lang.reflect.Modifier").isStatic
+    collection, mapping = jpype.JClass("java.util.Collection"), jpype.JClass("java.util.Map")
+    statics: list[_Static] = []
+    reusable = True
+    for name in names:
+        try:
+            fields = forname(name, True, loader).getDeclaredFields()
+        except Exception:  # a class that cannot load here is not used here either
+            continue
+        for field in fields:
+            if not static(field.getModifiers()):
+                continue
+            field.setAccessible(True)
+            value = field.get(None)
+            if isinstance(value, collection | mapping):
+                statics.append((field, value, _refill(value)))
+            elif _is_final(field):
+                continue  # constants (ENHSP's final objects are its true and false predicates)
+            elif value is None or field.getType().isPrimitive() or isinstance(value, str):
+                statics.append((field, value, None))
+            else:
+                reusable = False  # state this module does not know how to put back
+    return statics, reusable
+
+
+def _refill(container: _JavaContainer) -> Callable[[], None]:
+    """What empties a Java collection or map and puts its present contents back."""
+    import jpype
+
+    is_map = hasattr(container, "putAll")
+    first = jpype.JClass("java.util.HashMap" if is_map else "java.util.ArrayList")(container)
+
+    def refill() -> None:
+        container.clear()
+        container.putAll(first) if is_map else container.addAll(first)
+
+    return refill
+
+
+def _is_final(field: _JavaField) -> bool:
+    import jpype
+
+    return bool(jpype.JClass("java.lang.reflect.Modifier").isFinal(field.getModifiers()))
 
 
 class _Jvm:
@@ -80,6 +181,7 @@ class _Jvm:
         self.started = False
         self.broken: str | None = None
         self.jar = ""
+        self.slots: queue.LifoQueue[_Slot] = queue.LifoQueue()  # idle, reset before each use
 
     def ready(self, options: str) -> bool:
         """Start the JVM (with JVM ``options``) if it has not started; False (and ``broken``
@@ -168,7 +270,11 @@ def _start(options: str) -> str:
 def run(args: list[str], timeout: float) -> JvmRun:
     """Run ENHSP's ``main`` with ``args`` (up_enhsp's, without ``java -jar``) in the shared
     JVM, stopping it after ``timeout`` seconds. Call :func:`usable` first."""
-    slot = _Slot(_JVM.jar)
+    try:
+        slot = _JVM.slots.get_nowait()
+    except queue.Empty:
+        slot = _Slot(_JVM.jar)
+    slot.reset()
     done = threading.Event()
     box: dict[str, object] = {}
 
@@ -186,7 +292,7 @@ def run(args: list[str], timeout: float) -> JvmRun:
 
     threading.Thread(target=target, name="tmpnav-enhsp", daemon=True).start()
     if done.wait(timeout):
-        slot.close()
+        _JVM.slots.put(slot) if slot.reusable else slot.close()
         error = box.get("error")
         return JvmRun(False, None if error is None else str(error))
     if _stop(box.get("thread"), done):
