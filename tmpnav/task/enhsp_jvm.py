@@ -34,13 +34,16 @@ Only this module imports JPype. ``TMPNAV_ENHSP=process`` turns it off.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import queue
 import shlex
+import sys
+import tempfile
 import threading
 import zipfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
@@ -257,14 +260,42 @@ def _start(options: str) -> str:
         raise RuntimeError("no libjvm.so")
     # JNI_CreateJavaVM also reads JAVA_TOOL_OPTIONS: solve_text starts the JVM before it
     # sets tmpnav's own there (solve.java_options), so they are not given twice
-    jpype.startJVM(
-        str(path), *shlex.split(options), *FIXED_OPTIONS, classpath=[], interrupt=False, convertStrings=False
-    )
+    with _stderr_held() as said:
+        try:
+            jpype.startJVM(
+                str(path), *shlex.split(options), *FIXED_OPTIONS, classpath=[], interrupt=False, convertStrings=False
+            )
+        except Exception as err:
+            raise RuntimeError(" ".join(f"{err} {said()}".split())) from None
     system = jpype.JClass("java.lang.System")
     nowhere = jpype.JClass("java.io.PrintStream")(jpype.JClass("java.io.OutputStream").nullOutputStream())
     system.setOut(nowhere)  # ENHSP's log: see the module's docstring
     system.setErr(nowhere)
     return str(ENHSP_JAR)
+
+
+@contextlib.contextmanager
+def _stderr_held() -> Iterator[Callable[[], str]]:
+    """Hold what is written to file descriptor 2 inside (the JVM prints its start errors
+    there, not as an exception): given back to stderr after a start, or kept in the error
+    of a failed one, so that a bad JVM option is one line of tmpnav's, not two."""
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as held:
+        os.dup2(held.fileno(), 2)
+
+        def said() -> str:
+            held.seek(0)
+            return held.read().decode(errors="replace")
+
+        failed = True
+        try:
+            yield said
+            failed = False
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            if not failed:
+                sys.stderr.write(said())
 
 
 def run(args: list[str], timeout: float) -> JvmRun:
