@@ -53,6 +53,8 @@ MODE_ENV = "TMPNAV_ENHSP"
 #: JVM options always added: signals stay Python's (tmpnav.lifetime), ENHSP's System.gc()
 #: per run is not a full collection of the shared heap
 FIXED_OPTIONS = ("-Xrs", "-XX:+DisableExplicitGC")
+#: the first Java that knows --enable-native-access (and from 22 on, warns without it)
+NATIVE_ACCESS_JAVA = 21
 #: seconds a stopped search has to end before the JVM is given up for the run
 STOP_GRACE = 2.0
 
@@ -255,15 +257,25 @@ def _start(options: str) -> str:
     import jpype
     from up_enhsp.enhsp_planner import ENHSP_JAR
 
-    path = libjvm()
-    if path is None:
+    from tmpnav.java import find
+
+    path, java = libjvm(), find()
+    if path is None or java is None:
         raise RuntimeError("no libjvm.so")
+    # Java 22+ warns on stderr, 4 lines, when JPype loads its native part; this allows it
+    native = ("--enable-native-access=ALL-UNNAMED",) if java.version >= NATIVE_ACCESS_JAVA else ()
     # JNI_CreateJavaVM also reads JAVA_TOOL_OPTIONS: solve_text starts the JVM before it
     # sets tmpnav's own there (solve.java_options), so they are not given twice
     with _stderr_held() as said:
         try:
             jpype.startJVM(
-                str(path), *shlex.split(options), *FIXED_OPTIONS, classpath=[], interrupt=False, convertStrings=False
+                str(path),
+                *shlex.split(options),
+                *FIXED_OPTIONS,
+                *native,
+                classpath=[],
+                interrupt=False,
+                convertStrings=False,
             )
         except Exception as err:
             raise RuntimeError(" ".join(f"{err} {said()}".split())) from None
