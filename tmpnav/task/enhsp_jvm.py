@@ -25,9 +25,11 @@ What a shared JVM changes, and how this module keeps the old behaviour:
   the thread is stopped (``Thread.stop``, which Java 17-19 still honour). Where the JVM
   refuses (Java 20+), the search cannot be stopped: the JVM is then not used again in this
   run (the process path takes over) and the stray search ends with the process.
-- ``System.exit``: ENHSP calls it only on a bad command line (ours is up_enhsp's) and in
-  error branches of its PDDL library for constructs tmpnav's PDDL does not use; it would end
-  the process. Java 17+ offers no way to refuse it without a compiled SecurityManager.
+- ``System.exit``: ENHSP calls it on a bad command line (ours is up_enhsp's), and its PDDL
+  library (libs/JPddl_.jar) in about a dozen classes (conditions, expressions) on errors;
+  tmpnav's generated PDDL has not reached them (the tests; every sub-problem of a 10-room
+  run). If one did, the tmpnav process would end. Refusing it needs a SecurityManager, a
+  compiled subclass JPype cannot make (and Java 24+ has none).
 
 Only this module imports JPype. ``TMPNAV_ENHSP=process`` turns it off.
 """
