@@ -44,9 +44,11 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
+from concurrent.futures import Future, wait
 from pathlib import Path
 from types import FrameType
+from typing import TypeVar
 
 #: the environment variable that marks the processes of a run
 ENV = "TMPNAV_RUN"
@@ -56,6 +58,10 @@ PR_SET_PDEATHSIG = 1
 DEATH_SIGNAL = signal.SIGUSR1
 #: seconds a terminated run may take to clean up before it ends regardless
 CLEANUP_SECONDS = 10.0
+#: seconds between the main thread's looks at signals while it waits for other threads' work
+SIGNAL_POLL = 0.1
+
+T = TypeVar("T")
 
 _sentinel: subprocess.Popen[bytes] | None = None
 #: the signal (SIGINT or SIGTERM) that asked this run to end, once one has
@@ -149,6 +155,21 @@ def signals_held() -> Iterator[None]:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def gather(futures: Sequence[Future[T]]) -> Iterator[T]:
+    """The results of ``futures``, in their order, waited for in short slices.
+
+    A process-directed signal is given by the kernel to any thread that does not block it:
+    one of a pool's threads, or one of the JVM's. Its handler (KeyboardInterrupt,
+    :class:`Terminated`) then runs when the main thread next runs Python code, which an
+    untimed wait (``Future.result()``, ``Executor.map``) never does until its work ends: a
+    Ctrl-C waited for a search's time limit. Waited for in slices of SIGNAL_POLL seconds,
+    it is raised within that."""
+    for future in futures:
+        while not wait([future], timeout=SIGNAL_POLL).done:
+            pass
+        yield future.result()
 
 
 def _start_sentinel() -> None:

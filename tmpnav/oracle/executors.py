@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from tmpnav.errors import InputError
-from tmpnav.lifetime import signals_held
+from tmpnav.lifetime import gather, signals_held
 from tmpnav.oracle.evaluate import EvalStats, Request, evaluate
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.types import MotionResult, Roadmap, Scenario
@@ -193,9 +193,9 @@ class ProcessExecutor:
         pool = self._get_pool(ctx)
         try:
             with signals_held():  # the first blocks fork the workers
-                results = pool.map(_work, todo)
+                futures = [pool.submit(_work, block) for block in todo]
             parts = []
-            for k, part in enumerate(results):
+            for k, part in enumerate(gather(futures)):
                 parts.append(part)
                 if progress:
                     progress(k + 1, len(todo))

@@ -44,6 +44,7 @@ import shlex
 import sys
 import tempfile
 import threading
+import time
 import zipfile
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -59,6 +60,8 @@ FIXED_OPTIONS = ("-Xrs", "-XX:+DisableExplicitGC")
 NATIVE_ACCESS_JAVA = 21
 #: seconds a stopped search has to end before the JVM is given up for the run
 STOP_GRACE = 2.0
+#: seconds between looks at whether a search was asked to stop (:func:`stop_all`)
+POLL = 0.05
 
 
 @dataclass(frozen=True)
@@ -204,6 +207,17 @@ class _Jvm:
 
 
 _JVM = _Jvm()
+#: the runs in progress, each by the event that stops it (:func:`stop_all`)
+_stops: set[threading.Event] = set()
+_stops_lock = threading.Lock()
+
+
+def stop_all() -> None:
+    """Stop every search running in the JVM now (a signal is ending the run): each
+    :func:`run` stops its search as at its time limit and returns at once."""
+    with _stops_lock:
+        for stop in _stops:
+            stop.set()
 
 
 def forced_process() -> bool:
@@ -336,13 +350,30 @@ def run(args: list[str], timeout: float) -> JvmRun:
             done.set()
 
     threading.Thread(target=target, name="tmpnav-enhsp", daemon=True).start()
-    if done.wait(timeout):
+    if _wait(done, timeout):
         _JVM.slots.put(slot) if slot.reusable else slot.close()
         error = box.get("error")
         return JvmRun(False, None if error is None else str(error))
     if _stop(box.get("thread"), done):
         slot.close()
     return JvmRun(True)
+
+
+def _wait(done: threading.Event, timeout: float) -> bool:
+    """Wait for a search to end within ``timeout`` seconds (True if it did); False at once
+    when :func:`stop_all` is called."""
+    stop = threading.Event()
+    with _stops_lock:
+        _stops.add(stop)
+    try:
+        deadline = time.monotonic() + timeout
+        while not done.wait(min(POLL, max(deadline - time.monotonic(), 0.0))):
+            if stop.is_set() or time.monotonic() >= deadline:
+                return False
+        return True
+    finally:
+        with _stops_lock:
+            _stops.discard(stop)
 
 
 def _stop(thread: object, done: threading.Event) -> bool:

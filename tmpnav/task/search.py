@@ -24,11 +24,11 @@ the plan space) says how far from optimal it can be.
 
 from __future__ import annotations
 
+import functools
 import os
 import random
 import time
 from collections.abc import Callable
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
@@ -41,6 +41,7 @@ from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.pddl_text import Clocks, PddlTask, write_task
 from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_origins
 from tmpnav.task.routing import solve_routes
+from tmpnav.task.solve import side_by_side
 from tmpnav.types import CostTable, Goals
 
 #: relative improvement below which a new plan does not count as better
@@ -320,8 +321,7 @@ class AnytimeSearch:
             if len(subs) == 1:
                 solved = [self._solve(subs[0], timeout)]
             else:
-                with ThreadPoolExecutor(max_workers=len(subs)) as pool:
-                    solved = list(pool.map(lambda sub: self._solve(sub, timeout), subs))
+                solved = side_by_side([functools.partial(self._solve, sub, timeout) for sub in subs])
         self.stats.subproblems += len(subs)
         for sub, steps in zip(subs, solved, strict=True):
             if steps is not None:

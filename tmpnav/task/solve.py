@@ -10,11 +10,13 @@ import os
 import re
 import tempfile
 import threading
+import time
 import warnings
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor, wait
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from tmpnav.errors import (
     PlannerCrashError,
@@ -26,8 +28,11 @@ from tmpnav.errors import (
 from tmpnav.java import JAVA_MIN as JAVA_MIN  # re-exported: the oldest Java ENHSP runs on
 from tmpnav.java import find as find_java
 from tmpnav.java import require as require_java
+from tmpnav.lifetime import gather
 from tmpnav.task import enhsp_jvm
 from tmpnav.types import PlanStatus
+
+T = TypeVar("T")
 
 if TYPE_CHECKING:
     from unified_planning.engines.engine import Engine
@@ -262,15 +267,63 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
     return SolveResult(_plan_status(status), _plan_actions(plan_text), engine.name, _tail(log))
 
 
+#: seconds :func:`side_by_side` keeps stopping searches after a signal, and between its stops
+STOP_SECONDS, STOP_POLL = 5.0, 0.05
+#: the engines whose ``java`` process runs now (:func:`side_by_side` ends them after a signal)
+_running: set[Engine] = set()
+_running_lock = threading.Lock()
+
+
+def side_by_side(calls: list[Callable[[], T]]) -> list[T]:
+    """The results of ``calls`` (each solving with ENHSP), run side by side in threads.
+
+    Waited for so that a signal is handled at once (:func:`tmpnav.lifetime.gather`). When a
+    signal (or a failure) ends the wait, the searches under way are stopped, again until
+    every call has returned (a search may start just after the first stop): the threads
+    would otherwise hold the run's end until their searches' time limit (up to 30 s; a
+    SIGTERM's clean-up ended at its own limit instead, without its message)."""
+    pool = ThreadPoolExecutor(max_workers=len(calls))
+    futures = [pool.submit(call) for call in calls]
+    try:
+        return list(gather(futures))
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        deadline = time.monotonic() + STOP_SECONDS
+        while not all(f.done() for f in futures) and time.monotonic() < deadline:
+            _stop_searches()
+            wait(futures, timeout=STOP_POLL)
+        raise
+    finally:
+        pool.shutdown(wait=False)
+
+
+def _stop_searches() -> None:
+    """End every ENHSP search running now, in this process's JVM or as a ``java`` process."""
+    from unified_planning.engines.pddl_planner import terminate_process
+
+    enhsp_jvm.stop_all()
+    with _running_lock:
+        engines = list(_running)
+    for engine in engines:
+        process = getattr(engine, "_process", None)
+        if process is not None:
+            terminate_process(process)
+
+
 def _run_process(engine: Engine, planner: str, cmd: list[str], timeout: float) -> tuple[bool, bool, str]:
     """ENHSP as up_enhsp runs it, a ``java`` process: (timed out, failed, log)."""
     from unified_planning.engines.pddl_planner import run_command
 
+    with _running_lock:
+        _running.add(engine)
     try:
         with java_options():
             timed_out, (out, err), retval = run_command(engine, cmd, timeout=timeout)
     except FileNotFoundError as error:
         raise PlannerUnavailableError(f"planner {planner!r} could not start: {error}") from None
+    finally:
+        with _running_lock:
+            _running.discard(engine)
     log = "".join(out) + "".join(e for e in err if "JAVA_TOOL_OPTIONS" not in e)
     return timed_out and retval != 0, retval != 0, log
 
