@@ -1,0 +1,60 @@
+"""tmpnav.lifetime.gather: a signal the kernel hands to another thread still ends the wait at once."""
+
+from __future__ import annotations
+
+import signal
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+from types import FrameType
+
+import pytest
+
+from tmpnav.lifetime import SIGNAL_POLL, gather
+
+
+class Signalled(Exception):
+    pass
+
+
+def _raise(signum: int, frame: FrameType | None) -> None:
+    raise Signalled
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="needs pthread_kill")
+def test_a_signal_given_to_a_worker_thread_ends_the_wait_within_a_slice() -> None:
+    """The signal goes to the worker (as the kernel may do with a process-directed one): its C
+    handler only sets a flag, and Python runs the handler in the main thread when that next
+    runs Python code. An untimed Future.result() waited the worker's 3 s out."""
+    previous = signal.signal(signal.SIGUSR1, _raise)
+    release = threading.Event()
+    started = threading.Event()
+
+    def work() -> int:
+        started.set()
+        release.wait(3.0)
+        return 1
+
+    pool = ThreadPoolExecutor(max_workers=1)
+    try:
+        future = pool.submit(work)
+        started.wait(1.0)
+        worker = next(t for t in threading.enumerate() if t.name.startswith("ThreadPoolExecutor"))
+        assert worker.ident is not None
+        begun = time.monotonic()
+        signal.pthread_kill(worker.ident, signal.SIGUSR1)
+        with pytest.raises(Signalled):
+            list(gather([future]))
+        assert time.monotonic() - begun < 1.0 + SIGNAL_POLL  # not the worker's 3 s
+    finally:
+        release.set()
+        pool.shutdown(wait=True)
+        signal.signal(signal.SIGUSR1, previous)
+
+
+def test_gather_gives_the_results_in_the_futures_order() -> None:
+    with ThreadPoolExecutor(max_workers=3) as pool:
+        futures = [pool.submit(time.sleep, d) for d in (0.2, 0.0, 0.1)]
+        assert list(gather(futures)) == [None, None, None]
+        futures = [pool.submit(lambda k=k: k * k) for k in range(5)]
+        assert list(gather(futures)) == [0, 1, 4, 9, 16]
