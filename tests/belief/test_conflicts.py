@@ -65,8 +65,10 @@ def test_the_margin_bounds_the_touch_risk_by_delta() -> None:
     for delta in (0.01, 0.05, 0.2):
         m = margin_factor(delta) * 0.3
         assert math.exp(-(m**2) / (2 * 0.3**2)) == pytest.approx(delta)
-    with pytest.raises(ValueError):
-        margin_factor(1.0)
+    assert margin_factor(1.0) == 0.0  # any risk allowed (--max-risk 1): the radii alone
+    for bad in (0.0, 1.5):
+        with pytest.raises(ValueError):
+            margin_factor(bad)
 
 
 def test_a_robot_stands_where_its_trajectory_ends() -> None:

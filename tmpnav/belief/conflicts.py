@@ -57,9 +57,10 @@ class Conflict:
 
 
 def margin_factor(delta: float) -> float:
-    """k(delta) = sqrt(2 ln(1/delta)): standard deviations of margin for a touch risk of at most delta."""
-    if not 0.0 < delta < 1.0:
-        raise ValueError(f"the risk threshold must be in (0, 1), not {delta}")
+    """k(delta) = sqrt(2 ln(1/delta)): standard deviations of margin for a touch risk of at most
+    delta; 0 at delta = 1 (any risk allowed: the radii alone), as ``--max-risk 1`` may ask."""
+    if not 0.0 < delta <= 1.0:
+        raise ValueError(f"the risk threshold must be in (0, 1], not {delta}")
     return math.sqrt(2.0 * math.log(1.0 / delta))
 
 

@@ -1,0 +1,71 @@
+"""The chance constraint through the real command line: ``tmpnav plan --max-risk DELTA``.
+
+A plan within the threshold is written with every move's bound at most DELTA; a threshold no
+plan meets ends in one line (exit code 9) naming the least threshold found, and planning at
+that threshold succeeds; a threshold outside (0, 1] is a usage error.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from tests.test_cli_plan import ROOT, TWO_ROOMS, assert_clean_failure, tmpnav
+
+OFFICE = ROOT / "configs" / "office-rooms.yaml"
+
+pytestmark = pytest.mark.slow
+
+
+@pytest.fixture(scope="module")
+def cache_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("cache")
+
+
+def moves_risk(out: Path) -> list[float]:
+    doc = json.loads((out / "plan.json").read_text())
+    return [move["risk"] for action in doc["actions"] for move in action["moves"]]
+
+
+def test_a_plan_within_the_threshold_keeps_every_move_within_it(cache_dir: Path, tmp_path: Path) -> None:
+    """The office's unconstrained plan grazes door frames (bounds near 1); at 0.05 the planner
+    keeps to the middle of the corridors and doors."""
+    out = tmp_path / "out"
+    proc = tmpnav("plan", str(OFFICE), "-q", "--max-risk", "0.05", "--cache-dir", str(cache_dir), "-o", str(out))
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads((out / "plan.json").read_text())
+    assert doc["risk"]["max_risk"] == 0.05
+    assert max(moves_risk(out)) <= 0.05 and doc["risk"]["plan"] <= 0.05
+    assert "every move within max_risk 0.05" in proc.stdout
+
+
+def test_a_threshold_no_plan_meets_names_the_least_one_and_that_one_plans(cache_dir: Path, tmp_path: Path) -> None:
+    proc = tmpnav(
+        "plan", str(OFFICE), "-q", "--max-risk", "1e-12", "--cache-dir", str(cache_dir), "-o", str(tmp_path / "no")
+    )
+    assert_clean_failure(proc, 9, "within max_risk 1e-12")
+    assert not (tmp_path / "no" / "plan.json").exists()
+    found = re.search(r"rerun with --max-risk (\S+),", proc.stderr)
+    assert found, proc.stderr
+    least = found.group(1)
+    out = tmp_path / "out"
+    again = tmpnav("plan", str(OFFICE), "-q", "--max-risk", least, "--cache-dir", str(cache_dir), "-o", str(out))
+    assert again.returncode == 0, again.stderr
+    assert max(moves_risk(out)) <= float(least)
+
+
+def test_any_risk_allowed_at_one(tmp_path: Path) -> None:
+    proc = tmpnav(
+        "plan", str(TWO_ROOMS), "-q", "--max-risk", "1", "--cache-dir", str(tmp_path / "c"), "-o", str(tmp_path / "o")
+    )
+    assert proc.returncode == 0, proc.stderr
+
+
+@pytest.mark.parametrize("bad", ["0", "1.5", "nan"])
+def test_a_threshold_outside_zero_one_is_a_usage_error(bad: str, tmp_path: Path) -> None:
+    proc = tmpnav("plan", str(TWO_ROOMS), "--max-risk", bad, "-o", str(tmp_path / "o"))
+    assert proc.returncode == 2, proc.stderr
+    assert "--max-risk" in proc.stderr and "Traceback" not in proc.stderr
