@@ -177,8 +177,14 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
         click.echo(dumps(plan_document(report)))
     else:
         click.echo(plan_summary(report))
-        for path in written:
-            click.echo(f"wrote {path}")
+        if output is not None:
+            click.echo(wrote_into(output, written))
+
+
+def wrote_into(folder: Path, written: list[Path]) -> str:
+    """One line for the files written into ``folder``: ``wrote out/: plan.json, plan.png, ...``."""
+    names = [str(Path(p).relative_to(folder)) if Path(p).is_relative_to(folder) else str(p) for p in written]
+    return f"wrote {str(folder).rstrip('/')}/: {', '.join(names)}"
 
 
 @cli.command("export-pddl")
