@@ -152,3 +152,38 @@ def test_a_signal_during_a_search_in_the_jvm_ends_the_run_at_once(sig: signal.Si
     finally:
         proc.kill()
         proc.wait()
+
+
+#: two searches side by side in the JVM, as the anytime search solves sub-problems
+INTERRUPTED_PAIR = f"""
+import functools, sys
+from tmpnav.lifetime import Terminated, guard
+from tmpnav.task.solve import side_by_side, solve_text
+guard()
+try:
+    print("solving", flush=True)
+    side_by_side([functools.partial(solve_text, {SLOW_DOMAIN!r}, {SLOW_PROBLEM!r}, "enhsp-blind", 120.0)] * 2)
+except KeyboardInterrupt:
+    sys.exit(130)
+except Terminated:
+    sys.exit(143)
+"""
+
+
+@pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_during_searches_side_by_side_ends_the_run_at_once(sig: signal.Signals, code: int) -> None:
+    """The kernel may give the signal to a pool thread or a JVM thread: the main thread still
+    handles it within a slice, and the searches under way are stopped, not waited for (their
+    time limit is 120 s)."""
+    proc = subprocess.Popen([sys.executable, "-c", INTERRUPTED_PAIR], stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout is not None and proc.stdout.readline() == "solving\n"
+        time.sleep(4.0)  # unified-planning imported, the JVM started, both searches running
+        assert proc.poll() is None
+        start = time.perf_counter()
+        proc.send_signal(sig)
+        assert proc.wait(timeout=30) == code
+        assert time.perf_counter() - start < 3.0 + enhsp_jvm.STOP_GRACE  # Java 20+ cannot stop a search
+    finally:
+        proc.kill()
+        proc.wait()

@@ -49,7 +49,7 @@ import zipfile
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Protocol
+from typing import Literal, Protocol
 
 #: environment variable choosing how ENHSP runs: "jvm" (the default) or "process"
 MODE_ENV = "TMPNAV_ENHSP"
@@ -214,7 +214,9 @@ _stops_lock = threading.Lock()
 
 def stop_all() -> None:
     """Stop every search running in the JVM now (a signal is ending the run): each
-    :func:`run` stops its search as at its time limit and returns at once."""
+    :func:`run` asks its search's thread to stop and returns at once, as timed out, without
+    the grace :func:`_stop` gives a search at its time limit (on Java 20+, which cannot stop
+    a thread, that grace held a Ctrl-C 2 s; the search then ends with the process)."""
     with _stops_lock:
         for stop in _stops:
             stop.set()
@@ -350,41 +352,51 @@ def run(args: list[str], timeout: float) -> JvmRun:
             done.set()
 
     threading.Thread(target=target, name="tmpnav-enhsp", daemon=True).start()
-    if _wait(done, timeout):
+    ended = _wait(done, timeout)
+    if ended == "done":
         _JVM.slots.put(slot) if slot.reusable else slot.close()
         error = box.get("error")
         return JvmRun(False, None if error is None else str(error))
-    if _stop(box.get("thread"), done):
+    if ended == "stopped":  # the run is ending: asked to stop, not waited for (see stop_all)
+        _ask_to_stop(box.get("thread"))
+    elif _stop(box.get("thread"), done):
         slot.close()
     return JvmRun(True)
 
 
-def _wait(done: threading.Event, timeout: float) -> bool:
-    """Wait for a search to end within ``timeout`` seconds (True if it did); False at once
-    when :func:`stop_all` is called."""
+def _wait(done: threading.Event, timeout: float) -> Literal["done", "limit", "stopped"]:
+    """Wait for a search to end within ``timeout`` seconds: "done" if it did, "limit" if it
+    did not, "stopped" at once when :func:`stop_all` is called."""
     stop = threading.Event()
     with _stops_lock:
         _stops.add(stop)
     try:
         deadline = time.monotonic() + timeout
         while not done.wait(min(POLL, max(deadline - time.monotonic(), 0.0))):
-            if stop.is_set() or time.monotonic() >= deadline:
-                return False
-        return True
+            if stop.is_set():
+                return "stopped"
+            if time.monotonic() >= deadline:
+                return "limit"
+        return "done"
     finally:
         with _stops_lock:
             _stops.discard(stop)
 
 
-def _stop(thread: object, done: threading.Event) -> bool:
-    """Stop a search past its time limit (True if it stopped); if the JVM cannot, stop
-    using the JVM for the rest of the run."""
+def _ask_to_stop(thread: object) -> None:
+    """``Thread.stop`` a search's Java thread, not waiting for it (Java 20+ refuses: nothing)."""
     stop = getattr(thread, "stop", None)
     try:
         if stop is not None:
             stop()
     except Exception:  # Java 20+: UnsupportedOperationException
         pass
+
+
+def _stop(thread: object, done: threading.Event) -> bool:
+    """Stop a search past its time limit (True if it stopped); if the JVM cannot, stop
+    using the JVM for the rest of the run."""
+    _ask_to_stop(thread)
     if done.wait(STOP_GRACE):
         return True
     with _JVM.lock:

@@ -13,7 +13,7 @@ import threading
 import time
 import warnings
 from collections.abc import Callable, Iterator
-from concurrent.futures import ThreadPoolExecutor, wait
+from concurrent.futures import Future, wait
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, TypeVar
@@ -239,7 +239,7 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
     engine_cls = engine_class(planner)
     engine = engine_cls()
     # before java_options(): a JVM starting now would read them from the environment too
-    in_jvm = enhsp_jvm.usable(os.environ.get("TMPNAV_JAVA_OPTIONS", JAVA_OPTIONS))
+    in_jvm = enhsp_jvm.usable(_jvm_options())
     with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp:
         d, p, plan_file = (os.path.join(tmp, n) for n in ("domain.pddl", "problem.pddl", "plan.txt"))
         for path, text in ((d, domain), (p, problem)):
@@ -279,22 +279,39 @@ def side_by_side(calls: list[Callable[[], T]]) -> list[T]:
 
     Waited for so that a signal is handled at once (:func:`tmpnav.lifetime.gather`). When a
     signal (or a failure) ends the wait, the searches under way are stopped, again until
-    every call has returned (a search may start just after the first stop): the threads
-    would otherwise hold the run's end until their searches' time limit (up to 30 s; a
-    SIGTERM's clean-up ended at its own limit instead, without its message)."""
-    pool = ThreadPoolExecutor(max_workers=len(calls))
-    futures = [pool.submit(call) for call in calls]
+    every call has returned or STOP_SECONDS have passed (a search may start just after the
+    first stop, once its JVM has started): the threads would otherwise hold the run's end
+    until their searches' time limit (up to 30 s; a SIGTERM's clean-up ended at its own
+    limit instead, without its message). The threads are daemons, not a pool's, so that a
+    call still starting then (the JVM, ENHSP's classes) does not hold the process's exit."""
+    # the JVM started here, in the calling (main) thread: the thread that creates it is the
+    # JVM's non-daemon "main", which Python's exit (JPype's DestroyJavaVM) waits for; started
+    # by a searching thread that a signal left behind, the exit waited for good
+    enhsp_jvm.usable(_jvm_options())
+    futures: list[Future[T]] = [Future() for _ in calls]
+    for call, future in zip(calls, futures, strict=True):
+        threading.Thread(target=_settle, args=(call, future), name="tmpnav-solve", daemon=True).start()
     try:
         return list(gather(futures))
     except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
         deadline = time.monotonic() + STOP_SECONDS
         while not all(f.done() for f in futures) and time.monotonic() < deadline:
             _stop_searches()
             wait(futures, timeout=STOP_POLL)
         raise
-    finally:
-        pool.shutdown(wait=False)
+
+
+def _jvm_options() -> str:
+    """The JVM options ENHSP runs with: TMPNAV_JAVA_OPTIONS, else tmpnav's default."""
+    return os.environ.get("TMPNAV_JAVA_OPTIONS", JAVA_OPTIONS)
+
+
+def _settle(call: Callable[[], T], future: Future[T]) -> None:
+    """Run ``call`` and put its result (or its exception) in ``future``."""
+    try:
+        future.set_result(call())
+    except BaseException as err:  # given to the waiting thread, which re-raises it
+        future.set_exception(err)
 
 
 def _stop_searches() -> None:
