@@ -11,6 +11,9 @@ What a shared JVM changes, and how this module keeps the old behaviour:
 
 - Lifetime: the JVM is part of this process, so it ends with it, however the run ends.
   ``-Xrs`` keeps the JVM's hands off SIGINT and SIGTERM (tmpnav.lifetime's handlers stay).
+  The thread that starts the JVM becomes its non-daemon "main", which JPype's shutdown at
+  Python's exit waits for: it is the caller's thread (tmpnav.task.solve.side_by_side starts
+  the JVM before its searching threads), never a search's, which a signal may leave behind.
 - Static state: ENHSP keeps registries in static fields (interned predicates, fluents,
   objects, types, transition ids) and never resets them: reused as they are, they gave other
   plans than a fresh process, and a wrong "unsolvable", once the domain changed. So each
