@@ -44,7 +44,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future, wait
 from pathlib import Path
 from types import FrameType
@@ -87,7 +87,27 @@ def guard() -> None:
     if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # likewise for SIGINT
         signal.signal(signal.SIGINT, _raise_interrupted)
         os.register_at_fork(after_in_child=_default_sigint)
+    sys.unraisablehook = _quiet_when_signalled(sys.unraisablehook)
     _start_sentinel()
+
+
+def _quiet_when_signalled(
+    previous: Callable[[sys.UnraisableHookArgs], object],
+) -> Callable[[sys.UnraisableHookArgs], None]:
+    """An unraisable-exception hook that says nothing of the signal's own exception.
+
+    Raised where Python cannot propagate it (a weakref callback, such as importlib's module
+    locks', or a ``__del__``), KeyboardInterrupt or Terminated is printed as "Exception
+    ignored in ..." with a traceback, and dropped. The signal is remembered all the same
+    (:func:`signalled`), and the run ends as that signal asked (:func:`check_signals`), so the
+    traceback is noise on a user's terminal. Any other exception goes to ``previous``."""
+
+    def hook(unraisable: sys.UnraisableHookArgs) -> None:
+        if _signalled is not None and isinstance(unraisable.exc_value, KeyboardInterrupt | Terminated):
+            return
+        previous(unraisable)
+
+    return hook
 
 
 def signalled() -> signal.Signals | None:
