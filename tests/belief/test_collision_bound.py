@@ -1,36 +1,41 @@
 """The collision bound as the compiled kernel sums it, and the oracle's choice under a threshold.
 
 The bound itself (its validity against Monte Carlo) is tested in tests/belief/test_risk.py; here:
-the kernel sums exactly exp(-d^2 / (2 lambda_max)) over a robot's driving steps (1 where the
-margin d is not positive), and the oracle picks the cheapest instantiation within max_risk.
+the kernel sums exactly the step bound of tmpnav.belief.risk (the numpy reference) over a
+robot's driving steps (1 where a sector's reach is 0), and the oracle picks the cheapest
+instantiation within max_risk.
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 import pytest
 
 from tests.belief.test_kernel import _batch
+from tmpnav.belief.risk import step_bound
 from tmpnav.belief.sequences import MotionArrays, propagate_sequences
 from tmpnav.oracle.results import pick
 from tmpnav.types import RISK_PENALTY, risk_penalty
+from tmpnav.world.reach import SECTORS
+
+
+def _reach(margins: np.ndarray) -> np.ndarray:
+    """(T+1, K) reach: each step's margin in the sectors facing +y (a wall along the path), far
+    elsewhere, so that both the disc and the sectors decide some steps."""
+    far = np.full((margins.shape[0], SECTORS), 0.8 if np.isfinite(margins).any() else np.inf)
+    far[:, 4:12] = np.maximum(margins, 0.0)[:, None]
+    return far
 
 
 def _motion(T: int, L: int, margins: np.ndarray) -> MotionArrays:
     ctrl = np.column_stack([np.full(T, 0.5), np.zeros(T)])
     poses = np.column_stack([0.1 * np.arange(T + 1), np.zeros(T + 1), np.zeros(T + 1)])
     vis = np.zeros((T + 1, L), dtype=bool)
-    return MotionArrays.of([ctrl], [poses], [vis], np.zeros(1, dtype=np.int64), L, [margins])
+    return MotionArrays.of([ctrl], [poses], [vis], np.zeros(1, dtype=np.int64), L, [_reach(margins)])
 
 
 def _expected(covs: np.ndarray, margins: np.ndarray) -> float:
-    total = 0.0
-    for k in range(1, covs.shape[0]):
-        lam = float(np.linalg.eigvalsh(covs[k, :2, :2])[-1])
-        total += 1.0 if margins[k] <= 0 else math.exp(-(margins[k] ** 2) / (2 * lam))
-    return total
+    return float(step_bound(covs[1:, :2, :2], _reach(margins)[1:]).sum())
 
 
 @pytest.mark.parametrize("low", [0.4, 0.1, 0.0, -0.2])

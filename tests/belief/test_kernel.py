@@ -245,7 +245,7 @@ def test_zero_steps_and_bad_shapes() -> None:
 def test_the_kernel_unpacks_the_named_tuples_in_field_order() -> None:
     """run_sequences unpacks MotionArrays and EKFConstants by position: reordering a field
     must fail here, not silently swap arrays in compiled code."""
-    assert MotionArrays._fields == ("offset", "steps", "controls", "poses", "lm_visible", "noise_stream", "margin")
+    assert MotionArrays._fields == ("offset", "steps", "controls", "poses", "lm_visible", "noise_stream", "reach")
     assert EKFConstants._fields == (
         "dt",
         "alphas",

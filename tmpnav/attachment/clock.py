@@ -62,6 +62,7 @@ from tmpnav.oracle.requests import Request, StartState, mutual_seed
 from tmpnav.results import Schedule, TimedMove
 from tmpnav.task.plans import Plan, Step
 from tmpnav.types import CostTerms, CostWeights, MotionResult, TrajectoryStep, cov3, risk_penalty, vec3
+from tmpnav.world.reach import SECTORS
 from tmpnav.world.visibility import MutualSensing
 
 #: steps of one block of the mutual-noise stream of a pair of robots outside paired moves
@@ -369,11 +370,11 @@ class TeamClock:
 
     def _window(self, state: ClockState, i: int, a: int, b: int) -> tuple[np.ndarray, ...]:
         """Robot i's controls (h, 2), nominal poses (h+1, 3), landmark visibility (h+1, L),
-        landmark draws (h+1, L, 2), footprint margins (h+1,) and whether it drove into each
-        row (h+1,) over the steps a..b."""
+        landmark draws (h+1, L, 2), the sector reach of its footprint (h+1, K) and whether it
+        drove into each row (h+1,) over the steps a..b."""
         L = self.ekf.landmarks.shape[0]
         controls, poses = np.zeros((b - a, 2)), np.empty((b - a + 1, 3))
-        margins, drove = np.full(b - a + 1, np.inf), np.zeros(b - a + 1, dtype=bool)
+        reach, drove = np.full((b - a + 1, SECTORS), np.inf), np.zeros(b - a + 1, dtype=bool)
         vis, noise = np.empty((b - a + 1, L), dtype=bool), np.empty((b - a + 1, L, 2))
         legs = state.legs[i]
         for n, leg in enumerate(legs):
@@ -391,13 +392,13 @@ class TeamClock:
             else:
                 m = leg.motion
                 last = np.minimum(k, m.n_steps)
-                poses[rows], vis[rows], margins[rows] = m.poses[last], m.lm_visible[last], m.margins[last]
+                poses[rows], vis[rows], reach[rows] = m.poses[last], m.lm_visible[last], self.lib.reach(m, last)
                 s = np.arange(lo, min(hi, b))  # the window's transitions s -> s + 1 in this leg
                 drive = s - leg.start < m.n_steps
                 controls[s[drive] - a] = m.controls[s[drive] - leg.start]
                 drove[s[drive] - a + 1] = True
             noise[rows] = self._stream(leg.noise_seed, int(k[-1]) + 1, (L, 2))[k]
-        return controls, poses, vis, noise, margins, drove
+        return controls, poses, vis, noise, reach, drove
 
     def _radius(self, i: int) -> float:
         return self.scenario.robot(self.start.names[i]).radius
@@ -471,11 +472,12 @@ class _Trace:
         return {self.clock.start.names[i]: steps for i, steps in self.steps.items()}
 
 
-def _running_risk(covs: np.ndarray, i: int, margins: np.ndarray, drove: np.ndarray) -> np.ndarray:
+def _running_risk(covs: np.ndarray, i: int, reach: np.ndarray, drove: np.ndarray) -> np.ndarray:
     """Robot i's collision bound summed over the rows it drove into (0 at row 0): the bound of
     :func:`tmpnav.belief.risk.step_bound` at each, from its position covariance in ``covs``
-    (h+1, 3n, 3n) and the ``margins`` of its nominal poses, as the compiled kernel sums it."""
-    p = step_bound(covs[:, 3 * i : 3 * i + 2, 3 * i : 3 * i + 2], margins)
+    (h+1, 3n, 3n) and the sector ``reach`` (h+1, K) of its nominal poses, as the compiled
+    kernel sums it."""
+    p = step_bound(covs[:, 3 * i : 3 * i + 2, 3 * i : 3 * i + 2], reach)
     return np.cumsum(np.where(drove, p, 0.0))
 
 

@@ -82,7 +82,7 @@ def stationary(lib: MotionLibrary, robot: str, node: int, heading: float) -> Nom
         node_steps=np.zeros(1, dtype=int),
         lm_visible=np.zeros((1, lib.world.landmark_xy.shape[0]), dtype=bool),
         noise_seed=0,
-        margins=np.full(1, np.inf),
+        cells=lib.world.reach(lib.scenario.robot(robot).radius).cells(np.array([[x, y]])),
     )
 
 

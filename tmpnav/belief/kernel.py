@@ -29,6 +29,8 @@ import math
 import numba as nb
 import numpy as np
 
+from tmpnav.belief.risk import DET_FLOOR as RISK_DET_FLOOR
+from tmpnav.belief.risk import TINY as RISK_TINY
 from tmpnav.world.geometry import wrap_angle_scalar
 
 
@@ -203,17 +205,40 @@ def _robot_observation(mean, i, j, pi, pj, e0, e1, max_likelihood, chol, H, cols
         y[1] = wrap_angle_scalar(z_b - zp_b)
 
 
-@nb.njit(cache=True, inline="always")
-def _collision_bound(a, b, d, margin):
+@nb.njit(cache=True)
+def _collision_bound(a, b, c, reach, row):
     """The bound on the probability that a disc robot's footprint touches an obstacle at one
-    step (tmpnav.belief.risk): exp(-c^2 / (2 lambda_max)) of its 2x2 position covariance
-    [[a, b], [b, d]] with clearance margin c (m), 1 when c <= 0."""
-    if margin <= 0.0:
+    step (tmpnav.belief.risk.step_bound, which this computes the same way): the 2x2 position
+    covariance [[a, b], [b, c]] and the sector reach ``reach[row]`` (K,) m of its nominal pose."""
+    K = reach.shape[1]
+    r_min = reach[row, 0]
+    for k in range(1, K):
+        r_min = min(r_min, reach[row, k])
+    if r_min <= 0.0:
         return 1.0
-    lam = 0.5 * (a + d) + math.sqrt(0.25 * (a - d) * (a - d) + b * b)
+    lam = 0.5 * (a + c) + math.sqrt(0.25 * (a - c) * (a - c) + b * b)
     if lam <= 0.0:
         return 0.0
-    return math.exp(-margin * margin / (2.0 * lam))
+    disc = math.exp(-r_min * r_min / (2.0 * lam))
+    det = a * c - b * b
+    if disc < RISK_TINY or not det > RISK_DET_FLOOR * lam * lam:
+        return disc
+    w = 2.0 * math.pi / K
+    major = 0.5 * math.atan2(2.0 * b, a - c)
+    root = math.sqrt(det)
+    s0, c0 = math.sin(0.0), math.cos(0.0)
+    q0 = (a * s0 * s0 - 2.0 * b * s0 * c0 + c * c0 * c0) / det
+    total = 0.0
+    for k in range(K):
+        e = w * (k + 1)
+        s1, c1 = math.sin(e), math.cos(e)
+        q1 = (a * s1 * s1 - 2.0 * b * s1 * c1 + c * c1 * c1) / det
+        q = min(q0, q1)
+        if (major - w * k) % math.pi <= w:
+            q = 1.0 / lam
+        total += w * math.exp(-reach[row, k] * reach[row, k] * q / 2.0) / (2.0 * math.pi * root * q)
+        q0 = q1
+    return min(disc, total, 1.0)
 
 
 @nb.njit(cache=True, inline="always")
@@ -226,7 +251,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, groups, seqs, mutual_visible,
     mean after its own last step)."""
     h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk = hist
     work, PHt, K, H, cols, y = scratch
-    m_off, m_T, ctrl, pose, vis, stream, clear = motions  # the fields of MotionArrays, in order
+    m_off, m_T, ctrl, pose, vis, stream, reach = motions  # the fields of MotionArrays, in order
     dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks = ekf  # and of EKFConstants
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
     for k in range(seqs.restart[c], seqs.horizon[c]):
@@ -269,7 +294,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, groups, seqs, mutual_visible,
             h_csig[t, i] = h_csig[k, i] + trace * dt if t <= m_T[m] else h_csig[k, i]
             if t <= m_T[m]:
                 a, b, d = cov[3 * i, 3 * i], cov[3 * i, 3 * i + 1], cov[3 * i + 1, 3 * i + 1]
-                h_risk[t, i] = h_risk[k, i] + _collision_bound(a, b, d, clear[m_off[m] + m + t])
+                h_risk[t, i] = h_risk[k, i] + _collision_bound(a, b, d, reach, m_off[m] + m + t)
             else:
                 h_risk[t, i] = h_risk[k, i]
             arrived = t == m_T[m]

@@ -9,9 +9,13 @@ that contains p (:meth:`tmpnav.world.grid.OccupancyGrid.cells`).
 * A true position x **hits a wall** when C[cell(x)] <= r, or x lies outside the grid (an
   occupied or unknown cell has C = 0): :func:`hits_wall`, what ``tmpnav simulate`` counts.
 * The **margin** at a nominal (mean) position mu is d(mu) = C[cell(mu)] - r - sqrt(2) res:
-  ||x - mu|| < d implies that x does not hit a wall (:func:`margins`).
-* A **step** with position covariance Sigma (2x2): P(hit) <= 1 if d <= 0, else
-  exp(-d² / (2 lambda_max(Sigma))), the chi-square(2) tail (:func:`step_bound`).
+  ||x - mu|| < d implies that x does not hit a wall (:func:`margins`; the roadmap's safe
+  weights use it).
+* The **sector reach** R_k(mu) (:mod:`tmpnav.world.reach`): x - mu in sector k and
+  ||x - mu|| < R_k imply that x does not hit a wall.
+* A **step** with position covariance Sigma (2x2): P(hit) <= 1 if some R_k = 0, else the
+  smaller of the disc's chi-square(2) tail exp(-R² / (2 lambda_max(Sigma))), R = min_k R_k,
+  and the Gaussian's mass beyond R_k summed over the sectors (:func:`step_bound`).
 * A **move** of T control steps: P(any hit) <= min(1, sum_{k=1..T} p_k), Boole's inequality
   (:func:`move_bound`); a plan sums its moves the same way.
 * Two **robots** at one instant touch when ||x_i - x_j|| < r_i + r_j; with
@@ -33,8 +37,13 @@ import math
 import numpy as np
 
 from tmpnav.world.grid import OccupancyGrid, clearance, footprint_margins
+from tmpnav.world.reach import SectorReach
 
 SQRT2 = math.sqrt(2.0)
+#: below this the disc's bound is used as it is (the sectors would not change a sum that matters)
+TINY = 1e-12
+#: Sigma with det <= DET_FLOOR lambda_max² is nearly singular: the disc's bound alone
+DET_FLOOR = 1e-9
 
 
 def k_of(delta: float) -> float:
@@ -80,22 +89,53 @@ def margins(grid: OccupancyGrid, positions: np.ndarray, radius: float, clear: np
     return footprint_margins(grid, clear, np.asarray(positions, dtype=float), radius)
 
 
-def step_bound(cov_xy: np.ndarray, margin: np.ndarray | float) -> np.ndarray:
+def step_bound(cov_xy: np.ndarray, reach: np.ndarray) -> np.ndarray:
     """Upper bound on P(the true position hits a wall) at one step -> (...,).
 
-    p = 1 if d <= 0, else exp(-d² / (2 lambda_max(Sigma))) (0 when Sigma = 0). With
-    x - mu = Sigma^(1/2) z, ||x - mu||² <= lambda_max ||z||², and ||z||² ~ chi²(2) has the tail
-    P(||z||² >= t) = exp(-t/2); a hit needs ||x - mu|| >= d.
+    ``reach``: (..., K) the sector reach R_k at the nominal position (:mod:`tmpnav.world.reach`,
+    m), ``cov_xy``: (..., 2, 2) position covariance, m² (a pose covariance is cut to it). With
+    R = min_k R_k, the smaller of two bounds (docs/models.md, "Collision bound"):
 
-    cov_xy: (..., 2, 2) position covariance, m² (a pose covariance (..., 3, 3) is cut to it);
-    margin: (...,) m, from :func:`margins`.
+    * the disc: exp(-R² / (2 lambda_max)): ||x - mu||² <= lambda_max ||z||², chi²(2) tail;
+    * the sectors: sum_k w exp(-R_k² q_k / 2) / (2 pi sqrt(det Sigma) q_k), where q_k is the least
+      of q(theta) = u(theta)^T Sigma^-1 u(theta) over sector k: the Gaussian's mass beyond R_k in
+      the sector, with q at its least (exp(-R² q / 2) / q falls as q grows).
+
+    1 when R <= 0; the disc alone when it is below :data:`TINY` or Sigma is nearly singular.
     """
-    lam = lambda_max(np.asarray(cov_xy, dtype=float)[..., :2, :2])
-    d = np.asarray(margin, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tail = np.exp(-(d**2) / (2.0 * lam))
-    tail = np.where(lam > 0.0, tail, 0.0)
-    return np.where(d <= 0.0, 1.0, tail)
+    cov = np.asarray(cov_xy, dtype=float)[..., :2, :2]
+    R = np.asarray(reach, dtype=float)
+    a, c = cov[..., 0, 0], cov[..., 1, 1]
+    b = 0.5 * (cov[..., 0, 1] + cov[..., 1, 0])
+    lam = lambda_max(cov)
+    r_min = R.min(axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        disc = np.where(lam > 0.0, np.exp(-(r_min**2) / (2.0 * lam)), 0.0)
+        det = a * c - b * b
+        sectors = _sector_sum(a[..., None], b[..., None], c[..., None], det[..., None], R)
+        use = (disc >= TINY) & (det > DET_FLOOR * lam * lam)
+        p = np.where(use, np.minimum(disc, sectors), disc)
+    return np.where(r_min <= 0.0, 1.0, np.minimum(p, 1.0))
+
+
+def _sector_sum(a: np.ndarray, b: np.ndarray, c: np.ndarray, det: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """sum_k of the sector terms of :func:`step_bound` (the kernel's loop, vectorised).
+
+    q(theta) = v(theta + pi/2) / det with v(phi) = a cos² phi + 2 b cos phi sin phi + c sin² phi the
+    variance along phi; over a sector it is least at an edge, or at the major axis of Sigma
+    (q = 1 / lambda_max) when the sector holds it."""
+    K = R.shape[-1]
+    w = 2.0 * math.pi / K
+    edges = w * np.arange(K + 1)
+    s, co = np.sin(edges), np.cos(edges)
+    q_edge = (a * s * s - 2.0 * b * s * co + c * co * co) / det  # (..., K+1)
+    q = np.minimum(q_edge[..., :-1], q_edge[..., 1:])
+    major = 0.5 * np.arctan2(2.0 * b, a - c)
+    holds = np.mod(major - edges[:-1], math.pi) <= w
+    lam = 0.5 * (a + c) + np.hypot(0.5 * (a - c), b)
+    q = np.where(holds, 1.0 / lam, q)
+    terms = w * np.exp(-(R**2) * q / 2.0) / (2.0 * math.pi * np.sqrt(det) * q)
+    return terms.sum(axis=-1)
 
 
 def step_bounds(
@@ -103,8 +143,8 @@ def step_bounds(
 ) -> np.ndarray:
     """The per-step bounds p_k along a path: positions (T+1, 2) m, covariances (T+1, 3, 3) or
     (T+1, 2, 2) -> (T+1,) (entry 0 is the start, which :func:`move_bound` leaves out)."""
-    d = margins(grid, np.asarray(positions, dtype=float)[..., :2], radius, clear)
-    return step_bound(np.asarray(covs, dtype=float)[..., :2, :2], d)
+    table = SectorReach(grid, clearance(grid) if clear is None else clear, radius)
+    return step_bound(np.asarray(covs, dtype=float)[..., :2, :2], table.at(np.asarray(positions, dtype=float)))
 
 
 def move_bound(

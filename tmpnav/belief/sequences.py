@@ -21,6 +21,7 @@ import numpy as np
 
 from tmpnav.belief.kernel import run_sequences
 from tmpnav.types import Models, ObservationMode
+from tmpnav.world.reach import SECTORS
 
 
 class EKFConstants(NamedTuple):
@@ -68,7 +69,7 @@ class MotionArrays(NamedTuple):
     poses: np.ndarray  # (sum T_m + 1, 3)
     lm_visible: np.ndarray  # (sum T_m + 1, L) bool
     noise_stream: np.ndarray  # (M,) int64
-    margin: np.ndarray  # (sum T_m + 1,) m
+    reach: np.ndarray  # (sum T_m + 1, K) m: the sector reach of each nominal pose (tmpnav.world.reach)
 
     @staticmethod
     def of(
@@ -77,13 +78,13 @@ class MotionArrays(NamedTuple):
         lm_visible: Sequence[np.ndarray],
         noise_stream: np.ndarray,
         landmarks: int,
-        margins: Sequence[np.ndarray] | None = None,
+        reach: Sequence[np.ndarray] | None = None,
     ) -> MotionArrays:
         """Lay out motions given as per-motion arrays (T_m, 2), (T_m + 1, 3), (T_m + 1, L)
-        and (T_m + 1,) clearance margins (none given: no collision bound, margins inf)."""
+        and (T_m + 1, K) sector reach (none given: no collision bound, reach inf)."""
         steps = np.array([c.shape[0] for c in controls], dtype=np.int64)
         rows = int((steps + 1).sum())
-        margin = np.full(rows, np.inf) if margins is None else np.concatenate(list(margins)).astype(float)
+        far = np.full((rows, SECTORS), np.inf) if reach is None else np.concatenate(list(reach)).astype(float)
         return MotionArrays(
             offset=np.concatenate([[0], np.cumsum(steps)[:-1]]).astype(np.int64),
             steps=steps,
@@ -93,7 +94,7 @@ class MotionArrays(NamedTuple):
                 np.concatenate(list(lm_visible)).reshape(int((steps + 1).sum()), landmarks)
             ),
             noise_stream=np.asarray(noise_stream, dtype=np.int64),
-            margin=np.ascontiguousarray(margin.reshape(rows)),
+            reach=np.ascontiguousarray(far.reshape(rows, -1)),
         )
 
 

@@ -25,6 +25,7 @@ from tmpnav.world import World
 CODE_FILES = (
     "belief/controls.py",
     "belief/kernel.py",
+    "belief/risk.py",
     "belief/sequences.py",
     "belief/trie.py",
     "oracle/bounds.py",
@@ -41,6 +42,7 @@ CODE_FILES = (
     "types.py",
     "world/geometry.py",
     "world/grid.py",
+    "world/reach.py",
     "world/visibility.py",
 )
 #: the modules whose results are cached: their imports, followed through CODE_FILES, are

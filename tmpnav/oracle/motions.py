@@ -34,7 +34,7 @@ class NominalMotion:
     node_steps: np.ndarray  # (P,) step at which each path node is reached
     lm_visible: np.ndarray  # (T+1, L)
     noise_seed: int
-    margins: np.ndarray  # (T+1,) the footprint's free margin at each pose (m; World.margins)
+    cells: np.ndarray  # (T+1,) the grid cell of each pose (flat index, World.reach(radius).cells)
 
     @property
     def n_steps(self) -> int:
@@ -98,6 +98,10 @@ class MotionLibrary:
             self._motions.move_to_end(key)
         return found  # type: ignore[return-value]
 
+    def reach(self, motion: NominalMotion, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
+        """The sector reach (T+1, K) m of ``motion``'s footprint at its poses (``rows`` of them)."""
+        return self.world.reach(self.scenario.robot(motion.robot).radius).of_cells(motion.cells[rows])
+
     def prepare(self, starts: list[int]) -> None:
         """Run Dijkstra from many start nodes at once."""
         self.graph.prepare(starts)
@@ -117,7 +121,7 @@ class MotionLibrary:
             poses=pc.poses,
             node_steps=pc.node_steps,
             lm_visible=lm_visible,
-            margins=self.world.margins(pc.poses[:, :2], spec.radius),
+            cells=self.world.reach(spec.radius).cells(pc.poses[:, :2]),
             # one stream per robot and start node, drawn step by step: a robot sees the
             # same simulated observations at step k alone or in a pair, whatever its goal,
             # so factorised pairs are exact and motions with a common prefix share it

@@ -113,7 +113,8 @@ class GroupStart(NamedTuple):
 class MotionTable:
     """Motions laid out for the compiled kernel (concatenated arrays with offsets)."""
 
-    def __init__(self, motions: list[NominalMotion], landmarks: int, dt: float):
+    def __init__(self, motions: list[NominalMotion], lib: MotionLibrary):
+        landmarks, dt = lib.world.landmark_xy.shape[0], lib.scenario.models.dt
         self.offset: dict[int, int] = {}
         self.motions = motions
         self.c_u = np.array([m.c_u(dt) for m in motions])
@@ -126,12 +127,12 @@ class MotionTable:
             [m.lm_visible for m in motions],
             stream,
             landmarks,
-            [m.margins for m in motions],
+            [lib.reach(m) for m in motions],
         )
 
     @staticmethod
-    def of_sets(sets: list[MotionSet], landmarks: int, dt: float) -> MotionTable:
-        table = MotionTable([m for ms in sets for m in ms.motions], landmarks, dt)
+    def of_sets(sets: list[MotionSet], lib: MotionLibrary) -> MotionTable:
+        table = MotionTable([m for ms in sets for m in ms.motions], lib)
         k = 0
         for ms in sets:
             table.offset[id(ms)] = k
@@ -209,7 +210,7 @@ def trajectory(
     the mutual observations. Used to re-simulate the plan with all robots in one state.
     """
     n = len(motions)
-    table = MotionTable(motions, lib.world.landmark_xy.shape[0], lib.scenario.models.dt)
+    table = MotionTable(motions, lib)
     h = int(table.arrays.steps.max(initial=0))
     one = Sequences.one(n, h)
     run = table.propagate(lib, n, [GroupStart(mean0, cov0, 0)], one, np.ascontiguousarray(mvis), mu_noise[None])

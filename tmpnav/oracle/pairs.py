@@ -115,7 +115,7 @@ class PairCombos:
     def _layout(self) -> _Layout:
         lib = self.lib
         sets = [ms for s1, s2, _ in self.groups for ms in (s1, s2)]
-        table = MotionTable.of_sets(sets, lib.world.landmark_xy.shape[0], lib.scenario.models.dt)
+        table = MotionTable.of_sets(sets, lib)
         horizon = [
             np.maximum(s1.steps[a], s2.steps[b]) for (s1, s2, _), a, b in zip(self.groups, self.a, self.b, strict=True)
         ]

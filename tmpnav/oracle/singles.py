@@ -40,7 +40,7 @@ class SingleRuns:
         if not self.wanted:
             return
         sets = [self.by_id[k] for k in self.wanted]
-        table = MotionTable.of_sets(sets, self.lib.world.landmark_xy.shape[0], self.lib.scenario.models.dt)
+        table = MotionTable.of_sets(sets, self.lib)
         groups, cg, cm, cs, ch = [], [], [], [], []
         for g, ms in enumerate(sets):
             local = np.array(sorted(self.wanted[id(ms)]), dtype=np.int64)

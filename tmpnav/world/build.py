@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -19,6 +19,7 @@ from tmpnav.world.grid import (
     line_of_sight,
     line_of_sight_traced,
 )
+from tmpnav.world.reach import SectorReach
 from tmpnav.world.rosmap import load_ros_map
 
 
@@ -32,6 +33,7 @@ class World:
     landmarks: tuple[Landmark, ...]
     landmark_xy: np.ndarray  # (L, 2)
     fingerprint: str  # content hash of the grid, rooms and landmarks
+    _reach: dict[float, SectorReach] = field(default_factory=dict, repr=False)  # radius -> its cells' reach
 
     def is_free(self, points: np.ndarray, radius: float) -> np.ndarray:
         """Whether a disc of ``radius`` centred at each point (..., 2) is collision-free."""
@@ -41,6 +43,13 @@ class World:
     def margins(self, points: np.ndarray, radius: float) -> np.ndarray:
         """The free margin of a disc of ``radius`` at each point (tmpnav.world.grid.footprint_margins)."""
         return footprint_margins(self.grid, self.clearance, points, radius)
+
+    def reach(self, radius: float) -> SectorReach:
+        """The sector reach of a disc of ``radius`` (tmpnav.world.reach), its cells computed
+        when first asked for and remembered for the world's lifetime."""
+        if radius not in self._reach:
+            self._reach[radius] = SectorReach(self.grid, self.clearance, radius)
+        return self._reach[radius]
 
     def line_of_sight(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether segments a[k]-b[k] cross no occupied cell (sphere tracing)."""

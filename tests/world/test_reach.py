@@ -1,0 +1,57 @@
+"""Sector reach (tmpnav/world/reach.py): no point of a sector closer than its reach hits a wall."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tests.belief.test_risk import PATHS, RADIUS
+from tmpnav.belief import risk
+from tmpnav.world.grid import clearance
+from tmpnav.world.reach import OFF_GRID, REACH, SECTORS, SectorReach
+
+
+@pytest.mark.parametrize("case", ["straight", "corner"])
+def test_no_point_of_a_sector_within_its_reach_hits_a_wall(case: str) -> None:
+    """The lemma behind the directional bound, at random positions of each map: points of sector
+    k (direction in [k w, (k+1) w)) closer than R_k to mu never hit a wall; R_k is reached or the cap."""
+    grid, _ = PATHS[case]
+    clear = clearance(grid)
+    table = SectorReach(grid, clear, RADIUS)
+    rng = np.random.default_rng(5)
+    mu = rng.uniform((0.0, 0.0), grid.extent[2:], (4000, 2))
+    everywhere = table.at(mu)
+    mu = mu[~risk.hits_wall(grid, clear, mu, RADIUS)]  # a position that hits has reach 0 all round
+    reach = table.at(mu)  # (N, K)
+    w = 2 * math.pi / SECTORS
+    k = rng.integers(0, SECTORS, (mu.shape[0], 48))
+    angle = (k + rng.uniform(0.0, 1.0, k.shape)) * w
+    dist = np.take_along_axis(reach, k, axis=1) * np.sqrt(rng.uniform(0.0, 1.0, k.shape)) * 0.999999
+    x = mu[:, None, :] + dist[..., None] * np.stack([np.cos(angle), np.sin(angle)], -1)
+    assert not risk.hits_wall(grid, clear, x, RADIUS).any()
+    assert (reach <= REACH).all() and (reach > 0).any() and (everywhere == 0).all(axis=1).any()
+
+
+def test_reach_is_zero_on_a_wall_and_off_the_grid_and_within_the_old_margin_at_least() -> None:
+    grid, _ = PATHS["straight"]
+    clear = clearance(grid)
+    table = SectorReach(grid, clear, RADIUS)
+    mu = np.array([[3.01, 0.51], [-1.0, 0.5], [3.0, 1.55], [3.0, 0.8]])  # free, off the grid, a wall, the middle
+    assert table.cells(mu)[1] == OFF_GRID
+    reach = table.at(mu)
+    assert (reach[1] == 0).all() and (reach[2] == 0).all()
+    margin = risk.margins(grid, mu[[0, 3]], RADIUS, clear)
+    assert (reach[[0, 3]].min(axis=1) >= margin - 1e-9).all()  # never below the disc's margin
+    assert reach[3, 0] > reach[3].min()  # along the corridor it reaches farther than across it
+
+
+def test_cells_are_computed_once_and_remembered() -> None:
+    grid, _ = PATHS["corner"]
+    table = SectorReach(grid, clearance(grid), RADIUS)
+    pts = np.array([[0.5, 0.5], [0.51, 0.52], [2.9, 3.0]])
+    first = table.at(pts)
+    rows = table.rows
+    assert rows == 1 + 2  # row 0 is off the grid; the first two points share a cell
+    assert np.array_equal(table.at(pts[::-1]), first[::-1]) and table.rows == rows

@@ -1,0 +1,142 @@
+"""How far a disc robot can be moved in each direction before it hits a wall: sector reach.
+
+The directional part of the collision bound (docs/models.md, "Collision bound"). Around a
+nominal position mu the plane is cut into K sectors of angle w = 2 pi / K, sector k holding
+the directions theta in [k w, (k+1) w). The **reach** R_k(mu) is a lower bound on the distance
+from mu to the hit set H (the cells where the footprint hits a wall: clearance <= radius, and
+everything off the grid) within sector k, capped at :data:`REACH`:
+
+    R_k(mu) <= min { ||x - mu|| : x in H, x - mu in sector k },   R_k(mu) <= REACH.
+
+A true position x that hits a wall therefore lies in some sector k at least R_k from mu,
+which is what the bound integrates (:mod:`tmpnav.belief.risk`).
+
+Computed per grid cell, so that it holds for every mu in the cell: for a hit cell h and the
+cell c of mu, the vectors x - mu with mu in c and x in h are exactly the square of side
+2 res centred on h's centre less c's, so their lengths are at least that square's distance
+from the origin and their directions lie between its corners' bearings. Only hit cells with
+a free 8-neighbour are scanned: the nearest point of H in a sector (a convex cone) lies on
+H's boundary. A cell that is itself hit, or off the grid, has reach 0 in every sector.
+
+Cells are computed when first asked for and remembered (:class:`SectorReach`): a plan of a
+building asks for a few thousand distinct cells among millions of poses.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+from scipy import ndimage
+
+from tmpnav.world.grid import OccupancyGrid
+
+#: sectors of the directional bound (5.625 degrees each)
+SECTORS = 64
+#: how far the reach looks (m): hit cells farther than this count as this far
+REACH = 2.5
+#: the flat cell index of a pose off the grid (reach 0: the bound is 1)
+OFF_GRID = -1
+
+
+class SectorReach:
+    """The reach of every cell of ``grid`` for a disc of ``radius`` (m), computed on demand.
+
+    ``clear`` is the grid's clearance (:func:`tmpnav.world.grid.clearance`). Cells are named by
+    their flat index ``i * cols + j`` (:meth:`cells`), :data:`OFF_GRID` for a point off the grid.
+    """
+
+    def __init__(self, grid: OccupancyGrid, clear: np.ndarray, radius: float):
+        self.grid = grid
+        hit = np.ones((grid.shape[0] + 2, grid.shape[1] + 2), dtype=bool)  # one ring off the grid
+        hit[1:-1, 1:-1] = clear <= radius
+        self.hit = hit
+        self.boundary = hit & ndimage.binary_dilation(~hit, structure=np.ones((3, 3), dtype=bool))
+        self.row = np.full(grid.shape[0] * grid.shape[1], -1, dtype=np.int64)  # cell -> table row
+        self.table = np.zeros((1, SECTORS))  # row 0: off the grid, reach 0
+        self.rows = 1
+
+    def cells(self, points: np.ndarray) -> np.ndarray:
+        """The flat index of each point's cell (..., 2) -> (...,) int64, OFF_GRID off the grid."""
+        i, j, inside = self.grid.cells(np.asarray(points, dtype=float)[..., :2])
+        return np.where(inside, i * self.grid.shape[1] + j, OFF_GRID).astype(np.int64)
+
+    def of_cells(self, cells: np.ndarray) -> np.ndarray:
+        """R (..., K) m for flat cell indices (...,) (:meth:`cells`)."""
+        cells = np.asarray(cells, dtype=np.int64)
+        flat = cells.ravel()
+        new = np.unique(flat[flat >= 0])
+        new = new[self.row[new] < 0]
+        if new.size:
+            self._compute(new)
+        rows = np.where(flat >= 0, self.row[np.maximum(flat, 0)], 0)
+        return self.table[rows].reshape(*cells.shape, SECTORS)
+
+    def at(self, points: np.ndarray) -> np.ndarray:
+        """R (..., K) m at positions (..., 2)."""
+        return self.of_cells(self.cells(points))
+
+    def _compute(self, cells: np.ndarray) -> None:
+        cols = self.grid.shape[1]
+        out = np.empty((cells.size, SECTORS))
+        _sector_reach(self.hit, self.boundary, self.grid.resolution, cells // cols, cells % cols, REACH, out)
+        need = self.rows + cells.size
+        if need > self.table.shape[0]:
+            grown = np.zeros((max(need, 2 * self.table.shape[0]), SECTORS))
+            grown[: self.rows] = self.table[: self.rows]
+            self.table = grown
+        self.table[self.rows : need] = out
+        self.row[cells] = np.arange(self.rows, need)
+        self.rows = need
+
+
+@nb.njit(cache=True)
+def _sector_reach(hit, boundary, res, ci, cj, reach, out):
+    """Fill out (N, K) with the reach of cells (ci, cj) (the module docstring's construction).
+    ``hit`` and ``boundary`` carry one ring of cells around the grid (grid cell (i, j) is their
+    (i + 1, j + 1))."""
+    K = out.shape[1]
+    w = 2.0 * math.pi / K
+    n = math.ceil(reach / res) + 2
+    R, C = hit.shape
+    for p in range(ci.shape[0]):
+        i0, j0 = ci[p] + 1, cj[p] + 1
+        for k in range(K):
+            out[p, k] = reach
+        if hit[i0, j0]:
+            for k in range(K):
+                out[p, k] = 0.0
+            continue
+        for i in range(max(0, i0 - n), min(R, i0 + n + 1)):
+            dy = (i - i0) * res
+            for j in range(max(0, j0 - n), min(C, j0 + n + 1)):
+                if not boundary[i, j]:
+                    continue
+                dx = (j - j0) * res
+                ex = max(abs(dx) - res, 0.0)
+                ey = max(abs(dy) - res, 0.0)
+                d = math.sqrt(ex * ex + ey * ey)
+                if d >= reach:
+                    continue
+                if d <= 0.0:  # a neighbour of c: mu may touch it however little it moves
+                    for k in range(K):
+                        out[p, k] = 0.0
+                    continue
+                phi = math.atan2(dy, dx)
+                lo, hi = 0.0, 0.0
+                for sx in (-res, res):
+                    for sy in (-res, res):
+                        a = math.atan2(dy + sy, dx + sx) - phi
+                        if a > math.pi:
+                            a -= 2.0 * math.pi
+                        elif a < -math.pi:
+                            a += 2.0 * math.pi
+                        lo = min(lo, a)
+                        hi = max(hi, a)
+                k0 = math.floor((phi + lo) / w)
+                k1 = math.floor((phi + hi) / w)
+                for k in range(k0, k1 + 1):
+                    kk = k % K
+                    if d < out[p, kk]:
+                        out[p, kk] = d
