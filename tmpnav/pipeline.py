@@ -325,10 +325,19 @@ def check_risk(path: str | Path, options: PlanOptions, report: PlanReport) -> No
             )
     raise RiskError(
         f"no plan keeps every move's collision bound within max_risk {asked:g}: every plan tmpnav "
-        f"found has a move at {min(1.0, worst):.2g} (robots too uncertain where the map leaves them little "
-        'room; see docs/models.md, "Collision bound"): plan without --max-risk',
+        f"found has a move at {min(1.0, worst):.2g} ({_worst_move(report)}: robots too uncertain where "
+        'the map leaves them little room; see docs/models.md, "Collision bound"): plan without --max-risk',
         1.0,
     )
+
+
+def _worst_move(report: PlanReport) -> str:
+    """The plan's riskiest move and how uncertain its robot gets, in words."""
+    bound, (robot, origin, room) = max(
+        ((p, move) for a in report.actions for p, move in zip(a.risk, a.moves, strict=False)), key=lambda x: x[0]
+    )
+    std = report.largest_std().get(robot, 0.0)
+    return f"here {robot}'s move {origin} -> {room} is at {min(1.0, bound):.2g}, its position std up to {std:.2g} m"
 
 
 def _round_up(p: float) -> float:
