@@ -69,3 +69,24 @@ def test_a_threshold_outside_zero_one_is_a_usage_error(bad: str, tmp_path: Path)
     proc = tmpnav("plan", str(TWO_ROOMS), "--max-risk", bad, "-o", str(tmp_path / "o"))
     assert proc.returncode == 2, proc.stderr
     assert "--max-risk" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_under_a_threshold_robots_in_each_others_way_are_kept_apart(cache_dir: Path, tmp_path: Path) -> None:
+    """The bay of tests/attachment/test_conflicts.py: r1 drives the corridor east while r2
+    leaves the bay west. Without a threshold the conflict is reported; with one, the plan is
+    kept apart by a wait (the summary and plan.json say how) and the checker finds none."""
+    from tests.attachment.test_conflicts import BAY
+
+    scenario = tmp_path / "bay.yaml"
+    scenario.write_text(BAY)
+    plain = tmpnav("plan", str(scenario), "--cache-dir", str(cache_dir), "-o", str(tmp_path / "plain"))
+    assert plain.returncode == 0, plain.stderr
+    assert "robots in each other's way: 1" in plain.stdout and "--max-risk keeps robots apart" in plain.stdout
+    assert json.loads((tmp_path / "plain" / "plan.json").read_text())["risk"]["kept_apart"] is None
+    kept = tmpnav("plan", str(scenario), "--max-risk", "1", "--cache-dir", str(cache_dir), "-o", str(tmp_path / "kept"))
+    assert kept.returncode == 0, kept.stderr
+    assert re.search(r"kept apart: 1 -> 0 conflicts by 1 wait \(step \d \+\d+\.\d s\)", kept.stdout), kept.stdout
+    assert "robots in each other's way: none" in kept.stdout
+    risk = json.loads((tmp_path / "kept" / "plan.json").read_text())["risk"]
+    assert risk["conflicts"] == [] and risk["kept_apart"]["conflicts_left"] == 0
+    assert len(risk["kept_apart"]["waits"]) == 1 and risk["kept_apart"]["sidesteps"] == []

@@ -263,6 +263,7 @@ def plan(
 
 def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, World] | None) -> PlanReport:
     """The plan, whether or not it keeps within the chance constraint."""
+    from tmpnav.attachment.conflicts import keep_apart
     from tmpnav.planning import TaskRun, plan_stage
     from tmpnav.resimulate import resimulate
     from tmpnav.task.search import SearchRun
@@ -274,8 +275,15 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
         watch = SearchRun(times, options.reporters.search)
         run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch)
         planned = plan_stage(run)
+        task, apart = planned.task, None
         with times.timed("resimulate"):
-            resim = resimulate(run.carried, planned.task)
+            resim = resimulate(run.carried, task)
+            delta = prep.scenario.planner.max_risk
+            if delta is not None and max((p for a in resim.actions for p in a.risk), default=0.0) <= delta:
+                kept = keep_apart(run.carried, task, delta, resim.cost, resim.schedule.makespan)
+                if kept is not None:
+                    task, delays, apart = kept
+                    resim = resimulate(run.carried, task, delays)
     finally:
         prep.oracle.close()
     times.close()
@@ -284,13 +292,14 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
         world=prep.world,
         roadmap=prep.roadmap,
         table=planned.table,
-        task=planned.task,
+        task=task,
         actions=tuple(resim.actions),
         trajectories=resim.trajectories,
         schedule=resim.schedule,
         times=times,
         cache=_cache_use(prep, planned.task.plan_hit, options.execution.use_cache),
         oracle=prep.oracle.stats.counts(),
+        apart=apart,
     )
     return report
 

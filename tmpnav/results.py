@@ -125,6 +125,23 @@ class Schedule:
 
 
 @dataclass(frozen=True)
+class KeptApart:
+    """How a plan under a chance constraint was kept clear of robots in each other's way
+    (tmpnav.attachment.conflicts.keep_apart): the conflicts of the plan as planned and left,
+    the waits (plan step, 1-based, and seconds held back), the sidesteps (robot, origin,
+    siding room, target), the plan as planned run on the clock (its executed cost and
+    makespan), and the clock runs the search made."""
+
+    conflicts_before: int
+    conflicts_left: int
+    waits: tuple[tuple[int, float], ...]
+    sidesteps: tuple[tuple[str, str, str, str], ...]
+    cost_before: float
+    makespan_before: float
+    runs: int
+
+
+@dataclass(frozen=True)
 class TaskCounts:
     """How big the task problem was (plan.json ``task``)."""
 
@@ -264,6 +281,8 @@ class PlanReport:
     times: StageTimes
     cache: CacheUse
     oracle: OracleCounts
+    #: waits and sidesteps that keep the robots apart, under a chance constraint (None: none applied)
+    apart: KeptApart | None = None
 
     @property
     def encoding(self) -> str:

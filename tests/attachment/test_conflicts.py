@@ -11,14 +11,15 @@ import pytest
 from tests.attachment.support import carried_problem
 from tmpnav.attachment.canonical import CanonicalCosts
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.attachment.conflicts import resolve_conflicts, resolve_with_sidesteps
+from tmpnav.attachment.conflicts import _sidesteps, keep_apart, resolve_conflicts, resolve_with_sidesteps
 from tmpnav.belief.conflicts import find_conflicts
 from tmpnav.oracle.executors import OracleContext
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.pipeline import load_world
 from tmpnav.roadmap import build_roadmap
 from tmpnav.task.plans import Plan, Rules
-from tmpnav.types import Goals
+from tmpnav.results import TaskCounts, TaskResult
+from tmpnav.types import Goals, PlanStatus
 
 #: a + junction of 2 m corridors with a room at each end; r1 goes west to east, r2 south to
 #: north, the same distance: alone on the roadmap they reach the junction together
@@ -157,3 +158,40 @@ def test_sidesteps_are_not_made_where_waits_suffice(tmp_path: Path) -> None:
     plan: Plan = ((("r1", "W", "E"),), (("r2", "B", "W"),))
     res = resolve_with_sidesteps(carried, plan)
     assert res.resolved and res.plan == plan and list(res.delays) == [1]
+
+
+def test_a_paired_move_in_the_way_is_split_so_that_one_robot_waits(tmp_path: Path) -> None:
+    """Under a threshold the planner pairs the bay's two moves (costed together, started
+    together), so no wait can part them; keep_apart makes them two single moves and holds one
+    back: the independent checker finds nothing on the plan run again with those waits, and
+    what was done is reported."""
+    carried = carried_world(tmp_path, BAY)
+    planned: Plan = ((("r1", "W", "E"), ("r2", "B", "W")),)
+    run = carried.replay(planned)
+    task = TaskResult(
+        PlanStatus.SOLVED_OPTIMALLY, "test", planned, ("goto_room_pair",), (26.0,), TaskCounts(0, 0, 0, 0, 0), False
+    )
+    kept = keep_apart(carried, task, 1.0, 26.0, run.makespan)
+    assert kept is not None
+    new, delays, apart = kept
+    assert len(new.steps) == 2 and all(len(step) == 1 for step in new.steps)  # the pair split in two
+    assert new.status == PlanStatus.SOLVED_SATISFICING and new.action_names == ("goto_room", "goto_room")
+    assert (apart.conflicts_before, apart.conflicts_left, apart.sidesteps) == (1, 0, ())
+    assert [k for k, _ in apart.waits] == [k + 1 for k in delays] and apart.waits[0][1] > 0
+    again = carried.replay(new.steps, delays)
+    assert again.trajectories is not None and find_conflicts(again.trajectories, radii(carried), 1.0) == []
+
+
+def test_a_plan_without_conflicts_is_left_as_it_is(tmp_path: Path) -> None:
+    carried = carried_world(tmp_path, BAY)
+    alone: Plan = ((("r1", "W", "E"),),)
+    task = TaskResult(
+        PlanStatus.SOLVED_OPTIMALLY, "test", alone, ("goto_room",), (14.0,), TaskCounts(0, 0, 0, 0, 0), False
+    )
+    assert keep_apart(carried, task, 1.0, 14.0, 64.0) is None
+
+
+def test_sidesteps_are_named_with_the_room_the_robot_goes_on_to() -> None:
+    kept: Plan = ((("r2", "L10", "L2"),), (("r1", "L1", "L10"),), (("r2", "L2", "L1"),))
+    assert _sidesteps(SWAP, kept) == (("r2", "L10", "L2", "L1"),)
+    assert _sidesteps(SWAP, SWAP) == ()

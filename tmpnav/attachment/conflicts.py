@@ -58,9 +58,11 @@ from dataclasses import dataclass, replace
 from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
-from tmpnav.results import Schedule, TimedMove
+from tmpnav.results import KeptApart, Schedule, TaskResult, TimedMove
 from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Step
+from tmpnav.task.stage import action_names
+from tmpnav.types import PlanStatus
 
 #: clock runs the search may make per plan (each is one run of the team's joint EKF)
 MAX_RUNS = 40
@@ -215,7 +217,8 @@ def resolve_with_sidesteps(
     objective = OBJECTIVES[clock.scenario.planner.objective]
 
     def rank(res: Resolution) -> tuple[int, float]:
-        cost = sum(res.run.step_costs(len(res.plan), clock.scenario.cost))
+        # a move over the chance constraint costs more than any plan within it (tmpnav.types.risk_penalty)
+        cost = sum(res.run.step_costs(len(res.plan), clock.scenario.cost, clock.scenario.planner.max_risk))
         return len(res.conflicts_left), objective.value(cost, res.run.makespan, clock.scenario.cost)
 
     tried: set[Plan] = {best.plan}
@@ -238,18 +241,24 @@ def resolve_with_sidesteps(
 
 def _sidestepped(clock: TeamClock, res: Resolution, sidings: int) -> Iterator[Plan]:
     """Plans with one robot of the first conflict left making the move that puts it there
-    through a siding room, the robot of lower priority first."""
+    through a siding room, the robot of lower priority first; a paired move is also split in
+    two single moves, the other robot's first (its robot of lower priority then waits)."""
     conflict, schedule, plan = res.conflicts_left[0], res.run.schedule, res.plan
     moves = [_holds(schedule, r, conflict.t_from) or _first(schedule, r) for r in conflict.robots]
     goals = set(clock.scenario.goals.all_rooms)
     for move in sorted((m for m in moves if m is not None), key=lambda m: (m.start, m.step), reverse=True):
-        if len(plan[move.step]) != 1:
-            continue  # a paired move is costed as one: it is not split
-        robot, origin, target = plan[move.step][0]
+        step = plan[move.step]
+        # a paired move is made as two single moves (so that one may wait for the other), or
+        # with the robot of the conflict's through a siding
+        mine = next(m for m in step if m[0] == move.robot)
+        others = tuple((m,) for m in step if m is not mine)
+        if others:
+            yield (*plan[: move.step], *others, (mine,), *plan[move.step + 1 :])
+        robot, origin, target = mine
         rooms = [r for r in clock.scenario.rooms if r.name not in goals | {origin, target}]
         rooms.sort(key=lambda r: _distance(_centroid(r.polygon), conflict.where))
         for room in rooms[:sidings]:
-            split = ((robot, origin, room.name),), ((robot, room.name, target),)
+            split = ((robot, origin, room.name),), *others, ((robot, room.name, target),)
             yield (*plan[: move.step], *split, *plan[move.step + 1 :])
 
 
@@ -264,3 +273,57 @@ def _centroid(polygon: Sequence[tuple[float, float]]) -> tuple[float, float]:
 
 def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
     return float(((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5)
+
+
+# ---------------------------------------------------------------------- applied to a plan
+
+
+def keep_apart(
+    carried: CarriedCosts, task: TaskResult, delta: float, cost_before: float, makespan_before: float
+) -> tuple[TaskResult, dict[int, float], KeptApart] | None:
+    """The task plan kept clear of robots in each other's way at margin ``delta``: waits and
+    sidesteps (:func:`resolve_with_sidesteps`), the plan they belong to as a TaskResult, the
+    delays to run it with, and what was done. None when the plan has no conflict, or nothing
+    found removes one without a move over ``delta``. The plan changed is no longer the planner's proved optimum: its status
+    becomes satisficing; where sidesteps changed the steps, each step's cost is its executed
+    cost (the task planner never saw those steps). ``cost_before`` and ``makespan_before`` are
+    those of the plan as planned, run on the clock."""
+    res = resolve_with_sidesteps(carried, task.steps, delta=delta)
+    if not res.conflicts_before or len(res.conflicts_left) >= len(res.conflicts_before):
+        return None
+    if max((m.risk for m in res.run.moves), default=0.0) > delta:
+        return None  # kept apart only by a move over the chance constraint: the conflicts stay reported
+    changed = res.plan != task.steps
+    executed = res.run.step_costs(len(res.plan), carried.scenario.cost, delta)
+    kept = replace(
+        task,
+        status=PlanStatus.SOLVED_SATISFICING,
+        steps=res.plan,
+        action_names=action_names(res.plan) if changed else task.action_names,
+        step_costs=tuple(executed) if changed else task.step_costs,
+        schedule=res.run.schedule,
+        pddl=None if changed else task.pddl,
+    )
+    apart = KeptApart(
+        conflicts_before=len(res.conflicts_before),
+        conflicts_left=len(res.conflicts_left),
+        waits=tuple((k + 1, round(v, 6)) for k, v in sorted(res.delays.items()) if v > EPS),
+        sidesteps=_sidesteps(task.steps, res.plan),
+        cost_before=cost_before,
+        makespan_before=makespan_before,
+        runs=res.iterations,
+    )
+    return kept, dict(res.delays), apart
+
+
+def _sidesteps(planned: Plan, kept: Plan) -> tuple[tuple[str, str, str, str], ...]:
+    """(robot, origin, siding, target) of each move of ``kept`` into a room that ``planned`` never
+    sends its robot to, with the room the robot goes on to."""
+    targets = {(m[0], m[2]) for step in planned for m in step}
+    moves = [m for step in kept for m in step]
+    out = []
+    for i, (robot, origin, siding) in enumerate(moves):
+        if (robot, siding) not in targets:
+            onward = next((m[2] for m in moves[i + 1 :] if m[0] == robot), siding)
+            out.append((robot, origin, siding, onward))
+    return tuple(out)

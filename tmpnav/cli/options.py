@@ -280,7 +280,8 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             default_text=scenario_default("max_risk", "none"),
             help="The chance constraint: the largest probability of collision a move may have (its bound on "
             "touching a wall, from the robot's uncertainty along the path and the map's clearance; robots "
-            "also keep a margin from each other for it). Moves over it are not offered to the planner.",
+            "also keep a margin from each other for it). Moves over it are not offered to the planner, and "
+            "robots in each other's way are kept apart by waits and sidesteps where every move stays within it.",
         ),
         option(
             "--pair-min-gain",

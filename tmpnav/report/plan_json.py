@@ -174,6 +174,23 @@ def risk_section(report: PlanReport) -> JSON:
             }
             for c in plan_conflicts(report)
         ],
+        "kept_apart": _kept_apart(report),
+    }
+
+
+def _kept_apart(report: PlanReport) -> JSON:
+    """The waits and sidesteps that kept the robots apart under the chance constraint (null: none)."""
+    apart = report.apart
+    if apart is None:
+        return None
+    return {
+        "conflicts_before": apart.conflicts_before,
+        "conflicts_left": apart.conflicts_left,
+        "waits": [{"step": k, "seconds": number(v, 6)} for k, v in apart.waits],
+        "sidesteps": [{"robot": r, "origin": o, "siding": via, "target": t} for r, o, via, t in apart.sidesteps],
+        "cost_before": number(apart.cost_before, 9),
+        "makespan_before": number(apart.makespan_before, 6),
+        "clock_runs": apart.runs,
     }
 
 

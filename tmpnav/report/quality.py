@@ -151,8 +151,8 @@ def _crossings(means: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np
 def plan_conflicts(report: PlanReport) -> list[Conflict]:
     """Robots closer than their radii plus the margin of their uncertainty at one instant, by
     the independent checker over the re-simulated trajectories (tmpnav.belief.conflicts; the
-    margin's threshold is planner.max_risk, else 0.05). The plan is reported as planned: the
-    resolver of tmpnav.attachment.conflicts is not applied to it yet (docs/planning.md)."""
+    margin's threshold is planner.max_risk, else 0.05). Under a chance constraint the plan was
+    kept apart first where that helps (tmpnav.attachment.conflicts.keep_apart): what is left."""
     radii = {r.name: r.radius for r in report.scenario.robots}
     delta = report.scenario.planner.max_risk or DEFAULT_DELTA
     return find_conflicts(report.trajectories, radii, delta)

@@ -201,6 +201,7 @@ def _risk_lines(report: PlanReport) -> list[str]:
     delta = report.scenario.planner.max_risk
     within = "no chance constraint (--max-risk)" if delta is None else f"every move within max_risk {delta:g}"
     lines = [f"collision bound: plan {report.risk:.2g}, largest move {report.worst_risk:.2g}; {within}"]
+    lines.extend(_apart_lines(report))
     conflicts = plan_conflicts(report)
     if not conflicts:
         return [*lines, "robots in each other's way: none"]
@@ -209,8 +210,30 @@ def _risk_lines(report: PlanReport) -> list[str]:
         f"robots in each other's way: {len(conflicts)} (first {' and '.join(first.robots)} at "
         f"{first.t_from:.1f} s, {first.closest_distance:.2f} m apart, {first.required_separation:.2f} m needed;"
     )
-    lines.append(' not resolved in the plan yet: docs/planning.md, "Robots in each other\'s way")')
+    if delta is None:
+        lines.append(
+            ' --max-risk keeps robots apart by waits and sidesteps: docs/planning.md, "Robots in each other\'s way")'
+        )
+    else:
+        lines.append(' left: no wait or sidestep found clears them: docs/planning.md, "Robots in each other\'s way")')
     return lines
+
+
+def _apart_lines(report: PlanReport) -> list[str]:
+    """What kept the robots apart under the chance constraint, and what it cost."""
+    apart = report.apart
+    if apart is None:
+        return []
+    done = [
+        f"{_plural(len(apart.waits), 'wait')}"
+        + (" (" + ", ".join(f"step {k} +{s:.1f} s" for k, s in apart.waits) + ")" if apart.waits else "")
+    ]
+    done += [f"a sidestep: {r} {o} -> {via} -> {t}" for r, o, via, t in apart.sidesteps]
+    return [
+        f"kept apart: {apart.conflicts_before} -> {apart.conflicts_left} conflicts by {'; '.join(done)};",
+        f" executed cost {report.resimulated_cost:.3f} (as planned {apart.cost_before:.3f}), makespan "
+        f"{report.schedule.makespan:.1f} s (as planned {apart.makespan_before:.1f} s)",
+    ]
 
 
 def _plural(n: int, word: str) -> str:
