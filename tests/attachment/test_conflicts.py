@@ -16,9 +16,9 @@ from tmpnav.belief.conflicts import find_conflicts
 from tmpnav.oracle.executors import OracleContext
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.pipeline import load_world
+from tmpnav.results import TaskCounts, TaskResult
 from tmpnav.roadmap import build_roadmap
 from tmpnav.task.plans import Plan, Rules
-from tmpnav.results import TaskCounts, TaskResult
 from tmpnav.types import Goals, PlanStatus
 
 #: a + junction of 2 m corridors with a room at each end; r1 goes west to east, r2 south to
