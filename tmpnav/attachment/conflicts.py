@@ -286,8 +286,8 @@ def keep_apart(
     delays to run it with, and what was done. None when the plan has no conflict, or nothing
     found removes one without a move over ``delta``. The plan changed is no longer the
     planner's proved optimum: its status becomes satisficing; where sidesteps changed the
-    steps, each step's cost is its executed cost (the task planner never saw those steps). ``cost_before`` and ``makespan_before`` are
-    those of the plan as planned, run on the clock."""
+    steps, each step's cost is its executed cost (the task planner never saw those steps).
+    ``cost_before`` and ``makespan_before`` are those of the plan as planned, run on the clock."""
     res = resolve_with_sidesteps(carried, task.steps, delta=delta)
     if not res.conflicts_before or len(res.conflicts_left) >= len(res.conflicts_before):
         return None
