@@ -211,9 +211,7 @@ def _risk_lines(report: PlanReport) -> list[str]:
         f"{first.t_from:.1f} s, {first.closest_distance:.2f} m apart, {first.required_separation:.2f} m needed;"
     )
     if delta is None:
-        lines.append(
-            ' --max-risk keeps robots apart by waits and sidesteps: docs/planning.md, "Robots in each other\'s way")'
-        )
+        lines.append(' --max-risk keeps robots apart: docs/planning.md, "Robots in each other\'s way")')
     else:
         lines.append(' left: no wait or sidestep found clears them: docs/planning.md, "Robots in each other\'s way")')
     return lines
@@ -224,11 +222,13 @@ def _apart_lines(report: PlanReport) -> list[str]:
     apart = report.apart
     if apart is None:
         return []
-    done = [
-        f"{_plural(len(apart.waits), 'wait')}"
-        + (" (" + ", ".join(f"step {k} +{s:.1f} s" for k, s in apart.waits) + ")" if apart.waits else "")
-    ]
-    done += [f"a sidestep: {r} {o} -> {via} -> {t}" for r, o, via, t in apart.sidesteps]
+    waits = [f"step {k} +{s:.1f} s" for k, s in apart.waits[:2]]
+    if len(apart.waits) > 2:
+        waits.append(f"{len(apart.waits) - 2} more")
+    done = [_plural(len(apart.waits), "wait") + (f" ({', '.join(waits)})" if waits else "")]
+    done += [f"a sidestep: {r} {o} -> {via} -> {t}" for r, o, via, t in apart.sidesteps[:2]]
+    if len(apart.sidesteps) > 2:
+        done.append(f"{len(apart.sidesteps) - 2} more sidesteps")
     return [
         f"kept apart: {apart.conflicts_before} -> {apart.conflicts_left} conflicts by {'; '.join(done)};",
         f" executed cost {report.resimulated_cost:.3f} (as planned {apart.cost_before:.3f}), makespan "

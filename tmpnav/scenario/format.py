@@ -381,7 +381,7 @@ PLANNER = Section(
         ),
         "max_risk": Field(
             Number(None, minimum=0.0, exclusive_minimum=True, maximum=1.0),
-            "the chance constraint: the largest probability of collision a move may have (each robot's bound on touching a wall along the move, from its covariance at every step and the map's clearance; also the margin robots keep from each other); moves over it are not offered to the planner; omit for no constraint",
+            "the chance constraint: the largest probability of collision a move may have (each robot's bound on touching a wall along the move, from its covariance at every step and the map's clearance; also the margin robots keep from each other); moves over it are not offered to the planner, and robots in each other's way are kept apart by waits and sidesteps where that keeps every move within it; omit for no constraint (the paper's model)",
             default=None,
         ),
         "costs": Field(
