@@ -119,20 +119,26 @@ def test_without_jpype_the_reason_is_said(monkeypatch: pytest.MonkeyPatch) -> No
     assert "a JVM process per solve" in enhsp_jvm.describe()
 
 
-#: a run in miniature: guarded as the command line guards it, ENHSP searching in the JVM
-INTERRUPTED_RUN = f"""
-import sys
+def guarded_run(imports: str, call: str) -> str:
+    """A run in miniature, guarded as the command line guards it: ``call`` searches with ENHSP,
+    and an interrupted or terminated run exits with 130 or 143."""
+    return f"""
+import functools, sys
 from tmpnav.lifetime import Terminated, guard
-from tmpnav.task.solve import solve_text
+from tmpnav.task.solve import {imports}
 guard()
 try:
     print("solving", flush=True)
-    solve_text({SLOW_DOMAIN!r}, {SLOW_PROBLEM!r}, "enhsp-blind", 120.0)
+    {call}
 except KeyboardInterrupt:
     sys.exit(130)
 except Terminated:
     sys.exit(143)
 """
+
+
+#: one search in the JVM
+INTERRUPTED_RUN = guarded_run("solve_text", f"solve_text({SLOW_DOMAIN!r}, {SLOW_PROBLEM!r}, 'enhsp-blind', 120.0)")
 
 
 @pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
@@ -155,19 +161,10 @@ def test_a_signal_during_a_search_in_the_jvm_ends_the_run_at_once(sig: signal.Si
 
 
 #: two searches side by side in the JVM, as the anytime search solves sub-problems
-INTERRUPTED_PAIR = f"""
-import functools, sys
-from tmpnav.lifetime import Terminated, guard
-from tmpnav.task.solve import side_by_side, solve_text
-guard()
-try:
-    print("solving", flush=True)
-    side_by_side([functools.partial(solve_text, {SLOW_DOMAIN!r}, {SLOW_PROBLEM!r}, "enhsp-blind", 120.0)] * 2)
-except KeyboardInterrupt:
-    sys.exit(130)
-except Terminated:
-    sys.exit(143)
-"""
+INTERRUPTED_PAIR = guarded_run(
+    "side_by_side, solve_text",
+    f"side_by_side([functools.partial(solve_text, {SLOW_DOMAIN!r}, {SLOW_PROBLEM!r}, 'enhsp-blind', 120.0)] * 2)",
+)
 
 
 @pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
