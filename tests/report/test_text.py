@@ -4,6 +4,7 @@ makespan and the objective, the robots' time, their beliefs, time per stage."""
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 from typing import Any
 
@@ -90,28 +91,36 @@ def test_an_objective_that_prices_time_and_a_planner_that_saw_another_schedule(p
     assert any(line.startswith("lower bound on the objective: ") for line in lines)
 
 
+HEAD = "robot  rooms    busy   waits  idle [s]  travelled  pos. std max / end  heading std  collision bound"
+
+
 def test_robots_on_the_shared_clock(lines: list[str], plan_report: Any) -> None:
-    i = lines.index("robot  rooms  busy [s]  waits [s]  idle [s]  control steps")
+    i = lines.index(HEAD)
     rows = [line.split() for line in lines[i + 1 : i + 3]]
-    schedule, dt = plan_report.schedule, plan_report.scenario.models.dt
+    schedule = plan_report.schedule
     for row, robot in zip(rows, ["r1", "r2"], strict=True):
         assert row[0] == robot and int(row[1]) == len(schedule.timeline(robot))
         busy, waits, idle = (float(x) for x in row[2:5])
         assert busy == pytest.approx(schedule.busy(robot), abs=0.05)
         assert waits == pytest.approx(schedule.waits(robot), abs=0.05)
         assert idle == pytest.approx(schedule.idle(robot), abs=0.05)
-        # control steps: the steps it drives, not every step of the clock its trajectory covers
-        assert int(row[5]) == round(schedule.busy(robot) / dt) < len(plan_report.trajectories[robot]) - 1
     assert float(rows[1][3]) > 0 and float(rows[0][4]) > 0  # r2 waits for r1; r1 is idle at the end
     assert lines[i + 3].startswith("(busy: driving, in control steps of 0.5 s; idle: ")
 
 
-def test_beliefs_per_robot(lines: list[str]) -> None:
-    start = next(i for i, line in enumerate(lines) if line.startswith("robot  travelled"))
-    rows = lines[start + 1 : start + 3]
+def test_beliefs_per_robot(lines: list[str], plan_report: Any) -> None:
+    i = lines.index(HEAD)
+    rows = lines[i + 1 : i + 3]
     assert [r.split()[0] for r in rows] == ["r1", "r2"]
-    for row in rows:
-        assert re.search(r"\d+\.\d m\s+\d+\.\d{2} m\s+\d+\.\d{2} m\s+\d+\.\d deg\s+[\d.e+-]+$", row), row
+    for row, robot in zip(rows, ["r1", "r2"], strict=True):
+        match = re.search(r"(\d+\.\d) m\s+(\d+\.\d{2}) / (\d+\.\d{2}) m\s+\d+\.\d deg\s+([\d.e+-]+)$", row)
+        assert match, row
+        stds = [math.sqrt(s.cov[0][0] + s.cov[1][1]) for s in plan_report.trajectories[robot]]  # sqrt(var x + var y)
+        assert float(match[2]) == pytest.approx(max(stds), abs=0.005)
+        assert float(match[3]) == pytest.approx(stds[-1], abs=0.005)
+    # the plan's collision bound and the conflicts in one line under the table
+    assert lines[i + 4].startswith("collision bound: plan ")
+    assert "robots in each other's way: " in lines[i + 4]
 
 
 def test_times_and_cache(lines: list[str], plan_report: Any) -> None:

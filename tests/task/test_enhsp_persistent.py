@@ -104,7 +104,7 @@ def test_without_the_jvm_the_process_path_plans(monkeypatch: pytest.MonkeyPatch)
     expected = _solve(task, "enhsp-blind")
     monkeypatch.setattr(enhsp_jvm._JVM, "broken", "the JVM did not start: test")
     assert not enhsp_jvm.usable("")
-    assert enhsp_jvm.describe() == "a JVM process per solve (the JVM did not start: test)"
+    assert enhsp_jvm.describe() == "in a JVM process per solve (the JVM did not start: test)"
     called = []
     monkeypatch.setattr(enhsp_jvm, "run", lambda *a: called.append(a))
     assert _solve(task, "enhsp-blind") == expected

@@ -3,9 +3,11 @@
 Under the header, a ``warning:`` line for each reason to doubt the plan (tmpnav.report.quality):
 a lower bound far below its cost (or objective), a robot more uncertain than a door it passes
 allows. All robots move at once, on one clock: a step's ``t [s]`` is its window on that clock
-(steps of different robots overlap); under the totals, the makespan and the objective; then
-each robot's rooms and its time driving (``busy``), waiting before its moves and not driving
-(``idle``); ``control steps`` counts the steps it drives.
+(steps of different robots overlap); under the totals, the makespan and the objective; then one
+row per robot: its rooms, its time driving (``busy``, in control steps), waiting before its
+moves (``waits``) and not driving (``idle``, waits included), the distance its belief mean
+drives, its position std (largest / at the end), its heading std at the end and the collision
+bound of its riskiest move; then the plan's collision bound and robots in each other's way.
 
 Example (the paper's Fig. 2 task, ``tmpnav plan configs/corridor.yaml --costs table``, a
 second time)::
@@ -13,27 +15,24 @@ second time)::
     corridor (configs/corridor.yaml): encoding mixed, planner enhsp-blind, solved-optimally
     2 robots, mutual observations on; goals: r1 visits L10; r2 visits L1
     search: exact, costs table
-    lower bound on the objective: 31.198 (exact); proved optimal
+    lower bound on the objective: 31.198 (exact (A* over every schedule)); proved optimal
 
     step  moves                            planner cost  re-sim cost     diff  t [s]
        1  r1: L1 -> L10  &  r2: L10 -> L1        10.698       10.698   +0.000  0.0-20.5
     total (1 step)                               10.698       10.698   +0.000  0.0-20.5
     makespan 20.5 s; objective weighted (cost + 1 per s of makespan): 31.198
 
-    robot  rooms  busy [s]  waits [s]  idle [s]  control steps
-    r1         1      18.5        0.0       2.0             37
-    r2         1      20.5        0.0       0.0             41
-    (busy: driving, in control steps of 0.5 s; idle: the rest of the makespan, waits included)
+    robot  rooms    busy   waits  idle [s]  travelled  pos. std max / end  heading std  collision bound
+    r1         1    18.5     0.0       2.0      7.1 m       0.21 / 0.21 m      6.4 deg            0.045
+    r2         1    20.5     0.0       0.0      7.6 m       0.16 / 0.12 m      2.3 deg            0.005
+    (busy: driving, in control steps of 0.5 s; idle: the rest of the makespan; std: of the belief)
+    collision bound: plan 0.05 (no --max-risk); robots in each other's way: 1, the first:
+     r1 and r2 at 8.0 s, 0.04 m apart, 0.94 m needed; --max-risk keeps robots apart: docs/planning.md
 
-    robot  travelled  final pos. std  max pos. std  final heading std
-    r1         7.1 m          0.21 m        0.21 m            6.4 deg
-    r2         7.6 m          0.12 m        0.16 m            2.3 deg
-    (pos. std = sqrt(var x + var y) of the re-simulated belief; travelled: by the belief mean)
-
-    time [s]  roadmap  oracle  encode  planner  resimulate   total  (load)
-                 0.00    0.00    0.00     0.00        0.51    0.52    0.05
+    time [s]  roadmap  oracle  planner  resimulate   total  (load)
+                 0.00    0.00     0.00        0.20    0.21    0.05
     cache (/home/me/.cache/tmpnav): roadmap from cache; move costs: cost table from cache, then 1 more
-    from cache and 0 computed; task plan from cache (--replan runs the planner)
+    from cache and 0 computed
 """
 
 from __future__ import annotations
@@ -155,66 +154,57 @@ def _objective(report: PlanReport) -> list[str]:
     return [f"{makespan}; objective {o.name} ({formula}): {value}"]
 
 
-def _team(report: PlanReport) -> list[str]:
-    """Per robot on the shared clock: rooms reached, seconds driving (busy), waiting for a
-    partner or held back before its moves, not driving within the makespan (idle, waits
-    included), and the control steps it drives."""
+def _robots(report: PlanReport) -> list[str]:
+    """One row per robot: on the shared clock, the rooms it reaches, its seconds driving (busy),
+    waiting for a partner or held back before its moves (waits), and not driving within the
+    makespan (idle, waits included); in belief space, the distance its belief mean drives, its
+    position std (largest along the plan / at its end), its heading std at the end, and the
+    collision bound of its riskiest move. Then the plan's collision bound and its conflicts."""
     schedule, dt = report.schedule, report.scenario.models.dt
-    rows = ["robot  rooms  busy [s]  waits [s]  idle [s]  control steps"]
+    rows = ["robot  rooms    busy   waits  idle [s]  travelled  pos. std max / end  heading std  collision bound"]
     for robot in schedule.robots:
         steps = report.trajectories.get(robot, [])
-        driving = sum(a is not None for a in driving_steps(schedule, robot, [s.t for s in steps]))
-        rows.append(
-            f"{robot:<5}  {len(schedule.timeline(robot)):>5}  {schedule.busy(robot):>8.1f}  "
-            f"{schedule.waits(robot):>9.1f}  {schedule.idle(robot):>8.1f}  {driving:>13}"
+        timing = (
+            f"{robot:<5}  {len(schedule.timeline(robot)):>5}  {schedule.busy(robot):>6.1f}  "
+            f"{schedule.waits(robot):>6.1f}  {schedule.idle(robot):>8.1f}"
         )
-    rows.append(f"(busy: driving, in control steps of {dt:g} s; idle: the rest of the makespan, waits included)")
-    return rows
-
-
-def _beliefs(report: PlanReport) -> list[str]:
-    """Per robot: distance driven by the belief mean, and its position / heading uncertainty."""
-    rows = ["robot  travelled  final pos. std  max pos. std  final heading std  collision bound"]
-    for robot, steps in report.trajectories.items():
         if not steps:
+            rows.append(timing)
             continue
         means = np.array([s.mean for s in steps], dtype=float)
         covs = np.array([s.cov for s in steps], dtype=float)
-        driving = np.array([a is not None for a in driving_steps(report.schedule, robot, [s.t for s in steps])])
+        driving = np.array([a is not None for a in driving_steps(schedule, robot, [s.t for s in steps])])
         legs = np.linalg.norm(np.diff(means[:, :2], axis=0), axis=1)
         travelled = float(np.sum(legs[driving[1:]]))  # standing, the mean only shifts with observations
         pos_std = np.sqrt(np.clip(covs[:, 0, 0] + covs[:, 1, 1], 0.0, None))  # sqrt(trace of the (x, y) block)
         heading_std = math.degrees(math.sqrt(max(covs[-1, 2, 2], 0.0)))
         risks = [p for a in report.actions for (r, _, _), p in zip(a.moves, a.risk, strict=False) if r == robot]
+        stds = f"{pos_std.max():.2f} / {pos_std[-1]:.2f} m"
         rows.append(
-            f"{robot:<5}  {travelled:>7.1f} m  {pos_std[-1]:>12.2f} m  {pos_std.max():>10.2f} m"
-            f"  {heading_std:>13.1f} deg  {max(risks, default=0.0):>15.2g}"
+            f"{timing}  {travelled:>7.1f} m  {stds:>18}  {heading_std:>7.1f} deg  {max(risks, default=0.0):>15.2g}"
         )
-    rows.append("(pos. std = sqrt(var x + var y) of the re-simulated belief; travelled: by the belief mean;")
-    rows.append(" collision bound: the largest of the robot's moves, docs/models.md)")
+    rows.append(f"(busy: driving, in control steps of {dt:g} s; idle: the rest of the makespan; std: of the belief)")
     rows.extend(_risk_lines(report))
     return rows
 
 
 def _risk_lines(report: PlanReport) -> list[str]:
-    """The plan's collision bound against the chance constraint, and robots in each other's way."""
+    """The plan's collision bound against the chance constraint (each robot's riskiest move is in
+    the table above), what kept robots apart, and robots still in each other's way."""
     delta = report.scenario.planner.max_risk
-    within = "no chance constraint (--max-risk)" if delta is None else f"every move within max_risk {delta:g}"
-    lines = [f"collision bound: plan {report.risk:.2g}, largest move {report.worst_risk:.2g}; {within}"]
-    lines.extend(_apart_lines(report))
+    within = "no --max-risk" if delta is None else f"every move within max_risk {delta:g}"
+    bound = f"collision bound: plan {report.risk:.2g} ({within}); robots in each other's way: "
     conflicts = plan_conflicts(report)
     if not conflicts:
-        return [*lines, "robots in each other's way: none"]
+        return [bound + "none", *_apart_lines(report)]
     first = conflicts[0]
-    lines.append(
-        f"robots in each other's way: {len(conflicts)} (first {' and '.join(first.robots)} at "
-        f"{first.t_from:.1f} s, {first.closest_distance:.2f} m apart, {first.required_separation:.2f} m needed;"
-    )
-    if delta is None:
-        lines.append(' --max-risk keeps robots apart: docs/planning.md, "Robots in each other\'s way")')
-    else:
-        lines.append(' left: no wait or sidestep found clears them: docs/planning.md, "Robots in each other\'s way")')
-    return lines
+    hint = "--max-risk keeps robots apart" if delta is None else "left, no wait or sidestep clears them"
+    return [
+        f"{bound}{len(conflicts)}, the first:",
+        f" {' and '.join(first.robots)} at {first.t_from:.1f} s, {first.closest_distance:.2f} m apart, "
+        f"{first.required_separation:.2f} m needed; {hint}: docs/planning.md",
+        *_apart_lines(report),
+    ]
 
 
 def _apart_lines(report: PlanReport) -> list[str]:
@@ -273,5 +263,5 @@ def _cache_line(report: PlanReport) -> str:
 def plan_summary(report: PlanReport) -> str:
     """The plan at a glance: header, one line per plan step, totals with the makespan and the
     objective, the robots on the shared clock, their beliefs, time per stage."""
-    blocks = [_header(report), _steps(report), _team(report), _beliefs(report), _times(report)]
+    blocks = [_header(report), _steps(report), _robots(report), _times(report)]
     return "\n\n".join("\n".join(block) for block in blocks)

@@ -252,11 +252,11 @@ def usable(options: str) -> bool:
 
 
 def describe() -> str:
-    """One line for ``tmpnav doctor``: how ENHSP runs, and why."""
+    """For ``tmpnav doctor``'s Java line: how ENHSP runs, and why."""
     reason = unavailable()
     if reason is None:
-        return "one JVM for the run, inside tmpnav (JPype); TMPNAV_ENHSP=process: a JVM per solve"
-    return f"a JVM process per solve ({reason})"
+        return "in one JVM for the run inside tmpnav (JPype)"
+    return f"in a JVM process per solve ({reason})"
 
 
 def libjvm() -> Path | None:
