@@ -1,16 +1,22 @@
-"""Robots in each other's way (issue 24, item 3): conflicts of the shipped plans before and after waits.
+"""Robots in each other's way (issue 24, item 3): the shipped plans as planned, kept apart by
+default, and with siding rooms too.
 
-For every shipped scenario with two or more robots, plans with the defaults (the default cache
-directory, so remembered plans are reused), checks the re-simulated trajectories with the
-independent checker (:mod:`tmpnav.belief.conflicts`), resolves the conflicts by waits
-(:func:`tmpnav.attachment.conflicts.resolve_conflicts`) and checks the resolved run again.
-Where waits leave a conflict, resolves again allowing sidesteps
-(:func:`~tmpnav.attachment.conflicts.resolve_with_sidesteps`) and checks that plan, run again
-from scratch, with the independent checker. Prints a table: conflicts as planned, after waits
-(clock runs and seconds), after sidesteps, the sidesteps and waits of the final plan, its
-makespan and executed cost against the planned ones, and the sidestep search's runs and seconds.
+For every shipped scenario with two or more robots:
 
-    python benchmarks/bench_conflicts.py [--only corridor warehouse-2robots] [-o out.json]
+1. plans it with ``--no-keep-apart`` (the default cache directory, so remembered plans are
+   reused) and counts the conflicts of its re-simulated trajectories with the independent
+   checker (:mod:`tmpnav.belief.conflicts`);
+2. plans it with the defaults (robots kept apart: waits, detours, split pairs; at most 1.5
+   times the objective, tmpnav.attachment.conflicts.keep_apart) and counts again on the
+   report's trajectories, with what was done and the seconds of the ``resimulate`` stage
+   that holds the search;
+3. resolves the plan as planned once more with siding rooms too (what ``--max-risk`` adds,
+   :func:`tmpnav.attachment.conflicts.resolve_with_sidesteps`), runs the result again from
+   scratch and checks it.
+
+Prints a table (conflicts, makespan and executed cost for each) and writes the rows as JSON.
+
+    python benchmarks/bench_conflicts.py [--only corridor two-rooms] [-o out.json]
 """
 
 from __future__ import annotations
@@ -26,9 +32,9 @@ sys.path.insert(0, str(ROOT))
 
 from tmpnav.attachment.canonical import CanonicalCosts  # noqa: E402
 from tmpnav.attachment.carried import CarriedCosts  # noqa: E402
-from tmpnav.attachment.conflicts import resolve_conflicts, resolve_with_sidesteps  # noqa: E402
+from tmpnav.attachment.conflicts import resolve_with_sidesteps  # noqa: E402
 from tmpnav.belief.conflicts import find_conflicts  # noqa: E402
-from tmpnav.pipeline import Execution, make_oracle, plan  # noqa: E402
+from tmpnav.pipeline import Execution, PlanOptions, make_oracle, plan  # noqa: E402
 from tmpnav.scenario import load_partial  # noqa: E402
 from tmpnav.shipped import scenarios  # noqa: E402
 
@@ -44,64 +50,71 @@ def team_configs(only: list[str] | None) -> list[Path]:
 
 
 def measure(path: Path) -> dict:
-    """One scenario: plan, check, resolve, check again."""
-    start = time.perf_counter()
-    report = plan(path)
-    planned = time.perf_counter() - start
-    radii = {r.name: r.radius for r in report.scenario.robots}
-    before = find_conflicts(report.trajectories, radii)
-    oracle = make_oracle(report.scenario, report.world, report.roadmap, Execution(executor="serial"))
+    """One scenario: as planned, kept apart by default, and with siding rooms."""
+    planned = plan(path, PlanOptions.of(keep_apart=False))
+    radii = {r.name: r.radius for r in planned.scenario.robots}
+    before = find_conflicts(planned.trajectories, radii)
+    kept = plan(path)
+    after = find_conflicts(kept.trajectories, radii)
+    apart = kept.apart
+    oracle = make_oracle(planned.scenario, planned.world, planned.roadmap, Execution(executor="serial"))
     try:
-        carried = CarriedCosts(oracle, CanonicalCosts(oracle, report.world, report.scenario.planner.pair_min_gain))
+        carried = CarriedCosts(oracle, CanonicalCosts(oracle, planned.world, planned.scenario.planner.pair_min_gain))
         start = time.perf_counter()
-        waits = resolve_conflicts(carried, report.task.steps, radii)
-        seconds = time.perf_counter() - start
-        res = resolve_with_sidesteps(carried, report.task.steps, radii)
-        sidestep_seconds = time.perf_counter() - start - seconds
-        again = carried.replay(res.plan, res.delays)  # run from scratch for the independent check
+        res = resolve_with_sidesteps(carried, planned.task.steps, radii)
+        sidings_seconds = time.perf_counter() - start
+        again = carried.replay(res.plan, res.delays, res.detours)  # run from scratch for the independent check
     finally:
         oracle.close()
     assert again.trajectories is not None
-    after = find_conflicts(again.trajectories, radii)
-    left = [(*c.robots, c.t_from, c.t_to, round(c.closest_distance, 2), round(c.required_separation, 2)) for c in after]
-    steps, weights = len(report.task.steps), report.scenario.cost
+    sidings_left = find_conflicts(again.trajectories, radii)
+    weights = planned.scenario.cost
     return {
         "scenario": path.stem,
-        "robots": len(report.scenario.robots),
-        "steps": steps,
-        "conflicts_before": len(before),
-        "conflicts_after_waits": len(waits.conflicts_left),
-        "conflicts_after": len(after),
-        "sidesteps": len(res.plan) - steps,
-        "worst_before": min((c.closest_distance - c.required_separation for c in before), default=None),
-        "left": left,
-        "waits": len(res.delays),
-        "wait_seconds": round(sum(res.delays.values()), 2),
-        "makespan_before": report.schedule.makespan,
-        "makespan_after": res.run.makespan,
-        "cost_before": round(report.resimulated_cost, 2),
-        "cost_after": round(sum(res.run.step_costs(len(res.plan), weights)), 2),
-        "runs": waits.iterations,
-        "resolve_seconds": round(seconds, 2),
-        "sidestep_runs": res.iterations,
-        "sidestep_seconds": round(sidestep_seconds, 2),
-        "plan_seconds": round(planned, 1),
+        "robots": len(planned.scenario.robots),
+        "steps": len(planned.task.steps),
+        "conflicts_planned": len(before),
+        "makespan_planned": planned.schedule.makespan,
+        "cost_planned": round(planned.resimulated_cost, 2),
+        "conflicts_kept": len(after),
+        "makespan_kept": kept.schedule.makespan,
+        "cost_kept": round(kept.resimulated_cost, 2),
+        "kept": None
+        if apart is None
+        else {
+            "waits": [list(w) for w in apart.waits],
+            "detours": [list(d) for d in apart.detours],
+            "sidesteps": [list(s) for s in apart.sidesteps],
+            "clock_runs": apart.runs,
+        },
+        "resimulate_seconds": round(kept.times.seconds.get("resimulate", 0.0), 2),
+        "left": [(*c.robots, c.t_from, round(c.closest_distance, 2), round(c.required_separation, 2)) for c in after],
+        "conflicts_sidings": len(sidings_left),
+        "makespan_sidings": again.makespan,
+        "cost_sidings": round(sum(again.step_costs(len(res.plan), weights)), 2),
+        "sidings_seconds": round(sidings_seconds, 2),
     }
 
 
 def table(rows: list[dict]) -> str:
     lines = [
-        "| scenario | robots | steps | conflicts | after waits | runs, s | after sidesteps | sidesteps "
-        "| waits (s) | makespan [s] | cost (executed) | runs, s |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| scenario | robots | conflicts as planned | kept apart (default) | how | makespan [s] | cost (executed) "
+        "| resimulate [s] | with siding rooms | cost | seconds |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
+        kept = r["kept"]
+        how = "-"
+        if kept is not None:
+            parts = [f"{len(kept['waits'])} waits"] if kept["waits"] else []
+            parts += [f"detour {d[1]} step {d[0]} (+{d[2]:.1f} m)" for d in kept["detours"]]
+            parts += [f"sidestep {s[0]} via {s[2]}" for s in kept["sidesteps"]]
+            how = ", ".join(parts) or "split pair"
         lines.append(
-            f"| {r['scenario']} | {r['robots']} | {r['steps']} | {r['conflicts_before']} "
-            f"| {r['conflicts_after_waits']} | {r['runs']}, {r['resolve_seconds']:g} "
-            f"| {r['conflicts_after']} | {r['sidesteps']} | {r['waits']} ({r['wait_seconds']:g}) "
-            f"| {r['makespan_before']:g} -> {r['makespan_after']:g} | {r['cost_before']:g} -> {r['cost_after']:g} "
-            f"| {r['sidestep_runs']}, {r['sidestep_seconds']:g} |"
+            f"| {r['scenario']} | {r['robots']} | {r['conflicts_planned']} | {r['conflicts_kept']} | {how} "
+            f"| {r['makespan_planned']:g} -> {r['makespan_kept']:g} | {r['cost_planned']:g} -> {r['cost_kept']:g} "
+            f"| {r['resimulate_seconds']:g} | {r['conflicts_sidings']} | {r['cost_sidings']:g} "
+            f"| {r['sidings_seconds']:g} |"
         )
     return "\n".join(lines)
 

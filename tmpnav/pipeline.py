@@ -49,6 +49,7 @@ class Overrides:
     costs: Costs | None = None
     objective: Objective | None = None
     max_risk: float | None = None
+    keep_apart: bool | None = None
 
 
 @dataclass(frozen=True)
@@ -136,12 +137,15 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
         costs=o.costs or planner.costs,
         objective=o.objective or planner.objective,
         max_risk=o.max_risk if o.max_risk is not None else planner.max_risk,
+        keep_apart=o.keep_apart if o.keep_apart is not None else planner.keep_apart,
     )
     if (why := paper_conflict(planner.encoding, o.search, o.costs, o.objective)) is not None:
         raise InputError(why)
     if planner.encoding == "paper":  # the paper's model, as tmpnav.choices.choose plans it
         choice = choose(planner.encoding, planner.search, planner.costs, 0, 0)
-        planner = replace(planner, costs=choice.costs, search=choice.mode, objective="cost", max_risk=None)
+        planner = replace(
+            planner, costs=choice.costs, search=choice.mode, objective="cost", max_risk=None, keep_apart=False
+        )
     models = scenario.models
     if o.mutual_observations is not None:
         models = replace(models, mutual_observations=o.mutual_observations)
@@ -279,11 +283,12 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
         with times.timed("resimulate"):
             resim = resimulate(run.carried, task)
             delta = prep.scenario.planner.max_risk
-            if delta is not None and max((p for a in resim.actions for p in a.risk), default=0.0) <= delta:
+            within = delta is None or max((p for a in resim.actions for p in a.risk), default=0.0) <= delta
+            if prep.scenario.planner.keep_apart and within:
                 kept = keep_apart(run.carried, task, delta, resim.cost, resim.schedule.makespan)
                 if kept is not None:
-                    task, delays, apart = kept
-                    resim = resimulate(run.carried, task, delays)
+                    task, apart = kept.task, kept.apart
+                    resim = resimulate(run.carried, task, kept.delays, kept.detours)
     finally:
         prep.oracle.close()
     times.close()

@@ -36,10 +36,16 @@ class Resimulation:
         return sum(a.resimulated_cost for a in self.actions)
 
 
-def resimulate(carried: CarriedCosts, task: TaskResult, delays: Mapping[int, float] | None = None) -> Resimulation:
-    """Run the task plan on the team's clock (``delays`` hold steps back, in seconds)."""
+def resimulate(
+    carried: CarriedCosts,
+    task: TaskResult,
+    delays: Mapping[int, float] | None = None,
+    detours: Mapping[tuple[int, str], tuple[int, ...]] | None = None,
+) -> Resimulation:
+    """Run the task plan on the team's clock (``delays`` hold steps back, in seconds;
+    ``detours`` drive moves along other roadmap paths, ``TeamClock.run``)."""
     names, weights = carried.start.names, carried.scenario.cost
-    run = carried.replay(task.steps, delays)
+    run = carried.replay(task.steps, delays, detours)
     terms: dict[str, list[CostTerms]] = {r: [] for r in names}
     by_step: dict[int, list] = {}
     for move in run.moves:

@@ -130,7 +130,8 @@ class KeptApart:
     (tmpnav.attachment.conflicts.keep_apart): the conflicts of the plan as planned and left,
     the waits (plan step, 1-based, and seconds held back), the sidesteps (robot, origin,
     siding room, target), the plan as planned run on the clock (its executed cost and
-    makespan), and the clock runs the search made."""
+    makespan), the clock runs the search made, and the detours (plan step, robot, metres
+    driven more than the shortest path)."""
 
     conflicts_before: int
     conflicts_left: int
@@ -139,6 +140,7 @@ class KeptApart:
     cost_before: float
     makespan_before: float
     runs: int
+    detours: tuple[tuple[int, str, float], ...] = ()  # (plan step, 1-based; robot; metres longer)
 
 
 @dataclass(frozen=True)

@@ -221,6 +221,9 @@ class PlannerOptions:
     #: the chance constraint: each move's bound on the probability of touching an obstacle,
     #: and of two robots touching, at most this (None: unconstrained; docs/models.md)
     max_risk: float | None = None
+    #: robots in each other's way on the clock kept apart after planning, by waits and detours
+    #: (and sidesteps under max_risk; tmpnav.attachment.conflicts.keep_apart)
+    keep_apart: bool = True
 
 
 @dataclass(frozen=True)

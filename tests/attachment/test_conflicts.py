@@ -141,11 +141,28 @@ def test_the_papers_swap_is_found_and_not_hidden_by_waits() -> None:
     assert res.conflicts_left and res.iterations > 1 and res.plan == SWAP
 
 
-def test_the_papers_swap_is_resolved_by_a_sidestep() -> None:
-    """With a sidestep one robot goes through a room no goal names while the other passes:
-    no conflict left, by the independent checker on the sidestepped plan run again."""
+def test_the_papers_swap_is_resolved_by_a_detour() -> None:
+    """The corridor is 3 m wide: one robot leaves the shortest path for a parallel lane and
+    they pass side by side. The plan stays the paper's (the same two moves, the same goal
+    instantiations); the detour starts and ends where the planned path does, and the
+    independent checker finds nothing on the plan run again with it."""
     _, _, carried = carried_problem("corridor.yaml", ("L10", "L1"), 2)
+    planned = carried.replay(SWAP)
     res = resolve_with_sidesteps(carried, SWAP)
+    assert res.conflicts_before and res.resolved and res.plan == SWAP and not res.delays
+    [((step, robot), path)] = res.detours.items()
+    original = next(m for m in planned.moves if m.step == step and carried.start.names[m.robot] == robot)
+    assert path != original.motion.path and (path[0], path[-1]) == (original.motion.path[0], original.motion.path[-1])
+    again = carried.replay(SWAP, res.delays, res.detours)
+    assert again.trajectories is not None and find_conflicts(again.trajectories, radii(carried)) == []
+    assert [m.motion.path for m in again.moves if m.step == step] == [path]
+
+
+def test_the_papers_swap_is_resolved_by_a_sidestep() -> None:
+    """Without detours, a sidestep: one robot goes through a room no goal names while the other
+    passes: no conflict left, by the independent checker on the sidestepped plan run again."""
+    _, _, carried = carried_problem("corridor.yaml", ("L10", "L1"), 2)
+    res = resolve_with_sidesteps(carried, SWAP, detours=False)
     assert res.conflicts_before and res.resolved
     assert len(res.plan) == 3 and {m[0][2] for m in res.plan} - {"L1", "L10"}  # one move made in two
     Rules(carried.start_location, FIG2).check(res.plan)  # still a plan of the paper's task
@@ -173,7 +190,8 @@ def test_a_paired_move_in_the_way_is_split_so_that_one_robot_waits(tmp_path: Pat
     )
     kept = keep_apart(carried, task, 1.0, 26.0, run.makespan)
     assert kept is not None
-    new, delays, apart = kept
+    new, delays, apart = kept.task, kept.delays, kept.apart
+    assert kept.detours == {} and apart.detours == ()
     assert len(new.steps) == 2 and all(len(step) == 1 for step in new.steps)  # the pair split in two
     assert new.status == PlanStatus.SOLVED_SATISFICING and new.action_names == ("goto_room", "goto_room")
     assert (apart.conflicts_before, apart.conflicts_left, apart.sidesteps) == (1, 0, ())

@@ -54,8 +54,23 @@ goals:
 
 @pytest.fixture(scope="session")
 def plan_report(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
-    """The real plan of the three-rooms scenario (about 3 s: roadmap, oracle, ENHSP, re-simulation)."""
+    """The real plan of the three-rooms scenario (about 3 s: roadmap, oracle, ENHSP, re-simulation),
+    as planned: its paired move and the robot waiting for its partner, its conflict reported
+    (kept apart, a plan of single moves: :func:`kept_report`)."""
     folder = tmp_path_factory.mktemp("three-rooms")
+    scenario = folder / "three_rooms.yaml"
+    scenario.write_text(THREE_ROOMS)
+    options = PlanOptions.of(
+        cache_dir=folder / "cache", executor="serial", costs="table", objective="cost", keep_apart=False
+    )
+    return plan(scenario, options)
+
+
+@pytest.fixture(scope="session")
+def kept_report(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
+    """The same plan with the default keep_apart: its paired move split in two and one robot
+    held back, so that they no longer meet."""
+    folder = tmp_path_factory.mktemp("three-rooms-kept")
     scenario = folder / "three_rooms.yaml"
     scenario.write_text(THREE_ROOMS)
     options = PlanOptions.of(cache_dir=folder / "cache", executor="serial", costs="table", objective="cost")

@@ -173,3 +173,17 @@ def test_satisficing_and_cache_off(plan_report: Any) -> None:
     assert "solved-satisficing (not proven optimal)" in text.splitlines()[0]
     assert "cache: off (" in text
     assert "cache warning: cache is read-only" in text
+
+
+def test_robots_kept_apart(kept_report: Any) -> None:
+    """By default robots in each other's way are kept apart after planning: the summary says
+    how, what it cost against the plan as planned, and that the bound's proof is the plan's as
+    planned; no conflict is left."""
+    lines = plan_summary(kept_report).splitlines()
+    apart = kept_report.apart
+    assert apart is not None and (apart.conflicts_before, apart.conflicts_left) == (1, 0)
+    assert any(line.endswith("as planned, before the robots were kept apart") for line in lines)
+    assert any(line.endswith("robots in each other's way: none") for line in lines)
+    i = next(i for i, line in enumerate(lines) if line.startswith("kept apart: 1 -> 0 conflicts by "))
+    assert lines[i + 1].startswith(f" executed cost {kept_report.resimulated_cost:.3f} (as planned ")
+    assert kept_report.task.status == PlanStatus.SOLVED_SATISFICING

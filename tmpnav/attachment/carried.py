@@ -95,10 +95,15 @@ class CarriedCosts:
             self._runs.popitem(last=False)
         return found
 
-    def replay(self, plan: Plan, delays: Mapping[int, float] | None = None) -> ClockRun:
+    def replay(
+        self,
+        plan: Plan,
+        delays: Mapping[int, float] | None = None,
+        detours: Mapping[tuple[int, str], tuple[int, ...]] | None = None,
+    ) -> ClockRun:
         """The plan run as :meth:`plan_cost` runs it, recording each robot's belief at every
         control step. Raises TmpnavError when a step's robots cannot reach their rooms."""
-        return self.clock.run(tuple(plan), delays, record=True)
+        return self.clock.run(tuple(plan), delays, record=True, detours=detours)
 
     def state_after(self, head: Plan) -> Team:
         """The team when every step of ``head`` has ended."""

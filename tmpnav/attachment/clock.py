@@ -190,9 +190,17 @@ class TeamClock:
 
     # ------------------------------------------------------------------ a whole plan
 
-    def run(self, plan: Plan, delays: Mapping[int, float] | None = None, record: bool = False) -> ClockRun:
+    def run(
+        self,
+        plan: Plan,
+        delays: Mapping[int, float] | None = None,
+        record: bool = False,
+        detours: Mapping[tuple[int, str], tuple[int, ...]] | None = None,
+    ) -> ClockRun:
         """Run ``plan`` (see the module docstring); ``delays`` holds plan steps back by that
-        many seconds after they could start. Raises Unreachable for a step whose robots cannot
+        many seconds after they could start; ``detours`` drive (plan step, robot)'s move along
+        that roadmap path instead of the shortest one (tmpnav.attachment.detours), when it
+        starts and ends where the path does. Raises Unreachable for a step whose robots cannot
         reach their rooms."""
         names = self.start.names
         order = [[k for k, step in enumerate(plan) if any(m[0] == r for m in step)] for r in names]
@@ -213,7 +221,7 @@ class TeamClock:
             while events and events[0][0] == t:
                 batch.append(heapq.heappop(events)[1])
             state = self.advance(state, t, trace)
-            state = self.dispatch(state, [(k, plan[k]) for k in batch])
+            state = self.dispatch(state, [(k, plan[k]) for k in batch], detours=detours)
             for k in batch:
                 for m in plan[k]:
                     i = names.index(m[0])
@@ -244,12 +252,17 @@ class TeamClock:
     # ------------------------------------------------------------------ starting moves
 
     def dispatch(
-        self, state: ClockState, steps: Sequence[tuple[int, Step]], results: Sequence[MotionResult | None] | None = None
+        self,
+        state: ClockState,
+        steps: Sequence[tuple[int, Step]],
+        results: Sequence[MotionResult | None] | None = None,
+        detours: Mapping[tuple[int, str], tuple[int, ...]] | None = None,
     ) -> ClockState:
         """Start ``steps`` (plan index, step) at the clock's time: the oracle picks each move's
         goal instantiation from the robots' beliefs now (one batch of requests, unless their
-        ``results`` are given); their motions become their next legs. Raises Unreachable when
-        a step's robots cannot reach their rooms."""
+        ``results`` are given); their motions become their next legs (along a detour's path
+        where ``detours`` has one for the move, see :meth:`run`). Raises Unreachable when a
+        step's robots cannot reach their rooms."""
         names, t = self.start.names, state.t
         requests = [self.request(state, step) for _, step in steps]
         answers = results if results is not None else self.oracle.evaluate(requests)
@@ -260,7 +273,11 @@ class TeamClock:
                 raise Unreachable(f"{', '.join(robots)} cannot reach {', '.join(request.rooms)} from where they are")
             for r, start, goal in zip(robots, request.starts, result.goal_nodes, strict=True):
                 i = names.index(r)
-                motion = self.lib.motion(r, start.node, start.heading, goal)
+                path = (detours or {}).get((k, r))
+                if path is not None and path[0] == start.node and path[-1] == goal:
+                    motion: NominalMotion | None = self.lib.along(r, path, start.heading)
+                else:
+                    motion = self.lib.motion(r, start.node, start.heading, goal)
                 assert motion is not None  # the oracle just planned it
                 legs[i].append(Leg(t, motion, goal, motion.final_heading, motion.poses[-1], motion.noise_seed))
                 opened.append(MoveRun(k, i, free[i], t, t + motion.n_steps, motion, state.csig[i], state.risk[i]))

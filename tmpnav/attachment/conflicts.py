@@ -52,12 +52,17 @@ waits only), then run ``res.plan`` with ``res.delays`` (``CarriedCosts.replay``,
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass, replace
+import itertools
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
 
 from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
-from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
+from tmpnav.attachment.detours import Drive, Obstacle, detour
+from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, margin_factor, position_sigma
+from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.results import KeptApart, Schedule, TaskResult, TimedMove
 from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Step
@@ -70,6 +75,21 @@ MAX_RUNS = 40
 SIDINGS = 3
 #: times on the clock's grid agree to this (s)
 EPS = 1e-6
+#: rounds of detours per plan, each for the first conflict left
+DETOUR_ROUNDS = 3
+#: a detour keeps this much more than the required separation (m), and takes the detouring
+#: robot's uncertainty as DETOUR_SIGMA times the largest it had on the move it replaces
+DETOUR_MARGIN = 0.05
+DETOUR_SIGMA = 1.1
+#: without a chance constraint, robots are kept apart only when that raises the plan's
+#: objective by at most this fraction: a wait or a detour changes what the robots observe,
+#: and in a landmark-poor hall it can cost them their localisation (7.5 times the cost on
+#: the five rooms of tests/attachment/test_unfold.py)
+MAX_RISE = 0.5
+#: without a chance constraint, the clock runs after which no more sidesteps are tried: the
+#: swaps of the shipped configs resolve in 14-15 runs (0.3-0.5 s), while the sidestep search
+#: of robots that have lost track of where they are runs 83-143 times (7-17 s) and clears nothing
+RUN_BUDGET = 40
 
 
 @dataclass(frozen=True)
@@ -86,6 +106,7 @@ class Resolution:
     iterations: int
     conflicts_before: list[Conflict]
     plan: Plan
+    detours: dict[tuple[int, str], tuple[int, ...]] = field(default_factory=dict)
 
     @property
     def resolved(self) -> bool:
@@ -105,18 +126,21 @@ def resolve_conflicts(
     radii: Mapping[str, float] | None = None,
     delta: float | None = None,
     max_runs: int = MAX_RUNS,
+    detours: Mapping[tuple[int, str], tuple[int, ...]] | None = None,
 ) -> Resolution:
     """Waits that keep the robots of ``plan`` out of each other's way (module docstring).
     ``radii``: robot -> radius (m), the scenario's by default; ``delta``: the risk threshold
-    of the margin, the scenario's ``planner.max_risk`` when it has one, else 0.05. Raises
-    Unreachable when the plan itself cannot be run."""
+    of the margin, the scenario's ``planner.max_risk`` when it has one, else 0.05;
+    ``detours``: moves driven along other paths (``TeamClock.run``), kept in every run.
+    Raises Unreachable when the plan itself cannot be run."""
+    detours = dict(detours or {})
     clock = costs.clock if isinstance(costs, CarriedCosts) else costs
     steps: Plan = tuple(plan)
     radii = dict(radii) if radii is not None else _radii(clock)
     risk = delta if delta is not None else (clock.scenario.planner.max_risk or DEFAULT_DELTA)
 
     def check(delays: dict[int, float]) -> _Node:
-        run = clock.run(steps, delays, record=True)
+        run = clock.run(steps, delays, record=True, detours=detours)
         assert run.trajectories is not None
         return _Node(delays, run, find_conflicts(run.trajectories, radii, risk))
 
@@ -137,7 +161,7 @@ def resolve_conflicts(
             if _key(child) not in seen:
                 seen.add(_key(child))
                 stack.append(child)
-    return Resolution(best.delays, best.run, best.conflicts, runs, root.conflicts, steps)
+    return Resolution(best.delays, best.run, best.conflicts, runs, root.conflicts, steps, detours)
 
 
 def _radii(clock: TeamClock) -> dict[str, float]:
@@ -190,6 +214,113 @@ def _pointless(schedule: Schedule, move: TimedMove, other: str, t: float) -> boo
     return any(m.step == move.step for m in timeline) or all(m.end - EPS <= t for m in timeline)
 
 
+# ---------------------------------------------------------------------- detours
+
+
+def resolve_with_detours(
+    costs: TeamClock | CarriedCosts,
+    res: Resolution,
+    radii: Mapping[str, float] | None = None,
+    delta: float | None = None,
+    max_runs: int = MAX_RUNS,
+    rounds: int = DETOUR_ROUNDS,
+) -> Resolution:
+    """``res`` (a plan's waits), and where they leave a conflict, **detours**: a robot of the
+    first conflict left drives the move it makes then along another roadmap path, found by
+    A* in space and time around every other robot's run (:mod:`tmpnav.attachment.detours`;
+    the robot of lower priority first, then the other), and waits are searched again with
+    it. The plan stays the same (the same moves, the same goal instantiations); the detour's
+    motion, beliefs and cost are the clock's, as executed. Of the detoured resolutions the
+    one with the fewest conflicts left and then the least objective is kept, and its first
+    conflict left gets the same treatment, up to ``rounds`` times."""
+    clock = costs.clock if isinstance(costs, CarriedCosts) else costs
+    radii = dict(radii) if radii is not None else _radii(clock)
+    risk = delta if delta is not None else (clock.scenario.planner.max_risk or DEFAULT_DELTA)
+    rank = _ranker(clock)
+    best, runs = res, res.iterations
+    for _ in range(rounds):
+        if not best.conflicts_left:
+            break
+        found = []
+        for detours in _detoured(clock, best, radii, risk):
+            try:
+                found.append(resolve_conflicts(costs, best.plan, radii, delta, max_runs, detours))
+            except Unreachable:
+                continue
+            runs += found[-1].iterations
+        better = min(found, key=rank, default=None)
+        if better is None or rank(better)[0] >= len(best.conflicts_left):
+            break
+        best = better
+    return replace(best, iterations=runs, conflicts_before=res.conflicts_before)
+
+
+def _detoured(
+    clock: TeamClock, res: Resolution, radii: Mapping[str, float], risk: float
+) -> Iterator[dict[tuple[int, str], tuple[int, ...]]]:
+    """The resolution's detours with one more: the move a robot of the first conflict left
+    drives when it begins, around the other robots as they ran (their centres at every step,
+    the separation the conflict rule asks with this robot's largest uncertainty on the move,
+    times DETOUR_SIGMA, plus DETOUR_MARGIN)."""
+    conflict, run, names = res.conflicts_left[0], res.run, clock.start.names
+    trajectories = run.trajectories
+    assert trajectories is not None
+    t = round(conflict.t_from / clock.dt)
+    k = margin_factor(risk)
+    driving = [m for m in run.moves if names[m.robot] in conflict.robots and m.start <= t < m.end]
+    for move in sorted(driving, key=lambda m: (m.start, m.step), reverse=True):
+        robot = names[move.robot]
+        own = trajectories[robot][move.start : move.end + 1]
+        sigma = DETOUR_SIGMA * float(position_sigma(np.array([s.cov for s in own])).max())
+        obstacles = []
+        for other in names:
+            if other == robot or len(trajectories[other]) <= move.start:
+                continue
+            steps = trajectories[other][move.start :]
+            xy = np.array([s.mean[:2] for s in steps], dtype=float)
+            others = position_sigma(np.array([s.cov for s in steps]))
+            need = radii[robot] + radii[other] + k * (sigma + others) + DETOUR_MARGIN
+            obstacles.append(Obstacle(move.start, xy, need))
+        spec = clock.scenario.robot(robot)
+        path = detour(
+            clock.lib.roadmap,
+            move.motion.path,
+            float(move.motion.poses[0, 2]),
+            move.start,
+            Drive(spec.speed, spec.turn_rate, clock.dt),
+            obstacles,
+            move.motion.n_steps,
+            edges=_as_clear(clock.lib, move.motion.path, spec.radius),
+        )
+        if path is not None and path != tuple(move.motion.path):
+            yield {**res.detours, (move.step, robot): path}
+
+
+def _as_clear(lib: MotionLibrary, path: Sequence[int], radius: float) -> np.ndarray:
+    """The roadmap edges a detour of ``path`` may use: those whose footprint clears the walls
+    (margin at least 0), or at least as clear as the tightest edge of ``path``. A stricter rule
+    (as clear as ``path`` everywhere) leaves the paper's swap without a detour: its door frames
+    are 0.18 m from the planned path and 0.04 m from the lane that passes."""
+    margins = lib.edge_margins(radius)
+    edges = lib.roadmap.edges
+    index = {(int(a), int(b)): k for k, (a, b) in enumerate(edges.tolist())}
+    used = [index.get((a, b), index.get((b, a))) for a, b in itertools.pairwise(path)]
+    tightest = min((float(margins[k]) for k in used if k is not None), default=-np.inf)
+    return np.asarray(margins >= min(tightest, 0.0) - 1e-9)
+
+
+def _ranker(clock: TeamClock) -> Callable[[Resolution], tuple[int, float]]:
+    """Resolutions ranked by the conflicts they leave, then the scenario's objective of their
+    run (a move over the chance constraint costs more than any plan within it)."""
+    objective = OBJECTIVES[clock.scenario.planner.objective]
+
+    def rank(res: Resolution) -> tuple[int, float]:
+        cost = sum(res.run.step_costs(len(res.plan), clock.scenario.cost, clock.scenario.planner.max_risk))
+        return len(res.conflicts_left), objective.value(cost, res.run.makespan, clock.scenario.cost)
+
+    return rank
+
+
 # ---------------------------------------------------------------------- sidesteps
 
 
@@ -200,8 +331,11 @@ def resolve_with_sidesteps(
     delta: float | None = None,
     max_runs: int = MAX_RUNS,
     sidings: int = SIDINGS,
+    detours: bool = True,
+    budget: int | None = None,
 ) -> Resolution:
-    """:func:`resolve_conflicts`, and where waits leave a conflict, a **sidestep**: one robot
+    """:func:`resolve_conflicts`; where waits leave a conflict, :func:`resolve_with_detours`,
+    and apart from it a **sidestep**: one robot
     of the conflict makes its move in two, through a room that no goal names (a siding near
     where they met), so that the other can pass while it stands there; waits are then
     searched again on that plan. This is push-and-swap's move (Luna and Bekris, IJCAI 2011):
@@ -210,21 +344,24 @@ def resolve_with_sidesteps(
     the move it replaces, and the task planner did not choose it. Up to ``sidings`` rooms are
     tried per robot, nearest to where they met; of the plans with the fewest conflicts left,
     the one of least objective (the scenario's: cost, weighted or makespan) is kept, and its
-    first conflict left, if any, gets the same treatment."""
-    best = resolve_conflicts(costs, plan, radii, delta, max_runs)
-    before, runs = best.conflicts_before, best.iterations
+    first conflict left, if any, gets the same treatment. Of the detoured and the sidestepped
+    resolution, the one with the fewer conflicts left and then the least objective is
+    returned. ``detours=False``: waits and sidesteps only; ``sidings=0``: of the sidesteps,
+    only paired moves split in two; ``budget``: no sidestep is tried once the search has made
+    that many clock runs in all."""
+    waits = resolve_conflicts(costs, plan, radii, delta, max_runs)
+    if waits.resolved:
+        return waits
     clock = costs.clock if isinstance(costs, CarriedCosts) else costs
-    objective = OBJECTIVES[clock.scenario.planner.objective]
-
-    def rank(res: Resolution) -> tuple[int, float]:
-        # a move over the chance constraint costs more than any plan within it (tmpnav.types.risk_penalty)
-        cost = sum(res.run.step_costs(len(res.plan), clock.scenario.cost, clock.scenario.planner.max_risk))
-        return len(res.conflicts_left), objective.value(cost, res.run.makespan, clock.scenario.cost)
-
+    rank = _ranker(clock)
+    detoured = resolve_with_detours(costs, waits, radii, delta, max_runs) if detours else waits
+    best, runs = waits, detoured.iterations
     tried: set[Plan] = {best.plan}
     while best.conflicts_left:
         found = []
         for candidate in _sidestepped(clock, best, sidings):
+            if budget is not None and runs >= budget:
+                break
             if candidate not in tried:
                 tried.add(candidate)
                 try:
@@ -236,7 +373,8 @@ def resolve_with_sidesteps(
         if better is None or rank(better)[0] >= len(best.conflicts_left):
             break
         best = better
-    return replace(best, iterations=runs, conflicts_before=before)
+    best = min((detoured, best), key=rank)  # a tie goes to the detour: it keeps the plan's steps
+    return replace(best, iterations=runs, conflicts_before=waits.conflicts_before)
 
 
 def _sidestepped(clock: TeamClock, res: Resolution, sidings: int) -> Iterator[Plan]:
@@ -278,31 +416,53 @@ def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
 # ---------------------------------------------------------------------- applied to a plan
 
 
+@dataclass(frozen=True)
+class Kept:
+    """A plan kept apart (:func:`keep_apart`): the plan, how to run it (``delays``, ``detours``
+    for ``resimulate``) and what was done."""
+
+    task: TaskResult
+    delays: dict[int, float]
+    detours: dict[tuple[int, str], tuple[int, ...]]
+    apart: KeptApart
+
+
 def keep_apart(
-    carried: CarriedCosts, task: TaskResult, delta: float, cost_before: float, makespan_before: float
-) -> tuple[TaskResult, dict[int, float], KeptApart] | None:
-    """The task plan kept clear of robots in each other's way at margin ``delta``: waits and
-    sidesteps (:func:`resolve_with_sidesteps`), the plan they belong to as a TaskResult, the
-    delays to run it with, and what was done. None when the plan has no conflict, or nothing
-    found removes one without a move over ``delta``. The plan changed is no longer the
-    planner's proved optimum: its status becomes satisficing; where sidesteps changed the
-    steps, each step's cost is its executed cost (the task planner never saw those steps).
-    ``cost_before`` and ``makespan_before`` are those of the plan as planned, run on the clock."""
-    res = resolve_with_sidesteps(carried, task.steps, delta=delta)
+    carried: CarriedCosts, task: TaskResult, delta: float | None, cost_before: float, makespan_before: float
+) -> Kept | None:
+    """The task plan kept clear of robots in each other's way: waits, detours and split
+    pairs, and under a chance constraint ``delta`` sidesteps too
+    (:func:`resolve_with_sidesteps`), at the margin k(delta) (k(0.05) without one); the plan
+    they belong to as a TaskResult, the delays and detours to run it with, and what was done.
+    None when the plan has no conflict, or nothing found removes one (without a move over
+    ``delta``). The plan changed is no longer the planner's proved optimum: its status becomes
+    satisficing; where detours or sidesteps changed a step, its cost is its executed cost (the
+    task planner never saw that motion). ``cost_before`` and ``makespan_before`` are those of
+    the plan as planned, run on the clock.
+
+    Without a threshold, a plan kept apart is returned only when its objective is at most
+    (1 + MAX_RISE) times the plan's as planned, and no sidestep is tried past RUN_BUDGET clock
+    runs (the search is long where nothing clears the robots: up to 17 s on the 4-robot building)."""
+    res = resolve_with_sidesteps(carried, task.steps, delta=delta, budget=None if delta is not None else RUN_BUDGET)
     if not res.conflicts_before or len(res.conflicts_left) >= len(res.conflicts_before):
         return None
-    if max((m.risk for m in res.run.moves), default=0.0) > delta:
+    if delta is not None and max((m.risk for m in res.run.moves), default=0.0) > delta:
         return None  # kept apart only by a move over the chance constraint: the conflicts stay reported
-    changed = res.plan != task.steps
+    if delta is None:
+        w, objective = carried.scenario.cost, OBJECTIVES[carried.scenario.planner.objective]
+        value = objective.value(sum(res.run.step_costs(len(res.plan), w)), res.run.makespan, w)
+        if value > (1.0 + MAX_RISE) * objective.value(cost_before, makespan_before, w):
+            return None  # a wait or detour that costs the robots their localisation: reported, not applied
+    changed = res.plan != task.steps or bool(res.detours)
     executed = res.run.step_costs(len(res.plan), carried.scenario.cost, delta)
     kept = replace(
         task,
         status=PlanStatus.SOLVED_SATISFICING,
         steps=res.plan,
-        action_names=action_names(res.plan) if changed else task.action_names,
+        action_names=action_names(res.plan) if res.plan != task.steps else task.action_names,
         step_costs=tuple(executed) if changed else task.step_costs,
         schedule=res.run.schedule,
-        pddl=None if changed else task.pddl,
+        pddl=None if res.plan != task.steps else task.pddl,
     )
     apart = KeptApart(
         conflicts_before=len(res.conflicts_before),
@@ -312,8 +472,26 @@ def keep_apart(
         cost_before=cost_before,
         makespan_before=makespan_before,
         runs=res.iterations,
+        detours=_detour_lengths(carried.clock.lib, res),
     )
-    return kept, dict(res.delays), apart
+    return Kept(kept, dict(res.delays), dict(res.detours), apart)
+
+
+def _detour_lengths(lib: MotionLibrary, res: Resolution) -> tuple[tuple[int, str, float], ...]:
+    """(plan step, 1-based; robot; metres the detour is longer than the roadmap's shortest
+    path between its ends) of each detour the run drove."""
+    out = []
+    for (k, robot), path in sorted(res.detours.items()):
+        if not any(m.step == k and tuple(m.motion.path) == path for m in res.run.moves):
+            continue  # the move started or ended elsewhere: driven as planned
+        shortest = lib.graph.path(path[0], path[-1]) or path
+        out.append((k + 1, robot, round(_length(lib, path) - _length(lib, shortest), 6)))
+    return tuple(out)
+
+
+def _length(lib: MotionLibrary, path: Sequence[int]) -> float:
+    points = lib.roadmap.nodes[list(path)]
+    return float(np.sum(np.hypot(*np.diff(points, axis=0).T)))
 
 
 def _sidesteps(planned: Plan, kept: Plan) -> tuple[tuple[str, str, str, str], ...]:

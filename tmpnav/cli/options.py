@@ -281,7 +281,18 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             help="The chance constraint: the largest probability of collision a move may have (its bound on "
             "touching a wall, from the robot's uncertainty along the path and the map's clearance; robots "
             "also keep a margin from each other for it). Moves over it are not offered to the planner, and "
-            "robots in each other's way are kept apart by waits and sidesteps where every move stays within it.",
+            "robots in each other's way are kept apart by waits, detours and sidesteps where every move "
+            "stays within it.",
+        ),
+        option(
+            "--keep-apart/--no-keep-apart",
+            default=None,
+            default_text=scenario_default("keep_apart", "true"),
+            help="Keep robots out of each other's way on the team's clock after planning: a move held back "
+            "(a wait), driven along another roadmap path around the other robot (a detour) or made through a "
+            "room no goal names (a sidestep), if that costs at most 1.5 times the plan's objective (under "
+            "--max-risk: if every move stays within it). --no-keep-apart: the plan as planned, its conflicts "
+            "reported (the paper's model).",
         ),
         option(
             "--pair-min-gain",
@@ -352,6 +363,7 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
         costs=kw["costs"],
         objective=kw["objective"],
         max_risk=kw["max_risk"],
+        keep_apart=kw.get("keep_apart"),
     )
     execution = Execution(
         cache_dir=kw["cache_dir"],

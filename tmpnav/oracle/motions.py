@@ -17,7 +17,7 @@ import numpy as np
 
 from tmpnav.belief.controls import path_controls
 from tmpnav.roadmap import RoadmapGraph
-from tmpnav.roadmap.graph import safe_weights
+from tmpnav.roadmap.graph import edge_margins, safe_weights
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
@@ -84,6 +84,8 @@ class MotionLibrary:
         self.graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius) if safe else None)
         self.visibility = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
         self._motions: OrderedDict[tuple[str, int, float, int], NominalMotion | None] = OrderedDict()
+        self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
+        self._margins: dict[float, np.ndarray] = {}
 
     def motion(self, robot: str, start: int, heading: float, goal: int) -> NominalMotion | None:
         """The nominal motion start -> goal, or None if the roadmap does not connect them."""
@@ -102,14 +104,36 @@ class MotionLibrary:
         """The sector reach (T+1, K) m of ``motion``'s footprint at its poses (``rows`` of them)."""
         return self.world.reach(self.scenario.robot(motion.robot).radius).of_cells(motion.cells[rows])
 
+    def edge_margins(self, radius: float) -> np.ndarray:
+        """Each roadmap edge's smallest footprint margin for a robot of ``radius`` (m), memoised."""
+        found = self._margins.get(radius)
+        if found is None:
+            found = self._margins[radius] = edge_margins(self.roadmap, self.world, radius)
+        return found
+
     def prepare(self, starts: list[int]) -> None:
         """Run Dijkstra from many start nodes at once."""
         self.graph.prepare(starts)
+
+    def along(self, robot: str, path: tuple[int, ...], heading: float) -> NominalMotion:
+        """The nominal motion along the roadmap nodes ``path`` (a detour, tmpnav.attachment.detours),
+        with the noise stream of the move from ``path[0]`` as every motion from there has."""
+        key = (robot, path, heading)
+        found = self._along.get(key)
+        if found is None:
+            found = self._along[key] = self._motion(robot, path, heading)
+            if len(self._along) > MAX_MOTIONS:
+                self._along.pop(next(iter(self._along)))
+        return found
 
     def _compute(self, robot: str, start: int, heading: float, goal: int) -> NominalMotion | None:
         path = self.graph.path(start, goal)
         if path is None:
             return None
+        return self._motion(robot, path, heading)
+
+    def _motion(self, robot: str, path: tuple[int, ...], heading: float) -> NominalMotion:
+        start = path[0]
         spec = self.scenario.robot(robot)
         models = self.scenario.models
         pc = path_controls(self.graph.points(path), heading, spec.speed, spec.turn_rate, models.dt)

@@ -179,7 +179,7 @@ def risk_section(report: PlanReport) -> JSON:
 
 
 def _kept_apart(report: PlanReport) -> JSON:
-    """The waits and sidesteps that kept the robots apart under the chance constraint (null: none)."""
+    """The waits, detours and sidesteps that kept the robots apart (null: none)."""
     apart = report.apart
     if apart is None:
         return None
@@ -188,6 +188,7 @@ def _kept_apart(report: PlanReport) -> JSON:
         "conflicts_left": apart.conflicts_left,
         "waits": [{"step": k, "seconds": number(v, 6)} for k, v in apart.waits],
         "sidesteps": [{"robot": r, "origin": o, "siding": via, "target": t} for r, o, via, t in apart.sidesteps],
+        "detours": [{"step": k, "robot": r, "longer_m": number(m, 6)} for k, r, m in apart.detours],
         "cost_before": number(apart.cost_before, 9),
         "makespan_before": number(apart.makespan_before, 6),
         "clock_runs": apart.runs,

@@ -103,6 +103,8 @@ def _search(report: PlanReport) -> list[str]:
         lines.append(line)
     if bound is not None:
         verdict = "proved optimal" if bound.proved_optimal else f"gap {100 * bound.gap:.2f}%"
+        if report.apart is not None:
+            verdict += " as planned, before the robots were kept apart"
         what = "lower bound on the objective" if objective_values(report).span_weight else "lower bound"
         lines.append(f"{what}: {_cost(bound.value)} ({bound.relaxation}); {verdict}")
     return lines
@@ -198,7 +200,10 @@ def _risk_lines(report: PlanReport) -> list[str]:
     if not conflicts:
         return [bound + "none", *_apart_lines(report)]
     first = conflicts[0]
-    hint = "--max-risk keeps robots apart" if delta is None else "left, no wait or sidestep clears them"
+    if not report.scenario.planner.keep_apart:
+        hint = "--keep-apart keeps robots apart"
+    else:
+        hint = "no wait or detour clears them" if delta is None else "no wait, detour or sidestep clears them"
     return [
         f"{bound}{len(conflicts)}, the first:",
         f" {' and '.join(first.robots)} at {first.t_from:.1f} s, {first.closest_distance:.2f} m apart, "
@@ -215,7 +220,10 @@ def _apart_lines(report: PlanReport) -> list[str]:
     waits = [f"step {k} +{s:.1f} s" for k, s in apart.waits[:2]]
     if len(apart.waits) > 2:
         waits.append(f"{len(apart.waits) - 2} more")
-    done = [_plural(len(apart.waits), "wait") + (f" ({', '.join(waits)})" if waits else "")]
+    done = [_plural(len(apart.waits), "wait") + (f" ({', '.join(waits)})" if waits else "")] if waits else []
+    done += [f"a detour: {r} in step {k} (+{m:.1f} m)" for k, r, m in apart.detours[:2]]
+    if len(apart.detours) > 2:
+        done.append(f"{len(apart.detours) - 2} more detours")
     done += [f"a sidestep: {r} {o} -> {via} -> {t}" for r, o, via, t in apart.sidesteps[:2]]
     if len(apart.sidesteps) > 2:
         done.append(f"{len(apart.sidesteps) - 2} more sidesteps")

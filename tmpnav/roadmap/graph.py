@@ -28,6 +28,14 @@ def safe_weights(roadmap: Roadmap, world: World, radius: float) -> np.ndarray:
     that hugs a wall leaves its robot no room for its uncertainty: its collision bound is near 1
     whatever the belief (docs/models.md, "Collision bound"), so the shortest path is the wrong
     one to bound; a detour of a few per cent through the free middle makes the bound useful."""
+    margin = edge_margins(roadmap, world, radius)
+    g = (np.clip(SAFE_MARGIN - margin, 0.0, SAFE_MARGIN) / SAFE_MARGIN) ** 2
+    return np.asarray(roadmap.weights * (1.0 + SAFE_PENALTY * g), dtype=float)
+
+
+def edge_margins(roadmap: Roadmap, world: World, radius: float) -> np.ndarray:
+    """Each edge's smallest footprint margin (m; World.margins of a disc of ``radius``) at points
+    a grid cell apart along it."""
     a, b = roadmap.nodes[roadmap.edges[:, 0]], roadmap.nodes[roadmap.edges[:, 1]]
     length = np.hypot(*(b - a).T)
     samples = max(2, int(np.ceil(length.max(initial=0.0) / world.grid.resolution)) + 1)
@@ -37,8 +45,7 @@ def safe_weights(roadmap: Roadmap, world: World, radius: float) -> np.ndarray:
         e = slice(lo, lo + 2048)
         points = a[e, None, :] + s[None, :, None] * (b[e] - a[e])[:, None, :]
         margin[e] = world.margins(points, radius).min(axis=1)
-    g = (np.clip(SAFE_MARGIN - margin, 0.0, SAFE_MARGIN) / SAFE_MARGIN) ** 2
-    return np.asarray(roadmap.weights * (1.0 + SAFE_PENALTY * g), dtype=float)
+    return margin
 
 
 class RoadmapGraph:

@@ -381,8 +381,13 @@ PLANNER = Section(
         ),
         "max_risk": Field(
             Number(None, minimum=0.0, exclusive_minimum=True, maximum=1.0),
-            "the chance constraint: the largest probability of collision a move may have (each robot's bound on touching a wall along the move, from its covariance at every step and the map's clearance; also the margin robots keep from each other); moves over it are not offered to the planner, and robots in each other's way are kept apart by waits and sidesteps where that keeps every move within it; omit for no constraint (the paper's model)",
+            "the chance constraint: the largest probability of collision a move may have (each robot's bound on touching a wall along the move, from its covariance at every step and the map's clearance; also the margin robots keep from each other); moves over it are not offered to the planner, and robots in each other's way are kept apart (keep_apart) where that keeps every move within it; omit for no constraint (the paper's model)",
             default=None,
+        ),
+        "keep_apart": Field(
+            Flag(),
+            "robots in each other's way on the team's clock (closer than their radii plus a margin for their uncertainty) are kept apart after planning: a move held back (a wait), driven along another roadmap path around the other robot (a detour) or made through a room no goal names (a sidestep), if that raises the plan's objective by at most half (under max_risk: if every move stays within it); false: the plan as planned, its conflicts reported (the paper's model)",
+            default=True,
         ),
         "costs": Field(
             Choice(choices=COSTS_CHOICES),
