@@ -213,7 +213,7 @@ def _risk_lines(report: PlanReport) -> list[str]:
 
 
 def _apart_lines(report: PlanReport) -> list[str]:
-    """What kept the robots apart under the chance constraint, and what it cost."""
+    """What kept the robots apart, and what it cost against the plan as planned (run on the clock)."""
     apart = report.apart
     if apart is None:
         return []
@@ -227,11 +227,14 @@ def _apart_lines(report: PlanReport) -> list[str]:
     done += [f"a sidestep: {r} {o} -> {via} -> {t}" for r, o, via, t in apart.sidesteps[:2]]
     if len(apart.sidesteps) > 2:
         done.append(f"{len(apart.sidesteps) - 2} more sidesteps")
-    return [
-        f"kept apart: {apart.conflicts_before} -> {apart.conflicts_left} conflicts by {'; '.join(done)};",
-        f" executed cost {report.resimulated_cost:.3f} (as planned {apart.cost_before:.3f}), makespan "
-        f"{report.schedule.makespan:.1f} s (as planned {apart.makespan_before:.1f} s)",
-    ]
+    what = f"kept apart: {apart.conflicts_before} -> {apart.conflicts_left} conflicts by {'; '.join(done)}"
+    cost = (
+        f"cost {report.resimulated_cost - apart.cost_before:+.3f}, "
+        f"makespan {report.schedule.makespan - apart.makespan_before:+.1f} s"
+    )
+    if len(what) + len(cost) + 2 <= 100:
+        return [f"{what}; {cost}"]
+    return [f"{what};", f" {cost}"]
 
 
 def _plural(n: int, word: str) -> str:
