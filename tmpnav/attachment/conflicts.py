@@ -52,7 +52,6 @@ waits only), then run ``res.plan`` with ``res.delays`` (``CarriedCosts.replay``,
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
@@ -60,10 +59,11 @@ import numpy as np
 
 from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
-from tmpnav.attachment.detours import Drive, Obstacle, detour
+from tmpnav.attachment.detours import REACH, Drive, Obstacle, detour, near_nodes
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, margin_factor, position_sigma
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.results import KeptApart, Schedule, TaskResult, TimedMove
+from tmpnav.roadmap.graph import segment_margins
 from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Step
 from tmpnav.task.stage import action_names
@@ -89,7 +89,7 @@ MAX_RISE = 0.5
 #: without a chance constraint, the clock runs after which no more sidesteps are tried: the
 #: swaps of the shipped configs resolve in 14-15 runs (0.3-0.5 s), while the sidestep search
 #: of robots that have lost track of where they are runs 83-143 times (7-17 s) and clears nothing
-RUN_BUDGET = 40
+RUN_BUDGET = 20
 
 
 @dataclass(frozen=True)
@@ -297,16 +297,20 @@ def _detoured(
 
 
 def _as_clear(lib: MotionLibrary, path: Sequence[int], radius: float) -> np.ndarray:
-    """The roadmap edges a detour of ``path`` may use: those whose footprint clears the walls
-    (margin at least 0), or at least as clear as the tightest edge of ``path``. A stricter rule
-    (as clear as ``path`` everywhere) leaves the paper's swap without a detour: its door frames
-    are 0.18 m from the planned path and 0.04 m from the lane that passes."""
-    margins = lib.edge_margins(radius)
-    edges = lib.roadmap.edges
-    index = {(int(a), int(b)): k for k, (a, b) in enumerate(edges.tolist())}
-    used = [index.get((a, b), index.get((b, a))) for a, b in itertools.pairwise(path)]
-    tightest = min((float(margins[k]) for k in used if k is not None), default=-np.inf)
-    return np.asarray(margins >= min(tightest, 0.0) - 1e-9)
+    """The roadmap edges a detour of ``path`` may use: those near it (within the search's
+    REACH) whose footprint clears the walls (margin at least 0), or is at least as clear as the
+    tightest segment of ``path``. A stricter rule (as clear as ``path`` everywhere) leaves the
+    paper's swap without a detour: its door frames are 0.18 m from the planned path and 0.04 m
+    from the lane that passes."""
+    nodes, edges = lib.roadmap.nodes, lib.roadmap.edges
+    points = nodes[list(path)]
+    tightest = float(segment_margins(points[:-1], points[1:], lib.world, radius).min(initial=np.inf))
+    near = near_nodes(nodes, points, REACH)
+    candidates = near[edges[:, 0]] & near[edges[:, 1]]
+    ok = np.zeros(edges.shape[0], dtype=bool)
+    a, b = nodes[edges[candidates, 0]], nodes[edges[candidates, 1]]
+    ok[candidates] = segment_margins(a, b, lib.world, radius) >= min(tightest, 0.0) - 1e-9
+    return ok
 
 
 def _ranker(clock: TeamClock) -> Callable[[Resolution], tuple[int, float]]:

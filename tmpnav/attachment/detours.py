@@ -109,7 +109,7 @@ def detour(
     when None)."""
     nodes = np.ascontiguousarray(roadmap.nodes, dtype=np.float64)
     start, goal = int(path[0]), int(path[-1])
-    near = _near(nodes, nodes[list(path)], reach)
+    near = near_nodes(nodes, nodes[list(path)], reach)
     near[start] = near[goal] = True
     indptr, indices = _adjacency(roadmap, near, edges)
     horizon = t_start + int(STRETCH * original_steps) + SLACK
@@ -254,7 +254,7 @@ def _search(
     return empty
 
 
-def _near(nodes: np.ndarray, path_xy: np.ndarray, reach: float) -> np.ndarray:
+def near_nodes(nodes: np.ndarray, path_xy: np.ndarray, reach: float) -> np.ndarray:
     """Nodes within ``reach`` of the polyline ``path_xy``."""
     if path_xy.shape[0] == 1:
         return np.asarray(np.hypot(*(nodes - path_xy[0]).T) <= reach)

@@ -17,7 +17,7 @@ import numpy as np
 
 from tmpnav.belief.controls import path_controls
 from tmpnav.roadmap import RoadmapGraph
-from tmpnav.roadmap.graph import edge_margins, safe_weights
+from tmpnav.roadmap.graph import safe_weights
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
@@ -85,7 +85,6 @@ class MotionLibrary:
         self.visibility = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
         self._motions: OrderedDict[tuple[str, int, float, int], NominalMotion | None] = OrderedDict()
         self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
-        self._margins: dict[float, np.ndarray] = {}
 
     def motion(self, robot: str, start: int, heading: float, goal: int) -> NominalMotion | None:
         """The nominal motion start -> goal, or None if the roadmap does not connect them."""
@@ -103,13 +102,6 @@ class MotionLibrary:
     def reach(self, motion: NominalMotion, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
         """The sector reach (T+1, K) m of ``motion``'s footprint at its poses (``rows`` of them)."""
         return self.world.reach(self.scenario.robot(motion.robot).radius).of_cells(motion.cells[rows])
-
-    def edge_margins(self, radius: float) -> np.ndarray:
-        """Each roadmap edge's smallest footprint margin for a robot of ``radius`` (m), memoised."""
-        found = self._margins.get(radius)
-        if found is None:
-            found = self._margins[radius] = edge_margins(self.roadmap, self.world, radius)
-        return found
 
     def prepare(self, starts: list[int]) -> None:
         """Run Dijkstra from many start nodes at once."""

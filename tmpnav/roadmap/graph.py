@@ -36,7 +36,12 @@ def safe_weights(roadmap: Roadmap, world: World, radius: float) -> np.ndarray:
 def edge_margins(roadmap: Roadmap, world: World, radius: float) -> np.ndarray:
     """Each edge's smallest footprint margin (m; World.margins of a disc of ``radius``) at points
     a grid cell apart along it."""
-    a, b = roadmap.nodes[roadmap.edges[:, 0]], roadmap.nodes[roadmap.edges[:, 1]]
+    return segment_margins(roadmap.nodes[roadmap.edges[:, 0]], roadmap.nodes[roadmap.edges[:, 1]], world, radius)
+
+
+def segment_margins(a: np.ndarray, b: np.ndarray, world: World, radius: float) -> np.ndarray:
+    """The smallest footprint margin (m) along each segment a[k] -> b[k] ((E, 2) each), at points
+    a grid cell apart."""
     length = np.hypot(*(b - a).T)
     samples = max(2, int(np.ceil(length.max(initial=0.0) / world.grid.resolution)) + 1)
     s = np.linspace(0.0, 1.0, samples)
