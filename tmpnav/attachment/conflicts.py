@@ -1,4 +1,4 @@
-"""Robots in each other's way: conflicts of a plan's schedule resolved by waits.
+"""Robots in each other's way: conflicts of a plan's schedule resolved by waits, detours and sidesteps.
 
 A plan's schedule (:mod:`tmpnav.attachment.clock`) moves every robot at once along the paths
 the oracle chose for it, without looking at the other robots. Where two robots come closer
@@ -29,25 +29,26 @@ Phillips and Likhachev's safe-interval path planning, ICRA 2011):
    branch is run and checked again; depth first, until no conflict is left or after
    ``max_runs`` runs.
 
-Why these and not a search over paths: the roadmap paths are the oracle's, with beliefs and
-costs that the task planner optimised; replanning paths around each other would change both.
-Waits at the start of moves keep every motion as costed and only shift it in time, so the
-search space is small (one delay per plan step) and each node is one run of the clock.
-Conflicts no wait can resolve (two robots whose paths meet while one of them stands at its
-start, two that swap rooms along one lane, partners of one paired move, robots that end their
-plans closer than their margins) are returned in :attr:`Resolution.conflicts_left`, never
-hidden.
+Why waits first: the roadmap paths are the oracle's, with beliefs and costs that the task
+planner optimised; waits at the start of moves keep every motion as costed and only shift it in
+time, so the search space is small (one delay per plan step) and each node is one run of the
+clock. Conflicts no wait can resolve (two robots whose paths meet while one of them stands at
+its start, two that swap rooms along one lane, partners of one paired move, robots that end
+their plans closer than their margins) go on to :func:`resolve_with_detours`: one robot drives
+the move along another roadmap path around the others' runs (A* in space and time,
+:mod:`tmpnav.attachment.detours`); the same moves, another motion, costed as executed.
 
-:func:`resolve_with_sidesteps` goes one step further where waits leave a conflict: one robot
-of it makes its move through a siding, a room no goal names, so that the other can pass
-(push-and-swap's move; Luna and Bekris, IJCAI 2011). That changes the plan and its cost (the
-sidestep's motion is the oracle's, and costed as executed, but the task planner did not
-choose it), so it is a separate function, and its :attr:`Resolution.plan` is the plan the
-delays belong to.
+:func:`resolve_with_sidesteps` goes one step further where waits leave a conflict: beside the
+detours, one robot of it makes its move through a siding, a room no goal names, so that the
+other can pass (push-and-swap's move; Luna and Bekris, IJCAI 2011). That changes the plan and
+its cost (the sidestep's motion is the oracle's, and costed as executed, but the task planner
+did not choose it), so its :attr:`Resolution.plan` is the plan the delays belong to. Whatever
+is left is returned in :attr:`Resolution.conflicts_left`, never hidden.
 
 Use: ``res = resolve_with_sidesteps(carried, task.steps)`` (or :func:`resolve_conflicts` for
-waits only), then run ``res.plan`` with ``res.delays`` (``CarriedCosts.replay``,
-``resimulate``); ``res.run`` is that run already, recorded.
+waits only), then run ``res.plan`` with ``res.delays`` and ``res.detours``
+(``CarriedCosts.replay``, ``resimulate``); ``res.run`` is that run already, recorded.
+:func:`keep_apart` applies it to a plan, as ``tmpnav plan`` does by default.
 """
 
 from __future__ import annotations
