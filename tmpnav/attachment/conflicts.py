@@ -53,7 +53,7 @@ waits only), then run ``res.plan`` with ``res.delays`` and ``res.detours``
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -242,18 +242,41 @@ def resolve_with_detours(
     for _ in range(rounds):
         if not best.conflicts_left:
             break
-        found = []
-        for detours in _detoured(clock, best, radii, risk):
-            try:
-                found.append(resolve_conflicts(costs, best.plan, radii, delta, max_runs, detours))
-            except Unreachable:
-                continue
-            runs += found[-1].iterations
-        better = min(found, key=rank, default=None)
-        if better is None or rank(better)[0] >= len(best.conflicts_left):
+        tries = ((best.plan, detours) for detours in _detoured(clock, best, radii, risk))
+        better, spent = _next_best(costs, best, tries, rank, radii, delta, max_runs)
+        runs += spent
+        if better is None:
             break
         best = better
     return replace(best, iterations=runs, conflicts_before=res.conflicts_before)
+
+
+def _next_best(
+    costs: TeamClock | CarriedCosts,
+    best: Resolution,
+    tries: Iterable[tuple[Plan, Mapping[tuple[int, str], tuple[int, ...]] | None]],
+    rank: Callable[[Resolution], tuple[int, float]],
+    radii: Mapping[str, float] | None,
+    delta: float | None,
+    max_runs: int,
+    budget: int | None = None,
+) -> tuple[Resolution | None, int]:
+    """Each (plan, detours) of ``tries`` with its waits searched; the best of them by ``rank`` if
+    it leaves fewer conflicts than ``best`` (else None), and the clock runs made. No try starts
+    once ``budget`` runs are made."""
+    found, runs = [], 0
+    for plan, detours in tries:
+        if budget is not None and runs >= budget:
+            break
+        try:
+            found.append(resolve_conflicts(costs, plan, radii, delta, max_runs, detours))
+        except Unreachable:  # a wait changed a belief so much that a goal cannot be reached
+            continue
+        runs += found[-1].iterations
+    better = min(found, key=rank, default=None)
+    if better is None or rank(better)[0] >= len(best.conflicts_left):
+        return None, runs
+    return better, runs
 
 
 def _detoured(
@@ -362,20 +385,18 @@ def resolve_with_sidesteps(
     detoured = resolve_with_detours(costs, waits, radii, delta, max_runs) if detours else waits
     best, runs = waits, detoured.iterations
     tried: set[Plan] = {best.plan}
-    while best.conflicts_left:
-        found = []
-        for candidate in _sidestepped(clock, best, sidings):
-            if budget is not None and runs >= budget:
-                break
+
+    def untried(res: Resolution) -> Iterator[tuple[Plan, None]]:
+        for candidate in _sidestepped(clock, res, sidings):
             if candidate not in tried:
                 tried.add(candidate)
-                try:
-                    found.append(resolve_conflicts(costs, candidate, radii, delta, max_runs))
-                except Unreachable:
-                    continue
-                runs += found[-1].iterations
-        better = min(found, key=rank, default=None)
-        if better is None or rank(better)[0] >= len(best.conflicts_left):
+                yield candidate, None
+
+    while best.conflicts_left:
+        left = None if budget is None else budget - runs
+        better, spent = _next_best(costs, best, untried(best), rank, radii, delta, max_runs, left)
+        runs += spent
+        if better is None:
             break
         best = better
     best = min((detoured, best), key=rank)  # a tie goes to the detour: it keeps the plan's steps
