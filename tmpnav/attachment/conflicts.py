@@ -479,16 +479,16 @@ def keep_apart(
         value = objective.value(sum(res.run.step_costs(len(res.plan), w)), res.run.makespan, w)
         if value > (1.0 + MAX_RISE) * objective.value(cost_before, makespan_before, w):
             return None  # a wait or detour that costs the robots their localisation: reported, not applied
-    changed = res.plan != task.steps or bool(res.detours)
+    replanned = res.plan != task.steps  # sidesteps or a split pair: steps the planner never saw
     executed = res.run.step_costs(len(res.plan), carried.scenario.cost, delta)
     kept = replace(
         task,
         status=PlanStatus.SOLVED_SATISFICING,
         steps=res.plan,
-        action_names=action_names(res.plan) if res.plan != task.steps else task.action_names,
-        step_costs=tuple(executed) if changed else task.step_costs,
+        action_names=action_names(res.plan) if replanned else task.action_names,
+        step_costs=tuple(executed) if replanned or res.detours else task.step_costs,
         schedule=res.run.schedule,
-        pddl=None if res.plan != task.steps else task.pddl,
+        pddl=None if replanned else task.pddl,
     )
     apart = KeptApart(
         conflicts_before=len(res.conflicts_before),

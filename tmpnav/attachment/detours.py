@@ -208,7 +208,6 @@ def _search(
     st_node = [start]
     st_parent = [-1]
     st_heading = [heading0]
-    st_t = [t_start]
     h0 = math.ceil(math.hypot(nodes[start, 0] - gx, nodes[start, 1] - gy) / per_step - 1e-9)
     frontier = [(t_start + h0, t_start, 0)]  # (f, t, state index)
     seen = {np.int64(0): True}
@@ -249,7 +248,6 @@ def _search(
                 st_node.append(nxt)
                 st_parent.append(s)
                 st_heading.append(direction)
-                st_t.append(t_next)
                 heapq.heappush(frontier, (t_next + h, t_next, len(st_node) - 1))
     return empty
 
