@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import Future, wait
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, TypeVar
+from typing import TYPE_CHECKING, Literal, TypeVar
 
 from tmpnav.errors import (
     PlannerCrashError,
@@ -49,6 +49,34 @@ EXTRA_ENGINES: dict[str, tuple[str, str, str]] = {
         "ENHSP uniform-cost search (WA* with a blind heuristic): optimal",
     ),
 }
+
+
+@dataclass(frozen=True)
+class EnhspEngine:
+    """One of up_enhsp's ENHSP engines as its class runs ENHSP: its name and the arguments its
+    ``_get_cmd`` puts after the PDDL files (tests/task/test_solve_text.py checks them against
+    up_enhsp's classes). Known here so that a run of tmpnav's own PDDL text in the run's JVM
+    does not import unified-planning, whose engines module imports ConfigSpace and
+    scipy.stats: 0.6-1 s of every fresh process."""
+
+    name: str  # up_enhsp's ``name`` of the engine (the summary's engine)
+    args: tuple[str, ...]  # ENHSP's search arguments
+    optimal: bool  # the engine ``satisfies`` OptimalityGuarantee.SOLVED_OPTIMALLY
+
+    def command(self, domain: str, problem: str, plan: str) -> list[str]:
+        """ENHSP's command line, as up_enhsp writes it: ``java -jar enhsp.jar`` and the arguments."""
+        return ["java", "-jar", enhsp_jvm.enhsp_jar(), "-o", domain, "-f", problem, "-sp", plan, *self.args]
+
+
+#: the ENHSP engines by the names unified-planning registers them under (enhsp-blind: tmpnav's)
+ENHSP_ENGINES: dict[str, EnhspEngine] = {
+    "enhsp": EnhspEngine("enhsp", ("-npm", "-h", "hadd", "-s", "gbfs"), optimal=False),
+    "enhsp-opt": EnhspEngine("OPT-enhsp", ("-s", "WAStar", "-h", "hrmax", "-npm"), optimal=True),
+    "enhsp-blind": EnhspEngine(
+        "BLIND-enhsp", ("-s", "WAStar", "-h", "blind", "-ties", "larger_g", "-npm"), optimal=True
+    ),
+}
+
 
 #: JVM options for ENHSP's short runs: the C1 compiler alone starts faster, which saves
 #: 0.2-0.3 s a run (measured in benchmarks/); TMPNAV_JAVA_OPTIONS replaces them.
@@ -155,6 +183,8 @@ def engine_class(planner: str) -> type[Engine]:
 
 def reads_pddl_text(planner: str) -> bool:
     """Whether ``planner`` is an ENHSP engine, which can be given tmpnav's own PDDL text."""
+    if planner in ENHSP_ENGINES:
+        return True
     env = environment()
     if planner not in env.factory.engines:
         return False
@@ -218,53 +248,62 @@ def solve(problem: Problem, planner: str, timeout: float) -> SolveResult:
     except FileNotFoundError as err:
         raise PlannerUnavailableError(f"planner {planner!r} could not start: {err}") from None
     log = "\n".join(m.message for m in (result.log_messages or []) if "JAVA_TOOL_OPTIONS" not in m.message)
-    _raise_on_failure(planner, result.status, result.plan is None, timeout, _tail(log))
+    outcome, status = _outcome(result.status)
+    _raise_on_failure(planner, outcome, result.plan is None, timeout, _tail(log), status)
     actions = tuple((a.action.name, tuple(str(p) for p in a.actual_parameters)) for a in result.plan.actions)
-    return SolveResult(_plan_status(result.status), actions, result.engine_name, _tail(log), result.plan)
+    return SolveResult(_plan_status(outcome), actions, result.engine_name, _tail(log), result.plan)
 
 
 def solve_text(domain: str, problem: str, planner: str, timeout: float) -> SolveResult:
     """Run the ENHSP engine ``planner`` on PDDL text within ``timeout`` seconds.
 
-    The engine is unified-planning's own (up_enhsp's class, registered under ``planner``):
-    its command line and its reading of the result; only the PDDL writing is tmpnav's
-    (:mod:`tmpnav.task.pddl_text`). ENHSP runs in the run's one JVM
-    (:mod:`tmpnav.task.enhsp_jvm`) or, where that cannot start or ``TMPNAV_ENHSP=process``,
-    as up_enhsp runs it: a process per solve (``run_command``: a process group, killed at
-    the time limit). Plan actions come back as (name, parameters) in ENHSP's spelling.
+    The engine is one of up_enhsp's: its command line and the status it gives the result;
+    only the PDDL writing is tmpnav's (:mod:`tmpnav.task.pddl_text`). ENHSP runs in the run's
+    one JVM (:mod:`tmpnav.task.enhsp_jvm`) with the arguments of :data:`ENHSP_ENGINES`, or,
+    where that cannot start or ``TMPNAV_ENHSP=process``, as up_enhsp runs it: its engine
+    class's command, a process per solve (``run_command``: a process group, killed at the
+    time limit). Plan actions come back as (name, parameters) in ENHSP's spelling.
     """
-    from unified_planning.engines import OptimalityGuarantee
-    from unified_planning.engines import PlanGenerationResultStatus as St
-
-    engine_cls = engine_class(planner)
-    engine = engine_cls()
     # before java_options(): a JVM starting now would read them from the environment too
     in_jvm = enhsp_jvm.usable(_jvm_options())
+    known = ENHSP_ENGINES.get(planner) if in_jvm else None
+    engine = None
+    if known is None:  # unified-planning's engine class (raises where unknown, or without Java)
+        from unified_planning.engines import OptimalityGuarantee
+
+        engine_cls = engine_class(planner)
+        engine = engine_cls()
+        name, optimal = engine.name, engine_cls.satisfies(OptimalityGuarantee.SOLVED_OPTIMALLY)
+    else:
+        name, optimal = known.name, known.optimal
     with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp:
         d, p, plan_file = (os.path.join(tmp, n) for n in ("domain.pddl", "problem.pddl", "plan.txt"))
         for path, text in ((d, domain), (p, problem)):
             with open(path, "w", encoding="utf-8") as f:
                 f.write(text)
-        cmd = engine._get_cmd(d, p, plan_file)
-        run = _run_in_jvm if in_jvm else _run_process
-        timed_out, failed, log = run(engine, planner, cmd, timeout)
+        if engine is None:
+            assert known is not None
+            timed_out, failed, log = _run_in_jvm(planner, known.command(d, p, plan_file), timeout)
+        else:
+            cmd = engine._get_cmd(d, p, plan_file)
+            timed_out, failed, log = (
+                _run_in_jvm(planner, cmd, timeout) if in_jvm else _run_process(engine, planner, cmd, timeout)
+            )
         plan_text = None
         if os.path.isfile(plan_file):
             with open(plan_file, encoding="utf-8-sig") as f:
                 plan_text = f.read()
     if timed_out:
-        status = St.TIMEOUT
+        outcome: Outcome = "timeout"
     elif failed:
-        status = St.INTERNAL_ERROR
+        outcome = "crashed"
     elif plan_text is None:
-        status = St.UNSOLVABLE_PROVEN
-    elif engine_cls.satisfies(OptimalityGuarantee.SOLVED_OPTIMALLY):
-        status = St.SOLVED_OPTIMALLY
+        outcome = "unsolvable"
     else:
-        status = St.SOLVED_SATISFICING
-    _raise_on_failure(planner, status, plan_text is None, timeout, _tail(log))
+        outcome = "optimal" if optimal else "satisficing"
+    _raise_on_failure(planner, outcome, plan_text is None, timeout, _tail(log))
     assert plan_text is not None
-    return SolveResult(_plan_status(status), _plan_actions(plan_text), engine.name, _tail(log))
+    return SolveResult(_plan_status(outcome), _plan_actions(plan_text), name, _tail(log))
 
 
 #: seconds :func:`side_by_side` keeps stopping searches after a signal, and between its stops
@@ -345,11 +384,9 @@ def _run_process(engine: Engine, planner: str, cmd: list[str], timeout: float) -
     return timed_out and retval != 0, retval != 0, log
 
 
-def _run_in_jvm(engine: Engine, planner: str, cmd: list[str], timeout: float) -> tuple[bool, bool, str]:
+def _run_in_jvm(planner: str, cmd: list[str], timeout: float) -> tuple[bool, bool, str]:
     """ENHSP's ``main`` in the run's JVM, with up_enhsp's arguments: (timed out, failed, log)."""
-    from up_enhsp.enhsp_planner import ENHSP_JAR
-
-    jar = cmd.index(ENHSP_JAR)  # up_enhsp's command is java -jar <jar> <ENHSP's arguments>
+    jar = cmd.index("-jar") + 1  # up_enhsp's command is java -jar <jar> <ENHSP's arguments>
     run = enhsp_jvm.run(cmd[jar + 1 :], timeout)
     return run.timed_out, run.error is not None, run.error or ""
 
@@ -369,29 +406,46 @@ def _tail(log: str) -> str:
     return " | ".join(line.strip() for line in log.strip().splitlines()[-3:])
 
 
-def _plan_status(status: object) -> PlanStatus:
+#: how a solve ended: unified-planning's PlanGenerationResultStatus, in tmpnav's words
+Outcome = Literal["optimal", "satisficing", "timeout", "unsolvable", "unsupported", "crashed"]
+
+
+def _outcome(status: object) -> tuple[Outcome, str]:
+    """A unified-planning result status as an :data:`Outcome`, and the status's own name."""
     from unified_planning.engines import PlanGenerationResultStatus as St
 
-    return PlanStatus.SOLVED_OPTIMALLY if status == St.SOLVED_OPTIMALLY else PlanStatus.SOLVED_SATISFICING
+    outcomes: dict[object, Outcome] = {
+        St.SOLVED_OPTIMALLY: "optimal",
+        St.SOLVED_SATISFICING: "satisficing",
+        St.TIMEOUT: "timeout",
+        St.UNSOLVABLE_PROVEN: "unsolvable",
+        St.UNSOLVABLE_INCOMPLETELY: "unsolvable",
+        St.UNSUPPORTED_PROBLEM: "unsupported",
+    }
+    return outcomes.get(status, "crashed"), getattr(status, "name", str(status))
 
 
-def _raise_on_failure(planner: str, status: object, no_plan: bool, timeout: float, tail: str) -> None:
-    """Turn a result status that is not a plan into its typed error."""
-    from unified_planning.engines import PlanGenerationResultStatus as St
+def _plan_status(outcome: Outcome) -> PlanStatus:
+    return PlanStatus.SOLVED_OPTIMALLY if outcome == "optimal" else PlanStatus.SOLVED_SATISFICING
 
-    if status == St.TIMEOUT:
+
+def _raise_on_failure(
+    planner: str, outcome: Outcome, no_plan: bool, timeout: float, tail: str, status: str = "INTERNAL_ERROR"
+) -> None:
+    """Turn an outcome that is not a plan into its typed error (``status``: the engine's own
+    name of it, for the message of a crash)."""
+    if outcome == "timeout":
         raise PlannerTimeoutError(
             f"planner {planner!r} found no plan within the time limit of {timeout:g} s "
             "(--planner-timeout, planner.timeout)"
         )
-    if status in (St.UNSOLVABLE_PROVEN, St.UNSOLVABLE_INCOMPLETELY):
+    if outcome == "unsolvable":
         raise UnsolvableError(
             f"planner {planner!r} found no plan: the goals cannot be reached with the moves the roadmap allows "
             "(a goal room that its robot cannot reach?)"
         )
-    if status == St.UNSUPPORTED_PROBLEM:
+    if outcome == "unsupported":
         raise PlannerUnavailableError(f"planner {planner!r} does not support this problem")
-    if status not in (St.SOLVED_OPTIMALLY, St.SOLVED_SATISFICING) or no_plan:
+    if outcome not in ("optimal", "satisficing") or no_plan:
         detail = f": {tail}" if tail else ""
-        name = getattr(status, "name", str(status))
-        raise PlannerCrashError(f"planner {planner!r} failed with status {name}{detail}")
+        raise PlannerCrashError(f"planner {planner!r} failed with status {status}{detail}")
