@@ -67,7 +67,7 @@ def trace_batches() -> None:
         spent = {k: v - before.get(k, 0.0) for k, v in self.times.seconds.items() if v - before.get(k, 0.0) > 0.01}
         parts = ", ".join(f"{k} {v:.2f}" for k, v in spent.items())
         sizes = ", ".join(f"{len(h.robots)}r/{len(h.rooms)}x" for h in hoods)
-        label = self.watch.label or self.model.costs
+        label = self.model.costs
         counts = f"{self.stats.subproblems} solved, {self.stats.reused} reused"
         print(
             f"    batch [{label}] {sizes}: {time.perf_counter() - t0:.2f} s ({parts}), improved {out}; {counts}",

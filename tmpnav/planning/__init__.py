@@ -7,7 +7,7 @@
                    table (:mod:`~tmpnav.planning.anytime`).
 ``--costs carried`` ``exact``: the belief space unfolded and searched by ENHSP
                    (:mod:`~tmpnav.planning.unfolded`); ``anytime``: the same search as above,
-                   every plan costed with carried-over beliefs, in two phases
+                   every plan costed with carried-over beliefs
                    (:mod:`~tmpnav.planning.anytime`).
 =================  ======================================================================
 

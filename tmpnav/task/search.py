@@ -59,10 +59,9 @@ class SearchRun:
 
     times: StageTimes = field(default_factory=StageTimes)
     progress: SearchProgress | None = None
-    label: str = ""  # added to every event told (the phase of a search in two phases)
     bound: float | None = None  # the lower bound told with every event
-    #: ENHSP's plans of the sub-problems solved so far, by their PDDL text (domain, problem):
-    #: shared by the phases of a run (``replace`` keeps the same dict), see :meth:`AnytimeSearch._solve`
+    #: ENHSP's plans of the sub-problems solved so far, by their PDDL text (domain, problem)
+    #: (``replace`` keeps the same dict), see :meth:`AnytimeSearch._known`
     solved: dict[tuple[str, str], list[Step] | None] = field(default_factory=dict, compare=False, hash=False)
 
     def bounded(self, bound: float | None) -> SearchRun:
@@ -70,9 +69,9 @@ class SearchRun:
         return replace(self, bound=bound)
 
     def note(self, best: float, what: str) -> None:
-        """Tell of an event: the run's time (one clock for all its phases), the best cost, the bound."""
+        """Tell of an event: the run's time (the run's one clock), the best cost, the bound."""
         if self.progress is not None:
-            self.progress(self.times.elapsed(), best, self.bound, f"{what}; {self.label}" if self.label else what)
+            self.progress(self.times.elapsed(), best, self.bound, what)
 
 
 @dataclass(frozen=True)
@@ -377,10 +376,9 @@ class AnytimeSearch:
         optimal search is deterministic, so its plan is the one it gave before, and running it
         again cannot pay. The text holds every cost, the goals, the ends and the clocks, so a
         neighbourhood met again on an unchanged part of the plan (same robots, rooms, beliefs
-        at its start and, with time priced, the same clocks) is such a sub-problem -- whichever
-        phase met it first: with carried costs, a sub-problem whose robots start from the
-        canonical states (the plan's first moves) is the table phase's one. A sub-problem that
-        found no plan in time is not remembered (a longer timeout might find one)."""
+        at its start and, with time priced, the same clocks) is such a sub-problem. A
+        sub-problem that found no plan in time is not remembered (a longer timeout might find
+        one)."""
         fresh, known = [], []
         for sub in subs:
             plan = self.watch.solved.get(sub.task.texts())
