@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 
 from tests.attachment.support import carried_problem, every_plan
 from tests.belief.support import models, random_case
-from tmpnav.attachment.floors import bearing_information, heading_floor, motion_floors, sigma_rate
+from tmpnav.attachment.floors import _Walks, bearing_information, heading_floor, motion_floors, sigma_rate
+from tmpnav.belief.controls import path_controls
 from tmpnav.belief.rollout import Rollout, propagate_rollout
 from tmpnav.task.bound import lower_bound
 from tmpnav.types import Belief
@@ -25,15 +26,21 @@ from tmpnav.types import Belief
 )
 def test_every_move_of_every_schedule_costs_at_least_its_floor(config: str, rooms: tuple[str, ...]) -> None:
     scenario, _, carried = carried_problem(config, rooms, 2)
-    floors = motion_floors(scenario, carried.lib.roadmap, carried.start_location, scenario.goals)
+    floors = motion_floors(scenario, carried.lib.graph, carried.start_location, scenario.goals, arrived=True)
     plans = every_plan(carried, scenario.goals)
     assert any(len(s) == 2 for p in plans for s in p)
-    best = float("inf")
+    best, tight = float("inf"), 0
     for plan in plans:  # every step of every plan, in the context the team's clock gives it
         cost = carried.plan_cost(plan)
         for step, c in zip(plan, cost.steps, strict=True):
             assert sum(floors.single[m] for m in step) <= c * (1 + 1e-9), step
+        assert cost.schedule is not None
+        for move in cost.schedule.moves:  # each robot drives at least its move's time floor
+            floor = floors.duration[(move.robot, move.origin, move.target)]
+            assert floor <= move.end - move.start + 1e-9, move
+            tight += floor > move.end - move.start - 1e-9
         best = min(best, cost.total)
+    assert tight  # a single move from a robot's start takes exactly its time floor
     assert lower_bound(floors, scenario.goals, 0.0).value <= best
 
 
@@ -61,6 +68,28 @@ def test_no_move_accumulates_less_uncertainty_than_its_floor(seed: int, n: int, 
         if driving and own.size:
             speed = float(own[:, 0].max())
             assert sigma_rate(m, speed, n, L) * terms.c_u <= terms.c_Sigma * (1 + 1e-9) + 1e-15
+
+
+@pytest.mark.parametrize("config", ["corridor-2robots.yaml", "building-20.yaml"])
+def test_the_walk_drives_as_path_controls_does(config: str) -> None:
+    """The floors' walk along the roadmap's shortest paths (tmpnav.attachment.floors._walk)
+    counts the steps and the control usage that turn-then-drive (path_controls) gives the
+    same path from the same heading: exactly, but for the slack of SLACK (1e-6)."""
+    scenario, _, carried = carried_problem(config, (), 1)
+    spec, dt, paths = scenario.robots[0], scenario.models.dt, carried.lib.graph
+    rng = np.random.default_rng(1)
+    nodes = rng.choice(paths.roadmap.n_nodes, size=(12, 2), replace=False)
+    walks = _Walks(paths, spec, dt)
+    for source, target in nodes:
+        heading = float(rng.uniform(-np.pi, np.pi))
+        path = paths.path(int(source), int(target))
+        assert path is not None
+        driven = path_controls(paths.points(path), heading, spec.speed, spec.turn_rate, dt)
+        c_u = float((np.square(driven.controls).sum(axis=1) * dt).sum())
+        cost, seconds = walks.floors(int(source), (heading,), np.array([target]), 1.0, 1.0)
+        assert float(cost[0]) == pytest.approx(c_u, rel=1e-4, abs=1e-5)
+        assert float(cost[0]) <= c_u * (1 + 1e-12)
+        assert float(seconds[0]) == pytest.approx(driven.controls.shape[0] * dt)
 
 
 def test_the_floor_is_reached_when_the_robot_knows_all_but_its_last_step() -> None:

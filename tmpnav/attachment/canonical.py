@@ -23,6 +23,7 @@ from collections.abc import Iterable, Sequence
 
 from tmpnav.attachment.floors import motion_floors
 from tmpnav.choices import Costs
+from tmpnav.oracle.executors import library
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import arrival_state, build_table, initial_state, start_locations
@@ -77,7 +78,7 @@ class CanonicalCosts:
                 self.single.setdefault(move, cost)
                 self.duration.setdefault(move, table.duration[move])
             return table
-        floors = motion_floors(self.scenario, self.oracle.ctx.roadmap, self.start_location, goals).single
+        floors = motion_floors(self.scenario, library(self.oracle.ctx).graph, self.start_location, goals).single
         moves: list[MoveKey] = []
         for r in self.robots:
             start = self.start_location[r]

@@ -1,21 +1,34 @@
-"""Motion floors: the least any move can cost, whatever beliefs it starts from or shares.
+"""Motion floors: the least a move can cost and take, whatever beliefs it starts from or shares.
 
 A move's cost is c = M_u c_u + M_G c_G + M_Sigma c_Sigma, and c_G and c_Sigma are never
-negative, so c >= M_u c_u. The control usage c_u of a roadmap path is at least that of its
-driving steps: an edge of length l is driven in n = ceil(l / (v dt)) steps at l / (n dt), so
-it adds l^2 / (n dt) >= l^2 / (l / v + dt); turning on the spot only adds. Hence every move
-of robot r from location o to room t costs at least
+negative. **The path is known.** A move of robot r from a node s (where it stands: its start
+node, or a pose instantiation of its origin room) towards an instantiation g of room t drives
+the roadmap's shortest path s -> g (the motion library's :class:`RoadmapGraph`, under a
+chance constraint with its safe weights), turn-then-drive (:func:`path_controls`): before
+each edge with a length l it turns on the spot by the angle phi between its heading and the
+edge, in n = ceil(phi / (omega_max dt)) steps at phi / (n dt), then drives l in
+n = ceil(l / (v dt)) steps at l / (n dt). A stretch of amount a (metres or radians) covered
+in n steps adds n dt seconds and a^2 / (n dt) to c_u = sum (v^2 + omega^2) dt. So, along the
+path, every step count and every addition to c_u is known, but for the first turn, which
+depends on the heading the robot starts with: its start pose's on its first move; with
+carried beliefs (``arrived``), on a room's node, the heading of one of the edges into that
+node, the last edge it drove (a path arrives by an edge with a length; where an edge into
+the node has none, any heading); with the canonical states of table costs, any heading (the
+first turn counted as 0). The floor of the move is the least over s in nodes(o), g in
+instantiations(t) and the possible start headings of
 
-    M_u min over s in nodes(o), g in instantiations(t) of sum over the edges e of the path s -> g of
-        l_e^2 / (l_e / v_r + dt),
+    (M_u + M_Sigma kappa) c_u,drive(s -> g) + M_u c_u,turn(s -> g),
 
-the minimum over every roadmap path (Dijkstra with these edge weights), where nodes(o) are
-o's pose instantiations, or the robot's start node for its start location. This holds in
-every context -- canonical or carried beliefs, alone or in a paired move, whichever pose
-instantiation the robot stands on -- so a lower bound computed from these floors
-(:func:`tmpnav.task.bound.lower_bound`) bounds every plan, including those with paired moves
-that were never simulated. It is weak where uncertainty dominates the cost: it only counts
-driving.
+and its time floor the least of the path's seconds, computed in one walk of each shortest-path
+tree (:func:`_walk`; tests/attachment/test_floors.py checks it against path_controls). A
+paired move drives each robot's own path (its partner waits at the end), so both floors hold
+for each robot of a pair too; in every context -- canonical or carried beliefs, alone or
+paired, whichever instantiation the oracle picks -- and a lower bound computed from them
+(:func:`tmpnav.task.bound.lower_bound`, :func:`tmpnav.task.bound.makespan_bound`) bounds
+every plan tmpnav can plan on this roadmap, including those with paired moves never
+simulated. A plan kept apart afterwards (tmpnav.attachment.conflicts) may drive a detour:
+the bound is the plan's as planned. Step counts and lengths are taken with a slack of
+:data:`SLACK` on the floor's side, for the rounding of the nominal poses.
 
 **The uncertainty term.** c_Sigma = sum over the move's steps t of trace(Sigma_t) dt, and
 trace(Sigma_t) >= Sigma_t[theta, theta], the heading variance after step t's updates. That
@@ -54,36 +67,66 @@ position (the bearing Jacobian grows as 1/d), and a known position pins the head
 driving robot (the lateral displacement is v dt theta). The gap's uncertainty share is
 therefore the bound's, not the plan's; docs/planning.md measures it.
 
-The same paths give each move's time floor, the shortest path at the robot's speed, from
-which :func:`tmpnav.task.bound.makespan_bound` bounds the makespan of every schedule.
+Before this floor counted the paths' turns and step counts, it was the least
+driving over every roadmap path, l^2 / (l / v + dt) per edge: the gap of the 20-room
+building's plan was 49.7% with it and is 32.0% with this one (docs/planning.md).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import math
 
+import numba as nb
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
-from tmpnav.types import CostTable, Goals, Models, MoveKey, Roadmap, Scenario
+from tmpnav.belief.controls import LENGTH_EPS
+from tmpnav.roadmap.graph import RoadmapGraph
+from tmpnav.types import CostTable, Goals, Models, MoveKey, Roadmap, RobotSpec, Scenario
 
 
-def motion_floors(scenario: Scenario, roadmap: Roadmap, start_location: dict[str, str], goals: Goals) -> CostTable:
+def motion_floors(
+    scenario: Scenario,
+    paths: RoadmapGraph,
+    start_location: dict[str, str],
+    goals: Goals,
+    arrived: bool = False,
+) -> CostTable:
     """A cost table of the goal rooms whose every single move costs its motion floor (no pairs),
-    and takes its time floor (``duration``): the shortest roadmap path at the robot's speed,
-    which no move beats however it turns (a move drives each edge of length l in
-    ceil(l / (v dt)) >= l / (v dt) steps, and turning on the spot only adds)."""
-    dt = scenario.models.dt
-    driving = _floors(scenario, roadmap, start_location, goals, lambda length, v: length**2 / (length / v + dt))
-    speed = {r.name: r.speed for r in scenario.robots}
+    and takes its time floor (``duration``): the least that driving the path tmpnav drives from a
+    node of the origin to a pose instantiation of the target (``paths``' shortest path) costs
+    and takes (the module docstring). ``arrived``: a move from a room starts with the heading of
+    an edge into its node, as a robot that drove there has (carried beliefs); else with any
+    heading (the canonical states of table costs)."""
+    dt, w = scenario.models.dt, scenario.cost
     n, lms, models = len(scenario.robots), len(scenario.landmarks), scenario.models
-    weight = {v: scenario.cost.M_u + scenario.cost.M_Sigma * sigma_rate(models, v, n, lms) for v in speed.values()}
-    single = {m: weight[speed[m[0]]] * f for m, f in driving.items()}
-    times = _floors(scenario, roadmap, start_location, goals, lambda length, v: length / v)
+    roadmap = paths.roadmap
     rooms = tuple(dict.fromkeys(goals.all_rooms))
+    inst = roadmap.instantiations
+    single: dict[MoveKey, float] = {}
+    duration: dict[MoveKey, float] = {}
+    paths.prepare(sorted({*(roadmap.starts[r.name] for r in scenario.robots), *(g for x in rooms for g in inst[x])}))
+    targets = np.array([g for x in rooms for g in inst[x]], dtype=np.int64)
+    room_of = np.array([k for k, x in enumerate(rooms) for _ in inst[x]], dtype=np.int64)
+    for spec in scenario.robots:
+        walks = _Walks(paths, spec, dt)
+        m_drive = w.M_u + w.M_Sigma * sigma_rate(models, spec.speed, n, lms)
+        start = start_location[spec.name]
+        origins: dict[str, tuple[tuple[int, tuple[float, ...] | None], ...]] = {
+            start: ((roadmap.starts[spec.name], (spec.pose.theta,)),)
+        }
+        for x in rooms:
+            if x != start:
+                origins[x] = tuple((g, _arrivals(roadmap, g) if arrived else None) for g in inst[x])
+        for o, nodes in origins.items():
+            cost, seconds = np.full(len(rooms), np.inf), np.full(len(rooms), np.inf)
+            for node, headings in nodes:  # the least over the origin's nodes and the target's instantiations
+                c, t_s = walks.floors(node, headings, targets, m_drive, w.M_u)
+                np.minimum.at(cost, room_of, c)
+                np.minimum.at(seconds, room_of, t_s)
+            for k, t in enumerate(rooms):
+                if t not in (o, start) and np.isfinite(cost[k]):
+                    single[(spec.name, o, t)], duration[(spec.name, o, t)] = float(cost[k]), float(seconds[k])
     locations = tuple(dict.fromkeys([*rooms, *start_location.values()]))
-    duration = {m: t for m, t in times.items() if m in single}
     names = tuple(r.name for r in scenario.robots)
     return CostTable(names, rooms, locations, dict(start_location), single, {}, duration)
 
@@ -112,44 +155,135 @@ def sigma_rate(models: Models, speed: float, robots: int, landmarks: int) -> flo
     return models.dt**2 * a3 / (1.0 + rho_max * information)
 
 
-def _floors(
-    scenario: Scenario,
-    roadmap: Roadmap,
-    start_location: dict[str, str],
-    goals: Goals,
-    weight: Callable[[np.ndarray, float], np.ndarray],
-) -> dict[MoveKey, float]:
-    """The least sum of ``weight(edge length, speed)`` over the roadmap paths of every move."""
-    rooms = tuple(dict.fromkeys(goals.all_rooms))
-    single: dict[MoveKey, float] = {}
-    for speed in sorted({r.speed for r in scenario.robots}):
-        robots = [r.name for r in scenario.robots if r.speed == speed]
-        dist = _distances(roadmap, weight(roadmap.weights, speed))
-        for r in robots:
-            origins = {start_location[r]: (roadmap.starts[r],), **{x: roadmap.instantiations[x] for x in rooms}}
-            for o, nodes in origins.items():
-                reach = dist(nodes)
-                for t in rooms:
-                    if t == o or t == start_location[r]:
-                        continue
-                    floor = float(reach[:, list(roadmap.instantiations[t])].min())
-                    if np.isfinite(floor):
-                        single[(r, o, t)] = floor
-    return single
+#: the slack of the floors' step counts: a driven length or a turn is measured from the robot's
+#: nominal pose, which is a roadmap node up to rounding (1e-12 m); a step count of a length
+#: within this of a multiple of one step's reach is taken both ways, on the floor's side
+SLACK = 1e-6
 
 
-def _distances(roadmap: Roadmap, weights: np.ndarray) -> Callable[[tuple[int, ...]], np.ndarray]:
-    """Shortest paths with the given edge weights, from given source nodes."""
-    w = np.maximum(weights, 1e-12)  # csgraph drops explicit zeros (a 1e-12 excess is below the bound's rounding)
-    n = roadmap.n_nodes
-    rows = np.concatenate([roadmap.edges[:, 0], roadmap.edges[:, 1]])
-    cols = np.concatenate([roadmap.edges[:, 1], roadmap.edges[:, 0]])
-    graph = csr_matrix((np.concatenate([w, w]), (rows, cols)), shape=(n, n))
-    memo: dict[tuple[int, ...], np.ndarray] = {}
+def _seconds(amount: np.ndarray | float, rate: float, dt: float) -> np.ndarray:
+    """The least time turn-then-drive can take for a length (m) or a turn (rad) of ``amount``
+    at most ``rate`` per second: ceil(amount / (rate dt)) steps of dt, none for nothing."""
+    a = np.maximum(np.asarray(amount, dtype=float) - SLACK, 0.0)
+    return np.asarray(dt * np.where(a > 0.0, np.ceil(a / (rate * dt)), 0.0))
 
-    def from_nodes(nodes: tuple[int, ...]) -> np.ndarray:
-        if nodes not in memo:
-            memo[nodes] = np.atleast_2d(dijkstra(graph, directed=False, indices=list(nodes)))
-        return memo[nodes]
 
-    return from_nodes
+def _usage(amount: np.ndarray | float, rate: float, dt: float) -> np.ndarray:
+    """The least control usage of a length (m) or a turn (rad) of ``amount``: covered in n
+    steps at amount / (n dt), it adds amount^2 / (n dt), and n is at most
+    ceil(amount / (rate dt)) (the module docstring)."""
+    a = np.asarray(amount, dtype=float)
+    low = np.maximum(a - SLACK, 0.0)
+    most = np.maximum(np.ceil((a + SLACK) / (rate * dt)), 1.0)
+    return np.asarray(np.square(low) / (most * dt))
+
+
+def _arrivals(roadmap: Roadmap, node: int) -> tuple[float, ...] | None:
+    """The headings a robot can have on ``node`` after driving there: those of the edges into
+    it; None (any heading) where an edge into it has no length."""
+    e = roadmap.edges
+    neighbours = np.concatenate([e[e[:, 1] == node, 0], e[e[:, 0] == node, 1]])
+    delta = roadmap.nodes[node, :2] - roadmap.nodes[neighbours, :2]
+    if not neighbours.size or (np.hypot(delta[:, 0], delta[:, 1]) < LENGTH_EPS).any():
+        return None
+    return tuple(float(h) for h in np.arctan2(delta[:, 1], delta[:, 0]))
+
+
+class _Walks:
+    """What driving the shortest path from a source node to every node takes, for one robot:
+    its drives and its turns after the first (:func:`_walk`), and the heading of its first
+    edge, so that the first turn is added for the heading the robot starts with."""
+
+    def __init__(self, paths: RoadmapGraph, spec: RobotSpec, dt: float):
+        self.paths, self.spec, self.dt = paths, spec, dt
+        self.xy = np.ascontiguousarray(paths.roadmap.nodes[:, :2], dtype=float)
+        self._memo: dict[int, np.ndarray] = {}
+
+    def _of(self, source: int) -> np.ndarray:
+        if source not in self._memo:
+            dist, pred = self.paths.tree(source)
+            s = self.spec
+            self._memo[source] = _walk(pred, dist, self.xy, source, s.speed, s.turn_rate, self.dt, SLACK, LENGTH_EPS)
+        return self._memo[source]
+
+    def floors(
+        self, source: int, headings: tuple[float, ...] | None, targets: np.ndarray, m_drive: float, m_turn: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The cost floor and the time floor of the path from ``source`` to each of ``targets``,
+        starting with one of ``headings`` (None: any)."""
+        walked = self._of(source)[:, targets]  # drive c_u, drive s, turn c_u, turn s, first heading
+        first = walked[4]
+        if headings is None:
+            angle = np.zeros_like(first)
+        else:
+            angle = np.abs(_wrap(first[None, :] - np.asarray(headings)[:, None])).min(axis=0)
+        angle = np.where(np.isnan(first), 0.0, angle)
+        rate = self.spec.turn_rate
+        cost = m_drive * walked[0] + m_turn * (walked[2] + _usage(angle, rate, self.dt))
+        seconds = walked[1] + walked[3] + _seconds(angle, rate, self.dt)
+        return cost, seconds
+
+
+@nb.njit(cache=True)
+def _walk(pred, dist, xy, root, speed, turn_rate, dt, slack, length_eps):
+    """Along the shortest-path tree ``pred`` from ``root``: for every node, (5, N) rows of the
+    drives' c_u and seconds, the turns' c_u and seconds after the first edge with a length,
+    and that edge's heading (NaN: none; unreachable nodes: inf). Each turn is the one
+    turn-then-drive makes: from the heading of the last edge with a length to the next's."""
+    n = pred.shape[0]
+    out = np.full((5, n), np.inf)
+    last = np.full(n, np.nan)
+    done = np.zeros(n, dtype=np.bool_)
+    out[0:4, root] = 0.0
+    out[4, root] = np.nan
+    done[root] = True
+    order = np.argsort(dist)
+    chain = np.empty(n, dtype=np.int64)
+    for n0 in order:
+        if done[n0] or not np.isfinite(dist[n0]):
+            continue
+        k, m = 0, n0
+        while not done[m]:
+            chain[k] = m
+            k += 1
+            m = pred[m]
+        for j in range(k - 1, -1, -1):
+            m = chain[j]
+            p = pred[m]
+            for r in range(5):
+                out[r, m] = out[r, p]
+            last[m] = last[p]
+            dx, dy = xy[m, 0] - xy[p, 0], xy[m, 1] - xy[p, 1]
+            length = math.hypot(dx, dy)
+            if length >= length_eps:
+                heading = math.atan2(dy, dx)
+                if np.isnan(last[p]):
+                    out[4, m] = heading
+                else:
+                    turn = abs((heading - last[p] + math.pi) % (2 * math.pi) - math.pi)
+                    out[2, m] += _usage_one(turn, turn_rate, dt, slack)
+                    out[3, m] += _seconds_one(turn, turn_rate, dt, slack)
+                out[0, m] += _usage_one(length, speed, dt, slack)
+                out[1, m] += _seconds_one(length, speed, dt, slack)
+                last[m] = heading
+            done[m] = True
+    return out
+
+
+@nb.njit(cache=True)
+def _usage_one(amount, rate, dt, slack):
+    """:func:`_usage` of one amount."""
+    low = max(amount - slack, 0.0)
+    return low * low / (max(math.ceil((amount + slack) / (rate * dt)), 1.0) * dt)
+
+
+@nb.njit(cache=True)
+def _seconds_one(amount, rate, dt, slack):
+    """:func:`_seconds` of one amount."""
+    low = amount - slack
+    return dt * math.ceil(low / (rate * dt)) if low > 0.0 else 0.0
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    """Angles wrapped to [-pi, pi)."""
+    return np.asarray((angle + np.pi) % (2 * np.pi) - np.pi)

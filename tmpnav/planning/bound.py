@@ -6,6 +6,7 @@ import math
 from dataclasses import replace
 
 from tmpnav.attachment.floors import motion_floors
+from tmpnav.oracle.executors import library
 from tmpnav.planning.run import TaskRun
 from tmpnav.task.bound import Bound, lower_bound, makespan_bound
 from tmpnav.types import CostTable, Goals
@@ -27,7 +28,10 @@ def certified_bound(run: TaskRun) -> Bound:
     moves' time floors (:func:`tmpnav.task.bound.makespan_bound`, or :func:`_work_bound` where
     higher): both bounds hold for every plan at once, so their weighted sum bounds its objective."""
     sp, goals, canonical = run.planner, run.goals, run.canonical
-    floors = motion_floors(run.scenario, canonical.oracle.ctx.roadmap, canonical.start_location, goals)
+    # with carried beliefs a robot leaves a room with the heading it arrived with
+    arrived = run.choice.costs == "carried"
+    paths = library(canonical.oracle.ctx).graph
+    floors = motion_floors(run.scenario, paths, canonical.start_location, goals, arrived)
     bound = None
     if run.choice.costs == "table":
         table = canonical.bound_table(goals, MAX_BOUND_PAIRS)

@@ -4,8 +4,8 @@ A plan can be poor in two ways the status line does not show:
 
 - **Far from its bound.** The gap (plan cost - lower bound) / plan cost is above
   :data:`GAP_WARN`: no plan can cost less than the bound, so the plan may be up to that much too
-  expensive. With carried costs the bound counts driving only (motion floors), so part of a
-  large gap is the bound's; a search stopped by its time budget says more time may help.
+  expensive. With carried costs the bound counts driving and turning but not uncertainty
+  (motion floors), so part of a large gap is the bound's; a search stopped by its time budget says more time may help.
   With an objective that prices time, the bound and the gap are on the objective (cost plus a
   price per second of makespan), and the warning says so.
 - **More uncertain than a door allows.** Where a robot's belief mean passes an open door, the
@@ -82,8 +82,14 @@ def _gap(report: PlanReport) -> PlanWarning | None:
     elif search is not None and search.mode == "anytime":
         text += " The search stopped improving: try --anytime-budget with more time, or --search exact if small."
     if "floors" in bound.relaxation:
-        text += " The bound counts driving only (motion floors), so part of the gap is the bound's."
-    if objective_values(report).span_weight and not bound.relaxation.startswith("exact"):
+        text += (
+            " The bound counts driving and turning, not uncertainty (motion floors): part of the gap is the bound's."
+        )
+    if (
+        objective_values(report).span_weight
+        and not bound.relaxation.startswith("exact")
+        and "makespan" not in bound.relaxation
+    ):
         text += " The bound puts no price on the makespan, so the time's share of the objective is in the gap."
     return PlanWarning("gap", None, bound.gap, GAP_WARN, text)
 

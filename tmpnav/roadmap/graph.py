@@ -80,6 +80,11 @@ class RoadmapGraph:
         for k, s in enumerate(todo):
             self._trees[s] = (dist[k], pred[k])
 
+    def tree(self, source: int) -> tuple[np.ndarray, np.ndarray]:
+        """The shortest-path tree from ``source``: distances and predecessors of every node."""
+        self.prepare([source])
+        return self._trees[source]
+
     def distance(self, source: int, target: int) -> float:
         self.prepare([source])
         return float(self._trees[source][0][target])
