@@ -308,12 +308,6 @@ def _start(options: str) -> str:
             )
         except Exception as err:
             raise RuntimeError(" ".join(f"{err} {said()}".split())) from None
-    # at Python's exit, JPype still stops its reference queue but does not destroy the JVM:
-    # DestroyJavaVM waits for the JVM's threads and runs its shutdown hooks, none of which
-    # ENHSP needs (its plans are read from files by then), and took 0.3 s of every run's end
-    import jpype.config
-
-    jpype.config.destroy_jvm = False
     system = jpype.JClass("java.lang.System")
     nowhere = jpype.JClass("java.io.PrintStream")(jpype.JClass("java.io.OutputStream").nullOutputStream())
     system.setOut(nowhere)  # ENHSP's log: see the module's docstring
