@@ -354,12 +354,17 @@ def _settle(call: Callable[[], T], future: Future[T]) -> None:
 
 
 def _stop_searches() -> None:
-    """End every ENHSP search running now, in this process's JVM or as a ``java`` process."""
-    from unified_planning.engines.pddl_planner import terminate_process
-
+    """End every ENHSP search running now, in this process's JVM or as a ``java`` process.
+    unified-planning is imported only for the processes: a run whose searches are all in the
+    JVM never imports it, and importing it here (0.6-1 s, more on a loaded machine) delayed
+    the stop of a run interrupted during its searches past its limit."""
     enhsp_jvm.stop_all()
     with _running_lock:
         engines = list(_running)
+    if not engines:
+        return
+    from unified_planning.engines.pddl_planner import terminate_process
+
     for engine in engines:
         process = getattr(engine, "_process", None)
         if process is not None:
