@@ -107,8 +107,12 @@ def motion_floors(
     paths.prepare(sorted({*(roadmap.starts[r.name] for r in scenario.robots), *(g for x in rooms for g in inst[x])}))
     targets = np.array([g for x in rooms for g in inst[x]], dtype=np.int64)
     room_of = np.array([k for k, x in enumerate(rooms) for _ in inst[x]], dtype=np.int64)
+    # the headings a robot can arrive with, by node, and the walks, by (speed, turn rate): the
+    # same for every robot that shares them
+    arrivals = {g: _arrivals(roadmap, g) if arrived else None for x in rooms for g in inst[x]}
+    walked: dict[tuple[float, float], _Walks] = {}
     for spec in scenario.robots:
-        walks = _Walks(paths, spec, dt)
+        walks = walked.setdefault((spec.speed, spec.turn_rate), _Walks(paths, spec, dt))
         m_drive = w.M_u + w.M_Sigma * sigma_rate(models, spec.speed, n, lms)
         start = start_location[spec.name]
         origins: dict[str, tuple[tuple[int, tuple[float, ...] | None], ...]] = {
@@ -116,7 +120,7 @@ def motion_floors(
         }
         for x in rooms:
             if x != start:
-                origins[x] = tuple((g, _arrivals(roadmap, g) if arrived else None) for g in inst[x])
+                origins[x] = tuple((g, arrivals[g]) for g in inst[x])
         for o, nodes in origins.items():
             cost, seconds = np.full(len(rooms), np.inf), np.full(len(rooms), np.inf)
             for node, headings in nodes:  # the least over the origin's nodes and the target's instantiations

@@ -281,14 +281,12 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
         for path, text in ((d, domain), (p, problem)):
             with open(path, "w", encoding="utf-8") as f:
                 f.write(text)
-        if engine is None:
-            assert known is not None
-            timed_out, failed, log = _run_in_jvm(planner, known.command(d, p, plan_file), timeout)
+        cmd = engine._get_cmd(d, p, plan_file) if engine is not None else known.command(d, p, plan_file)  # type: ignore[union-attr]
+        if in_jvm:
+            timed_out, failed, log = _run_in_jvm(planner, cmd, timeout)
         else:
-            cmd = engine._get_cmd(d, p, plan_file)
-            timed_out, failed, log = (
-                _run_in_jvm(planner, cmd, timeout) if in_jvm else _run_process(engine, planner, cmd, timeout)
-            )
+            assert engine is not None  # known engines are run this way only in the JVM
+            timed_out, failed, log = _run_process(engine, planner, cmd, timeout)
         plan_text = None
         if os.path.isfile(plan_file):
             with open(plan_file, encoding="utf-8-sig") as f:
