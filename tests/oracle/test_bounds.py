@@ -4,11 +4,20 @@ from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+import pytest
+
 from tests.oracle.support import actions
+from tmpnav import shipped
+from tmpnav.oracle import pairs
 from tmpnav.oracle.bounds import cannot_save
 from tmpnav.oracle.cache import NullCache
+from tmpnav.oracle.evaluate import Request
 from tmpnav.oracle.executors import OracleContext, SerialExecutor
 from tmpnav.oracle.oracle import Oracle
+from tmpnav.oracle.table import initial_state
+from tmpnav.pipeline import load_world
+from tmpnav.roadmap import build_roadmap
 
 
 def test_a_pruned_pair_costs_at_least_its_bound(two_rooms: OracleContext) -> None:
@@ -31,3 +40,42 @@ def test_the_pruning_margin() -> None:
     assert cannot_save(bound=10.0, alone=10.0, min_gain=0.05)
     assert not cannot_save(bound=9.4, alone=10.0, min_gain=0.05)
     assert not cannot_save(bound=9.501, alone=10.0, min_gain=0.05)  # within the 0.002 rounding margin
+
+
+def _corridor_pairs() -> tuple[OracleContext, list[Request]]:
+    """The shipped corridor's robots moving together from their starts to every two rooms:
+    many combinations in which they see each other."""
+    scenario, world = load_world(shipped.configs_dir() / "corridor-2robots.yaml")
+    ctx = OracleContext(scenario, world, build_roadmap(world, scenario.robots, scenario.roadmap))
+    s1, s2 = (initial_state(scenario, ctx.roadmap.starts[r], r) for r in ("r1", "r2"))
+    rooms = [room.name for room in scenario.rooms]
+    return ctx, [Request(("r1", "r2"), (s1, s2), (a, b)) for a in rooms for b in rooms if a != b]
+
+
+@pytest.mark.parametrize("min_gain", [0.0, 0.05, 0.3])
+def test_combinations_past_their_cutoff_are_skipped_without_changing_what_is_offered(
+    min_gain: float, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A request's result with its dear combinations skipped (bounds.skippable) is exact
+    wherever the pair saves ``min_gain``, and pruned with a valid bound elsewhere."""
+    ctx, requests = _corridor_pairs()
+    full = Oracle(ctx, NullCache(), SerialExecutor()).evaluate(requests)
+    bounded_requests = [replace(r, min_gain=min_gain) for r in requests]
+    oracle = Oracle(ctx, NullCache(), SerialExecutor())
+    bounded = oracle.evaluate(bounded_requests)
+    monkeypatch.setattr(pairs, "skippable", lambda bounds, seen, limit: np.zeros(bounds.shape, dtype=bool))
+    unskipped = Oracle(ctx, NullCache(), SerialExecutor())
+    without = unskipped.evaluate(bounded_requests)
+    skipped = unskipped.stats.sims.joint_sims - oracle.stats.sims.joint_sims
+    assert skipped > 0 if min_gain < 0.3 else skipped >= 0  # at 0.3 the pruning of requests leaves none
+    singles = Oracle(ctx, NullCache(), SerialExecutor())
+    for req, b, f, w in zip(requests, bounded, full, without, strict=True):
+        assert f is not None and b is not None and w is not None
+        moves = zip(req.robots, req.starts, req.rooms, strict=True)
+        alone = sum(res.cost for res in singles.evaluate([Request((r,), (s,), (x,)) for r, s, x in moves]) if res)
+        if not cannot_save(f.cost, alone, min_gain):  # offered: exact, the same as without skipping
+            assert not b.pruned and b == f == w
+        elif b.pruned:
+            assert b.cost <= f.cost + 1e-12
+        else:
+            assert b == f

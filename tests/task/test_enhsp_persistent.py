@@ -6,6 +6,7 @@ share it (as the sub-problems of a run do).
 
 from __future__ import annotations
 
+import functools
 import random
 import signal
 import subprocess
@@ -19,8 +20,8 @@ from tests.task.instances import small_instance
 from tests.task.test_pddl_text import validate_with_unified_planning
 from tmpnav.errors import PlannerTimeoutError
 from tmpnav.task import enhsp_jvm
-from tmpnav.task.pddl_text import PddlTask, write_task
-from tmpnav.task.solve import solve_text
+from tmpnav.task.pddl_text import PddlTask, sample_task, write_task
+from tmpnav.task.solve import side_by_side, solve_text, warm_up
 
 pytestmark = pytest.mark.skipif(enhsp_jvm.unavailable() is not None, reason=str(enhsp_jvm.unavailable()))
 
@@ -184,3 +185,57 @@ def test_a_signal_during_searches_side_by_side_ends_the_run_at_once(sig: signal.
     finally:
         proc.kill()
         proc.wait()
+
+
+def _attached_java_threads() -> set[str]:
+    """The names of the JVM's threads that are not the JVM's own (an attached Python thread
+    shows as ``Thread-N``)."""
+    import jpype
+
+    names = {str(t.getName()) for t in jpype.java.lang.Thread.getAllStackTraces().keySet()}
+    return {n for n in names if n.startswith("Thread-")}
+
+
+def test_threads_that_solved_leave_the_jvm_detached() -> None:
+    """A thread that ended attached kept the JVM's shutdown waiting 0.3 s at every exit."""
+    task = _task(*CASES[0][:4])
+    _solve(task, "enhsp-blind")
+    before = _attached_java_threads()
+    side_by_side([functools.partial(_solve, task, "enhsp-blind")] * 2)  # the searches' threads and their callers'
+    _solve(task, "enhsp-blind")
+    assert _attached_java_threads() <= before
+
+
+def test_warmed_searches_are_ready_and_plan_as_cold_ones(monkeypatch: pytest.MonkeyPatch) -> None:
+    """warm_up readies one slot per search in the background, each after a search of the
+    sample; the searches after it take those slots (no slot made for them) and plan the same."""
+    task, sample = _task(*CASES[1][:4]), sample_task("mixed", 1.0, 0.05)
+    cold = _solve(task, "enhsp-blind")
+    while not enhsp_jvm._JVM.slots.empty():  # no idle slot: warm_up must make them
+        enhsp_jvm._JVM.slots.get_nowait().close()
+    warm_up("enhsp-blind", 2, sample.domain, sample.problem)
+    warming = enhsp_jvm._JVM.warming
+    assert warming is not None and warming.daemon
+    made: list[object] = []
+    original = enhsp_jvm._Slot.__init__
+
+    def counted(self: enhsp_jvm._Slot, jar: str) -> None:
+        made.append(threading.current_thread().name)
+        original(self, jar)
+
+    monkeypatch.setattr(enhsp_jvm._Slot, "__init__", counted)
+    together = side_by_side([functools.partial(_solve, task, "enhsp-blind")] * 2)  # waits for the warm slots
+    warming.join(timeout=60)
+    assert together == [cold, cold]
+    assert set(made) <= {"tmpnav-enhsp-warm"}  # the searches made no slot of their own
+    assert enhsp_jvm._JVM.slots.qsize() == 2
+    warm_up("enhsp-blind", 2, sample.domain, sample.problem)  # enough idle slots: nothing to do
+    assert enhsp_jvm._JVM.warming is warming
+
+
+def test_the_warm_up_sample_is_a_sub_problem_enhsp_solves() -> None:
+    for encoding, span in (("mixed", 1.0), ("mixed", 0.0), ("single", 0.5)):
+        sample = sample_task(encoding, span, 0.05)
+        actions = _solve(sample, "enhsp-blind")
+        assert actions
+        validate_with_unified_planning(sample, actions)

@@ -78,13 +78,19 @@ class MotionArrays(NamedTuple):
         lm_visible: Sequence[np.ndarray],
         noise_stream: np.ndarray,
         landmarks: int,
-        reach: Sequence[np.ndarray] | None = None,
+        reach: Sequence[np.ndarray] | np.ndarray | None = None,
     ) -> MotionArrays:
         """Lay out motions given as per-motion arrays (T_m, 2), (T_m + 1, 3), (T_m + 1, L)
-        and (T_m + 1, K) sector reach (none given: no collision bound, reach inf)."""
+        and (T_m + 1, K) sector reach, or the reach already laid end to end (sum (T_m + 1), K)
+        (none given: no collision bound, reach inf)."""
         steps = np.array([c.shape[0] for c in controls], dtype=np.int64)
         rows = int((steps + 1).sum())
-        far = np.full((rows, SECTORS), np.inf) if reach is None else np.concatenate(list(reach)).astype(float)
+        if reach is None:
+            far = np.full((rows, SECTORS), np.inf)
+        elif isinstance(reach, np.ndarray):
+            far = np.asarray(reach, dtype=float)
+        else:
+            far = np.concatenate(list(reach)).astype(float)
         return MotionArrays(
             offset=np.concatenate([[0], np.cumsum(steps)[:-1]]).astype(np.int64),
             steps=steps,

@@ -127,7 +127,7 @@ class MotionTable:
             [m.lm_visible for m in motions],
             stream,
             landmarks,
-            [lib.reach(m) for m in motions],
+            lib.reach_all(motions),
         )
 
     @staticmethod

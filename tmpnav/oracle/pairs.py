@@ -15,7 +15,7 @@ import numpy as np
 
 from tmpnav.belief.sequences import Sequences
 from tmpnav.belief.trie import joint_lex_order
-from tmpnav.oracle.bounds import cannot_save, pair_lower_bound
+from tmpnav.oracle.bounds import cannot_save, combination_bounds, cutoff, skippable
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.oracle.motionsets import GroupStart, MotionSet, MotionTable, SetKey, chain_restarts, row_offsets
 from tmpnav.oracle.requests import EvalStats, Request, mutual_seed
@@ -47,6 +47,7 @@ class PairCombos:
         self.b: list[np.ndarray] = []  # per group: motions of robot 2
         self.of_request: dict[int, tuple[int, np.ndarray]] = {}  # request -> (group, combo positions)
         self.pruned: dict[int, float] = {}  # request -> lower bound, for pairs not simulated
+        self.skipped: dict[int, tuple[float, float]] = {}  # request -> (its cutoff, least bound it skipped)
         for g, wanted in self._group_requests(sets).items():
             self._order(g, wanted)
 
@@ -111,6 +112,7 @@ class PairCombos:
         self.seen = [f >= 0 for f in first]
         needed = self._prune(first, singles, stats)
         self._joint_runs(layout, needed, stats)
+        self._settle_skipped(singles, stats)
 
     def _layout(self) -> _Layout:
         lib = self.lib
@@ -172,7 +174,7 @@ class PairCombos:
         the combos still worth simulating jointly."""
         weights = self.lib.scenario.cost
         needed = [np.zeros(a.shape[0], dtype=bool) for a in self.a]
-        self.pruned = {}
+        self.pruned, self.skipped = {}, {}
         for i, (g, positions) in self.of_request.items():
             req = self.requests[i]
             s1, s2, _ = self.groups[g]
@@ -180,15 +182,32 @@ class PairCombos:
             if not bounded or req.joint_cov is not None or positions.size == 0:
                 needed[g][positions] = True
                 continue
-            a, b = self.a[g][positions], self.b[g][positions]
-            bound = pair_lower_bound(singles, s1, s2, a, b, first[g][positions], weights)
+            a, b, sight = self.a[g][positions], self.b[g][positions], first[g][positions]
+            bounds = combination_bounds(singles, s1, s2, a, b, sight, weights)
+            bound = float(bounds.min(initial=np.inf))
             alone = singles.best_cost(s1, req.rooms[0]) + singles.best_cost(s2, req.rooms[1])
             if req.bound_only or cannot_save(bound, alone, req.min_gain or 0.0):
                 self.pruned[i] = bound
                 stats.pairs_pruned += 1
-            else:
-                needed[g][positions] = True
+                continue
+            skip = np.zeros(positions.size, dtype=bool)
+            if req.max_risk is None:  # (tmpnav.oracle.bounds: not under a threshold on the collision bound)
+                limit = cutoff(bounds, sight < 0, alone, req.min_gain or 0.0)
+                skip = skippable(bounds, sight >= 0, limit)
+                if skip.any():
+                    self.skipped[i] = (limit, float(bounds[skip].min()))
+            needed[g][positions[~skip]] = True
         return needed
+
+    def _settle_skipped(self, singles: SingleRuns, stats: EvalStats) -> None:
+        """A request that skipped combinations is exact when its cheapest other combination is
+        within its cutoff; otherwise none of its combinations can save ``min_gain``: pruned."""
+        for i, (limit, skipped) in self.skipped.items():
+            g, positions = self.of_request[i]
+            cheapest = float(self._costs(g, positions, singles)[0].min(initial=np.inf))
+            if cheapest > limit:
+                self.pruned[i] = min(cheapest, skipped)
+                stats.pairs_pruned += 1
 
     def _joint_runs(self, layout: _Layout, needed: list[np.ndarray], stats: EvalStats) -> None:
         """Simulate jointly what cannot be factorised and is not pruned."""
@@ -224,6 +243,23 @@ class PairCombos:
         self.cost = self.lib.scenario.cost.combine(self.c_u, self.c_g, self.c_sigma).sum(axis=1)
         stats.count_steps(seqs.horizon, seqs.restart)
 
+    def _costs(self, g: int, positions: np.ndarray, singles: SingleRuns) -> tuple[np.ndarray, np.ndarray]:
+        """The costs and collision bounds of group g's combinations at ``positions``: simulated
+        jointly, factorised (the sum of the singles), or skipped (robots that meet, not
+        simulated: cost inf, see :meth:`_prune`)."""
+        s1, s2, _ = self.groups[g]
+        costs, risks = np.empty(positions.size), np.empty((positions.size, 2))
+        for k, p in enumerate(positions):
+            row = self.kept_row[g][p]
+            if row >= 0:
+                costs[k], risks[k] = self.cost[row], self.risk[row]
+            elif self.seen[g][p]:
+                costs[k], risks[k] = np.inf, np.inf
+            else:
+                r1, r2 = singles.index(s1, int(self.a[g][p])), singles.index(s2, int(self.b[g][p]))
+                costs[k], risks[k] = singles.cost[r1] + singles.cost[r2], (singles.risk[r1], singles.risk[r2])
+        return costs, risks
+
     def best(self, i: int, singles: SingleRuns) -> MotionResult | None:
         """The cheapest combination of pair request i (the first in the request's own
         product order on a tie), its bound if it was pruned, or None if there is none."""
@@ -234,14 +270,7 @@ class PairCombos:
             return pruned_result(req.robots, self.pruned[i])
         g, positions = self.of_request[i]
         s1, s2, _ = self.groups[g]
-        costs, risks = np.empty(positions.size), np.empty((positions.size, 2))
-        for k, p in enumerate(positions):
-            row = self.kept_row[g][p]
-            if row >= 0:
-                costs[k], risks[k] = self.cost[row], self.risk[row]
-            else:
-                r1, r2 = singles.index(s1, int(self.a[g][p])), singles.index(s2, int(self.b[g][p]))
-                costs[k], risks[k] = singles.cost[r1] + singles.cost[r2], (singles.risk[r1], singles.risk[r2])
+        costs, risks = self._costs(g, positions, singles)
         p = positions[pick(costs, risks, req.max_risk)]
         a, b = int(self.a[g][p]), int(self.b[g][p])
         motions = (s1.motions[a], s2.motions[b])

@@ -312,3 +312,22 @@ def _problem_name(name: str) -> str:
     """A PDDL identifier for the problem (the scenario's name may hold any characters)."""
     slug = "".join(c if c.isalnum() or c == "-" else "-" for c in name.lower()).strip("-")
     return f"tmpnav-{slug}" if slug else "tmpnav"
+
+
+def sample_task(encoding: Encoding | str, span_weight: float = 0.0, min_gain: float = 0.0) -> PddlTask:
+    """A small problem of the kind the anytime search gives ENHSP, to warm a search before the
+    run's first (:func:`tmpnav.task.solve.warm_up`): two robots at the ends of a row of four
+    rooms, costs and durations growing with the distance, one paired move that saves, and the
+    team's clock where ``span_weight`` prices time. Its plan is of no use."""
+    where = {"a-start": 0, "w": 1, "x": 2, "y": 3, "z": 4, "b-start": 5}
+    start = {"a": "a-start", "b": "b-start"}
+    rooms = ("w", "x", "y", "z")
+    single = {(r, o, t): 1.0 + 2.0 * abs(where[o] - where[t]) for r in start for o in (start[r], *rooms) for t in rooms}
+    duration = {m: 5.0 * abs(where[m[1]] - where[m[2]]) for m in single}
+    single = {m: c for m, c in single.items() if m[1] != m[2]}
+    duration = {m: d for m, d in duration.items() if m in single}
+    pair_moves = (("a", "a-start", "w"), ("b", "b-start", "z"))
+    pair = {pair_moves: 0.8 * (single[pair_moves[0]] + single[pair_moves[1]])}
+    pair_duration = {pair_moves: (duration[pair_moves[0]], duration[pair_moves[1]])}
+    table = CostTable(("a", "b"), rooms, (*rooms, *start.values()), start, single, pair, duration, pair_duration)
+    return write_task(table, Goals(rooms, ()), encoding, "warm-up", min_gain, None, span_weight)

@@ -304,6 +304,28 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
     return SolveResult(_plan_status(outcome), _plan_actions(plan_text), name, _tail(log))
 
 
+def warm_up(planner: str, searches: int, domain: str, problem: str) -> None:
+    """Start ENHSP's JVM now, in the calling thread (the main one, as in :func:`side_by_side`),
+    and get ``searches`` searches ready in the background while the run computes its first
+    costs and plan, each having planned ``domain`` and ``problem`` (a small problem like the
+    run's) once (:func:`tmpnav.task.enhsp_jvm.warm`). Nothing where ENHSP runs as a process per
+    solve or ``planner`` is not one of :data:`ENHSP_ENGINES`."""
+    known = ENHSP_ENGINES.get(planner)
+    if known is None or not enhsp_jvm.usable(_jvm_options()):
+        return
+
+    @contextmanager
+    def sample() -> Iterator[list[str]]:
+        with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp:
+            d, p, plan_file = (os.path.join(tmp, n) for n in ("domain.pddl", "problem.pddl", "plan.txt"))
+            for path, text in ((d, domain), (p, problem)):
+                with open(path, "w", encoding="utf-8") as f:
+                    f.write(text)
+            yield _enhsp_arguments(known.command(d, p, plan_file))
+
+    enhsp_jvm.warm(searches, sample)
+
+
 #: seconds :func:`side_by_side` keeps stopping searches after a signal, and between its stops
 STOP_SECONDS, STOP_POLL = 5.0, 0.05
 #: the engines whose ``java`` process runs now (:func:`side_by_side` ends them after a signal)
@@ -349,6 +371,8 @@ def _settle(call: Callable[[], T], future: Future[T]) -> None:
         future.set_result(call())
     except BaseException as err:  # given to the waiting thread, which re-raises it
         future.set_exception(err)
+    finally:
+        enhsp_jvm.detach()  # the JVM's exit would wait for this thread (enhsp_jvm.detach)
 
 
 def _stop_searches() -> None:
@@ -389,9 +413,13 @@ def _run_process(engine: Engine, planner: str, cmd: list[str], timeout: float) -
 
 def _run_in_jvm(planner: str, cmd: list[str], timeout: float) -> tuple[bool, bool, str]:
     """ENHSP's ``main`` in the run's JVM, with up_enhsp's arguments: (timed out, failed, log)."""
-    jar = cmd.index("-jar") + 1  # up_enhsp's command is java -jar <jar> <ENHSP's arguments>
-    run = enhsp_jvm.run(cmd[jar + 1 :], timeout)
+    run = enhsp_jvm.run(_enhsp_arguments(cmd), timeout)
     return run.timed_out, run.error is not None, run.error or ""
+
+
+def _enhsp_arguments(cmd: list[str]) -> list[str]:
+    """ENHSP's own arguments in up_enhsp's command, ``java -jar <jar> <arguments>``."""
+    return cmd[cmd.index("-jar") + 2 :]
 
 
 def _plan_actions(text: str) -> tuple[tuple[str, tuple[str, ...]], ...]:

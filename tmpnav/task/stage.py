@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 from tmpnav.errors import UnsolvableError
 from tmpnav.results import BoundSummary, SearchSummary, StageTimes, TaskCounts, TaskResult
+from tmpnav.task import solve
 from tmpnav.task.bound import Bound
 from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import EncodedTask, encode_task
@@ -25,6 +26,7 @@ from tmpnav.task.export import pddl_texts
 from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
 from tmpnav.task.model import CostModel, table_schedule
 from tmpnav.task.objectives import OBJECTIVES
+from tmpnav.task.pddl_text import TEXT_ENCODINGS, sample_task
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.schedules import exact_schedule
 from tmpnav.task.search import SearchOptions, SearchRun, search
@@ -188,6 +190,17 @@ class AnytimeTask:
             sizes=SearchOptions.sizes if context_free else CARRIED_SIZES,
             span_weight=self.span_weight,
         )
+
+
+def warm_up(task: AnytimeTask) -> None:
+    """Get ENHSP ready for the anytime search's sub-problems while the run computes its first
+    costs and plan (:func:`tmpnav.task.solve.warm_up`): one search ready for each sub-problem
+    solved at once, warmed on a small problem of the search's encoding and objective."""
+    opts = task.options(0.0)
+    if opts.encoding not in TEXT_ENCODINGS:
+        return
+    sample = sample_task(opts.encoding, opts.span_weight, opts.min_gain)
+    solve.warm_up(opts.planner, opts.parallel, sample.domain, sample.problem)
 
 
 def plan_anytime(
