@@ -39,7 +39,15 @@ def _end(code: object) -> None:
     else:
         sys.stderr.write(f"{code}\n")
         status = 1
-    atexit._run_exitfuncs()
+    jvm = sys.modules.get("tmpnav.task.enhsp_jvm")
+    if jvm is None or jvm.quiesce(jvm.QUIESCE_SECONDS):
+        atexit._run_exitfuncs()
+    # else a thread is still inside ENHSP's JVM, which cannot be destroyed safely (it would
+    # deadlock or crash: tmpnav.task.enhsp_jvm.quiesce): the process ends with the JVM in it
+    _flush_and_exit(status)
+
+
+def _flush_and_exit(status: int) -> None:
     for stream in (sys.stdout, sys.stderr):
         try:
             stream.flush()

@@ -239,3 +239,27 @@ def test_the_warm_up_sample_is_a_sub_problem_enhsp_solves() -> None:
         actions = _solve(sample, "enhsp-blind")
         assert actions
         validate_with_unified_planning(sample, actions)
+
+
+#: a run that ends while the warm-up still loads ENHSP or searches its sample
+ENDING_WHILE_WARMING = """
+import sys, time
+from tmpnav.task.pddl_text import sample_task
+from tmpnav.task.solve import warm_up
+sample = sample_task("mixed", 1.0, 0.05)
+warm_up("enhsp-blind", 2, sample.domain, sample.problem)
+time.sleep(float(sys.argv[1]))
+sys.exit(130)
+"""
+
+
+@pytest.mark.parametrize("delay", [0.1, 0.2, 0.25, 0.3, 0.4])
+def test_a_run_that_ends_while_the_warm_up_runs_ends_at_once(delay: float) -> None:
+    """Destroying the JVM while the warm-up's thread was inside it deadlocked (that thread
+    holding Python's lock) or crashed the process: 2 runs in 10 of this hung before
+    enhsp_jvm.quiesce waited for the thread at exit."""
+    proc = subprocess.run(
+        [sys.executable, "-c", ENDING_WHILE_WARMING, str(delay)], capture_output=True, text=True, timeout=30
+    )
+    assert proc.returncode == 130, proc.stderr
+    assert "Traceback" not in proc.stderr and "Fatal" not in proc.stderr

@@ -21,6 +21,13 @@ What a shared JVM changes, and how this module keeps the old behaviour:
   all loaded at once and their static fields recorded; before every solve the slot puts them
   back as they were (null, a number, or a collection's first contents). A slot with a field
   of another kind would not be reused (a new slot per solve: about 190 ms instead of 20 ms).
+- Exit: the JVM is destroyed at Python's exit (JPype's shutdown). A thread still inside it
+  then is stopped there for good, which deadlocked (holding Python's lock) or crashed the
+  process, so :func:`quiesce` first stops the searches and waits for this module's threads
+  (the warm-up's, the searches'), and every thread that called into the JVM detaches before
+  it ends (:func:`detach`: the JVM's exit waited 0.3 s for each one left attached).
+- Warm-up: :func:`warm` loads the slots the search will use, and runs a small search in
+  each, in a background thread while the run computes its first plan.
 - Output: ENHSP prints its log on the JVM's one ``System.out``, which two solves at once
   would share; it goes nowhere. A crash is a Java exception, whose text is the log tail.
 - ``System.gc()``: ENHSP asks for a full collection per run; ``-XX:+DisableExplicitGC``.
@@ -39,6 +46,7 @@ Only this module imports JPype. ``TMPNAV_ENHSP=process`` turns it off.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import functools
 import importlib.util
@@ -68,6 +76,9 @@ STOP_GRACE = 2.0
 POLL = 0.05
 #: seconds the small search that warms a slot may take (:func:`warm`; it takes about 0.2 s)
 WARM_TIMEOUT = 10.0
+#: seconds the end of a run waits for threads to leave the JVM (:func:`quiesce`); a slot's
+#: classes load in about 0.3 s, a stopped search ends in milliseconds
+QUIESCE_SECONDS = 2.0
 
 
 @dataclass(frozen=True)
@@ -199,6 +210,7 @@ class _Jvm:
         self.jar = ""
         self.slots: queue.LifoQueue[_Slot] = queue.LifoQueue()  # idle, reset before each use
         self.warming: threading.Thread | None = None  # getting slots ready (:func:`warm`)
+        self.closing = threading.Event()  # the run is ending (:func:`quiesce`): warm nothing more
 
     def ready(self, options: str) -> bool:
         """Start the JVM (with JVM ``options``) if it has not started; False (and ``broken``
@@ -208,12 +220,17 @@ class _Jvm:
                 try:
                     self.jar = _start(options)
                     self.started = True
+                    # at Python's exit, before JPype's shutdown (registered earlier, so run later)
+                    atexit.register(quiesce, QUIESCE_SECONDS)
                 except Exception as err:  # any failure to start means: use processes
                     self.broken = f"the JVM did not start: {err}"
             return self.started and self.broken is None
 
 
 _JVM = _Jvm()
+#: the threads that may be inside the JVM now, besides the main thread (:func:`quiesce`)
+_threads: set[threading.Thread] = set()
+_threads_lock = threading.Lock()
 #: the runs in progress, each by the event that stops it (:func:`stop_all`)
 _stops: set[threading.Event] = set()
 _stops_lock = threading.Lock()
@@ -345,7 +362,47 @@ def _stderr_held() -> Iterator[Callable[[], str]]:
 def run(args: list[str], timeout: float) -> JvmRun:
     """Run ENHSP's ``main`` with ``args`` (up_enhsp's, without ``java -jar``) in the shared
     JVM, stopping it after ``timeout`` seconds. Call :func:`usable` first."""
-    return _run_in(_take(), args, timeout)
+    with _inside():
+        return _run_in(_take(), args, timeout)
+
+
+@contextlib.contextmanager
+def _inside() -> Iterator[None]:
+    """The calling thread may call into the JVM inside (:func:`quiesce` waits for it); not
+    the main thread, which shuts the JVM down itself."""
+    me = threading.current_thread()
+    if me is threading.main_thread():
+        yield
+        return
+    with _threads_lock:
+        _threads.add(me)
+    try:
+        yield
+    finally:
+        with _threads_lock:
+            _threads.discard(me)
+
+
+def quiesce(timeout: float) -> bool:
+    """Before the JVM is shut down: stop what runs in it (the warm-up, the searches) and wait up
+    to ``timeout`` seconds for every thread of this module to leave it. True when none is left.
+
+    A thread inside the JVM when it is destroyed (JPype's shutdown at Python's exit) is stopped
+    at the JVM's last safepoint for good: holding Python's lock (a JNI call from Python code,
+    such as freeing a Java object), it deadlocked the main thread, which needs that lock back
+    after DestroyJavaVM; running compiled Java code, it crashed the process at a safepoint
+    poll (seen in the test suite: a run interrupted while the warm-up loaded ENHSP). The
+    command line ends the process without destroying the JVM when this returns False
+    (tmpnav.__main__); at Python's exit, it runs before JPype's shutdown (registered when
+    the JVM starts)."""
+    _JVM.closing.set()
+    stop_all()
+    deadline = time.monotonic() + timeout
+    with _threads_lock:
+        threads = list(_threads)
+    for thread in threads:
+        thread.join(max(0.0, deadline - time.monotonic()))
+    return not any(t.is_alive() for t in threads)
 
 
 def detach() -> None:
@@ -376,17 +433,20 @@ def warm(slots: int, sample: Callable[[], contextlib.AbstractContextManager[list
     one (:func:`_take`). The thread's searches are stopped like any (:func:`stop_all`); a slot
     still loading its classes at the run's end is left to the process's exit."""
     missing = slots - _JVM.slots.qsize()
-    if missing <= 0 or not _JVM.started:
+    if missing <= 0 or not _JVM.started or _JVM.closing.is_set():
         return
 
     def ready() -> None:
         try:
-            _ready()
+            with _inside():
+                _ready()
         finally:
             detach()
 
     def _ready() -> None:
         for _ in range(missing):
+            if _JVM.closing.is_set():
+                return
             try:
                 slot = _Slot(_JVM.jar)
             except Exception:  # a search makes its own slot, and meets the same failure
@@ -396,6 +456,8 @@ def warm(slots: int, sample: Callable[[], contextlib.AbstractContextManager[list
                 return
             ran = False
             try:
+                if _JVM.closing.is_set():
+                    raise RuntimeError("the run is ending")
                 with sample() as args:
                     ran = True
                     _run_in(slot, args, WARM_TIMEOUT)  # gives the slot back when done
@@ -431,17 +493,23 @@ def _run_in(slot: _Slot, args: list[str], timeout: float) -> JvmRun:
     def target() -> None:
         import jpype
 
-        jpype.java.lang.Thread.attachAsDaemon()
-        box["thread"] = jpype.java.lang.Thread.currentThread()
         try:
-            slot.main.main(args)
-        except Exception as err:  # a Java exception (or ThreadDeath after a stop)
-            box["error"] = f"{type(err).__name__}: {err}"
+            jpype.java.lang.Thread.attachAsDaemon()
+            box["thread"] = jpype.java.lang.Thread.currentThread()
+            try:
+                slot.main.main(args)
+            except Exception as err:  # a Java exception (or ThreadDeath after a stop)
+                box["error"] = f"{type(err).__name__}: {err}"
         finally:
             done.set()
             detach()
+            with _threads_lock:
+                _threads.discard(threading.current_thread())
 
-    threading.Thread(target=target, name="tmpnav-enhsp", daemon=True).start()
+    thread = threading.Thread(target=target, name="tmpnav-enhsp", daemon=True)
+    with _threads_lock:
+        _threads.add(thread)
+    thread.start()
     ended = _wait(done, timeout)
     if ended == "done":
         _JVM.slots.put(slot) if slot.reusable else slot.close()
