@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import signal
+import subprocess
+import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -97,3 +99,33 @@ def test_the_signals_own_exception_where_python_cannot_raise_it_prints_no_traceb
     assert proc.returncode == 0 and proc.stdout == "went on\n", proc.stderr
     assert "KeyboardInterrupt" not in proc.stderr
     assert "ValueError: a real bug" in proc.stderr
+
+
+@pytest.mark.skipif(not hasattr(signal, "pthread_kill"), reason="needs pthread_kill")
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_given_to_another_thread_inside_a_held_block_is_raised_when_it_ends(sig: signal.Signals) -> None:
+    """The main thread holds the signals while it forks; the kernel gives one to another
+    thread (the JVM's), and Python runs the handler in the main thread inside the block, where
+    at-fork handlers dropped its exception: the run went on to its end. It is raised when the
+    block ends, and the block's work is not cut short."""
+    script = f"""
+import signal, sys, threading, time
+from tmpnav import lifetime
+signal.signal(signal.SIGTERM, lifetime._raise_terminated)
+signal.signal(signal.SIGINT, lifetime._raise_interrupted)
+other = threading.Thread(target=time.sleep, args=(2.0,), daemon=True)
+other.start()
+try:
+    with lifetime.signals_held():
+        signal.pthread_kill(other.ident, {int(sig)})
+        until = time.monotonic() + 0.3
+        while time.monotonic() < until:  # bytecode: the handler runs here, in this thread
+            pass
+        print("block done", flush=True)
+    print("not raised", flush=True)
+except (KeyboardInterrupt, lifetime.Terminated) as err:
+    print("raised", type(err).__name__, flush=True)
+"""
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=30)
+    expected = "KeyboardInterrupt" if sig == signal.SIGINT else "Terminated"
+    assert proc.stdout.split("\n")[:2] == ["block done", f"raised {expected}"], proc.stdout + proc.stderr

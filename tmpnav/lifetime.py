@@ -66,6 +66,9 @@ T = TypeVar("T")
 _sentinel: subprocess.Popen[bytes] | None = None
 #: the signal (SIGINT or SIGTERM) that asked this run to end, once one has
 _signalled: signal.Signals | None = None
+#: blocks of :func:`signals_held` running now, and whether a signal's exception waits for their end
+_holding = 0
+_deferred = False
 
 
 class Terminated(BaseException):
@@ -125,9 +128,13 @@ def check_signals() -> None:
 
 
 def _raise_interrupted(signum: int, frame: FrameType | None) -> None:
-    """Ctrl-C: Python's own KeyboardInterrupt, remembered."""
-    global _signalled
+    """Ctrl-C: Python's own KeyboardInterrupt, remembered (raised when a held block ends,
+    :func:`signals_held`, if one is running)."""
+    global _signalled, _deferred
     _signalled = _signalled or signal.SIGINT
+    if _holding:
+        _deferred = True
+        return
     raise KeyboardInterrupt
 
 
@@ -138,12 +145,15 @@ def _default_sigint() -> None:
 
 def _raise_terminated(signum: int, frame: FrameType | None) -> None:
     """The first SIGTERM: unwind (Terminated), within CLEANUP_SECONDS; the next one kills."""
-    global _signalled
+    global _signalled, _deferred
     _signalled = signal.SIGTERM
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     timer = threading.Timer(CLEANUP_SECONDS, os.kill, (os.getpid(), signal.SIGTERM))
     timer.daemon = True
     timer.start()
+    if _holding:
+        _deferred = True
+        return
     raise Terminated()
 
 
@@ -165,16 +175,27 @@ def signals_held() -> Iterator[None]:
     """Hold Ctrl-C and SIGTERM while this thread forks: CPython runs its at-fork handlers
     (logging's, threading's) right after fork(), and KeyboardInterrupt or Terminated raised
     in one of them is printed as "Exception ignored" and lost; the run went on to its end.
-    Held, a signal is delivered when the block ends, to ordinary code."""
+    Held, a signal is delivered when the block ends, to ordinary code. The kernel may give
+    it to another thread meanwhile (the JVM's, started before the oracle's workers since
+    ENHSP is warmed up early), and Python then runs its handler in this thread all the
+    same, inside the block: the handler only remembers the signal, and its exception is
+    raised when the block ends (a fault-injection run interrupted while its workers forked
+    ran on to its end, remembering its plan)."""
+    global _holding, _deferred
     held = {signal.SIGINT, signal.SIGTERM}
     if threading.current_thread() is not threading.main_thread():
         yield  # Python runs signal handlers in the main thread only
         return
     previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    _holding += 1
     try:
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        _holding -= 1
+    if not _holding and _deferred:
+        _deferred = False
+        check_signals()
 
 
 def gather(futures: Sequence[Future[T]]) -> Iterator[T]:
