@@ -430,8 +430,8 @@ def warm(slots: int, sample: Callable[[], contextlib.AbstractContextManager[list
     cold against 1.11 s warm. Call after :func:`usable` has started the JVM (in the main
     thread, see the module docstring); slots already idle count (a second run in the process
     warms nothing). A search that finds no idle slot while the thread runs waits for the next
-    one (:func:`_take`). The thread's searches are stopped like any (:func:`stop_all`); a slot
-    still loading its classes at the run's end is left to the process's exit."""
+    one (:func:`_take`). At the run's end, :func:`quiesce` stops the thread's search and waits
+    for it to leave the JVM; it makes no slot after that."""
     missing = slots - _JVM.slots.qsize()
     if missing <= 0 or not _JVM.started or _JVM.closing.is_set():
         return
