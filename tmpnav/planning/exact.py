@@ -19,7 +19,7 @@ def exact_table(run: TaskRun) -> Planned:
     task = TaskProblem.of(run.scenario, table)
     if not task.span_weight:
         return Planned(table, plan_task(task, run.store, run.replan, run.times))
-    found = plan_schedules(task, run.times)
+    found = plan_schedules(task, run.times, run.store, run.replan)
     if found is None:
         return anytime_table(run)
     return Planned(table, found)

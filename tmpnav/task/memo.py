@@ -38,6 +38,7 @@ CODE_FILES = (
     "task/decode.py",
     "task/memo.py",
     "task/stage.py",
+    "task/schedules.py",
 )
 VERSION = "plan/1"
 

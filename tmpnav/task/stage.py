@@ -107,30 +107,65 @@ def plan_task(
     return _result(task, memo, encoded)
 
 
-def plan_schedules(task: TaskProblem, times: StageTimes | None = None) -> TaskResult | None:
+#: the engine name that keys a remembered plan of the A* over schedules (not a PDDL planner)
+SCHEDULES_ENGINE = "tmpnav A* over the schedules of the cost table"
+
+
+def plan_schedules(
+    task: TaskProblem, times: StageTimes | None = None, store: EntryStore | None = None, replan: bool = False
+) -> TaskResult | None:
     """The exact plan of ``task`` when its objective prices time: the A* over every schedule of
     the table (:mod:`tmpnav.task.schedules`; ENHSP's optimal search does not cover a makespan).
-    None when the problem is too large for it. ``times`` gets the ``planner`` stage."""
+    None when the problem is too large for it. ``times`` gets the ``planner`` stage.
+
+    Like :func:`plan_task`, it is remembered in ``store`` (unless ``replan``): the plan, or that
+    the problem is too large (so a warm run of a large one does not expand the A*'s states
+    again before the anytime search takes over). The bound it reports is the plan's own
+    objective, computed from its steps alike whether remembered or just found."""
     times = times if times is not None else StageTimes()
+    key = None
     with times.timed("planner"):
+        if store is not None:
+            p = task.planner
+            key = memo_key(
+                task.table, task.goals, p.encoding, p.pair_min_gain, SCHEDULES_ENGINE, task.name, task.span_weight
+            )
+            entry = None if replan else store.get_many([key]).get(key)
+            if isinstance(entry, dict) and entry.get("too_large") is True:
+                return None
+            memo = entry_to_memo(entry, task.table) if entry is not None else None
+            if memo is not None:
+                return _schedules_result(task, memo.steps, remembered=True)
         found = exact_schedule(task.table, task.goals, task.planner.pair_min_gain, task.span_weight)
     if found is None:
+        if store is not None and key is not None:
+            store.put_many({key: {"too_large": True}})
         return None
-    steps, value = found
+    steps = found[0]
+    if store is not None and key is not None:
+        actions = tuple((name, ()) for name in action_names(steps))
+        memo = Memo(PlanStatus.SOLVED_OPTIMALLY, SCHEDULES_ENGINE, actions, steps, (0, 0, 0))
+        store.put_many({key: memo_to_entry(memo)})
+    return _schedules_result(task, steps, remembered=False)
+
+
+def _schedules_result(task: TaskProblem, steps: Plan, remembered: bool) -> TaskResult:
     order = canonical_order(list(steps), task.table.robots)
     steps = tuple(steps[i] for i in order)
     step_costs = tuple(step_cost(task.table, s) for s in steps)
+    schedule = table_schedule(task.table, steps)
+    value = float(sum(step_costs)) + task.span_weight * (schedule.makespan if schedule is not None else 0.0)
     return TaskResult(
         status=PlanStatus.SOLVED_OPTIMALLY,
-        engine="tmpnav A* over the schedules of the cost table",
+        engine=SCHEDULES_ENGINE,
         steps=steps,
         action_names=action_names(steps),
         step_costs=step_costs,
         counts=TaskCounts(len(task.table.single), len(task.table.pair), 0, sum(len(s) == 2 for s in steps), 0),
-        plan_hit=False,
+        plan_hit=remembered,
         search=SearchSummary(mode="exact", costs="table", stopped="solved"),
         bound=BoundSummary(value, "exact (A* over every schedule)", 0.0, True),
-        schedule=table_schedule(task.table, steps),
+        schedule=schedule,
     )
 
 
