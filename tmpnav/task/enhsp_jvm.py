@@ -454,10 +454,11 @@ def warm(slots: int, sample: Callable[[], contextlib.AbstractContextManager[list
             if not slot.reusable:  # a slot that cannot be reused serves one search only
                 slot.close()
                 return
+            if _JVM.closing.is_set():
+                _JVM.slots.put(slot)
+                return
             ran = False
             try:
-                if _JVM.closing.is_set():
-                    raise RuntimeError("the run is ending")
                 with sample() as args:
                     ran = True
                     _run_in(slot, args, WARM_TIMEOUT)  # gives the slot back when done

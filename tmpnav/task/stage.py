@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from tmpnav.errors import UnsolvableError
-from tmpnav.results import BoundSummary, SearchSummary, StageTimes, TaskCounts, TaskResult
+from tmpnav.results import BoundSummary, Schedule, SearchSummary, StageTimes, TaskCounts, TaskResult
 from tmpnav.task import solve
 from tmpnav.task.bound import Bound
 from tmpnav.task.decode import canonical_order, step_cost
@@ -63,9 +63,11 @@ class TaskProblem:
             span_weight=self.span_weight,
         )
 
-    def memo_key(self) -> str:
+    def memo_key(self, engine: str | None = None) -> str:
+        """The key of this problem's remembered plan, solved by ``engine`` (the planner's by default)."""
         p = self.planner
-        return memo_key(self.table, self.goals, p.encoding, p.pair_min_gain, p.name, self.name, self.span_weight)
+        engine = p.name if engine is None else engine
+        return memo_key(self.table, self.goals, p.encoding, p.pair_min_gain, engine, self.name, self.span_weight)
 
 
 def plan_task(
@@ -126,10 +128,7 @@ def plan_schedules(
     key = None
     with times.timed("planner"):
         if store is not None:
-            p = task.planner
-            key = memo_key(
-                task.table, task.goals, p.encoding, p.pair_min_gain, SCHEDULES_ENGINE, task.name, task.span_weight
-            )
+            key = task.memo_key(SCHEDULES_ENGINE)
             entry = None if replan else store.get_many([key]).get(key)
             if isinstance(entry, dict) and entry.get("too_large") is True:
                 return None
@@ -154,7 +153,7 @@ def _schedules_result(task: TaskProblem, steps: Plan, remembered: bool) -> TaskR
     steps = tuple(steps[i] for i in order)
     step_costs = tuple(step_cost(task.table, s) for s in steps)
     schedule = table_schedule(task.table, steps)
-    value = float(sum(step_costs)) + task.span_weight * (schedule.makespan if schedule is not None else 0.0)
+    value = _objective(task, step_costs, schedule)
     return TaskResult(
         status=PlanStatus.SOLVED_OPTIMALLY,
         engine=SCHEDULES_ENGINE,
@@ -169,6 +168,11 @@ def _schedules_result(task: TaskProblem, steps: Plan, remembered: bool) -> TaskR
     )
 
 
+def _objective(task: TaskProblem, step_costs: tuple[float, ...], schedule: Schedule | None) -> float:
+    """The plan's objective on the table: its steps' costs plus the price of its makespan."""
+    return float(sum(step_costs)) + task.span_weight * (schedule.makespan if schedule is not None else 0.0)
+
+
 def _result(task: TaskProblem, memo: Memo, encoded: EncodedTask | None) -> TaskResult:
     """The memo's steps in canonical order, with their table costs and schedule."""
     table = task.table
@@ -178,7 +182,7 @@ def _result(task: TaskProblem, memo: Memo, encoded: EncodedTask | None) -> TaskR
     step_costs = tuple(step_cost(table, s) for s in steps)
     optimal = memo.status == PlanStatus.SOLVED_OPTIMALLY
     schedule = table_schedule(table, steps)
-    cost = float(sum(step_costs)) + task.span_weight * (schedule.makespan if schedule is not None else 0.0)
+    cost = _objective(task, step_costs, schedule)
     return TaskResult(
         status=memo.status,
         engine=memo.engine,
