@@ -341,7 +341,8 @@ class MotionResult:
     pruned: bool = False  # a pair proved unable to save min_gain: cost is a lower bound only
     steps: tuple[int, ...] = ()  # control steps of each robot's motion (its duration is steps x dt)
     #: each robot's bound on the probability that its footprint touches an obstacle during the
-    #: move (docs/models.md, "Collision bound"; at most 1)
+    #: move (docs/models.md, "Collision bound"; at most 1); empty when the request had no
+    #: threshold on it (``max_risk``): the oracle then does not compute it
     risk: tuple[float, ...] = ()
 
     @property

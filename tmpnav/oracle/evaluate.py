@@ -53,8 +53,11 @@ def evaluate(lib: MotionLibrary, requests: list[Request]) -> tuple[list[MotionRe
         for robot, start, room in zip(req.robots, req.starts, req.rooms, strict=True):
             wanted.setdefault((robot, start), set()).update(lib.roadmap.instantiations[room])
     sets = motion_sets(lib, wanted)
-    pairs = PairCombos(lib, sets, requests)
-    singles = SingleRuns(lib, sets)
+    # the collision bound only where a threshold chooses by it; a request without one has no
+    # bound in its result, whatever the batch it comes in (tmpnav.oracle.motionsets.MotionTable)
+    priced = any(req.max_risk is not None for req in requests)
+    pairs = PairCombos(lib, sets, requests, priced)
+    singles = SingleRuns(lib, sets, priced)
     for req in requests:
         if req.n == 1 and (req.robots[0], req.starts[0]) in sets:
             ms = sets[(req.robots[0], req.starts[0])]

@@ -40,8 +40,8 @@ class _Layout:
 class PairCombos:
     """The two-robot combinations of all pair requests of one evaluation."""
 
-    def __init__(self, lib: MotionLibrary, sets: dict[SetKey, MotionSet], requests: list[Request]):
-        self.lib, self.requests = lib, requests
+    def __init__(self, lib: MotionLibrary, sets: dict[SetKey, MotionSet], requests: list[Request], priced: bool = True):
+        self.lib, self.requests, self.priced = lib, requests, priced
         self.groups: list[tuple[MotionSet, MotionSet, Request]] = []
         self.a: list[np.ndarray] = []  # per group: motions of robot 1, in trie order
         self.b: list[np.ndarray] = []  # per group: motions of robot 2
@@ -117,7 +117,7 @@ class PairCombos:
     def _layout(self) -> _Layout:
         lib = self.lib
         sets = [ms for s1, s2, _ in self.groups for ms in (s1, s2)]
-        table = MotionTable.of_sets(sets, lib)
+        table = MotionTable.of_sets(sets, lib, self.priced)
         horizon = [
             np.maximum(s1.steps[a], s2.steps[b]) for (s1, s2, _), a, b in zip(self.groups, self.a, self.b, strict=True)
         ]
@@ -275,17 +275,18 @@ class PairCombos:
         a, b = int(self.a[g][p]), int(self.b[g][p])
         motions = (s1.motions[a], s2.motions[b])
         weights = self.lib.scenario.cost
+        priced = req.max_risk is not None
         row = self.kept_row[g][p]
         if row >= 0:
             terms = tuple(
                 CostTerms(float(self.c_u[row, j]), float(self.c_g[row, j]), float(self.c_sigma[row, j]))
                 for j in range(2)
             )
-            risk = (float(self.risk[row, 0]), float(self.risk[row, 1]))
+            risk = (float(self.risk[row, 0]), float(self.risk[row, 1])) if priced else ()
             mean, cov, mutual = self.mean[row], self.cov[row], int(self.mutual[row])
             return motion_result(req.robots, terms, mean, cov, mutual, motions, weights, risk)
         r1, r2 = singles.index(s1, a), singles.index(s2, b)
         mean, cov = block_diagonal(singles.mean[r1], singles.cov[r1], singles.mean[r2], singles.cov[r2])
         terms = (singles.terms(r1), singles.terms(r2))
-        risk = (float(singles.risk[r1]), float(singles.risk[r2]))
+        risk = (float(singles.risk[r1]), float(singles.risk[r2])) if priced else ()
         return motion_result(req.robots, terms, mean, cov, 0, motions, weights, risk)

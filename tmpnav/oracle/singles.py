@@ -25,8 +25,8 @@ class SingleRuns:
     ``cost[r]`` and its running c_Sigma after every step, ``csig_hist[r]``.
     """
 
-    def __init__(self, lib: MotionLibrary, sets: dict[SetKey, MotionSet]):
-        self.lib, self.sets = lib, sets
+    def __init__(self, lib: MotionLibrary, sets: dict[SetKey, MotionSet], priced: bool = True):
+        self.lib, self.sets, self.priced = lib, sets, priced
         self.wanted: dict[int, set[int]] = {}
         self.by_id = {id(ms): ms for ms in sets.values()}
         self.results: dict[tuple[int, int], int] = {}
@@ -40,7 +40,7 @@ class SingleRuns:
         if not self.wanted:
             return
         sets = [self.by_id[k] for k in self.wanted]
-        table = MotionTable.of_sets(sets, self.lib)
+        table = MotionTable.of_sets(sets, self.lib, self.priced)
         groups, cg, cm, cs, ch = [], [], [], [], []
         for g, ms in enumerate(sets):
             local = np.array(sorted(self.wanted[id(ms)]), dtype=np.int64)
@@ -93,6 +93,5 @@ class SingleRuns:
         k, r = rows[pick(self.cost[idx], self.risk[idx], req.max_risk)]
         weights = self.lib.scenario.cost
         motion = (ms.motions[k],)
-        return motion_result(
-            req.robots, (self.terms(r),), self.mean[r], self.cov[r], 0, motion, weights, (float(self.risk[r]),)
-        )
+        risk = (float(self.risk[r]),) if req.max_risk is not None else ()
+        return motion_result(req.robots, (self.terms(r),), self.mean[r], self.cov[r], 0, motion, weights, risk)
