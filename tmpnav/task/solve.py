@@ -77,6 +77,11 @@ ENHSP_ENGINES: dict[str, EnhspEngine] = {
     ),
 }
 
+#: arguments tmpnav adds to an engine's when ENHSP runs tmpnav's own PDDL text: a blind search
+#: needs no reachability analysis of the grounded problem (``-dap``, ENHSP's AIBR preprocessing
+#: off: it only drops actions that can never apply, which the search never applies either).
+#: On the 10-room corridor's 24 sub-problems, in a warm JVM: 0.69 s -> 0.49 s, the same plans.
+TEXT_ARGUMENTS: dict[str, tuple[str, ...]] = {"enhsp-blind": ("-dap",)}
 
 #: JVM options for ENHSP's short runs: the C1 compiler alone starts faster, which saves
 #: 0.2-0.3 s a run (measured in benchmarks/); TMPNAV_JAVA_OPTIONS replaces them.
@@ -282,6 +287,7 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
             with open(path, "w", encoding="utf-8") as f:
                 f.write(text)
         cmd = engine._get_cmd(d, p, plan_file) if engine is not None else known.command(d, p, plan_file)  # type: ignore[union-attr]
+        cmd = [*cmd, *TEXT_ARGUMENTS.get(planner, ())]
         if in_jvm:
             timed_out, failed, log = _run_in_jvm(planner, cmd, timeout)
         else:
@@ -321,7 +327,7 @@ def warm_up(planner: str, searches: int, domain: str, problem: str) -> None:
             for path, text in ((d, domain), (p, problem)):
                 with open(path, "w", encoding="utf-8") as f:
                     f.write(text)
-            yield _enhsp_arguments(known.command(d, p, plan_file))
+            yield _enhsp_arguments([*known.command(d, p, plan_file), *TEXT_ARGUMENTS.get(planner, ())])
 
     enhsp_jvm.warm(searches, sample)
 
