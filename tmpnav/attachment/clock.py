@@ -67,8 +67,6 @@ from tmpnav.world.visibility import MutualSensing
 
 #: steps of one block of the mutual-noise stream of a pair of robots outside paired moves
 MUTUAL_BLOCK = 512
-#: noise streams kept in memory (the oldest dropped first)
-MAX_STREAMS = 4096
 
 
 class Unreachable(TmpnavError):
@@ -186,7 +184,6 @@ class TeamClock:
             if i != j and (s := MutualSensing.between(self.scenario, start.names[i], start.names[j])) is not None
         }
         self.ekf = EKFConstants.of(self.scenario.models, lib.world.landmark_xy)
-        self._noise: dict[int, np.ndarray] = {}  # seed -> the noise stream drawn so far (see _stream)
 
     # ------------------------------------------------------------------ a whole plan
 
@@ -321,7 +318,9 @@ class TeamClock:
         if h <= 0:
             return state
         n = len(self.start.names)
-        windows = [self._window(state, i, a, until) for i in range(n)]
+        # the collision bound prices moves only under a threshold; without one, only records need it
+        priced = self.scenario.planner.max_risk is not None or trace is not None
+        windows = [self._window(state, i, a, until, priced) for i in range(n)]
         poses = [w[1] for w in windows]
         visible = np.zeros((h + 1, n, n), dtype=bool)
         for (i, j), sensing in self.sensing.items():
@@ -341,8 +340,6 @@ class TeamClock:
         out = propagate_sequences(batch)
         assert out.c_sigma_history is not None
         running = [[state.csig[i] + float(c) for c in out.c_sigma_history[0, :, i]] for i in range(n)]
-        # the collision bound prices moves only under a threshold; without one, only records need it
-        priced = self.scenario.planner.max_risk is not None or trace is not None
         zero = np.zeros(h + 1)
         risk = [
             state.risk[i] + (_running_risk(out.last_covs, i, windows[i][4], windows[i][5]) if priced else zero)
@@ -385,10 +382,11 @@ class TeamClock:
         still = tuple(m for m in state.open if m.end > state.t)
         return replace(state, open=still, closed=tuple(closed), closed_cost=total)
 
-    def _window(self, state: ClockState, i: int, a: int, b: int) -> tuple[np.ndarray, ...]:
+    def _window(self, state: ClockState, i: int, a: int, b: int, priced: bool) -> tuple[np.ndarray, ...]:
         """Robot i's controls (h, 2), nominal poses (h+1, 3), landmark visibility (h+1, L),
-        landmark draws (h+1, L, 2), the sector reach of its footprint (h+1, K) and whether it
-        drove into each row (h+1,) over the steps a..b."""
+        landmark draws (h+1, L, 2), the sector reach of its footprint (h+1, K; infinite unless
+        ``priced``: the collision bound is wanted) and whether it drove into each row (h+1,)
+        over the steps a..b."""
         L = self.ekf.landmarks.shape[0]
         controls, poses = np.zeros((b - a, 2)), np.empty((b - a + 1, 3))
         reach, drove = np.full((b - a + 1, SECTORS), np.inf), np.zeros(b - a + 1, dtype=bool)
@@ -409,29 +407,18 @@ class TeamClock:
             else:
                 m = leg.motion
                 last = np.minimum(k, m.n_steps)
-                poses[rows], vis[rows], reach[rows] = m.poses[last], m.lm_visible[last], self.lib.reach(m, last)
+                poses[rows], vis[rows] = m.poses[last], m.lm_visible[last]
+                if priced:
+                    reach[rows] = self.lib.reach(m, last)
                 s = np.arange(lo, min(hi, b))  # the window's transitions s -> s + 1 in this leg
                 drive = s - leg.start < m.n_steps
                 controls[s[drive] - a] = m.controls[s[drive] - leg.start]
                 drove[s[drive] - a + 1] = True
-            noise[rows] = self._stream(leg.noise_seed, int(k[-1]) + 1, (L, 2))[k]
+            noise[rows] = self.lib.noise.rows(leg.noise_seed, int(k[-1]) + 1, (L, 2))[k]
         return controls, poses, vis, noise, reach, drove
 
     def _radius(self, i: int) -> float:
         return self.scenario.robot(self.start.names[i]).radius
-
-    def _stream(self, seed: int, rows: int, tail: tuple[int, ...]) -> np.ndarray:
-        """At least the first ``rows`` rows of the standard-normal stream of ``seed``, each of
-        shape ``tail``. Drawn in C order, a stream drawn longer starts with the draws of a
-        shorter one (tmpnav.belief.sequences.standard_normal_draws): so it is kept, and drawn
-        again twice as long when more is needed."""
-        have = self._noise.get(seed)
-        if have is None or have.shape[0] < rows:
-            size = max(rows, 64 if have is None else 2 * have.shape[0])
-            have = self._noise[seed] = np.random.default_rng(seed).standard_normal((size, *tail))
-            if len(self._noise) > MAX_STREAMS:
-                self._noise.pop(next(iter(self._noise)))
-        return have
 
     def _mutual_noise(self, state: ClockState, a: int, b: int) -> np.ndarray:
         """(h+1, n, n, 2) draws of every ordered pair's observations over the steps a..b."""
@@ -445,7 +432,7 @@ class TeamClock:
             lo, hi = max(p.start, a), min(p.start + p.steps, b)
             if lo > hi:
                 continue
-            draws = self._stream(p.seed, p.steps + 1, (2, 2, 2))
+            draws = self.lib.noise.rows(p.seed, p.steps + 1, (2, 2, 2))
             (x, y), rows, k = p.robots, slice(lo - a, hi - a + 1), slice(lo - p.start, hi - p.start + 1)
             out[rows, x, y], out[rows, y, x] = draws[k, 0, 1], draws[k, 1, 0]
         return out
@@ -454,7 +441,7 @@ class TeamClock:
         """Block ``block`` of the draws of robot i observing robot j outside paired moves."""
         names = self.start.names
         seed = stable_seed(self.scenario.models.seed, "mutual", names[i], names[j], "clock", block)
-        return self._stream(seed, MUTUAL_BLOCK, (2,))[:MUTUAL_BLOCK]
+        return self.lib.noise.rows(seed, MUTUAL_BLOCK, (2,))[:MUTUAL_BLOCK]
 
     # ------------------------------------------------------------------ the result
 

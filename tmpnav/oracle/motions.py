@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tmpnav.belief.controls import path_controls
+from tmpnav.belief.sequences import NoiseStreams
 from tmpnav.roadmap import RoadmapGraph
 from tmpnav.roadmap.graph import safe_weights
 from tmpnav.types import Roadmap, Scenario
@@ -89,6 +90,7 @@ class MotionLibrary:
         safe = scenario.planner.max_risk is not None
         self.graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius) if safe else None)
         self.visibility = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
+        self.noise = NoiseStreams()  # the simulated observations' draws, by stream
         self._motions: OrderedDict[tuple[str, int, float, int], NominalMotion | None] = OrderedDict()
         self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
 

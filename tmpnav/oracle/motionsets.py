@@ -23,7 +23,6 @@ from tmpnav.belief.sequences import (
     Sequences,
     StartGroups,
     propagate_sequences,
-    standard_normal_draws,
 )
 from tmpnav.belief.trie import common_prefix_matrix
 from tmpnav.oracle.motions import MotionLibrary, NominalMotion
@@ -172,12 +171,12 @@ class MotionTable:
         landmarks = np.ascontiguousarray(lib.world.landmark_xy)
         T = int(sequences.horizon.max(initial=0))
         if mutual_noise is None:
-            mutual_noise = standard_normal_draws([g.seed for g in groups], (T + 1, n, n, 2))
+            mutual_noise = lib.noise.draws([g.seed for g in groups], (T + 1, n, n, 2))
         batch = SequenceBatch(
             n=n,
             ekf=EKFConstants.of(models, landmarks),
             motions=self.arrays,
-            landmark_noise=standard_normal_draws(self.seeds, (T + 1, landmarks.shape[0], 2)),
+            landmark_noise=lib.noise.draws(self.seeds, (T + 1, landmarks.shape[0], 2)),
             groups=StartGroups(np.stack([g.mean0 for g in groups]), np.stack([g.cov0 for g in groups]), mutual_noise),
             sequences=sequences,
             mutual_visible=mutual_visible,
