@@ -59,14 +59,14 @@ def trace_batches() -> None:
     """Print every batch of sub-problems the search tries: its size, seconds, and whether it improved."""
     from tmpnav.task import search
 
-    try_batch = search.AnytimeSearch._try_batch
+    try_batch = search.AnytimeSearch._settle
 
-    def traced(self: search.AnytimeSearch, plan: object, hoods: list, keep_equal: bool = False) -> bool:
+    def traced(self: search.AnytimeSearch, plan: object, batch: object, keep_equal: bool = False) -> bool:
         t0, before = time.perf_counter(), dict(self.times.seconds)
-        out = try_batch(self, plan, hoods, keep_equal)  # type: ignore[arg-type]
+        out = try_batch(self, plan, batch, keep_equal)  # type: ignore[arg-type]
         spent = {k: v - before.get(k, 0.0) for k, v in self.times.seconds.items() if v - before.get(k, 0.0) > 0.01}
         parts = ", ".join(f"{k} {v:.2f}" for k, v in spent.items())
-        sizes = ", ".join(f"{len(h.robots)}r/{len(h.rooms)}x" for h in hoods)
+        sizes = ", ".join(f"{len(s.hood.robots)}r/{len(s.hood.rooms)}x" for s in batch.subs)
         label = self.model.costs
         counts = f"{self.stats.subproblems} solved, {self.stats.reused} reused"
         print(
@@ -75,7 +75,7 @@ def trace_batches() -> None:
         )
         return out
 
-    search.AnytimeSearch._try_batch = traced  # type: ignore[method-assign]
+    search.AnytimeSearch._settle = traced  # type: ignore[method-assign]
 
 
 def run_case(case: Case, verbose: bool, budget: float | None = None) -> str:

@@ -24,16 +24,19 @@ the plan space) says how far from optimal it can be.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import random
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future
 from dataclasses import dataclass, field, replace
 from typing import Literal
 
 from tmpnav.choices import StopReason
 from tmpnav.errors import PlannerError
+from tmpnav.lifetime import gather
 from tmpnav.results import SearchProgress, StageTimes
 from tmpnav.task.decode import canonical_order
 from tmpnav.task.model import CostModel, PlanCost
@@ -41,7 +44,7 @@ from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.pddl_text import Clocks, PddlTask, write_task
 from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_origins
 from tmpnav.task.routing import solve_routes
-from tmpnav.task.solve import side_by_side
+from tmpnav.task.solve import Background
 from tmpnav.types import CostTable, Goals
 
 #: relative improvement below which a new plan does not count as better
@@ -131,6 +134,23 @@ class _Sub:
     task: PddlTask
 
 
+@dataclass(frozen=True)
+class _Batch:
+    """Sub-problems tried together, each with ENHSP's plan or the search that gives it.
+
+    A sub-problem is its PDDL text: the same text is the same problem to ENHSP, whose optimal
+    search is deterministic, so its plan is the one it gave before (``SearchRun.solved``), or
+    will give (a search under way), and running it again cannot pay. The text holds every
+    cost, the goals, the ends and the clocks, so a neighbourhood met again on an unchanged
+    part of the plan (same robots, rooms, beliefs at its start and, with time priced, the same
+    clocks) is such a sub-problem. A search that found no plan in time is not remembered (a
+    longer timeout might find one)."""
+
+    subs: list[_Sub]
+    plans: list[Future[list[Step] | None] | list[Step] | None]  # None: no plan, or no time to search
+    state: tuple[object, ...]  # the random generator's state after the batch was drawn (() if not drawn)
+
+
 class AnytimeSearch:
     """One run of the anytime search on a cost model."""
 
@@ -152,6 +172,9 @@ class AnytimeSearch:
         self.t0 = time.perf_counter()
         self.near = Closeness(CostTable((), (), (), {}, {}, {}), model.start_location, model.robots)
         self.waypoints: tuple[str, ...] = ()
+        self._stack = contextlib.ExitStack()
+        self._solver: Background | None = None
+        self._running: dict[tuple[str, str], Future[list[Step] | None]] = {}  # searches by their text
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
@@ -191,6 +214,17 @@ class AnytimeSearch:
         """Search from the cheapest of OR-Tools' routes and the ``seeds`` (name -> plan,
         e.g. the exact plan of the cost table) until the plan is proved optimal, a local
         optimum, or the budget is spent."""
+        with self._stack:  # ENHSP's searches in the background end with the run
+            return self._run(seeds)
+
+    @property
+    def solver(self) -> Background:
+        """ENHSP's searches in the background (started with the first one)."""
+        if self._solver is None:
+            self._solver = self._stack.enter_context(Background(self.options.parallel))
+        return self._solver
+
+    def _run(self, seeds: dict[str, Plan] | None) -> SearchResult:
         with self.times.timed("oracle"):
             singles = self.model.singles(self.goals)
         self.near = Closeness(singles, self.model.start_location, self.model.robots)
@@ -249,55 +283,117 @@ class AnytimeSearch:
     def _round(self, size: int) -> Literal["improved", "unchanged", "time budget", "optimal"]:
         """Neighbourhoods of ``size`` rooms around seeds until every room was in one
         ('improved' or 'unchanged'); the round starts again on each improved plan. Ends
-        early with 'time budget' or 'optimal'. ``parallel`` sub-problems run at once."""
+        early with 'time budget' or 'optimal'."""
         improved = False
         while True:
-            plan = self.best
-            seeds = [(k, i) for k, step in enumerate(plan) for i in range(len(step))]
-            self.rng.shuffle(seeds)
-            covered: set[str] = set()
-            tried: set[tuple[tuple[str, ...], frozenset[int]]] = set()
-            batch: list[Neighbourhood] = []
-            restart = False
-            for n, (k, i) in enumerate(seeds):
-                if plan[k][i][2] not in covered:
-                    hood = neighbourhood(plan, k, i, size, self.near, self.rng, self._robots_for(size))
-                    covered.update(hood.rooms)
-                    if (hood.robots, hood.removed) not in tried:
-                        tried.add((hood.robots, hood.removed))
-                        batch.append(hood)
-                if len(batch) < self.options.parallel and n + 1 < len(seeds):
-                    continue
-                if self.left() <= 0:
-                    return "time budget"
-                if batch and self._try_batch(plan, batch):
-                    improved = restart = True
-                    if self.proves_optimal(self.value(self.best_cost)):
-                        return "optimal"
-                    break
-                batch = []
-            if not restart:
-                return "improved" if improved else "unchanged"
+            outcome = self._sweep(self.best, size)
+            if outcome != "improved":
+                return "improved" if improved and outcome == "unchanged" else outcome
+            improved = True
+            if self.proves_optimal(self.value(self.best_cost)):
+                return "optimal"
+
+    def _sweep(self, plan: Plan, size: int) -> Literal["improved", "unchanged", "time budget"]:
+        """Try the batches of neighbourhoods of one sweep of ``plan`` (:meth:`_batches`) until
+        one improves it ('improved'), every one was tried ('unchanged') or the time is up.
+
+        A batch's sub-problems are costed in the oracle while ENHSP plans the batch before
+        (:class:`tmpnav.task.solve.Background`): on two cores the two overlap. The plan is
+        the one the batches would give one after the other: a batch drawn ahead of an
+        improvement is dropped, and the random generator is put back as it was when the
+        improving batch had been drawn (its next sweep draws the same neighbourhoods)."""
+        before: _Batch | None = None
+        for hoods, state in self._batches(plan, size):
+            if self.left() <= 0:
+                if before is not None and self._settle(plan, before):
+                    self.rng.setstate(before.state)
+                    return "improved"
+                return "time budget"
+            batch = self._launch(plan, hoods, state)
+            if before is not None and self._settle(plan, before):
+                self._drop(batch)
+                self.rng.setstate(before.state)
+                return "improved"
+            before = batch
+        return "improved" if before is not None and self._settle(plan, before) else "unchanged"
+
+    def _batches(self, plan: Plan, size: int) -> Iterator[tuple[list[Neighbourhood], tuple[object, ...]]]:
+        """The batches of one sweep: neighbourhoods of ``size`` rooms around seeds in random
+        order, each seed's room not yet in one, ``parallel`` new ones a batch (the last may
+        be smaller, even empty); each with the random generator's state after it was drawn."""
+        seeds = [(k, i) for k, step in enumerate(plan) for i in range(len(step))]
+        self.rng.shuffle(seeds)
+        covered: set[str] = set()
+        tried: set[tuple[tuple[str, ...], frozenset[int]]] = set()
+        batch: list[Neighbourhood] = []
+        for n, (k, i) in enumerate(seeds):
+            if plan[k][i][2] not in covered:
+                hood = neighbourhood(plan, k, i, size, self.near, self.rng, self._robots_for(size))
+                covered.update(hood.rooms)
+                if (hood.robots, hood.removed) not in tried:
+                    tried.add((hood.robots, hood.removed))
+                    batch.append(hood)
+            if len(batch) < self.options.parallel and n + 1 < len(seeds):
+                continue
+            yield batch, self.rng.getstate()
+            batch = []
 
     def _try_batch(self, plan: Plan, hoods: list[Neighbourhood], keep_equal: bool = False) -> bool:
-        """Solve the sub-problems of ``hoods`` (ENHSP runs side by side) and keep the
-        cheapest spliced plan if it beats the best one (or ties it, with ``keep_equal``:
-        then True means ENHSP solved them)."""
+        """Solve the sub-problems of ``hoods`` and keep the cheapest spliced plan if it beats
+        the best one (or ties it, with ``keep_equal``: then True means ENHSP solved them)."""
+        return self._settle(plan, self._launch(plan, hoods, ()), keep_equal)
+
+    def _launch(self, plan: Plan, hoods: list[Neighbourhood], state: tuple[object, ...]) -> _Batch:
+        """The sub-problems of ``hoods`` costed, and ENHSP started on those not solved before."""
         subs = [sub for hood in hoods if (sub := self._sub_problem(plan, hood)) is not None]
-        if not subs:
+        timeout = min(self.options.sub_timeout, self.left())
+        plans: list[Future[list[Step] | None] | list[Step] | None] = []
+        for sub in subs:
+            texts = sub.task.texts()
+            known = self.watch.solved.get(texts)
+            if known is not None:
+                plans.append(known)
+            elif texts in self._running:
+                plans.append(self._running[texts])
+            elif timeout > 0.05:
+                future = self.solver.submit(functools.partial(self._solve, sub, timeout))
+                self._running[texts] = future
+                plans.append(future)
+            else:  # no time left to solve it
+                plans.append(None)
+        return _Batch(subs, plans, state)
+
+    def _drop(self, batch: _Batch) -> None:
+        """A batch drawn ahead of an improvement: ENHSP need not start its searches."""
+        for sub, found in zip(batch.subs, batch.plans, strict=True):
+            if isinstance(found, Future) and found.cancel():
+                self._running.pop(sub.task.texts(), None)
+
+    def _settle(self, plan: Plan, batch: _Batch, keep_equal: bool = False) -> bool:
+        """ENHSP's plans of a batch waited for, spliced into ``plan``, and the cheapest kept if it
+        beats the best one (or ties it, with ``keep_equal``: then True means ENHSP solved them)."""
+        if not batch.subs:
             return False
-        fresh, known = self._known(subs)
-        solved = self._solve_all(fresh)
-        if solved is None:
-            return False
-        self.stats.reused += len(known)
-        plans = {id(sub): steps for sub, steps in [*zip(fresh, solved, strict=True), *known]}
+        steps: list[list[Step] | None] = []
+        with self.times.timed("planner"):
+            for sub, found in zip(batch.subs, batch.plans, strict=True):
+                if not isinstance(found, Future):
+                    self.stats.reused += found is not None
+                    steps.append(found)
+                    continue
+                solved = next(gather([found]))
+                if self._running.pop(sub.task.texts(), None) is found:
+                    self.stats.subproblems += 1
+                    if solved is not None:
+                        self.watch.solved[sub.task.texts()] = solved
+                else:  # a search two batches asked for: counted once
+                    self.stats.reused += 1
+                steps.append(solved)
         best: tuple[Plan, PlanCost, _Sub] | None = None
-        for sub in subs:  # in the neighbourhoods' order, which decides between equal candidates
-            steps = plans[id(sub)]
-            if steps is None:
+        for sub, found in zip(batch.subs, steps, strict=True):  # in the neighbourhoods' order
+            if found is None:
                 continue
-            candidate = self.canonical(splice(sub.opened, steps, self.model.start_location))
+            candidate = self.canonical(splice(sub.opened, found, self.model.start_location))
             if not self.rules.valid(candidate):
                 continue
             cost = self.cost(candidate)
@@ -313,24 +409,6 @@ class AnytimeSearch:
         self.stats.improvements += 1
         self._note(self.value(cost), f"{len(sub.hood.robots)} robots, {len(sub.hood.rooms)} rooms")
         return True
-
-    def _solve_all(self, subs: list[_Sub]) -> list[list[Step] | None] | None:
-        """ENHSP's plans of ``subs``, side by side (None: no time left to solve them)."""
-        if not subs:
-            return []
-        timeout = min(self.options.sub_timeout, self.left())
-        if timeout <= 0.05:
-            return None
-        with self.times.timed("planner"):
-            if len(subs) == 1:
-                solved = [self._solve(subs[0], timeout)]
-            else:
-                solved = side_by_side([functools.partial(self._solve, sub, timeout) for sub in subs])
-        self.stats.subproblems += len(subs)
-        for sub, steps in zip(subs, solved, strict=True):
-            if steps is not None:
-                self.watch.solved[sub.task.texts()] = steps
-        return solved
 
     def _sub_problem(self, plan: Plan, hood: Neighbourhood) -> _Sub | None:
         """The sub-problem of ``hood``: the plan opened, its goals, its costs, its PDDL text."""
@@ -373,25 +451,6 @@ class AnytimeSearch:
             return sub.task.decode(sub.task.solve(self.options.planner, timeout))
         except PlannerError:
             return None
-
-    def _known(self, subs: list[_Sub]) -> tuple[list[_Sub], list[tuple[_Sub, list[Step]]]]:
-        """Split ``subs`` into those to solve and those solved before, with their plans.
-
-        A sub-problem is its PDDL text: the same text is the same problem to ENHSP, whose
-        optimal search is deterministic, so its plan is the one it gave before, and running it
-        again cannot pay. The text holds every cost, the goals, the ends and the clocks, so a
-        neighbourhood met again on an unchanged part of the plan (same robots, rooms, beliefs
-        at its start and, with time priced, the same clocks) is such a sub-problem. A
-        sub-problem that found no plan in time is not remembered (a longer timeout might find
-        one)."""
-        fresh, known = [], []
-        for sub in subs:
-            plan = self.watch.solved.get(sub.task.texts())
-            if plan is None:
-                fresh.append(sub)
-            else:
-                known.append((sub, plan))
-        return fresh, known
 
     def cost(self, plan: Plan) -> PlanCost:
         with self.times.timed("oracle"):

@@ -7,6 +7,7 @@ no Java, unknown engine, timeout, proved unsolvable, crashed.
 from __future__ import annotations
 
 import os
+import queue
 import re
 import tempfile
 import threading
@@ -364,6 +365,60 @@ def side_by_side(calls: list[Callable[[], T]]) -> list[T]:
             _stop_searches()
             wait(futures, timeout=STOP_POLL)
         raise
+
+
+class Background:
+    """ENHSP's searches in the background while the caller goes on: at most ``parallel`` at once,
+    started in the order they were submitted (the anytime search costs its next sub-problems
+    in the oracle while ENHSP plans the ones before; tmpnav.task.search).
+
+    A context manager: when its block ends normally, searches not yet started are cancelled
+    and the threads end; when an exception ends it (a signal: KeyboardInterrupt,
+    tmpnav.lifetime.Terminated), the searches under way are stopped as :func:`side_by_side`
+    stops them. The threads are daemons, and leave the JVM after every search
+    (:func:`tmpnav.task.enhsp_jvm.detach`)."""
+
+    def __init__(self, parallel: int):
+        # the JVM started here, in the calling (main) thread: see side_by_side
+        enhsp_jvm.usable(_jvm_options())
+        self._jobs: queue.SimpleQueue[tuple[Callable[[], object], Future[object]] | None] = queue.SimpleQueue()
+        self._futures: list[Future[object]] = []
+        self._threads = [
+            threading.Thread(target=self._work, name="tmpnav-solve", daemon=True) for _ in range(max(1, parallel))
+        ]
+        for thread in self._threads:
+            thread.start()
+
+    def __enter__(self) -> Background:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, *exc: object) -> None:
+        self.cancel()
+        for _thread in self._threads:
+            self._jobs.put(None)
+        if kind is not None:
+            deadline = time.monotonic() + STOP_SECONDS
+            while not all(f.done() for f in self._futures) and time.monotonic() < deadline:
+                _stop_searches()
+                wait(self._futures, timeout=STOP_POLL)
+
+    def submit(self, call: Callable[[], T]) -> Future[T]:
+        """Run ``call`` (a search) when a thread is free; its future."""
+        future: Future[object] = Future()
+        self._futures = [f for f in self._futures if not f.done()] + [future]
+        self._jobs.put((call, future))
+        return future  # type: ignore[return-value]
+
+    def cancel(self) -> None:
+        """Cancel the searches not yet started (those under way run to their end)."""
+        for future in self._futures:
+            future.cancel()
+
+    def _work(self) -> None:
+        while (job := self._jobs.get()) is not None:
+            call, future = job
+            if future.set_running_or_notify_cancel():
+                _settle(call, future)
 
 
 def _jvm_options() -> str:
