@@ -118,3 +118,44 @@ def test_instantiations_avoid_pockets_of_a_room_no_robot_reaches(tmp_path: Path)
     for seed in range(1, 9):
         rm = build_roadmap(world, sc.robots, replace(sc.roadmap, seed=seed, instantiations=4))
         assert not points_in_polygon(rm.nodes[list(rm.instantiations["A"])], box).any()
+
+
+def test_compiled_edge_checks_agree_with_ompls_discrete_motion_validator(loaded) -> None:  # type: ignore[no-untyped-def]
+    """The roadmap's motion validator (one compiled check per edge) answers as OMPL's own
+    DiscreteMotionValidator with the same validity checker, on random segments of the map:
+    short and long, through doors and walls, ending inside and outside the free space."""
+    from ompl import base as ob
+
+    from tmpnav.roadmap import prm
+
+    sc, world = loaded
+    radius = max(r.radius for r in sc.robots)
+    free = prm.reachable_free_space(world, radius, np.array([[r.pose.x, r.pose.y] for r in sc.robots]))
+    xmin, ymin, xmax, ymax = world.grid.extent
+    space = ob.RealVectorStateSpace(2)
+    bounds = ob.RealVectorBounds(2)
+    bounds.setLow(0, xmin)
+    bounds.setLow(1, ymin)
+    bounds.setHigh(0, xmax)
+    bounds.setHigh(1, ymax)
+    space.setBounds(bounds)
+    ours, theirs = ob.SpaceInformation(space), ob.SpaceInformation(space)
+    for si in (ours, theirs):
+        si.setStateValidityChecker(prm._validity_checker(world, free))
+        si.setStateValidityCheckingResolution(0.5 * world.grid.resolution / space.getMaximumExtent())
+    validator = prm._motion_validator(ob, ours, space, world, free)
+    ours.setMotionValidator(validator)
+    ours.setup()
+    theirs.setup()
+    rng = np.random.default_rng(3)
+    a, b = ours.allocState(), ours.allocState()
+    answers = {True: 0, False: 0}
+    for k in range(3000):
+        p = rng.uniform((xmin, ymin), (xmax, ymax))
+        q = p + rng.normal(scale=0.3 if k % 2 else 3.0, size=2)
+        a[0], a[1], b[0], b[1] = float(p[0]), float(p[1]), float(q[0]), float(q[1])
+        expected = theirs.checkMotion(a, b)
+        assert ours.checkMotion(a, b) == expected, (p, q)
+        answers[expected] += 1
+    assert min(answers.values()) > 300  # both answers were tested
+    del validator, ours, theirs

@@ -15,7 +15,9 @@ from __future__ import annotations
 import gc
 import hashlib
 import math
+from typing import Any
 
+import numba as nb
 import numpy as np
 
 from tmpnav.errors import RoadmapError
@@ -61,7 +63,7 @@ def reachable_free_space(world: World, radius: float, starts: np.ndarray) -> np.
 
 
 def _validity_checker(world: World, free_cells: np.ndarray):
-    """A fast scalar validity check for OMPL's callback (called ~10^6 times)."""
+    """A fast scalar validity check for OMPL's callback (the milestones it samples)."""
     free = free_cells.tolist()
     x0, y0 = world.grid.origin
     inv = 1.0 / world.grid.resolution
@@ -73,6 +75,48 @@ def _validity_checker(world: World, free_cells: np.ndarray):
         return 0 <= i < rows and 0 <= j < cols and free[i][j]
 
     return is_valid
+
+
+@nb.njit(cache=True)
+def _free_at(x: float, y: float, free: np.ndarray, x0: float, y0: float, inv: float) -> bool:
+    """The validity checker's test (:func:`_validity_checker`), compiled."""
+    i = math.floor((y - y0) * inv)
+    j = math.floor((x - x0) * inv)
+    return 0 <= i < free.shape[0] and 0 <= j < free.shape[1] and free[i, j]
+
+
+@nb.njit(cache=True)
+def _segment_free(
+    x1: float, y1: float, x2: float, y2: float, nd: int, free: np.ndarray, x0: float, y0: float, inv: float
+) -> bool:
+    """Whether OMPL's discrete motion validator finds the segment free: the end (x2, y2) and
+    the nd - 1 states it interpolates between the ends (``from + (to - from) * (j / nd)``,
+    RealVectorStateSpace::interpolate), each as the validity checker tests it. The validator
+    visits them in bisection order, stopping at the first invalid one; the answer is the same."""
+    if not _free_at(x2, y2, free, x0, y0, inv):
+        return False
+    for j in range(1, nd):
+        t = j / nd
+        if not _free_at(x1 + (x2 - x1) * t, y1 + (y2 - y1) * t, free, x0, y0, inv):
+            return False
+    return True
+
+
+def _motion_validator(ob: Any, si: Any, space: Any, world: World, free_cells: np.ndarray) -> Any:
+    """OMPL's discrete motion validator with its state checks compiled: one Python call per
+    edge instead of one per state checked along it (on the 20-room building 1.9 million
+    calls grew the roadmap in 0.75 s). The same edges: OMPL still counts the segments
+    (``validSegmentCount``), and :func:`_segment_free` checks the states it would."""
+    free = np.ascontiguousarray(free_cells, dtype=np.bool_)
+    x0, y0 = (float(v) for v in world.grid.origin)
+    inv = 1.0 / world.grid.resolution
+    count = space.validSegmentCount
+
+    class Edges(ob.MotionValidator):
+        def checkMotion(self, s1: Any, s2: Any) -> bool:  # OMPL names it
+            return bool(_segment_free(s1[0], s1[1], s2[0], s2[1], count(s1, s2), free, x0, y0, inv))
+
+    return Edges(si)
 
 
 def _grow(
@@ -100,6 +144,8 @@ def _grow(
     si.setStateValidityChecker(_validity_checker(world, free_cells))
     # check edges every half cell: fine enough for the narrowest door the grid can show
     si.setStateValidityCheckingResolution(0.5 * world.grid.resolution / space.getMaximumExtent())
+    validator = _motion_validator(ob, si, space, world, free_cells)
+    si.setMotionValidator(validator)
     si.setup()
 
     pdef = ob.ProblemDefinition(si)
@@ -129,7 +175,7 @@ def _grow(
         st = data.getVertex(i).getState()
         nodes[i] = st[0], st[1]
         edges.extend((i, j) for j in data.getEdges(i) if i < j)
-    del data, prm, pdef, si, space, goal
+    del data, prm, pdef, si, space, goal, validator
     gc.collect()  # release the OMPL objects now, not at interpreter exit
     return nodes, np.array(edges, dtype=np.int64).reshape(-1, 2)
 
