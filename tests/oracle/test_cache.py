@@ -64,6 +64,48 @@ def test_every_input_changes_the_keys(two_rooms: OracleContext) -> None:
         assert base.isdisjoint(keys(ctx)), name
 
 
+def test_every_field_of_a_request_changes_its_key(two_rooms: OracleContext) -> None:
+    """Each field of a request, and each number of its start states, enters its key (the keys
+    hash floats by their bits: a field the key forgot would share results between requests)."""
+    from dataclasses import fields
+
+    from tmpnav.oracle.requests import Request, StartState
+
+    sc = two_rooms.scenario
+    context = context_digest(sc, two_rooms.world, two_rooms.roadmap)
+    pair = next(r for r in actions(two_rooms) if r.n == 2)
+    joint = tuple(tuple(float(v) for v in row) for row in pair.cov0())
+    base = replace(pair, joint_cov=joint)
+    key = request_key(context, sc, base)
+    start = base.starts[0]
+    changed = {
+        "robots": replace(base, robots=base.robots[::-1]),
+        "starts": replace(base, starts=base.starts[::-1]),
+        "rooms": replace(base, rooms=(base.rooms[0], next(r.name for r in sc.rooms if r.name != base.rooms[1]))),
+        "joint_cov": replace(base, joint_cov=None),
+        "min_gain": replace(base, min_gain=0.05),
+        "bound_only": replace(base, bound_only=True),
+        "max_risk": replace(base, max_risk=0.1),
+    }
+    assert set(changed) == {f.name for f in fields(Request)}
+    nudged = float(np.nextafter(1.0, 2.0))
+    for name in (f.name for f in fields(StartState)):
+        value = getattr(start, name)
+        if name == "node":
+            value = value + 1
+        elif name == "heading":
+            value = value * nudged if value else 1e-300
+        elif name == "mean":
+            value = (value[0], value[1] * nudged, value[2])
+        else:
+            value = (value[0], value[1], (value[2][0], value[2][1], value[2][2] * nudged))
+        changed[f"starts.{name}"] = replace(base, starts=(replace(start, **{name: value}), *base.starts[1:]))
+    changed["joint_cov entry"] = replace(base, joint_cov=(*joint[:-1], (*joint[-1][:-1], joint[-1][-1] * nudged)))
+    for name, request in changed.items():
+        assert request_key(context, sc, request) != key, name
+    assert request_key(context, sc, replace(base)) == key
+
+
 def test_truncated_cache_is_detected_and_recomputed(two_rooms: OracleContext, tmp_path: Path) -> None:
     reqs = actions(two_rooms)
     reference = Oracle(two_rooms, DiskCache(tmp_path), SerialExecutor()).evaluate(reqs)

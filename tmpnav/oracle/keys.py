@@ -10,6 +10,7 @@ which round-trips exactly, so two keys are equal only for bit-identical inputs.
 from __future__ import annotations
 
 import hashlib
+import struct
 from functools import lru_cache
 from typing import Any
 
@@ -72,11 +73,26 @@ def context_digest(scenario: Scenario, world: World, roadmap: Roadmap) -> str:
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 
 
+#: a start state's bytes in a key: its node, its heading, its mean and its covariance (floats
+#: as their IEEE bits: equal bytes for bit-identical inputs only, as ``repr`` gives them)
+_START = struct.Struct("<q13d")
+
+
 def request_key(context: str, scenario: Scenario, request: Request) -> str:
-    """The key of one request: the context, the specs of its robots and the request itself."""
+    """The key of one request: the context, the specs of its robots and the request itself.
+
+    The floats of the start states and the joint covariance enter as their bits: ``repr`` of
+    a whole request took 46 us (the 20-room building keyed 7,400 requests in 0.34 s)."""
     robots = tuple(scenario.robot(r) for r in request.robots)
     specs = tuple((r.name, r.radius, r.speed, r.turn_rate) for r in robots)
-    return hashlib.sha256(repr((context, specs, request)).encode()).hexdigest()
+    head = (context, specs, request.rooms, request.min_gain, request.bound_only, request.max_risk)
+    digest = hashlib.sha256(repr(head).encode())
+    for start in request.starts:
+        digest.update(_START.pack(start.node, start.heading, *start.mean, *(v for row in start.cov for v in row)))
+    if request.joint_cov is not None:
+        flat = [v for row in request.joint_cov for v in row]
+        digest.update(b"joint" + struct.pack(f"<{len(flat)}d", *flat))
+    return digest.hexdigest()
 
 
 def to_json(result: MotionResult | None) -> dict[str, Any]:
