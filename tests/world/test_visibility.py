@@ -18,7 +18,8 @@ import pytest
 
 from tests.scenario.helpers import base_scenario, build_world
 from tmpnav.world.build import World
-from tmpnav.world.visibility import LandmarkVisibility, MutualSensing, mutual_visible
+from tmpnav.world.geometry import wrap_angle
+from tmpnav.world.visibility import RAYS, LandmarkVisibility, MutualSensing, mutual_visible
 
 RANGE = 4.0
 FULL = 2 * math.pi
@@ -88,6 +89,29 @@ def test_landmark_visibility_matches_exact_line_of_sight(world: World) -> None:
     clear_cut[near] &= np.all([a == answers[0] for a in answers], axis=0)
     assert clear_cut.mean() > 0.6
     assert np.array_equal(seen[clear_cut], exact[clear_cut])
+
+
+def rays_in_numpy(vis: LandmarkVisibility, poses: np.ndarray, fov: float, min_range: float) -> np.ndarray:
+    """The ray model of :class:`LandmarkVisibility`, written in numpy as it was before it was
+    compiled: range, field of view, and the free distance of the ray nearest the pose."""
+    d = vis.landmarks[None, :, :] - poses[:, None, :2]
+    dist = np.hypot(d[..., 0], d[..., 1])
+    seen = (dist <= vis.range) & (dist >= min_range)
+    if fov < FULL - 1e-9:
+        seen &= np.abs(wrap_angle(np.arctan2(d[..., 1], d[..., 0]) - poses[:, None, 2])) <= fov / 2
+    ray = np.round((np.arctan2(-d[..., 1], -d[..., 0]) + np.pi) / (2 * np.pi) * RAYS).astype(np.int64) % RAYS
+    return seen & (dist <= np.take_along_axis(vis._free, ray.T, axis=1).T)
+
+
+def test_compiled_landmark_visibility_is_the_ray_model(world: World) -> None:
+    """The compiled check answers as the ray model in numpy on random poses, also outside the
+    free space and with headings beyond [-pi, pi) (a pose exactly between two rays could
+    differ: numpy's and the compiled arctangent may round its last bit apart)."""
+    vis = LandmarkVisibility(world, RANGE)
+    rng = np.random.default_rng(11)
+    poses = np.column_stack([rng.uniform(-1.0, 11.0, (20000, 2)), rng.uniform(-7.0, 7.0, 20000)])
+    for fov, min_range in ((FULL, 0.0), (math.radians(120), 0.25), (1.0, 0.5)):
+        assert np.array_equal(vis.visible(poses, fov, min_range), rays_in_numpy(vis, poses, fov, min_range))
 
 
 def test_landmark_visibility_range_min_range_and_field_of_view(world: World) -> None:

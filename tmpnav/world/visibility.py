@@ -18,7 +18,7 @@ import numpy as np
 
 from tmpnav.types import Scenario
 from tmpnav.world.build import World
-from tmpnav.world.geometry import wrap_angle, wrap_angle_scalar
+from tmpnav.world.geometry import wrap_angle_scalar
 
 RAYS = 1440
 
@@ -50,18 +50,40 @@ class LandmarkVisibility:
         A landmark closer than ``min_range`` (the robot's radius: it would be under the
         robot) is not observed; the range-bearing model is singular there.
         """
-        d = self.landmarks[None, :, :] - poses.reshape(-1, 1, 3)[:, :, :2]  # (P, L, 2)
-        dist = np.hypot(d[..., 0], d[..., 1])
-        seen = (dist <= self.range) & (dist >= min_range)
-        if fov < 2 * np.pi - 1e-9:
-            bearing = wrap_angle(np.arctan2(d[..., 1], d[..., 0]) - poses.reshape(-1, 1, 3)[:, :, 2])
-            seen &= np.abs(bearing) <= fov / 2
-        # the ray from the landmark towards the pose
-        ray_angle = np.arctan2(-d[..., 1], -d[..., 0])
-        ray = np.round((ray_angle + np.pi) / (2 * np.pi) * RAYS).astype(np.int64) % RAYS
-        free = np.take_along_axis(self._free, ray.T, axis=1).T if self._free.size else np.zeros_like(dist)
-        seen &= dist <= free
+        flat = np.ascontiguousarray(poses, dtype=float).reshape(-1, 3)
+        seen = np.zeros((flat.shape[0], len(self.landmarks)), dtype=bool)
+        if self._free.size:
+            _landmarks_seen(flat, self.landmarks, self._free, self.range, fov, min_range, seen)
         return seen.reshape(*poses.shape[:-1], len(self.landmarks))
+
+
+@nb.njit(cache=True)
+def _landmarks_seen(
+    poses: np.ndarray,
+    landmarks: np.ndarray,
+    free: np.ndarray,
+    sensor_range: float,
+    fov: float,
+    min_range: float,
+    seen: np.ndarray,
+) -> None:
+    """:meth:`LandmarkVisibility.visible`, compiled: ``seen[p, l]`` when pose p (x, y, theta)
+    has landmark l within [min_range, sensor_range], inside the field of view, and no farther
+    than the free distance ``free[l, ray]`` of the landmark's ray towards the pose (the ray
+    nearest its angle, ties to the even one). A motion's poses were checked one numpy call per
+    motion: 0.77 s of the 20-room building's oracle for 4,700 motions."""
+    limited = fov < 2 * np.pi - 1e-9
+    for p in range(poses.shape[0]):
+        x, y, theta = poses[p, 0], poses[p, 1], poses[p, 2]
+        for k in range(landmarks.shape[0]):
+            dx, dy = landmarks[k, 0] - x, landmarks[k, 1] - y
+            dist = math.hypot(dx, dy)
+            if not (dist <= sensor_range and dist >= min_range):
+                continue
+            if limited and not abs(wrap_angle_scalar(math.atan2(dy, dx) - theta)) <= fov / 2:
+                continue
+            ray = round((math.atan2(-dy, -dx) + np.pi) / (2 * np.pi) * RAYS) % RAYS
+            seen[p, k] = dist <= free[k, ray]
 
 
 class SightGrid(NamedTuple):
