@@ -4,8 +4,9 @@
 
 Plans each case cold (no cache; the roadmap grown, every cost simulated, ENHSP run) with the
 default choices (carried costs, auto search: the anytime search at these sizes, weighted
-objective), after planning a tiny scenario once so that imports, compiled kernels and the
-first JVM start are not counted (as the bench worker does, tmpnav/bench/worker.py). Prints
+objective), after the bench worker's warm-up (tmpnav/bench/worker.py: a tiny scenario
+planned twice), so that imports, compiled kernels, the first JVM start and ENHSP's first
+searches are not counted. Prints
 one line per run: rooms, robots, seconds, how the search stopped, the plan's objective, the
 certified lower bound, the gap and the sub-problems ENHSP solved; ``--verbose`` adds the
 search's progress lines. Timings on a 2-core machine shared with other jobs are noisy.
@@ -21,6 +22,7 @@ import time
 from dataclasses import dataclass, replace
 
 from tmpnav import shipped
+from tmpnav.bench.worker import warm_up
 from tmpnav.pipeline import PlanOptions, Reporters, plan
 from tmpnav.report.schedule import objective_values
 from tmpnav.results import PlanReport
@@ -128,7 +130,7 @@ def main(argv: list[str] | None = None) -> None:
     args = parser.parse_args(argv)
     if args.verbose:
         trace_batches()
-    plan(shipped.configs_dir() / "two-rooms.yaml", PlanOptions.of(use_cache=False, executor="serial"))
+    warm_up()
     print(
         f"{'case':12s} {'rooms':>5s} {'robots':>6s} {'time [s]':>8s} {'stopped':>12s} "
         f"{'objective':>10s} {'bound':>10s} {'gap':>7s} {'subs':>5s}"
