@@ -35,10 +35,13 @@ from tmpnav.errors import TmpnavError
 from tmpnav.pipeline import PlanOptions, plan
 from tmpnav.results import PlanReport
 from tmpnav.scenario import load
+from tmpnav.task import enhsp_jvm
 from tmpnav.types import Goals, PlanStatus
 
 SOLVED = {s.value for s in PlanStatus}
 WARM_UP = "two-rooms.yaml"  # a shipped scenario
+#: seconds the warm-up waits for ENHSP's searches to be ready
+WARM_SECONDS = 30.0
 
 
 def warm_up() -> None:
@@ -54,6 +57,7 @@ def warm_up() -> None:
     plan(path, PlanOptions.of(use_cache=False, executor="serial"))
     rooms = tuple(room.name for room in load(path).rooms)
     plan(path, PlanOptions.of(use_cache=False, search="anytime", goals=Goals(visit=rooms, per_robot=())))
+    enhsp_jvm.settle(WARM_SECONDS)  # its second search was still being made ready in the background
 
 
 class Watchdog:

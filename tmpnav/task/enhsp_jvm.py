@@ -471,6 +471,16 @@ def warm(slots: int, sample: Callable[[], contextlib.AbstractContextManager[list
     thread.start()
 
 
+def settle(timeout: float) -> bool:
+    """Wait up to ``timeout`` seconds for the searches :func:`warm` makes ready; True when none
+    is being made any more (a benchmark's warm-up ends with its searches ready, as in a
+    planning service that is already running: ``tmpnav.bench.worker``)."""
+    warming = _JVM.warming
+    if warming is not None:
+        warming.join(timeout)
+    return warming is None or not warming.is_alive()
+
+
 def _take() -> _Slot:
     """An idle slot; one being made ready (:func:`warm`) when there is none; else a new one."""
     while True:
