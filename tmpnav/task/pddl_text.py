@@ -162,6 +162,7 @@ class TextBuilder:
         self.move_cost: Callable[[MoveKey], int] = lambda move: 0
         self.pair_texts: list[str] = []
         self.pair_actions: dict[str, tuple[MoveKey, MoveKey]] = {}
+        self.pairs_written = 0  # paired moves written (each is up to four actions)
 
     def set_move_costs(self, cost: Callable[[MoveKey], int]) -> None:
         self.move_cost = cost
@@ -171,7 +172,8 @@ class TextBuilder:
 
     def add_pair_action(self, m1: MoveKey, m2: MoveKey, cost: int) -> None:
         rob, loc = self.names.robot, self.names.location
-        name = f"goto_room_pair_{len({v for v in self.pair_actions.values()}) + 1}"
+        self.pairs_written += 1
+        name = f"goto_room_pair_{self.pairs_written}"
         pre, dels, adds = [], [], []
         for r, origin, dest in (m1, m2):
             pre.append(f"(robot_in {rob[r]} {loc[origin]})")
