@@ -389,7 +389,7 @@ class TeamClock:
         over the steps a..b."""
         L = self.ekf.landmarks.shape[0]
         controls, poses = np.zeros((b - a, 2)), np.empty((b - a + 1, 3))
-        reach, drove = np.full((b - a + 1, SECTORS), np.inf), np.zeros(b - a + 1, dtype=bool)
+        reach, drove = np.full((b - a + 1, SECTORS if priced else 1), np.inf), np.zeros(b - a + 1, dtype=bool)
         vis, noise = np.empty((b - a + 1, L), dtype=bool), np.empty((b - a + 1, L, 2))
         legs = state.legs[i]
         for n, leg in enumerate(legs):

@@ -44,18 +44,13 @@ def combination_bounds(
     """The least cost each of the combinations (motions ``a[k]`` of ``s1``, ``b[k]`` of
     ``s2``) can have, given the first step each sees the other robot (-1: never, and then
     exactly the sum of its singles)."""
-    bounds = np.empty(a.shape[0])
-    for k in range(a.shape[0]):
-        r1, r2 = singles.index(s1, int(a[k])), singles.index(s2, int(b[k]))
-        k0 = int(first_sight[k])
-        if k0 < 0:  # factorised: exactly the sum of its singles
-            bounds[k] = singles.cost[r1] + singles.cost[r2]
-            continue
-        before = max(k0 - 1, 0)
-        c1 = singles.csig_hist[r1][min(before, int(s1.steps[a[k]]))]
-        c2 = singles.csig_hist[r2][min(before, int(s2.steps[b[k]]))]
-        bounds[k] = weights.combine(singles.c_u[r1] + singles.c_u[r2], 0.0, c1 + c2)
-    return bounds
+    r1, r2 = singles.rows(s1, a), singles.rows(s2, b)
+    before = np.maximum(first_sight - 1, 0)
+    c1 = singles.csig_hist[r1, np.minimum(before, s1.steps[a])]
+    c2 = singles.csig_hist[r2, np.minimum(before, s2.steps[b])]
+    seen = weights.combine(singles.c_u[r1] + singles.c_u[r2], 0.0, c1 + c2)
+    # factorised (never in sight): exactly the sum of its singles
+    return np.where(first_sight < 0, singles.cost[r1] + singles.cost[r2], seen)
 
 
 def cutoff(bounds: np.ndarray, factorised: np.ndarray, alone: float, min_gain: float) -> float:

@@ -85,7 +85,7 @@ class PairCombos:
         b = np.array([c[1] for c in combos], dtype=np.int64)
         order = joint_lex_order(a, b, s1.prefix, s2.prefix) if len(combos) else np.zeros(0, dtype=np.int64)
         a, b = a[order], b[order]
-        position = {(int(x), int(y)): k for k, (x, y) in enumerate(zip(a, b, strict=True))}
+        position = {pair: k for k, pair in enumerate(zip(a.tolist(), b.tolist(), strict=True))}
         self.a.append(a)
         self.b.append(b)
         for i, mine in wanted:

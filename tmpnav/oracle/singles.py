@@ -72,6 +72,11 @@ class SingleRuns:
         """The row of the simulation of motion k of set ``ms``."""
         return self.results[(id(ms), k)]
 
+    def rows(self, ms: MotionSet, local: np.ndarray) -> np.ndarray:
+        """The rows of the simulations of the motions at positions ``local`` of set ``ms``."""
+        key = id(ms)
+        return np.array([self.results[(key, k)] for k in local.tolist()], dtype=np.int64)
+
     def best_cost(self, ms: MotionSet, room: str) -> float:
         """The single-robot optimum of moving to ``room`` (its table cost)."""
         return float(min(self.cost[self.index(ms, k)] for k in ms.goals_in(self.lib, room)))
