@@ -6,6 +6,8 @@ real local Ray instance: the same costs, goal instantiations, paths and final be
 
 from __future__ import annotations
 
+import ctypes
+import sys
 from pathlib import Path
 
 import pytest
@@ -47,16 +49,34 @@ def test_local_workers(two_rooms: OracleContext, reference, workers: int, monkey
 @pytest.mark.ray
 @pytest.mark.slow
 def test_ray(two_rooms: OracleContext, reference, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
-    ray = pytest.importorskip("ray")
+    """The same results from a real local Ray instance; its start and shutdown leave the
+    process's handlers of fatal signals as they were (the JVM's, in a run that started it:
+    with Ray's or the default in place, the JVM's next safepoint poll ended the process)."""
+    pytest.importorskip("ray")
     monkeypatch.setattr(executors, "BLOCK", 4)
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    before = fatal_handlers()
+    executor = executors.RayExecutor(num_cpus=2)
     try:
-        executor = executors.RayExecutor()
         assert executor.workers == 2
+        assert fatal_handlers() == before
         result = Oracle(two_rooms, NullCache(), executor).evaluate(actions(two_rooms))
     finally:
-        ray.shutdown()
+        executor.close()
+    assert fatal_handlers() == before
     assert result == reference
+
+
+def fatal_handlers() -> dict[int, int | None]:
+    """The C-level handler of each signal Ray's start and shutdown replace (Linux; else empty)."""
+    if not sys.platform.startswith("linux"):
+        return {}
+    libc = ctypes.CDLL(None)
+    out = {}
+    for sig in executors.KEPT_SIGNALS:
+        action = executors._SigAction()
+        libc.sigaction(int(sig), None, ctypes.byref(action))
+        out[int(sig)] = action.handler
+    return out
 
 
 def test_blocks_keep_start_groups_together(two_rooms: OracleContext) -> None:

@@ -22,7 +22,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -246,7 +246,8 @@ class RayExecutor:
             else:
                 kwargs["num_cpus"] = num_cpus or os.cpu_count() or 1
             try:
-                ray.init(**kwargs)
+                with signal_handlers_kept():
+                    ray.init(**kwargs)
             except (ConnectionError, RuntimeError, ValueError) as err:
                 raise InputError(f"cannot start or reach Ray at {address or 'a new local instance'}: {err}") from None
             self._started = True
@@ -273,7 +274,51 @@ class RayExecutor:
 
     def close(self) -> None:
         if self._started:
-            self._ray.shutdown()
+            with signal_handlers_kept():
+                self._ray.shutdown()
+
+
+#: the signals whose handlers Ray's start and shutdown replace in the calling process
+#: (SIGABRT, SIGBUS, SIGFPE, SIGILL, SIGSEGV, SIGTERM; measured with Ray 2.60)
+KEPT_SIGNALS = (signal.SIGABRT, signal.SIGBUS, signal.SIGFPE, signal.SIGILL, signal.SIGSEGV, signal.SIGTERM)
+
+
+class _SigAction(ctypes.Structure):
+    """glibc's ``struct sigaction`` (Linux, x86_64 and aarch64)."""
+
+    _fields_ = (
+        ("handler", ctypes.c_void_p),
+        ("mask", ctypes.c_ulong * 16),
+        ("flags", ctypes.c_int),
+        ("restorer", ctypes.c_void_p),
+    )
+
+
+@contextlib.contextmanager
+def signal_handlers_kept() -> Iterator[None]:
+    """The process's own handlers of :data:`KEPT_SIGNALS` put back after the block (Linux).
+
+    ``ray.init`` installs Ray's crash handlers for them in the calling process, and
+    ``ray.shutdown`` resets most to the default. The JVM that runs ENHSP inside tmpnav
+    (tmpnav.task.enhsp_jvm) takes SIGSEGV, SIGBUS, SIGFPE and SIGILL in its normal work
+    (implicit null checks, safepoint polls): with the default or Ray's handler in place, the
+    next one ended the process (the test suite's worker died in the anytime search after a
+    test ran Ray beside a JVM started earlier), and tmpnav's own SIGTERM handling
+    (tmpnav.lifetime) was Ray's. The handlers are kept at the C level, where the JVM's are."""
+    if not sys.platform.startswith("linux"):
+        yield
+        return
+    libc = ctypes.CDLL(None, use_errno=True)
+    saved = {}
+    for sig in KEPT_SIGNALS:
+        action = _SigAction()
+        if libc.sigaction(int(sig), None, ctypes.byref(action)) == 0:
+            saved[sig] = action
+    try:
+        yield
+    finally:
+        for sig, action in saved.items():
+            libc.sigaction(int(sig), ctypes.byref(action), None)
 
 
 def _ray_work(ctx: OracleContext, block: list[Request]) -> Outcome:
