@@ -13,6 +13,7 @@ are, so their fields are its arguments.
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -270,29 +271,36 @@ def standard_normal_draws(seeds: Sequence[int], shape: tuple[int, ...]) -> np.nd
 
 
 class NoiseStreams:
-    """Standard-normal streams by seed, kept once drawn (the least recently drawn dropped
-    first beyond ``limit``): the oracle and the team's clock ask for the same streams again
-    and again (20-room building: 0.47 s of 5 s of the oracle drew them anew).
+    """Standard-normal streams by seed, kept once drawn, up to ``limit`` bytes (the least
+    recently used dropped first): the oracle and the team's clock ask for the same streams
+    again and again (20-room building: 0.47 s of 5 s of the oracle drew them anew).
 
     Drawn in C order, a stream drawn longer starts with the draws of a shorter one
     (:func:`standard_normal_draws`), so a stream is drawn again, twice as long, only when
     more rows are needed, and what it gives is bit for bit what :func:`standard_normal_draws`
     gives."""
 
-    def __init__(self, limit: int = 4096):
+    def __init__(self, limit: int = 128 * 2**20):
         self.limit = limit
-        self._have: dict[tuple[int, tuple[int, ...]], np.ndarray] = {}
+        self._have: OrderedDict[tuple[int, tuple[int, ...]], np.ndarray] = OrderedDict()
+        self._bytes = 0
 
     def rows(self, seed: int, rows: int, tail: tuple[int, ...]) -> np.ndarray:
         """At least the first ``rows`` rows of the stream of ``seed``, each of shape ``tail``."""
         key = (seed, tail)
         have = self._have.get(key)
-        if have is None or have.shape[0] < rows:
-            size = max(rows, 64 if have is None else 2 * have.shape[0])
-            have = self._have[key] = np.random.default_rng(seed).standard_normal((size, *tail))
-            if len(self._have) > self.limit:
-                self._have.pop(next(iter(self._have)))
-        return have
+        if have is not None and have.shape[0] >= rows:
+            self._have.move_to_end(key)
+            return have
+        size = max(rows, 64 if have is None else 2 * have.shape[0])
+        fresh = np.random.default_rng(seed).standard_normal((size, *tail))
+        if have is not None:
+            self._bytes -= self._have.pop(key).nbytes
+        self._have[key] = fresh
+        self._bytes += fresh.nbytes
+        while self._bytes > self.limit and len(self._have) > 1:
+            self._bytes -= self._have.popitem(last=False)[1].nbytes
+        return fresh
 
     def draws(self, seeds: Sequence[int], shape: tuple[int, ...]) -> np.ndarray:
         """:func:`standard_normal_draws` of ``seeds`` and ``shape``, from the kept streams."""
