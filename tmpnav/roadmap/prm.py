@@ -119,6 +119,19 @@ def _motion_validator(ob: Any, si: Any, space: Any, world: World, free_cells: np
     return Edges(si)
 
 
+def plane(ob: Any, world: World) -> Any:
+    """OMPL's state space of the roadmap: the plane, bounded by the map's extent."""
+    xmin, ymin, xmax, ymax = world.grid.extent
+    space = ob.RealVectorStateSpace(2)
+    bounds = ob.RealVectorBounds(2)
+    bounds.setLow(0, xmin)
+    bounds.setLow(1, ymin)
+    bounds.setHigh(0, xmax)
+    bounds.setHigh(1, ymax)
+    space.setBounds(bounds)
+    return space
+
+
 def _grow(
     world: World, free_cells: np.ndarray, params: RoadmapParams, specials: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -132,14 +145,7 @@ def _grow(
 
     ou.setLogLevel(ou.LogLevel.LOG_NONE)
     ou.RNG.setSeed(params.seed + 1)  # OMPL treats seed 0 as "pick one at random"
-    xmin, ymin, xmax, ymax = world.grid.extent
-    space = ob.RealVectorStateSpace(2)
-    bounds = ob.RealVectorBounds(2)
-    bounds.setLow(0, xmin)
-    bounds.setLow(1, ymin)
-    bounds.setHigh(0, xmax)
-    bounds.setHigh(1, ymax)
-    space.setBounds(bounds)
+    space = plane(ob, world)
     si = ob.SpaceInformation(space)
     si.setStateValidityChecker(_validity_checker(world, free_cells))
     # check edges every half cell: fine enough for the narrowest door the grid can show
