@@ -6,8 +6,6 @@ real local Ray instance: the same costs, goal instantiations, paths and final be
 
 from __future__ import annotations
 
-import ctypes
-import sys
 from pathlib import Path
 
 import pytest
@@ -68,15 +66,7 @@ def test_ray(two_rooms: OracleContext, reference, monkeypatch: pytest.MonkeyPatc
 
 def fatal_handlers() -> dict[int, int | None]:
     """The C-level handler of each signal Ray's start and shutdown replace (Linux; else empty)."""
-    if not sys.platform.startswith("linux"):
-        return {}
-    libc = ctypes.CDLL(None)
-    out = {}
-    for sig in executors.KEPT_SIGNALS:
-        action = executors._SigAction()
-        libc.sigaction(int(sig), None, ctypes.byref(action))
-        out[int(sig)] = action.handler
-    return out
+    return {int(sig): action.handler for sig, action in executors.signal_actions().items()}
 
 
 def test_blocks_keep_start_groups_together(two_rooms: OracleContext) -> None:

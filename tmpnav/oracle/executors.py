@@ -305,20 +305,26 @@ def signal_handlers_kept() -> Iterator[None]:
     next one ended the process (the test suite's worker died in the anytime search after a
     test ran Ray beside a JVM started earlier), and tmpnav's own SIGTERM handling
     (tmpnav.lifetime) was Ray's. The handlers are kept at the C level, where the JVM's are."""
-    if not sys.platform.startswith("linux"):
+    saved = signal_actions()
+    try:
         yield
-        return
-    libc = ctypes.CDLL(None, use_errno=True)
+    finally:
+        libc = ctypes.CDLL(None)
+        for sig, action in saved.items():
+            libc.sigaction(int(sig), ctypes.byref(action), None)
+
+
+def signal_actions() -> dict[signal.Signals, _SigAction]:
+    """The C-level action of each of :data:`KEPT_SIGNALS` now (Linux; elsewhere none)."""
+    if not sys.platform.startswith("linux"):
+        return {}
+    libc = ctypes.CDLL(None)
     saved = {}
     for sig in KEPT_SIGNALS:
         action = _SigAction()
         if libc.sigaction(int(sig), None, ctypes.byref(action)) == 0:
             saved[sig] = action
-    try:
-        yield
-    finally:
-        for sig, action in saved.items():
-            libc.sigaction(int(sig), ctypes.byref(action), None)
+    return saved
 
 
 def _ray_work(ctx: OracleContext, block: list[Request]) -> Outcome:
