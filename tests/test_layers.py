@@ -26,6 +26,7 @@ LAYERS: dict[str, int] = {
     "tmpnav.digest": 0,
     "tmpnav.atomic": 0,
     "tmpnav.lifetime": 0,
+    "tmpnav.heap": 0,  # a run's long-lived objects out of Python's full collections
     "tmpnav.shipped": 0,
     "tmpnav.cachedir": 0,
     "tmpnav.java": 0,  # which Java runs ENHSP

@@ -24,6 +24,7 @@ from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
 from tmpnav.choices import Costs, Objective, Search, choose, paper_conflict
 from tmpnav.errors import InputError, Problem, RiskError, ScenarioError
+from tmpnav.heap import long_lived_frozen
 from tmpnav.results import CacheUse, PlanReport, SearchProgress, StageTimes
 from tmpnav.types import Goals, Roadmap, Scenario
 from tmpnav.world import MapImageError, World
@@ -273,24 +274,25 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
     from tmpnav.task.search import SearchRun
 
     times = StageTimes()
-    prep = prepare(path, options, times, loaded)
-    try:
-        store = prep.oracle.cache if options.execution.use_cache else None
-        watch = SearchRun(times, options.reporters.search)
-        run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch)
-        planned = plan_stage(run)
-        task, apart = planned.task, None
-        with times.timed("resimulate"):
-            resim = resimulate(run.carried, task)
-            delta = prep.scenario.planner.max_risk
-            within = delta is None or max((p for a in resim.actions for p in a.risk), default=0.0) <= delta
-            if prep.scenario.planner.keep_apart and within:
-                kept = keep_apart(run.carried, task, delta, resim.cost, resim.schedule.makespan)
-                if kept is not None:
-                    task, apart = kept.task, kept.apart
-                    resim = resimulate(run.carried, task, kept.delays, kept.detours)
-    finally:
-        prep.oracle.close()
+    with long_lived_frozen():  # tmpnav.heap: JPype's full Python collections
+        prep = prepare(path, options, times, loaded)
+        try:
+            store = prep.oracle.cache if options.execution.use_cache else None
+            watch = SearchRun(times, options.reporters.search)
+            run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch)
+            planned = plan_stage(run)
+            task, apart = planned.task, None
+            with times.timed("resimulate"):
+                resim = resimulate(run.carried, task)
+                delta = prep.scenario.planner.max_risk
+                within = delta is None or max((p for a in resim.actions for p in a.risk), default=0.0) <= delta
+                if prep.scenario.planner.keep_apart and within:
+                    kept = keep_apart(run.carried, task, delta, resim.cost, resim.schedule.makespan)
+                    if kept is not None:
+                        task, apart = kept.task, kept.apart
+                        resim = resimulate(run.carried, task, kept.delays, kept.detours)
+        finally:
+            prep.oracle.close()
     times.close()
     report = PlanReport(
         scenario=prep.scenario,
