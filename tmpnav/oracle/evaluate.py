@@ -35,13 +35,13 @@ A result depends only on its own request, never on the batch it was computed in.
 from __future__ import annotations
 
 from tmpnav.oracle.motions import MotionLibrary
-from tmpnav.oracle.motionsets import SetKey, Trajectory, motion_sets, trajectory
+from tmpnav.oracle.motionsets import SetKey, motion_sets
 from tmpnav.oracle.pairs import PairCombos
 from tmpnav.oracle.requests import EvalStats, Request, StartState, mutual_seed
 from tmpnav.oracle.singles import SingleRuns
 from tmpnav.types import MotionResult
 
-__all__ = ["EvalStats", "Request", "StartState", "Trajectory", "evaluate", "mutual_seed", "trajectory"]
+__all__ = ["EvalStats", "Request", "StartState", "evaluate", "mutual_seed"]
 
 
 def evaluate(lib: MotionLibrary, requests: list[Request]) -> tuple[list[MotionResult | None], EvalStats]:

@@ -27,7 +27,6 @@ from tmpnav.belief.sequences import (
 from tmpnav.belief.trie import common_prefix_matrix
 from tmpnav.oracle.motions import MotionLibrary, NominalMotion
 from tmpnav.oracle.requests import StartState
-from tmpnav.types import CostTerms
 
 
 @dataclass
@@ -188,39 +187,3 @@ class MotionTable:
 def row_offsets(horizon: np.ndarray) -> np.ndarray:
     """First row of each simulation in a stack of per-step rows (steps 0..horizon)."""
     return np.concatenate([[0], np.cumsum(horizon + 1)[:-1]]).astype(np.int64)
-
-
-@dataclass
-class Trajectory:
-    """One simulation with its history: ``means`` (T+1, 3n), ``covs`` (T+1, 3n, 3n)."""
-
-    means: np.ndarray
-    covs: np.ndarray
-    terms: tuple[CostTerms, ...]
-    mutual_steps: int
-
-
-def trajectory(
-    lib: MotionLibrary,
-    motions: list[NominalMotion],
-    mean0: np.ndarray,
-    cov0: np.ndarray,
-    mvis: np.ndarray,
-    mu_noise: np.ndarray,
-) -> Trajectory:
-    """Simulate n robots through their motions from a joint belief, keeping every step.
-
-    ``mvis`` (h+1, n, n) says who sees whom; ``mu_noise`` (h+1, n, n, 2) are the draws of
-    the mutual observations. Used to re-simulate the plan with all robots in one state.
-    """
-    n = len(motions)
-    table = MotionTable(motions, lib)
-    h = int(table.arrays.steps.max(initial=0))
-    one = Sequences.one(n, h)
-    run = table.propagate(lib, n, [GroupStart(mean0, cov0, 0)], one, np.ascontiguousarray(mvis), mu_noise[None])
-    arrival = run.arrival_xy[0]
-    terms = tuple(
-        CostTerms(float(table.c_u[i]), float(np.hypot(*(arrival[i] - m.poses[-1, :2]))), float(run.c_sigma[0, i]))
-        for i, m in enumerate(motions)
-    )
-    return Trajectory(run.last_means[: h + 1].copy(), run.last_covs[: h + 1].copy(), terms, int(run.mutual_steps[0]))
