@@ -7,7 +7,7 @@ output files are being written, then run to its end. After each kill:
 
 - no process of the run is left: the oracle's workers, the JVM (which unified-planning
   starts in a session of its own, out of reach of signals to tmpnav's process group) and
-  tmpnav's own sentinel (tmpnav.lifetime);
+  tmpnav's own sentinel (tmpnav.lifetime), and none of its temporary files (ENHSP's);
 - no output file is half-written: the folder holds the files of the earlier plan, byte
   for byte, and nothing else a user sees (a SIGKILL may leave hidden temporary files,
   which the next write removes);
@@ -51,11 +51,14 @@ def plan_args(cache: Path, out: Path, *extra: str) -> list[str]:
 
 
 def start(args: list[str], log: Path, env: dict[str, str]) -> subprocess.Popen[bytes]:
-    """The run, with SIGINT at its default (a shell's background job would ignore it) and
-    its output in a file (a pipe would be held open by any process left behind)."""
+    """The run, with SIGINT at its default (a shell's background job would ignore it), its
+    output in a file (a pipe would be held open by any process left behind) and its
+    temporary files in a folder of its own (:func:`scratch_left`)."""
+    scratch = log.parent / "tmp"
+    scratch.mkdir(exist_ok=True)
     with open(log, "wb") as fh:
         return subprocess.Popen(
-            args, stdout=fh, stderr=subprocess.STDOUT, cwd=ROOT, env={**os.environ, **env},
+            args, stdout=fh, stderr=subprocess.STDOUT, cwd=ROOT, env={**os.environ, **env, "TMPDIR": str(scratch)},
             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
         )  # fmt: skip
 
@@ -169,6 +172,12 @@ def leftovers(started: list[int]) -> list[str]:
     return named
 
 
+def scratch_left(log: Path) -> list[str]:
+    """tmpnav's temporary folders the killed run left (its sentinel removes them, after the
+    processes, which :func:`leftovers` waited for)."""
+    return sorted(p.name for p in (log.parent / "tmp").glob("tmpnav-*"))
+
+
 def visible(folder: Path) -> dict[str, bytes]:
     return {p.name: p.read_bytes() for p in folder.iterdir() if not p.name.startswith(".")}
 
@@ -207,6 +216,7 @@ def test_a_killed_plan_leaves_no_process_no_half_written_file_and_the_same_next_
         said = log.read_text()
         assert code == ENDS[sig], f"{point}: exit status {code}: {said}"
         assert leftovers(started) == [], f"{point}: processes outlived tmpnav plan ({sig.name})"
+        assert scratch_left(log) == [], f"{point}: temporary files outlived tmpnav plan ({sig.name})"
         assert visible(out) == earlier, f"{point}: the earlier plan's files changed"
         assert "Traceback" not in said, said
         if sig != signal.SIGKILL:  # a run that could clean up did

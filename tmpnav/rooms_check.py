@@ -12,11 +12,11 @@ turn, and the first that connects every room is kept.
 
 from __future__ import annotations
 
-import tempfile
 from dataclasses import replace
 from pathlib import Path
 
 from tmpnav.errors import RoadmapError, ScenarioError
+from tmpnav.lifetime import scratch_folder
 from tmpnav.pipeline import load_world
 from tmpnav.roadmap import build_roadmap
 from tmpnav.rooms.proposal import Proposal
@@ -29,7 +29,7 @@ MAX_SAMPLES = 12000
 def verify(proposal: Proposal) -> tuple[Proposal, list[str]]:
     """The proposal with a roadmap size that connects every room, and what is still wrong
     (empty when the scenario validates and its roadmap connects)."""
-    with tempfile.TemporaryDirectory(prefix="tmpnav-rooms-") as folder:
+    with scratch_folder("rooms-") as folder:
         path = Path(folder) / "scenario.yaml"
         save(path, skeleton_in(proposal, Path(folder), "check"))
         try:

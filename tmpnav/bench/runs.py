@@ -26,6 +26,7 @@ from pathlib import Path
 from tmpnav import shipped
 from tmpnav.bench.table import BENCH_STAGES, PHASES, Row
 from tmpnav.errors import InputError
+from tmpnav.lifetime import remove_scratch
 
 #: after this many timeouts at one point, an encoding's later sessions there are not run
 GIVE_UP_AFTER = 2
@@ -164,10 +165,12 @@ def run_job(job: Job, timeout: float, workers: int | None, time_budget: float | 
 
 
 def kill_group(proc: subprocess.Popen[str]) -> None:
-    """Kill a run's whole process group (the worker and its oracle pool) and reap it."""
+    """Kill a run's whole process group (the worker and its oracle pool), reap it, and remove
+    the worker's temporary files (its cache; ENHSP's files of a search still under way)."""
     with contextlib.suppress(ProcessLookupError, PermissionError):
         os.killpg(proc.pid, signal.SIGKILL)
     proc.communicate()
+    remove_scratch(pid=proc.pid)
 
 
 def rows(job: Job, result: WorkerResult) -> list[Row]:

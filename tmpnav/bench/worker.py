@@ -22,7 +22,6 @@ import json
 import os
 import shutil
 import sys
-import tempfile
 import threading
 import time
 from dataclasses import asdict
@@ -32,6 +31,7 @@ from typing import Any
 from tmpnav import shipped
 from tmpnav.bench.table import PHASES
 from tmpnav.errors import TmpnavError
+from tmpnav.lifetime import scratch_folder
 from tmpnav.pipeline import PlanOptions, plan
 from tmpnav.results import PlanReport
 from tmpnav.scenario import load
@@ -96,7 +96,7 @@ class Watchdog:
 def run(job: dict[str, Any]) -> dict[str, Any]:
     goals = Goals(visit=tuple(job["rooms"]), per_robot=())
     out: dict[str, Any] = {}
-    with tempfile.TemporaryDirectory(prefix="tmpnav-bench-") as cache:
+    with scratch_folder("bench-") as cache:
         watchdog = Watchdog(out, job.get("planner_timeout"), cache)
         for phase in PHASES:
             if phase != "cold" and out["cold"].get("status") not in SOLVED:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import os
 import queue
 import re
-import tempfile
 import threading
 import time
 import warnings
@@ -29,7 +28,7 @@ from tmpnav.errors import (
 from tmpnav.java import JAVA_MIN as JAVA_MIN  # re-exported: the oldest Java ENHSP runs on
 from tmpnav.java import find as find_java
 from tmpnav.java import require as require_java
-from tmpnav.lifetime import gather
+from tmpnav.lifetime import gather, scratch_folder
 from tmpnav.task import enhsp_jvm
 from tmpnav.types import PlanStatus
 
@@ -282,7 +281,7 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
         name, optimal = engine.name, engine_cls.satisfies(OptimalityGuarantee.SOLVED_OPTIMALLY)
     else:
         name, optimal = known.name, known.optimal
-    with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp:
+    with scratch_folder("enhsp-") as tmp:
         d, p, plan_file = (os.path.join(tmp, n) for n in ("domain.pddl", "problem.pddl", "plan.txt"))
         for path, text in ((d, domain), (p, problem)):
             with open(path, "w", encoding="utf-8") as f:
@@ -323,7 +322,7 @@ def warm_up(planner: str, searches: int, domain: str, problem: str) -> None:
 
     @contextmanager
     def sample() -> Iterator[list[str]]:
-        with tempfile.TemporaryDirectory(prefix="tmpnav-enhsp-") as tmp:
+        with scratch_folder("enhsp-") as tmp:
             d, p, plan_file = (os.path.join(tmp, n) for n in ("domain.pddl", "problem.pddl", "plan.txt"))
             for path, text in ((d, domain), (p, problem)):
                 with open(path, "w", encoding="utf-8") as f:
