@@ -56,3 +56,23 @@ def test_given_back_when_the_run_fails() -> None:
     with pytest.raises(RuntimeError), long_lived_frozen():
         raise RuntimeError("the run failed")
     assert gc.get_freeze_count() == 0
+
+
+def test_what_survives_a_full_collection_inside_is_not_walked_again_until_the_end() -> None:
+    with long_lived_frozen():
+        keep = _Node()
+        keep.other = keep  # a cycle, alive
+        gc.collect()  # survives: frozen
+        ref = weakref.ref(keep)
+        del keep
+        gc.collect()
+        assert ref() is not None  # unreachable now, but frozen: not walked
+    gc.collect()
+    assert ref() is None
+
+
+def test_collections_are_left_as_they_were() -> None:
+    callbacks = list(gc.callbacks)
+    with long_lived_frozen(), long_lived_frozen():
+        pass
+    assert gc.callbacks == callbacks and gc.get_freeze_count() == 0
