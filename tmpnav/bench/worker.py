@@ -50,8 +50,8 @@ def warm_up() -> None:
     its three rooms with the anytime search as a bench run plans (worker processes for the
     oracle, OR-Tools' routes, the bound's linear programs, ENHSP's sub-problems in the JVM).
     Before the second plan, a cold 10-room run spent about a second more than a second cold
-    run in the same process: 0.3 s importing scipy.optimize for the bound, the rest in ENHSP's
-    first searches and the oracle. A different world from every benchmarked one: no motion,
+    run in the same process: 0.3 s importing scipy.optimize for the bound (its LP solver
+    then), the rest in ENHSP's first searches and the oracle. A different world from every benchmarked one: no motion,
     roadmap or cost computed here serves a measured run."""
     path = shipped.configs_dir() / WARM_UP
     plan(path, PlanOptions.of(use_cache=False, executor="serial"))

@@ -46,7 +46,7 @@ origin. The plan's moves thus define a feasible assignment of rows to columns wh
 (the arc costs below) is at most their summed prices. Arc costs: for a row x of U, the
 minimum of w(r, o, x) over the robots r that can make that move (for (i), r itself; for
 (ii) and (iii), every r able to enter o); for a row (r, x) of E, w(r, o, x) with r fixed.
-The cheapest assignment (scipy's ``linear_sum_assignment``, exact) is a lower bound on
+The cheapest assignment (scipy's ``min_weight_full_bipartite_matching``, exact) is a lower bound on
 every plan, and at least (a), because every arc cost is at least its row's minimum in
 (a). If no assignment exists, no plan exists, and the bound is infinite.
 
@@ -189,18 +189,22 @@ def _potentials(price: dict[MoveKey, float], rows: list[Row]) -> dict[str, float
 
 def _assignment(table: CostTable, goals: Goals, price: dict[MoveKey, float], rows: list[Row]) -> dict[str, float]:
     """(b): the cheapest assignment of rows to origins, each origin left at most once."""
-    from scipy.optimize import linear_sum_assignment
+    from scipy.sparse import csr_array
+    from scipy.sparse.csgraph import min_weight_full_bipartite_matching
 
     cost = _assignment_matrix(table, goals, price, rows)
     finite = np.isfinite(cost)
-    big = 1.0 + 2.0 * len(rows) * (float(cost[finite].max()) if finite.any() else 0.0)
-    # a finite stand-in for "forbidden": any assignment that uses one costs more than all others
-    row_ind, col_ind = linear_sum_assignment(np.where(finite, cost, big))
-    chosen = cost[row_ind, col_ind]
-    if not np.isfinite(chosen).all():
+    i, j = np.nonzero(finite)
+    # the allowed arcs only, each weighing 1 more than it costs: a sparse matrix has no
+    # explicit zero weights, and every row is assigned, so the shift does not change the choice
+    arcs = csr_array((cost[i, j] + 1.0, (i, j)), shape=cost.shape)
+    try:
+        row_ind, col_ind = min_weight_full_bipartite_matching(arcs)
+    except ValueError:  # no assignment of every row to a column of its own
         return {"assignment": math.inf, "assignment.rooms": math.inf, "assignment.targets": math.inf}
-    rooms = float(sum(chosen[i] for i in row_ind if rows[i][0] is None))
-    targets = float(sum(chosen[i] for i in row_ind if rows[i][0] is not None))
+    chosen = cost[row_ind, col_ind]
+    rooms = float(sum(c for i, c in zip(row_ind, chosen, strict=True) if rows[i][0] is None))
+    targets = float(sum(c for i, c in zip(row_ind, chosen, strict=True) if rows[i][0] is not None))
     return {"assignment": rooms + targets, "assignment.rooms": rooms, "assignment.targets": targets}
 
 
