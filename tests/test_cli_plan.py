@@ -169,6 +169,16 @@ def test_planner_crash(cache_dir: Path) -> None:
 
 
 @pytest.mark.slow
+def test_a_planner_crash_in_the_anytime_search_fails_the_run(cache_dir: Path) -> None:
+    """The anytime search took a crashed sub-problem search for one without improvement: with
+    every ENHSP search crashing, the corridor's run 'converged' on OR-Tools' first plan, exit 0."""
+    env = dict(os.environ, TMPNAV_JAVA_OPTIONS="-XX:+NoSuchJvmOption")
+    corridor = ROOT / "configs" / "corridor-2robots.yaml"
+    proc = tmpnav("plan", str(corridor), "--search", "anytime", "--cache-dir", str(cache_dir), "-q", env=env)
+    assert_clean_failure(proc, PlannerCrashError.exit_code, "failed with status")
+
+
+@pytest.mark.slow
 def test_export_pddl_is_accepted_by_enhsp(cache_dir: Path, tmp_path: Path) -> None:
     from up_enhsp.enhsp_planner import ENHSP_JAR
 

@@ -45,6 +45,8 @@ from tmpnav.types import CostTable, Goals, MoveKey
 if TYPE_CHECKING:
     from scipy.sparse import csc_array as SparseMatrix
 
+    from tmpnav.task.linear import LpSolution
+
 Floats = NDArray[np.float64]
 Ints = NDArray[np.int64]
 Bools = NDArray[np.bool_]
@@ -60,21 +62,6 @@ SLACK_ROUNDS = 3
 INITIAL_MOVES = 6
 #: a column outside the LP joins it when its reduced cost is below minus this
 PRICING_TOLERANCE = 1e-9
-#: GLOP's dual simplex: on tests/task/instances.py's 60-room, 8-robot table the bound took
-#: 7.4 s with it, 33.9 s with GLOP's default primal simplex, 8.3 s with scipy's HiGHS before
-GLOP_PARAMETERS = "use_dual_simplex: true"
-
-
-@dataclass(frozen=True)
-class LpSolution:
-    """What a solve of the LP gives the bound: the solver's status (``optimal``, ``infeasible``
-    or another of OR-Tools' statuses), the solution and the duals of the = and <= rows (each the
-    objective's rate of change with its row's right-hand side; <= 0 on a <= row at its bound)."""
-
-    status: str
-    x: Floats
-    y_eq: Floats
-    y_ub: Floats
 
 
 @dataclass(frozen=True)
@@ -108,7 +95,8 @@ def flow_bound(
             continue
         if res.status != "optimal":
             break
-        y_eq, y_ub = res.y_eq, np.minimum(res.y_ub, 0.0)
+        n_ub = a_ub.shape[0]
+        y_eq, y_ub = res.duals[n_ub:], np.minimum(res.duals[:n_ub], 0.0)
         reduced = lp.cost - lp.a_eq.T @ y_eq - a_ub.T @ y_ub
         last = float(lp.b_eq @ y_eq + b_ub @ y_ub + np.minimum(reduced, 0.0).sum())
         entering = ~active & (reduced < -PRICING_TOLERANCE)
@@ -127,30 +115,21 @@ def flow_bound(
 
 
 def _solve(lp: _Program, a_ub: SparseMatrix, b_ub: Floats, active: Bools) -> LpSolution:
-    """min c·x over the ``active`` columns, the = rows and the <= rows ``a_ub`` x <= ``b_ub``,
-    0 <= x <= 1, by OR-Tools' simplex solver GLOP, through its array interface (no model
-    built a term at a time). It replaced scipy's ``linprog(method="highs")``, whose import
-    (scipy.optimize) took 0.2-0.3 s of every fresh process; on 155 tables of
-    tests/task/instances.py, 2 to 60 rooms, the bounds agree to 1e-15 (relative)."""
-    from ortools.linear_solver.python import model_builder_helper as mb
+    """The LP over the ``active`` columns, 0 <= x <= 1, its rows the <= rows ``a_ub`` then the =
+    rows (:func:`tmpnav.task.linear.minimise`)."""
     from scipy.sparse import csr_matrix, vstack
 
-    cols = np.flatnonzero(active)
-    n_ub = a_ub.shape[0]
-    columns = (np.zeros(len(cols)), np.ones(len(cols)), lp.cost[cols])  # bounds, then costs
-    rows = (np.concatenate([np.full(n_ub, -np.inf), lp.b_eq]), np.concatenate([b_ub, lp.b_eq]))  # bounds
-    model = mb.ModelBuilderHelper()
-    # OR-Tools' stub types each array as numpy.ndarray[numpy.float64[m, 1]], which no array is
-    model.fill_model_from_sparse_data(*columns, *rows, csr_matrix(vstack([a_ub[:, cols], lp.a_eq[:, cols]])))  # type: ignore[arg-type]
-    solver = mb.ModelSolverHelper("glop")
-    solver.set_solver_specific_parameters(GLOP_PARAMETERS)
-    solver.solve(model)
-    status = solver.status()
-    if status != mb.SolveStatus.OPTIMAL:
-        name = "infeasible" if status == mb.SolveStatus.INFEASIBLE else status.name.lower()
-        return LpSolution(name, np.zeros(0), np.zeros(0), np.zeros(0))
-    y = np.asarray(solver.dual_values(), dtype=float)
-    return LpSolution("optimal", np.asarray(solver.variable_values(), dtype=float), y[n_ub:], y[:n_ub])
+    from tmpnav.task.linear import minimise
+
+    cols, n_ub = np.flatnonzero(active), a_ub.shape[0]
+    return minimise(
+        lp.cost[cols],
+        np.zeros(len(cols)),
+        np.ones(len(cols)),
+        np.concatenate([np.full(n_ub, -np.inf), lp.b_eq]),
+        np.concatenate([b_ub, lp.b_eq]),
+        csr_matrix(vstack([a_ub[:, cols], lp.a_eq[:, cols]])),
+    )
 
 
 class _Program:

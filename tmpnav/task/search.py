@@ -35,7 +35,7 @@ from dataclasses import dataclass, field, replace
 from typing import Literal
 
 from tmpnav.choices import StopReason
-from tmpnav.errors import PlannerError
+from tmpnav.errors import PlannerError, PlannerTimeoutError, UnsolvableError
 from tmpnav.lifetime import gather
 from tmpnav.results import SearchProgress, StageTimes
 from tmpnav.task.decode import canonical_order
@@ -446,10 +446,13 @@ class AnytimeSearch:
         return Clocks(start, max(others, default=0.0))
 
     def _solve(self, sub: _Sub, timeout: float) -> list[Step] | None:
-        """ENHSP's optimal plan of a sub-problem (None if it found none in time)."""
+        """ENHSP's optimal plan of a sub-problem (None if it found none in time, or none at
+        all). A planner that fails otherwise (it crashed, or cannot run) fails the search: it
+        used to count as a sub-problem solved without improvement, so a run whose every ENHSP
+        search crashed (a bad TMPNAV_JAVA_OPTIONS) "converged" on OR-Tools' first plan."""
         try:
             return sub.task.decode(sub.task.solve(self.options.planner, timeout))
-        except PlannerError:
+        except (PlannerTimeoutError, UnsolvableError):
             return None
 
     def cost(self, plan: Plan) -> PlanCost:
