@@ -46,9 +46,9 @@ origin. The plan's moves thus define a feasible assignment of rows to columns wh
 (the arc costs below) is at most their summed prices. Arc costs: for a row x of U, the
 minimum of w(r, o, x) over the robots r that can make that move (for (i), r itself; for
 (ii) and (iii), every r able to enter o); for a row (r, x) of E, w(r, o, x) with r fixed.
-The cheapest assignment (scipy's ``min_weight_full_bipartite_matching``, exact) is a lower bound on
-every plan, and at least (a), because every arc cost is at least its row's minimum in
-(a). If no assignment exists, no plan exists, and the bound is infinite.
+The cheapest assignment (scipy's ``min_weight_full_bipartite_matching``, exact) is a
+lower bound on every plan, and at least (a), because every arc cost is at least its row's
+minimum in (a). If no assignment exists, no plan exists, and the bound is infinite.
 
 **(c) Flow.** The assignment permits closed loops among rooms of U that no robot can
 reach, takes each arc's cheapest robot independently of the robot that arrived, and
