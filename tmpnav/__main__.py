@@ -26,9 +26,9 @@ def _end(code: object) -> None:
     tmpnav.task.enhsp_jvm, though it leaves the JVM to end with the process once no thread is
     inside it; multiprocessing's and the temporary files' clean-up), the output is flushed,
     and the process ends without unloading its modules, which frees nothing the system does
-    not and took about 0.3 s (numba, LLVM, OR-Tools, SciPy). The run's
-    files are written and closed by then (tmpnav.atomic). A signal from here on ends the process
-    at once, as it ends any program that has finished its work."""
+    not and took about 0.3 s (numba, LLVM, OR-Tools, SciPy). The run's files are written and
+    closed by then (tmpnav.atomic). A signal from here on ends the process at once, as it
+    ends any program that has finished its work."""
     import atexit
 
     for sig in (signal.SIGINT, signal.SIGTERM):

@@ -51,8 +51,8 @@ def warm_up() -> None:
     oracle, OR-Tools' routes, the bound's linear programs, ENHSP's sub-problems in the JVM).
     Before the second plan, a cold 10-room run spent about a second more than a second cold
     run in the same process: 0.3 s importing scipy.optimize for the bound (its LP solver
-    then), the rest in ENHSP's first searches and the oracle. A different world from every benchmarked one: no motion,
-    roadmap or cost computed here serves a measured run."""
+    then), the rest in ENHSP's first searches and the oracle. A different world from every
+    benchmarked one: no motion, roadmap or cost computed here serves a measured run."""
     path = shipped.configs_dir() / WARM_UP
     plan(path, PlanOptions.of(use_cache=False, executor="serial"))
     rooms = tuple(room.name for room in load(path).rooms)
