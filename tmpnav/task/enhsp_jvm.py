@@ -21,6 +21,9 @@ What a shared JVM changes, and how this module keeps the old behaviour:
   all loaded at once and their static fields recorded; before every solve the slot puts them
   back as they were (null, a number, or a collection's first contents). A slot with a field
   of another kind would not be reused (a new slot per solve: about 190 ms instead of 20 ms).
+  Both are tmpnav's one Java class (java/EnhspSlot.java, shipped compiled beside it and put
+  on the JVM's class path), one call each outside Python's lock, so that a slot made ready in
+  the background does not wait for the main thread, nor slow it down, thousands of times.
 - Exit: the JVM is destroyed at Python's exit (JPype's shutdown). A thread still inside it
   then is stopped there for good, which deadlocked (holding Python's lock) or crashed the
   process, so :func:`quiesce` first stops the searches and waits for this module's threads
@@ -48,7 +51,6 @@ from __future__ import annotations
 
 import atexit
 import contextlib
-import functools
 import importlib.util
 import os
 import queue
@@ -57,14 +59,15 @@ import sys
 import tempfile
 import threading
 import time
-import zipfile
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal, Protocol
+from typing import Literal
 
 #: environment variable choosing how ENHSP runs: "jvm" (the default) or "process"
 MODE_ENV = "TMPNAV_ENHSP"
+#: tmpnav's Java class (java/EnhspSlot.java, built by ``make java``), on the JVM's class path
+HELPER_JAR = Path(__file__).parent / "java" / "tmpnav-enhsp.jar"
 #: JVM options always added: signals stay Python's (tmpnav.lifetime), ENHSP's System.gc()
 #: per run is not a full collection of the shared heap
 FIXED_OPTIONS = ("-Xrs", "-XX:+DisableExplicitGC")
@@ -90,114 +93,35 @@ class JvmRun:
     error: str | None = None
 
 
-class _JavaField(Protocol):
-    """A java.lang.reflect.Field, as JPype shows it."""
-
-    def set(self, owner: None, value: object) -> None: ...
-    def getModifiers(self) -> int: ...
-
-
-class _JavaContainer(Protocol):
-    """A java.util.Collection or Map, as JPype shows it."""
-
-    def clear(self) -> None: ...
-    def addAll(self, contents: object) -> bool: ...  # a Collection's
-    def putAll(self, contents: object) -> None: ...  # a Map's
-
-
-#: a static field of ENHSP's, its first value, and what puts a collection's contents back
-_Static = tuple[_JavaField, object, "Callable[[], None] | None"]
-
-
 class _Slot:
     """ENHSP in a class loader of its own over enhsp.jar: its ``main``, and the first values
-    of ENHSP's static fields, put back before every solve (:meth:`reset`)."""
+    of ENHSP's static fields, put back before every solve (:meth:`reset`). The loading, the
+    recording and the putting back are tmpnav's Java class (java/EnhspSlot.java), each one
+    call into the JVM: see that file for why not JPype's reflection from Python."""
 
     def __init__(self, jar: str) -> None:
         import jpype
 
-        url = jpype.JClass("java.io.File")(jar).toURI().toURL()
-        parent = jpype.JClass("java.lang.ClassLoader").getPlatformClassLoader()
-        self.loader = jpype.JClass("java.net.URLClassLoader")([url], parent)
-        self.main = jpype.JClass("main", loader=self.loader)
-        self.statics, self.reusable = _snapshot(self.loader, _class_names(jar))
+        self.java = jpype.JClass("tmpnav.EnhspSlot")(jar)
+        self.main = jpype.JClass(self.java.load("main"))
+        for archive, prefixes in _own_classes(jar):
+            self.java.record(archive, prefixes)
+        self.reusable = bool(self.java.reusable())
 
     def reset(self) -> None:
         """ENHSP's static fields as they were when its classes were loaded."""
-        for field, value, refill in self.statics:
-            if refill is not None:
-                refill()  # the same collection (final fields too), its first contents
-            if not _is_final(field):
-                field.set(None, value)
+        self.java.reset()
 
     def close(self) -> None:
-        self.loader.close()
+        self.java.close()
 
 
-@functools.lru_cache(maxsize=1)
-def _class_names(jar: str) -> tuple[str, ...]:
-    """ENHSP's own classes (enhsp.jar, and its PDDL library libs/JPddl_.jar), whose static
-    fields hold its state; the other libraries are generic (collections, parser runtime)."""
-    names = []
+def _own_classes(jar: str) -> tuple[tuple[str, list[str]], ...]:
+    """ENHSP's own classes, each archive with the prefixes of their paths: enhsp.jar's, and
+    those of its PDDL library (libs/JPddl_.jar), whose static fields hold its state; the other
+    libraries are generic (collections, parser runtime)."""
     library = os.path.join(os.path.dirname(jar), "libs", "JPddl_.jar")
-    for path, prefixes in ((jar, ("main.", "planners/")), (library, ("com/hstairs/",))):
-        with zipfile.ZipFile(path) as archive:
-            for name in archive.namelist():
-                if name.endswith(".class") and name.startswith(prefixes):
-                    names.append(name.removesuffix(".class").replace("/", "."))
-    return tuple(names)
-
-
-def _snapshot(loader: object, names: tuple[str, ...]) -> tuple[list[_Static], bool]:
-    """Load and initialise ENHSP's classes in ``loader``; their static fields, each with its
-    value and (for a collection or map) what puts its first contents back; and whether every
-    field is of a kind :meth:`_Slot.reset` puts back (else the slot is not reused)."""
-    import jpype
-
-    forname = jpype.JClass("java.lang.Class").forName
-    static = jpype.JClass("java.lang.reflect.Modifier").isStatic
-    collection, mapping = jpype.JClass("java.util.Collection"), jpype.JClass("java.util.Map")
-    statics: list[_Static] = []
-    reusable = True
-    for name in names:
-        try:
-            fields = forname(name, True, loader).getDeclaredFields()
-        except Exception:  # a class that cannot load here is not used here either
-            continue
-        for field in fields:
-            if not static(field.getModifiers()):
-                continue
-            field.setAccessible(True)
-            value = field.get(None)
-            if isinstance(value, collection | mapping):
-                statics.append((field, value, _refill(value)))
-            elif _is_final(field):
-                continue  # constants (ENHSP's final objects are its true and false predicates)
-            elif value is None or field.getType().isPrimitive() or isinstance(value, str):
-                statics.append((field, value, None))
-            else:
-                reusable = False  # state this module does not know how to put back
-    return statics, reusable
-
-
-def _refill(container: _JavaContainer) -> Callable[[], None]:
-    """What empties a Java collection or map and puts its present contents back."""
-    import jpype
-
-    is_map = hasattr(container, "putAll")
-    first = jpype.JClass("java.util.HashMap" if is_map else "java.util.ArrayList")(container)
-
-    def refill() -> None:
-        container.clear()
-        container.putAll(first) if is_map else container.addAll(first)
-
-    return refill
-
-
-def _is_final(field: _JavaField) -> bool:
-    import jpype
-
-    return bool(jpype.JClass("java.lang.reflect.Modifier").isFinal(field.getModifiers()))
+    return ((jar, ["main.", "planners/"]), (library, ["com/hstairs/"]))
 
 
 class _Jvm:
@@ -322,7 +246,7 @@ def _start(options: str) -> str:
                 *shlex.split(options),
                 *FIXED_OPTIONS,
                 *native,
-                classpath=[],
+                classpath=[str(HELPER_JAR)],
                 interrupt=False,
                 convertStrings=False,
             )
