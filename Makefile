@@ -81,17 +81,17 @@ regression-update: $(STAMP)
 clean:
 	rm -rf out .pytest_cache .mypy_cache .ruff_cache
 
-# tmpnav's one Java class (ENHSP's slots in the in-process JVM, tmpnav/task/enhsp_jvm.py) is
-# shipped compiled, so that neither an install nor a run needs a JDK: after changing its source,
-# `make java` (javac 17+) builds the jar again. Its manifest records the source's SHA-256, which
-# tests/task/test_enhsp_slot_jar.py compares with the source; the fixed date makes the build
-# reproducible.
-JAVA_SRC := tmpnav/task/java/EnhspSlot.java
+# tmpnav's Java classes (the server that runs ENHSP's searches for a run, tmpnav/task/enhsp_jvm.py)
+# are shipped compiled, so that neither an install nor a run needs a JDK: after changing their
+# sources, `make java` (javac 17+) builds the jar again. Its manifest records the SHA-256 of the
+# sources (in name order, one after another), which tests/task/test_enhsp_slot_jar.py compares
+# with them; the fixed date makes the build reproducible.
+JAVA_SRC := $(sort $(wildcard tmpnav/task/java/*.java))
 JAVA_JAR := tmpnav/task/java/tmpnav-enhsp.jar
 java:
 	@rm -rf build/java && mkdir -p build/java/classes
 	javac --release 17 -Xlint:all -Werror -d build/java/classes $(JAVA_SRC)
-	@printf 'Source-SHA256: %s\n' "$$(sha256sum $(JAVA_SRC) | cut -d' ' -f1)" > build/java/manifest.txt
+	@printf 'Source-SHA256: %s\n' "$$(cat $(JAVA_SRC) | sha256sum | cut -d' ' -f1)" > build/java/manifest.txt
 	jar --create --date=2026-01-01T00:00:00Z --file $(JAVA_JAR) --manifest build/java/manifest.txt -C build/java/classes .
 
 # Property-based fuzzing of the inputs through the real CLI, about ten minutes of random

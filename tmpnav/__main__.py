@@ -22,13 +22,12 @@ def main() -> None:
 
 def _end(code: object) -> None:
     """End the process with the run's exit ``code`` (as ``sys.exit`` takes it) once the run is
-    over: Python's exit handlers run as at any exit (JPype's shutdown, which must stay:
-    tmpnav.task.enhsp_jvm, though it leaves the JVM to end with the process once no thread is
-    inside it; multiprocessing's and the temporary files' clean-up), the output is flushed,
-    and the process ends without unloading its modules, which frees nothing the system does
-    not and took about 0.3 s (numba, LLVM, OR-Tools, SciPy). The run's files are written and
-    closed by then (tmpnav.atomic). A signal from here on ends the process at once, as it
-    ends any program that has finished its work."""
+    over: Python's exit handlers run as at any exit (ENHSP's server ended: tmpnav.task.enhsp_jvm;
+    multiprocessing's and the temporary files' clean-up), the output is flushed, and the
+    process ends without unloading its modules, which frees nothing the system does not and
+    took about 0.3 s (numba, LLVM, OR-Tools, SciPy). The run's files are written and closed
+    by then (tmpnav.atomic). A signal from here on ends the process at once, as it ends any
+    program that has finished its work."""
     import atexit
 
     for sig in (signal.SIGINT, signal.SIGTERM):
@@ -40,13 +39,7 @@ def _end(code: object) -> None:
     else:
         sys.stderr.write(f"{code}\n")
         status = 1
-    jvm = sys.modules.get("tmpnav.task.enhsp_jvm")
-    if jvm is None or jvm.quiesce(jvm.QUIESCE_SECONDS):
-        if jvm is not None:
-            jvm.not_destroyed_at_exit()  # the JVM ends with the process, right after
-        atexit._run_exitfuncs()
-    # else a thread is still inside ENHSP's JVM, which cannot be destroyed safely (it would
-    # deadlock or crash: tmpnav.task.enhsp_jvm.quiesce): the process ends with the JVM in it
+    atexit._run_exitfuncs()
     _flush_and_exit(status)
 
 

@@ -1,15 +1,17 @@
 """A run's long-lived objects kept out of Python's full collections (``gc.freeze``).
 
-JPype, which runs ENHSP inside the tmpnav process (:mod:`tmpnav.task.enhsp_jvm`), ties the
-two collectors together: after every collection of the JVM's heap, its reference thread runs
-a full Python collection, holding the interpreter's lock. ENHSP's searches fill the JVM's
-young generation every 0.1-0.5 s, and a full collection walks every Python object there is:
-the libraries' (numba's type system, SciPy, OR-Tools, OMPL's bindings) and the run's own
-(cost tables, oracle results, the search's state). Measured after the bench's warm-up: on
+Python's full collections walk every object there is: the libraries' (numba's type system,
+SciPy, OR-Tools, OMPL's bindings) and the run's own (cost tables, oracle results, the
+search's state). They were frequent while ENHSP's JVM ran inside tmpnav, through JPype (until
+2026-11-28; :mod:`tmpnav.task.enhsp_jvm` now runs it as a process), which tied the two
+collectors together: after every collection of the JVM's heap, its reference thread ran a
+full Python collection, holding the interpreter's lock, every 0.1-0.5 s of ENHSP's
+searches. Measured then, after the bench's warm-up: on
 the 10-room corridor 8 such collections of 70-170 ms, 0.8 s of a 2.7 s run; on the 40-room
 office 131 collections, 18 s of a 44.5 s run. Every other thread waited for the lock
 meanwhile, the searches' own too (the first two searches of a 10-room run took 0.3 s each
-instead of 0.01 s).
+instead of 0.01 s). Python's own full collections remain (one each time the objects that
+survived the last grow by a quarter), and the run's objects only grow.
 
 So a run moves the objects that exist when it starts (imported modules, the world, the
 roadmap) into the permanent generation, which collections skip, and after each full

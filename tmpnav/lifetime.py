@@ -191,11 +191,11 @@ def signals_held() -> Iterator[None]:
     (logging's, threading's) right after fork(), and KeyboardInterrupt or Terminated raised
     in one of them is printed as "Exception ignored" and lost; the run went on to its end.
     Held, a signal is delivered when the block ends, to ordinary code. The kernel may give
-    it to another thread meanwhile (the JVM's, started before the oracle's workers since
-    ENHSP is warmed up early), and Python then runs its handler in this thread all the
-    same, inside the block: the handler only remembers the signal, and its exception is
-    raised when the block ends (a fault-injection run interrupted while its workers forked
-    ran on to its end, remembering its plan)."""
+    it to another thread meanwhile (one reading ENHSP's answers, or waiting for a search),
+    and Python then runs its handler in this thread all the same, inside the block: the
+    handler only remembers the signal, and its exception is raised when the block ends (a
+    fault-injection run interrupted while its workers forked ran on to its end, remembering
+    its plan)."""
     global _holding, _deferred
     held = {signal.SIGINT, signal.SIGTERM}
     if threading.current_thread() is not threading.main_thread():
@@ -217,7 +217,7 @@ def gather(futures: Sequence[Future[T]]) -> Iterator[T]:
     """The results of ``futures``, in their order, waited for in short slices.
 
     A process-directed signal is given by the kernel to any thread that does not block it:
-    one of a pool's threads, or one of the JVM's. Its handler (KeyboardInterrupt,
+    one of a pool's threads, or one waiting for an ENHSP search. Its handler (KeyboardInterrupt,
     :class:`Terminated`) then runs when the main thread next runs Python code, which an
     untimed wait (``Future.result()``, ``Executor.map``) never does until its work ends: a
     Ctrl-C waited for a search's time limit. Waited for in slices of SIGNAL_POLL seconds,
@@ -287,8 +287,8 @@ def remove_scratch(token: str | None = None, pid: int | None = None) -> int:
 
 def _remove_own_scratch() -> None:
     """At exit: this process's scratch folder, if it made one (registered when this module is
-    imported, so that it runs after the exit handlers registered later: JPype's shutdown of
-    the JVM and the searches' end, whose files are in it)."""
+    imported, so that it runs after the exit handlers registered later: the end of ENHSP's
+    server and of its searches, whose files are in it)."""
     if _scratch is not None and _scratch[0] == os.getpid():
         shutil.rmtree(_scratch[1], ignore_errors=True)
 

@@ -216,10 +216,15 @@ class Prepared:
 
 
 def prepare(
-    path: str | Path, options: PlanOptions, times: StageTimes, loaded: tuple[Scenario, World] | None = None
+    path: str | Path,
+    options: PlanOptions,
+    times: StageTimes,
+    loaded: tuple[Scenario, World] | None = None,
+    on_loaded: Callable[[Scenario], None] | None = None,
 ) -> Prepared:
-    """Load (or take ``loaded``, the overrides applied), grow or read the roadmap, open the
-    oracle. The caller must close ``prepared.oracle`` (executor and cache)."""
+    """Load (or take ``loaded``, the overrides applied), tell ``on_loaded`` the scenario, grow
+    or read the roadmap, open the oracle. The caller must close ``prepared.oracle`` (executor
+    and cache)."""
     from tmpnav.roadmap.reach import check_reachable
     from tmpnav.roadmap.store import RoadmapStore
 
@@ -229,6 +234,8 @@ def prepare(
             scenario, world = load_world(path, options.overrides)
         else:
             scenario, world = in_force(loaded[0], options.overrides), loaded[1]
+    if on_loaded is not None:
+        on_loaded(scenario)
     cache = CacheDir.at(run.cache_dir) if run.use_cache else None
     if cache is not None:
         cache.ensure()  # an unusable cache directory fails now, not after the roadmap
@@ -269,13 +276,13 @@ def plan(
 def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, World] | None) -> PlanReport:
     """The plan, whether or not it keeps within the chance constraint."""
     from tmpnav.attachment.conflicts import keep_apart
-    from tmpnav.planning import TaskRun, plan_stage
+    from tmpnav.planning import TaskRun, get_ready, plan_stage
     from tmpnav.resimulate import resimulate
     from tmpnav.task.search import SearchRun
 
     times = StageTimes()
-    with long_lived_frozen():  # tmpnav.heap: JPype's full Python collections
-        prep = prepare(path, options, times, loaded)
+    with long_lived_frozen():  # tmpnav.heap
+        prep = prepare(path, options, times, loaded, on_loaded=get_ready)  # ENHSP readied meanwhile
         try:
             store = prep.oracle.cache if options.execution.use_cache else None
             watch = SearchRun(times, options.reporters.search)

