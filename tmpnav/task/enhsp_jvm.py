@@ -30,8 +30,9 @@ What this module keeps from ENHSP's behaviour as a process per solve:
   search in each, while the run computes its first costs, plan and bound.
 - Output: ENHSP's log goes nowhere; a crash is a Java exception, whose text is the answer.
 - Time limit: the server stops a search at its limit (``Thread.stop``, which Java 17-19 still
-  honour). Where the JVM refuses (Java 20+), the search cannot be stopped: the server is then
-  ended and not used again in this run (the process path takes over).
+  honour). Where the JVM refuses (Java 20+), the search cannot be stopped: the server is not
+  asked for another search in this run (the process path takes over), the searches under
+  way end as they would, and the stray one ends with the server, at the run's end.
 - ``System.exit``: ENHSP calls it on a bad command line (ours is up_enhsp's) and its PDDL
   library on some errors: the server ends, and the solves under way fail with what it said.
 
@@ -320,8 +321,9 @@ def run(args: list[str], timeout: float) -> JvmRun:
         return JvmRun(False)
     if answer.outcome == "timeout":
         return JvmRun(True)
-    if answer.outcome == "stuck":
-        _JVM.give_up("a search could not be stopped at its time limit (Java 20+ has no Thread.stop)")
+    if answer.outcome == "stuck":  # the searches under way go on; no new one is asked for
+        with _JVM.lock:
+            _JVM.broken = _JVM.broken or "a search could not be stopped at its time limit (Java 20+ has no Thread.stop)"
         return JvmRun(True)
     if answer.outcome == "ended":
         with _JVM.lock:
