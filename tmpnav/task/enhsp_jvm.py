@@ -109,7 +109,8 @@ class _Server:
         self.ids = itertools.count()
         self.warmed = threading.Event()
         self.ended: str | None = None
-        threading.Thread(target=self._read, name="tmpnav-enhsp-answers", daemon=True).start()
+        self.reader = threading.Thread(target=self._read, name="tmpnav-enhsp-answers", daemon=True)
+        self.reader.start()
 
     def solve(self, args: list[str], timeout: float) -> tuple[str, _Answer]:
         """Ask for a search; its id and its answer-to-be."""
@@ -150,6 +151,9 @@ class _Server:
                     answer.outcome, answer.text = fields[2], fields[3] if len(fields) > 3 else ""
                     answer.done.set()
         self._end(f"the JVM ended: {self._said() or 'exit status ' + str(self.process.wait())}")
+        with contextlib.suppress(OSError, ValueError):
+            self.process.stdout.close()
+            self.errors.close()
 
     def _said(self) -> str:
         with contextlib.suppress(OSError, ValueError):
@@ -183,6 +187,7 @@ class _Server:
         with contextlib.suppress(OSError):
             self.process.kill()
         self.process.wait()
+        self.reader.join(1.0)  # it has read the end of the output, and closes its files
 
     def forget(self) -> None:
         """In a process forked from this one (the oracle's workers): the server's pipes made
