@@ -59,11 +59,7 @@ def version_of(java: str | Path) -> int | None:
         out = subprocess.run([str(java), "-version"], capture_output=True, text=True, timeout=30)
     except (OSError, subprocess.SubprocessError):
         return None
-    match = re.search(r'version "(\d+)(?:\.(\d+))?', out.stderr + out.stdout)
-    if match is None:
-        return None
-    major = int(match.group(1))
-    return int(match.group(2) or 0) if major == 1 else major
+    return _major(re.search(r'version "(\d+)(?:\.(\d+))?', out.stderr + out.stdout))
 
 
 def _declared_version(java: Path) -> int | None:
@@ -76,11 +72,15 @@ def _declared_version(java: Path) -> int | None:
         text = (real.parent.parent / "release").read_text(errors="replace")
     except OSError:
         return None
-    match = re.search(r'^JAVA_VERSION="(\d+)(?:\.(\d+))?', text, re.MULTILINE)
-    if match is None:
+    return _major(re.search(r'^JAVA_VERSION="(\d+)(?:\.(\d+))?', text, re.MULTILINE))
+
+
+def _major(version: re.Match[str] | None) -> int | None:
+    """The major version of a matched "MAJOR.MINOR" (``1.8`` is 8), or None."""
+    if version is None:
         return None
-    major = int(match.group(1))
-    return int(match.group(2) or 0) if major == 1 else major
+    major = int(version.group(1))
+    return int(version.group(2) or 0) if major == 1 else major
 
 
 def on_path() -> tuple[Path | None, int | None]:

@@ -24,14 +24,13 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from tmpnav.choices import Costs, SearchMode, choose
+from tmpnav.choices import Costs, SearchMode
 from tmpnav.errors import InputError
 from tmpnav.planning.anytime import anytime_carried, anytime_table
 from tmpnav.planning.exact import exact_table
 from tmpnav.planning.remember import recall, remember, search_key
-from tmpnav.planning.run import Planned, TaskRun
+from tmpnav.planning.run import Planned, TaskRun, choice_for, span_weight_of
 from tmpnav.planning.unfolded import exact_carried
-from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.solve import engine_class, reads_pddl_text
 from tmpnav.task.stage import warm_up_searches
 from tmpnav.types import Scenario
@@ -104,6 +103,5 @@ def get_ready(scenario: Scenario) -> None:
     ENHSP's classes and their first searches, about 0.8 s of the JVM's work, out of the way
     of the searches). A run that then finds its plan in the cache leaves the server idle."""
     sp = scenario.planner
-    choice = choose(sp.encoding, sp.search, sp.costs, len(scenario.goals.all_rooms), len(scenario.robots))
-    if choice.mode == "anytime":
-        warm_up_searches(sp.name, sp.encoding, OBJECTIVES[sp.objective].span_weight(scenario.cost), sp.pair_min_gain)
+    if choice_for(scenario).mode == "anytime":
+        warm_up_searches(sp.name, sp.encoding, span_weight_of(scenario), sp.pair_min_gain)

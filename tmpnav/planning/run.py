@@ -38,9 +38,8 @@ class TaskRun:
         cls, scenario: Scenario, world: World, oracle: Oracle, store: EntryStore | None, replan: bool, search: SearchRun
     ) -> TaskRun:
         """The task stage of a run whose oracle is open: its cost models on that oracle."""
-        sp = scenario.planner
-        choice = choose(sp.encoding, sp.search, sp.costs, len(scenario.goals.all_rooms), len(scenario.robots))
-        canonical = CanonicalCosts(oracle, world, sp.pair_min_gain)
+        canonical = CanonicalCosts(oracle, world, scenario.planner.pair_min_gain)
+        choice = choice_for(scenario)
         return cls(scenario, world, choice, canonical, CarriedCosts(oracle, canonical), store, replan, search)
 
     @property
@@ -58,7 +57,7 @@ class TaskRun:
     @property
     def span_weight(self) -> float:
         """The objective's price of a second of makespan (tmpnav.task.objectives)."""
-        return OBJECTIVES[self.planner.objective].span_weight(self.scenario.cost)
+        return span_weight_of(self.scenario)
 
     @property
     def budget(self) -> float:
@@ -76,3 +75,14 @@ class Planned:
 
     table: CostTable  # the table costs the planner saw (the lazily computed ones for anytime)
     task: TaskResult
+
+
+def choice_for(scenario: Scenario) -> TaskChoice:
+    """The search and costs :func:`tmpnav.choices.choose` picks for the scenario."""
+    sp = scenario.planner
+    return choose(sp.encoding, sp.search, sp.costs, len(scenario.goals.all_rooms), len(scenario.robots))
+
+
+def span_weight_of(scenario: Scenario) -> float:
+    """The scenario's objective's price of a second of makespan (tmpnav.task.objectives)."""
+    return OBJECTIVES[scenario.planner.objective].span_weight(scenario.cost)

@@ -14,7 +14,7 @@ in-process JVM's start held the run's main thread for 0.2 s in every fresh ``tmp
 (JPype's start makes thousands of calls between Python and Java, each taking Python's lock);
 each call from a searching thread waited for that lock while the main thread computed costs;
 and JPype ran a full Python collection after each of the JVM's (tmpnav.heap). The server
-starts beside the run (:func:`start`: a process start, nothing waited for), readies its
+starts beside the run (:func:`usable`: a process start, nothing waited for), readies its
 searches while tmpnav loads its modules and grows its roadmap, and needs nothing of tmpnav's
 lock but a line written and one read per solve.
 
@@ -175,6 +175,12 @@ class _Server:
     def stop(self, key: str) -> None:
         self._ask("stop", key)
 
+    def warm(self, slots: int, args: list[str]) -> None:
+        """Ask for ``slots`` searches made ready, each with a search of ``args``; ``warmed``
+        is set once they are."""
+        self.warmed.clear()
+        self._ask("warm", str(slots), str(round(WARM_TIMEOUT * 1000)), *args)
+
     def close(self) -> None:
         """End the server now, whatever it runs (a search's plan is in its file by the time
         the server answers; nothing else of the JVM's needs an orderly end)."""
@@ -231,14 +237,16 @@ class _Jvm:
                 self.broken = self.server.ended
             return self.server if self.broken is None else None
 
+    def refuse(self, why: str) -> None:
+        """Ask the server for no more searches in this run (those under way go on)."""
+        with self.lock:
+            self.broken = self.broken or why
+
     def give_up(self, why: str) -> None:
         """Stop using the server for the rest of the run, and end it."""
-        with self.lock:
-            if self.broken is None:
-                self.broken = why
-            server = self.server
-        if server is not None:
-            server.close()
+        self.refuse(why)
+        if self.server is not None:
+            self.server.close()
 
 
 _JVM = _Jvm()
@@ -286,12 +294,6 @@ def usable(options: str) -> bool:
     return unavailable() is None and _JVM.ready(options) is not None
 
 
-def start(options: str) -> None:
-    """Start the server now, if it will be used: early in a run, so that its JVM starts and
-    readies its searches while the run does other work."""
-    usable(options)
-
-
 def describe() -> str:
     """For ``tmpnav doctor``'s Java line: how ENHSP runs, and why."""
     reason = unavailable()
@@ -326,13 +328,11 @@ def run(args: list[str], timeout: float) -> JvmRun:
         return JvmRun(False)
     if answer.outcome == "timeout":
         return JvmRun(True)
-    if answer.outcome == "stuck":  # the searches under way go on; no new one is asked for
-        with _JVM.lock:
-            _JVM.broken = _JVM.broken or "a search could not be stopped at its time limit (Java 20+ has no Thread.stop)"
+    if answer.outcome == "stuck":
+        _JVM.refuse("a search could not be stopped at its time limit (Java 20+ has no Thread.stop)")
         return JvmRun(True)
     if answer.outcome == "ended":
-        with _JVM.lock:
-            _JVM.broken = _JVM.broken or answer.text
+        _JVM.refuse(answer.text)
     return JvmRun(False, answer.text or answer.outcome)
 
 
@@ -343,16 +343,15 @@ def warm(slots: int, sample: Callable[[], contextlib.AbstractContextManager[list
     first searches do not pay for either. Measured on the 10-room corridor's 24 sub-problems,
     one after another in a fresh JVM: the first took 0.79 s (JVM start 0.25 s, a slot 0.32 s,
     its first search 0.2 s against 0.04 s warm), and all took 2.07 s cold against 1.11 s warm.
-    The server makes the slots side by side; a search that finds no idle slot meanwhile waits
-    for one of them. A daemon thread keeps the sample's files until the server is done."""
+    The server makes the slots one after another; a search that finds no idle slot meanwhile
+    waits for the next. A daemon thread keeps the sample's files until the server is done."""
     server = _JVM.server
     if server is None or _JVM.closing.is_set() or (_JVM.warming is not None and _JVM.warming.is_alive()):
         return
 
     def ready() -> None:
         with contextlib.suppress(Exception), sample() as args:  # the sample's files: the searches go on
-            server.warmed.clear()
-            server._ask("warm", str(slots), str(round(WARM_TIMEOUT * 1000)), *args)
+            server.warm(slots, args)
             while not server.warmed.wait(POLL) and not _JVM.closing.is_set():
                 pass
 
