@@ -128,6 +128,29 @@ class RangeBearingSensor:
         return np.diag([self.sigma_range**2, self.sigma_bearing**2])
 
 
+@dataclass(frozen=True)
+class RangeSensor:
+    """A 2D range finder (lidar) that measures, per beam, the range to the map's walls.
+
+    ``beams`` rays spread evenly over the field of view ``fov`` (rad) centred on the heading,
+    each with independent Gaussian range noise ``sigma_range`` (m). ``beams`` is the effective
+    number of independent beams per scan (a lidar's returns are correlated through the map's
+    errors; nav2's AMCL uses 60 of them). A beam returns nothing beyond ``range`` or before
+    ``min_range`` (m), nor where it meets a surface more than ``max_incidence`` (rad) from
+    head-on. docs/models.md, "Range sensor"."""
+
+    range: float  # m
+    fov: float  # rad
+    beams: int
+    sigma_range: float  # m
+    min_range: float  # m
+    max_incidence: float  # rad
+
+    def beam_angles(self) -> np.ndarray:
+        """(beams,) rad: each beam's direction relative to the heading, evenly over the field of view."""
+        return -0.5 * self.fov + (np.arange(self.beams) + 0.5) * (self.fov / self.beams)
+
+
 class ObservationMode(enum.StrEnum):
     """How future observations are simulated while planning."""
 
@@ -146,6 +169,7 @@ class Models:
     mutual_observations: bool
     observations: ObservationMode
     seed: int  # seed of the simulated observation noise
+    range_sensor: RangeSensor | None = None  # a lidar against the map; None: landmarks and partners only
 
 
 CostValue = TypeVar("CostValue", float, np.ndarray)

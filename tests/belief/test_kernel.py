@@ -245,7 +245,17 @@ def test_zero_steps_and_bad_shapes() -> None:
 def test_the_kernel_unpacks_the_named_tuples_in_field_order() -> None:
     """run_sequences unpacks MotionArrays and EKFConstants by position: reordering a field
     must fail here, not silently swap arrays in compiled code."""
-    assert MotionArrays._fields == ("offset", "steps", "controls", "poses", "lm_visible", "noise_stream", "reach")
+    assert MotionArrays._fields == (
+        "offset",
+        "steps",
+        "controls",
+        "poses",
+        "lm_visible",
+        "noise_stream",
+        "reach",
+        "scan_row",
+        "scan_table",
+    )
     assert EKFConstants._fields == (
         "dt",
         "alphas",
@@ -255,4 +265,5 @@ def test_the_kernel_unpacks_the_named_tuples_in_field_order() -> None:
         "chol_mutual",
         "max_likelihood",
         "landmarks",
+        "scans",
     )

@@ -56,7 +56,7 @@ from tmpnav.belief.sequences import (
     propagate_sequences,
 )
 from tmpnav.errors import TmpnavError
-from tmpnav.oracle.motions import MotionLibrary, NominalMotion, stable_seed
+from tmpnav.oracle.motions import MotionLibrary, NominalMotion, scan_seed, stable_seed
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState, mutual_seed
 from tmpnav.results import Schedule, TimedMove
@@ -325,17 +325,24 @@ class TeamClock:
         visible = np.zeros((h + 1, n, n), dtype=bool)
         for (i, j), sensing in self.sensing.items():
             visible[:, i, j] = sensing.visible(self.lib.world, poses[i], poses[j])
+        scans = self.lib.scans
         batch = SequenceBatch(
             n=n,
             ekf=self.ekf,
             motions=MotionArrays.of(
-                [w[0] for w in windows], poses, [w[2] for w in windows], np.arange(n), self.ekf.landmarks.shape[0]
+                [w[0] for w in windows],
+                poses,
+                [w[2] for w in windows],
+                np.arange(n),
+                self.ekf.landmarks.shape[0],
+                scans=None if scans is None else (scans.rows(np.concatenate([w[6] for w in windows])), scans.table),
             ),
             landmark_noise=np.stack([w[3] for w in windows]),
             groups=StartGroups(state.team.mean[None], state.team.cov[None], self._mutual_noise(state, a, until)[None]),
             sequences=Sequences.one(n, h),
             mutual_visible=visible,
             c_sigma_history=True,
+            scan_noise=np.stack([w[7] for w in windows]),
         )
         out = propagate_sequences(batch)
         assert out.c_sigma_history is not None
@@ -385,12 +392,15 @@ class TeamClock:
     def _window(self, state: ClockState, i: int, a: int, b: int, priced: bool) -> tuple[np.ndarray, ...]:
         """Robot i's controls (h, 2), nominal poses (h+1, 3), landmark visibility (h+1, L),
         landmark draws (h+1, L, 2), the sector reach of its footprint (h+1, K; infinite unless
-        ``priced``: the collision bound is wanted) and whether it drove into each row (h+1,)
-        over the steps a..b."""
+        ``priced``: the collision bound is wanted), whether it drove into each row (h+1,), its
+        scans' keys (h+1,; -1: none) and their draws (h+1, 3) over the steps a..b."""
         L = self.ekf.landmarks.shape[0]
         controls, poses = np.zeros((b - a, 2)), np.empty((b - a + 1, 3))
         reach, drove = np.full((b - a + 1, SECTORS if priced else 1), np.inf), np.zeros(b - a + 1, dtype=bool)
         vis, noise = np.empty((b - a + 1, L), dtype=bool), np.empty((b - a + 1, L, 2))
+        scans, scan_noise = self.lib.scans, np.zeros((b - a + 1, 3))
+        keys = np.full(b - a + 1, -1, dtype=np.int64)
+        noisy = scans is not None and not self.ekf.max_likelihood
         legs = state.legs[i]
         for n, leg in enumerate(legs):
             end = legs[n + 1].start if n + 1 < len(legs) else b + 1
@@ -404,10 +414,14 @@ class TeamClock:
                 vis[rows] = self.lib.visibility.visible(
                     leg.pose[None], self.scenario.models.landmark_sensor.fov, min_range=self._radius(i)
                 )[0]
+                if scans is not None:
+                    keys[rows] = scans.keys(leg.pose)
             else:
                 m = leg.motion
                 last = np.minimum(k, m.n_steps)
                 poses[rows], vis[rows] = m.poses[last], m.lm_visible[last]
+                if m.scan_keys is not None:
+                    keys[rows] = m.scan_keys[last]
                 if priced:
                     reach[rows] = self.lib.reach(m, last)
                 s = np.arange(lo, min(hi, b))  # the window's transitions s -> s + 1 in this leg
@@ -415,7 +429,9 @@ class TeamClock:
                 controls[s[drive] - a] = m.controls[s[drive] - leg.start]
                 drove[s[drive] - a + 1] = True
             noise[rows] = self.lib.noise.rows(leg.noise_seed, int(k[-1]) + 1, (L, 2))[k]
-        return controls, poses, vis, noise, reach, drove
+            if noisy:
+                scan_noise[rows] = self.lib.noise.rows(scan_seed(leg.noise_seed), int(k[-1]) + 1, (3,))[k]
+        return controls, poses, vis, noise, reach, drove, keys, scan_noise
 
     def _radius(self, i: int) -> float:
         return self.scenario.robot(self.start.names[i]).radius

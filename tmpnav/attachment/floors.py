@@ -37,8 +37,9 @@ bearing measurements can shrink it:
 
     Sigma_t[theta, theta] >= rho_t / (1 + rho_t I),   rho_t = dt^2 (alpha3 v_t^2 + alpha4 omega_t^2),
 
-with I = L / sigma_b,lm^2 + (n - 1) / sigma_b,mu^2 (L landmarks, n robots; without mutual
-observations the second term is 0), **whatever the belief at the start of the move and
+with I = L / sigma_b,lm^2 + (n - 1) / sigma_b,mu^2 + B (range tan(max_incidence))^2 / sigma_r^2
+(L landmarks, n robots, a range scan of B beams; without mutual observations or a range
+sensor that term is 0), **whatever the belief at the start of the move and
 whatever the partners do**. Proof (docs/planning.md, "The uncertainty floor"): the EKF's
 covariance after step t is the covariance, given the measurements, of the linear-Gaussian
 model with the Jacobians it used (F, V at the mean, H at the mean after the previous
@@ -48,10 +49,12 @@ prior, of every earlier noise and of the other robots' noise; the positions afte
 do not depend on it (eq. (4) moves the position with the heading before the step), and it
 enters a measurement only through the bearing rows of the robot's own measurements (a
 landmark's, or of a partner it sees), each with coefficient -1, of noise variance
-sigma_b^2 (Q is diagonal); range rows and a partner's view of the robot have no heading
-entry. Conditioning on everything but b can only lower a Gaussian's variance, and leaves
-1 / (1/rho_t + sum of 1/sigma_b^2 over those rows) <= the variance of theta_t. Per step
-there are at most L landmark updates and n - 1 mutual ones.
+sigma_b^2 (Q is diagonal), and through the beams of its range scan, each with coefficient
+-r tan(beta), at most range tan(max_incidence) in size, of noise variance sigma_range^2;
+landmark range rows and a partner's view of the robot have no heading entry. Conditioning
+on everything but b can only lower a Gaussian's variance, and leaves 1 / (1/rho_t + sum of
+h_theta^2 / sigma^2 over those rows) <= the variance of theta_t. Per step there are at most
+L landmark updates, n - 1 mutual ones and one scan.
 
 On a driving step (omega = 0, v <= v_max) rho_t = dt^2 alpha3 v_t^2 <= rho_max = dt^2 alpha3
 v_max^2, and rho / (1 + rho I) >= rho / (1 + rho_max I) (it is concave in rho, 0 at 0), so
@@ -137,9 +140,20 @@ def motion_floors(
 
 def bearing_information(models: Models, landmarks: int, partners: int) -> float:
     """I: the most information on its heading a robot's own bearings can give in one step,
-    with ``landmarks`` landmarks and ``partners`` other robots in view (rad^-2)."""
+    with ``landmarks`` landmarks and ``partners`` other robots in view, and its range scan's
+    beams (rad^-2)."""
     mutual = partners / models.mutual_sensor.sigma_bearing**2 if models.mutual_observations else 0.0
-    return landmarks / models.landmark_sensor.sigma_bearing**2 + mutual
+    return landmarks / models.landmark_sensor.sigma_bearing**2 + mutual + scan_heading_information(models)
+
+
+def scan_heading_information(models: Models) -> float:
+    """The most information on its heading one range scan can give (rad^-2): a beam's heading
+    entry is -r tan(beta) (tmpnav.world.lidar), at most range tan(max_incidence) in size, and a
+    scan has ``beams`` of them, each of noise sigma_range; 0 without a range sensor."""
+    s = models.range_sensor
+    if s is None:
+        return 0.0
+    return s.beams * (s.range * math.tan(s.max_incidence)) ** 2 / s.sigma_range**2
 
 
 def heading_floor(models: Models, v: np.ndarray, omega: np.ndarray, information: float) -> np.ndarray:

@@ -131,3 +131,28 @@ def update_mutual(belief: Belief, i: int, j: int, z: np.ndarray, Q: np.ndarray) 
         return mutual_obs(x[ci], x[cj])
 
     return _update(belief, z, H_of, h_of, Q)
+
+
+def update_scan(belief: Belief, i: int, G: np.ndarray, y: np.ndarray) -> Belief:
+    """EKF update of robot i's range scan in its compressed form (docs/models.md, "Range sensor").
+
+    A scan of B beams with Jacobians H (B, 3) and noise sigma informs the pose by
+    J = Hᵀ H / sigma² and the innovation by Hᵀ y_beams / sigma²; the posterior depends on the
+    beams only through these. With J = Gᵀ G (G (3, 3), :func:`tmpnav.world.lidar.information_matrices`'s
+    factor) the same update is the 3-D pseudo-measurement z = G x of unit noise, with innovation
+    ``y`` (3,) such that Gᵀ y = Hᵀ y_beams / sigma². G fills robot i's three columns.
+    """
+    G = np.asarray(G, dtype=float)
+    cols = slice(3 * i, 3 * i + 3)
+    ekf = _JointUnicycleEKF(belief)
+    ekf.dim_z = 3
+    H = np.zeros((3, belief.dim))
+    H[:, cols] = G
+    y = np.asarray(y, dtype=float)
+    ekf.update(
+        y + G @ np.asarray(belief.mean, dtype=float)[cols],  # z with z - h(mean) = y
+        HJacobian=lambda x: H,
+        Hx=lambda x: H @ x,
+        R=np.eye(3),
+    )
+    return ekf.belief()

@@ -4,8 +4,9 @@ This is the production path of the belief stage; :mod:`tmpnav.belief.sequences` 
 only caller and documents the data layout (:class:`~tmpnav.belief.sequences.SequenceBatch`).
 The reference it is held to (1e-9, step by step, in the tests) is the filterpy EKF of
 :mod:`tmpnav.belief.ekf` driven by :func:`tmpnav.belief.reference.propagate_reference`:
-the same models (paper eqs. (4), (5), (14), (15)), the same prediction (eqs. (8), (11),
-(12)) and update (eqs. (9), (13)) in the same order within a step. The update is the
+the same models (paper eqs. (4), (5), (14), (15), and the range sensor of docs/models.md),
+the same prediction (eqs. (8), (11), (12)) and update (eqs. (9), (13)) in the same order
+within a step. The update is the
 Joseph form with an explicit 2x2 inverse of S, its result mirrored from the upper triangle.
 
 Simulations that start from the same belief and whose first d steps are identical (the
@@ -138,6 +139,52 @@ def _update(mean, cov, H, cols, ncols, y, Q, n, work, PHt, K):
             cov[c, r] = v
 
 
+@nb.njit(cache=True, inline="always")
+def _update_scalar(mean, cov, g, c0, y, n, work, PHt, K):
+    """EKF update with one scalar pseudo-measurement of unit noise, eq. (9) in Joseph form:
+    h is ``g`` (3,) in the columns c0..c0+2 of one robot, R = 1, innovation ``y``. A range
+    scan is three of them (:func:`_scan_update`)."""
+    D = 3 * n
+    for r in range(D):
+        PHt[r, 0] = cov[r, c0] * g[0] + cov[r, c0 + 1] * g[1] + cov[r, c0 + 2] * g[2]
+    S = 1.0 + g[0] * PHt[c0, 0] + g[1] * PHt[c0 + 1, 0] + g[2] * PHt[c0 + 2, 0]
+    for r in range(D):
+        K[r, 0] = PHt[r, 0] / S
+        mean[r] += K[r, 0] * y
+    for i in range(n):
+        mean[3 * i + 2] = wrap_angle_scalar(mean[3 * i + 2])
+    for r in range(D):  # M = P - K (h P)
+        for c in range(D):
+            work[r, c] = cov[r, c] - K[r, 0] * PHt[c, 0]
+    for r in range(D):  # M hᵀ
+        PHt[r, 0] = work[r, c0] * g[0] + work[r, c0 + 1] * g[1] + work[r, c0 + 2] * g[2]
+    for r in range(D):  # M - (M hᵀ) Kᵀ + K Kᵀ, upper triangle mirrored
+        for c in range(r, D):
+            v = work[r, c] - PHt[r, 0] * K[c, 0] + K[r, 0] * K[c, 0]
+            cov[r, c] = v
+            cov[c, r] = v
+
+
+@nb.njit(cache=True, inline="always")
+def _scan_update(mean, cov, i, G, px, py, pth, e, max_likelihood, n, work, PHt, K, g):
+    """Robot i's range scan: three scalar updates with the rows g_k of its information's factor
+    G (J = Gᵀ G, tmpnav.world.lidar), each a pseudo-measurement g_k x of unit noise. Simulated
+    from the nominal pose (px, py, pth) and the draws ``e`` (3,): y_k = g_k (x_nominal - mean) +
+    e_k, or 0 in maximum-likelihood mode. Together they are the update with every beam of the
+    scan, linearised at the nominal pose: the posterior depends on the beams only through
+    Hᵀ R⁻¹ H and Hᵀ R⁻¹ y (docs/models.md, "Range sensor")."""
+    c0 = 3 * i
+    for k in range(3):
+        g[0], g[1], g[2] = G[k, 0], G[k, 1], G[k, 2]
+        if g[0] == 0.0 and g[1] == 0.0 and g[2] == 0.0:
+            continue
+        y = 0.0
+        if not max_likelihood:
+            dth = wrap_angle_scalar(pth - mean[c0 + 2])
+            y = g[0] * (px - mean[c0]) + g[1] * (py - mean[c0 + 1]) + g[2] * dth + e[k]
+        _update_scalar(mean, cov, g, c0, y, n, work, PHt, K)
+
+
 @nb.njit(cache=True)
 def _range_bearing(px, py, th, qx, qy):
     dx, dy = qx - px, qy - py
@@ -242,17 +289,18 @@ def _collision_bound(a, b, c, reach, row):
 
 
 @nb.njit(cache=True, inline="always")
-def _propagate_steps(c, n, ekf, motions, lm_noise, groups, seqs, mutual_visible, hist, scratch):
+def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_visible, hist, scratch):
     """Steps restart[c]+1 .. horizon[c] of simulation c, each from the stored state of the
     step before: prediction, landmark updates (robot i ascending, landmark l ascending),
-    mutual updates (ordered pairs (i, j), i != j, lexicographic); then the belief and the
+    range scans (robot i ascending), mutual updates (ordered pairs (i, j), i != j,
+    lexicographic); then the belief and the
     running sums are stored (c_Sigma grows by trace(Sigma_i) dt while robot i moves, and the
     collision bound by that of the step's pose and covariance; its arrival position is its
     mean after its own last step)."""
     h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk = hist
-    work, PHt, K, H, cols, y = scratch
-    m_off, m_T, ctrl, pose, vis, stream, reach = motions  # the fields of MotionArrays, in order
-    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks = ekf  # and of EKFConstants
+    work, PHt, K, H, cols, y, g = scratch
+    m_off, m_T, ctrl, pose, vis, stream, reach, scan_row, scan_table = motions  # the fields of MotionArrays, in order
+    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans = ekf  # and of EKFConstants
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
     for k in range(seqs.restart[c], seqs.horizon[c]):
         t = k + 1
@@ -273,6 +321,13 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, groups, seqs, mutual_visible,
                     px, py, pth = pose[row, 0], pose[row, 1], pose[row, 2]
                     _landmark_observation(mean, i, lx, ly, px, py, pth, e0, e1, ml, chol_lm, H, cols, y)
                     _update(mean, cov, H, cols, 3, y, Q_lm, n, work, PHt, K)
+        if scans:
+            for i in range(n):
+                m = sim[i]
+                row = m_off[m] + m + (t if t <= m_T[m] else m_T[m])
+                G = scan_table[scan_row[row]]
+                e = scan_noise[stream[m], t]
+                _scan_update(mean, cov, i, G, pose[row, 0], pose[row, 1], pose[row, 2], e, ml, n, work, PHt, K, g)
         seen = False
         for i in range(n):
             for j in range(n):
@@ -303,7 +358,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, groups, seqs, mutual_visible,
 
 
 @nb.njit(cache=True)
-def run_sequences(n, ekf, motions, lm_noise, groups, seqs, mutual_visible, out):
+def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_visible, out):
     """Propagate the simulations ``seqs`` of n robots; see the module docstring.
 
     The arguments are the fields of :class:`tmpnav.belief.sequences.SequenceBatch`, which
@@ -328,6 +383,7 @@ def run_sequences(n, ekf, motions, lm_noise, groups, seqs, mutual_visible, out):
         np.zeros((2, D)),
         np.zeros(6, np.int64),
         np.zeros(2),
+        np.zeros(3),
     )
     C = seqs.group.shape[0]
     for c in range(C):
@@ -341,7 +397,7 @@ def run_sequences(n, ekf, motions, lm_noise, groups, seqs, mutual_visible, out):
                 h_fxy[0, i, 0] = groups.mean0[g, 3 * i]
                 h_fxy[0, i, 1] = groups.mean0[g, 3 * i + 1]
             h_mut[0] = 0
-        _propagate_steps(c, n, ekf, motions, lm_noise, groups, seqs, mutual_visible, hist, scratch)
+        _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_visible, hist, scratch)
         h = seqs.horizon[c]
         out.mean[c] = h_mean[h]
         out.cov[c] = h_cov[h]

@@ -24,6 +24,8 @@ import numpy as np
 from tmpnav.world.geometry import wrap_angle
 
 __all__ = [
+    "beam_jacobian",
+    "compressed_scan",
     "joint_block_diag",
     "landmark_obs",
     "landmark_obs_jacobian",
@@ -35,6 +37,7 @@ __all__ = [
     "noisy_observation",
     "observation_residual",
     "process_noise",
+    "scan_information",
     "wrap_angle",
 ]
 
@@ -229,3 +232,56 @@ def observation_residual(z: np.ndarray, z_pred: np.ndarray) -> np.ndarray:
     y = np.asarray(z, dtype=float) - np.asarray(z_pred, dtype=float)
     y[..., 1] = wrap_angle(y[..., 1])
     return y
+
+
+# --------------------------------------------------------------------------- range sensor
+
+
+def beam_jacobian(r: np.ndarray, gradient: np.ndarray, psi: np.ndarray) -> np.ndarray:
+    """Jacobian H_i = d r_i / d(x, y, theta) of range beams (docs/models.md, "Range sensor").
+
+    A beam from the robot's position p in direction psi = theta + phi_i meets the wall where
+    the signed distance field vanishes, phi(p + r d) = 0, d = (cos psi, sin psi). The
+    implicit-function theorem gives, with g the field's gradient at the hit point and
+    d' = (-sin psi, cos psi):
+
+        H_i = [-g_x / (g.d),  -g_y / (g.d),  -r (g.d') / (g.d)]
+
+    which is Censi's -[v(alpha); r sin(beta)] / cos(beta), alpha the normal into the wall
+    and beta the incidence (the angle between the beam and that normal).
+
+    r: (...,) m; gradient: (..., 2) (any length: only its direction matters); psi: (...,) rad.
+    Returns (..., 3).
+    """
+    g = np.asarray(gradient, dtype=float)
+    c, s = np.cos(psi), np.sin(psi)
+    gd = g[..., 0] * c + g[..., 1] * s
+    gdp = -g[..., 0] * s + g[..., 1] * c
+    return np.stack([-g[..., 0] / gd, -g[..., 1] / gd, -np.asarray(r) * gdp / gd], axis=-1)
+
+
+def scan_information(H: np.ndarray, sigma: float) -> np.ndarray:
+    """The information J = Hᵀ H / sigma² (3, 3) of a scan's beams H (B, 3) of noise ``sigma`` m,
+    the beams taken as independent (Censi's Fisher information of one scan)."""
+    H = np.asarray(H, dtype=float).reshape(-1, 3)
+    return H.T @ H / sigma**2
+
+
+def compressed_scan(H: np.ndarray, y: np.ndarray, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """A scan's update as a 3-D pseudo-measurement: (G (3, 3), y_G (3,)) with Gᵀ G = Hᵀ H / sigma²
+    and Gᵀ y_G = Hᵀ y / sigma².
+
+    The EKF's posterior with the B beams (Jacobians H (B, 3), innovations y (B,), noise
+    sigma² I) depends on them only through these two products (its information form), so the
+    update with z = G x of unit noise and innovation y_G is the same update in three
+    dimensions instead of B. G's rows are sqrt(lambda_k) e_kᵀ over the eigenpairs of J; a
+    direction the scan does not see has lambda = 0, a zero row and a zero innovation.
+    """
+    J = scan_information(H, sigma)
+    b = np.asarray(H, dtype=float).reshape(-1, 3).T @ np.asarray(y, dtype=float).reshape(-1) / sigma**2
+    lam, vec = np.linalg.eigh(J)
+    seen = lam > 1e-12 * max(float(lam[-1]), 0.0)
+    root = np.where(seen, np.sqrt(np.where(seen, lam, 1.0)), 0.0)
+    G = root[:, None] * vec.T
+    y_G = np.where(seen, (vec.T @ b) / np.where(seen, root, 1.0), 0.0)
+    return G, y_G

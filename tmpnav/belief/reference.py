@@ -7,11 +7,14 @@ path and not part of the oracle's cache keys. At each step k = 0..T-1:
 1. joint prediction of all robots with their controls of step k, paper eqs. (8), (11), (12);
 2. landmark updates, robot by robot (i ascending), landmark by landmark (l ascending),
    each a 2-D EKF update, eq. (9), where ``lm_visible[i, k+1, l]``;
-3. mutual updates for ordered pairs (i, j), i != j, in lexicographic order, where
+3. range scans, robot by robot, where the rollout has them (``scans``), each the
+   three-dimensional update of :func:`tmpnav.belief.ekf.update_scan`;
+4. mutual updates for ordered pairs (i, j), i != j, in lexicographic order, where
    ``mutual_visible[i, j, k+1]``, eqs. (13)-(15).
 
 Observations are simulated as z = h(true pose after the step) + chol(Q) noise (noisy
-mode) or z = h(current mean) (maximum-likelihood mode: no innovation).
+mode) or z = h(current mean) (maximum-likelihood mode: no innovation); a scan's innovation
+is G (true pose - mean) + noise, the heading difference wrapped.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from tmpnav.belief import ekf
-from tmpnav.belief.models import landmark_obs, mutual_obs, noisy_observation
+from tmpnav.belief.models import landmark_obs, mutual_obs, noisy_observation, wrap_angle
 from tmpnav.belief.rollout import ObservationNoise, Propagation, Rollout, control_usage, observed_mutually
 from tmpnav.types import Belief, CostTerms, Models, ObservationMode
 
@@ -83,6 +86,16 @@ def propagate_reference(
                 else:
                     z = noisy_observation(landmark_obs(poses[i, t], landmarks[l_]), chol_lm, noise.landmark[i, t, l_])
                 b = ekf.update_landmark(b, i, landmarks[l_], z, Q_lm)
+        if rollout.scans is not None and models.range_sensor is not None:
+            for i in range(n):
+                G = rollout.scans[i, t]
+                if ml:
+                    y = np.zeros(3)
+                else:
+                    delta = poses[i, t] - b.mean[3 * i : 3 * i + 3]
+                    delta[2] = wrap_angle(delta[2])
+                    y = G @ delta + noise.scan_draws(n, T)[i, t]
+                b = ekf.update_scan(b, i, G, y)
         for i in range(n):
             for j in range(n):
                 if not mutual_visible[i, j, t]:

@@ -40,6 +40,8 @@ class Rollout:
     number of motion steps T_i; ``lm_visible`` (n, T+1, L) and ``mutual_visible``
     (n, n, T+1) bool masks (robot i sees landmark l / robot j at step k). A robot that
     arrived waits: its poses and landmark visibility after step T_i repeat those at T_i.
+    ``scans`` (n, T+1, 3, 3), with a range sensor: the factor G (J = Gᵀ G) of the information
+    of robot i's scan at step k (tmpnav.world.lidar); None without one.
     """
 
     controls: np.ndarray
@@ -47,6 +49,7 @@ class Rollout:
     active_steps: np.ndarray
     lm_visible: np.ndarray
     mutual_visible: np.ndarray
+    scans: np.ndarray | None = None
 
     @property
     def n_steps(self) -> int:
@@ -58,11 +61,17 @@ class ObservationNoise:
     """Standard-normal draws for the simulated observations of one simulation.
 
     ``landmark`` (n, T+1, L, 2): robot i's draw for landmark l at step k; ``mutual``
-    (n, n, T+1, 2): robot i's draw for its observation of robot j at step k.
+    (n, n, T+1, 2): robot i's draw for its observation of robot j at step k; ``scan``
+    (n, T+1, 3): robot i's draws for the three pseudo-measurements of its scan at step k.
     """
 
     landmark: np.ndarray
     mutual: np.ndarray
+    scan: np.ndarray | None = None
+
+    def scan_draws(self, n: int, T: int) -> np.ndarray:
+        """The scans' draws (n, T+1, 3); zeros where none were drawn."""
+        return np.zeros((n, T + 1, 3)) if self.scan is None else np.asarray(self.scan, dtype=float)
 
     @staticmethod
     def draw(seed: int, n: int, T: int, L: int) -> ObservationNoise:
@@ -71,6 +80,7 @@ class ObservationNoise:
         return ObservationNoise(
             landmark=rng.standard_normal((n, T + 1, L, 2)),
             mutual=rng.standard_normal((n, n, T + 1, 2)),
+            scan=rng.standard_normal((n, T + 1, 3)),
         )
 
 
@@ -142,12 +152,17 @@ def propagate_rollout(
     if noise is None:
         noise = ObservationNoise.draw(models.seed, n, T, L)
     steps = [int(s) for s in rollout.active_steps]
+    scans = None
+    if rollout.scans is not None and models.range_sensor is not None:
+        table = np.concatenate([np.zeros((1, 3, 3)), *(rollout.scans[i, : steps[i] + 1] for i in range(n))])
+        scans = (np.arange(1, table.shape[0]), table)
     motions = MotionArrays.of(
         [rollout.controls[i, : steps[i]] for i in range(n)],
         [rollout.true_poses[i, : steps[i] + 1] for i in range(n)],
         [rollout.lm_visible[i, : steps[i] + 1] for i in range(n)],
         np.arange(n),  # robot i observes landmarks with its own draws
         L,
+        scans=scans,
     )
     batch = SequenceBatch(
         n=n,
@@ -161,6 +176,7 @@ def propagate_rollout(
         ),
         sequences=Sequences.one(n, T),
         mutual_visible=np.ascontiguousarray(observed_mutually(rollout, models).transpose(2, 0, 1)),
+        scan_noise=np.ascontiguousarray(noise.scan_draws(n, T)),
     )
     result = propagate_sequences(batch)
     goal_xy = rollout.true_poses[np.arange(n), np.asarray(steps, dtype=int), :2]

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
@@ -35,6 +35,7 @@ class EKFConstants(NamedTuple):
     chol_mutual: np.ndarray  # (2, 2) its lower Cholesky factor
     max_likelihood: bool  # simulate z = h(mean) (no innovation) instead of h(pose) + noise
     landmarks: np.ndarray  # (L, 2) landmark positions (m)
+    scans: bool  # the robots carry a range sensor (MotionArrays.scan_row, SequenceBatch.scan_noise)
 
     @staticmethod
     def of(models: Models, landmarks: np.ndarray) -> EKFConstants:
@@ -49,6 +50,7 @@ class EKFConstants(NamedTuple):
             chol_mutual=np.linalg.cholesky(Q_mu),
             max_likelihood=models.observations is ObservationMode.MAX_LIKELIHOOD,
             landmarks=np.ascontiguousarray(landmarks, dtype=float).reshape(-1, 2),
+            scans=models.range_sensor is not None,
         )
 
 
@@ -60,7 +62,10 @@ class MotionArrays(NamedTuple):
     landmark-visibility rows, rows ``offset[m] + m`` to ``offset[m] + m + T_m`` of
     ``poses`` and ``lm_visible`` (L columns). After its last step a robot waits (u = 0)
     at its last pose and keeps observing from there. ``noise_stream[m]`` is the row of
-    :attr:`SequenceBatch.landmark_noise` its simulated landmark observations use.
+    :attr:`SequenceBatch.landmark_noise` its simulated landmark observations use (and of
+    :attr:`SequenceBatch.scan_noise`, its range scans'). A pose's range scan updates with
+    the factor ``scan_table[scan_row[row]]`` (3, 3) of its information (tmpnav.world.lidar;
+    row 0 of the table is zero: no scan).
     """
 
     offset: np.ndarray  # (M,) int64
@@ -70,6 +75,8 @@ class MotionArrays(NamedTuple):
     lm_visible: np.ndarray  # (sum T_m + 1, L) bool
     noise_stream: np.ndarray  # (M,) int64
     reach: np.ndarray  # (sum T_m + 1, K) m: the sector reach of each nominal pose (tmpnav.world.reach)
+    scan_row: np.ndarray  # (sum T_m + 1,) int64: the row of scan_table of each nominal pose's scan
+    scan_table: np.ndarray  # (R, 3, 3): factors G of scan information, J = Gᵀ G; row 0 zero
 
     @staticmethod
     def of(
@@ -79,10 +86,12 @@ class MotionArrays(NamedTuple):
         noise_stream: np.ndarray,
         landmarks: int,
         reach: Sequence[np.ndarray] | np.ndarray | None = None,
+        scans: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> MotionArrays:
         """Lay out motions given as per-motion arrays (T_m, 2), (T_m + 1, 3), (T_m + 1, L)
         and (T_m + 1, K) sector reach, or the reach already laid end to end (sum (T_m + 1), K)
-        (none given: no collision bound, one sector of infinite reach)."""
+        (none given: no collision bound, one sector of infinite reach); ``scans``: the scan rows
+        laid end to end (sum (T_m + 1),) and their table (R, 3, 3) (none given: no scans)."""
         steps = np.array([c.shape[0] for c in controls], dtype=np.int64)
         rows = int((steps + 1).sum())
         if reach is None:  # one sector of infinite reach: the kernel's bound is 0 at once
@@ -101,6 +110,8 @@ class MotionArrays(NamedTuple):
             ),
             noise_stream=np.asarray(noise_stream, dtype=np.int64),
             reach=np.ascontiguousarray(far.reshape(rows, -1)),
+            scan_row=np.zeros(rows, dtype=np.int64) if scans is None else np.asarray(scans[0], dtype=np.int64),
+            scan_table=np.zeros((1, 3, 3)) if scans is None else np.asarray(scans[1], dtype=float),
         )
 
 
@@ -148,7 +159,9 @@ class SequenceBatch:
 
     ``landmark_noise`` (S, T+1, L, 2): standard-normal draws of the landmark observations
     per noise stream, step and landmark; ``mutual_visible`` (rows, n, n) bool: robot i sees
-    robot j; ``c_sigma_history``: also return the running c_Sigma after every step.
+    robot j; ``c_sigma_history``: also return the running c_Sigma after every step;
+    ``scan_noise`` (S, T+1, 3): the draws of the range scans' three pseudo-measurements per
+    noise stream and step (read only when the robots carry a range sensor).
     """
 
     n: int
@@ -159,6 +172,7 @@ class SequenceBatch:
     sequences: Sequences
     mutual_visible: np.ndarray
     c_sigma_history: bool = False
+    scan_noise: np.ndarray = field(default_factory=lambda: np.zeros((1, 1, 3)))
 
     @property
     def horizon(self) -> int:
@@ -192,6 +206,13 @@ class SequenceBatch:
             raise ValueError("sequences.group must index the start groups")
         if self.groups.mutual_noise.shape[1] <= T or self.landmark_noise.shape[1] <= T:
             raise ValueError(f"the noise draws must cover steps 0..{T}")
+        if self.ekf.scans:
+            streams = int(self.motions.noise_stream.max(initial=-1)) + 1
+            if self.scan_noise.ndim != 3 or self.scan_noise.shape[0] < streams or self.scan_noise.shape[1] <= T:
+                raise ValueError(f"scan_noise has shape {self.scan_noise.shape}, expected ({streams}, >{T}, 3)")
+            rows = self.motions.scan_row
+            if rows.size and (rows.min() < 0 or rows.max() >= self.motions.scan_table.shape[0]):
+                raise ValueError("motions.scan_row must index motions.scan_table")
         if C and int((seq.mutual_offset + seq.horizon).max()) >= self.mutual_visible.shape[0]:
             raise ValueError("mutual_visible must have a row for every step of every simulation")
 
@@ -246,7 +267,15 @@ def propagate_sequences(batch: SequenceBatch) -> SequenceResults:
         np.empty((C, n)),
     )
     last_means, last_covs = run_sequences(
-        n, batch.ekf, batch.motions, batch.landmark_noise, batch.groups, batch.sequences, batch.mutual_visible, out
+        n,
+        batch.ekf,
+        batch.motions,
+        batch.landmark_noise,
+        np.ascontiguousarray(batch.scan_noise, dtype=float),
+        batch.groups,
+        batch.sequences,
+        batch.mutual_visible,
+        out,
     )
     return SequenceResults(
         mean=out.mean,

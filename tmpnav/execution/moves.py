@@ -34,6 +34,7 @@ class QueuedMove:
     start: int  # control steps: the planned start on the team's clock (never started earlier)
     steps: int  # control steps: the planned duration
     arrivals: tuple[float | None, ...]  # s: planned arrival at each node after the first (None: not found)
+    planned_covs: tuple[np.ndarray | None, ...] = ()  # (2, 2) m²: the planned position covariance there
 
     @property
     def waypoints(self) -> list[np.ndarray]:
@@ -69,6 +70,10 @@ def _queued(report: PlanReport, move: TimedMove, steps: Sequence[TrajectoryStep]
         start=round(move.start / dt),
         steps=round((move.end - move.start) / dt),
         arrivals=planned_arrivals(steps, nodes[1:], move.start, move.end),
+        planned_covs=tuple(
+            None if k is None else np.array(steps[k].cov, dtype=float)[:2, :2]
+            for k in _arrival_steps(steps, nodes[1:], move.start, move.end)
+        ),
     )
 
 
@@ -77,15 +82,19 @@ def planned_arrivals(
 ) -> tuple[float | None, ...]:
     """When the plan's trajectory reaches each of ``nodes`` in order between ``start`` and ``end``
     (s); None for a node it does not mark there."""
-    out: list[float | None] = []
+    return tuple(None if k is None else float(steps[k].t) for k in _arrival_steps(steps, nodes, start, end))
+
+
+def _arrival_steps(steps: Sequence[TrajectoryStep], nodes: Sequence[int], start: float, end: float) -> list[int | None]:
+    """The index in ``steps`` at which the trajectory reaches each of ``nodes`` in order between
+    ``start`` and ``end`` (s); None for a node it does not mark there."""
+    out: list[int | None] = []
     j = 0
     while j < len(steps) and steps[j].t <= start + _T_TOL:
         j += 1
     for node in nodes:
         k = next((k for k in range(j, len(steps)) if steps[k].t <= end + _T_TOL and steps[k].node == node), None)
-        if k is None:
-            out.append(None)
-            continue
-        out.append(float(steps[k].t))
-        j = k + 1
-    return tuple(out)
+        out.append(k)
+        if k is not None:
+            j = k + 1
+    return out

@@ -15,6 +15,7 @@ by session, so the comparison is paired (paper, Fig. 3(a)). What a session recor
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,6 +64,9 @@ class ExecutionResult:
     planned: Schedule  # the plan's schedule
     wall_hits: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions,) control steps hitting a wall
     contacts: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions,) control steps touching a robot
+    planned_nees: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions, points): NEES vs the plan
+    filter_nees: dict[tuple[int, str], tuple[float, int]]  # (config, robot) -> the filter's NEES summed, steps
+    beams: dict[tuple[int, str], tuple[int, int]]  # (config, robot) -> range beams used, rejected by the gate
 
     def mean_errors(self, config: int, robot: str) -> np.ndarray:
         """(points,) m: the robot's position error at each point of its paths, averaged over the sessions."""
@@ -98,6 +102,23 @@ class ExecutionResult:
         """Executions in which the robot (any pair of robots, for None) touched another."""
         return self._rate(self.contacts, config, robot)
 
+    def nees(self, config: int, robot: str | None = None) -> float:
+        """The average position NEES against the planned covariance at the path points the
+        robot (every robot, for None) reached: 2 when the error agrees with the plan's
+        covariance (a position has two dimensions); nan when there is none."""
+        robots = self.robots if robot is None else [robot]
+        values = np.concatenate([self.planned_nees[(config, r)].ravel() for r in robots])
+        values = values[np.isfinite(values)]
+        return float(values.mean()) if values.size else math.nan
+
+    def own_nees(self, config: int, robot: str | None = None) -> float:
+        """The average position NEES against the executing filter's own covariance over every
+        control step (2 for a consistent filter)."""
+        robots = self.robots if robot is None else [robot]
+        total = sum(self.filter_nees[(config, r)][0] for r in robots)
+        steps = sum(self.filter_nees[(config, r)][1] for r in robots)
+        return total / steps if steps else math.nan
+
     def _rate(self, counts: dict[tuple[int, str], np.ndarray], config: int, robot: str | None) -> Rate:
         robots = self.robots if robot is None else [robot]
         any_event = np.any([counts[(config, r)] > 0 for r in robots], axis=0)
@@ -118,10 +139,12 @@ def execute(report: PlanReport, sessions: int = 25, seed: int = 0) -> ExecutionR
     # budget (sessions drawn before the team moved at once draw the same numbers)
     planned = sum(len(t) for t in report.trajectories.values())
     vis = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
+    sensor = scenario.models.range_sensor
+    beams = sensor.beams if sensor is not None else 0
     traces: dict[int, list[SessionTrace]] = {c: [] for c in CONFIGS}
     truncated = 0
     for s in range(sessions):
-        draws = Draws.draw(seed, s, len(robots), STEP_BUDGET * planned + 100, world.landmark_xy.shape[0])
+        draws = Draws.draw(seed, s, len(robots), STEP_BUDGET * planned + 100, world.landmark_xy.shape[0], beams)
         cut = False
         for config, mutual in CONFIGS.items():
             trace = Session(scenario, world, moves, draws, vis, mutual).run()
@@ -150,4 +173,17 @@ def _result(
         planned=report.schedule,
         wall_hits={(c, r): np.array([t.wall_hits[r] for t in traces[c]], dtype=int) for c in CONFIGS for r in robots},
         contacts={(c, r): np.array([t.contacts[r] for t in traces[c]], dtype=int) for c in CONFIGS for r in robots},
+        planned_nees={
+            (c, r): np.array([t.planned_nees[r] for t in traces[c]], dtype=float) for c in CONFIGS for r in robots
+        },
+        filter_nees={
+            (c, r): (sum(t.nees_sum[r] for t in traces[c]), sum(t.nees_steps[r] for t in traces[c]))
+            for c in CONFIGS
+            for r in robots
+        },
+        beams={
+            (c, r): (sum(t.beams[r][0] for t in traces[c]), sum(t.beams[r][1] for t in traces[c]))
+            for c in CONFIGS
+            for r in robots
+        },
     )

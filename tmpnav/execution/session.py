@@ -18,7 +18,9 @@ Each control step, for the whole team together:
 3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the joint
    EKF of :mod:`tmpnav.belief.ekf` (the filterpy reference) predicts with the commands;
 4. every robot observes the landmarks it sees from its true pose (range, field of view, line of
-   sight) with sensor noise, moving or standing; with mutual observations (config 1) any two
+   sight) with sensor noise, moving or standing; with a range sensor, every robot scans the
+   walls from its true pose and the filter compares the scan with one ray cast from its
+   estimate (:mod:`tmpnav.execution.scans`); with mutual observations (config 1) any two
    robots observe each other whenever they are in range and line of sight at that instant;
 5. the true poses are checked (:meth:`Session._collide`): a robot whose true position hits a
    wall (:func:`tmpnav.belief.risk.hits_wall`: its cell's clearance at most its radius, or off
@@ -42,6 +44,7 @@ from tmpnav.belief.risk import hits_wall
 from tmpnav.errors import TmpnavError
 from tmpnav.execution.control import control, reached
 from tmpnav.execution.moves import QueuedMove
+from tmpnav.execution.scans import ScanSimulator
 from tmpnav.results import Schedule, TimedMove
 from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
@@ -64,6 +67,14 @@ class SessionTrace:
     truncated: bool = False
     wall_hits: dict[str, int] = field(default_factory=dict)
     contacts: dict[str, int] = field(default_factory=dict)
+    #: robot -> the position NEES (true - estimated position against the plan's covariance) at
+    #: each point of its paths (nan where the plan has no covariance or the point was not reached)
+    planned_nees: dict[str, list[float]] = field(default_factory=dict)
+    #: robot -> the filter's own position NEES summed over its control steps, and their number
+    nees_sum: dict[str, float] = field(default_factory=dict)
+    nees_steps: dict[str, int] = field(default_factory=dict)
+    #: robot -> range beams used by its filter and rejected by the innovation gate
+    beams: dict[str, list[int]] = field(default_factory=dict)
 
     def schedule(self, robots: tuple[str, ...]) -> Schedule:
         """The moves as executed, in plan order: a schedule like the plan's."""
@@ -79,16 +90,19 @@ class Draws:
     motion: np.ndarray  # (N, S, 2)
     landmark: np.ndarray  # (N, S, L, 2)
     mutual: np.ndarray  # (N, N, S, 2)
+    scan: np.ndarray  # (N, S, B): the range beams' noise (B = 0 without a range sensor)
 
     @staticmethod
-    def draw(seed: int, session: int, n: int, steps: int, landmarks: int) -> Draws:
-        """The draws of session ``session`` for ``n`` robots, ``steps`` control steps and ``landmarks``."""
+    def draw(seed: int, session: int, n: int, steps: int, landmarks: int, beams: int = 0) -> Draws:
+        """The draws of session ``session`` for ``n`` robots, ``steps`` control steps, ``landmarks``
+        and ``beams`` per range scan (drawn last: the others do not depend on them)."""
         rng = np.random.default_rng([seed, session])
         return Draws(
             initial=rng.standard_normal((n, 3)),
             motion=rng.standard_normal((n, steps, 2)),
             landmark=rng.standard_normal((n, steps, landmarks, 2)),
             mutual=rng.standard_normal((n, n, steps, 2)),
+            scan=rng.standard_normal((n, steps, beams)),
         )
 
     @property
@@ -137,8 +151,14 @@ class Session:
         self.truth, self.belief, self.trace = self._initial()
         self.sensing = self._sensing()
         self.radii = np.array([r.radius for r in scenario.robots], dtype=float)
+        sensor = scenario.models.range_sensor
+        self.scans = ScanSimulator(world, sensor) if sensor is not None else None
         self.trace.wall_hits = dict.fromkeys(self.names, 0)
         self.trace.contacts = dict.fromkeys(self.names, 0)
+        self.trace.planned_nees = {r: [math.nan] for r in self.names}
+        self.trace.nees_sum = dict.fromkeys(self.names, 0.0)
+        self.trace.nees_steps = dict.fromkeys(self.names, 0)
+        self.trace.beams = {r: [0, 0] for r in self.names}
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -207,9 +227,13 @@ class Session:
         name = self.names[i]
         assert r.previous is not None and r.move is not None
         while r.waypoints and reached(self.estimate(i), r.previous, r.waypoints[0]):
+            k = len(r.move.waypoints) - len(r.waypoints)  # the path point reached, after its start
             r.previous = r.waypoints.pop(0)
-            self.trace.errors[name].append(float(np.hypot(*(self.truth[i, :2] - self.estimate(i)[:2]))))
+            error = self.truth[i, :2] - self.estimate(i)[:2]
+            self.trace.errors[name].append(float(np.hypot(*error)))
             self.trace.times[name].append(self.step * self.dt)
+            planned = r.move.planned_covs[k] if k < len(r.move.planned_covs) else None
+            self.trace.planned_nees[name].append(_nees(error, planned))
         if r.waypoints and self.step - r.since >= STEP_BUDGET * max(r.move.steps, 40 * (len(r.move.nodes) - 1)):
             self._cut(name, len(r.waypoints))
             r.waypoints = []
@@ -252,6 +276,7 @@ class Session:
         self.trace.truncated = True
         self.trace.errors[name].extend([math.nan] * points)
         self.trace.times[name].extend([math.nan] * points)
+        self.trace.planned_nees[name].extend([math.nan] * points)
 
     def _cut_all(self) -> None:
         """The draws have run out: every move under way or not started is cut."""
@@ -298,6 +323,11 @@ class Session:
             for lm in np.flatnonzero(seen[i]):
                 z = noisy_observation(landmark_obs(truth[i], landmarks[lm]), chol_lm, self.draws.landmark[i, step, lm])
                 self.belief = ekf.update_landmark(self.belief, i, landmarks[lm], z, q_lm)
+        if self.scans is not None:
+            for i, name in enumerate(self.names):
+                self.belief, count = self.scans.update(self.belief, i, truth[i], self.draws.scan[i, step])
+                self.trace.beams[name][0] += count.used
+                self.trace.beams[name][1] += count.rejected
         if not self.sensing:
             return
         q_mu = models.mutual_sensor.Q
@@ -309,6 +339,12 @@ class Session:
     def _collide(self) -> None:
         """Count the true poses, after this control step, that hit a wall, and the robots that touch
         (closer than their radii added): what the collision bound (docs/models.md) bounds."""
+        for i, name in enumerate(self.names):
+            cols = slice(3 * i, 3 * i + 2)
+            nees = _nees(self.truth[i, :2] - self.belief.mean[cols], self.belief.cov[cols, cols])
+            if math.isfinite(nees):
+                self.trace.nees_sum[name] += nees
+                self.trace.nees_steps[name] += 1
         walls = hits_wall(self.world.grid, self.world.clearance, self.truth[:, :2], self.radii)
         gap = np.hypot(*(self.truth[:, None, :2] - self.truth[None, :, :2]).transpose(2, 0, 1))
         touch = (gap < self.radii[:, None] + self.radii[None, :]) & ~np.eye(len(self.names), dtype=bool)
@@ -324,3 +360,14 @@ class Session:
             seen = sensing.visible(self.world, self.truth[a], self.truth[b])
             out += [p for p, s in zip(pairs, seen, strict=True) if s]
         return sorted(out)
+
+
+def _nees(error: np.ndarray, cov: np.ndarray | None) -> float:
+    """The normalised estimation error squared eᵀ Σ⁻¹ e of a position error e (2,) against its
+    covariance Σ (2, 2): 2 on average for a consistent filter; nan without a usable Σ."""
+    if cov is None:
+        return math.nan
+    try:
+        return float(error @ np.linalg.solve(cov, error))
+    except np.linalg.LinAlgError:
+        return math.nan

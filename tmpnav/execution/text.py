@@ -27,6 +27,7 @@ def error_summary(result: ExecutionResult, sessions: int) -> list[str]:
     )
     lines.append(makespan_line(result))
     lines += wait_lines(result)
+    lines += consistency_lines(result)
     lines += collision_lines(result)
     if result.truncated_sessions:
         lines.append(f"note: {result.truncated_sessions} session(s) did not reach every node within the step budget")
@@ -53,6 +54,27 @@ def wait_lines(result: ExecutionResult) -> list[str]:
         return []
     cells = ", ".join(f"{r} {executed[r]:.1f} s (planned {planned[r]:.1f} s)" for r in result.robots)
     return [f"waiting for partners and planned starts, mean per session with mutual observations: {cells}"]
+
+
+def consistency_lines(result: ExecutionResult) -> list[str]:
+    """How well the errors agree with the covariances (position NEES, 2 when they do), and with a
+    range sensor the share of beams the filters' innovation gate rejected."""
+    lines = []
+    for config, label in ((1, "with mutual observations"), (2, "without")):
+        robots = ", ".join(f"{r} {result.nees(config, r):.2f}" for r in result.robots)
+        lines.append(
+            f"position NEES {label} (2 when the errors agree with the covariance): against the plan's covariance "
+            f"at the path's nodes {result.nees(config):.2f} ({robots}); against the filter's own at every step "
+            f"{result.own_nees(config):.2f}"
+        )
+    used = sum(result.beams[(1, r)][0] for r in result.robots)
+    if used:
+        rejected = sum(result.beams[(1, r)][1] for r in result.robots)
+        lines.append(
+            f"range beams with mutual observations: {used} returned in both the true and the predicted scan, "
+            f"{100 * rejected / used:.2f}% rejected by the innovation gate"
+        )
+    return lines
 
 
 def collision_lines(result: ExecutionResult) -> list[str]:

@@ -43,6 +43,7 @@ CODE_FILES = (
     "types.py",
     "world/geometry.py",
     "world/grid.py",
+    "world/lidar.py",
     "world/reach.py",
     "world/visibility.py",
 )

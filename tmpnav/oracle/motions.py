@@ -1,10 +1,11 @@
 """Nominal motions: what a robot does and sees when it drives a roadmap path.
 
 A :class:`NominalMotion` is the shortest roadmap path from a start node to a goal node,
-the turn-then-drive controls along it, the nominal poses they produce and the landmarks
-visible from each pose. Motions depend only on the robot, its start (node, heading) and
-the goal node, so the :class:`MotionLibrary` computes each once and shares it between the
-single-robot and joint evaluations that need it.
+the turn-then-drive controls along it, the nominal poses they produce, the landmarks
+visible from each pose and, with a range sensor, the cell and heading of each pose's scan.
+Motions depend only on the robot, its start (node, heading) and the goal node, so the
+:class:`MotionLibrary` computes each once and shares it between the single-robot and joint
+evaluations that need it.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from tmpnav.roadmap import RoadmapGraph
 from tmpnav.roadmap.graph import safe_weights
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
+from tmpnav.world.lidar import ScanInformation
 from tmpnav.world.visibility import LandmarkVisibility
 
 
@@ -37,6 +39,13 @@ class NominalMotion:
     lm_visible: np.ndarray  # (T+1, L)
     noise_seed: int
     cells: np.ndarray  # (T+1,) the grid cell of each pose (flat index, World.reach(radius).cells)
+    scan_keys: np.ndarray | None = None  # (T+1,) each pose's scan (World.scans(sensor).keys); None: no scans
+
+    def scan_rows(self, lib: MotionLibrary) -> np.ndarray:
+        """(T+1,) the rows of ``lib.scans.table`` of the poses' scans (0: no scan)."""
+        if self.scan_keys is None or lib.scans is None:
+            return np.zeros(self.poses.shape[0], dtype=np.int64)
+        return lib.scans.rows(self.scan_keys)
 
     @property
     def n_steps(self) -> int:
@@ -72,6 +81,12 @@ def stable_seed(*parts: object) -> int:
     return int.from_bytes(digest[:8], "little") >> 1
 
 
+@functools.lru_cache(maxsize=65536)
+def scan_seed(noise_seed: int) -> int:
+    """The seed of the range scans' draws that go with the landmark-noise stream ``noise_seed``."""
+    return stable_seed(noise_seed, "scans")
+
+
 #: nominal motions kept in memory (least recently used dropped first): a motion of a few
 #: hundred steps with its landmark visibility takes 10-20 kB, and a building of 60 rooms and
 #: 8 robots asks for over 100,000 of them
@@ -90,6 +105,9 @@ class MotionLibrary:
         safe = scenario.planner.max_risk is not None
         self.graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius) if safe else None)
         self.visibility = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
+        sensor = scenario.models.range_sensor
+        # a range scan's information per cell and heading (tmpnav.world.lidar)
+        self.scans: ScanInformation | None = world.scans(sensor) if sensor is not None else None
         self.noise = NoiseStreams()  # the simulated observations' draws, by stream
         self._motions: OrderedDict[tuple[str, int, float, int], NominalMotion | None] = OrderedDict()
         self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
@@ -157,6 +175,7 @@ class MotionLibrary:
             node_steps=pc.node_steps,
             lm_visible=lm_visible,
             cells=self.world.reach(spec.radius).cells(pc.poses[:, :2]),
+            scan_keys=self.scans.keys(pc.poses) if self.scans is not None else None,
             # one stream per robot and start node, drawn step by step: a robot sees the
             # same simulated observations at step k alone or in a pair, whatever its goal,
             # so factorised pairs are exact and motions with a common prefix share it

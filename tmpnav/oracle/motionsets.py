@@ -25,8 +25,9 @@ from tmpnav.belief.sequences import (
     propagate_sequences,
 )
 from tmpnav.belief.trie import common_prefix_matrix
-from tmpnav.oracle.motions import MotionLibrary, NominalMotion
+from tmpnav.oracle.motions import MotionLibrary, NominalMotion, scan_seed
 from tmpnav.oracle.requests import StartState
+from tmpnav.types import ObservationMode
 
 
 @dataclass
@@ -131,6 +132,7 @@ class MotionTable:
             stream,
             landmarks,
             lib.reach_all(motions) if priced else None,
+            scan_layout(motions, lib),
         )
 
     @staticmethod
@@ -176,12 +178,32 @@ class MotionTable:
             ekf=EKFConstants.of(models, landmarks),
             motions=self.arrays,
             landmark_noise=lib.noise.draws(self.seeds, (T + 1, landmarks.shape[0], 2)),
+            scan_noise=scan_draws(lib, self.seeds, T),
             groups=StartGroups(np.stack([g.mean0 for g in groups]), np.stack([g.cov0 for g in groups]), mutual_noise),
             sequences=sequences,
             mutual_visible=mutual_visible,
             c_sigma_history=c_sigma_history,
         )
         return propagate_sequences(batch)
+
+
+def scan_layout(motions: list[NominalMotion], lib: MotionLibrary) -> tuple[np.ndarray, np.ndarray] | None:
+    """The scan rows of ``motions``' poses laid end to end, and the table they index (None
+    without a range sensor)."""
+    if lib.scans is None:
+        return None
+    keys = [m.scan_keys if m.scan_keys is not None else np.full(m.poses.shape[0], -1) for m in motions]
+    rows = lib.scans.rows(np.concatenate(keys)) if keys else np.zeros(0, dtype=np.int64)
+    return rows, lib.scans.table  # the table after the rows were added to it
+
+
+def scan_draws(lib: MotionLibrary, seeds: list[int], T: int) -> np.ndarray:
+    """The range scans' draws (S, T+1, 3) of the landmark-noise streams ``seeds``; zeros where no
+    scan is simulated with noise (no range sensor, or maximum-likelihood observations)."""
+    models = lib.scenario.models
+    if lib.scans is None or models.observations is ObservationMode.MAX_LIKELIHOOD:
+        return np.zeros((max(len(seeds), 1), T + 1, 3))
+    return lib.noise.draws([scan_seed(s) for s in seeds], (T + 1, 3))
 
 
 def row_offsets(horizon: np.ndarray) -> np.ndarray:

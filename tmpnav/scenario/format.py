@@ -244,6 +244,65 @@ def _sensor(range_: float, fov: float, doc: str) -> Section:
     )
 
 
+def _range_sensor_reach(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
+    _noise_within_range(section, ctx, path, raw)
+    if section["min_range"] >= section["range"]:
+        ctx.add(
+            f"{path}.min_range",
+            (*raw, "min_range"),
+            f"{section['min_range']:g} m is not below the sensor's range {section['range']:g} m; expected a blind "
+            "zone shorter than the range (no beam could return)",
+        )
+
+
+#: beams of one scan: past this the per-step cost grows for information the filter would
+#: over-trust anyway (beams of one scan are correlated through the map; docs/models.md)
+MAX_BEAMS = 2000
+
+RANGE_SENSOR = Section(
+    fields={
+        "range": Field(
+            Number("length", minimum=0.0, exclusive_minimum=True),
+            "range sensor: longest range that returns (a typical 2D lidar: 8-30 m)",
+            default=12.0,
+        ),
+        "fov": Field(
+            Number("angle", minimum=0.0, exclusive_minimum=True, maximum=2 * math.pi + 1e-9),
+            "range sensor: field of view, centred on the heading",
+            default=2 * math.pi,
+        ),
+        "beams": Field(
+            Number(None, minimum=1, maximum=MAX_BEAMS, integer=True, reason="a scan needs at least one beam"),
+            "range sensor: beams per scan, spread evenly over the field of view; the effective count of "
+            "independent beams (nav2's AMCL uses 60 of a scan)",
+            default=60,
+        ),
+        "sigma_range": Field(
+            Number("length", minimum=MIN_SIGMA, reason=PRECISE),
+            "range sensor: range noise standard deviation of one beam",
+            default=0.03,
+        ),
+        "min_range": Field(
+            Number("length", minimum=0.0),
+            "range sensor: blind zone; nearer surfaces return nothing",
+            default=0.1,
+        ),
+        "max_incidence": Field(
+            Number(
+                "angle",
+                minimum=0.0,
+                exclusive_minimum=True,
+                maximum=89 * DEG,
+                reason="a beam along a wall returns nothing",
+            ),
+            "range sensor: a beam that meets a surface farther than this from head-on returns nothing",
+            default=75 * DEG,
+        ),
+    },
+    post=_range_sensor_reach,
+    absent_is_none=True,
+)
+
 MODELS = Section(
     fields={
         "dt": Field(
@@ -281,6 +340,11 @@ MODELS = Section(
         ),
         "mutual_sensor": Field(
             _sensor(4.0, 2 * math.pi, "mutual sensor"), "range-bearing sensor of other robots (paper eq. (14))"
+        ),
+        "range_sensor": Field(
+            RANGE_SENSOR,
+            "2D range finder (lidar) against the map's walls, in every robot's EKF; absent: the paper's model "
+            "(landmarks and partners only); {} for a typical lidar",
         ),
         "mutual_observations": Field(
             Flag(), "use mutual observations between robots (false: the paper's config 2)", default=True

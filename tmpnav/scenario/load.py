@@ -30,6 +30,7 @@ from tmpnav.types import (
     PolygonMap,
     Pose,
     RangeBearingSensor,
+    RangeSensor,
     RoadmapParams,
     RobotSpec,
     Room,
@@ -365,6 +366,7 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
             mutual_observations=models["mutual_observations"],
             observations=ObservationMode(models["observations"]),
             seed=models["seed"],
+            range_sensor=_range_sensor(models["range_sensor"]),
         ),
         cost=CostWeights(d["cost"]["M_u"], d["cost"]["M_G"], d["cost"]["M_Sigma"], d["cost"]["M_T"]),
         roadmap=RoadmapParams(**d["roadmap"]),
@@ -375,6 +377,12 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
         planner=PlannerOptions(**d["planner"]),
         key_lines={_display(raw, doc): line for raw, line in doc.lines.items()},
     )
+
+
+def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
+    if s is None:
+        return None
+    return RangeSensor(s["range"], s["fov"], s["beams"], s["sigma_range"], s["min_range"], s["max_incidence"])
 
 
 def _display(raw: tuple[Any, ...], doc: YamlDoc) -> str:

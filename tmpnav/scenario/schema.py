@@ -413,6 +413,9 @@ class Section(Spec):
     fields: dict[str, Field] = field(default_factory=dict)
     #: extra checks over the converted section: (section, ctx, path, raw) -> None
     post: Callable[[dict[str, Any], Ctx, str, tuple[Any, ...]], None] | None = None
+    #: an absent (or null) optional section is None rather than its defaults: a part the
+    #: scenario may leave out (a sensor the robots do not carry); ``{}`` gives the defaults
+    absent_is_none: bool = False
 
     def describe(self) -> str:
         return "a mapping with keys " + ", ".join(self.fields)
@@ -436,21 +439,22 @@ class Section(Spec):
                     ctx.add(sub, (*raw, key), f"is missing; expected {fld.spec.describe()}")
                     complete = False
                     out[key] = MISSING
-                elif isinstance(fld.spec, Section):
+                elif isinstance(fld.spec, Section) and not fld.spec.absent_is_none:
                     out[key] = fld.spec.check({}, ctx, sub, (*raw, key))
                 else:
                     out[key] = fld.default
                 continue
             if value[key] is None:
-                # an absent optional section still yields its defaults
-                out[key] = fld.spec.check({}, ctx, sub, (*raw, key)) if isinstance(fld.spec, Section) else fld.default
+                # an absent optional section still yields its defaults (unless absent means none)
+                section = isinstance(fld.spec, Section) and not fld.spec.absent_is_none
+                out[key] = fld.spec.check({}, ctx, sub, (*raw, key)) if section else fld.default
                 continue
             checked = fld.spec.check(value[key], ctx, sub, (*raw, key))
             if checked is MISSING:
                 complete = False
                 if fld.required:
                     out[key] = MISSING
-                elif isinstance(fld.spec, Section):
+                elif isinstance(fld.spec, Section) and not fld.spec.absent_is_none:
                     # a bad optional section (`roadmap: 5`, reported above) falls back to its defaults
                     out[key] = fld.spec.check({}, Ctx(), sub, (*raw, key))
                 else:
@@ -513,7 +517,8 @@ def reference_rows(spec: Spec, path: str = "") -> Iterator[tuple[str, str, str, 
             child = fld.spec
             if isinstance(child, (Section, NamedList)):
                 kind = "list" if isinstance(child, NamedList) else "mapping"
-                yield sub, kind, "", "required" if fld.required else "", fld.doc
+                absent = "(none)" if isinstance(child, Section) and child.absent_is_none else ""
+                yield sub, kind, "", "required" if fld.required else absent, fld.doc
                 inner = child.item if isinstance(child, NamedList) else child
                 yield from reference_rows(inner, sub + ("[]" if isinstance(child, NamedList) else ""))
             else:

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tmpnav.types import Landmark, PolygonMap, Room, Scenario
+from tmpnav.types import Landmark, PolygonMap, RangeSensor, Room, Scenario
 from tmpnav.world.geometry import points_in_polygon
 from tmpnav.world.grid import (
     OccupancyGrid,
@@ -19,6 +19,7 @@ from tmpnav.world.grid import (
     line_of_sight,
     line_of_sight_traced,
 )
+from tmpnav.world.lidar import ScanInformation, signed_distance
 from tmpnav.world.reach import SectorReach
 from tmpnav.world.rosmap import load_ros_map
 
@@ -34,6 +35,8 @@ class World:
     landmark_xy: np.ndarray  # (L, 2)
     fingerprint: str  # content hash of the grid, rooms and landmarks
     _reach: dict[float, SectorReach] = field(default_factory=dict, repr=False)  # radius -> its cells' reach
+    _scans: dict[RangeSensor, ScanInformation] = field(default_factory=dict, repr=False)  # sensor -> its scans
+    _sdf: list[np.ndarray] = field(default_factory=list, repr=False)  # the signed distance field, once computed
 
     def is_free(self, points: np.ndarray, radius: float) -> np.ndarray:
         """Whether a disc of ``radius`` centred at each point (..., 2) is collision-free."""
@@ -50,6 +53,20 @@ class World:
         if radius not in self._reach:
             self._reach[radius] = SectorReach(self.grid, self.clearance, radius)
         return self._reach[radius]
+
+    @property
+    def signed_distance(self) -> np.ndarray:
+        """The signed distance field of the walls (tmpnav.world.lidar), computed when first asked for."""
+        if not self._sdf:
+            self._sdf.append(signed_distance(self.grid))
+        return self._sdf[0]
+
+    def scans(self, sensor: RangeSensor) -> ScanInformation:
+        """The scan information of ``sensor`` (tmpnav.world.lidar), its cells computed when first
+        asked for and remembered for the world's lifetime."""
+        if sensor not in self._scans:
+            self._scans[sensor] = ScanInformation(self.grid, self.signed_distance, sensor)
+        return self._scans[sensor]
 
     def line_of_sight(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether segments a[k]-b[k] cross no occupied cell (sphere tracing)."""

@@ -1,0 +1,105 @@
+"""Range scans in the EKF: the compiled kernel against filterpy, and what a scan does to a belief."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from tests.belief.support import DT, models, random_case
+from tests.belief.test_kernel import assert_same_propagation
+from tmpnav.belief.reference import propagate_reference
+from tmpnav.belief.rollout import ObservationNoise, Rollout, propagate_rollout
+from tmpnav.types import Belief, RangeSensor
+from tmpnav.world.grid import OccupancyGrid
+from tmpnav.world.lidar import ScanInformation, signed_distance
+
+LIDAR = RangeSensor(
+    range=12.0, fov=2 * math.pi, beams=60, sigma_range=0.03, min_range=0.1, max_incidence=math.radians(75)
+)
+
+
+def _with_scans(rng: np.random.Generator, rollout: Rollout) -> Rollout:
+    """Random scan factors (n, T+1, 3, 3), some rank-deficient, some zero, repeated after arrival."""
+    n, T1 = rollout.true_poses.shape[:2]
+    scans = rng.normal(0.0, 1.0, (n, T1, 3, 3)) * rng.uniform(0.0, 30.0, (n, T1, 1, 1))
+    scans[rng.random((n, T1)) < 0.3] = 0.0
+    scans[..., 2, :] *= rng.random((n, T1, 1)) < 0.5
+    for i in range(n):
+        scans[i, rollout.active_steps[i] + 1 :] = scans[i, rollout.active_steps[i]]
+    return replace(rollout, scans=scans)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**32 - 1), st.sampled_from([1, 2, 3]), st.booleans())
+def test_kernel_matches_filterpy_with_range_scans(seed: int, n: int, ml: bool) -> None:
+    rng = np.random.default_rng(seed)
+    T, L = int(rng.integers(1, 12)), int(rng.integers(0, 3))
+    belief, rollout, landmarks, noise = random_case(rng, n, T, L)
+    rollout = _with_scans(rng, rollout)
+    noise = ObservationNoise(noise.landmark, noise.mutual, rng.standard_normal((n, T + 1, 3)))
+    m = replace(models(ml), range_sensor=LIDAR)
+    assert_same_propagation(
+        propagate_rollout(belief, rollout, landmarks, m, noise),
+        propagate_reference(belief, rollout, landmarks, m, noise),
+    )
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 2**32 - 1))
+def test_a_scan_never_adds_uncertainty_and_keeps_the_covariance_positive(seed: int) -> None:
+    """Information never increases trace(Sigma); covariances stay symmetric positive semi-definite.
+    (Maximum-likelihood mode: the means, hence the motion's Jacobians, do not depend on the scans.)"""
+    rng = np.random.default_rng(seed)
+    belief, rollout, landmarks, noise = random_case(rng, 2, 8, 0)
+    rollout = replace(_with_scans(rng, rollout), mutual_visible=np.zeros_like(rollout.mutual_visible))
+    with_scans = propagate_rollout(belief, rollout, landmarks, replace(models(True), range_sensor=LIDAR), noise)
+    without = propagate_rollout(belief, rollout, landmarks, models(True), noise)
+    traces = np.trace(with_scans.covs, axis1=1, axis2=2)
+    assert (traces <= np.trace(without.covs, axis1=1, axis2=2) + 1e-12).all()
+    covs = with_scans.covs
+    np.testing.assert_allclose(covs, np.swapaxes(covs, -1, -2), rtol=0, atol=1e-15)
+    assert np.linalg.eigvalsh(covs).min() >= -1e-12
+
+
+def corridor(length: float = 64.0, width: float = 2.0, res: float = 0.05) -> OccupancyGrid:
+    """A straight corridor with no door, no feature: walls three cells thick all round."""
+    rows, cols = round((width + 0.3) / res), round((length + 0.3) / res)
+    occupied = np.zeros((rows, cols), dtype=bool)
+    occupied[:3], occupied[-3:], occupied[:, :3], occupied[:, -3:] = True, True, True, True
+    return OccupancyGrid(occupied, (0.0, 0.0), res)
+
+
+def corridor_stds(length: float = 64.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A robot driving the corridor's length at 0.5 m/s with a 12 m lidar: its x (m) and its
+    position std along and across the corridor at every step (tmpnav's kernel, max-likelihood)."""
+    grid = corridor(length)
+    table = ScanInformation(grid, signed_distance(grid), LIDAR)
+    y = grid.extent[3] / 2
+    T = int((length - 4.0) / (0.5 * DT))
+    x = 2.0 + 0.5 * DT * np.arange(T + 1)
+    poses = np.column_stack([x, np.full(T + 1, y), np.zeros(T + 1)])
+    rows = table.rows(table.keys(poses))
+    G = table.table[rows]
+    controls = np.tile([0.5, 0.0], (1, T, 1))
+    rollout = Rollout(
+        controls, poses[None], np.array([T]), np.zeros((1, T + 1, 0), bool), np.zeros((1, 1, T + 1), bool), G[None]
+    )
+    m = replace(models(max_likelihood=True), range_sensor=LIDAR)
+    belief = Belief(poses[0].copy(), np.diag([0.01, 0.01, 0.001]))
+    run = propagate_rollout(belief, rollout, np.zeros((0, 2)), m)
+    return x, np.sqrt(run.covs[:, 0, 0]), np.sqrt(run.covs[:, 1, 1])
+
+
+def test_a_featureless_corridor_pins_the_robot_across_not_along() -> None:
+    """60 m of corridor with no feature, a 12 m lidar: across the corridor the robot stays within
+    centimetres; along it, once both ends are out of range, its uncertainty grows (the scan sees
+    nothing along parallel walls) until the far end comes into range."""
+    x, along, across = corridor_stds()
+    assert across.max() <= 0.1 and across[1:].max() < 0.01
+    middle = (x > 14.5) & (x < 49.5)  # both ends farther than the range
+    assert along[middle][-1] > 5 * along[1] and np.all(np.diff(along[middle]) > 0)
+    assert along[-1] < along[middle][-1] / 5  # the far end in range again

@@ -1,0 +1,286 @@
+"""What a 2D range finder sees of the map: ray casting, beam Jacobians and scan information.
+
+The walls are the zero level set of a signed distance field: at each cell centre the distance
+to the nearest cell of the other kind, less half a cell (positive in free space, negative in
+occupied cells; off the grid is occupied), interpolated bilinearly between centres. Its zero
+set runs along the boundary between free and occupied cells, smoothly enough that a beam's
+range is a differentiable function of the pose, so the simulator's scans and the planner's
+linearisation see the same walls. A beam from (x, y) in direction psi is marched along the
+field (sphere tracing: a step of 0.8 times the distance, at least a quarter cell) to the first
+point where the field turns negative, which bisection and a last secant step locate.
+
+Range of beam i of a scan from pose (x, y, theta) at angle phi_i: r_i = ray(x, y, theta + phi_i).
+With g the field's gradient at the hit point and d = (cos psi, sin psi), d' = (-sin psi, cos psi),
+the implicit-function theorem on phi(p + r d) = 0 gives its Jacobian (docs/models.md, "Range
+sensor"):
+
+    H_i = [-g_x / (g.d),  -g_y / (g.d),  -r (g.d') / (g.d)]
+
+which is Censi's -[v(alpha); r tan beta] / cos beta with alpha the normal into the wall and
+beta the incidence. One scan informs the pose by J = sum_i H_i^T H_i / sigma^2 (beams as
+independent), and :class:`ScanInformation` keeps J's factor per cell and heading, computed
+when first asked for (the oracle's motions read a few thousand cells of a building).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+from scipy import ndimage
+
+from tmpnav.types import RangeSensor
+from tmpnav.world.grid import OccupancyGrid
+
+#: heading bins of the scan information table (5 degrees each) for a sensor with a limited field of view
+HEADINGS = 72
+#: march at least this share of a cell per step near a wall
+MIN_STEP = 0.25
+#: bisection steps that bracket a hit (a quarter cell / 2**6: 0.2 mm on a 5 cm grid) before a secant step
+BISECTIONS = 6
+#: flat cell index of a pose off the grid: no information
+OFF_GRID = -1
+
+
+def signed_distance(grid: OccupancyGrid) -> np.ndarray:
+    """The signed distance field (rows, cols) m at the cell centres: free cells +(distance to the
+    nearest occupied centre - res/2), occupied cells -(distance to the nearest free centre - res/2).
+    The grid's outside counts as occupied."""
+    res = grid.resolution
+    free = np.pad(~grid.occupied, 1, constant_values=False)
+    outside = ndimage.distance_transform_edt(free)[1:-1, 1:-1] * res
+    inside = ndimage.distance_transform_edt(~free)[1:-1, 1:-1] * res
+    return np.where(grid.occupied, -(inside - 0.5 * res), outside - 0.5 * res)
+
+
+@nb.njit(cache=True, inline="always")
+def _field(sdf, x0, y0, res, x, y):
+    """The bilinear field and its gradient at (x, y): (phi, gx, gy); off the grid -res/2."""
+    u = (x - x0) / res - 0.5
+    v = (y - y0) / res - 0.5
+    j = math.floor(u)
+    i = math.floor(v)
+    fx, fy = u - j, v - i
+    R, C = sdf.shape
+    out = -0.5 * res
+    f00 = sdf[i, j] if 0 <= i < R and 0 <= j < C else out
+    f01 = sdf[i, j + 1] if 0 <= i < R and 0 <= j + 1 < C else out
+    f10 = sdf[i + 1, j] if 0 <= i + 1 < R and 0 <= j < C else out
+    f11 = sdf[i + 1, j + 1] if 0 <= i + 1 < R and 0 <= j + 1 < C else out
+    a = f00 + (f01 - f00) * fx
+    b = f10 + (f11 - f10) * fx
+    phi = a + (b - a) * fy
+    gx = ((f01 - f00) * (1.0 - fy) + (f11 - f10) * fy) / res
+    gy = (b - a) / res
+    return phi, gx, gy
+
+
+@nb.njit(cache=True)
+def cast(sdf, x0, y0, res, x, y, psi, r_max):
+    """One beam from (x, y) in direction psi (rad): (range m, gx, gy) of its first hit within
+    ``r_max``, with the field's gradient there; range inf for no hit, nan from inside a wall."""
+    dx, dy = math.cos(psi), math.sin(psi)
+    phi, _, _ = _field(sdf, x0, y0, res, x, y)
+    if phi <= 0.0:
+        return math.nan, 0.0, 0.0
+    t_prev, t = 0.0, 0.0
+    floor = MIN_STEP * res
+    while True:
+        t_prev = t
+        t += max(0.8 * phi, floor)
+        if t > r_max + floor:
+            return math.inf, 0.0, 0.0
+        phi, _, _ = _field(sdf, x0, y0, res, x + t * dx, y + t * dy)
+        if phi < 0.0:
+            break
+    lo, hi = t_prev, t  # phi(lo) >= 0 > phi(hi)
+    f_lo, _, _ = _field(sdf, x0, y0, res, x + lo * dx, y + lo * dy)
+    f_hi = phi
+    for _ in range(BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        f_mid, _, _ = _field(sdf, x0, y0, res, x + mid * dx, y + mid * dy)
+        if f_mid >= 0.0:
+            lo, f_lo = mid, f_mid
+        else:
+            hi, f_hi = mid, f_mid
+    r = lo + (hi - lo) * f_lo / (f_lo - f_hi)
+    if r > r_max:
+        return math.inf, 0.0, 0.0
+    _, gx, gy = _field(sdf, x0, y0, res, x + r * dx, y + r * dy)
+    return r, gx, gy
+
+
+@nb.njit(cache=True, inline="always")
+def _beam_row(r, gx, gy, psi):
+    """H_i = d r / d(x, y, theta) of a beam with range r and field gradient (gx, gy) at its hit."""
+    gd = gx * math.cos(psi) + gy * math.sin(psi)
+    gdp = -gx * math.sin(psi) + gy * math.cos(psi)
+    return -gx / gd, -gy / gd, -r * gdp / gd
+
+
+@nb.njit(cache=True)
+def _returns(r, gx, gy, psi, r_min, cos_max):
+    """Whether a beam returns: a hit within range, beyond the blind zone, and a surface met at
+    most the largest incidence from head-on (cos of the incidence at least ``cos_max``)."""
+    if not (r >= r_min and r < math.inf):
+        return False
+    g = math.hypot(gx, gy)
+    if g <= 0.0:
+        return False
+    return -(gx * math.cos(psi) + gy * math.sin(psi)) / g >= cos_max
+
+
+@nb.njit(cache=True)
+def scan(sdf, x0, y0, res, pose, angles, r_min, r_max, cos_max, ranges, H):
+    """Ray cast one scan from ``pose`` (x, y, theta): ``ranges`` (B,) m (nan: no return) and
+    ``H`` (B, 3), each beam's Jacobian (zero rows where it does not return)."""
+    for b in range(angles.shape[0]):
+        psi = pose[2] + angles[b]
+        r, gx, gy = cast(sdf, x0, y0, res, pose[0], pose[1], psi, r_max)
+        if _returns(r, gx, gy, psi, r_min, cos_max):
+            ranges[b] = r
+            H[b, 0], H[b, 1], H[b, 2] = _beam_row(r, gx, gy, psi)
+        else:
+            ranges[b] = math.nan
+            H[b, 0], H[b, 1], H[b, 2] = 0.0, 0.0, 0.0
+
+
+@nb.njit(cache=True)
+def _information(sdf, x0, y0, res, x, y, theta, angles, r_min, r_max, cos_max, J):
+    """J (3, 3) = sum over the returning beams of H_i^T H_i (per unit noise variance)."""
+    for a in range(3):
+        for b in range(3):
+            J[a, b] = 0.0
+    for k in range(angles.shape[0]):
+        psi = theta + angles[k]
+        r, gx, gy = cast(sdf, x0, y0, res, x, y, psi, r_max)
+        if not _returns(r, gx, gy, psi, r_min, cos_max):
+            continue
+        h0, h1, h2 = _beam_row(r, gx, gy, psi)
+        J[0, 0] += h0 * h0
+        J[0, 1] += h0 * h1
+        J[0, 2] += h0 * h2
+        J[1, 1] += h1 * h1
+        J[1, 2] += h1 * h2
+        J[2, 2] += h2 * h2
+    J[1, 0], J[2, 0], J[2, 1] = J[0, 1], J[0, 2], J[1, 2]
+
+
+@nb.njit(cache=True)
+def _factors(sdf, x0, y0, res, xs, ys, thetas, angles, r_min, r_max, cos_max, inv_var, out):
+    """out[p] (3, 3): the rows G of J = G^T G at (xs[p], ys[p], thetas[p]), J the scan's information."""
+    J = np.empty((3, 3))
+    for p in range(xs.shape[0]):
+        _information(sdf, x0, y0, res, xs[p], ys[p], thetas[p], angles, r_min, r_max, cos_max, J)
+        lam, vec = np.linalg.eigh(J * inv_var)
+        top = max(lam[2], 0.0)
+        for k in range(3):
+            s = math.sqrt(lam[k]) if lam[k] > 1e-12 * top and lam[k] > 0.0 else 0.0
+            for c in range(3):
+                out[p, k, c] = s * vec[c, k]
+
+
+def information_matrices(sdf: np.ndarray, grid: OccupancyGrid, sensor: RangeSensor, poses: np.ndarray) -> np.ndarray:
+    """The scan information J (..., 3, 3) at poses (..., 3): sum_i H_i^T H_i / sigma^2 over the
+    beams that return (m^-2, m^-1 rad^-1, rad^-2)."""
+    flat = np.ascontiguousarray(poses, dtype=float).reshape(-1, 3)
+    out = np.empty((flat.shape[0], 3, 3))
+    G = np.empty((flat.shape[0], 3, 3))
+    x0, y0 = grid.origin
+    _factors(
+        sdf,
+        x0,
+        y0,
+        grid.resolution,
+        flat[:, 0],
+        flat[:, 1],
+        flat[:, 2],
+        sensor.beam_angles(),
+        sensor.min_range,
+        sensor.range,
+        math.cos(sensor.max_incidence),
+        1.0 / sensor.sigma_range**2,
+        G,
+    )
+    np.matmul(G.transpose(0, 2, 1), G, out=out)
+    return out.reshape(*poses.shape[:-1], 3, 3)
+
+
+class ScanInformation:
+    """One scan's information, as the factor G (3, 3) of J = G^T G, per grid cell and heading bin.
+
+    Keys name a cell and a heading bin, ``cell * bins + bin`` (:meth:`keys`); the factor of a
+    key is computed at the cell's centre and the bin's heading when first asked for
+    (:meth:`rows`) and kept in :attr:`table`, whose row 0 is zero (no information: a pose off
+    the grid). G's rows are sqrt(lambda_k) e_k^T over J's eigenpairs, so the update with the
+    scan is three scalar ones (tmpnav.belief.kernel). A sensor that sees all around has one
+    bin: turning it only moves its beams along the circle, by less than their spacing.
+    """
+
+    def __init__(self, grid: OccupancyGrid, sdf: np.ndarray, sensor: RangeSensor):
+        self.grid, self.sdf, self.sensor = grid, sdf, sensor
+        self.angles = sensor.beam_angles()
+        self.bins = 1 if sensor.fov >= 2.0 * math.pi - 1e-9 else HEADINGS
+        self._keys = np.zeros(0, dtype=np.int64)  # sorted
+        self._rows = np.zeros(0, dtype=np.int64)  # table row of each of _keys
+        self.table = np.zeros((1, 3, 3))
+        self.size = 1
+
+    def keys(self, poses: np.ndarray) -> np.ndarray:
+        """The key (..., ) int64 of each pose (..., 3): its cell and its heading's bin; OFF_GRID off the grid."""
+        poses = np.asarray(poses, dtype=float)
+        i, j, inside = self.grid.cells(poses[..., :2])
+        b = np.floor(np.mod(poses[..., 2], 2.0 * math.pi) * (self.bins / (2.0 * math.pi)) + 0.5).astype(np.int64)
+        cell = i * self.grid.shape[1] + j
+        return np.where(inside, cell * self.bins + b % self.bins, OFF_GRID).astype(np.int64)
+
+    def rows(self, keys: np.ndarray) -> np.ndarray:
+        """The :attr:`table` row (...,) of each key (...,), computing those not seen before."""
+        keys = np.asarray(keys, dtype=np.int64)
+        flat = keys.ravel()
+        wanted = np.unique(flat[flat >= 0])
+        new = wanted[~np.isin(wanted, self._keys, assume_unique=True)]
+        if new.size:
+            self._compute(new)
+        out = np.zeros(flat.shape, dtype=np.int64)
+        inside = flat >= 0
+        at = np.searchsorted(self._keys, flat[inside])
+        out[inside] = self._rows[at]
+        return out.reshape(keys.shape)
+
+    def _compute(self, keys: np.ndarray) -> None:
+        cols, res = self.grid.shape[1], self.grid.resolution
+        cell, b = keys // self.bins, keys % self.bins
+        x0, y0 = self.grid.origin
+        xs = x0 + (cell % cols + 0.5) * res
+        ys = y0 + (cell // cols + 0.5) * res
+        thetas = b * (2.0 * math.pi / self.bins)
+        G = np.empty((keys.size, 3, 3))
+        s = self.sensor
+        _factors(
+            self.sdf,
+            x0,
+            y0,
+            res,
+            xs,
+            ys,
+            thetas,
+            self.angles,
+            s.min_range,
+            s.range,
+            math.cos(s.max_incidence),
+            1.0 / s.sigma_range**2,
+            G,
+        )
+        need = self.size + keys.size
+        if need > self.table.shape[0]:
+            grown = np.zeros((max(need, 2 * self.table.shape[0]), 3, 3))
+            grown[: self.size] = self.table[: self.size]
+            self.table = grown
+        self.table[self.size : need] = G
+        merged = np.concatenate([self._keys, keys])
+        rows = np.concatenate([self._rows, np.arange(self.size, need)])
+        order = np.argsort(merged, kind="stable")
+        self._keys, self._rows = merged[order], rows[order]
+        self.size = need
