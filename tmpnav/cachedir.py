@@ -6,6 +6,7 @@
                                         tables and remembered task plans (tmpnav.oracle.cache)
     <cache>/oracle-v1.sqlite3-wal, -shm SQLite's journal files
     <cache>/roadmaps/<key>.npz          grown roadmaps (tmpnav.roadmap.store)
+    <cache>/roadmaps/<key>.scans.npz    a range sensor's scan information of a map (the same)
     <file>.corrupt-<date>-<pid>         a damaged file, set aside: never read again, kept for a
                                         bug report, removed by ``tmpnav cache clear``
     .<file>.tmpnav-<pid>-<hex>.tmp      a file being written (tmpnav.atomic); removed by the next
@@ -31,6 +32,7 @@ from tmpnav.errors import CacheError
 
 DATABASE = "oracle-v1.sqlite3"
 ROADMAPS = "roadmaps"
+SCANS = ".scans.npz"  # a scan information table beside the roadmaps
 SET_ASIDE = ".corrupt-"
 
 
@@ -96,6 +98,9 @@ class CacheDir:
     def roadmap(self, key: str) -> Path:
         return self.roadmaps / f"{key}.npz"
 
+    def scans(self, key: str) -> Path:
+        return self.roadmaps / f"{key}{SCANS}"
+
     def ensure(self, folder: Path | None = None) -> Path:
         """Create the directory (or its sub-folder ``folder``) if needed; a CacheError when it
         cannot be created or written, with what to do instead."""
@@ -124,7 +129,8 @@ class CacheDir:
     def info(self) -> CacheInfo:
         """Location, size and content of the cache (the database is opened read-only)."""
         files = self.database_files()
-        roadmaps = [p for p in self.roadmap_files() if p.suffix == ".npz"]
+        stored = [p for p in self.roadmap_files() if p.suffix == ".npz"]  # with the scan tables
+        roadmaps = [p for p in stored if not p.name.endswith(SCANS)]
         entries, error = count_entries(self.database) if self.database.exists() else (0, None)
         return CacheInfo(
             directory=self.root,
@@ -134,7 +140,7 @@ class CacheDir:
             database_bytes=sum(_size(p) for p in files if SET_ASIDE not in p.name),
             error=error,
             roadmaps=len(roadmaps),
-            roadmap_bytes=sum(_size(p) for p in roadmaps),
+            roadmap_bytes=sum(_size(p) for p in stored),
             set_aside=sum(SET_ASIDE in p.name for p in [*files, *self.roadmap_files()]),
         )
 
@@ -155,7 +161,7 @@ class CacheDir:
             first, why = failed[0]
             more = f" ({len(failed)} files could not be removed)" if len(failed) > 1 else ""
             raise CacheError(f"cannot clear the cache {self.root}: {first}: {why.strerror}{more}")
-        return len(database), sum(p.suffix == ".npz" for p in roadmaps)
+        return len(database), sum(p.suffix == ".npz" and not p.name.endswith(SCANS) for p in roadmaps)
 
 
 def _size(path: Path) -> int:

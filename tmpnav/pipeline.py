@@ -44,6 +44,7 @@ class Overrides:
     timeout: float | None = None
     pair_min_gain: float | None = None
     mutual_observations: bool | None = None
+    range_sensor: bool | None = None  # False: plan without the scenario's range sensor (the paper's model)
     goals: Goals | None = None
     search: Search | None = None
     time_budget: float | None = None
@@ -150,6 +151,8 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
     models = scenario.models
     if o.mutual_observations is not None:
         models = replace(models, mutual_observations=o.mutual_observations)
+    if o.range_sensor is False:
+        models = replace(models, range_sensor=None)
     if o.goals is not None and (unknown := [g for g in o.goals.all_rooms if g not in {r.name for r in scenario.rooms}]):
         raise InputError(f"goal rooms {', '.join(unknown)} are not rooms of scenario {scenario.name!r}")
     return replace(scenario, planner=planner, models=models, goals=o.goals or scenario.goals)
@@ -226,7 +229,7 @@ def prepare(
     or read the roadmap, open the oracle. The caller must close ``prepared.oracle`` (executor
     and cache)."""
     from tmpnav.roadmap.reach import check_reachable
-    from tmpnav.roadmap.store import RoadmapStore
+    from tmpnav.roadmap.store import RoadmapStore, ScanStore
 
     run = options.execution
     with times.timed("load"):
@@ -243,6 +246,9 @@ def prepare(
     with times.timed("roadmap"):
         roadmap, roadmap_hit = roadmap_for(scenario, world, store)
         check_reachable(scenario, world, roadmap)
+        if cache is not None and store is not None and scenario.models.range_sensor is not None:
+            # before the oracle's workers fork: they start with the table too
+            ScanStore(cache, store).load(world, scenario.models.range_sensor)
     oracle = make_oracle(scenario, world, roadmap, run, options.reporters)
     warnings = tuple(store.warnings) if store is not None else ()
     return Prepared(scenario, world, roadmap, roadmap_hit, cache, warnings, oracle)
@@ -300,6 +306,7 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
                         resim = resimulate(run.carried, task, kept.delays, kept.detours)
         finally:
             prep.oracle.close()
+            _keep_scans(prep)
     times.close()
     report = PlanReport(
         scenario=prep.scenario,
@@ -316,6 +323,15 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
         apart=apart,
     )
     return report
+
+
+def _keep_scans(prep: Prepared) -> None:
+    """Store the range sensor's scan information this run computed, for the next (tmpnav.roadmap.store)."""
+    from tmpnav.roadmap.store import RoadmapStore, ScanStore
+
+    sensor = prep.scenario.models.range_sensor
+    if prep.cache is not None and sensor is not None:
+        ScanStore(prep.cache, RoadmapStore(prep.cache)).save(prep.world, sensor)
 
 
 #: re-plans at the threshold the plan of least risk meets, before tmpnav names it (each under

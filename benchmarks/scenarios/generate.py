@@ -134,6 +134,17 @@ class Spec:
     roadmap: list[str]
     goals: list[str]
     goals_comment: str
+    models: list[str] = field(default_factory=list)
+
+
+#: the robots' 2D lidar (docs/scenario.md, models.range_sensor), the same in every scenario that has one
+LIDAR = [
+    "# a typical 2D lidar: 12 m, all round, 60 beams treated as independent (as nav2's AMCL uses 60",
+    "# of a scan), 3 cm of range noise; plan with --no-range-sensor for the paper's model (landmarks",
+    "# and partners only)",
+    "models:",
+    "  range_sensor: {range: 12, fov: 360 deg, beams: 60, sigma_range: 0.03}",
+]
 
 
 def room(name: str, polygon: list[tuple[float, float]], comment: str = "") -> Entry:
@@ -172,6 +183,7 @@ def scenario_text(spec: Spec) -> str:
         if any(g.entries for g in groups):
             out += [*section(key, groups), ""]
     out += [*section("robots", spec.robots), ""]
+    out += [*spec.models, ""] if spec.models else []
     out += [
         *spec.roadmap,
         "",
@@ -377,7 +389,8 @@ def building_20() -> dict[str, bytes]:
             "middle of its corridor wall. Eleven landmarks stand along the corridor, one every 10 m",
             "on alternating sides and one at each end: with the default 5 m landmark sensor the",
             "corridor sees one almost everywhere (gaps of a few decimetres midway between two), while",
-            "in the rooms the walls hide them but for glimpses through the doors.",
+            "in the rooms the walls hide them but for glimpses through the doors. The robots carry a",
+            "2D lidar (models.range_sensor) and localise against the walls as well.",
             "Two robots start at the two ends of the corridor; the task is to visit every room.",
             "",
             "Written by benchmarks/scenarios/generate.py (edit that script, not this file).",
@@ -401,6 +414,7 @@ def building_20() -> dict[str, bytes]:
         roadmap=roadmap_lines("building-20"),
         goals=[f"S{i}" for i in range(1, 11)] + [f"N{i}" for i in range(1, 11)],
         goals_comment="every room",
+        models=LIDAR,
     )
     return {"building-20.yaml": scenario_text(spec).encode()}
 
@@ -557,6 +571,7 @@ def office_building() -> dict[str, bytes]:
             roadmap=roadmap_lines("building"),
             goals=goals,
             goals_comment="default task: 20 rooms spread over the three corridors (`tmpnav bench` draws its own)",
+            models=LIDAR,
         )
         files[f"building-{n}robots.yaml"] = scenario_text(spec).encode()
     return files
@@ -580,7 +595,8 @@ def office_header(robots: int, rooms: int, landmarks: int) -> list[str]:
         f"{landmarks} landmarks: every 8 m along corridor A and the west parts of B and C, in the",
         "lobby and cross corridor, and in eight rooms. Deliberately sparse: corridor C east of the",
         "cross corridor (35 m) and every room off it have none, and corridor B east of the lobby",
-        "has one, at its far end (default 5 m landmark sensor).",
+        "has one, at its far end (default 5 m landmark sensor). The robots carry a 2D lidar",
+        "(models.range_sensor) and localise against the walls wherever the landmarks are sparse.",
         "",
         "Robots start in the corridors and the lobby, so every room to visit needs a real visit;",
         "building-2robots, -4robots and -8robots share the world, and each team is the first",
@@ -736,6 +752,7 @@ def warehouse() -> dict[str, bytes]:
             roadmap=roadmap_lines("warehouse"),
             goals=spread(names, 20),
             goals_comment="default task: 20 places spread over the floor (`tmpnav bench` draws its own)",
+            models=LIDAR,
         )
         files[f"warehouse-{n}robots.yaml"] = scenario_text(spec).encode()
     return files
@@ -757,7 +774,8 @@ def warehouse_header(robots: int, places: int, landmarks: int) -> list[str]:
         "",
         f"{landmarks} landmarks: rack ends (a sign on the end face), six building pillars, two pick",
         "terminals, two chargers and a sign. From the middle of an aisle none is in sight within",
-        "5 m (the default landmark sensor): the racks hide the pillars.",
+        "5 m (the default landmark sensor): the racks hide the pillars. The robots carry a 2D",
+        "lidar (models.range_sensor) and localise against the racks and walls.",
         "Robots start in the main aisles, the cross aisle and the open floor east of the staging",
         "lanes; warehouse-2robots, -4robots and -8robots share the map and each team is the first",
         "robots of the larger one (`tmpnav bench --scenario configs/warehouse-{robots}robots.yaml`).",
@@ -829,7 +847,8 @@ def sparse_warehouse() -> dict[str, bytes]:
             "columns (x 7 and 43, y 20 and 28). The middle and the north of the hall have none, so",
             "the belief a robot carries into a place depends on the way it came: canonical start",
             "states (--costs table) misjudge the plans there, the beliefs carried step to step",
-            "(--costs carried) do not.",
+            "(--costs carried) do not. The robots have no range sensor: this is the paper's model,",
+            "which this hall is built to starve (a lidar would see the pillars and pin the beliefs).",
             "A few walls and racks: a partition from the west wall (y 24, x 0..12), an office in the",
             "north-west corner (door on its south side), two rack rows in the north-east",
             "(x 33..47) and a fence from the east wall (y 10, x 40..50).",

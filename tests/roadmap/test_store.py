@@ -93,3 +93,33 @@ def test_read_rejects_what_serialize_did_not_write(tmp_path: Path) -> None:
     path.write_bytes(b"PK\x03\x04 not a zip")
     with pytest.raises(DAMAGE):
         read(path)
+
+
+def test_a_scan_table_is_kept_beside_the_roadmaps_and_read_back(tmp_path: Path) -> None:
+    """What one run computed of a range sensor's scan information, the next preloads: the same
+    factors, computed no more; a damaged table is set aside with one warning."""
+    import math
+
+    from tests.world.test_lidar import box, world_of
+    from tmpnav.roadmap.store import ScanStore
+    from tmpnav.types import RangeSensor
+
+    sensor = RangeSensor(8.0, 2 * math.pi, 30, 0.03, 0.1, math.radians(75))
+    cache = CacheDir(tmp_path)
+    first = world_of(box())
+    poses = np.array([[2.0, 1.5, 0.0], [7.5, 4.2, 1.0], [3.3, 3.3, -2.0]])
+    scans = first.scans(sensor)
+    rows = scans.rows(scans.keys(poses))
+    ScanStore(cache, RoadmapStore(cache)).save(first, sensor)
+    assert cache.info().roadmaps == 0 and cache.info().roadmap_bytes > 0  # a scan table, not a roadmap
+    second = world_of(box())
+    assert ScanStore(cache, RoadmapStore(cache)).load(second, sensor) == 3
+    again = second.scans(sensor)
+    np.testing.assert_array_equal(again.table[again.rows(again.keys(poses))], scans.table[rows])
+    assert again.computed == 0
+    with open(cache.scans(next(iter(cache.roadmaps.iterdir())).name.split(".")[0]), "r+b") as fh:
+        fh.truncate(100)
+    store = RoadmapStore(cache)
+    with pytest.warns(RoadmapCacheWarning, match="scan table .* is unreadable"):
+        assert ScanStore(cache, store).load(world_of(box()), sensor) == 0
+    assert cache.info().set_aside == 1

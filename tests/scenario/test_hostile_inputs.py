@@ -113,6 +113,14 @@ CASES = [
     Case("sensor-noise-1e-300", nested("models.landmark_sensor.sigma_bearing", 1e-300),
          "models.landmark_sensor.sigma_bearing", "1e-300 is out of range; expected a number >= 1e-06 and <= 3.14159 in "
          "rad (or a string such as '1.5 rad'); a sensor more precise than 1e-6 drives the filter below float"),
+    Case("lidar-negative-range", nested("models.range_sensor", {"range": -3}), "models.range_sensor.range",
+         "-3 is out of range; expected a number > 0 in m"),
+    Case("lidar-zero-beams", nested("models.range_sensor", {"beams": 0}), "models.range_sensor.beams",
+         "0 is out of range; expected an integer >= 1 and <= 2000; a scan needs at least one beam"),
+    Case("lidar-blind-beyond-its-range", nested("models.range_sensor", {"range": 5, "min_range": 6}),
+         "models.range_sensor.min_range", "6 m is not below the sensor's range 5 m"),
+    Case("lidar-along-the-wall", nested("models.range_sensor", {"max_incidence": "90 deg"}),
+         "models.range_sensor.max_incidence", "'90 deg' is out of range; expected a number > 0 and <= 1.55334 in rad"),
     Case("sensor-range-1e9", nested("models.mutual_sensor", {"range": 1e9}), "models.mutual_sensor.range",
          "1e+09 m is longer than the map's diagonal 11.7 m; expected at most 11.7 m"),
     Case("one-control-step-crosses-the-map", change("robots", "r2", speed=100), "robots.r2.speed",
@@ -365,3 +373,31 @@ def test_a_key_never_breaks_the_one_line_message(key: str, tmp_path: Path, monke
     problems = reported(result.exit_code, result.stdout, result.stderr)  # each line an error: line
     assert len(problems) == 2 == len(result.stderr.splitlines())
     assert all(len(p.rest) < 300 for p in problems)
+
+
+OPEN_FLOOR = """\
+name: open-floor
+map: {bounds: [0, 0, 100, 100], resolution: 0.1}
+rooms:
+  - {name: A, polygon: [[40, 40], [45, 40], [45, 45], [40, 45]]}
+  - {name: B, polygon: [[55, 55], [60, 55], [60, 60], [55, 60]]}
+robots:
+  - {name: r1, pose: [50, 50, 0]}
+models:
+  range_sensor: {range: 12}
+goals: {visit: [A, B]}
+"""
+
+
+def test_a_range_sensor_that_sees_no_wall_is_refused_and_nothing_is_written(tmp_path: Path) -> None:
+    """An open floor whose walls are 40 m from every start and room: a 12 m lidar never returns."""
+    scenario = tmp_path / "open.yaml"
+    scenario.write_text(OPEN_FLOOR)
+    result = CliRunner().invoke(cli, ["plan", str(scenario), "-o", str(tmp_path / "out")])
+    assert result.exit_code == 2
+    lines = result.output.strip().splitlines()
+    assert (
+        len(lines) == 1 and "models.range_sensor.range: 12 m reaches no wall from any robot's start or room" in lines[0]
+    )
+    assert "the nearest wall is 40" in lines[0] and "Traceback" not in result.output
+    assert not (tmp_path / "out").exists()

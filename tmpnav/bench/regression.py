@@ -44,6 +44,7 @@ class Case:
     time_budget: float | None = None  # anytime: a budget it never reaches, so the plan is the converged one
     objective: str | None = None  # None: the default (weighted); "cost": the paper's sum, the plans of before
     keep_apart: bool | None = None  # None: the default (robots kept apart); False: the plan as planned
+    range_sensor: bool = True  # False: without the scenario's range sensor (the paper's model)
 
 
 CASES = (
@@ -98,6 +99,7 @@ CASES = (
         search="exact",
         objective="cost",
         keep_apart=False,
+        range_sensor=False,  # the paper's model: without the lidar the scenario carries
     ),
     # the defaults: carried-over beliefs, the search auto chooses, the weighted objective (the
     # team on one clock, time priced): recorded again when schedules came
@@ -130,6 +132,7 @@ def run_case(case: Case) -> dict[str, Any]:
         time_budget=case.time_budget,
         objective=case.objective,
         keep_apart=case.keep_apart,
+        range_sensor=None if case.range_sensor else False,
     )
     report = plan(scenario, options)
     return {

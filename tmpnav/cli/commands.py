@@ -72,19 +72,30 @@ def validate(scenario: Path) -> None:
     default=Path("world.png"),
     show_default=True,
 )
+@click.option(
+    "--localisability",
+    is_flag=True,
+    help="Shade the map by how well one scan of the robots' range sensor pins a robot down (the position "
+    "std along its worst direction): long featureless corridors and open floor beyond the sensor's range stand out.",
+)
 @report_errors
-def show(scenario: Path, output: Path) -> None:
+def show(scenario: Path, output: Path, localisability: bool) -> None:
     """Draw the world: map, rooms, doors, landmarks, robots.
 
     Robots are drawn at their start pose with the 2-sigma ellipse of their start belief, landmarks
     with the range of the landmark sensor (a ROS map: only its known free space).
     """
+    from tmpnav.errors import InputError
     from tmpnav.pipeline import load_world
     from tmpnav.report.world_plot import plot_world
 
     sc, world = load_world(scenario)
+    if localisability and sc.models.range_sensor is None:
+        raise InputError(
+            f"--localisability: {scenario} has no models.range_sensor; expected a scenario whose robots carry one"
+        )
     with writing(output):
-        plot_world(sc, world, output)
+        plot_world(sc, world, output, localisability)
     click.echo(f"wrote {output}")
 
 

@@ -313,6 +313,12 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             if mutual
             else []
         ),
+        click.option(
+            "--no-range-sensor",
+            is_flag=True,
+            help="Plan as if the robots had no range sensor, whatever the scenario's models.range_sensor "
+            "(the paper's model: landmarks and partners only).",
+        ),
         option(
             "--cache-dir",
             type=click.Path(path_type=Path, file_okay=False),
@@ -358,6 +364,7 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
         timeout=kw["timeout"],
         pair_min_gain=kw["pair_min_gain"],
         mutual_observations=False if kw.get("no_mutual_observations") else None,
+        range_sensor=False if kw.get("no_range_sensor") else None,
         search=kw["search"],
         time_budget=kw["time_budget"],
         costs=kw["costs"],

@@ -16,6 +16,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
+from matplotlib.image import AxesImage
 from matplotlib.patches import Ellipse, Polygon
 from numpy.typing import NDArray
 
@@ -25,6 +26,7 @@ from tmpnav.report import figure_format, figure_suffixes
 from tmpnav.types import Roadmap, RosMap, Scenario
 from tmpnav.world import World
 from tmpnav.world.grid import OccupancyGrid
+from tmpnav.world.lidar import LOCALISABILITY_POINTS, localisability
 
 ROBOT_COLORS = ("#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 LANDMARK_MARKERS = ("*", "P", "X", "D", "p", "h", "s", "^")
@@ -124,6 +126,52 @@ def draw_map(ax: Axes, world: World) -> None:
         interpolation="nearest",
         zorder=0,
     )
+
+
+#: the localisability map's colour scale: a scan's worst position std from LOCALISE_LOW (m, well
+#: localised: no colour) to LOCALISE_HIGH (and beyond, or a direction the scan does not see: full colour)
+LOCALISE_LOW, LOCALISE_HIGH = 0.01, 1.0
+
+
+def draw_localisability(
+    ax: Axes,
+    scenario: Scenario,
+    world: World,
+    view: tuple[float, float, float, float] | None = None,
+    alpha: float = 1.0,
+    points: int = LOCALISABILITY_POINTS,
+) -> AxesImage | None:
+    """Where a robot can localise with its range sensor (tmpnav.world.lidar.localisability): each
+    point coloured by the position std one scan leaves along its worst direction, on a log scale
+    from 1 cm (white) to 1 m or unseen (dark red); walls left clear. None without a range sensor."""
+    sensor = scenario.models.range_sensor
+    if sensor is None:
+        return None
+    found = localisability(world.grid, world.signed_distance, sensor, view, points)
+    sigma = np.where(np.isinf(found.sigma), LOCALISE_HIGH, found.sigma)
+    shade = np.clip(np.log10(sigma / LOCALISE_LOW) / np.log10(LOCALISE_HIGH / LOCALISE_LOW), 0.0, 1.0)
+    half = (found.xs[1] - found.xs[0]) / 2 if found.xs.size > 1 else world.grid.resolution / 2
+    return ax.imshow(
+        np.ma.masked_invalid(shade),
+        origin="lower",
+        extent=(found.xs[0] - half, found.xs[-1] + half, found.ys[0] - half, found.ys[-1] + half),
+        cmap="Reds",
+        vmin=0.0,
+        vmax=1.0,
+        alpha=alpha,
+        interpolation="nearest",
+        zorder=0.5,
+    )
+
+
+def localisability_colorbar(fig: Figure, ax: Axes, image: AxesImage) -> None:
+    """A colour bar in metres for :func:`draw_localisability`'s image."""
+    ticks = [0.01, 0.03, 0.1, 0.3, 1.0]
+    scale = np.log10(LOCALISE_HIGH / LOCALISE_LOW)
+    bar = fig.colorbar(image, ax=ax, orientation="horizontal", fraction=0.035, pad=0.1, shrink=0.45, aspect=40)
+    bar.set_ticks([np.log10(t / LOCALISE_LOW) / scale for t in ticks])
+    bar.set_ticklabels([f"{t:g} m" for t in ticks[:-1]] + ["1 m, unseen"], fontsize=8)
+    bar.set_label("localisability: one scan's position std, worst direction", fontsize=9)
 
 
 def draw_rooms(ax: Axes, scenario: Scenario, view: tuple[float, float, float, float] | None = None) -> None:

@@ -30,6 +30,7 @@ from tmpnav.types import TrajectoryStep
 N_SIGMA = 2.0
 MAX_ELLIPSES = 45  # per robot: more and they merge into a band
 WIDE = 0.45  # height / width of the view under which the figure is wider and the legend goes below
+PLAN_LOCALISABILITY_POINTS = 8000  # the faint localisability map behind the plan: a coarse one is enough
 #: offsets (points) of a badge that would hide another badge or a start marker; robot names sit up-right
 NUDGES = ((-20.0, 10.0), (20.0, -14.0), (-20.0, -14.0), (0.0, 24.0))
 
@@ -272,6 +273,8 @@ def plan_figure(report: PlanReport, crop: bool = True) -> Figure:
     width = 15.0 if (ymax - ymin) / max(xmax - xmin, 1e-9) < WIDE else 12.0
     fig, ax = fg.new_axes(world, width=width, extent=extent, max_height=9.0)
     fg.draw_map(ax, world)
+    # where the range sensor pins the robots down, faintly (tmpnav show --localisability draws it in full)
+    fg.draw_localisability(ax, sc, world, (xmin, ymin, xmax, ymax), alpha=0.4, points=PLAN_LOCALISABILITY_POINTS)
     fg.draw_rooms(ax, sc, extent)
     fg.draw_doors(ax, sc)
     fg.draw_instantiations(ax, report.roadmap, label="pose instantiations")

@@ -9,12 +9,16 @@ from tmpnav.types import Scenario
 from tmpnav.world import World
 
 
-def plot_world(scenario: Scenario, world: World, path: Path) -> None:
+def plot_world(scenario: Scenario, world: World, path: Path, localisability: bool = False) -> None:
     """Write the world figure; robots are drawn with their 2-sigma initial ellipse, magnified
-    (and the title says so) where it would be too small to see."""
+    (and the title says so) where it would be too small to see. With ``localisability``, where
+    the robots' range sensor pins them down (tmpnav.report.figures.draw_localisability)."""
     extent = fg.scenario_extent(scenario, world)
     fig, ax = fg.new_axes(world, extent=extent)
     fg.draw_map(ax, world)
+    image = fg.draw_localisability(ax, scenario, world, extent) if localisability else None
+    if image is not None:
+        fg.localisability_colorbar(fig, ax, image)
     fg.draw_rooms(ax, scenario)
     fg.draw_doors(ax, scenario)
     fg.draw_landmarks(ax, scenario, sensor_range=scenario.models.landmark_sensor.range)

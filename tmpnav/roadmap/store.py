@@ -23,7 +23,7 @@ import numpy as np
 
 from tmpnav.atomic import write_file
 from tmpnav.cachedir import CacheDir, set_aside
-from tmpnav.types import Roadmap, RoadmapParams, RobotSpec
+from tmpnav.types import RangeSensor, Roadmap, RoadmapParams, RobotSpec
 from tmpnav.world import World
 
 CODE = Path(__file__).with_name("prm.py")
@@ -131,3 +131,76 @@ def read(path: Path) -> Roadmap:
     ):
         raise ValueError("node indices out of range")
     return Roadmap(nodes, edges, weights, instantiations, starts, str(header["fingerprint"]))
+
+
+SCANS_FORMAT = "scans-file/1"
+LIDAR_CODE = Path(__file__).resolve().parents[1] / "world" / "lidar.py"
+
+
+def scans_key(world: World, sensor: RangeSensor) -> str:
+    """The content address of a range sensor's scan information in a world (the map and the sensor,
+    and the code that computes it)."""
+    parts = (SCANS_FORMAT, world.fingerprint, repr(sensor), hashlib.sha256(LIDAR_CODE.read_bytes()).hexdigest())
+    return hashlib.sha256(repr(parts).encode()).hexdigest()
+
+
+class ScanStore:
+    """A range sensor's scan information (tmpnav.world.lidar.ScanInformation) kept beside the
+    roadmaps, keyed by the map and the sensor: what one run computed, the next reads. Like a
+    roadmap, a damaged file is set aside with one warning and computed again."""
+
+    def __init__(self, cache: CacheDir, warn: RoadmapStore):
+        self.cache, self.store = cache, warn
+
+    def load(self, world: World, sensor: RangeSensor) -> int:
+        """Preload ``world.scans(sensor)`` with the stored table; how many keys it held."""
+        path = self.cache.scans(scans_key(world, sensor))
+        if not path.exists():
+            return 0
+        try:
+            keys, factors = read_scans(path)
+        except DAMAGE as err:
+            moved = set_aside(path)
+            where = f"; moved it to {moved.name}" if moved is not None else ""
+            self.store._warn(f"stored scan table {path} is unreadable ({type(err).__name__}: {err}){where}")
+            return 0
+        world.scans(sensor).preload(keys, factors)
+        return int(keys.size)
+
+    def save(self, world: World, sensor: RangeSensor) -> None:
+        """Store the table when this run computed keys the stored one lacked (a failed write: a warning)."""
+        scans = world.scans(sensor)
+        if scans.computed == 0:
+            return
+        self.cache.ensure(self.cache.roadmaps)
+        path = self.cache.scans(scans_key(world, sensor))
+        try:
+            write_file(path, serialize_scans(*scans.contents()))
+        except OSError as err:
+            self.store._warn(f"scan table not stored in {path.parent} ({err.strerror or err})")
+
+
+def serialize_scans(keys: np.ndarray, factors: np.ndarray) -> bytes:
+    """The .npz file of a scan table: its keys (K,) and factors (K, 3, 3), with their checksum."""
+    arrays = {"keys": np.asarray(keys, dtype=np.int64), "factors": np.asarray(factors, dtype=float)}
+    header: dict[str, object] = {"format": SCANS_FORMAT}
+    header["digest"] = _digest(arrays, header)
+    buffer = io.BytesIO()
+    contents = {"header": np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays}
+    np.savez(buffer, **contents)  # type: ignore[arg-type]  # numpy's stub mistakes ** for allow_pickle
+    return buffer.getvalue()
+
+
+def read_scans(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A stored scan table, checked; raises one of ``DAMAGE`` when anything is off."""
+    with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as data:
+        header = json.loads(bytes(data["header"]).decode())
+        arrays = {k: data[k] for k in ("keys", "factors")}
+    if not isinstance(header, dict) or _digest(arrays, header) != header["digest"]:
+        raise ValueError("checksum mismatch")
+    keys, factors = arrays["keys"], arrays["factors"]
+    if keys.ndim != 1 or factors.shape != (keys.size, 3, 3) or keys.dtype != np.int64:
+        raise ValueError("arrays of the wrong shape")
+    if keys.size and (keys.min() < 0 or np.any(np.diff(keys) <= 0) or not np.isfinite(factors).all()):
+        raise ValueError("keys out of order or factors not finite")
+    return keys, factors

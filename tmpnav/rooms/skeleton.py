@@ -16,6 +16,15 @@ from tmpnav.version import __version__
 
 WIDTH = 100  # characters per line of a wrapped polygon
 
+#: the robots' sensors: a typical 2D lidar against the map (docs/scenario.md, models.range_sensor)
+MODELS = (
+    "models:",
+    "  # a typical 2D lidar: put your robots' (range, field of view, range noise); beams is the",
+    "  # number treated as independent per scan (nav2's AMCL uses 60). Delete it for the paper's",
+    "  # model: landmarks and other robots only",
+    "  range_sensor: {range: 12, fov: 360 deg, beams: 60, sigma_range: 0.03}",
+)
+
 
 def scenario_yaml(proposal: Proposal, name: str, map_ref: str, map_shown: str) -> str:
     """The scenario file; ``map_ref`` is the map YAML's path relative to the scenario file and
@@ -34,6 +43,8 @@ def scenario_yaml(proposal: Proposal, name: str, map_ref: str, map_shown: str) -
         *_landmarks(proposal),
         "",
         *_robots(proposal),
+        "",
+        *MODELS,
         "",
         "roadmap:",
         f"  samples: {proposal.samples}  # PRM milestones: tmpnav rooms checked that every room connects with these",
@@ -81,7 +92,8 @@ Found {len(usable)} rooms, {len(p.doors)} doors, {len(p.landmarks)} landmark can
    `tmpnav rooms` again with --min-area or --max-rooms).
 2. doors: all open. Set `state: closed` on doors that are shut: a closed door is a wall.
 3. landmarks: candidates (isolated pillars and obstacles, door frames, room corners). Keep
-   those your robots' sensors really recognise, and add the ones you know of.
+   those your robots' sensors really recognise, and add the ones you know of. The robots
+   also carry a 2D lidar (models.range_sensor): give your robots' figures.
 4. robots: r1 is a placeholder (radius {ROBOT_RADIUS:g} m) at the roomiest spot of {p.robot_room}. Put your
    robots with their real start poses, radii and speeds.
 5. goals: pre-filled with the rooms nearest to r1 so that `tmpnav plan` runs as written.
@@ -109,6 +121,7 @@ Coordinates: metres, map frame. `tmpnav show THIS_FILE -o world.png` draws it. C
    connection between two places is open floor: leave it open, or delete it.
 3. landmarks: candidates (isolated pillars and obstacles: pallets, short racks; door frames,
    room corners). Keep those your robots' sensors really recognise, and add the ones you know of.
+   The robots also carry a 2D lidar (models.range_sensor): give your robots' figures.
 4. robots: {robots} (radius {ROBOT_RADIUS:g} m) at the roomiest {spots} of {where}.
    Put your robots with their real start poses, radii and speeds; add more as r3, r4, ...
 5. goals: pre-filled with the {len(p.goals)} places nearest to the robots so that `tmpnav plan` runs as

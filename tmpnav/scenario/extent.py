@@ -19,7 +19,7 @@ from tmpnav.scenario.limits import (
     move_steps,
     table_entries,
 )
-from tmpnav.types import RangeBearingSensor, RangeSensor, Scenario
+from tmpnav.types import Scenario
 
 #: a sensor range below this is never refused, however small the map
 MIN_RANGE_CAP = 10.0
@@ -46,12 +46,7 @@ def model_ranges(scenario: Scenario, width: float, height: float) -> list[Findin
                 )
             )
     longest = max(diagonal, MIN_RANGE_CAP)
-    sensors: dict[str, RangeBearingSensor | RangeSensor] = {
-        "landmark_sensor": scenario.models.landmark_sensor,
-        "mutual_sensor": scenario.models.mutual_sensor,
-    }
-    if scenario.models.range_sensor is not None:
-        sensors["range_sensor"] = scenario.models.range_sensor
+    sensors = {"landmark_sensor": scenario.models.landmark_sensor, "mutual_sensor": scenario.models.mutual_sensor}
     for key, sensor in sensors.items():
         if sensor.range > longest:
             found.append(

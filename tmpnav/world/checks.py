@@ -62,11 +62,36 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
                 break
     start_problems, starts_ok = _starts(scenario, world, inside, extent, problem)
     problems += start_problems
+    problems += _range_sensor(scenario, world, problem)
     problems += _overlapping(scenario, problem)
     if any(p.path.startswith("rooms.") for p in problems):
         return problems
     problems += _reachability(scenario, world, starts_ok, problem)
     return problems
+
+
+def _range_sensor(scenario: Scenario, world: World, problem: Callable[[str, str], Problem]) -> list[Problem]:
+    """A range sensor that reaches no wall from anywhere the robots must be (their starts, the
+    rooms): it would never return a beam, and the map has no walls for it to see."""
+    sensor = scenario.models.range_sensor
+    if sensor is None:
+        return []
+    points = [np.array([[r.pose.x, r.pose.y] for r in scenario.robots])]
+    points += [world.free_cells_in_room(room.name, 0.0) for room in scenario.rooms]
+    xy = np.concatenate(points)
+    i, j, inside = world.grid.cells(xy)
+    if not inside.any():
+        return []
+    nearest = float(world.clearance[i[inside], j[inside]].min())
+    if nearest <= sensor.range:
+        return []
+    return [
+        problem(
+            "models.range_sensor.range",
+            f"{sensor.range:g} m reaches no wall from any robot's start or room (the nearest wall is {nearest:.3g} m "
+            "away); expected a range that reaches the map's walls, or no range_sensor (landmarks and partners only)",
+        )
+    ]
 
 
 def _room_outlines(

@@ -25,6 +25,7 @@ when first asked for (the oracle's motions read a few thousand cells of a buildi
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numba as nb
 import numpy as np
@@ -226,6 +227,7 @@ class ScanInformation:
         self._rows = np.zeros(0, dtype=np.int64)  # table row of each of _keys
         self.table = np.zeros((1, 3, 3))
         self.size = 1
+        self._preloaded = 0
 
     def keys(self, poses: np.ndarray) -> np.ndarray:
         """The key (..., ) int64 of each pose (..., 3): its cell and its heading's bin; OFF_GRID off the grid."""
@@ -248,6 +250,23 @@ class ScanInformation:
         at = np.searchsorted(self._keys, flat[inside])
         out[inside] = self._rows[at]
         return out.reshape(keys.shape)
+
+    @property
+    def computed(self) -> int:
+        """Keys computed here rather than preloaded (:meth:`preload`)."""
+        return self.size - 1 - self._preloaded
+
+    def contents(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every key known (sorted) and its factor (K, 3, 3): what :meth:`preload` takes."""
+        return self._keys.copy(), self.table[self._rows].copy()
+
+    def preload(self, keys: np.ndarray, factors: np.ndarray) -> None:
+        """Take factors computed earlier (:meth:`contents`, read from the cache directory) for the
+        keys not known yet."""
+        keys = np.asarray(keys, dtype=np.int64)
+        fresh = ~np.isin(keys, self._keys)
+        self._add(keys[fresh], np.asarray(factors, dtype=float)[fresh])
+        self._preloaded += int(fresh.sum())
 
     def _compute(self, keys: np.ndarray) -> None:
         cols, res = self.grid.shape[1], self.grid.resolution
@@ -273,6 +292,10 @@ class ScanInformation:
             1.0 / s.sigma_range**2,
             G,
         )
+        self._add(keys, G)
+
+    def _add(self, keys: np.ndarray, G: np.ndarray) -> None:
+        """Rows for ``keys`` (none known yet) with their factors G (K, 3, 3)."""
         need = self.size + keys.size
         if need > self.table.shape[0]:
             grown = np.zeros((max(need, 2 * self.table.shape[0]), 3, 3))
@@ -284,3 +307,67 @@ class ScanInformation:
         order = np.argsort(merged, kind="stable")
         self._keys, self._rows = merged[order], rows[order]
         self.size = need
+
+
+#: localisability maps are computed on at most this many points (a coarser spacing on larger views)
+LOCALISABILITY_POINTS = 25_000
+#: headings averaged for a sensor that does not see all around
+LOCALISABILITY_HEADINGS = 8
+
+
+@dataclass(frozen=True, eq=False)
+class Localisability:
+    """How well one scan pins a robot down, on a regular grid of points: ``sigma`` (rows, cols) m is
+    the position standard deviation along the worst direction after one scan from a belief that
+    knew nothing (the position block of J's inverse, heading marginalised); inf where the scan
+    leaves a direction unseen (a featureless corridor, along it) or returns nothing, nan on walls.
+    Points ``xs`` (cols,), ``ys`` (rows,) m."""
+
+    xs: np.ndarray
+    ys: np.ndarray
+    sigma: np.ndarray
+
+
+def localisability(
+    grid: OccupancyGrid,
+    sdf: np.ndarray,
+    sensor: RangeSensor,
+    view: tuple[float, float, float, float] | None = None,
+    points: int = LOCALISABILITY_POINTS,
+) -> Localisability:
+    """The :class:`Localisability` of ``sensor`` over ``view`` (xmin, ymin, xmax, ymax; the whole grid
+    for None), on at most about ``points`` points; a sensor with a limited field of view gets the
+    information averaged over :data:`LOCALISABILITY_HEADINGS` headings."""
+    x0, y0, x1, y1 = view if view is not None else grid.extent
+    spacing = max(grid.resolution, math.sqrt((x1 - x0) * (y1 - y0) / points))
+    xs = np.arange(x0 + spacing / 2, x1, spacing)
+    ys = np.arange(y0 + spacing / 2, y1, spacing)
+    gx, gy = np.meshgrid(xs, ys)
+    at = np.column_stack([gx.ravel(), gy.ravel()])
+    i, j, inside = grid.cells(at)
+    free = inside & (sdf[i, j] > 0)
+    headings = 1 if sensor.fov >= 2.0 * math.pi - 1e-9 else LOCALISABILITY_HEADINGS
+    J = np.zeros((int(free.sum()), 3, 3))
+    for h in range(headings):
+        poses = np.column_stack([at[free], np.full(int(free.sum()), 2.0 * math.pi * h / headings)])
+        J += information_matrices(sdf, grid, sensor, poses) / headings
+    sigma = np.full(at.shape[0], np.nan)
+    sigma[free] = _worst_position_std(J)
+    return Localisability(xs, ys, sigma.reshape(gx.shape))
+
+
+def _worst_position_std(J: np.ndarray) -> np.ndarray:
+    """sqrt of the largest eigenvalue of the position block of J⁻¹ (..., 3, 3): 1 / sqrt of the
+    smallest eigenvalue of the position information with the heading marginalised (J's Schur
+    complement); inf where that is singular."""
+    a, b, c = J[:, 0, 0], J[:, 0, 1], J[:, 1, 1]
+    t = J[:, 2, 2]
+    safe = t > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(safe, a - J[:, 0, 2] ** 2 / t, a)
+        b = np.where(safe, b - J[:, 0, 2] * J[:, 1, 2] / t, b)
+        c = np.where(safe, c - J[:, 1, 2] ** 2 / t, c)
+    smallest = 0.5 * (a + c) - np.sqrt(0.25 * (a - c) ** 2 + b**2)
+    top = np.maximum(0.5 * (a + c) + np.sqrt(0.25 * (a - c) ** 2 + b**2), 0.0)
+    with np.errstate(divide="ignore"):
+        return np.where(smallest > 1e-9 * top, 1.0 / np.sqrt(np.maximum(smallest, 1e-300)), np.inf)
