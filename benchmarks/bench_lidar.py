@@ -3,6 +3,7 @@
     .venv/bin/python benchmarks/bench_lidar.py corridor            # the featureless corridor (figure)
     .venv/bin/python benchmarks/bench_lidar.py time [--runs 1]      # plan time with and without the lidar
     .venv/bin/python benchmarks/bench_lidar.py simulate [--sessions 200]   # 200 executions of building-4robots
+    .venv/bin/python benchmarks/bench_lidar.py kernel              # the EKF's cost per control step
 
 Each writes its results to benchmarks/lidar/ (``corridor.txt``, ``time.txt``, ``simulate.txt``) and
 prints them; ``corridor`` also draws docs/figures/lidar-corridor.png.
@@ -15,6 +16,9 @@ prints them; ``corridor`` also draws docs/figures/lidar-corridor.png.
   one after the other, alternating which goes first.
 * simulate: ``tmpnav simulate configs/building-4robots.yaml --sessions N``, with the lidar and
   without (the paper's model): worst-case errors, NEES, wall hits and robot contacts.
+* kernel: the compiled EKF's time per control step of two robots (joint state of 6), with three
+  landmarks in view, with and without a scan at every step: the best of 7 repeats of 2,000
+  simulations of 100 steps each.
 """
 
 from __future__ import annotations
@@ -48,7 +52,7 @@ def corridor() -> str:
     occupied = np.zeros((rows, cols), dtype=bool)
     occupied[:3], occupied[-3:], occupied[:, :3], occupied[:, -3:] = True, True, True, True
     grid = OccupancyGrid(occupied, (0.0, 0.0), res)
-    lidar = RangeSensor(12.0, 2 * math.pi, 60, 0.03, 0.1, math.radians(75))
+    lidar = RangeSensor(12.0, 2 * math.pi, 60, 0.03, 0.1, math.radians(75), 0.01)
     table = ScanInformation(grid, signed_distance(grid), lidar)
     T = int((length - 4.0) / (speed * dt))
     x = 2.0 + speed * dt * np.arange(T + 1)
@@ -67,7 +71,8 @@ def corridor() -> str:
     along, across = np.sqrt(runs["lidar"].covs[:, 0, 0]), np.sqrt(runs["lidar"].covs[:, 1, 1])
     lines = [
         "featureless corridor 64 m x 2 m (walls 0.15 m), robot from x = 2 to 62 m at 0.5 m/s, dt 0.5 s,",
-        "lidar 12 m / 360 deg / 60 beams / sigma 0.03 m / max incidence 75 deg, motion noise (0.01, 0, 0.02, 0.01),",
+        "lidar 12 m / 360 deg / 60 beams / sigma 0.03 m / max incidence 75 deg / divergence 0.01,",
+        "motion noise (0.01, 0, 0.02, 0.01),",
         "start std 0.1 m, 0.032 rad; the kernel in maximum-likelihood mode (the covariance does not depend on noise)",
         "x [m]   std along [m]   std across [m]   (no sensor: std along, across [m])",
     ]
@@ -195,9 +200,48 @@ def simulate(sessions: int) -> str:
     return "\n".join(lines)
 
 
+def kernel() -> str:
+    from tmpnav.belief.rollout import ObservationNoise, Rollout, propagate_rollout
+    from tmpnav.types import Belief, Models, ObservationMode, RangeBearingSensor, RangeSensor
+
+    rng = np.random.default_rng(0)
+    n, T, L = 2, 100, 3
+    poses = np.zeros((n, T + 1, 3))
+    poses[:, :, 0] = np.linspace(0.0, 25.0, T + 1)
+    poses[1, :, 1] = 2.0
+    visible = np.ones((n, T + 1, L), dtype=bool)
+    mutual = np.zeros((n, n, T + 1), dtype=bool)
+    scans = rng.normal(0.0, 30.0, (n, T + 1, 3, 3))
+    rollout = Rollout(np.tile([0.5, 0.0], (n, T, 1)), poses, np.array([T, T]), visible, mutual)
+    sensor = RangeBearingSensor(5.0, 2 * math.pi, 0.1, math.radians(3))
+    lidar = RangeSensor(12.0, 2 * math.pi, 60, 0.03, 0.1, math.radians(75), 0.01)
+    models = Models(0.5, (0.01, 0.0, 0.02, 0.01), sensor, sensor, True, ObservationMode.NOISY, 0)
+    landmarks = rng.uniform(0.0, 25.0, (L, 2))
+    noise = ObservationNoise.draw(0, n, T, L)
+    start = Belief(np.zeros(3 * n), np.eye(3 * n) * 0.01)
+    lines = ["compiled kernel, 2 robots, 100 steps, 3 landmarks in view at every step; microseconds per step"]
+    per_step = {}
+    for label, rollout_, models_ in (
+        ("landmarks and partners", rollout, models),
+        ("with a scan per robot and step", replace(rollout, scans=scans), replace(models, range_sensor=lidar)),
+    ):
+        propagate_rollout(start, rollout_, landmarks, models_, noise)  # compiled
+        best = math.inf
+        for _ in range(7):
+            t0 = time.perf_counter()
+            for _ in range(2000):
+                propagate_rollout(start, rollout_, landmarks, models_, noise)
+            best = min(best, time.perf_counter() - t0)
+        per_step[label] = best / (2000 * T) * 1e6
+        lines.append(f"{label}: {per_step[label]:.2f} us per step (whole calls, layout included)")
+    ratio = per_step["with a scan per robot and step"] / per_step["landmarks and partners"]
+    lines.append(f"ratio {ratio:.2f}")
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("corridor", "time", "simulate"))
+    parser.add_argument("what", choices=("corridor", "time", "simulate", "kernel"))
     parser.add_argument("--runs", type=int, default=1, help="time: runs of each case, with and without")
     parser.add_argument("--sessions", type=int, default=200, help="simulate: executions")
     args = parser.parse_args()
@@ -206,6 +250,8 @@ def main() -> None:
         text = corridor()
     elif args.what == "time":
         text = timing(args.runs)
+    elif args.what == "kernel":
+        text = kernel()
     else:
         text = simulate(args.sessions)
     stamp = f"# {' '.join(sys.argv[1:])}, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}\n"

@@ -133,11 +133,13 @@ class RangeSensor:
     """A 2D range finder (lidar) that measures, per beam, the range to the map's walls.
 
     ``beams`` rays spread evenly over the field of view ``fov`` (rad) centred on the heading,
-    each with independent Gaussian range noise ``sigma_range`` (m). ``beams`` is the effective
-    number of independent beams per scan (a lidar's returns are correlated through the map's
-    errors; nav2's AMCL uses 60 of them). A beam returns nothing beyond ``range`` or before
-    ``min_range`` (m), nor where it meets a surface more than ``max_incidence`` (rad) from
-    head-on. docs/models.md, "Range sensor"."""
+    each with independent Gaussian range noise. ``beams`` is the effective number of
+    independent beams per scan (a lidar's returns are correlated through the map's errors;
+    nav2's AMCL uses 60 of them). A beam's range has the variance sigma_range² + (r divergence
+    tan beta)²: the noise of its range ``sigma_range`` (m), and the spread of its spot, which
+    widens by ``divergence`` (rad) per metre of range r, along a surface met at incidence beta.
+    A beam returns nothing beyond ``range`` or before ``min_range`` (m), nor where it meets a
+    surface more than ``max_incidence`` (rad) from head-on. docs/models.md, "Range sensor"."""
 
     range: float  # m
     fov: float  # rad
@@ -145,6 +147,7 @@ class RangeSensor:
     sigma_range: float  # m
     min_range: float  # m
     max_incidence: float  # rad
+    divergence: float = 0.0  # rad
 
     def beam_angles(self) -> np.ndarray:
         """(beams,) rad: each beam's direction relative to the heading, evenly over the field of view."""

@@ -18,7 +18,13 @@ from tmpnav.world.grid import OccupancyGrid
 from tmpnav.world.lidar import ScanInformation, signed_distance
 
 LIDAR = RangeSensor(
-    range=12.0, fov=2 * math.pi, beams=60, sigma_range=0.03, min_range=0.1, max_incidence=math.radians(75)
+    range=12.0,
+    fov=2 * math.pi,
+    beams=60,
+    sigma_range=0.03,
+    min_range=0.1,
+    max_incidence=math.radians(75),
+    divergence=0.01,
 )
 
 

@@ -7,16 +7,22 @@ import math
 import numpy as np
 import pytest
 
-from tmpnav.belief.models import beam_jacobian, compressed_scan, scan_information
+from tmpnav.belief.models import beam_jacobian, beam_variance, compressed_scan, scan_information
 from tmpnav.pipeline import load_world
 from tmpnav.shipped import configs_dir
 from tmpnav.types import RangeSensor
 from tmpnav.world import World
 from tmpnav.world.grid import OccupancyGrid
-from tmpnav.world.lidar import ScanInformation, cast, information_matrices, scan, signed_distance
+from tmpnav.world.lidar import ScanInformation, cast, information_matrices, scan, sensor_params, signed_distance
 
 LIDAR = RangeSensor(
-    range=12.0, fov=2 * math.pi, beams=60, sigma_range=0.03, min_range=0.1, max_incidence=math.radians(75)
+    range=12.0,
+    fov=2 * math.pi,
+    beams=60,
+    sigma_range=0.03,
+    min_range=0.1,
+    max_incidence=math.radians(75),
+    divergence=0.01,
 )
 
 
@@ -28,21 +34,10 @@ def box(rows: int = 120, cols: int = 200, res: float = 0.05) -> OccupancyGrid:
     return OccupancyGrid(occupied, (0.0, 0.0), res)
 
 
-def _scan(sdf: np.ndarray, grid: OccupancyGrid, pose: np.ndarray, sensor: RangeSensor = LIDAR):
-    r, H = np.empty(sensor.beams), np.empty((sensor.beams, 3))
-    scan(
-        sdf,
-        *grid.origin,
-        grid.resolution,
-        pose,
-        sensor.beam_angles(),
-        sensor.min_range,
-        sensor.range,
-        math.cos(sensor.max_incidence),
-        r,
-        H,
-    )
-    return r, H
+def _scan(sdf: np.ndarray, grid: OccupancyGrid, pose: np.ndarray, sensor: RangeSensor = LIDAR, variances=False):  # type: ignore[no-untyped-def]
+    r, H, var = np.empty(sensor.beams), np.empty((sensor.beams, 3)), np.empty(sensor.beams)
+    scan(sdf, *grid.origin, grid.resolution, pose, sensor.beam_angles(), sensor_params(sensor), r, H, var)
+    return (r, H, var) if variances else (r, H)
 
 
 def test_the_field_changes_sign_on_the_boundary_between_free_and_occupied_cells() -> None:
@@ -111,8 +106,9 @@ def test_the_compiled_beam_row_is_the_model_equation() -> None:
 
 
 def _censi_information(sdf: np.ndarray, grid: OccupancyGrid, pose: np.ndarray) -> np.ndarray:
-    """Censi's closed form: sum over the returning beams of u uᵀ / sigma², u = [v(alpha); r sin(beta)] /
-    cos(beta), alpha the angle of the surface normal into the wall and beta the incidence."""
+    """Censi's closed form: sum over the returning beams of u uᵀ / sigma_i², u = [v(alpha); r sin(beta)] /
+    cos(beta), alpha the angle of the surface normal into the wall, beta the incidence and sigma_i²
+    the beam's variance (tmpnav.belief.models.beam_variance)."""
     J = np.zeros((3, 3))
     for phi in LIDAR.beam_angles():
         psi = pose[2] + phi
@@ -124,7 +120,7 @@ def _censi_information(sdf: np.ndarray, grid: OccupancyGrid, pose: np.ndarray) -
         if abs(beta) > LIDAR.max_incidence:
             continue
         u = np.array([math.cos(alpha), math.sin(alpha), r * math.sin(beta)]) / math.cos(beta)
-        J += np.outer(u, u) / LIDAR.sigma_range**2
+        J += np.outer(u, u) / beam_variance(LIDAR.sigma_range, LIDAR.divergence, r, beta)
     return J
 
 
@@ -144,10 +140,10 @@ def test_jacobian_information_matches_censis_closed_form(config: str) -> None:
         if not inside[0] or world.clearance[i[0], j[0]] < 0.3:
             continue
         censi = _censi_information(sdf, grid, pose)
-        r, _ = _scan(sdf, grid, pose)
+        r, _, var = _scan(sdf, grid, pose, variances=True)
         fd = _finite_difference_jacobian(sdf, grid, pose)
         fd[np.isnan(r)] = 0.0
-        jac = scan_information(fd, LIDAR.sigma_range)
+        jac = scan_information(fd, np.sqrt(np.where(np.isnan(r), 1.0, var)))
         scale = np.sqrt(np.outer(np.diag(censi), np.diag(censi)))
         poses += 1
         agree += bool((np.abs(jac - censi) <= 0.05 * scale + 1e-9).all())

@@ -25,6 +25,7 @@ from tmpnav.world.geometry import wrap_angle
 
 __all__ = [
     "beam_jacobian",
+    "beam_variance",
     "compressed_scan",
     "joint_block_diag",
     "landmark_obs",
@@ -260,25 +261,38 @@ def beam_jacobian(r: np.ndarray, gradient: np.ndarray, psi: np.ndarray) -> np.nd
     return np.stack([-g[..., 0] / gd, -g[..., 1] / gd, -np.asarray(r) * gdp / gd], axis=-1)
 
 
-def scan_information(H: np.ndarray, sigma: float) -> np.ndarray:
-    """The information J = Hᵀ H / sigma² (3, 3) of a scan's beams H (B, 3) of noise ``sigma`` m,
-    the beams taken as independent (Censi's Fisher information of one scan)."""
+def beam_variance(sigma: float, divergence: float, r: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """A beam's range variance sigma² + (r divergence tan beta)² (m²): the sensor's range noise
+    ``sigma`` (m), and the spread of a spot that widens by ``divergence`` (rad) per metre of
+    range, met by a surface at incidence beta (rad) and so stretched along it by 1/cos beta
+    (a beam along a wall returns anything from its whole spot). r, beta: (...,)."""
+    return sigma**2 + (np.asarray(r) * divergence * np.tan(beta)) ** 2
+
+
+def scan_information(H: np.ndarray, sigma: np.ndarray | float) -> np.ndarray:
+    """The information J = sum_i H_iᵀ H_i / sigma_i² (3, 3) of a scan's beams H (B, 3) of noise
+    ``sigma`` m (one for all, or one per beam (B,)), the beams taken as independent (Censi's
+    Fisher information of one scan)."""
     H = np.asarray(H, dtype=float).reshape(-1, 3)
-    return H.T @ H / sigma**2
+    w = np.broadcast_to(1.0 / np.square(np.asarray(sigma, dtype=float)), H.shape[:1])
+    return (H * w[:, None]).T @ H
 
 
-def compressed_scan(H: np.ndarray, y: np.ndarray, sigma: float) -> tuple[np.ndarray, np.ndarray]:
-    """A scan's update as a 3-D pseudo-measurement: (G (3, 3), y_G (3,)) with Gᵀ G = Hᵀ H / sigma²
-    and Gᵀ y_G = Hᵀ y / sigma².
+def compressed_scan(H: np.ndarray, y: np.ndarray, sigma: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """A scan's update as a 3-D pseudo-measurement: (G (3, 3), y_G (3,)) with
+    Gᵀ G = sum_i H_iᵀ H_i / sigma_i² and Gᵀ y_G = sum_i H_iᵀ y_i / sigma_i².
 
-    The EKF's posterior with the B beams (Jacobians H (B, 3), innovations y (B,), noise
-    sigma² I) depends on them only through these two products (its information form), so the
-    update with z = G x of unit noise and innovation y_G is the same update in three
-    dimensions instead of B. G's rows are sqrt(lambda_k) e_kᵀ over the eigenpairs of J; a
-    direction the scan does not see has lambda = 0, a zero row and a zero innovation.
+    The EKF's posterior with the B beams (Jacobians H (B, 3), innovations y (B,), independent
+    noise of standard deviation ``sigma``, one for all or one per beam) depends on them only
+    through these two products (its information form), so the update with z = G x of unit
+    noise and innovation y_G is the same update in three dimensions instead of B. G's rows are
+    sqrt(lambda_k) e_kᵀ over the eigenpairs of J; a direction the scan does not see has
+    lambda = 0, a zero row and a zero innovation.
     """
+    H = np.asarray(H, dtype=float).reshape(-1, 3)
     J = scan_information(H, sigma)
-    b = np.asarray(H, dtype=float).reshape(-1, 3).T @ np.asarray(y, dtype=float).reshape(-1) / sigma**2
+    w = np.broadcast_to(1.0 / np.square(np.asarray(sigma, dtype=float)), H.shape[:1])
+    b = H.T @ (np.asarray(y, dtype=float).reshape(-1) * w)
     lam, vec = np.linalg.eigh(J)
     seen = lam > 1e-12 * max(float(lam[-1]), 0.0)
     root = np.where(seen, np.sqrt(np.where(seen, lam, 1.0)), 0.0)

@@ -1,7 +1,8 @@
 """The range scans of ``tmpnav simulate``: what a robot's lidar measures, and the EKF update with it.
 
 A true scan is ray cast from the robot's true pose (:func:`tmpnav.world.lidar.scan`) with
-Gaussian noise of the sensor's ``sigma_range`` on every beam that returns. The filter predicts
+Gaussian noise on every beam that returns, of the beam's variance there (the sensor's range
+noise and its spot's spread). The filter predicts
 each beam by ray casting from its estimate, with the beam's Jacobian there (docs/models.md,
 "Range sensor"); a beam is used when both return. A beam whose innovation lies beyond
 :data:`GATE` standard deviations of its predicted spread is rejected, as a robot's filter
@@ -13,7 +14,6 @@ beams used update the joint belief at once, through their compressed 3-D form
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,9 +22,9 @@ from tmpnav.belief import ekf
 from tmpnav.belief.models import compressed_scan, wrap_angle
 from tmpnav.types import Belief, RangeSensor
 from tmpnav.world import World
-from tmpnav.world.lidar import scan
+from tmpnav.world.lidar import scan, sensor_params
 
-#: innovation gate of one beam, in standard deviations of its predicted spread sqrt(H P Hᵀ + sigma²)
+#: innovation gate of one beam, in standard deviations of its predicted spread sqrt(H P Hᵀ + var)
 GATE = 3.0
 #: Gauss-Newton iterations of the scan's update (an iterated EKF): relinearised at each new estimate
 ITERATIONS = 6
@@ -49,40 +49,29 @@ class ScanSimulator:
         self.origin = (float(world.grid.origin[0]), float(world.grid.origin[1]))
         self.res = float(world.grid.resolution)
         self.angles = sensor.beam_angles()
-        self.cos_max = math.cos(sensor.max_incidence)
+        self.params = sensor_params(sensor)
 
-    def ranges(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The noise-free scan from ``pose`` (3,): ranges (B,) m (nan: no return) and Jacobians (B, 3)."""
-        r, H = np.empty(self.angles.size), np.empty((self.angles.size, 3))
-        s = self.sensor
-        scan(
-            self.sdf,
-            *self.origin,
-            self.res,
-            np.asarray(pose, dtype=float),
-            self.angles,
-            s.min_range,
-            s.range,
-            self.cos_max,
-            r,
-            H,
-        )
-        return r, H
+    def ranges(self, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The noise-free scan from ``pose`` (3,): ranges (B,) m (nan: no return), Jacobians (B, 3)
+        and the variances of the ranges (B,) m²."""
+        B = self.angles.size
+        r, H, var = np.empty(B), np.empty((B, 3)), np.empty(B)
+        scan(self.sdf, *self.origin, self.res, np.asarray(pose, dtype=float), self.angles, self.params, r, H, var)
+        return r, H, var
 
     def update(self, belief: Belief, i: int, truth: np.ndarray, draws: np.ndarray) -> tuple[Belief, ScanCount]:
         """Robot i scans from its true pose ``truth`` with the standard-normal ``draws`` (B,); the
         joint belief updated with the beams that pass the gate, relinearised at each new estimate."""
-        sigma = self.sensor.sigma_range
-        true_r, _ = self.ranges(truth)
-        z = true_r + sigma * draws
+        true_r, _, true_var = self.ranges(truth)
+        z = true_r + np.sqrt(true_var) * draws
         cols = slice(3 * i, 3 * i + 3)
         prior = belief.mean[cols]
         at, out, spread_cov, count = prior, belief, belief.cov[cols, cols], ScanCount(0, 0)
         for it in range(ITERATIONS):
-            predicted, H = self.ranges(at)
+            predicted, H, var = self.ranges(at)
             both = ~np.isnan(z) & ~np.isnan(predicted)
-            H, residual = H[both], z[both] - predicted[both]
-            spread = np.sqrt(np.einsum("bi,ij,bj->b", H, spread_cov, H) + sigma**2)
+            H, var, residual = H[both], var[both], z[both] - predicted[both]
+            spread = np.sqrt(np.einsum("bi,ij,bj->b", H, spread_cov, H) + var)
             keep = np.abs(residual) <= GATE * spread
             if it == 0:
                 count = ScanCount(int(both.sum()), int((~keep).sum()))
@@ -90,7 +79,7 @@ class ScanSimulator:
                 return out, count
             shift = at - prior
             shift[2] = wrap_angle(shift[2])
-            G, y_G = compressed_scan(H[keep], residual[keep] + H[keep] @ shift, sigma)
+            G, y_G = compressed_scan(H[keep], residual[keep] + H[keep] @ shift, np.sqrt(var[keep]))
             out = ekf.update_scan(belief, i, G, y_G)
             step = out.mean[cols] - at
             at, spread_cov = out.mean[cols], out.cov[cols, cols]

@@ -19,10 +19,10 @@ WIDTH = 100  # characters per line of a wrapped polygon
 #: the robots' sensors: a typical 2D lidar against the map (docs/scenario.md, models.range_sensor)
 MODELS = (
     "models:",
-    "  # a typical 2D lidar: put your robots' (range, field of view, range noise); beams is the",
-    "  # number treated as independent per scan (nav2's AMCL uses 60). Delete it for the paper's",
-    "  # model: landmarks and other robots only",
-    "  range_sensor: {range: 12, fov: 360 deg, beams: 60, sigma_range: 0.03}",
+    "  # a typical 2D lidar: put your robots' (range, field of view, range noise, spot divergence);",
+    "  # beams is the number treated as independent per scan (nav2's AMCL uses 60). Delete it for",
+    "  # the paper's model: landmarks and other robots only",
+    "  range_sensor: {range: 12, fov: 360 deg, beams: 60, sigma_range: 0.03, divergence: 0.01}",
 )
 
 

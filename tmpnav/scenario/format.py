@@ -287,6 +287,13 @@ RANGE_SENSOR = Section(
             "range sensor: blind zone; nearer surfaces return nothing",
             default=0.1,
         ),
+        "divergence": Field(
+            Number("angle", minimum=0.0, maximum=0.1, reason="a spot wider than 0.1 rad per metre is no beam"),
+            "range sensor: how fast a beam's spot widens (rad, metres per metre of range); a surface met at "
+            "incidence beta spreads a return over r divergence tan(beta), which adds to the range noise "
+            "(a typical 2D lidar: 3-15 mrad)",
+            default=0.01,
+        ),
         "max_incidence": Field(
             Number(
                 "angle",

@@ -382,7 +382,9 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
 def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
     if s is None:
         return None
-    return RangeSensor(s["range"], s["fov"], s["beams"], s["sigma_range"], s["min_range"], s["max_incidence"])
+    return RangeSensor(
+        s["range"], s["fov"], s["beams"], s["sigma_range"], s["min_range"], s["max_incidence"], s["divergence"]
+    )
 
 
 def _display(raw: tuple[Any, ...], doc: YamlDoc) -> str:

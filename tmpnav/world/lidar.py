@@ -120,61 +120,70 @@ def _beam_row(r, gx, gy, psi):
     return -gx / gd, -gy / gd, -r * gdp / gd
 
 
-@nb.njit(cache=True)
-def _returns(r, gx, gy, psi, r_min, cos_max):
-    """Whether a beam returns: a hit within range, beyond the blind zone, and a surface met at
-    most the largest incidence from head-on (cos of the incidence at least ``cos_max``)."""
-    if not (r >= r_min and r < math.inf):
-        return False
+def sensor_params(sensor: RangeSensor) -> np.ndarray:
+    """The sensor as the compiled functions take it: (min_range m, range m, cos of the largest
+    incidence, sigma_range m, divergence rad)."""
+    return np.array(
+        [sensor.min_range, sensor.range, math.cos(sensor.max_incidence), sensor.sigma_range, sensor.divergence]
+    )
+
+
+@nb.njit(cache=True, inline="always")
+def _beam(sdf, x0, y0, res, x, y, psi, params):
+    """Beam psi from (x, y): (whether it returns, its range r, its Jacobian h0, h1, h2, the variance
+    of its range). It returns with a hit within range, beyond the blind zone, on a surface met at
+    most the largest incidence beta from head-on; its variance is sigma^2 + (r div tan beta)^2,
+    the spot's spread along the surface (docs/models.md, "Range sensor")."""
+    r, gx, gy = cast(sdf, x0, y0, res, x, y, psi, params[1])
     g = math.hypot(gx, gy)
-    if g <= 0.0:
-        return False
-    return -(gx * math.cos(psi) + gy * math.sin(psi)) / g >= cos_max
+    if not (r >= params[0] and r < math.inf) or g <= 0.0:
+        return False, r, 0.0, 0.0, 0.0, 0.0
+    cos_b = -(gx * math.cos(psi) + gy * math.sin(psi)) / g
+    if cos_b < params[2]:
+        return False, r, 0.0, 0.0, 0.0, 0.0
+    h0, h1, h2 = _beam_row(r, gx, gy, psi)
+    spread = r * params[4] * math.sqrt(max(1.0 - cos_b * cos_b, 0.0)) / cos_b
+    return True, r, h0, h1, h2, params[3] * params[3] + spread * spread
 
 
 @nb.njit(cache=True)
-def scan(sdf, x0, y0, res, pose, angles, r_min, r_max, cos_max, ranges, H):
-    """Ray cast one scan from ``pose`` (x, y, theta): ``ranges`` (B,) m (nan: no return) and
-    ``H`` (B, 3), each beam's Jacobian (zero rows where it does not return)."""
+def scan(sdf, x0, y0, res, pose, angles, params, ranges, H, var):
+    """Ray cast one scan from ``pose`` (x, y, theta) with the sensor's ``params``
+    (:func:`sensor_params`): ``ranges`` (B,) m (nan: no return), ``H`` (B, 3), each beam's
+    Jacobian, and ``var`` (B,) m², its range's variance (zero rows and 0 where it does not return)."""
     for b in range(angles.shape[0]):
-        psi = pose[2] + angles[b]
-        r, gx, gy = cast(sdf, x0, y0, res, pose[0], pose[1], psi, r_max)
-        if _returns(r, gx, gy, psi, r_min, cos_max):
-            ranges[b] = r
-            H[b, 0], H[b, 1], H[b, 2] = _beam_row(r, gx, gy, psi)
-        else:
-            ranges[b] = math.nan
-            H[b, 0], H[b, 1], H[b, 2] = 0.0, 0.0, 0.0
+        ok, r, h0, h1, h2, v = _beam(sdf, x0, y0, res, pose[0], pose[1], pose[2] + angles[b], params)
+        ranges[b] = r if ok else math.nan
+        H[b, 0], H[b, 1], H[b, 2], var[b] = h0, h1, h2, v
 
 
 @nb.njit(cache=True)
-def _information(sdf, x0, y0, res, x, y, theta, angles, r_min, r_max, cos_max, J):
-    """J (3, 3) = sum over the returning beams of H_i^T H_i (per unit noise variance)."""
+def _information(sdf, x0, y0, res, x, y, theta, angles, params, J):
+    """J (3, 3) = sum over the returning beams of H_i^T H_i / var_i."""
     for a in range(3):
         for b in range(3):
             J[a, b] = 0.0
     for k in range(angles.shape[0]):
-        psi = theta + angles[k]
-        r, gx, gy = cast(sdf, x0, y0, res, x, y, psi, r_max)
-        if not _returns(r, gx, gy, psi, r_min, cos_max):
+        ok, _, h0, h1, h2, v = _beam(sdf, x0, y0, res, x, y, theta + angles[k], params)
+        if not ok:
             continue
-        h0, h1, h2 = _beam_row(r, gx, gy, psi)
-        J[0, 0] += h0 * h0
-        J[0, 1] += h0 * h1
-        J[0, 2] += h0 * h2
-        J[1, 1] += h1 * h1
-        J[1, 2] += h1 * h2
-        J[2, 2] += h2 * h2
+        w = 1.0 / v
+        J[0, 0] += h0 * h0 * w
+        J[0, 1] += h0 * h1 * w
+        J[0, 2] += h0 * h2 * w
+        J[1, 1] += h1 * h1 * w
+        J[1, 2] += h1 * h2 * w
+        J[2, 2] += h2 * h2 * w
     J[1, 0], J[2, 0], J[2, 1] = J[0, 1], J[0, 2], J[1, 2]
 
 
 @nb.njit(cache=True)
-def _factors(sdf, x0, y0, res, xs, ys, thetas, angles, r_min, r_max, cos_max, inv_var, out):
+def _factors(sdf, x0, y0, res, xs, ys, thetas, angles, params, out):
     """out[p] (3, 3): the rows G of J = G^T G at (xs[p], ys[p], thetas[p]), J the scan's information."""
     J = np.empty((3, 3))
     for p in range(xs.shape[0]):
-        _information(sdf, x0, y0, res, xs[p], ys[p], thetas[p], angles, r_min, r_max, cos_max, J)
-        lam, vec = np.linalg.eigh(J * inv_var)
+        _information(sdf, x0, y0, res, xs[p], ys[p], thetas[p], angles, params, J)
+        lam, vec = np.linalg.eigh(J)
         top = max(lam[2], 0.0)
         for k in range(3):
             s = math.sqrt(lam[k]) if lam[k] > 1e-12 * top and lam[k] > 0.0 else 0.0
@@ -183,29 +192,15 @@ def _factors(sdf, x0, y0, res, xs, ys, thetas, angles, r_min, r_max, cos_max, in
 
 
 def information_matrices(sdf: np.ndarray, grid: OccupancyGrid, sensor: RangeSensor, poses: np.ndarray) -> np.ndarray:
-    """The scan information J (..., 3, 3) at poses (..., 3): sum_i H_i^T H_i / sigma^2 over the
+    """The scan information J (..., 3, 3) at poses (..., 3): sum_i H_i^T H_i / var_i over the
     beams that return (m^-2, m^-1 rad^-1, rad^-2)."""
     flat = np.ascontiguousarray(poses, dtype=float).reshape(-1, 3)
-    out = np.empty((flat.shape[0], 3, 3))
     G = np.empty((flat.shape[0], 3, 3))
     x0, y0 = grid.origin
     _factors(
-        sdf,
-        x0,
-        y0,
-        grid.resolution,
-        flat[:, 0],
-        flat[:, 1],
-        flat[:, 2],
-        sensor.beam_angles(),
-        sensor.min_range,
-        sensor.range,
-        math.cos(sensor.max_incidence),
-        1.0 / sensor.sigma_range**2,
-        G,
+        sdf, x0, y0, grid.resolution, flat[:, 0], flat[:, 1], flat[:, 2], sensor.beam_angles(), sensor_params(sensor), G
     )
-    np.matmul(G.transpose(0, 2, 1), G, out=out)
-    return out.reshape(*poses.shape[:-1], 3, 3)
+    return np.matmul(G.transpose(0, 2, 1), G).reshape(*poses.shape[:-1], 3, 3)
 
 
 class ScanInformation:
@@ -276,22 +271,7 @@ class ScanInformation:
         ys = y0 + (cell // cols + 0.5) * res
         thetas = b * (2.0 * math.pi / self.bins)
         G = np.empty((keys.size, 3, 3))
-        s = self.sensor
-        _factors(
-            self.sdf,
-            x0,
-            y0,
-            res,
-            xs,
-            ys,
-            thetas,
-            self.angles,
-            s.min_range,
-            s.range,
-            math.cos(s.max_incidence),
-            1.0 / s.sigma_range**2,
-            G,
-        )
+        _factors(self.sdf, x0, y0, res, xs, ys, thetas, self.angles, sensor_params(self.sensor), G)
         self._add(keys, G)
 
     def _add(self, keys: np.ndarray, G: np.ndarray) -> None:
