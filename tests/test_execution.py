@@ -347,3 +347,38 @@ def test_the_counts_are_rates_of_executions_in_the_summary(waiting: PlanReport) 
     assert "wall hits (executions with a true pose" in text
     assert "  with mutual observations: 1/2 = 50.0% (95% CI 1.3-98.7%); per robot r1 0, r2 1" in text
     assert "robot contacts" in text and "  without: 0/2 = 0.0% (95% CI 0.0-84.2%); per robot r1 0, r2 0" in text
+
+
+@pytest.mark.slow
+def test_sessions_on_worker_processes_are_the_sessions_run_in_one(waiting: PlanReport) -> None:
+    one = execute(waiting, sessions=3, workers=1)
+    two = execute(waiting, sessions=3, workers=2)
+    for key, errors in one.errors.items():
+        np.testing.assert_array_equal(errors, two.errors[key])
+        np.testing.assert_array_equal(one.planned_nees[key], two.planned_nees[key])
+    assert one.filter_nees == two.filter_nees and one.makespans(1).tolist() == two.makespans(1).tolist()
+
+
+@pytest.fixture(scope="module")
+def lidar_rooms(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
+    """The two rooms off a corridor, the robots with the shipped scenarios' lidar."""
+    folder = tmp_path_factory.mktemp("lidar")
+    text = (ROOT / "configs" / "two-rooms.yaml").read_text()
+    scenario = folder / "two-rooms-lidar.yaml"
+    scenario.write_text(text + "models:\n  range_sensor: {range: 12, beams: 60, sigma_range: 0.03, divergence: 0.01}\n")
+    return plan(scenario, PlanOptions.of(cache_dir=folder / "cache"))
+
+
+@pytest.mark.slow
+def test_robots_with_a_lidar_are_localised_as_their_filter_says(lidar_rooms: PlanReport) -> None:
+    """True scans ray cast from the true poses, predicted ones from the estimates: the filter's
+    position NEES is about 2 (a consistent filter), the error agrees with the plan's covariance
+    too, the errors are centimetres, and the innovation gate rejects few beams."""
+    result = execute(lidar_rooms, sessions=6)
+    assert 1.0 <= result.own_nees(1) <= 3.0
+    assert 1.0 <= result.nees(1) <= 3.5
+    assert max(result.worst(1, r) for r in result.robots) < 0.15  # the start's own uncertainty: 0.1 m
+    used, rejected = (sum(result.beams[(1, r)][k] for r in result.robots) for k in (0, 1))
+    assert used > 10_000 and rejected / used < 0.05
+    lines = "\n".join(error_summary(result, 6))
+    assert "position NEES with mutual observations" in lines and "rejected by the innovation gate" in lines

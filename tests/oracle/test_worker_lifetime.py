@@ -113,7 +113,7 @@ parent = os.getpid()
 worker = os.fork()
 if worker == 0:
     os.close(1)  # the test reads our parent's output to its end
-    executors._die_with_parent(parent, use_prctl=False)  # the watchdog alone
+    executors.die_with_parent(parent, use_prctl=False)  # the watchdog alone
     time.sleep(120)
     os._exit(0)
 print(worker, flush=True)

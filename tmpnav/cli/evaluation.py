@@ -61,7 +61,7 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
 
     check_planner(scenario, kw["planner_name"])
     report = run_plan(scenario, plan_options(kw))
-    result = execute(report, sessions, seed)
+    result = execute(report, sessions, seed, kw["workers"])
     lines = error_summary(result, sessions)
     if output is not None:
         from tmpnav.report.outputs import write_execution_outputs

@@ -331,7 +331,7 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             type=click.IntRange(min=1),
             metavar="N",
             default_text="one per core",
-            help="Worker processes that compute the costs of moves.",
+            help="Worker processes that compute the costs of moves (and run the sessions of tmpnav simulate).",
         ),
         option(
             "--executor",

@@ -16,6 +16,10 @@ by session, so the comparison is paired (paper, Fig. 3(a)). What a session recor
 from __future__ import annotations
 
 import math
+import multiprocessing
+import os
+import signal
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,7 +27,11 @@ import numpy as np
 from tmpnav.belief.risk import clopper_pearson
 from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
+from tmpnav.lifetime import gather, signals_held
+from tmpnav.oracle.executors import die_with_parent
 from tmpnav.results import PlanReport, Schedule
+from tmpnav.types import Scenario
+from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
 
 CONFIGS = {1: True, 2: False}  # config -> with mutual observations
@@ -130,28 +138,92 @@ def recorded_nodes(moves: dict[str, tuple[QueuedMove, ...]], starts: dict[str, i
     return {r: [starts[r], *(n for m in queue for n in m.nodes[1:])] for r, queue in moves.items()}
 
 
-def execute(report: PlanReport, sessions: int = 25, seed: int = 0) -> ExecutionResult:
-    """Execute ``report``'s schedule ``sessions`` times in both configurations."""
+@dataclass(frozen=True, eq=False)
+class _Sessions:
+    """What every session of one execution shares (sent once to each worker process)."""
+
+    scenario: Scenario
+    world: World
+    moves: dict[str, tuple[QueuedMove, ...]]
+    vis: LandmarkVisibility
+    seed: int
+    steps: int  # control steps drawn per session
+    beams: int
+
+    def run(self, s: int) -> tuple[dict[int, SessionTrace], bool]:
+        """Session ``s`` in both configurations (the same draws), and whether it was cut short."""
+        scenario, world = self.scenario, self.world
+        robots = len(scenario.robots)
+        draws = Draws.draw(self.seed, s, robots, self.steps, world.landmark_xy.shape[0], self.beams)
+        traces = {
+            c: Session(scenario, world, self.moves, draws, self.vis, mutual).run() for c, mutual in CONFIGS.items()
+        }
+        return traces, any(t.truncated for t in traces.values())
+
+
+_SHARED: _Sessions | None = None
+
+
+def _init_worker(shared: _Sessions, parent: int) -> None:
+    global _SHARED
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a worker just ends; Ctrl-C is the parent's business
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent(parent)
+    _SHARED = shared
+
+
+def _run_session(s: int) -> tuple[dict[int, SessionTrace], bool]:
+    assert _SHARED is not None
+    return _SHARED.run(s)
+
+
+def execute(report: PlanReport, sessions: int = 25, seed: int = 0, workers: int | None = None) -> ExecutionResult:
+    """Execute ``report``'s schedule ``sessions`` times in both configurations, on ``workers``
+    local processes (one per core when None; the same results, session by session, as in one)."""
     scenario, world = report.scenario, report.world
     robots = [r.name for r in scenario.robots]
     moves = queues(report)
     # the draws' length: as many steps as the plan's trajectories hold together, times the
     # budget (sessions drawn before the team moved at once draw the same numbers)
     planned = sum(len(t) for t in report.trajectories.values())
-    vis = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
     sensor = scenario.models.range_sensor
-    beams = sensor.beams if sensor is not None else 0
-    traces: dict[int, list[SessionTrace]] = {c: [] for c in CONFIGS}
-    truncated = 0
-    for s in range(sessions):
-        draws = Draws.draw(seed, s, len(robots), STEP_BUDGET * planned + 100, world.landmark_xy.shape[0], beams)
-        cut = False
-        for config, mutual in CONFIGS.items():
-            trace = Session(scenario, world, moves, draws, vis, mutual).run()
-            traces[config].append(trace)
-            cut |= trace.truncated
-        truncated += int(cut)
+    shared = _Sessions(
+        scenario,
+        world,
+        moves,
+        LandmarkVisibility(world, scenario.models.landmark_sensor.range),
+        seed,
+        STEP_BUDGET * planned + 100,
+        sensor.beams if sensor is not None else 0,
+    )
+    if sensor is not None:
+        _ = world.signed_distance  # once, before the workers fork
+    workers = min(workers or os.cpu_count() or 1, sessions)
+    if workers <= 1 or "fork" not in multiprocessing.get_all_start_methods():
+        done = [shared.run(s) for s in range(sessions)]
+    else:
+        done = _in_workers(shared, sessions, workers)
+    traces: dict[int, list[SessionTrace]] = {c: [t[c] for t, _ in done] for c in CONFIGS}
+    truncated = sum(cut for _, cut in done)
     return _result(report, robots, moves, traces, truncated)
+
+
+def _in_workers(shared: _Sessions, sessions: int, workers: int) -> list[tuple[dict[int, SessionTrace], bool]]:
+    """The sessions on local worker processes (forked: they end with this process, however it
+    ends), in order."""
+    mp = multiprocessing.get_context("fork")
+    pool = ProcessPoolExecutor(workers, mp_context=mp, initializer=_init_worker, initargs=(shared, os.getpid()))
+    try:
+        with signals_held():  # the first submissions fork the workers
+            futures = [pool.submit(_run_session, s) for s in range(sessions)]
+        return list(gather(futures))
+    except BaseException:
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    finally:
+        pool.shutdown(wait=True)
 
 
 def _result(

@@ -61,12 +61,17 @@ class ScanSimulator:
 
     def update(self, belief: Belief, i: int, truth: np.ndarray, draws: np.ndarray) -> tuple[Belief, ScanCount]:
         """Robot i scans from its true pose ``truth`` with the standard-normal ``draws`` (B,); the
-        joint belief updated with the beams that pass the gate, relinearised at each new estimate."""
+        joint belief updated with the beams that pass the gate, relinearised at each new estimate.
+
+        The iterations move robot i's estimate only (its own block of the belief: the update of
+        the robot's mean does not depend on the others'); the last one updates the joint belief
+        through the filterpy reference (:func:`tmpnav.belief.ekf.update_scan`)."""
         true_r, _, true_var = self.ranges(truth)
         z = true_r + np.sqrt(true_var) * draws
         cols = slice(3 * i, 3 * i + 3)
-        prior = belief.mean[cols]
-        at, out, spread_cov, count = prior, belief, belief.cov[cols, cols], ScanCount(0, 0)
+        prior, P = belief.mean[cols], belief.cov[cols, cols]
+        at, spread_cov, count = prior, P, ScanCount(0, 0)
+        update: tuple[np.ndarray, np.ndarray] | None = None
         for it in range(ITERATIONS):
             predicted, H, var = self.ranges(at)
             both = ~np.isnan(z) & ~np.isnan(predicted)
@@ -76,13 +81,18 @@ class ScanSimulator:
             if it == 0:
                 count = ScanCount(int(both.sum()), int((~keep).sum()))
             if not keep.any():
-                return out, count
+                break
             shift = at - prior
             shift[2] = wrap_angle(shift[2])
             G, y_G = compressed_scan(H[keep], residual[keep] + H[keep] @ shift, np.sqrt(var[keep]))
-            out = ekf.update_scan(belief, i, G, y_G)
-            step = out.mean[cols] - at
-            at, spread_cov = out.mean[cols], out.cov[cols, cols]
+            update = (G, y_G)
+            K = P @ G.T @ np.linalg.inv(G @ P @ G.T + np.eye(3))
+            step = prior + K @ y_G - at
+            at = prior + K @ y_G
+            at[2] = wrap_angle(at[2])
+            spread_cov = P - K @ G @ P
             if np.hypot(step[0], step[1]) < CONVERGED and abs(wrap_angle(step[2])) < CONVERGED:
                 break
-        return out, count
+        if update is None:
+            return belief, count
+        return ekf.update_scan(belief, i, *update), count

@@ -129,7 +129,7 @@ PR_SET_PDEATHSIG = 1
 WATCHDOG_PERIOD = 1.0
 
 
-def _die_with_parent(parent: int, use_prctl: bool = True) -> None:
+def die_with_parent(parent: int, use_prctl: bool = True) -> None:
     """Make this worker process end when ``parent`` does, however the parent ends."""
     if use_prctl and sys.platform.startswith("linux"):
         with contextlib.suppress(OSError, AttributeError):
@@ -152,7 +152,7 @@ def _init_worker(ctx: OracleContext, parent: int) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     # Ctrl-C is the parent's business (it cancels the pool); workers stay quiet
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _die_with_parent(parent)
+    die_with_parent(parent)
     _WORKER_CTX = ctx
 
 
