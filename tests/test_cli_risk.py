@@ -63,8 +63,21 @@ def test_a_threshold_no_plan_meets_names_the_least_one_and_that_one_plans(cache_
     found = re.search(r"rerun with --max-risk (\S+),", proc.stderr)
     assert found, proc.stderr
     least = found.group(1)
+    assert "what would help there" in proc.stderr or "rerun with --max-risk" in proc.stderr
     out = tmp_path / "out"
-    again = tmpnav("plan", str(OFFICE), paper, "-q", "--max-risk", least, "--cache-dir", str(cache_dir), "-o", str(out))
+    again = tmpnav(
+        "plan",
+        str(OFFICE),
+        paper,
+        "-q",
+        "--max-risk",
+        least,
+        "--accept-risk",
+        "--cache-dir",
+        str(cache_dir),
+        "-o",
+        str(out),
+    )
     assert again.returncode == 0, again.stderr
     assert max(moves_risk(out)) <= float(least)
 
@@ -108,3 +121,68 @@ def test_under_a_threshold_robots_in_each_others_way_are_kept_apart(cache_dir: P
     default = tmpnav("plan", str(scenario), "--cache-dir", str(cache_dir), "-q")
     assert default.returncode == 0, default.stderr
     assert "robots in each other's way: none" in default.stdout and "kept apart: 1 -> 0" in default.stdout
+
+
+LANE = """\
+# Two robots that must swap ends of a lane too narrow to pass each other in: nothing can keep them apart.
+name: lane
+map:
+  bounds: [0, 0, 14, 1.1]
+  resolution: 0.05
+  wall_thickness: 0.1
+  walls:
+    - [[0, 0], [14, 0], [14, 1.1], [0, 1.1], [0, 0]]
+rooms:
+  - {name: W, polygon: [[0.2, 0.15], [2.0, 0.15], [2.0, 0.95], [0.2, 0.95]]}
+  - {name: E, polygon: [[12.0, 0.15], [13.8, 0.15], [13.8, 0.95], [12.0, 0.95]]}
+landmarks:
+  - {name: w, position: [0.3, 0.3]}
+  - {name: m, position: [7.0, 0.3]}
+  - {name: e, position: [13.7, 0.3]}
+robots:
+  - {name: r1, pose: [1.0, 0.55, 0.0]}
+  - {name: r2, pose: [13.0, 0.55, 3.1416]}
+roadmap: {samples: 300, instantiations: 3, seed: 1}
+goals:
+  robots: {r1: [E], r2: [W]}
+"""
+
+
+def test_robots_left_in_each_others_way_end_in_exit_10_unless_accepted(cache_dir: Path, tmp_path: Path) -> None:
+    """Nothing can part two robots swapping the ends of a narrow lane: under a chance constraint the
+    plan is refused in one line (exit code 10) and nothing is written; --accept-risk writes it, with
+    a warning; without one (the paper's model) and with --no-keep-apart the conflict is reported."""
+    scenario = tmp_path / "lane.yaml"
+    scenario.write_text(LANE)
+    risk = ("--max-risk", "1")
+    refused = tmpnav("plan", str(scenario), *risk, "-q", "--cache-dir", str(cache_dir), "-o", str(tmp_path / "no"))
+    assert_clean_failure(refused, 10, "the plan leaves robots in each other's way: r1 and r2 at")
+    assert "--accept-risk takes the plan" in refused.stderr and not (tmp_path / "no").exists()
+    taken = tmpnav(
+        "plan", str(scenario), *risk, "-q", "--accept-risk", "--cache-dir", str(cache_dir), "-o", str(tmp_path / "yes")
+    )
+    assert taken.returncode == 0, taken.stderr
+    assert "warning: robots stay in each other's way: r1 and r2" in taken.stdout
+    assert json.loads((tmp_path / "yes" / "plan.json").read_text())["risk"]["conflicts"]
+    paper = tmpnav("plan", str(scenario), "-q", "--cache-dir", str(cache_dir))
+    assert paper.returncode == 0 and "robots in each other's way: 1" in paper.stdout
+    plain = tmpnav("plan", str(scenario), *risk, "-q", "--no-keep-apart", "--cache-dir", str(cache_dir))
+    assert plain.returncode == 0 and "--keep-apart keeps robots apart" in plain.stdout
+
+
+def test_robots_with_a_lidar_plan_within_005_by_default_and_say_so(cache_dir: Path, tmp_path: Path) -> None:
+    """The office's robots carry a lidar: the chance constraint 0.05 is in force without a word
+    (the summary names it and its source), its paths keep to the middle of doors; --max-risk none
+    lifts it, --no-range-sensor (the paper's model) has none."""
+    out = tmp_path / "out"
+    default = tmpnav("plan", str(OFFICE), "-q", "--cache-dir", str(cache_dir), "-o", str(out))
+    assert default.returncode == 0, default.stderr
+    assert "chance constraint: max_risk 0.05 (the default for robots with a range sensor)" in default.stdout
+    doc = json.loads((out / "plan.json").read_text())
+    assert doc["risk"]["max_risk"] == 0.05 and max(moves_risk(out)) <= 0.05
+    lifted = tmpnav("plan", str(OFFICE), "-q", "--max-risk", "none", "--cache-dir", str(cache_dir))
+    assert lifted.returncode == 0 and "chance constraint: none" in lifted.stdout
+    paper = tmpnav("plan", str(OFFICE), "-q", "--no-range-sensor", "--cache-dir", str(cache_dir))
+    assert "landmarks and partners only (the paper's model); chance constraint: none" in paper.stdout
+    asked = tmpnav("plan", str(OFFICE), "-q", "--max-risk", "0.01", "--cache-dir", str(cache_dir))
+    assert "chance constraint: max_risk 0.01 (--max-risk)" in asked.stdout

@@ -24,6 +24,7 @@ from tmpnav.execution import (
     error_summary,
     errors_csv,
     execute,
+    moves_csv,
     reached,
     sessions_csv,
 )
@@ -271,7 +272,8 @@ def test_mutual_observations_cut_the_worst_error_of_the_landmark_starved_robot(c
 def waiting(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
     """r1 goes from L1 to L10 alone, then r1 and r2 leave L10 together: r2 waits for r1."""
     goals = Goals(visit=(), per_robot=(("r1", ("L2", "L10")), ("r2", ("L1",))))
-    report = plan(CORRIDOR, PlanOptions.of(cache_dir=tmp_path_factory.mktemp("cache"), costs="table", goals=goals))
+    options = PlanOptions.of(cache_dir=tmp_path_factory.mktemp("cache"), costs="table", goals=goals, accept_risk=True)
+    report = plan(CORRIDOR, options)
     paired = [m for m in report.schedule.moves if m.partner is not None]
     assert paired and report.schedule.waits("r2") > 0.0, f"the planner no longer makes r2 wait: {report.schedule}"
     return report
@@ -382,3 +384,21 @@ def test_robots_with_a_lidar_are_localised_as_their_filter_says(lidar_rooms: Pla
     assert used > 10_000 and rejected / used < 0.05
     lines = "\n".join(error_summary(result, 6))
     assert "position NEES with mutual observations" in lines and "rejected by the innovation gate" in lines
+
+
+@pytest.mark.slow
+def test_each_move_is_held_to_its_own_bound(corridor: PlanReport) -> None:
+    """The paper's corridor as planned (one paired move, the robots through each other): every
+    execution has the contact during that move; moves.csv lists each move with its executions,
+    their 95% interval and the move's bound as planned; the summary names the moves."""
+    result = execute(corridor, sessions=4)
+    rates = {(robot, step): (hits, touches, bound) for robot, step, hits, touches, bound in result.move_rates(1)}
+    assert set(rates) == {("r1", 0), ("r2", 0)}
+    for hits, touches, bound in rates.values():
+        assert touches == Rate(4, 4) and bound == pytest.approx(corridor.actions[0].risk[0], abs=1.0)
+    rows = list(csv.DictReader(io.StringIO(moves_csv(result))))
+    assert len(rows) == 2 * 2 and {r["step"] for r in rows} == {"1"}
+    assert all(
+        int(r["contact_executions"]) == 4 and float(r["contact_ci_low"]) > 0.3 for r in rows if r["config"] == "1"
+    )
+    assert any(line.startswith("moves against their bounds") for line in error_summary(result, 4))

@@ -144,16 +144,18 @@ def plan(
     time_budget: float | None = None,
     costs: str | None = None,
     objective: str | None = None,
-    max_risk: float | None = None,
+    max_risk: float | str | None = None,
     keep_apart: bool | None = None,
+    accept_risk: bool = False,
     cache_dir: str | Path | None = None,
     use_cache: bool = True,
     workers: int | None = None,
     executor: str = "processes",
 ) -> PlanResult:
     """Plan a scenario file, as ``tmpnav plan`` does; keyword arguments override the file's
-    choices like the command's options of the same names."""
-    from tmpnav.pipeline import PlanOptions
+    choices like the command's options of the same names (``max_risk="none"`` lifts the chance
+    constraint, as ``--max-risk none`` does)."""
+    from tmpnav.pipeline import NO_THRESHOLD, PlanOptions
     from tmpnav.pipeline import plan as run
 
     _check_choices(
@@ -163,7 +165,7 @@ def plan(
         timeout=timeout,
         time_budget=time_budget,
         pair_min_gain=pair_min_gain,
-        max_risk=max_risk,
+        max_risk=None if max_risk == "none" else max_risk,
     )
     options = PlanOptions.of(
         encoding=encoding,
@@ -176,8 +178,9 @@ def plan(
         time_budget=time_budget,
         costs=costs,
         objective=objective,
-        max_risk=max_risk,
+        max_risk=NO_THRESHOLD if max_risk == "none" else max_risk,
         keep_apart=keep_apart,
+        accept_risk=accept_risk,
         cache_dir=Path(cache_dir) if cache_dir is not None else None,
         use_cache=use_cache,
         workers=workers,

@@ -99,6 +99,12 @@ class RiskError(PlannerError):
         self.least = least  # the smallest threshold tmpnav found a plan for
 
 
+class ConflictError(PlannerError):
+    """The plan leaves robots in each other's way that keeping them apart could not clear."""
+
+    exit_code = 10
+
+
 class CacheError(TmpnavError):
     """The cache directory cannot be used at all (not a directory, not writable)."""
 
@@ -116,7 +122,10 @@ EXIT_CODES: dict[int, str] = {
     UnsolvableError.exit_code: "no plan exists for the goals (proved by the planner)",
     PlannerCrashError.exit_code: "the planner process crashed",
     CacheError.exit_code: "the cache directory is unusable",
-    RiskError.exit_code: "no plan keeps every move within --max-risk (the message names the least that one does)",
+    RiskError.exit_code: "no plan keeps every move within the chance constraint (--max-risk, or its default): the "
+    "message names the least threshold a plan meets and what would help; --accept-risk takes the plan",
+    ConflictError.exit_code: "under a chance constraint, the plan leaves robots in each other's way that waits "
+    "and detours could not clear (the message names the first); --accept-risk takes the plan",
     130: "interrupted (Ctrl-C)",
     143: "terminated (SIGTERM; a parent process sees it killed by the signal): the processes it started "
     "are stopped and earlier outputs kept, as after Ctrl-C",

@@ -23,10 +23,10 @@ from tmpnav import scenario as scenario_stage
 from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
 from tmpnav.choices import Costs, Objective, Search, choose, paper_conflict
-from tmpnav.errors import InputError, Problem, RiskError, ScenarioError
+from tmpnav.errors import ConflictError, InputError, Problem, RiskError, ScenarioError
 from tmpnav.heap import long_lived_frozen
 from tmpnav.results import CacheUse, PlanReport, SearchProgress, StageTimes
-from tmpnav.types import Goals, Roadmap, Scenario
+from tmpnav.types import DEFAULT_RISK_SOURCE, SAFE_MARGIN, Goals, Roadmap, Scenario
 from tmpnav.world import MapImageError, World
 
 if TYPE_CHECKING:
@@ -52,6 +52,12 @@ class Overrides:
     objective: Objective | None = None
     max_risk: float | None = None
     keep_apart: bool | None = None
+    clearance: float | None = None  # m: roadmap.clearance
+    accept_risk: bool = False  # hand out a plan that breaks the chance constraint or leaves robots in the way
+
+
+#: ``Overrides.max_risk`` that lifts the chance constraint (``--max-risk none``)
+NO_THRESHOLD = -1.0
 
 
 @dataclass(frozen=True)
@@ -138,7 +144,12 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
         time_budget=o.time_budget if o.time_budget is not None else planner.time_budget,
         costs=o.costs or planner.costs,
         objective=o.objective or planner.objective,
-        max_risk=o.max_risk if o.max_risk is not None else planner.max_risk,
+        max_risk=planner.max_risk if o.max_risk is None else None if o.max_risk == NO_THRESHOLD else o.max_risk,
+        max_risk_from=planner.max_risk_from
+        if o.max_risk is None
+        else ""
+        if o.max_risk == NO_THRESHOLD
+        else "--max-risk",
         keep_apart=o.keep_apart if o.keep_apart is not None else planner.keep_apart,
     )
     if (why := paper_conflict(planner.encoding, o.search, o.costs, o.objective)) is not None:
@@ -146,16 +157,30 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
     if planner.encoding == "paper":  # the paper's model, as tmpnav.choices.choose plans it
         choice = choose(planner.encoding, planner.search, planner.costs, 0, 0)
         planner = replace(
-            planner, costs=choice.costs, search=choice.mode, objective="cost", max_risk=None, keep_apart=False
+            planner,
+            costs=choice.costs,
+            search=choice.mode,
+            objective="cost",
+            max_risk=None,
+            max_risk_from="",
+            keep_apart=False,
         )
     models = scenario.models
     if o.mutual_observations is not None:
         models = replace(models, mutual_observations=o.mutual_observations)
     if o.range_sensor is False:
         models = replace(models, range_sensor=None)
+        if planner.max_risk_from == DEFAULT_RISK_SOURCE:  # the paper's model: no threshold by default
+            planner = replace(planner, max_risk=None, max_risk_from="")
     if o.goals is not None and (unknown := [g for g in o.goals.all_rooms if g not in {r.name for r in scenario.rooms}]):
         raise InputError(f"goal rooms {', '.join(unknown)} are not rooms of scenario {scenario.name!r}")
-    return replace(scenario, planner=planner, models=models, goals=o.goals or scenario.goals)
+    clearance = o.clearance if o.clearance is not None else scenario.roadmap.clearance
+    if planner.encoding == "paper":
+        clearance = 0.0
+    elif clearance is None:  # paths keep clear of walls under a chance constraint, the paper's do not
+        clearance = SAFE_MARGIN if planner.max_risk is not None else 0.0
+    roadmap = replace(scenario.roadmap, clearance=clearance)
+    return replace(scenario, planner=planner, models=models, goals=o.goals or scenario.goals, roadmap=roadmap)
 
 
 def in_force(scenario: Scenario, overrides: Overrides) -> Scenario:
@@ -273,10 +298,35 @@ def plan(
 ) -> PlanReport:
     """Plan a scenario end to end: the task-level optimal plan for the roadmap, with its
     motions and beliefs. ``loaded`` skips loading when the caller already has the world.
-    Raises RiskError when the plan breaks the chance constraint (:func:`check_risk`)."""
-    report = _planned(path, options or PlanOptions(), loaded)
-    check_risk(path, options or PlanOptions(), report)
+    Raises RiskError when the plan breaks the chance constraint (:func:`check_risk`) and
+    ConflictError when it leaves robots in each other's way (:func:`check_conflicts`), unless
+    the options accept that (``accept_risk``)."""
+    options = options or PlanOptions()
+    report = _planned(path, options, loaded)
+    if not options.overrides.accept_risk:
+        check_risk(path, options, report)
+        check_conflicts(report)
     return report
+
+
+def check_conflicts(report: PlanReport) -> None:
+    """Raise ConflictError when, under a chance constraint (planner.max_risk), robots asked to be
+    kept apart (planner.keep_apart) are still in each other's way on the plan's trajectories (the
+    independent checker, tmpnav.belief.conflicts). Without a constraint (the paper's model) no
+    plan claims to be safe: its conflicts are reported, not refused."""
+    from tmpnav.planning.safety import conflicts_left
+
+    planner = report.scenario.planner
+    if planner.max_risk is None or not planner.keep_apart or not (left := conflicts_left(report)):
+        return
+    first = left[0]
+    more = f" (and {len(left) - 1} more)" if len(left) > 1 else ""
+    raise ConflictError(
+        f"the plan leaves robots in each other's way: {' and '.join(first.robots)} at {first.t_from:.1f} s, "
+        f"{first.closest_distance:.2f} m apart where {first.required_separation:.2f} m are needed{more}; no wait, "
+        "detour or sidestep clears them (--accept-risk takes the plan as it is, --no-keep-apart plans without "
+        "keeping robots apart)"
+    )
 
 
 def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, World] | None) -> PlanReport:
@@ -357,26 +407,29 @@ def check_risk(path: str | Path, options: PlanOptions, report: PlanReport) -> No
         again = _planned(path, options.but(max_risk=least, replan=False), None)
         worst = again.worst_risk
         if worst <= least:
+            from tmpnav.planning.safety import conflicts_left
+
+            apart = again.scenario.planner.keep_apart and conflicts_left(again)
             raise RiskError(
                 f"no plan keeps every move's collision bound within max_risk {asked:g}: the least "
-                f"tmpnav found is {least:g} (rerun with --max-risk {least:g}, or set planner.max_risk)",
+                f"tmpnav found is {least:g} (rerun with --max-risk {least:g}, or set planner.max_risk"
+                + ("; its plan leaves robots in each other's way: add --accept-risk to take it)" if apart else ")"),
                 least,
             )
     raise RiskError(
-        f"no plan keeps every move's collision bound within max_risk {asked:g}: every plan tmpnav "
-        f"found has a move at {min(1.0, worst):.2g} ({_worst_move(report)}: robots too uncertain where "
-        'the map leaves them little room; see docs/models.md, "Collision bound"): plan without --max-risk',
+        f"no plan keeps every move's collision bound within max_risk {asked:g} "
+        f"({report.scenario.planner.max_risk_from or 'planner.max_risk'}): {_worst_move(report)} "
+        "(--accept-risk takes the plan as it is)",
         1.0,
     )
 
 
 def _worst_move(report: PlanReport) -> str:
-    """The plan's riskiest move and how uncertain its robot gets, in words."""
-    bound, (robot, origin, room) = max(
-        ((p, move) for a in report.actions for p, move in zip(a.risk, a.moves, strict=False)), key=lambda x: x[0]
-    )
-    std = report.largest_std().get(robot, 0.0)
-    return f"here {robot}'s move {origin} -> {room} is at {min(1.0, bound):.2g}, its position std up to {std:.2g} m"
+    """The plan's riskiest move, where its bound is made, and what would help there, in words."""
+    from tmpnav.planning.safety import riskiest_point, what_would_help
+
+    point = riskiest_point(report)
+    return "every plan has a move at 1" if point is None else what_would_help(report, point)
 
 
 def _round_up(p: float) -> float:

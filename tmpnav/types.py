@@ -177,6 +177,14 @@ class Models:
 
 CostValue = TypeVar("CostValue", float, np.ndarray)
 
+#: the chance constraint in force when a scenario whose robots carry a range sensor names none
+#: (planner.max_risk): every move's collision bound at most 5% (docs/planning.md)
+DEFAULT_MAX_RISK = 0.05
+DEFAULT_RISK_SOURCE = "the default for robots with a range sensor"
+#: m: the margin from the walls paths prefer and goal poses keep under a chance constraint when
+#: the scenario names none (roadmap.clearance; tmpnav.roadmap.graph.safe_weights)
+SAFE_MARGIN = 0.5
+
 
 #: what a move costs per unit of probability by which its collision bound exceeds the chance
 #: constraint (planner.max_risk): so much that a plan with a move over the threshold costs more
@@ -217,6 +225,9 @@ class RoadmapParams:
     instantiations: int  # pose instantiations sampled per room
     seed: int
     neighbors: int  # k of the k-nearest connection strategy
+    #: m: the margin from the walls paths prefer and goal poses keep where a room allows it
+    #: (0: the paper's shortest paths; None until the chance constraint in force decides it)
+    clearance: float | None = None
 
 
 @dataclass(frozen=True)
@@ -248,6 +259,9 @@ class PlannerOptions:
     #: the chance constraint: each move's bound on the probability of touching an obstacle,
     #: and of two robots touching, at most this (None: unconstrained; docs/models.md)
     max_risk: float | None = None
+    #: where max_risk comes from, in words for the reports: "planner.max_risk", "--max-risk",
+    #: DEFAULT_RISK_SOURCE (a team with a range sensor), or "" (none is in force)
+    max_risk_from: str = ""
     #: robots in each other's way on the clock kept apart after planning, by waits and detours
     #: (and sidesteps under max_risk; tmpnav.attachment.conflicts.keep_apart)
     keep_apart: bool = True

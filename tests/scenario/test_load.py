@@ -256,7 +256,7 @@ def test_a_bad_optional_value_falls_back_to_its_default() -> None:
 
 def test_a_bad_optional_section_falls_back_to_its_defaults() -> None:
     out, issues = check(SCENARIO, {"roadmap": 5, "models": ["dt"]})
-    assert out["roadmap"] == {"samples": 1500, "instantiations": 4, "seed": 1, "neighbors": 10}
+    assert out["roadmap"] == {"samples": 1500, "instantiations": 4, "seed": 1, "neighbors": 10, "clearance": None}
     assert out["models"]["dt"] == 0.5
     # in the order of the schema's fields: the required ones are missing too
     assert [i.split(":")[0] for i in issues] == ["x.map", "x.rooms", "x.robots", "x.models", "x.roadmap", "x.goals"]

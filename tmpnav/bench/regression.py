@@ -133,6 +133,7 @@ def run_case(case: Case) -> dict[str, Any]:
         objective=case.objective,
         keep_apart=case.keep_apart,
         range_sensor=None if case.range_sensor else False,
+        accept_risk=True,  # the plan is recorded whatever it leaves
     )
     report = plan(scenario, options)
     return {

@@ -144,6 +144,19 @@ class FiniteRange(click.FloatRange):
         return super().convert(number, param, ctx)
 
 
+class ThresholdOrNone(FiniteRange):
+    """A probability in (0, 1], or ``none``: no chance constraint (NO_THRESHOLD)."""
+
+    name = "threshold"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        if isinstance(value, str) and value.strip().lower() == "none":
+            from tmpnav.pipeline import NO_THRESHOLD
+
+            return NO_THRESHOLD
+        return super().convert(value, param, ctx)
+
+
 def timeout_range() -> FiniteRange:
     """Seconds: more than 0, at most the scenario format's limit (planner.timeout)."""
     from tmpnav.scenario.format import MAX_TIMEOUT
@@ -275,14 +288,28 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
         ),
         option(
             "--max-risk",
-            type=FiniteRange(min=0, min_open=True, max=1),
+            type=ThresholdOrNone(min=0, min_open=True, max=1),
             metavar="DELTA",
-            default_text=scenario_default("max_risk", "none"),
+            default_text="the scenario's planner.max_risk, else 0.05 for robots with a range sensor, else none",
             help="The chance constraint: the largest probability of collision a move may have (its bound on "
             "touching a wall, from the robot's uncertainty along the path and the map's clearance; robots "
             "also keep a margin from each other for it). Moves over it are not offered to the planner, and "
             "robots in each other's way are kept apart by waits, detours and sidesteps where every move "
-            "stays within it.",
+            "stays within it. 'none': no chance constraint.",
+        ),
+        option(
+            "--clearance",
+            type=FiniteRange(min=0, max=5),
+            metavar="M",
+            default_text="the scenario's roadmap.clearance, else 0.5 under a chance constraint, else 0",
+            help="The margin from the walls (m, beyond the robot's radius) that paths prefer and goal poses "
+            "keep, as nav2's inflation does; 0 gives the paper's shortest paths.",
+        ),
+        click.option(
+            "--accept-risk",
+            is_flag=True,
+            help="Take the plan even when no plan keeps every move within the chance constraint, or robots "
+            "stay in each other's way (exit codes 9 and 10 otherwise): the summary warns of it.",
         ),
         option(
             "--keep-apart/--no-keep-apart",
@@ -371,6 +398,8 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
         objective=kw["objective"],
         max_risk=kw["max_risk"],
         keep_apart=kw.get("keep_apart"),
+        accept_risk=bool(kw.get("accept_risk")),
+        clearance=kw.get("clearance"),
     )
     execution = Execution(
         cache_dir=kw["cache_dir"],

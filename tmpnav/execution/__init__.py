@@ -19,7 +19,7 @@ from tmpnav.execution.control import ALIGN, ARRIVED, control, reached
 from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.result import ExecutionResult, Rate, execute
 from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
-from tmpnav.execution.text import error_summary, errors_csv, sessions_csv
+from tmpnav.execution.text import error_summary, errors_csv, moves_csv, sessions_csv
 
 __all__ = [
     "ALIGN",
@@ -35,6 +35,7 @@ __all__ = [
     "error_summary",
     "errors_csv",
     "execute",
+    "moves_csv",
     "queues",
     "reached",
     "sessions_csv",

@@ -75,6 +75,11 @@ class ExecutionResult:
     planned_nees: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions, points): NEES vs the plan
     filter_nees: dict[tuple[int, str], tuple[float, int]]  # (config, robot) -> the filter's NEES summed, steps
     beams: dict[tuple[int, str], tuple[int, int]]  # (config, robot) -> range beams used, rejected by the gate
+    #: (config, robot, plan step) -> (sessions,) control steps hitting a wall / touching a robot during the
+    #: move (or standing after it; step -1: before the robot's first move)
+    move_hits: dict[tuple[int, str, int], np.ndarray]
+    move_contacts: dict[tuple[int, str, int], np.ndarray]
+    bounds: dict[tuple[str, int], float]  # (robot, plan step) -> the move's collision bound as planned
 
     def mean_errors(self, config: int, robot: str) -> np.ndarray:
         """(points,) m: the robot's position error at each point of its paths, averaged over the sessions."""
@@ -126,6 +131,20 @@ class ExecutionResult:
         total = sum(self.filter_nees[(config, r)][0] for r in robots)
         steps = sum(self.filter_nees[(config, r)][1] for r in robots)
         return total / steps if steps else math.nan
+
+    def move_rates(self, config: int) -> list[tuple[str, int, Rate, Rate, float]]:
+        """Per move (robot, plan step): the executions with a wall hit and with a contact during it,
+        and its collision bound as planned, in plan order."""
+        sessions = len(self.schedules[config])
+        zero = np.zeros(sessions, dtype=int)
+        out = []
+        for (robot, step), bound in sorted(self.bounds.items(), key=lambda x: (x[0][1], x[0][0])):
+            hits = self.move_hits.get((config, robot, step), zero)
+            touches = self.move_contacts.get((config, robot, step), zero)
+            out.append(
+                (robot, step, Rate(int((hits > 0).sum()), sessions), Rate(int((touches > 0).sum()), sessions), bound)
+            )
+        return out
 
     def _rate(self, counts: dict[tuple[int, str], np.ndarray], config: int, robot: str | None) -> Rate:
         robots = self.robots if robot is None else [robot]
@@ -258,4 +277,21 @@ def _result(
             for c in CONFIGS
             for r in robots
         },
+        move_hits=_per_move(traces, "move_hits"),
+        move_contacts=_per_move(traces, "move_contacts"),
+        bounds={
+            (robot, action.index - 1): float(bound)
+            for action in report.actions
+            for (robot, _, _), bound in zip(action.moves, action.risk, strict=False)
+        },
     )
+
+
+def _per_move(traces: dict[int, list[SessionTrace]], what: str) -> dict[tuple[int, str, int], np.ndarray]:
+    """(config, robot, step) -> each session's count of ``what`` (SessionTrace.move_hits or .move_contacts)."""
+    out: dict[tuple[int, str, int], np.ndarray] = {}
+    for c, ts in traces.items():
+        for s, t in enumerate(ts):
+            for (robot, step), n in getattr(t, what).items():
+                out.setdefault((c, robot, step), np.zeros(len(ts), dtype=int))[s] = n
+    return out

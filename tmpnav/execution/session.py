@@ -75,6 +75,10 @@ class SessionTrace:
     nees_steps: dict[str, int] = field(default_factory=dict)
     #: robot -> range beams used by its filter and rejected by the innovation gate
     beams: dict[str, list[int]] = field(default_factory=dict)
+    #: (robot, plan step of the move under way, or of its last one when it stands; -1 before its
+    #: first) -> control steps its true pose hit a wall / touched another robot's
+    move_hits: dict[tuple[str, int], int] = field(default_factory=dict)
+    move_contacts: dict[tuple[str, int], int] = field(default_factory=dict)
 
     def schedule(self, robots: tuple[str, ...]) -> Schedule:
         """The moves as executed, in plan order: a schedule like the plan's."""
@@ -351,6 +355,17 @@ class Session:
         for i, name in enumerate(self.names):
             self.trace.wall_hits[name] += int(walls[i])
             self.trace.contacts[name] += int(touch[i].any())
+            if walls[i] or touch[i].any():
+                key = (name, self._move_step(self.robots[i]))
+                self.trace.move_hits[key] = self.trace.move_hits.get(key, 0) + int(walls[i])
+                self.trace.move_contacts[key] = self.trace.move_contacts.get(key, 0) + int(touch[i].any())
+
+    @staticmethod
+    def _move_step(r: _Robot) -> int:
+        """The plan step of robot r's move under way, or of its last one when it stands (-1 before its first)."""
+        if r.move is not None:
+            return r.move.step
+        return r.queue[r.started - 1].step if r.started else -1
 
     def _mutually_visible(self) -> list[tuple[int, int]]:
         """The ordered pairs (observer, observed) in range and line of sight now, in team order."""

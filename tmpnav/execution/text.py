@@ -29,6 +29,7 @@ def error_summary(result: ExecutionResult, sessions: int) -> list[str]:
     lines += wait_lines(result)
     lines += consistency_lines(result)
     lines += collision_lines(result)
+    lines += move_lines(result)
     if result.truncated_sessions:
         lines.append(f"note: {result.truncated_sessions} session(s) did not reach every node within the step budget")
     return lines
@@ -93,6 +94,44 @@ def collision_lines(result: ExecutionResult) -> list[str]:
             robots = ", ".join(f"{r} {rate(config, r).events}" for r in result.robots)
             lines.append(f"  {label}: {rate(config).text()}; per robot {robots}")
     return lines
+
+
+#: moves listed by name in the summary (moves.csv has them all)
+MOVES_SHOWN = 5
+
+
+def move_lines(result: ExecutionResult) -> list[str]:
+    """The moves against their collision bounds, with mutual observations: the executions with a wall
+    hit during each (95% interval), the moves whose interval lies wholly above their bound, and the
+    few with the most."""
+    moves = [m for m in result.move_rates(1) if m[0] in result.robots]
+    if not moves:
+        return []
+    above = [m for m in moves if m[2].interval[0] > m[4]]
+    worst = sorted(moves, key=lambda m: (-m[2].events, -m[4]))[:MOVES_SHOWN]
+    shown = "; ".join(f"{r} step {k + 1}: {hits.text()}, bound {bound:.2g}" for r, k, hits, _, bound in worst)
+    return [
+        f"moves against their bounds, with mutual observations ({len(moves)} moves; moves.csv has each): "
+        f"{len(above)} with a wall-hit rate whose 95% interval lies above the move's bound; most hits: {shown}"
+    ]
+
+
+def moves_csv(result: ExecutionResult) -> str:
+    """One row per configuration and move: executions with a wall hit and with a robot contact
+    during the move (or while its robot stands after it), with 95% intervals, and its bound."""
+    rows = [
+        "config,mutual_observations,robot,step,sessions,wall_hit_executions,wall_hit_rate,wall_hit_ci_low,"
+        "wall_hit_ci_high,contact_executions,contact_rate,contact_ci_low,contact_ci_high,bound"
+    ]
+    for config in CONFIGS:
+        for robot, step, hits, touches, bound in result.move_rates(config):
+            (hl, hh), (cl, ch) = hits.interval, touches.interval
+            rows.append(
+                f"{config},{'yes' if config == 1 else 'no'},{robot},{step + 1},{hits.sessions},{hits.events},"
+                f"{hits.value:.6g},{hl:.6g},{hh:.6g},{touches.events},{touches.value:.6g},{cl:.6g},{ch:.6g},"
+                f"{bound:.6g}"
+            )
+    return "\n".join(rows) + "\n"
 
 
 def errors_csv(result: ExecutionResult, roadmap: Roadmap) -> str:

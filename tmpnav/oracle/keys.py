@@ -70,6 +70,7 @@ def context_digest(scenario: Scenario, world: World, roadmap: Roadmap) -> str:
         roadmap.fingerprint,
         repr(scenario.models),
         repr(scenario.cost),
+        repr(scenario.roadmap.clearance),  # the paths the motions drive (tmpnav.roadmap.graph.safe_weights)
     )
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 

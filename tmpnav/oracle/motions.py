@@ -102,8 +102,8 @@ class MotionLibrary:
         self.world = world
         self.roadmap = roadmap
         radius = max(r.radius for r in scenario.robots)
-        safe = scenario.planner.max_risk is not None
-        self.graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius) if safe else None)
+        clearance = scenario.roadmap.clearance or 0.0  # 0: the paper's shortest paths
+        self.graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius, clearance) if clearance > 0 else None)
         self.visibility = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
         sensor = scenario.models.range_sensor
         # a range scan's information per cell and heading (tmpnav.world.lidar)

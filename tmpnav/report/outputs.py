@@ -48,15 +48,17 @@ def write_outputs(
 
 def write_execution_outputs(report: PlanReport, result: ExecutionResult, sessions: int, out_dir: Path) -> list[Path]:
     """``tmpnav simulate -o DIR``: errors.csv, sessions.csv (each session's makespan and waits),
-    errors.png and summary.md, all or nothing."""
+    moves.csv (each move's wall hits and contacts against its bound), errors.png and summary.md,
+    all or nothing."""
     from tmpnav.execution import error_summary, errors_csv
-    from tmpnav.execution.text import sessions_csv
+    from tmpnav.execution.text import moves_csv, sessions_csv
     from tmpnav.report.bench_plot import errors_figure
 
     title = f"{report.scenario.name}: average position error over {sessions} sessions"
     contents: dict[str, Content] = {
         "errors.csv": errors_csv(result, report.roadmap),
         "sessions.csv": sessions_csv(result),
+        "moves.csv": moves_csv(result),
         "errors.png": lambda tmp: fg.render(errors_figure(result, title), tmp),
         "summary.md": "\n".join(error_summary(result, sessions)) + "\n",
     }

@@ -26,8 +26,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
+from tmpnav.belief.conflicts import Conflict
 from tmpnav.choices import time_budget
+from tmpnav.planning.safety import conflicts_left, riskiest_point, what_would_help
 from tmpnav.report.schedule import move_at, objective_values
 from tmpnav.results import PlanReport
 from tmpnav.types import Door, TrajectoryStep
@@ -42,7 +43,7 @@ N_SIGMA = 2.0
 class PlanWarning:
     """One warning: what it is about, its numbers, and the message with what to try."""
 
-    kind: str  # "gap" | "door"
+    kind: str  # "risk" | "conflict" | "gap" | "door"
     robot: str | None  # the robot a "door" warning is about
     value: float  # gap: the gap (fraction); door: the 2-sigma spread across the door (m)
     limit: float  # gap: GAP_WARN; door: half the door's width less the robot's radius (m)
@@ -50,13 +51,38 @@ class PlanWarning:
 
 
 def plan_warnings(report: PlanReport) -> list[PlanWarning]:
-    """The warnings of a plan: its gap, then each robot's worst door (at most one per robot)."""
-    found = [w for w in (_gap(report),) if w is not None]
+    """The warnings of a plan: a move over the chance constraint and robots still in each other's
+    way (a plan taken with --accept-risk), its gap, then each robot's worst door (at most one per
+    robot)."""
+    found = [w for w in (_over_threshold(report), _in_the_way(report), _gap(report)) if w is not None]
     for robot in report.scenario.robots:
         door = _worst_door(report, robot.name, robot.radius)
         if door is not None:
             found.append(door)
     return found
+
+
+def _over_threshold(report: PlanReport) -> PlanWarning | None:
+    delta = report.scenario.planner.max_risk
+    if delta is None or report.worst_risk <= delta:
+        return None
+    point = riskiest_point(report)
+    where = f": {what_would_help(report, point)}" if point is not None else ""
+    text = f"a move's collision bound is over the chance constraint max_risk {delta:g}{where}."
+    return PlanWarning("risk", point.robot if point else None, report.worst_risk, delta, text)
+
+
+def _in_the_way(report: PlanReport) -> PlanWarning | None:
+    planner = report.scenario.planner
+    if planner.max_risk is None or not planner.keep_apart or not (left := plan_conflicts(report)):
+        return None
+    first = left[0]
+    text = (
+        f"robots stay in each other's way: {' and '.join(first.robots)} at {first.t_from:.1f} s, "
+        f"{first.closest_distance:.2f} m apart where {first.required_separation:.2f} m are needed"
+        + (f" (and {len(left) - 1} more)." if len(left) > 1 else ".")
+    )
+    return PlanWarning("conflict", first.robots[0], first.closest_distance, first.required_separation, text)
 
 
 def warning_lines(report: PlanReport, width: int = 100) -> list[str]:
@@ -155,10 +181,8 @@ def _crossings(means: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np
 
 
 def plan_conflicts(report: PlanReport) -> list[Conflict]:
-    """Robots closer than their radii plus the margin of their uncertainty at one instant, by
-    the independent checker over the re-simulated trajectories (tmpnav.belief.conflicts; the
-    margin's threshold is planner.max_risk, else 0.05). Under a chance constraint the plan was
-    kept apart first where that helps (tmpnav.attachment.conflicts.keep_apart): what is left."""
-    radii = {r.name: r.radius for r in report.scenario.robots}
-    delta = report.scenario.planner.max_risk or DEFAULT_DELTA
-    return find_conflicts(report.trajectories, radii, delta)
+    """Robots closer than their radii plus the margin of their uncertainty at one instant
+    (tmpnav.planning.safety.conflicts_left: the independent checker over the re-simulated
+    trajectories). Robots asked to be kept apart were kept apart first where that helps
+    (tmpnav.attachment.conflicts.keep_apart): what is left."""
+    return conflicts_left(report)

@@ -14,6 +14,7 @@ second time)::
 
     corridor (configs/corridor.yaml): encoding mixed, planner enhsp-blind, solved-optimally
     2 robots, mutual observations on; goals: r1 visits L10; r2 visits L1
+    localisation: landmarks and partners only (the paper's model); chance constraint: none
     search: exact, costs table
     lower bound on the objective: 31.198 (exact (A* over every schedule)); proved optimal
 
@@ -82,9 +83,24 @@ def _header(report: PlanReport) -> list[str]:
     return [
         f"{sc.name} ({_display_path(sc.source)}): encoding {report.encoding}, planner {report.planner}, {status}",
         f"{len(sc.robots)} robots, mutual observations {mutual}; goals: {_goals(report)}",
+        _sensing_line(report),
         *_search(report),
         *warning_lines(report),
     ]
+
+
+def _sensing_line(report: PlanReport) -> str:
+    """What the robots localise with, and the chance constraint in force with where it comes from."""
+    sc = report.scenario
+    lidar = sc.models.range_sensor
+    sensing = (
+        "landmarks and partners only (the paper's model)"
+        if lidar is None
+        else f"a {lidar.range:g} m lidar of {lidar.beams} beams against the walls, landmarks and partners"
+    )
+    delta, source = sc.planner.max_risk, sc.planner.max_risk_from
+    constraint = "none" if delta is None else f"max_risk {delta:g} ({source})" if source else f"max_risk {delta:g}"
+    return f"localisation: {sensing}; chance constraint: {constraint}"
 
 
 def _search(report: PlanReport) -> list[str]:

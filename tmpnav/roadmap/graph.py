@@ -12,24 +12,24 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from tmpnav.types import Roadmap
+from tmpnav.types import SAFE_MARGIN, Roadmap
 from tmpnav.world import World
 
 #: :func:`safe_weights`: an edge whose footprint margin falls to 0 weighs (1 + SAFE_PENALTY)
-#: times its length; the penalty falls quadratically to nothing at a margin of SAFE_MARGIN (m)
+#: times its length; the penalty falls quadratically to nothing at the clearance asked for
 SAFE_PENALTY = 4.0
-SAFE_MARGIN = 0.5
 
 
-def safe_weights(roadmap: Roadmap, world: World, radius: float) -> np.ndarray:
-    """Edge weights that keep paths clear of obstacles: length x (1 + SAFE_PENALTY g), where
-    g = (max(0, SAFE_MARGIN - m) / SAFE_MARGIN)^2 and m is the smallest footprint margin
-    (World.margins of a disc of ``radius``) at points a grid cell apart along the edge. A path
-    that hugs a wall leaves its robot no room for its uncertainty: its collision bound is near 1
-    whatever the belief (docs/models.md, "Collision bound"), so the shortest path is the wrong
-    one to bound; a detour of a few per cent through the free middle makes the bound useful."""
+def safe_weights(roadmap: Roadmap, world: World, radius: float, clearance: float = SAFE_MARGIN) -> np.ndarray:
+    """Edge weights that keep paths clear of obstacles, as nav2's inflation layer does: length x
+    (1 + SAFE_PENALTY g), where g = (max(0, c - m) / c)^2 for the ``clearance`` c (m) and m is the
+    smallest footprint margin (World.margins of a disc of ``radius``) at points a grid cell apart
+    along the edge. A path that hugs a wall leaves its robot no room for its uncertainty: its
+    collision bound is near 1 whatever the belief (docs/models.md, "Collision bound"), so the
+    shortest path is the wrong one to bound; a detour of a few per cent through the free middle
+    makes the bound useful."""
     margin = edge_margins(roadmap, world, radius)
-    g = (np.clip(SAFE_MARGIN - margin, 0.0, SAFE_MARGIN) / SAFE_MARGIN) ** 2
+    g = (np.clip(clearance - margin, 0.0, clearance) / clearance) ** 2
     return np.asarray(roadmap.weights * (1.0 + SAFE_PENALTY * g), dtype=float)
 
 

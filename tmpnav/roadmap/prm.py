@@ -26,16 +26,27 @@ from tmpnav.world import World
 
 
 def sample_instantiations(
-    world: World, room: str, radius: float, k: int, rng: np.random.Generator, allowed: np.ndarray | None = None
+    world: World,
+    room: str,
+    radius: float,
+    k: int,
+    rng: np.random.Generator,
+    allowed: np.ndarray | None = None,
+    clearance: float = 0.0,
 ) -> np.ndarray:
     """k collision-free positions (k, 2) drawn uniformly in a room's free space (only in the
-    cells ``allowed`` (rows, cols), if given: a pocket of the room no robot reaches has none)."""
+    cells ``allowed`` (rows, cols), if given: a pocket of the room no robot reaches has none),
+    and, where the room has any, only where a robot keeps ``clearance`` (m) from the walls."""
     cells = world.free_cells_in_room(room, radius)
     if allowed is not None:
         i, j, _ = world.grid.cells(cells)
         cells = cells[allowed[i, j]]
     if cells.shape[0] == 0:
         raise RoadmapError(f"room {room!r} has no free space a robot of radius {radius:g} m can reach")
+    if clearance > 0:
+        i, j, _ = world.grid.cells(cells)
+        roomy = world.clearance[i, j] >= radius + world.grid.resolution + clearance
+        cells = cells[roomy] if roomy.any() else cells
     half = world.grid.resolution / 2.0
     out: list[np.ndarray] = []
     for _ in range(100 * k):
@@ -199,7 +210,9 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
     # instantiations only where OMPL may put milestones: one in a pocket of the room cut off by
     # noise in the map would be refused as a start state, and its room would lose it
     inst = {
-        room.name: sample_instantiations(world, room.name, radius, params.instantiations, rng, free_cells)
+        room.name: sample_instantiations(
+            world, room.name, radius, params.instantiations, rng, free_cells, params.clearance or 0.0
+        )
         for room in world.rooms
     }
     specials = np.vstack([*inst.values(), starts])

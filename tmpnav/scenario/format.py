@@ -401,6 +401,13 @@ ROADMAP = Section(
             "k of the PRM's k-nearest connection strategy",
             default=10,
         ),
+        "clearance": Field(
+            Number("length", minimum=0.0, maximum=5.0, reason="beyond 5 m no corridor has a middle"),
+            "the margin from the walls (beyond the robot's radius) that paths prefer, as nav2's inflation "
+            "does (an edge weighs more as its margin falls below it), and that goal poses keep where the room "
+            "allows; 0: the paper's shortest paths (default: 0.5 m under a chance constraint, planner.max_risk, "
+            "else 0)",
+        ),
     }
 )
 
@@ -452,7 +459,7 @@ PLANNER = Section(
         ),
         "max_risk": Field(
             Number(None, minimum=0.0, exclusive_minimum=True, maximum=1.0),
-            "the chance constraint: the largest probability of collision a move may have (each robot's bound on touching a wall along the move, from its covariance at every step and the map's clearance; also the margin robots keep from each other); moves over it are not offered to the planner, and robots in each other's way are kept apart (keep_apart) where that keeps every move within it; omit for no constraint (the paper's model)",
+            "the chance constraint: the largest probability of collision a move may have (each robot's bound on touching a wall along the move, from its covariance at every step and the map's clearance; also the margin robots keep from each other); moves over it are not offered to the planner, and robots in each other's way are kept apart (keep_apart) where that keeps every move within it; omitted: 0.05 when the robots carry a range sensor (models.range_sensor), else none (the paper's model)",
             default=None,
         ),
         "keep_apart": Field(

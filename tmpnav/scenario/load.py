@@ -20,6 +20,8 @@ from tmpnav.scenario.limits import MAP_CELLS, YAML_BYTES
 from tmpnav.scenario.schema import MISSING, Ctx, Issue, key_text
 from tmpnav.scenario.yamlio import YamlLimitError, YamlValueError, read_yaml
 from tmpnav.types import (
+    DEFAULT_MAX_RISK,
+    DEFAULT_RISK_SOURCE,
     CostWeights,
     Door,
     Goals,
@@ -374,9 +376,19 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
             visit=tuple(d["goals"]["visit"]),
             per_robot=tuple((k, tuple(v)) for k, v in d["goals"]["robots"].items()),
         ),
-        planner=PlannerOptions(**d["planner"]),
+        planner=_planner(d["planner"], d["models"]["range_sensor"] is not None),
         key_lines={_display(raw, doc): line for raw, line in doc.lines.items()},
     )
+
+
+def _planner(p: dict[str, Any], range_sensor: bool) -> PlannerOptions:
+    """The planner's options; a team with a range sensor plans within DEFAULT_MAX_RISK unless the
+    scenario names its own threshold."""
+    if p["max_risk"] is not None:
+        return PlannerOptions(**p, max_risk_from="planner.max_risk")
+    if range_sensor:
+        return PlannerOptions(**{**p, "max_risk": DEFAULT_MAX_RISK}, max_risk_from=DEFAULT_RISK_SOURCE)
+    return PlannerOptions(**p)
 
 
 def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
