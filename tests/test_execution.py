@@ -394,7 +394,7 @@ def test_each_move_is_held_to_its_own_bound(corridor: PlanReport) -> None:
     result = execute(corridor, sessions=4)
     rates = {(robot, step): (hits, touches, bound) for robot, step, hits, touches, bound in result.move_rates(1)}
     assert set(rates) == {("r1", 0), ("r2", 0)}
-    for hits, touches, bound in rates.values():
+    for _hits, touches, bound in rates.values():
         assert touches == Rate(4, 4) and bound == pytest.approx(corridor.actions[0].risk[0], abs=1.0)
     rows = list(csv.DictReader(io.StringIO(moves_csv(result))))
     assert len(rows) == 2 * 2 and {r["step"] for r in rows} == {"1"}
