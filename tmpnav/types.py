@@ -181,8 +181,8 @@ CostValue = TypeVar("CostValue", float, np.ndarray)
 #: (planner.max_risk): every move's collision bound at most 5% (docs/planning.md)
 DEFAULT_MAX_RISK = 0.05
 DEFAULT_RISK_SOURCE = "the default for robots with a range sensor"
-#: m: the margin from the walls paths prefer and goal poses keep under a chance constraint when
-#: the scenario names none (roadmap.clearance; tmpnav.roadmap.graph.safe_weights)
+#: m: the margin from the walls paths prefer and goal poses keep when the robots carry a range
+#: sensor and the scenario names none (roadmap.clearance; tmpnav.roadmap.graph.safe_weights)
 SAFE_MARGIN = 0.5
 
 
