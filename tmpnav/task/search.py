@@ -53,9 +53,10 @@ EPSILON = 1e-9
 #: OR-Tools' guided local search stops after this many solutions: on 20-60 rooms and 2-8
 #: robots it reaches in 0.1-1.2 s the routes it reaches in 10 s (within 0.02%)
 ROUTING_SOLUTIONS = 500
-#: ... and after this many up to :data:`FEW_ROOMS` rooms: on the 10-room corridor and the
-#: 20-room building, 50, 100, 500 and 2,000 solutions gave the same routes, in 0.11 s and
-#: 0.23 s for 100 against 0.32 s and 1.42 s for 500 (at 40 rooms, 200 gave dearer routes)
+#: ... and after this many up to :data:`FEW_ROOMS` rooms and two robots: on the 10-room corridor
+#: and the 20-room building, 50, 100, 500 and 2,000 solutions gave the same routes, in 0.11 s and
+#: 0.23 s for 100 against 0.32 s and 1.42 s for 500 (at 40 rooms, 200 gave dearer routes; on the
+#: 20 rooms of building-4robots, 100 left a robot two rooms where 500 balanced the team)
 FEW_ROUTING_SOLUTIONS, FEW_ROOMS = 100, 20
 
 
@@ -190,7 +191,7 @@ class AnytimeSearch:
         # guided local search stops after ROUTING_SOLUTIONS solutions (the same routes on every run),
         # or at its time limit on a very large or slow problem
         limit = opts.routing_time if opts.routing_time is not None else min(10.0, max(1.0, opts.budget / 4))
-        few = len(self.goals.all_rooms) <= FEW_ROOMS
+        few = len(self.goals.all_rooms) <= FEW_ROOMS and len(self.model.robots) <= 2
         with self.times.timed("planner"):
             routes = solve_routes(
                 singles,
