@@ -120,7 +120,7 @@ def _figure(
     fig.savefig(ROOT / "docs" / "figures" / "lidar-corridor.png", dpi=110)
 
 
-def _forty_rooms(folder: Path) -> Path:
+def forty_rooms(folder: Path) -> Path:
     """building-4robots with 40 goal rooms spread over its corridors."""
     source = ROOT / "configs" / "building-4robots.yaml"
     doc = yaml.safe_load(source.read_text())
@@ -153,7 +153,7 @@ def timing(runs: int) -> str:
         cases = {
             "building-20": ROOT / "configs" / "building-20.yaml",
             "building-4robots": ROOT / "configs" / "building-4robots.yaml",
-            "40 rooms / 4 robots": _forty_rooms(folder),
+            "40 rooms / 4 robots": forty_rooms(folder),
         }
         for name, scenario in cases.items():
             with_s, without_s, notes = [], [], {}

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 import yaml
+from bench_lidar import forty_rooms  # benchmarks/ is the script's folder, first on sys.path
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "benchmarks" / "safety"
@@ -103,16 +104,6 @@ def plans() -> str:
     return "\n".join(lines)
 
 
-def _forty_rooms(folder: Path) -> Path:
-    doc = yaml.safe_load((ROOT / "configs" / "building-4robots.yaml").read_text())
-    names = sorted((r["name"] for r in doc["rooms"]), key=lambda n: (n[0], int(n[1:])))
-    doc["goals"] = {"visit": [names[round(k * (len(names) - 1) / 39)] for k in range(40)]}
-    doc["name"] = "building-4robots-40rooms"
-    target = folder / "building-4robots-40rooms.yaml"
-    target.write_text(yaml.safe_dump(doc, sort_keys=False))
-    return target
-
-
 def default(runs: int) -> str:
     lines = ["fresh `tmpnav plan` commands, a cold cache each: the default threshold (0.05) against --max-risk none"]
     with tempfile.TemporaryDirectory() as tmp:
@@ -120,7 +111,7 @@ def default(runs: int) -> str:
         cases = {
             "building-20": ROOT / "configs" / "building-20.yaml",
             "building-4robots": ROOT / "configs" / "building-4robots.yaml",
-            "40 rooms / 4 robots": _forty_rooms(folder),
+            "40 rooms / 4 robots": forty_rooms(folder),
         }
         for name, scenario in cases.items():
             seconds: dict[bool, list[float]] = {True: [], False: []}

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -11,21 +10,12 @@ from hypothesis import strategies as st
 
 from tests.belief.support import DT, models, random_case
 from tests.belief.test_kernel import assert_same_propagation
+from tests.world.test_lidar import LIDAR
 from tmpnav.belief.reference import propagate_reference
 from tmpnav.belief.rollout import ObservationNoise, Rollout, propagate_rollout
-from tmpnav.types import Belief, RangeSensor
+from tmpnav.types import Belief
 from tmpnav.world.grid import OccupancyGrid
 from tmpnav.world.lidar import ScanInformation, signed_distance
-
-LIDAR = RangeSensor(
-    range=12.0,
-    fov=2 * math.pi,
-    beams=60,
-    sigma_range=0.03,
-    min_range=0.1,
-    max_incidence=math.radians(75),
-    divergence=0.01,
-)
 
 
 def _with_scans(rng: np.random.Generator, rollout: Rollout) -> Rollout:
