@@ -81,23 +81,18 @@ def test_unsolvable(walled: Path, cache_dir: Path) -> None:
     assert_clean_failure(proc, UnsolvableError.exit_code, "found no plan")
 
 
-def test_a_roadmap_that_cuts_a_goal_off_its_robot_is_bad_input_not_unsolvable(tmp_path: Path) -> None:
+def test_a_roadmap_that_cut_a_goal_off_its_robot_grows_until_it_does_not(tmp_path: Path) -> None:
     """Found by the fuzzer (tests/fuzz/RESULTS.md): with 150 milestones this seed's roadmap
     never enters room B from r1's side, though free space does; the planner then said "no
     plan ... (a goal room that its robot cannot reach?)", exit 6, after costing every move.
-    Now: one line naming the room, the robot and the fix, before the oracle."""
+    Now the roadmap grows until free space and roadmap agree, and the scenario plans."""
     from tests.scenario.helpers import base_scenario, write_yaml
 
     doc = base_scenario()
     doc["roadmap"] = {"samples": 150, "instantiations": 2, "seed": 6692373}
     write_yaml(tmp_path / "scenario.yaml", doc)
     proc = tmpnav("plan", "scenario.yaml", "--no-cache", "-q", cwd=tmp_path)
-    assert_clean_failure(
-        proc,
-        2,
-        "room 'B': none of its pose instantiations connects to robot r1's start through the roadmap, though free "
-        "space joins them; increase roadmap.samples (now 150)",
-    )
+    assert proc.returncode == 0, proc.stderr
 
 
 @pytest.mark.slow

@@ -177,8 +177,8 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
     clearance = o.clearance if o.clearance is not None else scenario.roadmap.clearance
     if planner.encoding == "paper":
         clearance = 0.0
-    elif clearance is None:  # robots that see the walls keep clear of them; the paper's take the shortest paths
-        clearance = SAFE_MARGIN if models.range_sensor is not None else 0.0
+    elif clearance is None:  # robots that see the walls, or plan within a threshold, keep clear of walls
+        clearance = SAFE_MARGIN if models.range_sensor is not None or planner.max_risk is not None else 0.0
     roadmap = replace(scenario.roadmap, clearance=clearance)
     return replace(scenario, planner=planner, models=models, goals=o.goals or scenario.goals, roadmap=roadmap)
 

@@ -182,7 +182,8 @@ CostValue = TypeVar("CostValue", float, np.ndarray)
 DEFAULT_MAX_RISK = 0.05
 DEFAULT_RISK_SOURCE = "the default for robots with a range sensor"
 #: m: the margin from the walls paths prefer and goal poses keep when the robots carry a range
-#: sensor and the scenario names none (roadmap.clearance; tmpnav.roadmap.graph.safe_weights)
+#: sensor or plan within a threshold, and the scenario names none (roadmap.clearance;
+#: tmpnav.roadmap.graph.safe_weights)
 SAFE_MARGIN = 0.5
 
 

@@ -91,9 +91,22 @@ def test_shortest_path_is_shortest(loaded) -> None:  # type: ignore[no-untyped-d
 
 def test_room_that_cannot_connect_is_named(loaded) -> None:  # type: ignore[no-untyped-def]
     sc, world = loaded
-    with pytest.raises(RoadmapError, match=r"room '[ABC]': none of its 3 pose instantiations connects"):
-        # far too few samples to get through the doors
-        build_roadmap(world, sc.robots, replace(sc.roadmap, samples=10, neighbors=2))
+    with pytest.raises(RoadmapError, match=r"room '[ABC]': none of its 3 pose instantiations connects .* grown to 320"):
+        # one neighbour per milestone: even 32 times 10 milestones do not get through the doors
+        build_roadmap(world, sc.robots, replace(sc.roadmap, samples=10, neighbors=1))
+
+
+def test_a_roadmap_too_small_grows_until_every_room_connects(loaded) -> None:  # type: ignore[no-untyped-def]
+    """10 milestones of two neighbours each do not find the doors: the roadmap doubles until every
+    room reaches a start, the same on every run; a roadmap that connects at its size is not grown."""
+    sc, world = loaded
+    small = build_roadmap(world, sc.robots, replace(sc.roadmap, samples=10, neighbors=2))
+    assert set(small.instantiations) == {"A", "B", "C"} and all(small.instantiations.values())
+    assert small.n_nodes > 40
+    again = build_roadmap(world, sc.robots, replace(sc.roadmap, samples=10, neighbors=2))
+    assert np.array_equal(small.nodes, again.nodes) and np.array_equal(small.edges, again.edges)
+    enough = build_roadmap(world, sc.robots, sc.roadmap)
+    assert enough.n_nodes <= sc.roadmap.samples + 3 * sc.roadmap.instantiations + len(sc.robots)
 
 
 def test_only_the_roadmap_stage_imports_ompl() -> None:

@@ -301,7 +301,7 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             "--clearance",
             type=FiniteRange(min=0, max=5),
             metavar="M",
-            default_text="the scenario's roadmap.clearance, else 0.5 for robots with a range sensor, else 0",
+            default_text="the scenario's roadmap.clearance, else 0.5 with a range sensor or a threshold, else 0",
             help="The margin from the walls (m, beyond the robot's radius) that paths prefer and goal poses "
             "keep, as nav2's inflation does; 0 gives the paper's shortest paths.",
         ),

@@ -14,7 +14,10 @@ from __future__ import annotations
 
 import gc
 import hashlib
+import itertools
 import math
+import time
+from collections.abc import Callable
 from typing import Any
 
 import numba as nb
@@ -143,13 +146,24 @@ def plane(ob: Any, world: World) -> Any:
     return space
 
 
-def _grow(
-    world: World, free_cells: np.ndarray, params: RoadmapParams, specials: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Grow the PRM with OMPL and add ``specials`` (instantiations, starts) as milestones.
+#: the roadmap grows until every room connects to a robot's start, up to this many times
+#: ``roadmap.samples`` milestones (doubling each round) and GROWTH_SECONDS of growing
+GROWTH, GROWTH_SECONDS = 32, 120.0
 
-    Returns the vertices (N, 2) and undirected edges (E, 2) of the roadmap.
-    """
+
+def _grow(
+    world: World,
+    free_cells: np.ndarray,
+    params: RoadmapParams,
+    specials: np.ndarray,
+    connected: Callable[[np.ndarray, np.ndarray], bool],
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Grow the PRM with OMPL and add ``specials`` (instantiations, starts) as milestones, then
+    grow it further, doubling its milestones each round, until ``connected(nodes, edges)`` (every
+    room reaches a robot's start) or GROWTH times ``params.samples`` milestones (or GROWTH_SECONDS).
+
+    Returns the vertices (N, 2), the undirected edges (E, 2) and the milestones grown (before
+    the specials). A roadmap connected at ``params.samples`` is the one grown to that many."""
     from ompl import base as ob
     from ompl import geometric as og
     from ompl import util as ou
@@ -179,10 +193,28 @@ def _grow(
     prm.setProblemDefinition(pdef)  # PRM needs it before growing (it segfaults otherwise)
     prm.setup()
     milestones = prm.milestoneCount
-    prm.growRoadmapPtc(ob.PlannerTerminationCondition(lambda: milestones() >= params.samples))
+    target, started = params.samples, time.perf_counter()
+    prm.growRoadmapPtc(ob.PlannerTerminationCondition(lambda: milestones() >= target))
+    grown = milestones()
     # solve() adds the start and goal states as milestones, connected by PRM's own strategy;
     # the always-true termination condition stops it from growing the roadmap any further
     prm.solve(ob.plannerAlwaysTerminatingCondition())
+    nodes, edges = _roadmap_of(ob, si, prm)
+    while not connected(nodes, edges) and target < GROWTH * params.samples:
+        if time.perf_counter() - started > GROWTH_SECONDS:
+            break
+        target = min(2 * target, GROWTH * params.samples)
+        total = target + len(specials)
+        prm.growRoadmapPtc(ob.PlannerTerminationCondition(lambda total=total: milestones() >= total))
+        grown = target
+        nodes, edges = _roadmap_of(ob, si, prm)
+    del prm, pdef, si, space, goal, validator
+    gc.collect()  # release the OMPL objects now, not at interpreter exit
+    return nodes, edges, grown
+
+
+def _roadmap_of(ob: Any, si: Any, prm: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The PRM's vertices (N, 2) and undirected edges (E, 2), as plain arrays."""
     data = ob.PlannerData(si)
     prm.getPlannerData(data)
     n = data.numVertices()
@@ -192,16 +224,17 @@ def _grow(
         st = data.getVertex(i).getState()
         nodes[i] = st[0], st[1]
         edges.extend((i, j) for j in data.getEdges(i) if i < j)
-    del data, prm, pdef, si, space, goal, validator
-    gc.collect()  # release the OMPL objects now, not at interpreter exit
+    del data
     return nodes, np.array(edges, dtype=np.int64).reshape(-1, 2)
 
 
 def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapParams) -> Roadmap:
     """The roadmap with k pose instantiations per room and a node at every robot's start.
 
-    Instantiations that end up in no component holding a robot start are dropped; a room
-    left with none is an error naming it.
+    It grows beyond ``params.samples`` milestones while free space joins two of its special
+    milestones (instantiations, starts) that it does not (a door too narrow for uniform
+    sampling to find at that size), up to GROWTH times as many. Instantiations that end up in
+    no component holding a robot start are dropped; a room left with none is an error naming it.
     """
     radius = max(r.radius for r in robots)
     rng = np.random.default_rng(params.seed)
@@ -216,25 +249,46 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
         for room in world.rooms
     }
     specials = np.vstack([*inst.values(), starts])
-    nodes, edges = _grow(world, free_cells, params, specials)
+    sizes = [len(pts) for pts in inst.values()]
 
-    index = {(float(x), float(y)): i for i, (x, y) in enumerate(nodes)}
-    special_ids = np.array([index[(float(x), float(y))] for x, y in specials])
-    labels = _components(nodes.shape[0], edges)
-    start_ids = special_ids[-len(robots) :]
-    reachable = set(labels[start_ids].tolist())
+    def kept_of(nodes: np.ndarray, edges: np.ndarray) -> list[tuple[int, ...]]:
+        """Each room's instantiations (roadmap node indices) in a component holding a robot's start."""
+        index = {(float(x), float(y)): i for i, (x, y) in enumerate(nodes)}
+        special_ids = np.array([index[(float(x), float(y))] for x, y in specials])
+        labels = _components(nodes.shape[0], edges)
+        reachable = set(labels[special_ids[-len(robots) :]].tolist())
+        bounds = np.cumsum([0, *sizes])
+        return [
+            tuple(int(i) for i in special_ids[lo:hi] if labels[i] in reachable) for lo, hi in itertools.pairwise(bounds)
+        ]
+
+    # the roadmap is complete when every two specials that free space joins are in one of its
+    # components: each room then reaches every robot that free space lets into it
+    from scipy import ndimage
+
+    space, _ = ndimage.label(world.clearance >= radius + world.grid.resolution, structure=np.ones((3, 3), dtype=bool))
+    si, sj, _ = world.grid.cells(specials)
+    joined = space[si, sj]
+
+    def complete(nodes: np.ndarray, edges: np.ndarray) -> bool:
+        index = {(float(x), float(y)): i for i, (x, y) in enumerate(nodes)}
+        labels = _components(nodes.shape[0], edges)[[index[(float(x), float(y))] for x, y in specials]]
+        return all(len(set(labels[joined == g].tolist())) == 1 for g in np.unique(joined))
+
+    nodes, edges, grown = _grow(world, free_cells, params, specials, complete)
+    kept = kept_of(nodes, edges)
     instantiations: dict[str, tuple[int, ...]] = {}
-    offset = 0
-    for name, pts in inst.items():
-        ids = special_ids[offset : offset + len(pts)]
-        offset += len(pts)
-        kept = tuple(int(i) for i in ids if labels[i] in reachable)
-        if not kept:
+    for (name, pts), ids in zip(inst.items(), kept, strict=True):
+        if not ids:
             raise RoadmapError(
                 f"room {name!r}: none of its {len(pts)} pose instantiations connects to a robot's start "
-                f"through the roadmap; increase roadmap.samples (now {params.samples}) or widen the passage"
+                f"through the roadmap, grown to {grown} milestones (from roadmap.samples {params.samples}): "
+                "the passage to it is narrower than a robot, or too narrow to find; widen it, or raise "
+                "roadmap.samples or roadmap.neighbors"
             )
-        instantiations[name] = kept
+        instantiations[name] = ids
+    index = {(float(x), float(y)): i for i, (x, y) in enumerate(nodes)}
+    start_ids = [index[(float(x), float(y))] for x, y in starts]
     weights = np.linalg.norm(nodes[edges[:, 0]] - nodes[edges[:, 1]], axis=1)
     digest = hashlib.sha256(
         nodes.tobytes() + edges.tobytes() + repr(sorted(instantiations.items())).encode()

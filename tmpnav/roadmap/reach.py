@@ -52,7 +52,8 @@ def roadmap_cuts(scenario: Scenario, world: World, roadmap: Roadmap) -> str | No
             whose = "a robot's" if robot is None else f"robot {robot}'s"
             return (
                 f"room {room!r}: none of its pose instantiations connects to {whose} start through the roadmap, "
-                f"though free space joins them; increase roadmap.samples (now {scenario.roadmap.samples})"
+                f"though free space joins them, with the roadmap grown from roadmap.samples "
+                f"{scenario.roadmap.samples} as far as it grows; raise roadmap.samples or roadmap.neighbors"
             )
     return None
 

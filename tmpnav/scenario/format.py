@@ -406,7 +406,7 @@ ROADMAP = Section(
             "the margin from the walls (beyond the robot's radius) that paths prefer, as nav2's inflation "
             "does (an edge weighs more as its margin falls below it), and that goal poses keep where the room "
             "allows; 0: the paper's shortest paths (default: 0.5 m when the robots carry a range sensor, "
-            "models.range_sensor, else 0)",
+            "models.range_sensor, or plan within a threshold, planner.max_risk; else 0)",
         ),
     }
 )
