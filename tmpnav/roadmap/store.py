@@ -71,7 +71,7 @@ class RoadmapStore:
         except DAMAGE as err:
             moved = set_aside(path)
             where = f"; moved it to {moved.name}" if moved is not None else ""
-            self._warn(f"stored roadmap {path} is unreadable ({type(err).__name__}: {err}){where}; growing it again")
+            self.warn(f"stored roadmap {path} is unreadable ({type(err).__name__}: {err}){where}; growing it again")
             return None
 
     def save(self, key: str, roadmap: Roadmap) -> None:
@@ -82,9 +82,10 @@ class RoadmapStore:
         try:
             write_file(path, serialize(roadmap))
         except OSError as err:
-            self._warn(f"roadmap not stored in {path.parent} ({err.strerror or err})")
+            self.warn(f"roadmap not stored in {path.parent} ({err.strerror or err})")
 
-    def _warn(self, message: str) -> None:
+    def warn(self, message: str) -> None:
+        """Record a cache problem and warn of it once (RoadmapCacheWarning)."""
         self.warnings.append(message)
         warnings.warn(message, RoadmapCacheWarning, stacklevel=3)
 
@@ -149,8 +150,8 @@ class ScanStore:
     roadmaps, keyed by the map and the sensor: what one run computed, the next reads. Like a
     roadmap, a damaged file is set aside with one warning and computed again."""
 
-    def __init__(self, cache: CacheDir, warn: RoadmapStore):
-        self.cache, self.store = cache, warn
+    def __init__(self, cache: CacheDir, store: RoadmapStore):
+        self.cache, self.store = cache, store  # the store's warnings are the run's cache warnings
 
     def load(self, world: World, sensor: RangeSensor) -> int:
         """Preload ``world.scans(sensor)`` with the stored table; how many keys it held."""
@@ -162,7 +163,7 @@ class ScanStore:
         except DAMAGE as err:
             moved = set_aside(path)
             where = f"; moved it to {moved.name}" if moved is not None else ""
-            self.store._warn(f"stored scan table {path} is unreadable ({type(err).__name__}: {err}){where}")
+            self.store.warn(f"stored scan table {path} is unreadable ({type(err).__name__}: {err}){where}")
             return 0
         world.scans(sensor).preload(keys, factors)
         return int(keys.size)
@@ -177,7 +178,7 @@ class ScanStore:
         try:
             write_file(path, serialize_scans(*scans.contents()))
         except OSError as err:
-            self.store._warn(f"scan table not stored in {path.parent} ({err.strerror or err})")
+            self.store.warn(f"scan table not stored in {path.parent} ({err.strerror or err})")
 
 
 def serialize_scans(keys: np.ndarray, factors: np.ndarray) -> bytes:
