@@ -3,6 +3,7 @@
     .venv/bin/python benchmarks/bench_safety.py plans          # the shipped teams with their defaults
     .venv/bin/python benchmarks/bench_safety.py default        # default against --max-risk none, side by side
     .venv/bin/python benchmarks/bench_safety.py simulate [--sessions 1000]   # building-4robots executed
+    .venv/bin/python benchmarks/bench_safety.py paths          # what the clearance and the threshold cost
 
 Each writes benchmarks/safety/<what>.txt and prints it.
 
@@ -15,6 +16,9 @@ Each writes benchmarks/safety/<what>.txt and prints it.
   with 4 robots).
 * simulate: ``tmpnav simulate configs/building-4robots.yaml --sessions N -o DIR``: wall hits and
   robot contacts with their 95% intervals, per robot and per move against the move's bound.
+* paths: building-20 and building-4robots planned three ways, a cold cache each: the defaults
+  (max_risk 0.05, paths 0.5 m clear of walls), ``--max-risk none`` (the same paths), and
+  ``--max-risk none --clearance 0`` (the shortest paths): objective, makespan, rooms per robot.
 """
 
 from __future__ import annotations
@@ -137,6 +141,35 @@ def default(runs: int) -> str:
     return "\n".join(lines)
 
 
+def paths() -> str:
+    lines = ["fresh `tmpnav plan` commands, a cold cache each: what keeping clear of walls and the threshold cost"]
+    variants = {
+        "default": [],
+        "--max-risk none": ["--max-risk", "none"],
+        "shortest paths": ["--max-risk", "none", "--clearance", "0"],
+    }
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in ("building-20", "building-4robots"):
+            for label, extra in variants.items():
+                out = Path(tmp) / f"{name}-{len(list(Path(tmp).iterdir()))}"
+                proc, seconds = _tmpnav(
+                    "plan", f"configs/{name}.yaml", "-q", *extra, "--cache-dir", str(out / "c"), "-o", str(out)
+                )
+                if proc.returncode != 0:
+                    sys.exit(f"{name} {label} failed ({proc.returncode}): {proc.stderr[-600:]}")
+                doc = json.loads((out / "plan.json").read_text())
+                rooms = {r: v["rooms"] for r, v in doc["schedule"]["robots"].items()}
+                risks = [m["risk"] for a in doc["actions"] for m in a["moves"]]
+                found = re.search(r"objective .*?: ([0-9.]+)", proc.stdout)
+                lines.append(
+                    f"{name}, {label}: objective {found.group(1) if found else '?'}, makespan "
+                    f"{doc['schedule']['makespan']:.1f} s, rooms per robot {rooms}, largest move bound "
+                    f"{max(risks, default=0.0):.2g}, {seconds:.1f} s"
+                )
+                print(lines[-1], flush=True)
+    return "\n".join(lines)
+
+
 def simulate(sessions: int) -> str:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "sim"
@@ -150,7 +183,7 @@ def simulate(sessions: int) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("plans", "default", "simulate"))
+    parser.add_argument("what", choices=("plans", "default", "simulate", "paths"))
     parser.add_argument("--runs", type=int, default=2, help="default: runs of each case, each way")
     parser.add_argument("--sessions", type=int, default=1000, help="simulate: executions")
     args = parser.parse_args()
