@@ -292,10 +292,9 @@ def test_a_schedule_of_another_plan_is_refused() -> None:
         waypoints({"schema": "tmpnav-plan/2", "robots": [{"name": "r1"}]})
 
 
-def test_every_robot_gets_three_files() -> None:
-    assert sorted(files(plan_doc())) == sorted(
-        f"{r}.{ext}" for r in ("r1", "r2") for ext in ("csv", "follow_waypoints.yaml", "rviz_waypoints.yaml")
-    )
+def test_every_robot_gets_four_files_and_the_team_a_schedule() -> None:
+    exts = ("csv", "follow_waypoints.yaml", "rviz_waypoints.yaml", "moves.yaml")
+    assert sorted(files(plan_doc())) == sorted([*(f"{r}.{ext}" for r in ("r1", "r2") for ext in exts), "schedule.yaml"])
 
 
 def test_a_document_of_another_schema_is_refused() -> None:

@@ -40,10 +40,18 @@ from pathlib import Path
 from typing import Any
 
 from tmpnav.atomic import write_files
-from tmpnav.export.plan_times import MoveTimes, arrivals, makespan, move_times, read_plan, robot_moves
+from tmpnav.export import moves
+from tmpnav.export.plan_times import (
+    FRAME,
+    UNITS,
+    MoveTimes,
+    arrivals,
+    makespan,
+    move_times,
+    read_plan,
+    robot_moves,
+)
 
-FRAME = "map"
-UNITS = "metres and radians (yaw about +z, 0 along +x), times in seconds"
 CSV_COLUMNS = ("index", "x", "y", "yaw", "frame", "step", "kind", "room", "t", "sync", "partner", "depart", "wait")
 
 
@@ -201,13 +209,16 @@ def _cell(value: float | None) -> str:
 
 
 def files(doc: dict[str, Any]) -> dict[str, str]:
-    """File name -> text of every file of the export."""
+    """File name -> text of every file of the export: per robot its waypoint files and its move
+    requests (:mod:`tmpnav.export.moves`), and the team's schedule."""
+    requests = moves.files(moves.team(doc))
     out = {}
     for robot, points in waypoints(doc).items():
         out[f"{robot}.csv"] = csv_text(doc, robot, points)
         out[f"{robot}.follow_waypoints.yaml"] = follow_waypoints_yaml(doc, robot, points)
         out[f"{robot}.rviz_waypoints.yaml"] = rviz_waypoints_yaml(doc, robot, points)
-    return out
+        out[f"{robot}.moves.yaml"] = requests.pop(f"{robot}.moves.yaml")
+    return out | requests
 
 
 def write_nav2(doc: dict[str, Any], directory: Path) -> list[Path]:

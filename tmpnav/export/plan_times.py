@@ -17,6 +17,8 @@ from typing import Any, TypeVar
 from tmpnav.errors import InputError
 
 SCHEMAS = ("tmpnav-plan/1", "tmpnav-plan/2")
+FRAME = "map"  # the frame of every pose: the ROS map's (for a polygonal map, the scenario's coordinates)
+UNITS = "metres and radians (yaw about +z, 0 along +x), times in seconds"
 _T_TOL = 1e-6  # s: trajectory times are rounded to 1e-9 s
 
 T = TypeVar("T")
