@@ -19,7 +19,9 @@ from typing import Any
 import pytest
 import yaml
 
+from tests.export.fake_nav2 import check_order_kept, replay
 from tmpnav.errors import InputError
+from tmpnav.export.moves import read_team
 from tmpnav.export.nav2 import CSV_COLUMNS, files, waypoints, write_nav2
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -133,6 +135,18 @@ def test_the_paired_move_is_a_sync_point_on_both_robots(exported: tuple[dict[str
         departs[robot] = [(r["sync"], float(r["depart"])) for r in rows if r["sync"]]
         assert all(float(r["wait"]) >= 0.0 for r in rows if r["depart"])
     assert departs["r1"] == departs["r2"]
+
+
+@pytest.mark.slow
+def test_the_executor_sends_a_paired_move_to_both_robots_at_once(exported: tuple[dict[str, Any], Path]) -> None:
+    _, folder = exported
+    team = read_team(folder)
+    paired = [m for m in team.all_moves() if m.partner is not None]
+    assert paired, "the two-rooms plan pairs its robots"
+    for slower in ({}, {"r1": 1.5}, {"r2": 1.5}):
+        run, server = replay(team, slower)
+        check_order_kept(team, run)  # both moves of each pair sent together
+        assert {(s.robot, s.t) for s in server.sent} >= {(m.robot, m.depart) for m in paired if m.index == 1}
 
 
 def plan_doc() -> dict[str, Any]:
