@@ -48,6 +48,15 @@ def test_plan_read_save_and_export(tmp_path: Path) -> None:
     assert moved == {"r1": "B", "r2": "A"}
     assert all(len(s.goal_poses) == len(s.robots) for s in result.steps)
     assert set(result.trajectories) == {"r1", "r2"}
+    # what the summary reports, from the result: the makespan, the objective in its units, the
+    # collision bound, the largest std (plan.json's definition), conflicts left and warnings
+    doc = result.document()
+    assert result.makespan == doc["schedule"]["makespan"]
+    assert result.objective == (doc["objective"]["name"], doc["objective"]["resimulated"], doc["objective"]["units"])
+    assert result.risk == doc["risk"]["plan"] and result.largest_move_risk == doc["risk"]["largest_move"]
+    assert result.largest_std == pytest.approx(doc["risk"]["largest_std"])
+    assert result.conflicts == [] and doc["risk"]["conflicts"] == []
+    assert isinstance(result.warnings, list) and all(isinstance(w, str) for w in result.warnings)
     written = result.save(tmp_path / "out")
     assert [p.name for p in written] == ["plan.json", "plan.png", "schedule.png"]
     doc = json.loads((tmp_path / "out" / "plan.json").read_text())

@@ -5,6 +5,7 @@
     scenario = tmpnav.load("configs/corridor.yaml")          # validated, as `tmpnav validate`
     result = tmpnav.plan("configs/corridor.yaml", planner="enhsp-blind", timeout=60)
     print(result.status, result.planner_cost, result.resimulated_cost)
+    print(result.makespan, result.objective, result.risk, result.conflicts, result.warnings)
     for step in result.steps:
         print(step.index, step.moves, step.resimulated_cost)
     result.save("out")                                       # plan.json, plan.png, schedule.png
@@ -29,6 +30,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:  # imported lazily: `import tmpnav` stays fast
+    from tmpnav.belief.conflicts import Conflict
     from tmpnav.export.nav2 import Waypoint
     from tmpnav.results import PlanReport
     from tmpnav.rooms.proposal import Proposal
@@ -85,6 +87,51 @@ class PlanResult:
     @property
     def planner_cost(self) -> float:
         return float(self.report.planner_cost)
+
+    @property
+    def makespan(self) -> float:
+        """When the last robot ends its last move (s, on the team's clock, re-simulated)."""
+        return float(self.report.schedule.makespan)
+
+    @property
+    def objective(self) -> tuple[str, float, str]:
+        """What the plan minimised, its value (re-simulated) and the value's units: for example
+        ``("weighted", 531.6, "cost")`` or ``("makespan", 286.5, "s")``."""
+        from tmpnav.report.schedule import objective_values
+
+        o = objective_values(self.report)
+        return o.name, float(o.own), o.units
+
+    @property
+    def risk(self) -> float:
+        """The plan's collision bound: an upper bound on the probability that any robot touches a
+        wall along the plan (docs/models.md, "Collision bound")."""
+        return float(self.report.risk)
+
+    @property
+    def largest_move_risk(self) -> float:
+        """The collision bound of the plan's riskiest move (what ``max_risk`` limits)."""
+        return float(self.report.worst_risk)
+
+    @property
+    def largest_std(self) -> dict[str, float]:
+        """Each robot's largest position std along the plan (m): along the widest axis of its
+        position covariance, the square root of the largest eigenvalue (as plan.json's)."""
+        return {robot: float(s) for robot, s in self.report.largest_std().items()}
+
+    @property
+    def conflicts(self) -> list[Conflict]:
+        """Robots still in each other's way, by the independent checker (empty when none)."""
+        from tmpnav.report.quality import plan_conflicts
+
+        return plan_conflicts(self.report)
+
+    @property
+    def warnings(self) -> list[str]:
+        """Each reason to doubt the plan, one message each, as the summary's ``warning:`` lines."""
+        from tmpnav.report.quality import plan_warnings
+
+        return [w.message for w in plan_warnings(self.report)]
 
     @property
     def resimulated_cost(self) -> float:

@@ -329,6 +329,22 @@ def check_conflicts(report: PlanReport) -> None:
     )
 
 
+def in_own_units(progress: SearchProgress | None, scenario: Scenario) -> SearchProgress | None:
+    """The search's progress told in the objective's own units (the makespan's seconds for
+    ``makespan``, :meth:`tmpnav.task.objectives.Objective.own`): the best plan and the bound."""
+    from tmpnav.task.objectives import OBJECTIVES
+
+    objective = OBJECTIVES[scenario.planner.objective]
+    if progress is None or objective.units == "cost":
+        return progress
+    dt, tell = scenario.models.dt, progress
+
+    def told(seconds: float, best: float, bound: float | None, what: str) -> None:
+        tell(seconds, objective.own(best, dt), None if bound is None else objective.own(bound, dt), what)
+
+    return told
+
+
 def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, World] | None) -> PlanReport:
     """The plan, whether or not it keeps within the chance constraint."""
     from tmpnav.attachment.conflicts import keep_apart
@@ -341,7 +357,7 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
         prep = prepare(path, options, times, loaded, on_loaded=get_ready)  # ENHSP readied meanwhile
         try:
             store = prep.oracle.cache if options.execution.use_cache else None
-            watch = SearchRun(times, options.reporters.search)
+            watch = SearchRun(times, in_own_units(options.reporters.search, prep.scenario))
             run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch)
             planned = plan_stage(run)
             task, apart = planned.task, None

@@ -116,8 +116,9 @@ class Schedule:
         return sum(m.end - m.start for m in self.timeline(robot))
 
     def idle(self, robot: str) -> float:
-        """Seconds of the makespan the robot does not drive: waits, and the time after its last move."""
-        return self.makespan - self.busy(robot)
+        """Seconds of the makespan the robot neither drives nor waits for a move: the time after
+        its last move, so that busy + waits + idle = makespan."""
+        return max(0.0, self.makespan - self.busy(robot) - self.waits(robot))
 
     def waits(self, robot: str) -> float:
         """Seconds the robot waits between its moves."""
@@ -206,6 +207,13 @@ class BoundSummary:
     relaxation: str  # what proved it: "exact" (ENHSP's optimal search), "flow", "assignment", ...
     gap: float  # (plan cost - bound) / plan cost
     proved_optimal: bool
+
+    def against(self, objective: float) -> BoundSummary:
+        """The same bound against a plan changed after the search (kept apart: waits, detours and
+        split pairs the bound's plan space does not hold), of objective value ``objective``: its
+        gap, clipped at 0, and no proof of optimality."""
+        gap = max(0.0, (objective - self.value) / objective) if objective > 0.0 else 0.0
+        return BoundSummary(self.value, self.relaxation, gap, False)
 
 
 @dataclass(frozen=True)

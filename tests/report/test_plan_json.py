@@ -107,6 +107,7 @@ def test_makespan_and_objective(plan_doc: dict[str, Any], plan_report: Any) -> N
     # the test plan's objective is the paper's: the sum of action costs, no price on time
     assert plan_doc["objective"] == {
         "name": "cost",
+        "units": "cost",
         "span_weight": 0.0,
         "planner": plan_doc["cost"]["planner"],
         "resimulated": plan_doc["cost"]["resimulated"],
@@ -122,10 +123,16 @@ def test_an_objective_that_prices_time(plan_report: Any, name: str) -> None:
     weights = report.scenario.cost
     w = OBJECTIVES[name].span_weight(weights)
     assert w > 0 and doc["objective"]["name"] == name and doc["objective"]["span_weight"] == w
-    assert doc["objective"]["resimulated"] == pytest.approx(
-        doc["cost"]["resimulated"] + w * doc["makespan"]["resimulated"]
-    )
-    assert doc["objective"]["planner"] == pytest.approx(doc["cost"]["planner"] + w * doc["makespan"]["planner"])
+    if name == "makespan":  # in its own units: the makespan's seconds, not cost + 10^4 per s
+        assert doc["objective"]["units"] == "s"
+        assert doc["objective"]["resimulated"] == doc["makespan"]["resimulated"]
+        assert doc["objective"]["planner"] == doc["makespan"]["planner"]
+    else:
+        assert doc["objective"]["units"] == "cost"
+        assert doc["objective"]["resimulated"] == pytest.approx(
+            doc["cost"]["resimulated"] + w * doc["makespan"]["resimulated"]
+        )
+        assert doc["objective"]["planner"] == pytest.approx(doc["cost"]["planner"] + w * doc["makespan"]["planner"])
     # a planner whose costs had no durations saw no makespan: null, and so is its objective
     blind = dataclasses.replace(report, task=dataclasses.replace(report.task, schedule=None))
     doc = plan_document(blind)
@@ -252,8 +259,9 @@ def test_schedule_is_consistent_with_the_actions(plan_doc: dict[str, Any], plan_
         for prev, nxt in itertools.pairwise(timeline):
             assert nxt["ready"] == prev["end"] and nxt["step"] > prev["step"]
         busy = sum(m["end"] - m["start"] for m in timeline)
-        assert entry["busy"] == pytest.approx(busy) and entry["idle"] == pytest.approx(schedule["makespan"] - busy)
-        assert entry["waits"] == pytest.approx(sum(m["wait"] for m in timeline))
+        waits = sum(m["wait"] for m in timeline)
+        assert entry["busy"] == pytest.approx(busy) and entry["waits"] == pytest.approx(waits)
+        assert entry["busy"] + entry["waits"] + entry["idle"] == pytest.approx(schedule["makespan"])
     # the two moves of a paired step start together
     for a in plan_doc["actions"]:
         if len(a["robots"]) == 2:

@@ -4,12 +4,13 @@ makespan and the objective, the robots' time, their beliefs, time per stage."""
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 from typing import Any
 
+import numpy as np
 import pytest
 
+from tmpnav.belief.risk import position_std
 from tmpnav.report.text import plan_summary
 from tmpnav.types import PlanStatus
 
@@ -115,12 +116,13 @@ def test_beliefs_per_robot(lines: list[str], plan_report: Any) -> None:
     for row, robot in zip(rows, ["r1", "r2"], strict=True):
         match = re.search(r"(\d+\.\d) m\s+(\d+\.\d{2}) / (\d+\.\d{2}) m\s+\d+\.\d deg\s+([\d.e+-]+)$", row)
         assert match, row
-        stds = [math.sqrt(s.cov[0][0] + s.cov[1][1]) for s in plan_report.trajectories[robot]]  # sqrt(var x + var y)
+        stds = [float(position_std(np.array(s.cov))) for s in plan_report.trajectories[robot]]  # sqrt(lambda_max)
         assert float(match[2]) == pytest.approx(max(stds), abs=0.005)
         assert float(match[3]) == pytest.approx(stds[-1], abs=0.005)
     # the plan's collision bound and the conflicts in one line under the table
-    assert lines[i + 4].startswith("collision bound: plan ")
-    assert "robots in each other's way: " in lines[i + 4]
+    assert lines[i + 4].startswith("(pos. std: along the widest axis")
+    assert lines[i + 5].startswith("collision bound: plan ")
+    assert "robots in each other's way: " in lines[i + 5]
 
 
 def test_times_and_cache(lines: list[str], plan_report: Any) -> None:
@@ -166,23 +168,30 @@ def test_plain_text(plan_report: Any) -> None:
 def test_satisficing_and_cache_off(plan_report: Any) -> None:
     other = dataclasses.replace(
         plan_report,
-        task=dataclasses.replace(plan_report.task, status=PlanStatus.SOLVED_SATISFICING),
+        task=dataclasses.replace(plan_report.task, status=PlanStatus.SOLVED_SATISFICING, bound=None),
         cache=dataclasses.replace(plan_report.cache, enabled=False, hits=0, warnings=("cache is read-only",)),
     )
     text = plan_summary(other)
-    assert "solved-satisficing (not proven optimal)" in text.splitlines()[0]
+    assert "solved-satisficing (not proven optimal)" in text.splitlines()[0]  # no bound to say how far
     assert "cache: off (" in text
     assert "cache warning: cache is read-only" in text
 
 
 def test_robots_kept_apart(kept_report: Any) -> None:
     """By default robots in each other's way are kept apart after planning: the summary says
-    how, what it cost against the plan as planned, and that the bound's proof is the plan's as
-    planned; no conflict is left."""
+    how and what it cost against the plan as planned; the status, the bound's gap and its verdict
+    are the plan kept apart's, one vocabulary (the plan searched was proved optimal, the plan
+    kept apart is not); no conflict is left."""
     lines = plan_summary(kept_report).splitlines()
     apart = kept_report.apart
     assert apart is not None and (apart.conflicts_before, apart.conflicts_left) == (1, 0)
-    assert any(line.endswith("as planned, before the robots were kept apart") for line in lines)
+    assert lines[0].endswith(", solved-satisficing")
+    bound = kept_report.task.bound
+    assert bound is not None and not bound.proved_optimal
+    (line,) = [line for line in lines if line.startswith("lower bound")]
+    assert line.endswith(
+        f"; gap {100 * bound.gap:.2f}% after keeping the robots apart; the plan searched: proved optimal"
+    )
     assert any(line.endswith("robots in each other's way: none") for line in lines)
     i = next(i for i, line in enumerate(lines) if line.startswith("kept apart: 1 -> 0 conflicts by "))
     cost = kept_report.resimulated_cost - apart.cost_before

@@ -130,3 +130,4 @@ def test_a_paired_move_starts_when_both_robots_are_free() -> None:
     assert [(m.ready, m.start, m.end) for m in r2] == [(0.0, 0.0, 4.0), (4.0, 10.0, 17.0)]  # r2 waits 6 s for r1
     assert found.makespan == 17.0 and found.waits("r2") == 6.0 and found.waits("r1") == 0.0
     assert found.busy("r1") == 15.0 and found.idle("r1") == 2.0
+    assert found.busy("r2") == 11.0 and found.idle("r2") == 0.0  # busy + waits + idle = makespan

@@ -462,9 +462,9 @@ def keep_apart(
     they belong to as a TaskResult, the delays and detours to run it with, and what was done.
     None when the plan has no conflict, or nothing found removes one (without a move over
     ``delta``). The plan changed is no longer the planner's proved optimum: its status becomes
-    satisficing; where detours or sidesteps changed a step, its cost is its executed cost (the
-    task planner never saw that motion). ``cost_before`` and ``makespan_before`` are those of
-    the plan as planned, run on the clock.
+    satisficing, and its bound's gap is measured against it; where detours or sidesteps changed
+    a step, its cost is its executed cost (the task planner never saw that motion).
+    ``cost_before`` and ``makespan_before`` are those of the plan as planned, run on the clock.
 
     Without a threshold, a plan kept apart is returned only when its objective is at most
     (1 + MAX_RISE) times the plan's as planned, and no sidestep is tried past RUN_BUDGET clock
@@ -474,21 +474,24 @@ def keep_apart(
         return None
     if delta is not None and max((m.risk for m in res.run.moves), default=0.0) > delta:
         return None  # kept apart only by a move over the chance constraint: the conflicts stay reported
+    w, objective = carried.scenario.cost, OBJECTIVES[carried.scenario.planner.objective]
     if delta is None:
-        w, objective = carried.scenario.cost, OBJECTIVES[carried.scenario.planner.objective]
         value = objective.value(sum(res.run.step_costs(len(res.plan), w)), res.run.makespan, w)
         if value > (1.0 + MAX_RISE) * objective.value(cost_before, makespan_before, w):
             return None  # a wait or detour that costs the robots their localisation: reported, not applied
     replanned = res.plan != task.steps  # sidesteps or a split pair: steps the planner never saw
     executed = res.run.step_costs(len(res.plan), carried.scenario.cost, delta)
+    step_costs = tuple(executed) if replanned or res.detours else task.step_costs
+    value = objective.value(sum(step_costs), res.run.makespan, w)
     kept = replace(
         task,
         status=PlanStatus.SOLVED_SATISFICING,
         steps=res.plan,
         action_names=action_names(res.plan) if replanned else task.action_names,
-        step_costs=tuple(executed) if replanned or res.detours else task.step_costs,
+        step_costs=step_costs,
         schedule=res.run.schedule,
         pddl=None if replanned else task.pddl,
+        bound=None if task.bound is None else task.bound.against(value),
     )
     apart = KeptApart(
         conflicts_before=len(res.conflicts_before),

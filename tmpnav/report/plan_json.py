@@ -19,7 +19,7 @@ from dataclasses import asdict
 import numpy as np
 
 from tmpnav.report.quality import plan_conflicts, plan_warnings
-from tmpnav.report.schedule import driving_steps, objective_values, step_windows
+from tmpnav.report.schedule import bound_values, driving_steps, objective_values, step_windows
 from tmpnav.results import JSON, STAGES, CacheUse, PlanReport, Schedule, TimedMove
 from tmpnav.types import PlannedAction, Roadmap, TrajectoryStep
 from tmpnav.version import __version__
@@ -101,7 +101,8 @@ def _timed_move(move: TimedMove) -> JSON:
 
 def schedule_section(schedule: Schedule) -> JSON:
     """plan.json's ``schedule``: the makespan, and per robot its moves on the shared clock with
-    the time it drives (``busy``), does not (``idle``, waits included) and waits between moves."""
+    the time it drives (``busy``), waits before its moves (``waits``) and neither (``idle``, after its
+    last move): busy + waits + idle = makespan."""
     return {
         "makespan": number(schedule.makespan, 9),
         "robots": {
@@ -126,9 +127,10 @@ def _objective(report: PlanReport) -> tuple[JSON, JSON]:
     }
     objective: JSON = {
         "name": o.name,
+        "units": o.units,
         "span_weight": number(o.span_weight),
-        "planner": None if o.planner_value is None else number(o.planner_value),
-        "resimulated": number(o.value),
+        "planner": None if o.planner_own is None else number(o.planner_own),
+        "resimulated": number(o.own),
     }
     return makespan, objective
 
@@ -259,11 +261,12 @@ def _search(report: PlanReport) -> JSON:
 
 
 def _bound(report: PlanReport) -> JSON:
-    b = report.task.bound
+    b = bound_values(report)
     if b is None:
         return None
     return {
         "value": number(b.value),
+        "units": b.units,
         "relaxation": b.relaxation,
         "gap": number(b.gap),
         "proved_optimal": b.proved_optimal,

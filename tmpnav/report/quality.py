@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from tmpnav.belief.conflicts import Conflict
 from tmpnav.choices import time_budget
 from tmpnav.planning.safety import conflicts_left, riskiest_point, what_would_help
-from tmpnav.report.schedule import move_at, objective_values
+from tmpnav.report.schedule import bound_values, move_at, objective_values
 from tmpnav.results import PlanReport
 from tmpnav.types import Door, TrajectoryStep
 
@@ -94,11 +94,12 @@ def warning_lines(report: PlanReport, width: int = 100) -> list[str]:
 
 
 def _gap(report: PlanReport) -> PlanWarning | None:
-    bound, search = report.task.bound, report.task.search
+    bound, search = bound_values(report), report.task.search
     if bound is None or bound.proved_optimal or not math.isfinite(bound.gap) or bound.gap <= GAP_WARN:
         return None
+    value = f"{bound.value:.1f} s" if bound.units == "s" else f"{bound.value:.3f}"
     text = (
-        f"the plan may be far from the best: its lower bound, {bound.value:.3f}, is {100 * bound.gap:.0f}% below "
+        f"the plan may be far from the best: its lower bound, {value}, is {100 * bound.gap:.0f}% below "
         f"{_planned(report)} (warned above {100 * GAP_WARN:.0f}%)."
     )
     if search is not None and search.stopped == "time budget":
@@ -124,6 +125,9 @@ def _planned(report: PlanReport) -> str:
     """What the bound is compared with: the plan's objective as the planner saw it (its cost
     when the objective puts no price on time)."""
     o = objective_values(report)
+    if o.units == "s":
+        makespan = o.planner_makespan if o.planner_makespan is not None else o.makespan
+        return f"its makespan, {makespan:.1f} s"
     if not o.span_weight:
         return f"its cost, {report.planner_cost:.3f}"
     value = o.planner_value if o.planner_value is not None else o.value

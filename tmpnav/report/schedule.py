@@ -68,6 +68,9 @@ class ObjectiveValues:
     planner_makespan: float | None  # s, the planner's schedule's
     value: float  # of the re-simulated plan
     planner_value: float | None  # of the plan as the planner saw it
+    units: str = "cost"  # the objective's own: cost, or s (the makespan objective)
+    own: float = 0.0  # ``value`` in those units
+    planner_own: float | None = None  # ``planner_value`` in those units
 
     def differs(self, tol: float = 5e-4) -> bool:
         """Whether the planner's makespan or value is not the re-simulated one (or unknown)."""
@@ -81,12 +84,45 @@ def objective_values(report: PlanReport) -> ObjectiveValues:
     name = report.scenario.planner.objective
     objective, weights = OBJECTIVES[name], report.scenario.cost
     makespan, planned = report.schedule.makespan, report.task.makespan
+    value = objective.value(report.resimulated_cost, makespan, weights)
+    planner_value = None if planned is None else objective.value(report.planner_cost, planned, weights)
+    dt = report.scenario.models.dt
     return ObjectiveValues(
         name=name,
         doc=objective.doc,
         span_weight=objective.span_weight(weights),
         makespan=makespan,
         planner_makespan=planned,
-        value=objective.value(report.resimulated_cost, makespan, weights),
-        planner_value=None if planned is None else objective.value(report.planner_cost, planned, weights),
+        value=value,
+        planner_value=planner_value,
+        units=objective.units,
+        own=objective.own(value, dt),
+        planner_own=None if planner_value is None else objective.own(planner_value, dt),
     )
+
+
+@dataclass(frozen=True)
+class BoundValues:
+    """The plan's lower bound in its objective's own units (:meth:`tmpnav.task.objectives.Objective.own`):
+    on the makespan objective a bound on the makespan (s), and the gap (plan - bound) / plan
+    between the two in those units."""
+
+    value: float
+    relaxation: str
+    gap: float
+    proved_optimal: bool
+    units: str
+
+
+def bound_values(report: PlanReport) -> BoundValues | None:
+    """``report``'s lower bound and gap in its objective's own units; None without a bound."""
+    b = report.task.bound
+    if b is None:
+        return None
+    o = objective_values(report)
+    if o.units == "cost":
+        return BoundValues(b.value, b.relaxation, b.gap, b.proved_optimal, o.units)
+    value = OBJECTIVES[report.scenario.planner.objective].own(b.value, report.scenario.models.dt)
+    plan = o.planner_makespan if o.planner_makespan is not None else o.makespan
+    gap = 0.0 if b.proved_optimal or plan <= 0.0 else max(0.0, (plan - value) / plan)
+    return BoundValues(value, b.relaxation, gap, b.proved_optimal, o.units)

@@ -279,7 +279,9 @@ def _title(report: PlanReport) -> str:
     pairs = sum(len(a.moves) == 2 for a in report.actions)
     paired = f", {pairs} paired" if pairs else ""
     cost = report.resimulated_cost
-    if o.span_weight:
+    if o.units == "s":
+        value = f"the makespan, {o.own:.1f} s, then the sum of action costs, {cost:.3f}"
+    elif o.span_weight:
         value = f"cost {cost:.3f} + {o.span_weight:g} per s x {o.makespan:.1f} s = {o.value:.3f}"
     else:
         value = f"the sum of action costs, {o.value:.3f}"

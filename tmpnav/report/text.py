@@ -5,8 +5,9 @@ a lower bound far below its cost (or objective), a robot more uncertain than a d
 allows. All robots move at once, on one clock: a step's ``t [s]`` is its window on that clock
 (steps of different robots overlap); under the totals, the makespan and the objective; then one
 row per robot: its rooms, its time driving (``busy``, in control steps), waiting before its
-moves (``waits``) and not driving (``idle``, waits included), the distance its belief mean
-drives, its position std (largest / at the end), its heading std at the end and the collision
+moves (``waits``) and neither (``idle``, after its last move: busy + waits + idle = makespan),
+the distance its belief mean drives, its position std along the widest axis of its covariance
+(sqrt of the largest eigenvalue; largest / at the end), its heading std at the end and the collision
 bound of its riskiest move; then the plan's collision bound and robots in each other's way.
 
 Example (the paper's Fig. 2 task, ``tmpnav plan configs/corridor.yaml --costs table``, a
@@ -26,7 +27,8 @@ second time)::
     robot  rooms    busy   waits  idle [s]  travelled  pos. std max / end  heading std  collision bound
     r1         1    18.5     0.0       2.0      7.1 m       0.21 / 0.21 m      6.4 deg            0.045
     r2         1    20.5     0.0       0.0      7.6 m       0.16 / 0.12 m      2.3 deg            0.005
-    (busy: driving, in control steps of 0.5 s; idle: the rest of the makespan; std: of the belief)
+    (busy: driving, in control steps of 0.5 s; idle: after the last move; busy + waits + idle: makespan)
+    (pos. std: along the widest axis of the position covariance, the sqrt of its largest eigenvalue)
     collision bound: plan 0.05 (no --max-risk); robots in each other's way: 1, the first:
      r1 and r2 at 8.0 s, 0.04 m apart, 0.94 m needed; --max-risk keeps robots apart: docs/planning.md
 
@@ -44,11 +46,15 @@ from pathlib import Path
 
 import numpy as np
 
+from tmpnav.belief.risk import position_std
 from tmpnav.choices import STOP_MEANINGS
 from tmpnav.report.quality import plan_conflicts, warning_lines
-from tmpnav.report.schedule import T_TOL, driving_steps, objective_values, step_windows
+from tmpnav.report.schedule import T_TOL, bound_values, driving_steps, objective_values, step_windows
 from tmpnav.results import STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
+from tmpnav.task.bound import OPTIMAL_GAP
+from tmpnav.task.objectives import OBJECTIVES
+from tmpnav.types import PlanStatus
 
 
 def _display_path(path: Path) -> str:
@@ -77,8 +83,8 @@ def _goals(report: PlanReport) -> str:
 def _header(report: PlanReport) -> list[str]:
     sc = report.scenario
     status = report.status.value
-    if status == "solved-satisficing":
-        status += " (not proven optimal)"
+    if report.task.bound is None and report.status is PlanStatus.SOLVED_SATISFICING:
+        status += " (not proven optimal)"  # with a bound, its line below says how far from it
     mutual = "on" if sc.models.mutual_observations else "off"
     return [
         f"{sc.name} ({_display_path(sc.source)}): encoding {report.encoding}, planner {report.planner}, {status}",
@@ -117,12 +123,20 @@ def _search(report: PlanReport) -> list[str]:
                 f"{_plural(search.improvements, 'improvement')}; stopped: {STOP_MEANINGS[search.stopped]}"
             )
         lines.append(line)
-    if bound is not None:
-        verdict = "proved optimal" if bound.proved_optimal else f"gap {100 * bound.gap:.2f}%"
-        if report.apart is not None:
-            verdict += " as planned, before the robots were kept apart"
-        what = "lower bound on the objective" if objective_values(report).span_weight else "lower bound"
-        lines.append(f"{what}: {_cost(bound.value)} ({bound.relaxation}); {verdict}")
+    own = bound_values(report)
+    if bound is not None and own is not None:
+        verdict = "proved optimal" if own.proved_optimal else f"gap {100 * own.gap:.2f}%"
+        apart = report.apart
+        if apart is not None and not own.proved_optimal:
+            objective = OBJECTIVES[report.scenario.planner.objective]
+            searched = objective.value(apart.cost_before, apart.makespan_before, report.scenario.cost)
+            if searched > 0.0 and (searched - bound.value) / searched <= OPTIMAL_GAP:
+                verdict += " after keeping the robots apart; the plan searched: proved optimal"
+        if own.units == "s":
+            lines.append(f"lower bound on the makespan: {own.value:.1f} s ({own.relaxation}); {verdict}")
+        else:
+            what = "lower bound on the objective" if objective_values(report).span_weight else "lower bound"
+            lines.append(f"{what}: {_cost(own.value)} ({own.relaxation}); {verdict}")
     return lines
 
 
@@ -165,6 +179,9 @@ def _objective(report: PlanReport) -> list[str]:
     makespan = f"makespan {o.makespan:.1f} s"
     if o.planner_makespan is not None and abs(o.planner_makespan - o.makespan) > T_TOL:
         makespan += f" (planner's schedule: {o.planner_makespan:.1f} s)"
+    if o.units == "s":  # the makespan first, then the sum of costs: each in its own units
+        value = f"{o.own:.1f} s, then cost {_cost(report.resimulated_cost)}"
+        return [f"{makespan}; objective {o.name} (the makespan, then the sum of action costs): {value}"]
     formula = f"cost + {o.span_weight:g} per s of makespan" if o.span_weight else "the sum of action costs"
     value = _cost(o.value)
     if o.planner_value is not None and abs(o.planner_value - o.value) > 5e-4:
@@ -174,9 +191,9 @@ def _objective(report: PlanReport) -> list[str]:
 
 def _robots(report: PlanReport) -> list[str]:
     """One row per robot: on the shared clock, the rooms it reaches, its seconds driving (busy),
-    waiting for a partner or held back before its moves (waits), and not driving within the
-    makespan (idle, waits included); in belief space, the distance its belief mean drives, its
-    position std (largest along the plan / at its end), its heading std at the end, and the
+    waiting for a partner or held back before its moves (waits), and neither (idle: after its last
+    move); in belief space, the distance its belief mean drives, its position std along the
+    widest axis (largest along the plan / at its end), its heading std at the end, and the
     collision bound of its riskiest move. Then the plan's collision bound and its conflicts."""
     schedule, dt = report.schedule, report.scenario.models.dt
     rows = ["robot  rooms    busy   waits  idle [s]  travelled  pos. std max / end  heading std  collision bound"]
@@ -194,14 +211,17 @@ def _robots(report: PlanReport) -> list[str]:
         driving = np.array([a is not None for a in driving_steps(schedule, robot, [s.t for s in steps])])
         legs = np.linalg.norm(np.diff(means[:, :2], axis=0), axis=1)
         travelled = float(np.sum(legs[driving[1:]]))  # standing, the mean only shifts with observations
-        pos_std = np.sqrt(np.clip(covs[:, 0, 0] + covs[:, 1, 1], 0.0, None))  # sqrt(trace of the (x, y) block)
+        pos_std = position_std(covs)  # sqrt(lambda_max) of the (x, y) block: along its widest axis
         heading_std = math.degrees(math.sqrt(max(covs[-1, 2, 2], 0.0)))
         risks = [p for a in report.actions for (r, _, _), p in zip(a.moves, a.risk, strict=False) if r == robot]
         stds = f"{pos_std.max():.2f} / {pos_std[-1]:.2f} m"
         rows.append(
             f"{timing}  {travelled:>7.1f} m  {stds:>18}  {heading_std:>7.1f} deg  {max(risks, default=0.0):>15.2g}"
         )
-    rows.append(f"(busy: driving, in control steps of {dt:g} s; idle: the rest of the makespan; std: of the belief)")
+    rows.append(
+        f"(busy: driving, in control steps of {dt:g} s; idle: after the last move; busy + waits + idle: makespan)"
+    )
+    rows.append("(pos. std: along the widest axis of the position covariance, the sqrt of its largest eigenvalue)")
     rows.extend(_risk_lines(report))
     return rows
 

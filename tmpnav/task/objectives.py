@@ -19,6 +19,7 @@ A new objective is a name in tmpnav.choices and an entry here.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -36,11 +37,25 @@ class Objective:
     name: Name
     doc: str
     span_weight: Callable[[CostWeights], float]
+    #: its own units: ``cost`` (unit-less, as the action costs) or ``s`` (the makespan's seconds)
+    units: str = "cost"
 
     def value(self, cost: float, makespan: float, weights: CostWeights) -> float:
         """The objective of a plan whose actions cost ``cost`` in all and which ends at ``makespan`` s."""
         w = self.span_weight(weights)
         return cost + w * makespan if w else cost
+
+    def own(self, value: float, dt: float) -> float:
+        """A value of :meth:`value`, a plan's or a lower bound's, in the objective's own units.
+
+        In cost units it is the value itself. In seconds (``makespan``) it is the makespan on
+        the clock's grid of ``dt`` s that the value implies: a plan's cost + W m, with its sum of
+        costs below W dt, gives its makespan m; a lower bound B on cost + W m over every plan
+        gives m >= dt floor(B / (W dt)), a lower bound on the makespan. W is MAKESPAN_WEIGHT."""
+        if self.units == "cost" or not math.isfinite(value):
+            return value
+        w = MAKESPAN_WEIGHT
+        return dt * math.floor(value / (w * dt) + 1e-9)
 
 
 OBJECTIVES: dict[Name, Objective] = {
@@ -48,6 +63,6 @@ OBJECTIVES: dict[Name, Objective] = {
     for o in (
         Objective("weighted", "the sum of action costs plus cost.M_T per second of makespan", lambda w: w.M_T),
         Objective("cost", "the paper's sum of action costs; the team's time does not count", lambda w: 0.0),
-        Objective("makespan", "the makespan first, then the sum of action costs", lambda w: MAKESPAN_WEIGHT),
+        Objective("makespan", "the makespan first, then the sum of action costs", lambda w: MAKESPAN_WEIGHT, units="s"),
     )
 }
