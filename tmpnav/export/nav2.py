@@ -1,11 +1,12 @@
-"""A plan -> each robot's ordered waypoints with their times, in the files a ROS 2 (nav2) user feeds a robot.
+"""A plan -> the files a ROS 2 (nav2) user feeds a team of robots: each robot's waypoints with their
+times (this module) and its moves as ``NavigateThroughPoses`` goals (:mod:`tmpnav.export.moves`).
 
-The input is the plan document (plan.json, docs/plan-json.md; schema ``tmpnav-plan/2``, or
-``tmpnav-plan/1`` written before plans were schedules), so a plan saved earlier exports the
-same as one just made. Each robot's waypoints are its start pose, then for each plan step it
-takes part in, the roadmap nodes of its path after the first (``via``) ending at the step's
-goal pose in the target room (``goal``). A via waypoint faces the next one (tmpnav's robots
-turn on the spot at roadmap nodes); a goal has the planned heading.
+The input is the plan document (plan.json, docs/plan-json.md; schema ``tmpnav-plan/2``, or the
+older ``tmpnav-plan/1``), so a plan saved earlier exports the same as one just made. Each
+robot's waypoints are its start pose, then for each plan step it takes part in, the roadmap
+nodes of its path after the first (``via``) ending at the step's goal pose in the target room
+(``goal``). A via waypoint faces the next one (tmpnav's robots turn on the spot at roadmap
+nodes); a goal has the planned heading.
 
 Times, on the team's shared clock (seconds from the plan's start): ``t``, when the plan has
 the robot at a waypoint; on the waypoint a move leaves from (the start pose, or the goal of
@@ -29,7 +30,8 @@ Files, per robot (units: metres, radians and seconds, yaw about +z from +x; pose
   nav2_msgs/action/FollowWaypoints "$(cat r1.follow_waypoints.yaml)"``), one comment per pose
   with its times;
 - ``<robot>.rviz_waypoints.yaml``: the file the Nav2 RViz panel loads ("Load WPs"):
-  ``waypoints: {waypoint0: {pose: [x, y, z], orientation: [w, x, y, z]}, ...}``.
+  ``waypoints: {waypoint0: {pose: [x, y, z], orientation: [w, x, y, z]}, ...}``;
+- ``<robot>.moves.yaml`` and the team's ``schedule.yaml``: see :mod:`tmpnav.export.moves`.
 """
 
 from __future__ import annotations
