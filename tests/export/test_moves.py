@@ -13,7 +13,8 @@ import yaml
 from tests.export.nav2_schema import check_goal, covered, fewest
 from tests.export.test_nav2 import plan_doc, scheduled_doc
 from tmpnav.errors import InputError
-from tmpnav.export.moves import ROUTE_TOLERANCE, files, read_team, team, turns
+from tmpnav.export.move_files import files, read_team
+from tmpnav.export.moves import ROUTE_TOLERANCE, team, turns
 from tmpnav.export.nav2 import write_nav2
 
 

@@ -21,7 +21,7 @@ import yaml
 
 from tests.export.fake_nav2 import check_order_kept, replay
 from tmpnav.errors import InputError
-from tmpnav.export.moves import read_team
+from tmpnav.export.move_files import read_team
 from tmpnav.export.nav2 import CSV_COLUMNS, files, waypoints, write_nav2
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -16,7 +16,8 @@ from tests.export.fake_nav2 import check_order_kept, replay
 from tests.export.nav2_schema import check_goal
 from tests.export.test_nav2 import ROOT, tmpnav
 from tmpnav.export.executor import ExecutionStatus
-from tmpnav.export.moves import ROUTE_TOLERANCE, Team, read_team
+from tmpnav.export.move_files import read_team
+from tmpnav.export.moves import ROUTE_TOLERANCE, Team
 
 BUILDING = ROOT / "configs" / "building-4robots.yaml"
 

@@ -5,7 +5,7 @@ No ROS here: a fleet adapter gives the executor a :class:`NavigationClient` (sen
 ``NavigateThroughPoses`` goal and reports once when it ends) and a :class:`Clock` (the team's
 clock, :class:`WallClock` for real robots), then calls :meth:`Executor.run`::
 
-    team = read_team("out/nav2")          # the export of `tmpnav plan -o out --export nav2`
+    team = move_files.read_team("out/nav2")   # the export of `tmpnav plan -o out --export nav2`
     result = Executor(team, client, WallClock()).run()
 
 A move is sent at the latest of: its planned departure (``depart``), the end of its robot's

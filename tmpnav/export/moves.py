@@ -1,10 +1,9 @@
 """Per robot and per move, the nav2 ``NavigateThroughPoses`` goal that drives it, with the move's
 times, wait and sync on the team's clock as data: what a fleet adapter sends, and when.
 
-:func:`team` builds them from a plan document (plan.json, docs/plan-json.md), :func:`files`
-renders them (``<robot>.moves.yaml`` per robot and the team's ``schedule.yaml``, written beside
-the waypoint files of :mod:`tmpnav.export.nav2`), :func:`read_team` reads them back, and
-:mod:`tmpnav.export.executor` runs them. docs/nav2.md describes the files for users.
+:func:`team` builds them from a plan document (plan.json, docs/plan-json.md);
+:mod:`tmpnav.export.move_files` writes and reads them (``<robot>.moves.yaml``, ``schedule.yaml``)
+and :mod:`tmpnav.export.executor` runs them. docs/nav2.md describes them for users.
 
 A goal's poses are the move's via points, each facing the next pose, then its goal pose with
 the planned heading. The via points are roadmap nodes of the move's path where it turns
@@ -13,22 +12,14 @@ the planned heading. The via points are roadmap nodes of the move's path where i
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
-import yaml
+from tmpnav.export.plan_times import FRAME, MoveTimes, makespan, move_times, read_plan, robot_moves
 
-from tmpnav.errors import InputError
-from tmpnav.export.plan_times import FRAME, UNITS, MoveTimes, makespan, move_times, read_plan, robot_moves
-
-FORMAT = "tmpnav-nav2/1"  # the ``format`` of the files: bump it when a reader of the old one would misread them
 ROUTE_TOLERANCE = 0.5  # m: how far a leg between two poses of a goal may pass from the roadmap path it replaces
-SCHEDULE_FILE = "schedule.yaml"
 
 
 @dataclass(frozen=True)
@@ -137,13 +128,6 @@ class Team:
         if other is not None and other.index > 1:
             out.append(self.moves[other.robot][other.index - 2])
         return tuple(out)
-
-    @property
-    def export_id(self) -> str:
-        """A digest of the moves: the files of one export carry the same one."""
-        data = [_move_entry(m) for m in self.all_moves()]
-        text = json.dumps([self.robots, data, self.makespan], sort_keys=True)
-        return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
 # ---------------------------------------------------------------- via points
@@ -260,185 +244,3 @@ def _request(
         goal=goal(move, tolerance),
         roadmap_nodes=len(move["path_points"]),
     )
-
-
-# ---------------------------------------------------------------- files
-
-
-def files(plan: Team) -> dict[str, str]:
-    """File name -> text: ``<robot>.moves.yaml`` per robot and ``schedule.yaml`` for the team."""
-    export = plan.export_id
-    out = {f"{robot}.moves.yaml": _robot_file(plan, robot, export) for robot in plan.robots}
-    out[SCHEDULE_FILE] = _schedule_file(plan, export)
-    return out
-
-
-_TIMES = (
-    "# Times on the team's clock, seconds from the plan's start (one instant for every robot): depart,\n"
-    "# the move's planned start (never send it earlier); ready, when the robot's previous move ends; wait,\n"
-    "# depart - ready; arrive, the planned end. A paired move (partner, sync step-K) starts when both\n"
-    "# robots have reached the poses they leave from, together with the partner's move of the same step.\n"
-)
-
-
-def _robot_file(plan: Team, robot: str, export: str) -> str:
-    header = (
-        f"# nav2 NavigateThroughPoses goals of robot {robot}, one per move, with their times: tmpnav plan of\n"
-        f"# scenario {plan.scenario}. Frame: {FRAME}. Units: {UNITS}.\n"
-        + _TIMES
-        + "# Send a move's goal: ros2 action send_goal /<robot>/navigate_through_poses\n"
-        '#   nav2_msgs/action/NavigateThroughPoses "<its goal>"; tmpnav.export.executor sends them all in time.\n'
-    )
-    data = {
-        "format": FORMAT,
-        "export": export,
-        "robot": robot,
-        "frame": FRAME,
-        "moves": [_move_entry(m) for m in plan.moves[robot]],
-    }
-    return header + _dump(data)
-
-
-def _schedule_file(plan: Team, export: str) -> str:
-    header = (
-        f"# The team's moves by planned departure: tmpnav plan of scenario {plan.scenario}. Units: {UNITS}.\n"
-        + _TIMES
-        + "# after: the moves whose arrival a move waits for (its robot's previous one, its partner's).\n"
-        "# The goals are in each robot's <robot>.moves.yaml.\n"
-    )
-    order = sorted(plan.all_moves(), key=lambda m: (math.inf if m.depart is None else m.depart, m.step, m.robot))
-    data = {
-        "format": FORMAT,
-        "export": export,
-        "scenario": plan.scenario,
-        "frame": FRAME,
-        "makespan": plan.makespan,
-        "robots": {r: {"file": f"{r}.moves.yaml", "moves": len(plan.moves[r])} for r in plan.robots},
-    }
-    rows = (
-        {"move": m.name, "robot": m.robot, **_timing(m), "after": [a.name for a in plan.after(m)]} for m in order
-    )  # one line per move: the file reads as a table
-    lines = "".join(f"- {yaml.safe_dump(row, sort_keys=False, default_flow_style=True, width=1 << 20)}" for row in rows)
-    return header + _dump(data) + "moves:\n" + lines
-
-
-def _timing(m: MoveRequest) -> dict[str, Any]:
-    return {
-        "index": m.index,
-        "step": m.step,
-        "from": m.origin,
-        "to": m.target,
-        "partner": m.partner,
-        "sync": m.sync,
-        "ready": m.ready,
-        "wait": m.wait,
-        "depart": m.depart,
-        "arrive": m.arrive,
-    }
-
-
-def _move_entry(m: MoveRequest) -> dict[str, Any]:
-    return {**_timing(m), "roadmap_nodes": m.roadmap_nodes, "goal": m.goal.message()}
-
-
-def _dump(data: dict[str, Any]) -> str:
-    return yaml.safe_dump(data, sort_keys=False, default_flow_style=None, width=120, allow_unicode=True)
-
-
-# ---------------------------------------------------------------- reading them back
-
-
-def read_team(folder: str | Path) -> Team:
-    """The moves of an export (``schedule.yaml`` and the robot files it names, in ``folder``);
-    a file that is missing, malformed or of another export raises :class:`InputError`."""
-    folder = Path(folder)
-    schedule = _load(folder / SCHEDULE_FILE)
-    robots = _get(schedule, "robots", dict, SCHEDULE_FILE)
-    moves = {}
-    for robot, entry in robots.items():
-        name = _get(_expect(entry, dict, SCHEDULE_FILE, f"robots.{robot}"), "file", str, SCHEDULE_FILE)
-        doc = _load(folder / name)
-        if doc.get("export") != schedule.get("export") or doc.get("robot") != robot:
-            raise InputError(f"{folder / name} is not robot {robot}'s file of {SCHEDULE_FILE}'s export: export again")
-        frame = _get(doc, "frame", str, name)
-        entries = _get(doc, "moves", list, name)
-        moves[str(robot)] = tuple(_read_move(str(robot), k, e, frame, name) for k, e in enumerate(entries, 1))
-    planned = schedule.get("makespan")
-    return Team(
-        tuple(map(str, robots)),
-        moves,
-        None if planned is None else _number(planned, SCHEDULE_FILE, "makespan"),
-        str(schedule.get("scenario", "")),
-    )
-
-
-def _load(path: Path) -> dict[str, Any]:
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as err:
-        raise InputError(f"cannot read {path}: {err.strerror or err}") from None
-    except yaml.YAMLError as err:
-        raise InputError(f"{path} is not YAML: {str(err).splitlines()[0]}") from None
-    if not isinstance(data, dict) or data.get("format") != FORMAT:
-        found = data.get("format") if isinstance(data, dict) else None
-        raise InputError(f"{path} is not a tmpnav nav2 move file: format {found!r}, expected {FORMAT!r}")
-    return data
-
-
-def _read_move(robot: str, index: int, e: Any, frame: str, name: str) -> MoveRequest:
-    where = f"moves[{index - 1}]"
-    e = _expect(e, dict, name, where)
-    if e.get("index") != index:
-        raise InputError(f"{name}: {where}.index is {e.get('index')!r}, expected {index} (the moves in order)")
-    message = _expect(e.get("goal"), dict, name, f"{where}.goal")
-    listed = _expect(message.get("poses"), list, name, f"{where}.goal.poses")
-    poses = tuple(_read_pose(p, frame, name, f"{where}.goal.poses[{i}]") for i, p in enumerate(listed))
-    if not poses:
-        raise InputError(f"{name}: {where}.goal has no poses")
-    partner = e.get("partner")
-    return MoveRequest(
-        robot=robot,
-        index=index,
-        step=_expect(e.get("step"), int, name, f"{where}.step"),
-        origin=str(e.get("from", "")),
-        target=str(e.get("to", "")),
-        partner=None if partner is None else str(partner),
-        ready=_time(e, "ready", name, where),
-        depart=_time(e, "depart", name, where),
-        arrive=_time(e, "arrive", name, where),
-        goal=NavigateThroughPoses(poses, frame, str(message.get("behavior_tree") or "")),
-        roadmap_nodes=_expect(e.get("roadmap_nodes", 0), int, name, f"{where}.roadmap_nodes"),
-    )
-
-
-def _read_pose(p: Any, frame: str, name: str, where: str) -> Pose:
-    try:
-        if p["header"]["frame_id"] != frame:
-            raise InputError(f"{name}: {where} is in frame {p['header']['frame_id']!r}, the file's is {frame!r}")
-        pos, q = p["pose"]["position"], p["pose"]["orientation"]
-        x, y = _number(pos["x"], name, where), _number(pos["y"], name, where)
-        qz, qw = _number(q["z"], name, where), _number(q["w"], name, where)
-    except (KeyError, TypeError):
-        raise InputError(f"{name}: {where} is not a geometry_msgs/PoseStamped") from None
-    return Pose(x, y, 2.0 * math.atan2(qz, qw))
-
-
-def _time(e: dict[str, Any], key: str, name: str, where: str) -> float | None:
-    value = e.get(key)
-    return None if value is None else _number(value, name, f"{where}.{key}")
-
-
-def _number(value: Any, name: str, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise InputError(f"{name}: {where} is {value!r}, not a finite number")
-    return float(value)
-
-
-def _get(data: dict[str, Any], key: str, kind: type, name: str) -> Any:
-    return _expect(data.get(key), kind, name, key)
-
-
-def _expect(value: Any, kind: type, name: str, where: str) -> Any:
-    if not isinstance(value, kind) or (isinstance(value, bool) and kind is not bool):
-        raise InputError(f"{name}: {where} is {value!r}, expected {'a mapping' if kind is dict else kind.__name__}")
-    return value

@@ -31,7 +31,7 @@ Files, per robot (units: metres, radians and seconds, yaw about +z from +x; pose
   with its times;
 - ``<robot>.rviz_waypoints.yaml``: the file the Nav2 RViz panel loads ("Load WPs"):
   ``waypoints: {waypoint0: {pose: [x, y, z], orientation: [w, x, y, z]}, ...}``;
-- ``<robot>.moves.yaml`` and the team's ``schedule.yaml``: see :mod:`tmpnav.export.moves`.
+- ``<robot>.moves.yaml`` and the team's ``schedule.yaml``: see :mod:`tmpnav.export.move_files`.
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ from pathlib import Path
 from typing import Any
 
 from tmpnav.atomic import write_files
-from tmpnav.export import moves
+from tmpnav.export import move_files, moves
 from tmpnav.export.plan_times import (
     FRAME,
     UNITS,
@@ -212,8 +212,8 @@ def _cell(value: float | None) -> str:
 
 def files(doc: dict[str, Any]) -> dict[str, str]:
     """File name -> text of every file of the export: per robot its waypoint files and its move
-    requests (:mod:`tmpnav.export.moves`), and the team's schedule."""
-    requests = moves.files(moves.team(doc))
+    requests (:mod:`tmpnav.export.move_files`), and the team's schedule."""
+    requests = move_files.files(moves.team(doc))
     out = {}
     for robot, points in waypoints(doc).items():
         out[f"{robot}.csv"] = csv_text(doc, robot, points)
