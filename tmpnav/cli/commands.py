@@ -146,7 +146,8 @@ def roadmap(scenario: Path, output: Path) -> None:
     multiple=True,
     type=click.Choice(["nav2"]),
     default_text="none",
-    help="Also write each robot's waypoints for ROS 2 navigation into DIR/nav2/ (needs -o DIR).",
+    help="Also write the plan for ROS 2 navigation into DIR/nav2/ (needs -o DIR): per robot and move a nav2 "
+    "NavigateThroughPoses goal with its times, the team's schedule, and each robot's waypoints.",
 )
 @oracle_options
 @report_errors
