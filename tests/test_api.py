@@ -97,7 +97,7 @@ def test_import_tmpnav_from_the_folder_that_holds_the_clone(tmp_path: Path) -> N
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=beside_the_clone(tmp_path))
     assert proc.returncode == 0, (
         f"{proc.stderr}\n(the clone folder was imported as tmpnav: is .venv's tmpnav-checkout.pth missing? "
-        "`make` writes it, README 'Python API')"
+        "`make` writes it, docs/usage.md 'Python API')"
     )
     found, name = proc.stdout.split()
     assert Path(found).resolve() == ROOT / "tmpnav" / "__init__.py" and name == "two-rooms"
@@ -105,9 +105,9 @@ def test_import_tmpnav_from_the_folder_that_holds_the_clone(tmp_path: Path) -> N
 
 @pytest.mark.slow
 def test_the_readme_snippet_runs_outside_the_checkout(tmp_path: Path) -> None:
-    """README's "Python API" block, as a user pastes it, in a directory that is not the checkout
-    but holds it: the folder a `git clone` was run in."""
-    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    """docs/usage.md's "Python API" block, as a user pastes it, in a directory that is not the
+    checkout but holds it: the folder a `git clone` was run in."""
+    readme = (ROOT / "docs" / "usage.md").read_text(encoding="utf-8")
     snippet = re.search(r"## Python API\n\n```python\n(.*?)```", readme, re.S)
     assert snippet is not None
     env = {**os.environ, "TMPNAV_CACHE_DIR": str(tmp_path / "cache")}

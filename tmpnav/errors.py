@@ -2,7 +2,7 @@
 
 Only :mod:`tmpnav.cli` turns them into messages and exit codes; nothing below the CLI
 prints to the terminal or exits. Each class carries the exit code the CLI uses, so the
-table in the README and the code cannot drift apart (see ``EXIT_CODES``).
+table in docs/usage.md and the code cannot drift apart (see ``EXIT_CODES``).
 """
 
 from __future__ import annotations
@@ -111,7 +111,7 @@ class CacheError(TmpnavError):
     exit_code = 8
 
 
-#: exit code -> meaning, printed in the README and in ``tmpnav --help``.
+#: exit code -> meaning, listed in docs/usage.md and printed in ``tmpnav --help``.
 EXIT_CODES: dict[int, str] = {
     0: "success",
     1: "unexpected internal error (a bug: please report it)",
