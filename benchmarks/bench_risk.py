@@ -1,39 +1,73 @@
-"""The chance constraint on the shipped configurations: each plan's collision bounds, without a
-threshold and with one (docs/planning.md, "Chance constraint").
+"""The collision bound: against Monte Carlo on the test paths, its cost in the kernel, and the
+chance constraint on the shipped configurations (docs/models.md, "Collision bound";
+docs/planning.md, "Chance constraint").
 
-    .venv/bin/python benchmarks/bench_risk.py [--max-risk 0.05] [CONFIG ...]
+    .venv/bin/python benchmarks/bench_risk.py paths [--samples N]
+    .venv/bin/python benchmarks/bench_risk.py kernel [--repeat N]
+    .venv/bin/python benchmarks/bench_risk.py plans [--max-risk 0.05] [CONFIG ...]
 
-Prints per configuration: the run's time, the quantiles of its moves' bounds, the largest move
-and the plan's bound, each robot's largest position std, the cost and the makespan; with
-``--max-risk``, the plan within it or the least threshold tmpnav names (exit code 9's message).
+``paths``: the four test paths of tests/belief/risk_paths.py at several noise levels; per case
+the bound, the sampled rate of trajectories that hit a wall (or, passing, whose robots touch)
+with its 95% Clopper-Pearson interval, and the bound over the rate. ``kernel``: microseconds
+per control step of the compiled EKF along the door path (one robot) and the passing (two
+robots) with and without the bound, 500 simulations from scratch per call, the best of
+``--repeat`` calls. ``plans``: per configuration the run's time, the quantiles of its moves'
+bounds, the largest move and the plan's bound, each robot's largest position std, the cost and
+the makespan; with ``--max-risk``, the plan within it or the least threshold tmpnav names
+(exit code 9's message).
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from tmpnav.errors import RiskError
-from tmpnav.pipeline import PlanOptions, plan
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # the test paths live with the tests
+
+from tests.belief import risk_paths  # noqa: E402
+from tmpnav.belief.sequences import propagate_sequences  # noqa: E402
+from tmpnav.errors import RiskError  # noqa: E402
+from tmpnav.pipeline import PlanOptions, plan  # noqa: E402
 
 CONFIGS = ("corridor", "two-rooms", "office-rooms", "warehouse-2robots", "sparse-warehouse", "building-4robots")
+KERNEL_COPIES = 500
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("configs", nargs="*", default=CONFIGS)
-    parser.add_argument("--max-risk", type=float, default=None)
-    args = parser.parse_args()
-    root = Path(__file__).resolve().parent.parent / "configs"
+def kernel(repeat: int) -> None:
+    """Microseconds per control step (one simulation's step of all its robots)."""
+    for name in ("door", "passing"):
+        d = risk_paths.drive(risk_paths.path(name), 1.0)
+        steps = KERNEL_COPIES * (d.covs.shape[0] - 1)
+        timed = {}
+        for bound in (False, True):
+            batch = risk_paths.kernel_batch(d, 1.0, KERNEL_COPIES, bound)
+            propagate_sequences(batch)  # compiled, or loaded from numba's cache
+            best = float("inf")
+            for _ in range(repeat):
+                start = time.perf_counter()
+                propagate_sequences(batch)
+                best = min(best, time.perf_counter() - start)
+            timed[bound] = 1e6 * best / steps
+        print(
+            f"{name} ({d.poses.shape[0]} robot(s), {d.covs.shape[0] - 1} steps, {d.landmarks.shape[0]} landmarks): "
+            f"{timed[False]:.2f} us per step without the bound, {timed[True]:.2f} us with it"
+        )
+
+
+def plans(configs: list[str], max_risk: float | None) -> None:
+    """The shipped configurations' plans and their bounds."""
+    root = ROOT / "configs"
     with tempfile.TemporaryDirectory() as cache:
-        for name in args.configs:
+        for name in configs:
             start = time.perf_counter()
             try:
-                r = plan(root / f"{name}.yaml", PlanOptions.of(cache_dir=Path(cache), max_risk=args.max_risk))
+                r = plan(root / f"{name}.yaml", PlanOptions.of(cache_dir=Path(cache), max_risk=max_risk))
             except RiskError as err:
                 print(f"{name}: {time.perf_counter() - start:.1f} s, {err} (least {err.least:g})")
                 continue
@@ -45,6 +79,21 @@ def main() -> None:
                 f"{np.round(q, 3).tolist()}, plan {r.risk:.2g}; largest std {std}; "
                 f"cost {r.resimulated_cost:.1f}, makespan {r.schedule.makespan:.1f} s"
             )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="what", required=True)
+    k = sub.add_parser("kernel")
+    k.add_argument("--repeat", type=int, default=5)
+    p = sub.add_parser("plans")
+    p.add_argument("configs", nargs="*", default=CONFIGS)
+    p.add_argument("--max-risk", type=float, default=None)
+    args = parser.parse_args()
+    if args.what == "kernel":
+        kernel(args.repeat)
+    else:
+        plans(list(args.configs), args.max_risk)
 
 
 if __name__ == "__main__":

@@ -1,9 +1,11 @@
-"""The collision bound as the compiled kernel sums it, and the oracle's choice under a threshold.
+"""The collision bound as the compiled kernel computes it, and the oracle's choice under a threshold.
 
 The bound itself (its validity against Monte Carlo) is tested in tests/belief/test_risk.py; here:
-the kernel sums exactly the step bound of tmpnav.belief.risk (the numpy reference) over a
-robot's driving steps (1 where a sector's reach is 0), and the oracle picks the cheapest
-instantiation within max_risk.
+the kernel's p_t and X_t of every step equal the numpy reference's (tmpnav.belief.risk.step_bound
+and crossing_bound, with the cross-covariances of the filter's error worked out in numpy), with
+landmarks, partners and range scans; a move's bound is min(p_1, p_0 + X_1) + sum X_t over its
+driving steps, the same from a restart; running_bound sums it the same way over any driving rows;
+the oracle picks the cheapest instantiation within max_risk.
 """
 
 from __future__ import annotations
@@ -11,12 +13,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tests.belief import risk_paths
 from tests.belief.test_kernel import _batch
-from tmpnav.belief.risk import step_bound
+from tmpnav.belief import risk
+from tmpnav.belief.models import motion_jacobians
 from tmpnav.belief.sequences import MotionArrays, propagate_sequences
 from tmpnav.oracle.results import pick
 from tmpnav.types import RISK_PENALTY, risk_penalty
-from tmpnav.world.reach import SECTORS
+from tmpnav.world.grid import clearance
+from tmpnav.world.reach import SECTORS, SectorReach
+
+#: a weak scan's information factor (J = Gᵀ G), so that the bounds stay informative
+SCAN = np.array([[3.0, 1.0, 0.0], [0.0, 2.0, 0.5], [0.0, 0.0, 4.0]])
 
 
 def _reach(margins: np.ndarray) -> np.ndarray:
@@ -27,23 +35,75 @@ def _reach(margins: np.ndarray) -> np.ndarray:
     return far
 
 
-def _motion(T: int, L: int, margins: np.ndarray) -> MotionArrays:
-    ctrl = np.column_stack([np.full(T, 0.5), np.zeros(T)])
+def _motion(T: int, L: int, margins: np.ndarray, turn: float = 0.0) -> MotionArrays:
+    ctrl = np.column_stack([np.full(T, 0.5), np.full(T, turn)])
     poses = np.column_stack([0.1 * np.arange(T + 1), np.zeros(T + 1), np.zeros(T + 1)])
     vis = np.zeros((T + 1, L), dtype=bool)
     return MotionArrays.of([ctrl], [poses], [vis], np.zeros(1, dtype=np.int64), L, [_reach(margins)])
 
 
-def _expected(covs: np.ndarray, margins: np.ndarray) -> float:
-    return float(step_bound(covs[1:, :2, :2], _reach(margins)[1:]).sum())
+def _expected(means: np.ndarray, covs: np.ndarray, controls: np.ndarray, reach: np.ndarray) -> tuple[np.ndarray, ...]:
+    """p_t, X_t and the move's bound of the reference along a drive without observations, where
+    Cov(e_t, e_{t-1}) = F_t Sigma_{t-1}."""
+    T = controls.shape[0]
+    F = np.array([motion_jacobians(means[k], controls[k], 0.2)[0] for k in range(T)])
+    cross = (F @ covs[:T])[:, :2, :2]
+    p = risk.step_bound(covs[:, :2, :2], reach)
+    x = risk.crossing_bound(covs[:T, :2, :2], covs[1:, :2, :2], cross, reach[:-1], reach[1:])
+    return p, x, min(p[1], p[0] + x[0]) + x[1:].sum()
 
 
 @pytest.mark.parametrize("low", [0.4, 0.1, 0.0, -0.2])
-def test_the_kernel_sums_the_step_bounds_over_the_driving_steps(low: float) -> None:
+def test_the_kernel_computes_the_reference_step_by_step(low: float) -> None:
     T, L = 12, 2
     margins = np.linspace(0.6, low, T + 1)
-    out = propagate_sequences(_batch(_motion(T, L, margins), [0], [0], T, L))
-    assert out.risk[0, 0] == pytest.approx(_expected(out.last_covs, margins), rel=1e-12)
+    motion = _motion(T, L, margins, turn=0.2)
+    out = propagate_sequences(_batch(motion, [0], [0], T, L))
+    p, x, move = _expected(out.last_means, out.last_covs, motion.controls, _reach(margins))
+    np.testing.assert_allclose(out.step_risk[:, 0, 0], p, rtol=1e-12, atol=1e-300)
+    np.testing.assert_allclose(out.step_risk[1:, 0, 1], x, rtol=1e-12, atol=1e-300)
+    assert out.risk[0, 0] == pytest.approx(move, rel=1e-12)
+    assert np.all(x <= p[1:]) and out.risk[0, 0] <= p[1:].sum() * (1.0 + 1e-12)  # never above Boole's
+
+
+@pytest.mark.parametrize("scan", [False, True])
+@pytest.mark.parametrize("name", ["corner", "door", "passing"])
+def test_with_landmarks_partners_and_scans_the_kernel_computes_the_reference(name: str, scan: bool) -> None:
+    """The cross-covariance the kernel carries through landmark, scan and mutual updates is the
+    filter's error transition's (risk_paths.drive works it out in numpy)."""
+    G = SCAN if scan else None
+    d = risk_paths.drive(risk_paths.path(name), 1.0, G)
+    out = propagate_sequences(risk_paths.kernel_batch(d, 1.0, scan=G))
+    table = SectorReach(d.grid, clearance(d.grid), risk_paths.RADIUS)
+    for i in range(d.poses.shape[0]):
+        T, b = int(d.steps[i]), slice(3 * i, 3 * i + 2)
+        reach = table.at(d.poses[i, : T + 1, :2])
+        p = risk.step_bound(d.covs[: T + 1, b, b], reach)
+        x = risk.crossing_bound(d.covs[:T, b, b], d.covs[1 : T + 1, b, b], d.cross(i)[1 : T + 1], reach[:-1], reach[1:])
+        assert x.sum() > 1e-5  # informative
+        np.testing.assert_allclose(out.step_risk[: T + 1, i, 0], p, rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(out.step_risk[1 : T + 1, i, 1], x, rtol=1e-9, atol=1e-15)
+        move = risk.move_bound(
+            d.poses[i, : T + 1], d.covs[: T + 1, b, b], d.cross(i)[: T + 1], d.grid, risk_paths.RADIUS
+        )
+        assert min(out.risk[0, i], 1.0) == pytest.approx(move, rel=1e-9)
+
+
+def test_a_restart_from_a_shared_prefix_gives_the_same_bound() -> None:
+    T, L = 10, 2
+    margins = np.linspace(0.5, 0.1, T + 1)
+    one = _motion(T, L, margins)
+    two = MotionArrays.of(
+        [one.controls, one.controls.copy()],
+        [one.poses, one.poses.copy()],
+        [one.lm_visible] * 2,
+        np.zeros(2, dtype=np.int64),
+        L,
+        [_reach(margins)] * 2,
+    )
+    shared = propagate_sequences(_batch(two, [0, 1], [0, 6], T, L))
+    alone = propagate_sequences(_batch(two, [1], [0], T, L))
+    assert shared.risk[1, 0] == alone.risk[0, 0] > 0.0
 
 
 def test_no_margins_no_bound_and_a_robot_that_waits_adds_nothing() -> None:
@@ -52,18 +112,29 @@ def test_no_margins_no_bound_and_a_robot_that_waits_adds_nothing() -> None:
     out = propagate_sequences(_batch(_motion(T, L, free), [0], [0], T, L))
     assert out.risk[0, 0] == 0.0
     short = _motion(4, L, np.linspace(0.3, 0.2, 5))
-    batch = _batch(short, [0], [0], T, L)  # drives 4 steps, then stands 4
-    out = propagate_sequences(batch)
-    assert out.risk[0, 0] == pytest.approx(_expected(out.last_covs[:5], np.linspace(0.3, 0.2, 5)), rel=1e-12)
+    out = propagate_sequences(_batch(short, [0], [0], T, L))  # drives 4 steps, then stands 4
+    _, _, move = _expected(out.last_means[:5], out.last_covs[:5], short.controls, _reach(np.linspace(0.3, 0.2, 5)))
+    assert out.risk[0, 0] == pytest.approx(move, rel=1e-12)
+    assert np.all(out.step_risk[5:, 0] == 0.0)
+
+
+def test_the_running_bound_starts_each_move_at_its_first_step() -> None:
+    """Rows driven after a row stood in add min(p_t, p_{t-1} + X_t), rows after a driven row X_t."""
+    terms = np.array([[0.1, 0.0], [0.2, 0.05], [0.3, 0.02], [0.4, 0.3], [0.05, 0.01], [0.06, 0.02]])
+    drove = np.array([False, True, True, False, True, True])
+    got = risk.running_bound(terms, drove)
+    want = np.cumsum([0.0, min(0.2, 0.1 + 0.05), 0.02, 0.0, min(0.05, 0.4 + 0.01), 0.02])
+    np.testing.assert_allclose(got, want)
+    assert risk.running_bound(terms, np.r_[True, drove[1:]])[1] == pytest.approx(0.05)  # a move going on
 
 
 def test_the_oracle_picks_the_cheapest_within_the_threshold_else_the_least_risky() -> None:
     cost = np.array([1.0, 2.0, 3.0, 4.0])
-    risk = np.array([0.5, 0.04, 0.01, 0.01])
-    assert pick(cost, risk, None) == 0
-    assert pick(cost, risk, 0.05) == 1
-    assert pick(cost, risk, 0.02) == 2
-    assert pick(cost, risk, 0.001) == 2  # none within: the least risky, the cheaper of a tie
+    risks = np.array([0.5, 0.04, 0.01, 0.01])
+    assert pick(cost, risks, None) == 0
+    assert pick(cost, risks, 0.05) == 1
+    assert pick(cost, risks, 0.02) == 2
+    assert pick(cost, risks, 0.001) == 2  # none within: the least risky, the cheaper of a tie
     pairs = np.array([[0.01, 0.2], [0.03, 0.03], [0.0, 0.0], [0.1, 0.0]])
     assert pick(cost, pairs, 0.05) == 1  # each robot's bound within it
 

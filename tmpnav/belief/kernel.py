@@ -8,6 +8,9 @@ the same models (paper eqs. (4), (5), (14), (15), and the range sensor of docs/m
 the same prediction (eqs. (8), (11), (12)) and update (eqs. (9), (13)) in the same order
 within a step. The update is the
 Joseph form with an explicit 2x2 inverse of S, its result mirrored from the upper triangle.
+Where the collision bound is wanted, each step also carries Cov(e_t, e_{t-1}) of every robot's
+position error through the same prediction and updates (e <- F e + noise, e <- (I - K H) e -
+K v), which the bound's crossing terms need (:mod:`tmpnav.belief.risk`).
 
 Simulations that start from the same belief and whose first d steps are identical (the
 same controls, poses, visibility and simulated noise) have identical beliefs after step
@@ -30,9 +33,11 @@ import math
 import numba as nb
 import numpy as np
 
+from tmpnav.belief.risk import CONE_COS, EDGE_COS, EDGE_SIN, ESCAPE, SIGNIFICANT, SQRT2, WIDTH
 from tmpnav.belief.risk import DET_FLOOR as RISK_DET_FLOOR
 from tmpnav.belief.risk import TINY as RISK_TINY
 from tmpnav.world.geometry import wrap_angle_scalar
+from tmpnav.world.reach import SECTORS
 
 
 @nb.njit(cache=True)
@@ -166,13 +171,14 @@ def _update_scalar(mean, cov, g, c0, y, n, work, PHt, K):
 
 
 @nb.njit(cache=True, inline="always")
-def _scan_update(mean, cov, i, G, px, py, pth, e, max_likelihood, n, work, PHt, K, g):
+def _scan_update(mean, cov, i, G, px, py, pth, e, max_likelihood, n, work, PHt, K, g, Cx, priced):
     """Robot i's range scan: three scalar updates with the rows g_k of its information's factor
     G (J = Gᵀ G, tmpnav.world.lidar), each a pseudo-measurement g_k x of unit noise. Simulated
     from the nominal pose (px, py, pth) and the draws ``e`` (3,): y_k = g_k (x_nominal - mean) +
     e_k, or 0 in maximum-likelihood mode. Together they are the update with every beam of the
     scan, linearised at the nominal pose: the posterior depends on the beams only through
-    Hᵀ R⁻¹ H and Hᵀ R⁻¹ y (docs/models.md, "Range sensor")."""
+    Hᵀ R⁻¹ H and Hᵀ R⁻¹ y (docs/models.md, "Range sensor"). ``priced``: carry Cov(e, e_prev)
+    ``Cx`` through them too."""
     c0 = 3 * i
     for k in range(3):
         g[0], g[1], g[2] = G[k, 0], G[k, 1], G[k, 2]
@@ -183,6 +189,45 @@ def _scan_update(mean, cov, i, G, px, py, pth, e, max_likelihood, n, work, PHt, 
             dth = wrap_angle_scalar(pth - mean[c0 + 2])
             y = g[0] * (px - mean[c0]) + g[1] * (py - mean[c0 + 1]) + g[2] * dth + e[k]
         _update_scalar(mean, cov, g, c0, y, n, work, PHt, K)
+        if priced:
+            _update_cross_scalar(Cx, g, c0, K)
+
+
+@nb.njit(cache=True, inline="always")
+def _predict_cross(Cx, mean, u, n, dt):
+    """Cov(e, e_prev) through the prediction: Cx <- F Cx (F = I + E as in :func:`_predict`,
+    from the mean before it moves; the motion noise is independent of the past)."""
+    for i in range(n):
+        th = mean[3 * i + 2]
+        v = u[i, 0]
+        e0, e1 = -v * dt * math.sin(th), v * dt * math.cos(th)
+        if e0 != 0.0 or e1 != 0.0:
+            for c in range(Cx.shape[1]):
+                Cx[3 * i, c] += e0 * Cx[3 * i + 2, c]
+                Cx[3 * i + 1, c] += e1 * Cx[3 * i + 2, c]
+
+
+@nb.njit(cache=True, inline="always")
+def _update_cross(Cx, H, cols, ncols, K):
+    """Cov(e, e_prev) through an update with gain K (D x 2): Cx <- (I - K H) Cx (the error after
+    it is (I - K H) e - K v, its observation noise v independent of the past)."""
+    for c in range(Cx.shape[1]):
+        h0 = 0.0
+        h1 = 0.0
+        for q in range(ncols):
+            h0 += H[0, cols[q]] * Cx[cols[q], c]
+            h1 += H[1, cols[q]] * Cx[cols[q], c]
+        for r in range(Cx.shape[0]):
+            Cx[r, c] -= K[r, 0] * h0 + K[r, 1] * h1
+
+
+@nb.njit(cache=True, inline="always")
+def _update_cross_scalar(Cx, g, c0, K):
+    """:func:`_update_cross` for a scalar pseudo-measurement g in the columns c0..c0+2."""
+    for c in range(Cx.shape[1]):
+        h = g[0] * Cx[c0, c] + g[1] * Cx[c0 + 1, c] + g[2] * Cx[c0 + 2, c]
+        for r in range(Cx.shape[0]):
+            Cx[r, c] -= K[r, 0] * h
 
 
 @nb.njit(cache=True)
@@ -253,39 +298,145 @@ def _robot_observation(mean, i, j, pi, pj, e0, e1, max_likelihood, chol, H, cols
 
 
 @nb.njit(cache=True)
-def _collision_bound(a, b, c, reach, row):
-    """The bound on the probability that a disc robot's footprint touches an obstacle at one
-    step (tmpnav.belief.risk.step_bound, which this computes the same way): the 2x2 position
-    covariance [[a, b], [b, c]] and the sector reach ``reach[row]`` (K,) m of its nominal pose."""
+def _sector_masses(a, b, c, det, lam, reach, row, masses, qs):
+    """The sector terms m_k of the step bound and each sector's least q_k (tmpnav.belief.risk,
+    :func:`~tmpnav.belief.risk.step_bound`) into ``masses`` and ``qs`` (K,); returns their sum."""
+    K = reach.shape[1]
+    major = 0.5 * math.atan2(2.0 * b, a - c)
+    root = math.sqrt(det)
+    s0, c0 = EDGE_SIN[0], EDGE_COS[0]
+    q0 = (a * s0 * s0 - 2.0 * b * s0 * c0 + c * c0 * c0) / det
+    total = 0.0
+    for k in range(K):
+        s1, c1 = EDGE_SIN[k + 1], EDGE_COS[k + 1]
+        q1 = (a * s1 * s1 - 2.0 * b * s1 * c1 + c * c1 * c1) / det
+        q = 1.0 / lam if (major - WIDTH * k) % math.pi <= WIDTH else min(q0, q1)
+        m = WIDTH * math.exp(-reach[row, k] * reach[row, k] * q / 2.0) / (2.0 * math.pi * root * q)
+        masses[k] = m
+        qs[k] = q
+        total += m
+        q0 = q1
+    return total
+
+
+@nb.njit(cache=True)
+def _foot(reach, row, k):
+    """tmpnav.belief.risk._foot: where the reach followed downhill from sector k is least."""
+    K = reach.shape[1]
+    left, right = reach[row, (k - 1) % K], reach[row, (k + 1) % K]
+    if min(left, right) >= reach[row, k]:
+        return k
+    step = -1 if left < right else 1
+    at = k
+    for _ in range(K // 4):
+        nxt = (at + step) % K
+        if reach[row, nxt] > reach[row, at]:
+            break
+        at = nxt
+    return at
+
+
+@nb.njit(cache=True)
+def _support(reach, row, ball, n):
+    """tmpnav.belief.risk._support: how far the star of reaches of ``row``, cut to the ball of
+    radius ``ball``, reaches along edge n's direction."""
+    K = reach.shape[1]
+    out = 0.0
+    for o in range(-(K // 4), K // 4):
+        d = o if o >= 0 else -o - 1
+        out = max(out, min(reach[row, (n + o) % K], ball) * CONE_COS[d])
+    return out
+
+
+@nb.njit(cache=True)
+def _passage(R, q, c, b, s, tail):
+    """tmpnav.belief.risk._passage: int_R^inf rho exp(-q rho²/2) Phi((b - c rho)/s) d rho,
+    ``tail`` = exp(-q R²/2)."""
+    if s <= 0.0 or c > 1e8 * s:
+        top = max(R, b / c)
+        return max(tail - math.exp(-q * top * top / 2.0), 0.0) / q
+    z = c / s
+    P = q + z * z
+    m = b * z / (s * P)
+    first = tail * 0.5 * math.erfc((c * R - b) / (s * SQRT2))
+    second = z / math.sqrt(P) * math.exp(-q * b * b / (2.0 * (q * s * s + c * c)))
+    second *= 0.5 * math.erfc(math.sqrt(P) * (R - m) / SQRT2)
+    return max(first - second, 0.0) / q
+
+
+@nb.njit(cache=True)
+def _step_bound(a, b, c, reach, row, masses, qs):
+    """p_t of tmpnav.belief.risk.step_bound at ``row`` for the position covariance
+    [[a, b], [b, c]], and the sum of its sector terms (left in ``masses`` and ``qs``), or -1
+    where the sectors are not used (the disc's bound, or 1 where a sector has no reach)."""
     K = reach.shape[1]
     r_min = reach[row, 0]
     for k in range(1, K):
         r_min = min(r_min, reach[row, k])
     if r_min <= 0.0:
-        return 1.0
+        return 1.0, -1.0
     lam = 0.5 * (a + c) + math.sqrt(0.25 * (a - c) * (a - c) + b * b)
     if lam <= 0.0:
-        return 0.0
+        return 0.0, -1.0
     disc = math.exp(-r_min * r_min / (2.0 * lam))
     det = a * c - b * b
-    if disc < RISK_TINY or not det > RISK_DET_FLOOR * lam * lam:
-        return disc
-    w = 2.0 * math.pi / K
-    major = 0.5 * math.atan2(2.0 * b, a - c)
-    root = math.sqrt(det)
-    s0, c0 = math.sin(0.0), math.cos(0.0)
-    q0 = (a * s0 * s0 - 2.0 * b * s0 * c0 + c * c0 * c0) / det
-    total = 0.0
+    if K != SECTORS or disc < RISK_TINY or not det > RISK_DET_FLOOR * lam * lam:
+        return disc, -1.0
+    total = _sector_masses(a, b, c, det, lam, reach, row, masses, qs)
+    return min(disc, total, 1.0), total
+
+
+@nb.njit(cache=True)
+def _step_risk(prev, ap, bp, cp, row, a, b, c, C00, C01, C10, C11, reach, masses, qs, support):
+    """(p_t, X_t) of tmpnav.belief.risk: the step bound at ``row`` (position covariance
+    [[a, b], [b, c]]) and the crossing bound from ``prev`` (covariance [[ap, bp], [bp, cp]]),
+    with Cov(e_t, e_{t-1}) = [[C00, C01], [C10, C11]], computed the same way
+    (:func:`~tmpnav.belief.risk.step_bound`, :func:`~tmpnav.belief.risk.crossing_bound`)."""
+    p, total = _step_bound(a, b, c, reach, row, masses, qs)
+    if total < 0.0:
+        return p, p
+    K = reach.shape[1]
+    det = a * c - b * b
+    rp_min = reach[prev, 0]
+    for k in range(1, K):
+        rp_min = min(rp_min, reach[prev, k])
+    escape = ESCAPE * total
+    if rp_min <= 0.0 or escape >= p:
+        return p, p
+    lam_p = 0.5 * (ap + cp) + math.sqrt(0.25 * (ap - cp) * (ap - cp) + bp * bp)
+    ball = math.sqrt(-2.0 * math.log(escape) * max(lam_p, 0.0))
+    G00, G01 = (c * C00 - b * C10) / det, (c * C01 - b * C11) / det
+    G10, G11 = (a * C10 - b * C00) / det, (a * C11 - b * C01) / det
+    L00 = ap - (C00 * G00 + C10 * G10)
+    L01 = bp - (C00 * G01 + C10 * G11)
+    L11 = cp - (C01 * G01 + C11 * G11)
+    scale = WIDTH / (2.0 * math.pi * math.sqrt(det))
     for k in range(K):
-        e = w * (k + 1)
-        s1, c1 = math.sin(e), math.cos(e)
-        q1 = (a * s1 * s1 - 2.0 * b * s1 * c1 + c * c1 * c1) / det
-        q = min(q0, q1)
-        if (major - w * k) % math.pi <= w:
-            q = 1.0 / lam
-        total += w * math.exp(-reach[row, k] * reach[row, k] * q / 2.0) / (2.0 * math.pi * root * q)
-        q0 = q1
-    return min(disc, total, 1.0)
+        support[k] = -1.0
+    out = escape
+    for k in range(K):
+        best = masses[k]
+        if best >= SIGNIFICANT * total:
+            foot, pick, z_pick, c_pick, s_pick = _foot(reach, row, k), -1, math.inf, 0.0, 0.0
+            for o in range(-1, 3):
+                n = (foot + o) % K
+                nx, ny = EDGE_COS[n], EDGE_SIN[n]
+                gx, gy = G00 * nx + G01 * ny, G10 * nx + G11 * ny
+                lo = min(gx * EDGE_COS[k] + gy * EDGE_SIN[k], gx * EDGE_COS[k + 1] + gy * EDGE_SIN[k + 1])
+                if lo <= 0.0:
+                    continue
+                if support[n] < 0.0:
+                    support[n] = _support(reach, prev, ball, n)
+                s = math.sqrt(max(L00 * nx * nx + 2.0 * L01 * nx * ny + L11 * ny * ny, 0.0))
+                gap = support[n] - lo * reach[row, k]
+                z = gap / s if s > 0.0 else (math.inf if gap > 0.0 else -math.inf)
+                if pick < 0 or z < z_pick:
+                    pick, z_pick, c_pick, s_pick = n, z, lo, s
+            if pick >= 0:
+                tail = best * qs[k] / scale
+                best = min(best, scale * _passage(reach[row, k], qs[k], c_pick, support[pick], s_pick, tail))
+        out += best
+    return p, min(p, out)
 
 
 @nb.njit(cache=True, inline="always")
@@ -294,14 +445,17 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
     step before: prediction, landmark updates (robot i ascending, landmark l ascending),
     range scans (robot i ascending), mutual updates (ordered pairs (i, j), i != j,
     lexicographic); then the belief and the
-    running sums are stored (c_Sigma grows by trace(Sigma_i) dt while robot i moves, and the
-    collision bound by that of the step's pose and covariance; its arrival position is its
-    mean after its own last step)."""
-    h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk = hist
-    work, PHt, K, H, cols, y, g = scratch
+    running sums are stored (c_Sigma grows by trace(Sigma_i) dt while robot i moves; its
+    arrival position is its mean after its own last step). Where the bound is wanted (a reach
+    of more than one sector), Cov(e_t, e_{t-1}) is carried through the step, and while robot i
+    moves its (p_t, X_t) are stored and its collision bound grows by min(p_1, p_0 + X_1) at
+    step 1, by X_t after (tmpnav.belief.risk.move_bound)."""
+    h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk, h_step = hist
+    work, PHt, K, H, cols, y, g, Cx, masses, qs, support = scratch
     m_off, m_T, ctrl, pose, vis, stream, reach, scan_row, scan_table = motions  # the fields of MotionArrays, in order
     dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans = ekf  # and of EKFConstants
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
+    priced = reach.shape[1] > 1
     for k in range(seqs.restart[c], seqs.horizon[c]):
         t = k + 1
         mean[:] = h_mean[k]
@@ -310,6 +464,12 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
             m = sim[i]
             u[i, 0] = ctrl[m_off[m] + k, 0] if k < m_T[m] else 0.0
             u[i, 1] = ctrl[m_off[m] + k, 1] if k < m_T[m] else 0.0
+        if priced:  # Cov(e_t, e_{t-1}) of every robot's position starts as Sigma_{t-1}'s columns
+            for i in range(n):
+                for r in range(3 * n):
+                    Cx[r, 2 * i] = cov[r, 3 * i]
+                    Cx[r, 2 * i + 1] = cov[r, 3 * i + 1]
+            _predict_cross(Cx, mean, u, n, dt)
         _predict(mean, cov, u, n, dt, alphas, work)
         for i in range(n):
             m = sim[i]
@@ -321,13 +481,16 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
                     px, py, pth = pose[row, 0], pose[row, 1], pose[row, 2]
                     _landmark_observation(mean, i, lx, ly, px, py, pth, e0, e1, ml, chol_lm, H, cols, y)
                     _update(mean, cov, H, cols, 3, y, Q_lm, n, work, PHt, K)
+                    if priced:
+                        _update_cross(Cx, H, cols, 3, K)
         if scans:
             for i in range(n):
                 m = sim[i]
                 row = m_off[m] + m + (t if t <= m_T[m] else m_T[m])
                 G = scan_table[scan_row[row]]
                 e = scan_noise[stream[m], t]
-                _scan_update(mean, cov, i, G, pose[row, 0], pose[row, 1], pose[row, 2], e, ml, n, work, PHt, K, g)
+                px, py, pth = pose[row, 0], pose[row, 1], pose[row, 2]
+                _scan_update(mean, cov, i, G, px, py, pth, e, ml, n, work, PHt, K, g, Cx, priced)
         seen = False
         for i in range(n):
             for j in range(n):
@@ -340,6 +503,8 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
                 pi, pj = (pose[ri, 0], pose[ri, 1], pose[ri, 2]), (pose[rj, 0], pose[rj, 1])
                 _robot_observation(mean, i, j, pi, pj, e0, e1, ml, chol_mu, H, cols, y)
                 _update(mean, cov, H, cols, 5, y, Q_mu, n, work, PHt, K)
+                if priced:
+                    _update_cross(Cx, H, cols, 5, K)
         h_mean[t] = mean
         h_cov[t] = cov
         h_mut[t] = h_mut[k] + (1 if seen else 0)
@@ -347,10 +512,19 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
             m = sim[i]
             trace = cov[3 * i, 3 * i] + cov[3 * i + 1, 3 * i + 1] + cov[3 * i + 2, 3 * i + 2]
             h_csig[t, i] = h_csig[k, i] + trace * dt if t <= m_T[m] else h_csig[k, i]
-            if t <= m_T[m]:
+            if priced and t <= m_T[m]:
                 a, b, d = cov[3 * i, 3 * i], cov[3 * i, 3 * i + 1], cov[3 * i + 1, 3 * i + 1]
-                h_risk[t, i] = h_risk[k, i] + _collision_bound(a, b, d, reach, m_off[m] + m + t)
+                ap, bp, dp = h_cov[k, 3 * i, 3 * i], h_cov[k, 3 * i, 3 * i + 1], h_cov[k, 3 * i + 1, 3 * i + 1]
+                C00, C01 = Cx[3 * i, 2 * i], Cx[3 * i, 2 * i + 1]
+                C10, C11 = Cx[3 * i + 1, 2 * i], Cx[3 * i + 1, 2 * i + 1]
+                row = m_off[m] + m + t
+                p, x = _step_risk(row - 1, ap, bp, dp, row, a, b, d, C00, C01, C10, C11, reach, masses, qs, support)
+                h_step[t, i, 0] = p
+                h_step[t, i, 1] = x
+                h_risk[t, i] = h_risk[k, i] + (min(p, h_step[k, i, 0] + x) if t == 1 else x)
             else:
+                h_step[t, i, 0] = 0.0
+                h_step[t, i, 1] = 0.0
                 h_risk[t, i] = h_risk[k, i]
             arrived = t == m_T[m]
             h_fxy[t, i, 0] = mean[3 * i] if arrived else h_fxy[k, i, 0]
@@ -365,8 +539,9 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
     documents them; ``out`` holds one row per simulation for the final belief, c_Sigma per
     robot, the arrival positions and the number of steps with a mutual observation, and
     the running c_Sigma of every step when ``out.c_sigma_history`` has a row per
-    simulation. Returns the history buffers (means, covariances): after a call with one
-    simulation they hold its whole trajectory.
+    simulation. Returns the history buffers (means, covariances, and each robot's (p_t, X_t)
+    of the collision bound, tmpnav.belief.risk): after a call with one simulation they hold its
+    whole trajectory.
     """
     D = 3 * n
     T = 0
@@ -374,8 +549,10 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
         T = max(T, seqs.horizon[c])
     h_mean, h_cov, h_csig = np.zeros((T + 1, D)), np.zeros((T + 1, D, D)), np.zeros((T + 1, n))
     h_fxy, h_mut = np.zeros((T + 1, n, 2)), np.zeros(T + 1, dtype=np.int64)
-    h_risk = np.zeros((T + 1, n))
-    hist = (h_mean, h_cov, h_csig, h_fxy, h_mut, np.empty(D), np.empty((D, D)), np.zeros((n, 2)), h_risk)
+    h_risk, h_step = np.zeros((T + 1, n)), np.zeros((T + 1, n, 2))
+    hist = (h_mean, h_cov, h_csig, h_fxy, h_mut, np.empty(D), np.empty((D, D)), np.zeros((n, 2)), h_risk, h_step)
+    K = motions.reach.shape[1]
+    masses, qs = np.empty(K), np.empty(K)
     scratch = (
         np.empty((D, D)),
         np.empty((D, 2)),
@@ -384,6 +561,10 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
         np.zeros(6, np.int64),
         np.zeros(2),
         np.zeros(3),
+        np.empty((D, 2 * n)),
+        masses,
+        qs,
+        np.empty(K),
     )
     C = seqs.group.shape[0]
     for c in range(C):
@@ -394,6 +575,16 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
             for i in range(n):
                 h_csig[0, i] = 0.0
                 h_risk[0, i] = 0.0
+                h_step[0, i, 0] = 0.0  # p_0, the start's step bound, where the bound is wanted
+                h_step[0, i, 1] = 0.0
+                if K > 1:
+                    a, b, d = (
+                        groups.cov0[g, 3 * i, 3 * i],
+                        groups.cov0[g, 3 * i, 3 * i + 1],
+                        groups.cov0[g, 3 * i + 1, 3 * i + 1],
+                    )
+                    m = seqs.motions[c, i]
+                    h_step[0, i, 0] = _step_bound(a, b, d, motions.reach, motions.offset[m] + m, masses, qs)[0]
                 h_fxy[0, i, 0] = groups.mean0[g, 3 * i]
                 h_fxy[0, i, 1] = groups.mean0[g, 3 * i + 1]
             h_mut[0] = 0
@@ -407,4 +598,4 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
         out.risk[c] = h_risk[h]
         if out.c_sigma_history.shape[0] == C:
             out.c_sigma_history[c, : h + 1] = h_csig[: h + 1]
-    return h_mean, h_cov
+    return h_mean, h_cov, h_step

@@ -225,11 +225,14 @@ class SequenceResults:
     ``c_sigma`` (C, n): c_Sigma of each robot (docs/models.md, "Motion cost");
     ``arrival_xy`` (C, n, 2): each robot's mean position after its own last step;
     ``mutual_steps`` (C,): steps with at least one mutual observation;
-    ``risk`` (C, n): each robot's collision bound, summed over its driving steps (Boole's
-    inequality; tmpnav.belief.risk), not capped at 1;
+    ``risk`` (C, n): each robot's collision bound over its driving steps (first passage,
+    tmpnav.belief.risk.move_bound), not capped at 1; 0 where the motions carry no sector reach;
     ``c_sigma_history`` (C, T+1, n): the running c_Sigma after every step, if asked for;
     ``last_means`` (T+1, 3n), ``last_covs`` (T+1, 3n, 3n): the history of the last
-    simulation (its whole trajectory if it started from its group's initial belief).
+    simulation (its whole trajectory if it started from its group's initial belief);
+    ``step_risk`` (T+1, n, 2): its p_t and X_t of every robot and step (risk.step_bound and
+    risk.crossing_bound; 0 where a robot stands or no bound is wanted, p_0 at row 0), from
+    which :func:`tmpnav.belief.risk.running_bound` sums a bound over any driving steps.
     """
 
     mean: np.ndarray
@@ -241,6 +244,7 @@ class SequenceResults:
     risk: np.ndarray
     last_means: np.ndarray
     last_covs: np.ndarray
+    step_risk: np.ndarray
 
 
 class _KernelOutputs(NamedTuple):
@@ -266,7 +270,7 @@ def propagate_sequences(batch: SequenceBatch) -> SequenceResults:
         np.zeros((C, T + 1, n)) if batch.c_sigma_history else np.zeros((0, 1, n)),
         np.empty((C, n)),
     )
-    last_means, last_covs = run_sequences(
+    last_means, last_covs, step_risk = run_sequences(
         n,
         batch.ekf,
         batch.motions,
@@ -287,6 +291,7 @@ def propagate_sequences(batch: SequenceBatch) -> SequenceResults:
         risk=out.risk,
         last_means=last_means,
         last_covs=last_covs,
+        step_risk=step_risk,
     )
 
 
