@@ -21,8 +21,10 @@ from tmpnav.world.grid import clearance
 from tmpnav.world.reach import REACH, SECTORS, SectorReach
 
 RADIUS = 0.2  # m
-STRAIGHT = risk_paths.grid_of(6.0, 1.6, [(0.1, 0.1, 5.9, 1.5)])  # a corridor 1.4 m wide
-CORNER = risk_paths.grid_of(3.6, 4.0, [(0.1, 0.1, 3.3, 1.3), (2.1, 0.1, 3.3, 3.9)])  # an L
+#: name -> (grid, waypoints) of the paths driven without observations (risk_paths.OPEN_LOOP):
+#: a corridor 1.4 m wide, and an L (tests/world/test_reach.py samples their reach too)
+PATHS = {name.removeprefix("open-"): (grid, list(points[0])) for name, (grid, points) in risk_paths.OPEN_LOOP.items()}
+STRAIGHT, CORNER = PATHS["straight"][0], PATHS["corner"][0]
 DOOR = risk_paths.path("door").grid  # a corridor and a room, a door 0.9 m wide between them
 
 
