@@ -88,11 +88,17 @@ class TimedMove:
     partner: str | None  # the other robot of a paired move
     ready: float
     start: float
-    end: float
+    end: float  # when it arrives
+    service: float = 0.0  # seconds it then stands at the target for the room's job (goals.jobs)
 
     @property
     def wait(self) -> float:
         return self.start - self.ready
+
+    @property
+    def done(self) -> float:
+        """When the robot is free again: its arrival plus the job's service time."""
+        return self.end + self.service
 
 
 @dataclass(frozen=True)
@@ -104,8 +110,8 @@ class Schedule:
 
     @property
     def makespan(self) -> float:
-        """When the last move ends (0 for a plan without moves)."""
-        return max((m.end for m in self.moves), default=0.0)
+        """When the last move ends, its job's service included (0 for a plan without moves)."""
+        return max((m.done for m in self.moves), default=0.0)
 
     def timeline(self, robot: str) -> tuple[TimedMove, ...]:
         """The robot's moves in the order it makes them."""
@@ -116,9 +122,13 @@ class Schedule:
         return sum(m.end - m.start for m in self.timeline(robot))
 
     def idle(self, robot: str) -> float:
-        """Seconds of the makespan the robot neither drives nor waits for a move: the time after
-        its last move, so that busy + waits + idle = makespan."""
-        return max(0.0, self.makespan - self.busy(robot) - self.waits(robot))
+        """Seconds of the makespan the robot neither drives, waits for a move nor serves a job:
+        the time after its last move, so that busy + waits + service + idle = makespan."""
+        return max(0.0, self.makespan - self.busy(robot) - self.waits(robot) - self.service(robot))
+
+    def service(self, robot: str) -> float:
+        """Seconds the robot stands at stations for their jobs (goals.jobs)."""
+        return sum(m.service for m in self.timeline(robot))
 
     def waits(self, robot: str) -> float:
         """Seconds the robot waits between its moves."""

@@ -8,7 +8,7 @@ Units are SI throughout: metres, radians, seconds.
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TypeVar
 
@@ -229,15 +229,46 @@ class RoadmapParams:
     #: m: the margin from the walls paths prefer and goal poses keep where a room allows it
     #: (0: the paper's shortest paths; None until the chance constraint in force decides it)
     clearance: float | None = None
+    #: rooms whose one pose instantiation is given (a job's goal pose, ``goals.jobs``): (room, x, y)
+    poses: tuple[tuple[str, float, float], ...] = ()
+
+
+@dataclass(frozen=True)
+class Job:
+    """What a goal room asks of the robot that visits it (``goals.jobs``): ``service`` seconds
+    standing there after it arrives (time at a station), the ``robots`` that may do it (every
+    robot when empty), and the ``pose`` it ends at (x, y in m, heading in rad; None: the room's
+    sampled pose instantiations, as any goal room)."""
+
+    room: str
+    service: float = 0.0  # s
+    robots: tuple[str, ...] = ()
+    pose: tuple[float, float, float] | None = None
 
 
 @dataclass(frozen=True)
 class Goals:
     visit: tuple[str, ...]  # rooms that some robot must visit
     per_robot: tuple[tuple[str, tuple[str, ...]], ...]  # (robot, rooms it must visit)
+    jobs: tuple[Job, ...] = ()
 
     def for_robot(self, robot: str) -> tuple[str, ...]:
         return dict(self.per_robot).get(robot, ())
+
+    def job(self, room: str) -> Job | None:
+        """The job at ``room``, if the goals give one."""
+        return next((j for j in self.jobs if j.room == room), None)
+
+    def may_visit(self, robot: str, room: str) -> bool:
+        """Whether ``robot`` may enter ``room``: every robot may, unless the room's job names
+        the robots that may."""
+        job = self.job(room)
+        return job is None or not job.robots or robot in job.robots
+
+    def service(self, room: str) -> float:
+        """Seconds a robot stands at ``room`` after it arrives, for the room's job (0 without)."""
+        job = self.job(room)
+        return 0.0 if job is None else job.service
 
     @property
     def all_rooms(self) -> tuple[str, ...]:
@@ -415,6 +446,16 @@ class CostTable:
     #: start together and each ends with its own motion: ``pair_duration[(m1, m2)]`` = (d1, d2)
     duration: dict[MoveKey, float] = field(default_factory=dict)
     pair_duration: dict[tuple[MoveKey, MoveKey], tuple[float, float]] = field(default_factory=dict)
+
+    def with_service(self, goals: Goals) -> CostTable:
+        """The same table with each move's duration ending after the service its target's job
+        asks (``goals.jobs``): the time until its robot is free again, as schedules count it."""
+        if not any(j.service for j in goals.jobs):
+            return self
+        s = goals.service
+        duration = {m: d + s(m[2]) for m, d in self.duration.items()}
+        pair_duration = {(m1, m2): (d1 + s(m1[2]), d2 + s(m2[2])) for (m1, m2), (d1, d2) in self.pair_duration.items()}
+        return replace(self, duration=duration, pair_duration=pair_duration)
 
 
 class PlanStatus(enum.StrEnum):

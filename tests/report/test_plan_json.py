@@ -257,7 +257,7 @@ def test_schedule_is_consistent_with_the_actions(plan_doc: dict[str, Any], plan_
         assert entry["rooms"] == len(timeline)
         assert timeline[0]["ready"] == 0.0
         for prev, nxt in itertools.pairwise(timeline):
-            assert nxt["ready"] == prev["end"] and nxt["step"] > prev["step"]
+            assert nxt["ready"] == prev["end"] + prev["service"] and nxt["step"] > prev["step"]
         busy = sum(m["end"] - m["start"] for m in timeline)
         waits = sum(m["wait"] for m in timeline)
         assert entry["busy"] == pytest.approx(busy) and entry["waits"] == pytest.approx(waits)

@@ -223,7 +223,7 @@ class CanonicalCosts:
         for m, res in zip(ready, results, strict=True):
             self.single[m] = None if res is None else res.cost
             if res is not None:
-                self.duration[m] = res.steps[0] * self.dt
+                self.duration[m] = res.steps[0] * self.dt + self.scenario.goals.service(m[2])
 
     def _ensure_canonical(self, states: set[tuple[str, str]]) -> None:
         """Canonical states at rooms: where a robot arrives driving there from its start."""
@@ -261,7 +261,11 @@ class CanonicalCosts:
             alone = self.single[m1] + self.single[m2]  # type: ignore[operator]
             if _offered(res.cost, alone, self.min_gain):
                 self.pair[(m1, m2)] = res.cost
-                self.pair_duration[(m1, m2)] = (res.steps[0] * self.dt, res.steps[1] * self.dt)
+                service = self.scenario.goals.service
+                self.pair_duration[(m1, m2)] = (
+                    res.steps[0] * self.dt + service(m1[2]),
+                    res.steps[1] * self.dt + service(m2[2]),
+                )
 
 
 def _offered(cost: float, alone: float, min_gain: float) -> bool:

@@ -132,7 +132,8 @@ class CarriedCosts:
                 single[m], duration[m] = res.cost, self._seconds(res)[0]
         pair, pair_duration = self._pairs(team, idx, at, arrived, single, goals)
         locations = tuple(dict.fromkeys([*rooms, *at.values()]))
-        return CostTable(tuple(robots), tuple(rooms), locations, at, single, pair, duration, pair_duration)
+        table = CostTable(tuple(robots), tuple(rooms), locations, at, single, pair, duration, pair_duration)
+        return table.with_service(self.scenario.goals)  # a move's time until its robot is free
 
     def _seconds(self, result: MotionResult) -> tuple[float, ...]:
         return tuple(n * self.scenario.models.dt for n in result.steps)

@@ -12,7 +12,8 @@ the whole team at a time (the compiled kernel of :mod:`tmpnav.belief.kernel`, th
 prediction and updates as everywhere else):
 
 * every robot that drives applies its control; every robot that stands (waiting for a
-  partner, held back, or done) applies none, so its uncertainty does not grow;
+  partner, held back, at a station for its job's service time, or done) applies none, so its
+  uncertainty does not grow;
 * every robot observes the landmarks it sees from its nominal pose, moving or standing;
 * any two robots observe each other whenever they are within range and line of sight at
   the same instant (not only the two of a paired move), which couples their beliefs.
@@ -40,6 +41,7 @@ and :meth:`TeamClock.advance` return new ones, so the exact search can branch fr
 from __future__ import annotations
 
 import heapq
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
@@ -283,6 +285,8 @@ class TeamClock:
                 h = max(free[names.index(r)] for r in robots) - t
                 pair = (names.index(robots[0]), names.index(robots[1]))
                 pairings.append(Pairing(pair, t, h, mutual_seed(self.lib, tuple(robots), request.starts)))
+            for r, _, room in step:  # the job's time at the station: the robot stands, then is free
+                free[names.index(r)] += self.service_steps(room)
         state = replace(
             state,
             legs=tuple(tuple(x) for x in legs),
@@ -292,6 +296,12 @@ class TeamClock:
         )
         # a move of no step ends as it starts
         return self._close(state, state.team.mean[None], state.t, [[c] for c in state.csig], [[p] for p in state.risk])
+
+    def service_steps(self, room: str) -> int:
+        """Control steps a robot stands at ``room`` after it arrives, for the room's job: its
+        service time rounded up to the clock's steps (0 without a job)."""
+        service = self.scenario.goals.service(room)
+        return math.ceil(service / self.dt - 1e-9) if service > 0 else 0
 
     def request(self, state: ClockState, step: Step) -> Request:
         """The oracle's request for ``step`` from where its robots stand now, with their beliefs
@@ -469,7 +479,10 @@ class TeamClock:
             step = plan[m.step]
             move = next(x for x in step if x[0] == names[m.robot])
             partner = next((x[0] for x in step if x[0] != names[m.robot]), None)
-            timed.append(TimedMove(m.step, move[0], move[1], move[2], partner, m.ready * dt, m.start * dt, m.end * dt))
+            service = self.service_steps(move[2]) * dt
+            timed.append(
+                TimedMove(m.step, move[0], move[1], move[2], partner, m.ready * dt, m.start * dt, m.end * dt, service)
+            )
         trajectories = trace.trajectories() if trace is not None else None
         return ClockRun(moves, Schedule(names, tuple(timed)), state, trajectories)
 

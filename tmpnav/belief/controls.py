@@ -62,6 +62,27 @@ def path_controls(points: np.ndarray, start_theta: float, speed: float, turn_rat
     return PathControls(controls=controls, poses=poses, node_steps=node_steps.astype(int))
 
 
+def turn_to(
+    controls: np.ndarray, poses: np.ndarray, heading: float, turn_rate: float, dt: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Controls (T, 2) and poses (T+1, 3) of a path followed by a turn on the spot to ``heading``
+    (rad), as :func:`path_controls` turns: omega = dtheta / (n dt), n = ceil(|dtheta| / (turn_rate
+    dt)), dtheta the wrapped difference from the last pose's heading (no steps below 1e-9 rad)."""
+    theta = float(poses[-1, 2])
+    dtheta = wrap_angle_scalar(heading - theta)
+    if abs(dtheta) < ANGLE_EPS:
+        return controls, poses
+    n = _n_steps(abs(dtheta), turn_rate, dt)
+    omega = dtheta / (n * dt)
+    turn = np.tile(np.array([[0.0, omega]]), (n, 1))
+    headings = np.empty(n)
+    for k in range(n):  # step by step, as the turns of path_controls
+        theta = wrap_angle_scalar(theta + omega * dt)
+        headings[k] = theta
+    turned = np.column_stack([np.repeat(poses[-1:, :2], n, axis=0), headings])
+    return np.vstack([controls.reshape(-1, 2), turn]), np.vstack([poses, turned])
+
+
 def pad(controls: np.ndarray, poses: np.ndarray, T_total: int) -> tuple[np.ndarray, np.ndarray]:
     """Extend a robot that arrived early to ``T_total`` steps.
 

@@ -124,7 +124,7 @@ class _Robot:
     move: QueuedMove | None = None  # the move under way
     waypoints: list[np.ndarray] = field(default_factory=list)  # of the move under way, not reached yet
     previous: np.ndarray | None = None  # the last waypoint reached
-    ready: int = 0  # step at which it ended its latest move
+    ready: int = 0  # step at which it ended its latest move, its job's service included
     since: int = 0  # step at which the move under way started
 
     @property
@@ -249,22 +249,26 @@ class Session:
         m = r.move
         assert m is not None
         dt = self.dt
+        service = self.scenario.goals.service(m.target)  # the robot stands at the station that long
+        stand = math.ceil(service / dt - 1e-9) if service > 0 else 0
         self.trace.moves.append(
-            TimedMove(m.step, m.robot, m.origin, m.target, m.partner, r.ready * dt, r.since * dt, self.step * dt)
+            TimedMove(
+                m.step, m.robot, m.origin, m.target, m.partner, r.ready * dt, r.since * dt, self.step * dt, stand * dt
+            )
         )
-        r.move, r.ready = None, self.step
+        r.move, r.ready = None, self.step + stand
 
     def _start_moves(self) -> bool:
         """Start every move whose robots are free and whose planned start has come; whether any did."""
         started = False
         for r in self.robots:
             m = r.next
-            if m is None or m.start > self.step:
-                continue
+            if m is None or m.start > self.step or r.ready > self.step:
+                continue  # not yet planned to start, or still at a station
             if m.partner is not None:
                 other = self.robots[self.names.index(m.partner)]
                 n = other.next
-                if n is None or n.step != m.step or n.start > self.step:
+                if n is None or n.step != m.step or n.start > self.step or other.ready > self.step:
                     continue  # the partner is not there yet: wait for it
                 self._start(other, n)
             self._start(r, m)

@@ -164,7 +164,7 @@ def sessions_csv(result: ExecutionResult) -> str:
     for config in CONFIGS:
         for s, schedule in enumerate(result.schedules[config]):
             for robot in result.robots:
-                done = max((m.end for m in schedule.timeline(robot)), default=0.0)
+                done = max((m.done for m in schedule.timeline(robot)), default=0.0)
                 rows.append(
                     f"{config},{'yes' if config == 1 else 'no'},{s + 1},{robot},{done:.6g},"
                     f"{schedule.waits(robot):.6g},{schedule.makespan:.6g},{result.planned.makespan:.6g},"

@@ -71,6 +71,7 @@ def context_digest(scenario: Scenario, world: World, roadmap: Roadmap) -> str:
         repr(scenario.models),
         repr(scenario.cost),
         repr(scenario.roadmap.clearance),  # the paths the motions drive (tmpnav.roadmap.graph.safe_weights)
+        repr([(j.room, j.pose) for j in scenario.goals.jobs if j.pose is not None]),  # headings motions end at
     )
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tmpnav.belief.controls import path_controls
+from tmpnav.belief.controls import path_controls, turn_to
 from tmpnav.belief.sequences import NoiseStreams
 from tmpnav.roadmap import RoadmapGraph
 from tmpnav.roadmap.graph import safe_weights
@@ -110,6 +110,12 @@ class MotionLibrary:
         self.scans: ScanInformation | None = world.scans(sensor) if sensor is not None else None
         self.noise = NoiseStreams()  # the simulated observations' draws, by stream
         self._motions: OrderedDict[tuple[str, int, float, int], NominalMotion | None] = OrderedDict()
+        #: the heading a motion ends at, at the node of a job's goal pose (goals.jobs)
+        self.goal_headings: dict[int, float] = {
+            roadmap.instantiations[j.room][0]: j.pose[2]
+            for j in scenario.goals.jobs
+            if j.pose is not None and roadmap.instantiations.get(j.room)
+        }
         self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
 
     def motion(self, robot: str, start: int, heading: float, goal: int) -> NominalMotion | None:
@@ -166,16 +172,20 @@ class MotionLibrary:
         spec = self.scenario.robot(robot)
         models = self.scenario.models
         pc = path_controls(self.graph.points(path), heading, spec.speed, spec.turn_rate, models.dt)
-        lm_visible = self.visibility.visible(pc.poses, models.landmark_sensor.fov, min_range=spec.radius)
+        controls, poses = pc.controls, pc.poses
+        final = self.goal_headings.get(path[-1])
+        if final is not None and len(path) > 1:  # a job's goal pose: turn on the spot to its heading
+            controls, poses = turn_to(controls, poses, final, spec.turn_rate, models.dt)
+        lm_visible = self.visibility.visible(poses, models.landmark_sensor.fov, min_range=spec.radius)
         return NominalMotion(
             robot=robot,
             path=path,
-            controls=pc.controls,
-            poses=pc.poses,
+            controls=controls,
+            poses=poses,
             node_steps=pc.node_steps,
             lm_visible=lm_visible,
-            cells=self.world.reach(spec.radius).cells(pc.poses[:, :2]),
-            scan_keys=self.scans.keys(pc.poses) if self.scans is not None else None,
+            cells=self.world.reach(spec.radius).cells(poses[:, :2]),
+            scan_keys=self.scans.keys(poses) if self.scans is not None else None,
             # one stream per robot and start node, drawn step by step: a robot sees the
             # same simulated observations at step k alone or in a pair, whatever its goal,
             # so factorised pairs are exact and motions with a common prefix share it

@@ -99,13 +99,21 @@ class Oracle:
         self.cache.close()
 
     def evaluate(self, requests: list[Request]) -> list[MotionResult | None]:
-        """Results in request order; None where the robots cannot reach their rooms.
+        """Results in request order; None where the robots cannot reach their rooms, or may not
+        enter them (a room whose job, ``goals.jobs``, is for other robots).
 
         Raises InputError if a cost is not a finite number. Every request is answered under
         the scenario's chance constraint (``planner.max_risk``, :class:`Request`): a move over
         it costs its penalty more (tmpnav.oracle.results.penalised; the cache keeps the bare
         result).
         """
+        goals = self.ctx.scenario.goals
+        allowed = [all(goals.may_visit(r, x) for r, x in zip(q.robots, q.rooms, strict=True)) for q in requests]
+        if not all(allowed):
+            # a move into a room whose job is for other robots is no move at all: answered None
+            # (as a room the robot cannot reach), neither computed nor cached
+            answers = iter(self.evaluate([q for q, ok in zip(requests, allowed, strict=True) if ok]))
+            return [next(answers) if ok else None for ok in allowed]
         start = time.perf_counter()
         delta = self.ctx.scenario.planner.max_risk
         if delta is not None:

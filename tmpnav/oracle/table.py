@@ -38,12 +38,14 @@ def start_locations(scenario: Scenario, world: World) -> dict[str, str]:
 
 
 def destinations(scenario: Scenario, mode: str) -> dict[str, tuple[str, ...]]:
-    """Rooms each robot may move to: the goal rooms it may serve, or every room."""
+    """Rooms each robot may move to: the goal rooms it may serve (those whose job allows it),
+    or every room."""
     if mode == "all-rooms":
         rooms = tuple(r.name for r in scenario.rooms)
         return {r.name: rooms for r in scenario.robots}
+    goals = scenario.goals
     return {
-        r.name: tuple(dict.fromkeys((*scenario.goals.visit, *scenario.goals.for_robot(r.name))))
+        r.name: tuple(x for x in dict.fromkeys((*goals.visit, *goals.for_robot(r.name))) if goals.may_visit(r.name, x))
         for r in scenario.robots
     }
 
@@ -84,10 +86,10 @@ def build_table(
     found = oracle.cache.get_many([key]).get(key)
     if found is not None:
         oracle.stats.table_hit = True
-        return _table_from_json(found)
+        return _table_from_json(found).with_service(scenario.goals)
     table = _compute_table(oracle, starts, dests, pair_filter, pair_min_gain)
-    oracle.cache.put_many({key: _table_to_json(table)})
-    return table
+    oracle.cache.put_many({key: _table_to_json(table)})  # the motions' own times: service added on reading
+    return table.with_service(scenario.goals)
 
 
 def table_key(

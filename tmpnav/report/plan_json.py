@@ -96,13 +96,15 @@ def _timed_move(move: TimedMove) -> JSON:
         "start": number(move.start, 9),
         "end": number(move.end, 9),
         "wait": number(move.wait, 9),
+        "service": number(move.service, 9),
     }
 
 
 def schedule_section(schedule: Schedule) -> JSON:
     """plan.json's ``schedule``: the makespan, and per robot its moves on the shared clock with
-    the time it drives (``busy``), waits before its moves (``waits``) and neither (``idle``, after its
-    last move): busy + waits + idle = makespan."""
+    the time it drives (``busy``), waits before its moves (``waits``), stands at stations for their
+    jobs (``service``) and none of these (``idle``, after its last move): busy + waits + service +
+    idle = makespan."""
     return {
         "makespan": number(schedule.makespan, 9),
         "robots": {
@@ -111,6 +113,7 @@ def schedule_section(schedule: Schedule) -> JSON:
                 "busy": number(schedule.busy(robot), 9),
                 "idle": number(schedule.idle(robot), 9),
                 "waits": number(schedule.waits(robot), 9),
+                "service": number(schedule.service(robot), 9),
                 "moves": [_timed_move(m) for m in schedule.timeline(robot)],
             }
             for robot in schedule.robots

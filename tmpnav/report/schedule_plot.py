@@ -12,6 +12,8 @@ once, :class:`~tmpnav.results.Schedule`):
   wide enough;
 - the two bars of a paired move outlined in black and joined at their common start by a
   connector: they start together and observe each other on the way;
+- a job's service time (``goals.jobs``: the robot stands at the station after it arrives) a
+  pale dotted bar after its move, labelled ``service`` where wide enough;
 - the time after a robot's last move, until the makespan, lightly shaded (``idle``);
 - the makespan as a dashed line (and the planner's, dotted, when its schedule ends elsewhere).
 
@@ -97,6 +99,31 @@ def _draw_moves(ax: Axes, schedule: Schedule, lay: Layout) -> None:
                     )
                 )
             outside += _label_move(ax, move, y, lay, outside)
+            if move.service > T_TOL:  # the job's time at the station: standing, after the arrival
+                ax.add_patch(
+                    Rectangle(
+                        (move.end, y - BAR / 2),
+                        move.service,
+                        BAR,
+                        fc=(*to_rgb(color), 0.35),
+                        ec=edge,
+                        lw=0.8,
+                        hatch="..",
+                        zorder=3,
+                    )
+                )
+                if lay.fits("service", move.service):
+                    ax.text(
+                        move.end + move.service / 2,
+                        y,
+                        "service",
+                        ha="center",
+                        va="center",
+                        fontsize=LABEL_PT - 1.5,
+                        color=fg.darker(color, 0.8),
+                        bbox={"fc": "white", "ec": "none", "alpha": 0.85, "pad": 1.0},
+                        zorder=5,
+                    )
 
 
 def _label_move(ax: Axes, move: TimedMove, y: float, lay: Layout, outside: int) -> int:
@@ -174,7 +201,7 @@ def _draw_idle(ax: Axes, schedule: Schedule, lay: Layout) -> None:
     makespan = schedule.makespan
     for robot, y in lay.rows.items():
         moves = schedule.timeline(robot)
-        done = max((m.end for m in moves), default=0.0)
+        done = max((m.done for m in moves), default=0.0)
         if makespan - done <= T_TOL:
             continue
         color = lay.colors[robot]
@@ -245,6 +272,8 @@ def _legend(ax: Axes, report: PlanReport, lay: Layout) -> None:
     ]
     if any(m.wait > T_TOL for m in schedule.moves):
         items.append((Patch(fc="white", ec="#555555", hatch="////"), "wait: for a partner, or held back"))
+    if any(m.service > T_TOL for m in schedule.moves):
+        items.append((Patch(fc=(*to_rgb(grey), 0.35), ec="#555555", hatch=".."), "service: at the station for its job"))
     if any(m.partner for m in schedule.moves):
         items.append(
             (
@@ -252,9 +281,9 @@ def _legend(ax: Axes, report: PlanReport, lay: Layout) -> None:
                 "paired move: start together, observe each other",
             )
         )
-    if any(schedule.makespan - max((m.end for m in schedule.timeline(r)), default=0.0) > T_TOL for r in lay.rows):
+    if any(schedule.makespan - max((m.done for m in schedule.timeline(r)), default=0.0) > T_TOL for r in lay.rows):
         items.append((Patch(fc=(*to_rgb(grey), 3 * IDLE_ALPHA), ec="none"), "idle: done until the makespan"))
-    items.append((Line2D([], [], ls="--", color="#333333"), "makespan: the last robot's last arrival"))
+    items.append((Line2D([], [], ls="--", color="#333333"), "makespan: when the last robot is done"))
     o = objective_values(report)
     if o.planner_makespan is not None and abs(o.planner_makespan - o.makespan) > T_TOL:
         items.append(

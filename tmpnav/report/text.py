@@ -196,12 +196,15 @@ def _robots(report: PlanReport) -> list[str]:
     widest axis (largest along the plan / at its end), its heading std at the end, and the
     collision bound of its riskiest move. Then the plan's collision bound and its conflicts."""
     schedule, dt = report.schedule, report.scenario.models.dt
-    rows = ["robot  rooms    busy   waits  idle [s]  travelled  pos. std max / end  heading std  collision bound"]
+    served = any(m.service > 0 for m in schedule.moves)  # a service column only for plans with jobs' times
+    head = "robot  rooms    busy   waits  " + ("service  " if served else "")
+    rows = [head + "idle [s]  travelled  pos. std max / end  heading std  collision bound"]
     for robot in schedule.robots:
         steps = report.trajectories.get(robot, [])
+        service = f"{schedule.service(robot):>7.1f}  " if served else ""
         timing = (
             f"{robot:<5}  {len(schedule.timeline(robot)):>5}  {schedule.busy(robot):>6.1f}  "
-            f"{schedule.waits(robot):>6.1f}  {schedule.idle(robot):>8.1f}"
+            f"{schedule.waits(robot):>6.1f}  {service}{schedule.idle(robot):>8.1f}"
         )
         if not steps:
             rows.append(timing)
@@ -218,9 +221,15 @@ def _robots(report: PlanReport) -> list[str]:
         rows.append(
             f"{timing}  {travelled:>7.1f} m  {stds:>18}  {heading_std:>7.1f} deg  {max(risks, default=0.0):>15.2g}"
         )
-    rows.append(
-        f"(busy: driving, in control steps of {dt:g} s; idle: after the last move; busy + waits + idle: makespan)"
-    )
+    if served:
+        rows += [
+            f"(busy: driving, in control steps of {dt:g} s; service: standing at stations for their jobs;",
+            " idle: after the last move; busy + waits + service + idle: makespan)",
+        ]
+    else:
+        rows.append(
+            f"(busy: driving, in control steps of {dt:g} s; idle: after the last move; busy + waits + idle: makespan)"
+        )
     rows.append("(pos. std: along the widest axis of the position covariance, the sqrt of its largest eigenvalue)")
     rows.extend(_risk_lines(report))
     return rows

@@ -229,7 +229,8 @@ def _roadmap_of(ob: Any, si: Any, prm: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapParams) -> Roadmap:
-    """The roadmap with k pose instantiations per room and a node at every robot's start.
+    """The roadmap with k pose instantiations per room (one, at the goal pose, for a room whose
+    job gives one: ``params.poses``) and a node at every robot's start.
 
     It grows beyond ``params.samples`` milestones while free space joins two of its special
     milestones (instantiations, starts) that it does not (a door too narrow for uniform
@@ -242,8 +243,11 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
     free_cells = reachable_free_space(world, radius, starts)
     # instantiations only where OMPL may put milestones: one in a pocket of the room cut off by
     # noise in the map would be refused as a start state, and its room would lose it
+    given = {room: np.array([[x, y]]) for room, x, y in params.poses}  # a job's goal pose: the one instantiation
     inst = {
-        room.name: sample_instantiations(
+        room.name: given[room.name]
+        if room.name in given
+        else sample_instantiations(
             world, room.name, radius, params.instantiations, rng, free_cells, params.clearance or 0.0
         )
         for room in world.rooms

@@ -411,10 +411,40 @@ ROADMAP = Section(
     }
 )
 
+#: the longest time at a station (s): a day
+MAX_SERVICE = 86_400.0
+
+JOB = Section(
+    fields={
+        "name": Field(
+            Name(), "the goal room (or place) of the job, named in goals.visit or goals.robots", required=True
+        ),
+        "service": Field(
+            Number("time", minimum=0.0, maximum=MAX_SERVICE),
+            "time the robot that visits the room stands there after it arrives (time at a station): on the "
+            "team's clock, in the makespan and in the schedule",
+            default=0.0,
+        ),
+        "robots": Field(
+            NameList(), "the robots that may do the job (capabilities); no other robot enters the room", default=()
+        ),
+        "pose": Field(
+            Vector(dimensions=("length", "length", "angle"), names="x, y, theta", max_abs=MAX_COORDINATE),
+            "the goal pose inside the room (a station): the robot ends its move there, turned to theta; "
+            "without it, the room's sampled pose instantiations",
+        ),
+    }
+)
+
 GOALS = Section(
     fields={
         "visit": Field(NameList(), "rooms that some robot must visit", default=()),
         "robots": Field(NameMap(), "rooms that a given robot must visit: {robot: [rooms]}", default={}),
+        "jobs": Field(
+            NamedList(item=JOB, what="job"),
+            "what a goal room asks of its visit: time at the station, the robots that may do it",
+            default=[],
+        ),
     },
     post=_some_goal,
 )

@@ -25,6 +25,7 @@ from tmpnav.types import (
     CostWeights,
     Door,
     Goals,
+    Job,
     Landmark,
     Models,
     ObservationMode,
@@ -308,6 +309,49 @@ def _cross_references(doc: YamlDoc, data: dict[str, Any]) -> list[Problem]:
                         doc.line(("goals", "robots", robot, i)),
                     )
                 )
+    return problems + _job_problems(doc, goals, robots)
+
+
+def _job_problems(doc: YamlDoc, goals: dict[str, Any], robots: list[str]) -> list[Problem]:
+    """A job names a goal room and robots of the team; a robot that goals.robots sends to a
+    room must be one its job allows."""
+    problems: list[Problem] = []
+    visit = set(goals.get("visit") or ())
+    per_robot = {r: set(xs) for r, xs in (goals.get("robots") or {}).items()}
+    goal_rooms = visit.union(*per_robot.values())
+    for i, job in enumerate(goals.get("jobs") or ()):
+        room, allowed = job["name"], list(job["robots"])
+        where = ("goals", "jobs", i)
+        if room not in goal_rooms:
+            problems.append(
+                Problem(
+                    doc.name,
+                    f"goals.jobs.{room}",
+                    f"{room!r} is no goal room; expected a room named in goals.visit or goals.robots",
+                    doc.line(where),
+                )
+            )
+        for k, robot in enumerate(allowed):
+            if robot not in robots:
+                problems.append(
+                    Problem(
+                        doc.name,
+                        f"goals.jobs.{room}.robots[{k}]",
+                        f"{robot!r} is not a robot{_hint(robot, robots)}; expected {_one_of('robot', robots)}",
+                        doc.line((*where, "robots", k)),
+                    )
+                )
+        for robot, targets in per_robot.items():
+            if allowed and room in targets and robot not in allowed:
+                problems.append(
+                    Problem(
+                        doc.name,
+                        f"goals.jobs.{room}.robots",
+                        f"goals.robots sends {robot} to {room!r}, which its job allows only to "
+                        f"{', '.join(allowed)}; expected {robot} among them, or the room in goals.visit",
+                        doc.line((*where, "robots")),
+                    )
+                )
     return problems
 
 
@@ -371,10 +415,17 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
             range_sensor=_range_sensor(models["range_sensor"]),
         ),
         cost=CostWeights(d["cost"]["M_u"], d["cost"]["M_G"], d["cost"]["M_Sigma"], d["cost"]["M_T"]),
-        roadmap=RoadmapParams(**d["roadmap"]),
+        roadmap=RoadmapParams(
+            **d["roadmap"],
+            poses=tuple((j["name"], *j["pose"][:2]) for j in d["goals"]["jobs"] if j["pose"] is not None),
+        ),
         goals=Goals(
             visit=tuple(d["goals"]["visit"]),
             per_robot=tuple((k, tuple(v)) for k, v in d["goals"]["robots"].items()),
+            jobs=tuple(
+                Job(j["name"], j["service"], tuple(j["robots"]), None if j["pose"] is None else tuple(j["pose"]))
+                for j in d["goals"]["jobs"]
+            ),
         ),
         planner=_planner(d["planner"], d["models"]["range_sensor"] is not None),
         key_lines={_display(raw, doc): line for raw, line in doc.lines.items()},

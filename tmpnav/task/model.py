@@ -152,7 +152,7 @@ def robot_ends(found: Schedule | None, robots: Sequence[str]) -> dict[str, float
     """When each robot ends its last move of a schedule (0 for none, or without a schedule)."""
     ends = dict.fromkeys(robots, 0.0)
     for m in found.moves if found is not None else ():
-        ends[m.robot] = max(ends[m.robot], m.end)
+        ends[m.robot] = max(ends[m.robot], m.done)
     return ends
 
 

@@ -4,7 +4,8 @@ A plan is a sequence of steps; a step is the moves (robot, origin, target) of th
 robots it moves. The rules are those of the ``single`` and ``mixed`` encodings
 (pddl/mixed.pddl): a robot moves from where it is; it enters a room only if nobody has
 visited it, or if the room is one of its own target rooms that it has not visited itself
-(for a pair, both moves are checked against the state before the step); a plan is done
+(for a pair, both moves are checked against the state before the step), and never a room
+whose job (``goals.jobs``) names other robots; a plan is done
 when every room of ``goals.visit`` is visited and every robot has visited its targets.
 The search edits plans only through :func:`splice`, and keeps only plans that
 :meth:`Rules.check` accepts.
@@ -48,6 +49,8 @@ class Rules:
         return State(at, frozenset(at.values()), by)
 
     def may_enter(self, state: State, robot: str, room: str) -> bool:
+        if not self.goals.may_visit(robot, room):  # the room's job is for other robots
+            return False
         return room not in state.visited or ((robot, room) in self.targets and (robot, room) not in state.visited_by)
 
     def apply(self, state: State, step: Step) -> State:
@@ -59,7 +62,8 @@ class Rules:
             if state.at.get(r) != origin:
                 raise PlanError(f"{r} is not at {origin} (it is at {state.at.get(r)})")
             if not self.may_enter(state, r, target):
-                raise PlanError(f"{r} may not enter {target}: visited before")
+                why = "visited before" if self.goals.may_visit(r, target) else "its job is for other robots"
+                raise PlanError(f"{r} may not enter {target}: {why}")
         if len(step) == 2 and step[0][2] == step[1][2] and not any((r, t) in self.targets for r, _, t in step):
             raise PlanError(f"two robots enter {step[0][2]} at once")
         at, visited, by = dict(state.at), set(state.visited), set(state.visited_by)

@@ -84,6 +84,8 @@ class _Space:
         return set(self.goals.visit) <= n.visited and self.targets <= n.by
 
     def may_enter(self, n: _Node, robot: str, room: str) -> bool:
+        if not self.goals.may_visit(robot, room):  # the room's job is for other robots
+            return False
         return room not in n.visited or ((robot, room) in self.targets and (robot, room) not in n.by)
 
     def steps(self, n: _Node) -> Iterator[tuple[Step, float, _Node]]:

@@ -441,9 +441,9 @@ class AnytimeSearch:
         start = {}
         for r in hood.robots:
             timeline = schedule.timeline(r)
-            last = max((m.end for m in timeline if m.step in hood.removed), default=ends[r])
-            start[r] = ends[r] + max(0.0, max((m.end for m in timeline), default=0.0) - last)
-        others = [m.end for m in schedule.moves if m.robot not in hood.robots]
+            last = max((m.done for m in timeline if m.step in hood.removed), default=ends[r])
+            start[r] = ends[r] + max(0.0, max((m.done for m in timeline), default=0.0) - last)
+        others = [m.done for m in schedule.moves if m.robot not in hood.robots]
         return Clocks(start, max(others, default=0.0))
 
     def _solve(self, sub: _Sub, timeout: float) -> list[Step] | None:

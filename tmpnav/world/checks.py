@@ -67,7 +67,46 @@ def check(scenario: Scenario, world: World) -> list[Problem]:
     if any(p.path.startswith("rooms.") for p in problems):
         return problems
     problems += _reachability(scenario, world, starts_ok, problem)
+    problems += _jobs(scenario, world, problem)
     return problems
+
+
+def _jobs(scenario: Scenario, world: World, problem: Callable[[str, str], Problem]) -> list[Problem]:
+    """A job's goal pose lies in its room where the robots that may do it fit; a job's room is
+    done by a robot that enters it, so no robot starts inside (it would count as having done
+    it at time 0: a visit's rule is that where a robot starts is visited)."""
+    out = []
+    for job in scenario.goals.jobs:
+        if job.pose is not None:
+            x, y, _ = job.pose
+            robots = [r for r in scenario.robots if not job.robots or r.name in job.robots]
+            radius = max((r.radius for r in robots), default=0.0)
+            if world.room_of([x, y]) != job.room:  # type: ignore[arg-type]
+                out.append(
+                    problem(
+                        f"goals.jobs.{job.room}.pose",
+                        f"[{x:g}, {y:g}] is not inside room {job.room!r}; expected a goal pose inside the job's room",
+                    )
+                )
+            elif not world.is_free(np.array([[x, y]]), radius)[0]:
+                out.append(
+                    problem(
+                        f"goals.jobs.{job.room}.pose",
+                        f"a robot of radius {radius:g} m at [{x:g}, {y:g}] touches a wall or an obstacle; "
+                        "expected a goal pose with room for the robot",
+                    )
+                )
+        for robot in scenario.robots:
+            if world.room_of([robot.pose.x, robot.pose.y]) == job.room:  # type: ignore[arg-type]
+                out.append(
+                    problem(
+                        f"goals.jobs.{job.room}",
+                        f"robot {robot.name} starts in {job.room!r}, so the job would count as done at 0 s; "
+                        "expected a job only at a room no robot starts in (start the robot outside it, "
+                        "or drop the job)",
+                    )
+                )
+    return out
 
 
 def _range_sensor(scenario: Scenario, world: World, problem: Callable[[str, str], Problem]) -> list[Problem]:
