@@ -297,13 +297,14 @@ def kernel_batch(
 @dataclass(frozen=True)
 class Measured:
     """A bound of a drive against trajectories sampled along it: ``what`` ("wall r0", "contact"),
-    the bound (first passage), the union of the per-step bounds over the steps (Boole's
-    inequality; for a contact, of :func:`tmpnav.belief.risk.pair_bound`), and how many of the
-    ``n`` sampled trajectories hit a wall (touch)."""
+    the bound (first passage), the bound before it (the union of the per-step bounds over the
+    steps, Boole's inequality, with reach measured from whole cells; for a contact, of the
+    per-instant rule :func:`tmpnav.belief.risk.pair_bound`), and how many of the ``n`` sampled
+    trajectories hit a wall (touch)."""
 
     what: str
     bound: float
-    union: float
+    before: float
     hits: int
     n: int
 
@@ -318,11 +319,12 @@ def measure(d: Drive, n: int, how: str = "walk", seed: int = 0) -> list[Measured
     rng = np.random.default_rng(seed)
     xs = sample(d, rng, n) if how == "walk" else sample_unicycle(d, rng, n)
     clear, r = clearance(d.grid), d.path.radius
+    cells = SectorReach(d.grid, clear, r, subdivisions=1)
     out = []
     for i in range(d.poses.shape[0]):
-        T, b = int(d.steps[i]), slice(3 * i, 3 * i + 3)
+        T, b = int(d.steps[i]), slice(3 * i, 3 * i + 2)
         bound = risk.move_bound(d.poses[i, : T + 1], d.covs[: T + 1, b, b], d.cross(i)[: T + 1], d.grid, r)
-        union = float(risk.step_bounds(d.poses[i, : T + 1], d.covs[: T + 1, b, b], d.grid, r, clear)[1:].sum())
+        union = float(risk.step_bound(d.covs[1 : T + 1, b, b], cells.at(d.poses[i, 1 : T + 1, :2])).sum())
         hits = int(risk.hits_wall(d.grid, clear, xs[:, i, :T], r).any(axis=1).sum())
         out.append(Measured(f"wall r{i}", bound, min(union, 1.0), hits, n))
     if d.poses.shape[0] == 2:

@@ -49,15 +49,19 @@ def test_a_step_without_reach_is_certain_to_be_bounded_by_one() -> None:
 
 @pytest.mark.parametrize("sigma", [0.05, 0.08, 0.12])
 def test_one_step_near_a_wall_against_sampling(sigma: float) -> None:
-    """One step 0.4 m from the straight corridor's wall cells, isotropic: the step bound alone
-    (no union over steps), against 200,000 samples."""
+    """One step 0.4 m from the straight corridor's wall cells (0.225 m from the cells where the
+    footprint hits), isotropic: the step bound alone against 200,000 samples, and against the
+    exact half-plane probability Q(0.225 / sigma) (the nearest wall is straight)."""
+    from scipy.stats import norm
+
     grid = STRAIGHT
     clear = clearance(grid)
     mu, cov = np.array([3.025, 0.525]), sigma**2 * np.eye(2)
     x = mu + sigma * np.random.default_rng(3).standard_normal((200_000, 2))
     hits = int(risk.hits_wall(grid, clear, x, RADIUS).sum())
     bound = float(risk.step_bound(cov, SectorReach(grid, clear, RADIUS).at(mu)))
-    assert risk.clopper_pearson(hits, x.shape[0])[1] <= bound
+    exact = float(norm.sf(0.225 / sigma))
+    assert hits / x.shape[0] <= bound and exact <= bound <= 3.0 * exact
 
 
 def test_a_step_with_zero_covariance_never_hits() -> None:
@@ -211,7 +215,7 @@ def test_a_move_is_its_first_step_and_its_crossings_and_stops_at_one() -> None:
     assert p[0] == 1.0 and 0.0 < p[1] < 0.5 and np.all(x <= p[1:])
     move = risk.move_bound(positions, covs, cross, STRAIGHT, RADIUS)
     assert move == pytest.approx(min(p[1], p[0] + x[0]) + x[1] + x[2]) and move < p[1:].sum()
-    assert risk.move_bound(positions, 100 * covs, 100 * cross, STRAIGHT, RADIUS) == 1.0
+    assert risk.move_bound(positions, 100 * covs, 0 * cross, STRAIGHT, RADIUS) == 1.0  # independent steps
     assert risk.move_bound(positions[:1], covs[:1], cross[:1], STRAIGHT, RADIUS) == 0.0
     assert risk.plan_bound([0.2, 0.3]) == pytest.approx(0.5) and risk.plan_bound([0.7, 0.6]) == 1.0
 

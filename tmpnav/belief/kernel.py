@@ -321,19 +321,27 @@ def _sector_masses(a, b, c, det, lam, reach, row, masses, qs):
 
 @nb.njit(cache=True)
 def _foot(reach, row, k):
-    """tmpnav.belief.risk._foot: where the reach followed downhill from sector k is least."""
+    """tmpnav.belief.risk._foot: where the reach followed downhill from sector k is least (the
+    middle of a level stretch there)."""
     K = reach.shape[1]
-    left, right = reach[row, (k - 1) % K], reach[row, (k + 1) % K]
-    if min(left, right) >= reach[row, k]:
-        return k
-    step = -1 if left < right else 1
     at = k
+    if min(reach[row, (k - 1) % K], reach[row, (k + 1) % K]) < reach[row, k]:
+        step = -1 if reach[row, (k - 1) % K] < reach[row, (k + 1) % K] else 1
+        for _ in range(K // 4):
+            nxt = (at + step) % K
+            if reach[row, nxt] > reach[row, at]:
+                break
+            at = nxt
+    lo, hi = at, at
     for _ in range(K // 4):
-        nxt = (at + step) % K
-        if reach[row, nxt] > reach[row, at]:
+        if reach[row, (lo - 1) % K] != reach[row, at]:
             break
-        at = nxt
-    return at
+        lo = (lo - 1) % K
+    for _ in range(K // 4):
+        if reach[row, (hi + 1) % K] != reach[row, at]:
+            break
+        hi = (hi + 1) % K
+    return (lo + ((hi - lo) % K + 1) // 2) % K
 
 
 @nb.njit(cache=True)

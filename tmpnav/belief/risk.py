@@ -263,20 +263,28 @@ def _sector_masses(
 
 
 def _foot(R: np.ndarray, k: int) -> int:
-    """The sector where the reach, followed downhill from sector k (across level stretches, at
-    most a quarter turn), is least: the foot of the wall that sector k looks at."""
+    """The sector where the reach, followed downhill from sector k (at most a quarter turn), is
+    least, or the middle one of a level stretch there: the foot of the wall that sector k looks
+    at (a wall's nearest cells give a level stretch of reach around its normal)."""
     K = R.shape[0]
-    left, right = R[(k - 1) % K], R[(k + 1) % K]
-    if min(left, right) >= R[k]:
-        return k
-    step = -1 if left < right else 1
     at = k
+    if min(R[(k - 1) % K], R[(k + 1) % K]) < R[k]:
+        step = -1 if R[(k - 1) % K] < R[(k + 1) % K] else 1
+        for _ in range(K // 4):
+            nxt = (at + step) % K
+            if R[nxt] > R[at]:
+                break
+            at = nxt
+    lo, hi = at, at
     for _ in range(K // 4):
-        nxt = (at + step) % K
-        if R[nxt] > R[at]:
+        if R[(lo - 1) % K] != R[at]:
             break
-        at = nxt
-    return at
+        lo = (lo - 1) % K
+    for _ in range(K // 4):
+        if R[(hi + 1) % K] != R[at]:
+            break
+        hi = (hi + 1) % K
+    return (lo + ((hi - lo) % K + 1) // 2) % K
 
 
 def _support(Rp: np.ndarray, ball: float, n: int) -> float:

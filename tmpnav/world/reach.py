@@ -11,15 +11,16 @@ everything off the grid) within sector k, capped at :data:`REACH`:
 A true position x that hits a wall therefore lies in some sector k at least R_k from mu,
 which is what the bound integrates (:mod:`tmpnav.belief.risk`).
 
-Computed per grid cell, so that it holds for every mu in the cell: for a hit cell h and the
-cell c of mu, the vectors x - mu with mu in c and x in h are exactly the square of side
-2 res centred on h's centre less c's, so their lengths are at least that square's distance
-from the origin and their directions lie between its corners' bearings. Only hit cells with
-a free 8-neighbour are scanned: the nearest point of H in a sector (a convex cone) lies on
-H's boundary. A cell that is itself hit, or off the grid, has reach 0 in every sector.
+Computed per sub-cell (a grid cell cut into :data:`SUBDIVISIONS` x :data:`SUBDIVISIONS`
+squares of side res / s), so that it holds for every mu there: for a hit cell h and the
+sub-cell c of mu, the vectors x - mu with mu in c and x in h are exactly the square of side
+res (1 + 1/s) centred on h's centre less c's, so their lengths are at least that square's
+distance from the origin and their directions lie between its corners' bearings. Only hit
+cells with a free 8-neighbour are scanned: the nearest point of H in a sector (a convex cone)
+lies on H's boundary. A sub-cell of a hit cell, or off the grid, has reach 0 in every sector.
 
-Cells are computed when first asked for and remembered (:class:`SectorReach`): a plan of a
-building asks for a few thousand distinct cells among millions of poses.
+Sub-cells are computed when first asked for and remembered (:class:`SectorReach`): a plan of
+a building asks for some thousands among millions of poses.
 """
 
 from __future__ import annotations
@@ -36,72 +37,91 @@ from tmpnav.world.grid import OccupancyGrid
 SECTORS = 64
 #: how far the reach looks (m): hit cells farther than this count as this far
 REACH = 2.5
-#: the flat cell index of a pose off the grid (reach 0: the bound is 1)
+#: sub-cells per cell and axis: a pose's reach is measured from its sub-cell, losing at most
+#: res / s per axis to where in it the pose lies (res with whole cells)
+SUBDIVISIONS = 2
+#: the key of a pose off the grid (reach 0: the bound is 1)
 OFF_GRID = -1
 
 
 class SectorReach:
-    """The reach of every cell of ``grid`` for a disc of ``radius`` (m), computed on demand.
+    """The reach of every sub-cell of ``grid`` for a disc of ``radius`` (m), computed on demand.
 
-    ``clear`` is the grid's clearance (:func:`tmpnav.world.grid.clearance`). Cells are named by
-    their flat index ``i * cols + j`` (:meth:`cells`), :data:`OFF_GRID` for a point off the grid.
+    ``clear`` is the grid's clearance (:func:`tmpnav.world.grid.clearance`); ``subdivisions``
+    per cell and axis (1: whole cells). Places are named by the flat index of their sub-cell,
+    ``row * (cols * s) + col`` (:meth:`cells`), :data:`OFF_GRID` for a point off the grid.
     """
 
-    def __init__(self, grid: OccupancyGrid, clear: np.ndarray, radius: float):
+    def __init__(self, grid: OccupancyGrid, clear: np.ndarray, radius: float, subdivisions: int = SUBDIVISIONS):
         self.grid = grid
+        self.subdivisions = subdivisions
         hit = np.ones((grid.shape[0] + 2, grid.shape[1] + 2), dtype=bool)  # one ring off the grid
         hit[1:-1, 1:-1] = clear <= radius
         self.hit = hit
         self.boundary = hit & ndimage.binary_dilation(~hit, structure=np.ones((3, 3), dtype=bool))
-        self.row = np.full(grid.shape[0] * grid.shape[1], -1, dtype=np.int64)  # cell -> table row
+        self.keys = np.zeros(0, dtype=np.int64)  # the sub-cells computed, sorted
+        self.key_rows = np.zeros(0, dtype=np.int64)  # and their rows of the table
         self.table = np.zeros((1, SECTORS))  # row 0: off the grid, reach 0
         self.rows = 1
 
     def cells(self, points: np.ndarray) -> np.ndarray:
-        """The flat index of each point's cell (..., 2) -> (...,) int64, OFF_GRID off the grid."""
-        i, j, inside = self.grid.cells(np.asarray(points, dtype=float)[..., :2])
-        return np.where(inside, i * self.grid.shape[1] + j, OFF_GRID).astype(np.int64)
+        """The key of each point's sub-cell (..., 2) -> (...,) int64, OFF_GRID off the grid."""
+        p = np.asarray(points, dtype=float)[..., :2]
+        size = self.grid.resolution / self.subdivisions
+        col = np.floor((p[..., 0] - self.grid.origin[0]) / size).astype(np.int64)
+        row = np.floor((p[..., 1] - self.grid.origin[1]) / size).astype(np.int64)
+        rows, cols = self.grid.shape[0] * self.subdivisions, self.grid.shape[1] * self.subdivisions
+        inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+        return np.where(inside, row * cols + col, OFF_GRID).astype(np.int64)
 
     def of_cells(self, cells: np.ndarray) -> np.ndarray:
-        """R (..., K) m for flat cell indices (...,) (:meth:`cells`)."""
+        """R (..., K) m for sub-cell keys (...,) (:meth:`cells`)."""
         cells = np.asarray(cells, dtype=np.int64)
         flat = cells.ravel()
-        new = np.unique(flat[flat >= 0])
-        new = new[self.row[new] < 0]
+        on = flat >= 0
+        new = np.unique(flat[on])
+        at = np.minimum(np.searchsorted(self.keys, new), max(self.keys.size - 1, 0))
+        new = new[self.keys[at] != new] if self.keys.size else new
         if new.size:
             self._compute(new)
-        rows = np.where(flat >= 0, self.row[np.maximum(flat, 0)], 0)
+        rows = np.zeros(flat.size, dtype=np.int64)
+        rows[on] = self.key_rows[np.searchsorted(self.keys, flat[on])]
         return self.table[rows].reshape(*cells.shape, SECTORS)
 
     def at(self, points: np.ndarray) -> np.ndarray:
         """R (..., K) m at positions (..., 2)."""
         return self.of_cells(self.cells(points))
 
-    def _compute(self, cells: np.ndarray) -> None:
-        cols = self.grid.shape[1]
-        out = np.empty((cells.size, SECTORS))
-        _sector_reach(self.hit, self.boundary, self.grid.resolution, cells // cols, cells % cols, REACH, out)
-        need = self.rows + cells.size
+    def _compute(self, keys: np.ndarray) -> None:
+        s, cols = self.subdivisions, self.grid.shape[1] * self.subdivisions
+        out = np.empty((keys.size, SECTORS))
+        _sector_reach(self.hit, self.boundary, self.grid.resolution, s, keys // cols, keys % cols, REACH, out)
+        need = self.rows + keys.size
         if need > self.table.shape[0]:
             grown = np.zeros((max(need, 2 * self.table.shape[0]), SECTORS))
             grown[: self.rows] = self.table[: self.rows]
             self.table = grown
         self.table[self.rows : need] = out
-        self.row[cells] = np.arange(self.rows, need)
+        order = np.argsort(np.concatenate([self.keys, keys]), kind="stable")
+        self.keys = np.concatenate([self.keys, keys])[order]
+        self.key_rows = np.concatenate([self.key_rows, np.arange(self.rows, need)])[order]
         self.rows = need
 
 
 @nb.njit(cache=True)
-def _sector_reach(hit, boundary, res, ci, cj, reach, out):
-    """Fill out (N, K) with the reach of cells (ci, cj) (the module docstring's construction).
-    ``hit`` and ``boundary`` carry one ring of cells around the grid (grid cell (i, j) is their
-    (i + 1, j + 1))."""
+def _sector_reach(hit, boundary, res, sub, si, sj, reach, out):
+    """Fill out (N, K) with the reach of sub-cells (si, sj) (the module docstring's construction;
+    ``sub`` sub-cells per cell and axis). ``hit`` and ``boundary`` carry one ring of cells around
+    the grid (grid cell (i, j) is their (i + 1, j + 1))."""
     K = out.shape[1]
     w = 2.0 * math.pi / K
     n = math.ceil(reach / res) + 2
+    half = 0.5 * res * (1.0 + 1.0 / sub)  # half the side of the squares x - mu lies in
     R, C = hit.shape
-    for p in range(ci.shape[0]):
-        i0, j0 = ci[p] + 1, cj[p] + 1
+    for p in range(si.shape[0]):
+        i0, j0 = si[p] // sub + 1, sj[p] // sub + 1
+        oy = ((si[p] % sub) + 0.5) * res / sub - 0.5 * res  # the sub-cell's centre from its cell's
+        ox = ((sj[p] % sub) + 0.5) * res / sub - 0.5 * res
         for k in range(K):
             out[p, k] = reach
         if hit[i0, j0]:
@@ -109,13 +129,13 @@ def _sector_reach(hit, boundary, res, ci, cj, reach, out):
                 out[p, k] = 0.0
             continue
         for i in range(max(0, i0 - n), min(R, i0 + n + 1)):
-            dy = (i - i0) * res
+            dy = (i - i0) * res - oy
             for j in range(max(0, j0 - n), min(C, j0 + n + 1)):
                 if not boundary[i, j]:
                     continue
-                dx = (j - j0) * res
-                ex = max(abs(dx) - res, 0.0)
-                ey = max(abs(dy) - res, 0.0)
+                dx = (j - j0) * res - ox
+                ex = max(abs(dx) - half, 0.0)
+                ey = max(abs(dy) - half, 0.0)
                 d = math.sqrt(ex * ex + ey * ey)
                 if d >= reach:
                     continue
@@ -125,8 +145,8 @@ def _sector_reach(hit, boundary, res, ci, cj, reach, out):
                     continue
                 phi = math.atan2(dy, dx)
                 lo, hi = 0.0, 0.0
-                for sx in (-res, res):
-                    for sy in (-res, res):
+                for sx in (-half, half):
+                    for sy in (-half, half):
                         a = math.atan2(dy + sy, dx + sx) - phi
                         if a > math.pi:
                             a -= 2.0 * math.pi
