@@ -70,6 +70,18 @@ def test_an_early_robot_waits_for_the_planned_departure() -> None:
     assert run.record("r1", 1).lateness == -5.0
 
 
+def test_a_late_robot_still_serves_its_station_before_its_next_move() -> None:
+    """r1's first move ends at a station with 5 s of service (goals.jobs): late by 10 s, it
+    leaves for its next move 5 s after it arrives, not at once."""
+    first = move("r1", 1, 1, 0.0, 10.0, 0.0)
+    first = MoveRequest(**{**first.__dict__, "service": 5.0})
+    team = Team(("r1",), {"r1": (first, move("r1", 2, 2, 15.0, 25.0, 15.0))}, 25.0, "test")
+    run, _ = replay(team, slower={"r1": 2.0})  # arrives at 20 s
+    assert sent(run.moves, "r1/2") == (25.0, 45.0, "previous move")
+    on_time, _ = replay(team)
+    assert sent(on_time.moves, "r1/2") == (15.0, 25.0, "depart")
+
+
 def test_a_failed_goal_stops_the_run_and_says_which_move() -> None:
     team = paired_team()
     clock = SimClock()

@@ -217,7 +217,7 @@ class Executor:
                 )
                 self._failed = self._failed or self._records[key]
             del self._under_way[move.robot]
-            self._free_at[move.robot] = t
+            self._free_at[move.robot] = t + move.service  # it stands at the station for its job first
 
     def _pending(self, robot: str) -> MoveRequest | None:
         moves = self.team.moves[robot]

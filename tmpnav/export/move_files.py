@@ -40,7 +40,8 @@ def files(plan: Team) -> dict[str, str]:
 _TIMES = (
     "# Times on the team's clock, seconds from the plan's start (one instant for every robot): depart,\n"
     "# the move's planned start (never send it earlier); ready, when the robot's previous move ends; wait,\n"
-    "# depart - ready; arrive, the planned end. A paired move (partner, sync step-K) starts when both\n"
+    "# depart - ready; arrive, the planned end; service, then the time at the station for its job.\n"
+    "# A paired move (partner, sync step-K) starts when both\n"
     "# robots have reached the poses they leave from, together with the partner's move of the same step.\n"
 )
 
@@ -98,6 +99,7 @@ def _timing(m: MoveRequest) -> dict[str, Any]:
         "wait": m.wait,
         "depart": m.depart,
         "arrive": m.arrive,
+        "service": m.service,
     }
 
 
@@ -172,6 +174,7 @@ def _read_move(robot: str, index: int, e: Any, frame: str, name: str) -> MoveReq
         arrive=_time(e, "arrive", name, where),
         goal=NavigateThroughPoses(poses, frame, str(message.get("behavior_tree") or "")),
         roadmap_nodes=_expect(e.get("roadmap_nodes", 0), int, name, f"{where}.roadmap_nodes"),
+        service=_time(e, "service", name, where) or 0.0,
     )
 
 

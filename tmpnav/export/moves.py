@@ -83,6 +83,7 @@ class MoveRequest:
     arrive: float | None  # the planned end: the robot at its goal pose
     goal: NavigateThroughPoses
     roadmap_nodes: int  # nodes of the roadmap path the via points were thinned from (its start included)
+    service: float = 0.0  # s the robot stands at the goal after it arrives, for the room's job
 
     @property
     def name(self) -> str:
@@ -243,4 +244,5 @@ def _request(
         arrive=when.end,
         goal=goal(move, tolerance),
         roadmap_nodes=len(move["path_points"]),
+        service=when.service,
     )

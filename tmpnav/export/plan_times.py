@@ -44,6 +44,7 @@ class MoveTimes:
     ready: float | None  # its previous move ended (0 for its first)
     start: float | None  # the move starts
     end: float | None  # the move ends
+    service: float = 0.0  # s the robot then stands at the target for the room's job
 
     @property
     def wait(self) -> float | None:
@@ -112,7 +113,11 @@ def _scheduled(doc: dict[str, Any], robot: str) -> list[MoveTimes]:
             ready, start, end = (_seconds(entry_k.get(key)) for key in ("ready", "start", "end"))
         except (TypeError, ValueError):
             raise InputError(f"{where}: move {k + 1} has times that are not numbers") from None
-        out.append(MoveTimes(ready, start, end))
+        try:
+            service = _seconds(entry_k.get("service", 0.0)) or 0.0
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: move {k + 1} has a service time that is not a number") from None
+        out.append(MoveTimes(ready, start, end, service))
     return out
 
 
