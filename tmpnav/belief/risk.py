@@ -17,9 +17,9 @@ beliefs, and tests/belief/test_collision_bound.py holds the two together. In sho
   covariance of their relative position; :func:`pair_bound` and :func:`separation`, the
   per-instant rule from each robot's own covariance alone.
 
-Every bound assumes the true position error is Gaussian with the EKF's covariances (a
-consistent filter). :func:`clopper_pearson` gives the confidence interval that the tests and
-``tmpnav simulate`` report for a sampled rate.
+Every bound assumes the true position errors are jointly Gaussian with the EKF's covariances
+and cross-covariances (a consistent filter). :func:`clopper_pearson` gives the confidence
+interval that the tests and ``tmpnav simulate`` report for a sampled rate.
 """
 
 from __future__ import annotations
