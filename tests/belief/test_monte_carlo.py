@@ -5,10 +5,10 @@ The paths, the filter along them and the samplers are tests/belief/risk_paths.py
 are drawn as the filter's error process (``walk``: the bound's assumption, exactly) and, on the
 paths driven without observations, as the nonlinear motion model with noisy controls
 (``unicycle``: the filter's covariance is then its linearisation). 20,000 trajectories a case,
-seeded (100,000 for the passing robots, whose contact bound is within 15% of the rate); a
-bound must not be below the sampled rate, and where the rate rests on enough hits, nor below
-the lower end of its 95% interval (Clopper-Pearson's). The measured figures are in
-benchmarks/risk/paths.txt (``benchmarks/bench_risk.py paths``).
+seeded (100,000 for the passing robots, whose contact bound is within 30% of the rate). A
+bound must not be below the sampled rate (the rate's 95% Clopper-Pearson interval is in the
+message); it must be at most 10 times the rate where that rests on enough hits to say so.
+The measured figures are in benchmarks/risk/paths.txt (``benchmarks/bench_risk.py paths``).
 """
 
 from __future__ import annotations
@@ -58,9 +58,7 @@ def measured(name: str, noise: float, how: str) -> tuple[risk_paths.Measured, ..
 
 def _never_below(m: risk_paths.Measured) -> None:
     lower, upper = risk.clopper_pearson(m.hits, m.n)
-    assert lower <= m.rate <= m.bound, (
-        f"{m.what}: sampled {m.rate:.4g} [{lower:.4g}, {upper:.4g}] > bound {m.bound:.4g}"
-    )
+    assert m.rate <= m.bound, f"{m.what}: sampled {m.rate:.4g} [{lower:.4g}, {upper:.4g}] > bound {m.bound:.4g}"
 
 
 @pytest.mark.parametrize(("name", "noise"), list(PAPER) + list(OPEN_LOOP))
