@@ -109,7 +109,8 @@ def step_bound(cov_xy: np.ndarray, reach: np.ndarray) -> np.ndarray:
       of q(theta) = u(theta)^T Sigma^-1 u(theta) over sector k: the Gaussian's mass beyond R_k in
       the sector, with q at its least (exp(-R² q / 2) / q falls as q grows).
 
-    1 when R <= 0; the disc alone when it is below :data:`TINY` or Sigma is nearly singular.
+    1 when R <= 0; the disc alone when it is below :data:`TINY`, Sigma is nearly singular, or the
+    reach has other than :data:`~tmpnav.world.reach.SECTORS` sectors (as in the kernel).
     """
     cov = np.asarray(cov_xy, dtype=float)[..., :2, :2]
     R = np.asarray(reach, dtype=float)
@@ -120,6 +121,8 @@ def step_bound(cov_xy: np.ndarray, reach: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         disc = np.where(lam > 0.0, np.exp(-(r_min**2) / (2.0 * lam)), 0.0)
         det = a * c - b * b
+        if R.shape[-1] != SECTORS:
+            return np.where(r_min <= 0.0, 1.0, np.minimum(disc, 1.0))
         sectors = _sector_sum(a[..., None], b[..., None], c[..., None], det[..., None], R)
         use = (disc >= TINY) & (det > DET_FLOOR * lam * lam)
         p = np.where(use, np.minimum(disc, sectors), disc)
@@ -132,17 +135,14 @@ def _sector_sum(a: np.ndarray, b: np.ndarray, c: np.ndarray, det: np.ndarray, R:
     q(theta) = v(theta + pi/2) / det with v(phi) = a cos² phi + 2 b cos phi sin phi + c sin² phi the
     variance along phi; over a sector it is least at an edge, or at the major axis of Sigma
     (q = 1 / lambda_max) when the sector holds it."""
-    K = R.shape[-1]
-    w = 2.0 * math.pi / K
-    edges = w * np.arange(K + 1)
-    s, co = (EDGE_SIN, EDGE_COS) if K == SECTORS else (np.sin(edges), np.cos(edges))
+    s, co = EDGE_SIN, EDGE_COS
     q_edge = (a * s * s - 2.0 * b * s * co + c * co * co) / det  # (..., K+1)
     q = np.minimum(q_edge[..., :-1], q_edge[..., 1:])
     major = 0.5 * np.arctan2(2.0 * b, a - c)
-    holds = np.mod(major - edges[:-1], math.pi) <= w
+    holds = np.mod(major - WIDTH * np.arange(SECTORS), math.pi) <= WIDTH
     lam = 0.5 * (a + c) + np.hypot(0.5 * (a - c), b)
     q = np.where(holds, 1.0 / lam, q)
-    terms = w * np.exp(-(R**2) * q / 2.0) / (2.0 * math.pi * np.sqrt(det) * q)
+    terms = WIDTH * np.exp(-(R**2) * q / 2.0) / (2.0 * math.pi * np.sqrt(det) * q)
     return terms.sum(axis=-1)
 
 
