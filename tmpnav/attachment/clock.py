@@ -48,7 +48,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from tmpnav.attachment.team import Team
-from tmpnav.belief.risk import step_bound
+from tmpnav.belief.risk import running_bound
 from tmpnav.belief.sequences import (
     EKFConstants,
     MotionArrays,
@@ -345,6 +345,7 @@ class TeamClock:
                 [w[2] for w in windows],
                 np.arange(n),
                 self.ekf.landmarks.shape[0],
+                [w[4] for w in windows],
                 scans=None if scans is None else (scans.rows(np.concatenate([w[6] for w in windows])), scans.table),
             ),
             landmark_noise=np.stack([w[3] for w in windows]),
@@ -359,8 +360,7 @@ class TeamClock:
         running = [[state.csig[i] + float(c) for c in out.c_sigma_history[0, :, i]] for i in range(n)]
         zero = np.zeros(h + 1)
         risk = [
-            state.risk[i] + (_running_risk(out.last_covs, i, windows[i][4], windows[i][5]) if priced else zero)
-            for i in range(n)
+            state.risk[i] + (running_bound(out.step_risk[:, i], windows[i][5]) if priced else zero) for i in range(n)
         ]
         if trace is not None:
             trace.extend(state, a, out.last_means, out.last_covs)
@@ -402,7 +402,8 @@ class TeamClock:
     def _window(self, state: ClockState, i: int, a: int, b: int, priced: bool) -> tuple[np.ndarray, ...]:
         """Robot i's controls (h, 2), nominal poses (h+1, 3), landmark visibility (h+1, L),
         landmark draws (h+1, L, 2), the sector reach of its footprint (h+1, K; infinite unless
-        ``priced``: the collision bound is wanted), whether it drove into each row (h+1,), its
+        ``priced``: the collision bound is wanted), whether it drove into each row (h+1; row 0:
+        from the step before the window), its
         scans' keys (h+1,; -1: none) and their draws (h+1, 3) over the steps a..b."""
         L = self.ekf.landmarks.shape[0]
         controls, poses = np.zeros((b - a, 2)), np.empty((b - a + 1, 3))
@@ -438,6 +439,8 @@ class TeamClock:
                 drive = s - leg.start < m.n_steps
                 controls[s[drive] - a] = m.controls[s[drive] - leg.start]
                 drove[s[drive] - a + 1] = True
+                if leg.start < a <= leg.start + m.n_steps:  # it drove into row 0 too: its move goes on
+                    drove[0] = True
             noise[rows] = self.lib.noise.rows(leg.noise_seed, int(k[-1]) + 1, (L, 2))[k]
             if noisy:
                 scan_noise[rows] = self.lib.noise.rows(scan_seed(leg.noise_seed), int(k[-1]) + 1, (3,))[k]
@@ -503,15 +506,6 @@ class _Trace:
 
     def trajectories(self) -> dict[str, list[TrajectoryStep]]:
         return {self.clock.start.names[i]: steps for i, steps in self.steps.items()}
-
-
-def _running_risk(covs: np.ndarray, i: int, reach: np.ndarray, drove: np.ndarray) -> np.ndarray:
-    """Robot i's collision bound summed over the rows it drove into (0 at row 0): the bound of
-    :func:`tmpnav.belief.risk.step_bound` at each, from its position covariance in ``covs``
-    (h+1, 3n, 3n) and the sector ``reach`` (h+1, K) of its nominal poses, as the compiled
-    kernel sums it."""
-    p = step_bound(covs[:, 3 * i : 3 * i + 2, 3 * i : 3 * i + 2], reach)
-    return np.cumsum(np.where(drove, p, 0.0))
 
 
 def _reached(legs: Sequence[Leg], a: int, b: int) -> dict[int, int]:

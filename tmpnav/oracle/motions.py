@@ -38,7 +38,7 @@ class NominalMotion:
     node_steps: np.ndarray  # (P,) step at which each path node is reached
     lm_visible: np.ndarray  # (T+1, L)
     noise_seed: int
-    cells: np.ndarray  # (T+1,) the grid cell of each pose (flat index, World.reach(radius).cells)
+    cells: np.ndarray  # (T+1,) the sub-cell key of each pose (World.reach(radius).cells)
     scan_keys: np.ndarray | None = None  # (T+1,) each pose's scan (World.scans(sensor).keys); None: no scans
 
     def scan_rows(self, lib: MotionLibrary) -> np.ndarray:
