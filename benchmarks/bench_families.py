@@ -1,6 +1,6 @@
 """tmpnav on buildings it was not tuned on: generated families (benchmarks/families.py), fresh commands.
 
-    .venv/bin/python benchmarks/bench_families.py [--seeds 10] [--sizes office:20:2,office:40:4,office:60:8]
+    .venv/bin/python benchmarks/bench_families.py [--seeds 10] [--sizes office:20:2,office:40:4,office:60:8:5]
 
 For every size (kind, rooms, robots) and seed, one fresh ``tmpnav plan`` of the generated scenario
 with its default settings (a cold cache each): exit code, time, the objective, whether the
@@ -95,14 +95,18 @@ def run(scenario: Path, cache: Path) -> dict[str, object]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=10)
-    parser.add_argument("--sizes", default=SIZES, help="kind:rooms:robots, comma-separated")
+    parser.add_argument(
+        "--sizes", default=SIZES, help="kind:rooms:robots[:seeds], comma-separated (seeds: --seeds unless given)"
+    )
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
-    sizes = [(k, int(r), int(n)) for k, r, n in (s.split(":") for s in args.sizes.split(","))]
+    fields = [s.split(":") for s in args.sizes.split(",")]
+    seeds = {(f[0], int(f[1]), int(f[2])): int(f[3]) if len(f) > 3 else args.seeds for f in fields}
+    sizes = list(seeds)
     rows: list[dict[str, object]] = []
     with tempfile.TemporaryDirectory() as tmp:
         for kind, rooms, robots in sizes:
-            for seed in range(args.seeds):
+            for seed in range(seeds[(kind, rooms, robots)]):
                 path = write(KINDS[kind](rooms, robots, seed), Path(tmp) / f"{kind}-{rooms}-{robots}-{seed}.yaml")
                 result = run(path, Path(tmp) / f"cache-{kind}-{rooms}-{robots}-{seed}")
                 rows.append({"kind": kind, "rooms": rooms, "robots": robots, "seed": seed, **result})
