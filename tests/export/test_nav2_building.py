@@ -27,7 +27,9 @@ pytestmark = pytest.mark.slow
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict[str, Any], Path]:
     out = tmp_path_factory.mktemp("building")
-    proc = tmpnav("plan", BUILDING, "-o", out, "--export", "nav2", "--cache-dir", out / "cache", "-q")
+    # the files of any plan of the building: a short anytime search keeps the test short
+    args = ("--export", "nav2", "--anytime-budget", "4", "--cache-dir", out / "cache", "-q")
+    proc = tmpnav("plan", BUILDING, "-o", out, *args)
     assert proc.returncode == 0, proc.stderr
     return json.loads((out / "plan.json").read_text()), out / "nav2"
 
