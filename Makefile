@@ -50,12 +50,12 @@ $(STAMP): pyproject.toml
 	@touch $(RUNTIME) $(STAMP)
 
 # The first plan compiles the EKF kernel and the line-of-sight code (numba) and caches them
-# beside the sources: about 15-20 s, in the `oracle` time of the summary.
+# beside the sources: about 45 s on 2 cores, in the `oracle` and `resimulate` times of the summary.
 demo: $(RUNTIME)
 	@$(BIN)/tmpnav doctor
 	$(BIN)/tmpnav validate configs/corridor.yaml
 	$(BIN)/tmpnav show configs/corridor.yaml -o out/world.png
-	@first=$$(ls tmpnav/belief/__pycache__/*.nbi >/dev/null 2>&1 || echo "   # first run: numba compiles, +15-20 s of oracle time"); \
+	@first=$$(ls tmpnav/belief/__pycache__/*.nbi >/dev/null 2>&1 || echo "   # first run: numba compiles, about +45 s"); \
 		echo "$(BIN)/tmpnav plan configs/corridor.yaml -o out/$$first"
 	@$(BIN)/tmpnav plan configs/corridor.yaml -o out/
 

@@ -88,3 +88,17 @@ def test_a_door_warning_says_when_on_the_shared_clock_and_which_move(plan_report
         t = float(w.message.split(" at t ")[1].split(" s,")[0])
         move = next(m for m in plan_report.schedule.timeline(str(w.robot)) if m.start < t <= m.end + 0.05)
         assert f"on its way to {move.target} (step {move.step + 1})" in w.message
+
+
+def test_keeping_robots_apart_is_not_blamed_on_the_search(kept_report: PlanReport) -> None:
+    """A plan kept apart costs more than the plan searched; its gap against the bound is in the
+    summary, but the "far from the best" warning is the search's: none when the plan searched
+    met its bound, one when the plan searched did not."""
+    apart = kept_report.apart
+    assert apart is not None
+    met = BoundSummary(apart.cost_before, "exact", 0.5, False)  # the objective is the cost here
+    report = dataclasses.replace(kept_report, task=dataclasses.replace(kept_report.task, bound=met))
+    assert not [w for w in plan_warnings(report) if w.kind == "gap"]
+    far = BoundSummary(apart.cost_before * 0.5, "flow", 0.5, False)
+    report = dataclasses.replace(kept_report, task=dataclasses.replace(kept_report.task, bound=far))
+    assert [w.kind for w in plan_warnings(report) if w.kind == "gap"] == ["gap"]
