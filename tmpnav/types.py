@@ -8,6 +8,7 @@ Units are SI throughout: metres, radians, seconds.
 from __future__ import annotations
 
 import enum
+import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TypeVar
@@ -269,6 +270,12 @@ class Goals:
         """Seconds a robot stands at ``room`` after it arrives, for the room's job (0 without)."""
         job = self.job(room)
         return 0.0 if job is None else job.service
+
+    def service_steps(self, room: str, dt: float) -> int:
+        """:meth:`service` in control steps of ``dt`` s, rounded up: how long the team's clock
+        and the simulator keep the robot standing there."""
+        service = self.service(room)
+        return math.ceil(service / dt - 1e-9) if service > 0 else 0
 
     @property
     def all_rooms(self) -> tuple[str, ...]:

@@ -41,7 +41,6 @@ and :meth:`TeamClock.advance` return new ones, so the exact search can branch fr
 from __future__ import annotations
 
 import heapq
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
@@ -300,8 +299,7 @@ class TeamClock:
     def service_steps(self, room: str) -> int:
         """Control steps a robot stands at ``room`` after it arrives, for the room's job: its
         service time rounded up to the clock's steps (0 without a job)."""
-        service = self.scenario.goals.service(room)
-        return math.ceil(service / self.dt - 1e-9) if service > 0 else 0
+        return self.scenario.goals.service_steps(room, self.dt)
 
     def request(self, state: ClockState, step: Step) -> Request:
         """The oracle's request for ``step`` from where its robots stand now, with their beliefs

@@ -249,8 +249,7 @@ class Session:
         m = r.move
         assert m is not None
         dt = self.dt
-        service = self.scenario.goals.service(m.target)  # the robot stands at the station that long
-        stand = math.ceil(service / dt - 1e-9) if service > 0 else 0
+        stand = self.scenario.goals.service_steps(m.target, dt)  # the robot stands at the station that long
         self.trace.moves.append(
             TimedMove(
                 m.step, m.robot, m.origin, m.target, m.partner, r.ready * dt, r.since * dt, self.step * dt, stand * dt

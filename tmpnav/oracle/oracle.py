@@ -108,7 +108,10 @@ class Oracle:
         result).
         """
         goals = self.ctx.scenario.goals
-        allowed = [all(goals.may_visit(r, x) for r, x in zip(q.robots, q.rooms, strict=True)) for q in requests]
+        allowed = [
+            not goals.jobs or all(goals.may_visit(r, x) for r, x in zip(q.robots, q.rooms, strict=True))
+            for q in requests
+        ]
         if not all(allowed):
             # a move into a room whose job is for other robots is no move at all: answered None
             # (as a room the robot cannot reach), neither computed nor cached

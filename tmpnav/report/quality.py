@@ -29,9 +29,8 @@ from numpy.typing import NDArray
 from tmpnav.belief.conflicts import Conflict
 from tmpnav.choices import time_budget
 from tmpnav.planning.safety import conflicts_left, riskiest_point, what_would_help
-from tmpnav.report.schedule import bound_values, move_at, objective_values
+from tmpnav.report.schedule import bound_values, move_at, objective_values, searched_gap
 from tmpnav.results import PlanReport
-from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.types import Door, TrajectoryStep
 
 #: warn when the lower bound is more than this fraction of the plan's cost below it
@@ -100,13 +99,9 @@ def _gap(report: PlanReport) -> PlanWarning | None:
     bound, search = bound_values(report), report.task.search
     if bound is None or bound.proved_optimal or not math.isfinite(bound.gap) or bound.gap <= GAP_WARN:
         return None
-    if report.apart is not None and report.task.bound is not None and bound.units == "cost":
-        b, apart = report.task.bound, report.apart
-        searched = OBJECTIVES[report.scenario.planner.objective].value(
-            apart.cost_before, apart.makespan_before, report.scenario.cost
-        )
-        if searched > 0.0 and (searched - b.value) / searched <= GAP_WARN:
-            return None
+    searched = searched_gap(report) if bound.units == "cost" else None
+    if searched is not None and searched <= GAP_WARN:
+        return None
     value = f"{bound.value:.1f} s" if bound.units == "s" else f"{bound.value:.3f}"
     text = (
         f"the plan may be far from the best: its lower bound, {value}, is {100 * bound.gap:.0f}% below "

@@ -114,6 +114,19 @@ class BoundValues:
     units: str
 
 
+def searched_gap(report: PlanReport) -> float | None:
+    """The gap of the plan the search found, before robots were kept apart (its cost and
+    makespan run on the clock, ``report.apart``), in objective units; None for a plan not kept
+    apart, without a bound, or of no cost."""
+    apart, b = report.apart, report.task.bound
+    if apart is None or b is None:
+        return None
+    value = OBJECTIVES[report.scenario.planner.objective].value(
+        apart.cost_before, apart.makespan_before, report.scenario.cost
+    )
+    return (value - b.value) / value if value > 0.0 else None
+
+
 def bound_values(report: PlanReport) -> BoundValues | None:
     """``report``'s lower bound and gap in its objective's own units; None without a bound."""
     b = report.task.bound

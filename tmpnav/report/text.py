@@ -49,11 +49,10 @@ import numpy as np
 from tmpnav.belief.risk import position_std
 from tmpnav.choices import STOP_MEANINGS
 from tmpnav.report.quality import plan_conflicts, warning_lines
-from tmpnav.report.schedule import T_TOL, bound_values, driving_steps, objective_values, step_windows
+from tmpnav.report.schedule import T_TOL, bound_values, driving_steps, objective_values, searched_gap, step_windows
 from tmpnav.results import STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
 from tmpnav.task.bound import OPTIMAL_GAP
-from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.types import PlanStatus
 
 
@@ -126,12 +125,9 @@ def _search(report: PlanReport) -> list[str]:
     own = bound_values(report)
     if bound is not None and own is not None:
         verdict = "proved optimal" if own.proved_optimal else f"gap {100 * own.gap:.2f}%"
-        apart = report.apart
-        if apart is not None and not own.proved_optimal:
-            objective = OBJECTIVES[report.scenario.planner.objective]
-            searched = objective.value(apart.cost_before, apart.makespan_before, report.scenario.cost)
-            if searched > 0.0 and (searched - bound.value) / searched <= OPTIMAL_GAP:
-                verdict += " after keeping the robots apart; the plan searched: proved optimal"
+        searched = None if own.proved_optimal else searched_gap(report)
+        if searched is not None and searched <= OPTIMAL_GAP:
+            verdict += " after keeping the robots apart; the plan searched: proved optimal"
         if own.units == "s":
             lines.append(f"lower bound on the makespan: {own.value:.1f} s ({own.relaxation}); {verdict}")
         else:
