@@ -105,7 +105,7 @@ def test_every_search_keeps_the_jobs(tmp_path: Path, mode: tuple[str, ...]) -> N
     [
         (
             "goals:\n  visit: [A]\n  jobs:\n    - {name: B, service: 5 s}\n",
-            "goals.jobs.B: 'B' is no goal room; expected a room named in goals.visit or goals.robots",
+            "goals.jobs.B: 'B' is no goal room; expected a room named in goals.visit, goals.robots or goals.ends",
         ),
         (
             "goals:\n  visit: [A]\n  jobs:\n    - {name: A, robots: [r9]}\n",
@@ -131,6 +131,30 @@ def test_every_search_keeps_the_jobs(tmp_path: Path, mode: tuple[str, ...]) -> N
             "goals:\n  visit: [A]\n  jobs:\n    - {name: A, service: -5 s}\n",
             "goals.jobs.A.service",
         ),
+        (
+            "goals:\n  visit: [A]\n  ends: {r9: C}\n",
+            "goals.ends.r9: 'r9' is not a robot",
+        ),
+        (
+            "goals:\n  visit: [A]\n  ends: {r1: D}\n",
+            "goals.ends.r1: 'D' is not a room",
+        ),
+        (
+            "goals:\n  visit: [A]\n  ends: {r1: A}\n",
+            "goals.ends.r1: 'A' is also a goal room (goals.visit or goals.robots); expected a room only r1 ends in",
+        ),
+        (
+            "goals:\n  visit: [A]\n  ends: {r1: C, r2: C}\n",
+            "goals.ends.r2: r1 ends in 'C' too; expected one robot per end room",
+        ),
+        (
+            "goals:\n  visit: [A]\n  ends: {r1: C}\nplanner: {encoding: paper}\n",
+            "goals.ends.r1: the paper's encoding moves two robots in every action and has no end",
+        ),
+        (
+            "goals:\n  visit: [A]\n  jobs:\n    - {name: A, window: [60 s, 30 s]}\n",
+            "goals.jobs.A.window: [60, 30] s is no window; expected [earliest, latest] with 0 <= earliest <= latest",
+        ),
     ],
     ids=[
         "not-a-goal",
@@ -140,6 +164,12 @@ def test_every_search_keeps_the_jobs(tmp_path: Path, mode: tuple[str, ...]) -> N
         "pose-in-wall",
         "start-inside",
         "negative",
+        "end-unknown-robot",
+        "end-not-a-room",
+        "end-also-a-goal",
+        "end-shared",
+        "end-paper",
+        "window-reversed",
     ],
 )
 def test_bad_jobs_get_one_line_each(tmp_path: Path, goals: str, fragment: str) -> None:
@@ -160,3 +190,38 @@ def test_a_job_allowed_to_no_robot_that_can_reach_it_has_no_plan(tmp_path: Path)
     )  # fmt: skip
     assert proc.returncode == 6, proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.slow
+def test_a_robot_comes_back_to_its_end_and_a_window_is_kept(tmp_path: Path) -> None:
+    """Read from plan.json only: r1 starts in C and must end there, so its last move enters C;
+    B's window opens at 60 s, so its robot waits there until then, serves 10 s, and arrives
+    before the window closes."""
+    goals = (
+        "goals:\n  visit: [A, B]\n  ends: {r1: C}\n"
+        "  jobs:\n    - {name: B, service: 10 s, window: [60 s, 120 s]}\n"
+    )
+    out = tmp_path / "out"
+    proc = tmpnav("plan", str(scenario(tmp_path, goals)), "-q", "--cache-dir", str(tmp_path / "c"), "-o", str(out))
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads((out / "plan.json").read_text())
+    assert doc["goals"]["ends"] == {"r1": "C"}
+    assert doc["goals"]["jobs"]["B"]["window"] == [60.0, 120.0]
+    r1 = doc["schedule"]["robots"]["r1"]["moves"]
+    assert r1 and r1[-1]["to"] == "C"
+    into_b = next(m for r in doc["schedule"]["robots"].values() for m in r["moves"] if m["to"] == "B")
+    assert into_b["end"] <= 120.0 and into_b["end"] + into_b["opens"] == pytest.approx(60.0, abs=0.5)
+    assert into_b["end"] + into_b["opens"] >= 60.0 and into_b["service"] == 10.0
+    makespan = doc["schedule"]["makespan"]
+    for entry in doc["schedule"]["robots"].values():
+        assert entry["busy"] + entry["waits"] + entry["service"] + entry["idle"] == pytest.approx(makespan)
+
+
+def test_a_window_nobody_can_reach_gets_one_line_and_exit_11(tmp_path: Path) -> None:
+    goals = "goals:\n  visit: [A, B]\n  jobs:\n    - {name: B, window: [0 s, 2 s]}\n"
+    out = tmp_path / "out"
+    proc = tmpnav("plan", str(scenario(tmp_path, goals)), "-q", "--cache-dir", str(tmp_path / "c"), "-o", str(out))
+    assert proc.returncode == 11, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "jobs.yaml: goals.jobs.B.window: it closes at 2 s" in lines[0], lines
+    assert "the earliest arrival possible is" in lines[0] and not out.exists()

@@ -105,6 +105,12 @@ class ConflictError(PlannerError):
     exit_code = 10
 
 
+class WindowError(PlannerError):
+    """A job's window that no robot can arrive within (goals.jobs.window)."""
+
+    exit_code = 11
+
+
 class CacheError(TmpnavError):
     """The cache directory cannot be used at all (not a directory, not writable)."""
 
@@ -126,6 +132,8 @@ EXIT_CODES: dict[int, str] = {
     "message names the least threshold a plan meets and what would help; --accept-risk takes the plan",
     ConflictError.exit_code: "under a chance constraint, the plan leaves robots in each other's way that waits "
     "and detours could not clear (the message names the first); --accept-risk takes the plan",
+    WindowError.exit_code: "no plan arrives within a job's window (goals.jobs.window): the message names the goal "
+    "and the earliest arrival possible",
     130: "interrupted (Ctrl-C)",
     143: "terminated (SIGTERM; a parent process sees it killed by the signal): the processes it started "
     "are stopped and earlier outputs kept, as after Ctrl-C",

@@ -12,14 +12,23 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
 from tmpnav.choices import COSTS, SEARCH_MODES, STOP_REASONS, Costs, SearchMode, StopReason
-from tmpnav.types import CostTable, MoveKey, PlannedAction, PlanStatus, Roadmap, Scenario, TrajectoryStep
+from tmpnav.types import (
+    WINDOW_TOL,
+    CostTable,
+    MoveKey,
+    PlannedAction,
+    PlanStatus,
+    Roadmap,
+    Scenario,
+    TrajectoryStep,
+)
 
 if TYPE_CHECKING:  # annotations only: the world is stage 2, built before this module's values
     from tmpnav.world import World
@@ -90,15 +99,17 @@ class TimedMove:
     start: float
     end: float  # when it arrives
     service: float = 0.0  # seconds it then stands at the target for the room's job (goals.jobs)
+    opens: float = 0.0  # seconds it waits at the target, before its service, for the job's window to open
 
     @property
     def wait(self) -> float:
+        """Seconds the robot waits before this move starts."""
         return self.start - self.ready
 
     @property
     def done(self) -> float:
-        """When the robot is free again: its arrival plus the job's service time."""
-        return self.end + self.service
+        """When the robot is free again: its arrival, the wait for the job's window, its service time."""
+        return self.end + self.opens + self.service
 
 
 @dataclass(frozen=True)
@@ -131,8 +142,12 @@ class Schedule:
         return sum(m.service for m in self.timeline(robot))
 
     def waits(self, robot: str) -> float:
-        """Seconds the robot waits between its moves."""
-        return sum(m.wait for m in self.timeline(robot))
+        """Seconds the robot waits between its moves (and at a station for its window to open)."""
+        return sum(m.wait + m.opens for m in self.timeline(robot))
+
+    def late(self, windows: Mapping[str, tuple[float, float]]) -> tuple[TimedMove, ...]:
+        """The moves that arrive after their target's window closes (goals.jobs)."""
+        return tuple(m for m in self.moves if m.target in windows and m.end > windows[m.target][1] + WINDOW_TOL)
 
 
 @dataclass(frozen=True)

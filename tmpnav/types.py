@@ -234,17 +234,24 @@ class RoadmapParams:
     poses: tuple[tuple[str, float, float], ...] = ()
 
 
+#: seconds by which an arrival may pass a window's latest and still count as within it (rounding)
+WINDOW_TOL = 1e-6
+
+
 @dataclass(frozen=True)
 class Job:
     """What a goal room asks of the robot that visits it (``goals.jobs``): ``service`` seconds
     standing there after it arrives (time at a station), the ``robots`` that may do it (every
     robot when empty), and the ``pose`` it ends at (x, y in m, heading in rad; None: the room's
-    sampled pose instantiations, as any goal room)."""
+    sampled pose instantiations, as any goal room), and the ``window`` [earliest, latest] of its
+    arrival on the team's clock (s from the plan's start; None: any time): a robot that arrives
+    earlier waits there until the earliest, one that would arrive later may not take the job."""
 
     room: str
     service: float = 0.0  # s
     robots: tuple[str, ...] = ()
     pose: tuple[float, float, float] | None = None
+    window: tuple[float, float] | None = None  # s on the team's clock
 
 
 @dataclass(frozen=True)
@@ -252,9 +259,57 @@ class Goals:
     visit: tuple[str, ...]  # rooms that some robot must visit
     per_robot: tuple[tuple[str, tuple[str, ...]], ...]  # (robot, rooms it must visit)
     jobs: tuple[Job, ...] = ()
+    #: (robot, room) where a robot must finish (its dock, a charger): its last move enters it
+    ends: tuple[tuple[str, str], ...] = ()
 
     def for_robot(self, robot: str) -> tuple[str, ...]:
-        return dict(self.per_robot).get(robot, ())
+        """The rooms ``robot`` must enter: its targets, then its end."""
+        end = self.end_of(robot)
+        return dict(self.per_robot).get(robot, ()) + (() if end is None else (end,))
+
+    def end_of(self, robot: str) -> str | None:
+        """Where ``robot`` must finish (None: anywhere)."""
+        return dict(self.ends).get(robot)
+
+    @property
+    def targets(self) -> frozenset[tuple[str, str]]:
+        """(robot, room): a room a given robot must visit (goals.robots); a robot's end is not one."""
+        return frozenset((r, x) for r, rooms in self.per_robot for x in rooms)
+
+    @property
+    def entries(self) -> frozenset[tuple[str, str]]:
+        """(robot, room): a room a given robot may enter though others entered it (its targets and
+        its end), once, recorded as ``visited_by``."""
+        return self.targets | frozenset(self.ends)
+
+    def marked_at_start(self, start_location: dict[str, str]) -> frozenset[tuple[str, str]]:
+        """The targets its robot visits by starting there; a robot that starts at its end must
+        still come back to it."""
+        return frozenset((r, x) for r, x in start_location.items() if (r, x) in self.targets)
+
+    def ended(self, at: dict[str, str]) -> bool:
+        """Whether every robot with an end is there."""
+        return all(at.get(r) == x for r, x in self.ends)
+
+    def window(self, room: str) -> tuple[float, float] | None:
+        """The window of arrival at ``room`` (s on the team's clock), if its job gives one."""
+        job = self.job(room)
+        return None if job is None else job.window
+
+    @property
+    def windows(self) -> dict[str, tuple[float, float]]:
+        return {j.room: j.window for j in self.jobs if j.window is not None}
+
+    def opens(self, room: str, arrival: float) -> float:
+        """Seconds a robot that arrives at ``room`` at ``arrival`` (team's clock) waits for its
+        window to open (0 without one)."""
+        window = self.window(room)
+        return 0.0 if window is None else max(0.0, window[0] - arrival)
+
+    def too_late(self, room: str, arrival: float) -> bool:
+        """Whether an arrival at ``room`` at ``arrival`` s is after its window closes."""
+        window = self.window(room)
+        return window is not None and arrival > window[1] + WINDOW_TOL
 
     def job(self, room: str) -> Job | None:
         """The job at ``room``, if the goals give one."""
@@ -279,9 +334,11 @@ class Goals:
 
     @property
     def all_rooms(self) -> tuple[str, ...]:
+        """Every room a plan enters: the rooms to visit, the robots' targets and ends."""
         rooms = list(self.visit)
         for _, targets in self.per_robot:
             rooms.extend(t for t in targets if t not in rooms)
+        rooms.extend(x for _, x in self.ends)
         return tuple(dict.fromkeys(rooms))
 
 

@@ -190,7 +190,7 @@ CASES = [
     Case("missing-room-polygon", delete("rooms", "hall", "polygon"), "rooms.hall.polygon",
          "is missing; expected a polygon: a list of 3 to 1000 points [x, y] in m"),
     Case("goals-name-no-room", top(goals={}), "goals",
-         "names no room to visit; expected rooms in goals.visit or goals.robots"),
+         "names no room to visit; expected rooms in goals.visit, goals.robots or goals.ends"),
     # --- types
     Case("wrong-type-number", change("robots", "r1", radius="big"), "robots.r1.radius",
          "'big' is not a number; expected a number > 0 in m (or a string such as '1.5 m')"),

@@ -104,11 +104,15 @@ class CanonicalCosts:
             costs.append(math.inf if c is None else c)
         if not all(math.isfinite(c) for c in costs):
             return PlanCost.impossible(len(plan))
-        return PlanCost(float(sum(costs)), tuple(costs), schedule(plan, self.robots, self._step_durations))
+        goals = self.scenario.goals
+        timed = schedule(plan, self.robots, self._step_durations, goals=goals)
+        if timed is not None and timed.late(goals.windows):
+            return PlanCost.impossible(len(plan))  # it arrives after a window closes
+        return PlanCost(float(sum(costs)), tuple(costs), timed)
 
     def ends(self, head: Plan) -> dict[str, float]:
         self.plan_cost(head)  # costs (and so times) every move of the head
-        return robot_ends(schedule(head, self.robots, self._step_durations), self.robots)
+        return robot_ends(schedule(head, self.robots, self._step_durations, goals=self.scenario.goals), self.robots)
 
     def _step_durations(self, step: Sequence[MoveKey]) -> tuple[float, ...] | None:
         if len(step) == 1:

@@ -70,7 +70,7 @@ class CarriedCosts:
 
     def plan_cost(self, plan: Plan) -> PlanCost:
         run = self.run(plan)
-        if run is None:
+        if run is None or run.end.late:  # it cannot be made, or arrives after a job's window closes
             return PlanCost.impossible(len(plan))
         costs = run.step_costs(len(plan), self.scenario.cost, self.scenario.planner.max_risk)
         return PlanCost(float(sum(costs)), tuple(costs), run.schedule)

@@ -41,6 +41,7 @@ and :meth:`TeamClock.advance` return new ones, so the exact search can branch fr
 from __future__ import annotations
 
 import heapq
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
@@ -135,6 +136,7 @@ class ClockState:
     open: tuple[MoveRun, ...] = ()  # moves under way
     closed: tuple[MoveRun, ...] = ()  # moves ended, in the order they ended
     closed_cost: float = 0.0  # the sum of their costs
+    late: bool = False  # a move started so far arrives after its target's window closes (goals.jobs)
 
     def where(self, i: int) -> tuple[int, float]:
         """Robot i's node and heading at the end of its latest leg (where its next move starts)."""
@@ -265,6 +267,7 @@ class TeamClock:
         requests = [self.request(state, step) for _, step in steps]
         answers = results if results is not None else self.oracle.evaluate(requests)
         legs, free, pairings, opened = [list(x) for x in state.legs], list(state.free), list(state.pairings), []
+        late = state.late
         for (k, step), request, result in zip(steps, requests, answers, strict=True):
             robots = [m[0] for m in step]
             if result is None:
@@ -284,17 +287,28 @@ class TeamClock:
                 h = max(free[names.index(r)] for r in robots) - t
                 pair = (names.index(robots[0]), names.index(robots[1]))
                 pairings.append(Pairing(pair, t, h, mutual_seed(self.lib, tuple(robots), request.starts)))
-            for r, _, room in step:  # the job's time at the station: the robot stands, then is free
-                free[names.index(r)] += self.service_steps(room)
+            for r, _, room in step:  # the job's window and time at the station: it stands, then is free
+                i = names.index(r)
+                late = late or self.scenario.goals.too_late(room, free[i] * self.dt)
+                free[i] += self.opens_steps(room, free[i]) + self.service_steps(room)
         state = replace(
             state,
             legs=tuple(tuple(x) for x in legs),
             free=tuple(free),
             pairings=tuple(pairings),
             open=(*state.open, *opened),
+            late=late,
         )
         # a move of no step ends as it starts
         return self._close(state, state.team.mean[None], state.t, [[c] for c in state.csig], [[p] for p in state.risk])
+
+    def opens_steps(self, room: str, arrive: int) -> int:
+        """Control steps a robot that arrives at ``room`` at step ``arrive`` waits there for the
+        job's window to open (0 without one)."""
+        window = self.scenario.goals.window(room)
+        if window is None:
+            return 0
+        return max(0, math.ceil(window[0] / self.dt - 1e-9) - arrive)
 
     def service_steps(self, room: str) -> int:
         """Control steps a robot stands at ``room`` after it arrives, for the room's job: its
@@ -481,8 +495,11 @@ class TeamClock:
             move = next(x for x in step if x[0] == names[m.robot])
             partner = next((x[0] for x in step if x[0] != names[m.robot]), None)
             service = self.service_steps(move[2]) * dt
+            opens = self.opens_steps(move[2], m.end) * dt
             timed.append(
-                TimedMove(m.step, move[0], move[1], move[2], partner, m.ready * dt, m.start * dt, m.end * dt, service)
+                TimedMove(
+                    m.step, move[0], move[1], move[2], partner, m.ready * dt, m.start * dt, m.end * dt, service, opens
+                )
             )
         trajectories = trace.trajectories() if trace is not None else None
         return ClockRun(moves, Schedule(names, tuple(timed)), state, trajectories)

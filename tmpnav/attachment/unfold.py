@@ -95,6 +95,8 @@ class _Unfolding:
         if caught is None:
             return []
         ctx, deciding = caught, self._undecided(caught)
+        if ctx.clock.late:
+            return []  # a move arrives after its job's window closes: a dead end
         if self.rules.done(ctx.task) and not ctx.pending:
             end = self.clock.advance(ctx.clock, max(ctx.clock.free, default=0))
             return [((), None, self.accounted(end) - before)]
@@ -199,7 +201,7 @@ class _Unfolding:
         """May ``robot`` enter ``room``, and is there a reason to (a goal not yet achieved)?"""
         if not self.rules.may_enter(task, robot, room):
             return False
-        return room not in task.visited or (robot, room) in self.rules.targets
+        return room not in task.visited or (robot, room) in self.rules.entries
 
     def _allowed(self, task: State, pair: Step) -> bool:
         try:

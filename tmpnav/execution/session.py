@@ -249,13 +249,26 @@ class Session:
         m = r.move
         assert m is not None
         dt = self.dt
-        stand = self.scenario.goals.service_steps(m.target, dt)  # the robot stands at the station that long
+        goals = self.scenario.goals
+        # it waits at the station for the job's window to open, then stands there for the service
+        window = goals.window(m.target)
+        opens = max(0, math.ceil(window[0] / dt - 1e-9) - self.step) if window is not None else 0
+        stand = goals.service_steps(m.target, dt)
         self.trace.moves.append(
             TimedMove(
-                m.step, m.robot, m.origin, m.target, m.partner, r.ready * dt, r.since * dt, self.step * dt, stand * dt
+                m.step,
+                m.robot,
+                m.origin,
+                m.target,
+                m.partner,
+                r.ready * dt,
+                r.since * dt,
+                self.step * dt,
+                stand * dt,
+                opens * dt,
             )
         )
-        r.move, r.ready = None, self.step + stand
+        r.move, r.ready = None, self.step + opens + stand
 
     def _start_moves(self) -> bool:
         """Start every move whose robots are free and whose planned start has come; whether any did."""

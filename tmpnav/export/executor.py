@@ -217,7 +217,8 @@ class Executor:
                 )
                 self._failed = self._failed or self._records[key]
             del self._under_way[move.robot]
-            self._free_at[move.robot] = t + move.service  # it stands at the station for its job first
+            # it waits at the station for the job's window to open, then stands there for its service
+            self._free_at[move.robot] = max(t, move.opens_at or t) + move.service
 
     def _pending(self, robot: str) -> MoveRequest | None:
         moves = self.team.moves[robot]

@@ -40,7 +40,8 @@ def files(plan: Team) -> dict[str, str]:
 _TIMES = (
     "# Times on the team's clock, seconds from the plan's start (one instant for every robot): depart,\n"
     "# the move's planned start (never send it earlier); ready, when the robot's previous move ends; wait,\n"
-    "# depart - ready; arrive, the planned end; service, then the time at the station for its job.\n"
+    "# depart - ready; arrive, the planned end; opens_at, when the job's window opens (it waits until then);\n"
+    "# service, then the time at the station for its job.\n"
     "# A paired move (partner, sync step-K) starts when both\n"
     "# robots have reached the poses they leave from, together with the partner's move of the same step.\n"
 )
@@ -100,6 +101,7 @@ def _timing(m: MoveRequest) -> dict[str, Any]:
         "depart": m.depart,
         "arrive": m.arrive,
         "service": m.service,
+        "opens_at": m.opens_at,
     }
 
 
@@ -175,6 +177,7 @@ def _read_move(robot: str, index: int, e: Any, frame: str, name: str) -> MoveReq
         goal=NavigateThroughPoses(poses, frame, str(message.get("behavior_tree") or "")),
         roadmap_nodes=_expect(e.get("roadmap_nodes", 0), int, name, f"{where}.roadmap_nodes"),
         service=_time(e, "service", name, where) or 0.0,
+        opens_at=_time(e, "opens_at", name, where),
     )
 
 

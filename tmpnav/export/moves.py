@@ -84,6 +84,9 @@ class MoveRequest:
     goal: NavigateThroughPoses
     roadmap_nodes: int  # nodes of the roadmap path the via points were thinned from (its start included)
     service: float = 0.0  # s the robot stands at the goal after it arrives, for the room's job
+    #: s on the team's clock: the job's window opens then, and the robot waits at the goal until it
+    #: does before its service (None: no wait planned)
+    opens_at: float | None = None
 
     @property
     def name(self) -> str:
@@ -245,4 +248,5 @@ def _request(
         goal=goal(move, tolerance),
         roadmap_nodes=len(move["path_points"]),
         service=when.service,
+        opens_at=round(when.end + when.opens, 9) if when.opens > 0 and when.end is not None else None,
     )

@@ -45,6 +45,7 @@ class MoveTimes:
     start: float | None  # the move starts
     end: float | None  # the move ends
     service: float = 0.0  # s the robot then stands at the target for the room's job
+    opens: float = 0.0  # s it first waits there for the job's window to open
 
     @property
     def wait(self) -> float | None:
@@ -115,9 +116,10 @@ def _scheduled(doc: dict[str, Any], robot: str) -> list[MoveTimes]:
             raise InputError(f"{where}: move {k + 1} has times that are not numbers") from None
         try:
             service = _seconds(entry_k.get("service", 0.0)) or 0.0
+            opens = _seconds(entry_k.get("opens", 0.0)) or 0.0
         except (TypeError, ValueError):
-            raise InputError(f"{where}: move {k + 1} has a service time that is not a number") from None
-        out.append(MoveTimes(ready, start, end, service))
+            raise InputError(f"{where}: move {k + 1} has a service or window time that is not a number") from None
+        out.append(MoveTimes(ready, start, end, service, opens))
     return out
 
 

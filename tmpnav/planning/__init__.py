@@ -31,6 +31,7 @@ from tmpnav.planning.exact import exact_table
 from tmpnav.planning.remember import recall, remember, search_key
 from tmpnav.planning.run import Planned, TaskRun, choice_for, span_weight_of
 from tmpnav.planning.unfolded import exact_carried
+from tmpnav.planning.windows import check_arrivals, check_windows
 from tmpnav.task.solve import engine_class, reads_pddl_text
 from tmpnav.task.stage import warm_up_searches
 from tmpnav.types import Scenario
@@ -65,6 +66,13 @@ def plan_stage(run: TaskRun) -> Planned:
     entry = PLANNERS[(run.choice.mode, run.choice.costs)]
     if entry.enhsp_only:
         _check_engine(run.planner.name)
+    check_windows(run)
+    planned = _planned(run, entry)
+    check_arrivals(run, planned.task.schedule)
+    return planned
+
+
+def _planned(run: TaskRun, entry: PlannerEntry) -> Planned:
     if not entry.remembered:
         return entry.plan(run)
     key = search_key(run.scenario, run.canonical.oracle.context)

@@ -96,15 +96,16 @@ def _timed_move(move: TimedMove) -> JSON:
         "start": number(move.start, 9),
         "end": number(move.end, 9),
         "wait": number(move.wait, 9),
+        "opens": number(move.opens, 9),
         "service": number(move.service, 9),
     }
 
 
 def schedule_section(schedule: Schedule) -> JSON:
     """plan.json's ``schedule``: the makespan, and per robot its moves on the shared clock with
-    the time it drives (``busy``), waits before its moves (``waits``), stands at stations for their
-    jobs (``service``) and none of these (``idle``, after its last move): busy + waits + service +
-    idle = makespan."""
+    the time it drives (``busy``), waits (``waits``: before its moves, for windows to open),
+    stands at stations for their jobs (``service``) and none of these (``idle``, after its last
+    move): busy + waits + service + idle = makespan."""
     return {
         "makespan": number(schedule.makespan, 9),
         "robots": {
@@ -140,7 +141,23 @@ def _objective(report: PlanReport) -> tuple[JSON, JSON]:
 
 def _goals(report: PlanReport) -> JSON:
     goals = report.scenario.goals
-    return {"visit": list(goals.visit), "per_robot": {robot: list(rooms) for robot, rooms in goals.per_robot}}
+    out: dict[str, JSON] = {
+        "visit": list(goals.visit),
+        "per_robot": {robot: list(rooms) for robot, rooms in goals.per_robot},
+    }
+    if goals.ends:
+        out["ends"] = dict(goals.ends)
+    if goals.jobs:
+        out["jobs"] = {
+            j.room: {
+                "service": number(j.service, 9),
+                "robots": list(j.robots),
+                "pose": None if j.pose is None else [number(v, 9) for v in j.pose],
+                "window": None if j.window is None else [number(v, 9) for v in j.window],
+            }
+            for j in goals.jobs
+        }
+    return out
 
 
 def _roadmap(roadmap: Roadmap) -> JSON:

@@ -81,6 +81,31 @@ def _text_color(color: str) -> str:
     return "black" if 0.299 * r + 0.587 * g + 0.114 * b > 0.6 else "white"
 
 
+def _draw_windows(ax: Axes, schedule: Schedule, lay: Layout, windows: dict[str, tuple[float, float]]) -> None:
+    """A job's window (goals.jobs) under the bar of the move into its room: a bracket from its
+    earliest to its latest arrival, and the wait at the station until it opens, hatched."""
+    for robot, y in lay.rows.items():
+        for move in schedule.timeline(robot):
+            window = windows.get(move.target)
+            if window is None:
+                continue
+            earliest, latest = window[0], min(window[1], lay.horizon)  # a window open past the axis: an arrow
+            low = y - BAR / 2 - 0.09  # rows grow downwards: just above the bar
+            dark = fg.darker(lay.colors[robot], 0.7)
+            ax.plot([earliest, latest], [low, low], color=dark, lw=1.4, zorder=4, solid_capstyle="butt")
+            ax.plot([earliest, earliest], [low - 0.06, low + 0.06], color=dark, lw=1.4, zorder=4)
+            if window[1] <= lay.horizon:
+                ax.plot([latest, latest], [low - 0.06, low + 0.06], color=dark, lw=1.4, zorder=4)
+            else:
+                ax.plot([latest], [low], marker=">", color=dark, markersize=5, zorder=4)
+            if move.opens > T_TOL:
+                ax.add_patch(
+                    Rectangle(
+                        (move.end, y - BAR / 2), move.opens, BAR, fc="white", ec=dark, lw=0.8, hatch="////", zorder=3
+                    )
+                )
+
+
 def _draw_moves(ax: Axes, schedule: Schedule, lay: Layout) -> None:
     """Each move a bar in its robot's colour, labelled with its room; a paired move outlined in black."""
     for robot, y in lay.rows.items():
@@ -102,7 +127,7 @@ def _draw_moves(ax: Axes, schedule: Schedule, lay: Layout) -> None:
             if move.service > T_TOL:  # the job's time at the station: standing, after the arrival
                 ax.add_patch(
                     Rectangle(
-                        (move.end, y - BAR / 2),
+                        (move.end + move.opens, y - BAR / 2),
                         move.service,
                         BAR,
                         fc=(*to_rgb(color), 0.35),
@@ -114,7 +139,7 @@ def _draw_moves(ax: Axes, schedule: Schedule, lay: Layout) -> None:
                 )
                 if lay.fits("service", move.service):
                     ax.text(
-                        move.end + move.service / 2,
+                        move.end + move.opens + move.service / 2,
                         y,
                         "service",
                         ha="center",
@@ -274,6 +299,13 @@ def _legend(ax: Axes, report: PlanReport, lay: Layout) -> None:
         items.append((Patch(fc="white", ec="#555555", hatch="////"), "wait: for a partner, or held back"))
     if any(m.service > T_TOL for m in schedule.moves):
         items.append((Patch(fc=(*to_rgb(grey), 0.35), ec="#555555", hatch=".."), "service: at the station for its job"))
+    if report.scenario.goals.windows and any(m.target in report.scenario.goals.windows for m in schedule.moves):
+        items.append(
+            (
+                Line2D([], [], color="#555555", lw=1.4, marker="|", markersize=7),
+                "window: when the job's robot may arrive (it waits for it to open)",
+            )
+        )
     if any(m.partner for m in schedule.moves):
         items.append(
             (
@@ -338,6 +370,7 @@ def schedule_figure(report: PlanReport) -> Figure:
     _draw_idle(ax, schedule, lay)
     _draw_waits(ax, schedule, lay)
     _draw_moves(ax, schedule, lay)
+    _draw_windows(ax, schedule, lay, report.scenario.goals.windows)
     _draw_pairs(ax, schedule, lay)
     _draw_makespans(ax, report, lay)
     _axes(ax, lay)

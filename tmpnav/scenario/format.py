@@ -96,8 +96,8 @@ def _one_map_kind(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, 
 
 
 def _some_goal(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
-    if not section.get("visit") and not any(section.get("robots", {}).values()):
-        ctx.add(path, raw, "names no room to visit; expected rooms in goals.visit or goals.robots")
+    if not section.get("visit") and not any(section.get("robots", {}).values()) and not section.get("ends"):
+        ctx.add(path, raw, "names no room to visit; expected rooms in goals.visit, goals.robots or goals.ends")
 
 
 MAP = Section(
@@ -414,10 +414,23 @@ ROADMAP = Section(
 #: the longest time at a station (s): a day
 MAX_SERVICE = 86_400.0
 
+
+def _window_in_order(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, ...]) -> None:
+    window = section.get("window")
+    if window is not None and not 0.0 <= window[0] <= window[1]:
+        ctx.add(
+            f"{path}.window",
+            (*raw, "window"),
+            f"[{window[0]:g}, {window[1]:g}] s is no window; expected [earliest, latest] with 0 <= earliest <= latest",
+        )
+
+
 JOB = Section(
     fields={
         "name": Field(
-            Name(), "the goal room (or place) of the job, named in goals.visit or goals.robots", required=True
+            Name(),
+            "the goal room (or place) of the job, named in goals.visit, goals.robots or goals.ends",
+            required=True,
         ),
         "service": Field(
             Number("time", minimum=0.0, maximum=MAX_SERVICE),
@@ -433,13 +446,25 @@ JOB = Section(
             "the goal pose inside the room (a station): the robot ends its move there, turned to theta; "
             "without it, the room's sampled pose instantiations",
         ),
-    }
+        "window": Field(
+            Vector(dimensions=("time", "time"), names="earliest, latest"),
+            "when the robot may arrive, on the team's clock (s from the plan's start): one that arrives "
+            "earlier waits in the room until the earliest, then serves; no plan arrives later than the latest",
+        ),
+    },
+    post=_window_in_order,
 )
 
 GOALS = Section(
     fields={
         "visit": Field(NameList(), "rooms that some robot must visit", default=()),
         "robots": Field(NameMap(), "rooms that a given robot must visit: {robot: [rooms]}", default={}),
+        "ends": Field(
+            NameMap(value=Name()),
+            "where a robot must finish (its dock, a charger): {robot: room}; its last move enters that room, "
+            "also when it starts there (a goals.jobs entry for the room gives the pose)",
+            default={},
+        ),
         "jobs": Field(
             NamedList(item=JOB, what="job"),
             "what a goal room asks of its visit: time at the station, the robots that may do it",

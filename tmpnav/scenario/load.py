@@ -309,7 +309,36 @@ def _cross_references(doc: YamlDoc, data: dict[str, Any]) -> list[Problem]:
                         doc.line(("goals", "robots", robot, i)),
                     )
                 )
-    return problems + _job_problems(doc, goals, robots)
+    return problems + _end_problems(doc, data, rooms, robots) + _job_problems(doc, goals, robots)
+
+
+def _end_problems(doc: YamlDoc, data: dict[str, Any], rooms: set[str], robots: list[str]) -> list[Problem]:
+    """A robot's end is a room of the map, no goal of another kind, nobody else's end; the
+    paper's encoding (both robots move in every action) has no ends."""
+    goals = data["goals"]
+    problems: list[Problem] = []
+    goal_rooms = set(goals.get("visit") or ()).union(*(set(xs) for xs in (goals.get("robots") or {}).values()))
+    taken: dict[str, str] = {}
+    for robot, room in (goals.get("ends") or {}).items():
+        where, path = ("goals", "ends", robot), f"goals.ends.{robot}"
+        why = None
+        if robot not in robots:
+            why = f"{robot!r} is not a robot{_hint(robot, robots)}; expected {_one_of('robot', robots)}"
+        elif room not in rooms:
+            why = f"{room!r} is not a room{_hint(room, rooms)}; expected {_one_of('room', sorted(rooms))}"
+        elif room in goal_rooms:
+            why = f"{room!r} is also a goal room (goals.visit or goals.robots); expected a room only {robot} ends in"
+        elif room in taken:
+            why = f"{taken[room]} ends in {room!r} too; expected one robot per end room"
+        elif isinstance(data.get("planner"), dict) and data["planner"].get("encoding") == "paper":
+            why = (
+                "the paper's encoding moves two robots in every action and has no end; "
+                "expected planner.encoding mixed or single"
+            )
+        if why is not None:
+            problems.append(Problem(doc.name, path, why, doc.line(where)))
+        taken.setdefault(room, robot)
+    return problems
 
 
 def _job_problems(doc: YamlDoc, goals: dict[str, Any], robots: list[str]) -> list[Problem]:
@@ -318,7 +347,7 @@ def _job_problems(doc: YamlDoc, goals: dict[str, Any], robots: list[str]) -> lis
     problems: list[Problem] = []
     visit = set(goals.get("visit") or ())
     per_robot = {r: set(xs) for r, xs in (goals.get("robots") or {}).items()}
-    goal_rooms = visit.union(*per_robot.values())
+    goal_rooms = visit.union(*per_robot.values()) | set((goals.get("ends") or {}).values())
     for i, job in enumerate(goals.get("jobs") or ()):
         room, allowed = job["name"], list(job["robots"])
         where = ("goals", "jobs", i)
@@ -327,7 +356,7 @@ def _job_problems(doc: YamlDoc, goals: dict[str, Any], robots: list[str]) -> lis
                 Problem(
                     doc.name,
                     f"goals.jobs.{room}",
-                    f"{room!r} is no goal room; expected a room named in goals.visit or goals.robots",
+                    f"{room!r} is no goal room; expected a room named in goals.visit, goals.robots or goals.ends",
                     doc.line(where),
                 )
             )
@@ -423,9 +452,16 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
             visit=tuple(d["goals"]["visit"]),
             per_robot=tuple((k, tuple(v)) for k, v in d["goals"]["robots"].items()),
             jobs=tuple(
-                Job(j["name"], j["service"], tuple(j["robots"]), None if j["pose"] is None else tuple(j["pose"]))
+                Job(
+                    j["name"],
+                    j["service"],
+                    tuple(j["robots"]),
+                    None if j["pose"] is None else tuple(j["pose"]),
+                    None if j["window"] is None else tuple(j["window"]),
+                )
                 for j in d["goals"]["jobs"]
             ),
+            ends=tuple(d["goals"]["ends"].items()),
         ),
         planner=_planner(d["planner"], d["models"]["range_sensor"] is not None),
         key_lines={_display(raw, doc): line for raw, line in doc.lines.items()},

@@ -143,7 +143,7 @@ def lower_bound(table: CostTable, goals: Goals, min_gain: float = 0.0, cut_round
 
 
 def _check_pairs(table: CostTable, goals: Goals, min_gain: float) -> None:
-    targets = {(r, x) for r, rooms in goals.per_robot for x in rooms}
+    targets = goals.entries  # rooms a robot may enter after others: its targets and its end
     for (r1, _, t1), (r2, _, t2) in _useful_pairs(table, min_gain):
         if t1 == t2 and (r1, t1) not in targets and (r2, t2) not in targets:
             raise ValueError(f"the pair of moves of {r1} and {r2} into {t1} enters one room twice at once")
@@ -166,13 +166,14 @@ def move_prices(table: CostTable, min_gain: float = 0.0) -> dict[MoveKey, float]
 def required_entries(table: CostTable, goals: Goals) -> list[Row]:
     """The entries every plan makes: (None, x) for each room x entered exactly once (a goal
     that is nobody's start and nobody's target), then (r, x) for each target room x of a
-    robot r that does not start in it."""
+    robot r that does not start in it, and for each robot's end that it does not start in."""
     starts = set(table.start_location.values())
     targeted = {room for _, rooms in goals.per_robot for room in rooms}
     once: list[Row] = [(None, x) for x in dict.fromkeys(goals.visit) if x not in starts and x not in targeted]
     entries: list[Row] = [
         (r, x) for r, rooms in goals.per_robot for x in dict.fromkeys(rooms) if table.start_location.get(r) != x
     ]
+    entries += [(r, x) for r, x in goals.ends if table.start_location.get(r) != x]  # its last move
     return once + entries
 
 
@@ -240,7 +241,7 @@ def _assignment_matrix(
 def _able_to_enter(table: CostTable, goals: Goals) -> dict[str, set[str]]:
     """Location -> the robots that can ever enter it (they may later leave it)."""
     starts = set(table.start_location.values())
-    targets = {(r, x) for r, rooms in goals.per_robot for x in rooms}
+    targets = goals.entries  # rooms a robot may enter after others: its targets and its end
     out: dict[str, set[str]] = {}
     for r, _, o in table.single:
         if o == table.start_location.get(r):

@@ -189,7 +189,7 @@ class _Program:
         from scipy.sparse import coo_array
 
         n_r, n_l = len(self.robots), len(self.locs)
-        targets = {(self.robots.index(r), loc[x]) for r, xs in goals.per_robot for x in xs}
+        targets = {(self.robots.index(r), loc[x]) for r, x in goals.entries}
         starts = {loc[s] for s in table.start_location.values()}
         first = np.array(
             [

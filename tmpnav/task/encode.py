@@ -145,7 +145,7 @@ class ProblemBuilder:
         self.locs: dict[str, Object] = {loc: Object(names.location[loc], loc_t) for loc in table.locations}
         problem.add_objects([*self.robots.values(), *self.locs.values()])
         self.problem = problem
-        self.targets = {(r, room) for r, rooms in goals.per_robot for room in rooms}
+        self.targets = goals.entries  # a robot's targets and its end: rooms it may enter after others
         self.encoded = EncodedProblem(problem, encoding, names)
         self.potentials = self.encoded.potentials
 
@@ -218,7 +218,7 @@ def encode(
     for r, loc in table.start_location.items():
         problem.set_initial_value(robot_in(robots[r], locs[loc]), True)
         problem.set_initial_value(visited(locs[loc]), True)
-        if (r, loc) in builder.targets:
+        if (r, loc) in goals.marked_at_start(table.start_location):
             problem.set_initial_value(visited_by(robots[r], locs[loc]), True)
     for r, room in builder.targets:
         problem.set_initial_value(target(robots[r], locs[room]), True)
@@ -227,8 +227,10 @@ def encode(
     enc.add_costs(builder, table, goals, min_gain)
     for room in goals.visit:
         problem.add_goal(visited(locs[room]))
-    for r, room in sorted(builder.targets):
+    for r, room in sorted(goals.targets):
         problem.add_goal(visited_by(robots[r], locs[room]))
+    for r, room in goals.ends:
+        problem.add_goal(robot_in(robots[r], locs[room]))
     act_cost_to_action_costs(problem)
     return builder.encoded
 

@@ -192,7 +192,7 @@ def occupancy_filter(goals: Goals, start_location: dict[str, str]) -> PairFilter
     """Pairs of moves that ``single``/``mixed``'s entry rule lets happen together: a room is
     entered only when unvisited or as its robot's own target, so two robots are never in the
     same room (unless they start there or it is a target) and never both enter one room."""
-    targets = {(r, room) for r, rooms in goals.per_robot for room in rooms}
+    targets = goals.entries  # a robot's targets and its end
     starts = set(start_location.values())
 
     def own_target(robot: str, room: str) -> bool:

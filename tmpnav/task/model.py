@@ -141,11 +141,12 @@ class TableModel:
         return CostTable(tuple(robots), tuple(rooms), locations, at, single, pair, duration, pair_duration)
 
 
-def table_schedule(table: CostTable, plan: Plan) -> Schedule | None:
-    """The plan's schedule with the table's durations (None when the table has none)."""
+def table_schedule(table: CostTable, plan: Plan, goals: Goals | None = None) -> Schedule | None:
+    """The plan's schedule with the table's durations (None when the table has none); with
+    ``goals``, the jobs' service and windows apart from the drive (tmpnav.task.timing.schedule)."""
     if not table.duration:
         return None
-    return schedule(plan, table.robots, table_durations(table))
+    return schedule(plan, table.robots, table_durations(table), goals=goals)
 
 
 def robot_ends(found: Schedule | None, robots: Sequence[str]) -> dict[str, float]:

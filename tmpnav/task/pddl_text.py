@@ -157,7 +157,7 @@ class TextBuilder:
         self.table, self.goals = table, goals
         self.span_weight = span_weight * COST_SCALE  # in the problem's cost units, per second
         self.names = PddlNames.of(table.robots, table.locations)
-        self.targets = {(r, room) for r, rooms in goals.per_robot for room in rooms}
+        self.targets = goals.entries  # a robot's targets and its end: rooms it may enter after others
         self.potentials: dict[str, int] = {}
         self.move_cost: Callable[[MoveKey], int] = lambda move: 0
         self.pair_texts: list[str] = []
@@ -231,7 +231,7 @@ class TextBuilder:
             init += self._clock_facts(clocks or Clocks())
         for r, where in table.start_location.items():
             init.append(f"(robot_in {rob[r]} {loc[where]}) (visited {loc[where]})")
-            if (r, where) in self.targets:
+            if (r, where) in self.goals.marked_at_start(table.start_location):
                 init.append(f"(visited_by {rob[r]} {loc[where]})")
         init.extend(f"(target {rob[r]} {loc[room]})" for r, room in sorted(self.targets))
         init.extend(f"(can_move {rob[r]} {loc[origin]} {loc[dest]})" for r, origin, dest in table.single)
@@ -258,8 +258,10 @@ class TextBuilder:
 
     def _problem(self, name: str, init: list[str], goal: list[str], ends: dict[str, str] | None) -> str:
         rob, loc = self.names.robot, self.names.location
-        goal += [f"(visited_by {rob[r]} {loc[room]})" for r, room in sorted(self.targets)]
-        goal += [f"(robot_in {rob[r]} {loc[where]})" for r, where in sorted((ends or {}).items())]
+        goal += [f"(visited_by {rob[r]} {loc[room]})" for r, room in sorted(self.goals.targets)]
+        # where a robot must be at the end: its end (goals.ends), or where a sub-problem's plan goes on
+        ends = {**dict(self.goals.ends), **(ends or {})}
+        goal += [f"(robot_in {rob[r]} {loc[where]})" for r, where in sorted(ends.items())]
         return (
             f"(define (problem {name})\n (:domain {name}-domain)\n (:init\n  (= (total-cost) 0)\n  "
             + "\n  ".join(init)

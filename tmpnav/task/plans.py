@@ -5,8 +5,10 @@ robots it moves. The rules are those of the ``single`` and ``mixed`` encodings
 (pddl/mixed.pddl): a robot moves from where it is; it enters a room only if nobody has
 visited it, or if the room is one of its own target rooms that it has not visited itself
 (for a pair, both moves are checked against the state before the step), and never a room
-whose job (``goals.jobs``) names other robots; a plan is done
-when every room of ``goals.visit`` is visited and every robot has visited its targets.
+whose job (``goals.jobs``) names other robots; a robot's end (``goals.ends``) counts as one
+of its targets for entry, but a robot that starts there must still come back to it; a plan is
+done when every room of ``goals.visit`` is visited, every robot has visited its targets, and
+every robot with an end is there (so its end is its last move).
 The search edits plans only through :func:`splice`, and keeps only plans that
 :meth:`Rules.check` accepts.
 """
@@ -41,17 +43,17 @@ class Rules:
     def __init__(self, start_location: dict[str, str], goals: Goals):
         self.start_location = dict(start_location)
         self.goals = goals
-        self.targets = frozenset((r, x) for r, rooms in goals.per_robot for x in rooms)
+        self.targets = goals.targets
+        self.entries = goals.entries  # the targets and the ends
 
     def start(self) -> State:
         at = dict(self.start_location)
-        by = frozenset((r, x) for r, x in at.items() if (r, x) in self.targets)
-        return State(at, frozenset(at.values()), by)
+        return State(at, frozenset(at.values()), self.goals.marked_at_start(at))
 
     def may_enter(self, state: State, robot: str, room: str) -> bool:
         if not self.goals.may_visit(robot, room):  # the room's job is for other robots
             return False
-        return room not in state.visited or ((robot, room) in self.targets and (robot, room) not in state.visited_by)
+        return room not in state.visited or ((robot, room) in self.entries and (robot, room) not in state.visited_by)
 
     def apply(self, state: State, step: Step) -> State:
         """The state after ``step``; PlanError if the rules forbid it."""
@@ -64,13 +66,13 @@ class Rules:
             if not self.may_enter(state, r, target):
                 why = "visited before" if self.goals.may_visit(r, target) else "its job is for other robots"
                 raise PlanError(f"{r} may not enter {target}: {why}")
-        if len(step) == 2 and step[0][2] == step[1][2] and not any((r, t) in self.targets for r, _, t in step):
+        if len(step) == 2 and step[0][2] == step[1][2] and not any((r, t) in self.entries for r, _, t in step):
             raise PlanError(f"two robots enter {step[0][2]} at once")
         at, visited, by = dict(state.at), set(state.visited), set(state.visited_by)
         for r, _, target in step:
             at[r] = target
             visited.add(target)
-            if (r, target) in self.targets:
+            if (r, target) in self.entries:
                 by.add((r, target))
         return State(at, frozenset(visited), frozenset(by))
 
@@ -85,7 +87,8 @@ class Rules:
         return state
 
     def done(self, state: State) -> bool:
-        return set(self.goals.visit) <= state.visited and self.targets <= state.visited_by
+        visited = set(self.goals.visit) <= state.visited and self.targets <= state.visited_by
+        return visited and self.goals.ended(state.at)
 
     def check(self, plan: Iterable[Step]) -> None:
         """Raise PlanError unless ``plan`` obeys the rules and reaches the goals."""
@@ -93,6 +96,7 @@ class Rules:
         if not self.done(state):
             missing = sorted(set(self.goals.visit) - state.visited)
             missing += sorted(f"{x} by {r}" for r, x in self.targets - state.visited_by)
+            missing += sorted(f"{r} ends at {x}" for r, x in self.goals.ends if state.at.get(r) != x)
             raise PlanError(f"the plan leaves goals undone: {', '.join(missing)}")
 
     def valid(self, plan: Iterable[Step]) -> bool:

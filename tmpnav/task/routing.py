@@ -6,7 +6,8 @@ plan where the exact planner cannot go (20 rooms and more), and a yardstick for 
 bound of :mod:`tmpnav.task.bound`.
 
 The model. Vehicles are the robots, each starting at its start location, with open
-routes (each vehicle ends at a dummy node that every node reaches at cost 0). The nodes
+routes (each vehicle ends at a dummy node that every node reaches at cost 0), or, for a robot
+with an end (``goals.ends``), a route that ends in that room, its last move priced as any. The nodes
 to visit are the rows of :func:`tmpnav.task.bound.required_entries`: every goal room that
 is nobody's start and nobody's target (any robot with a move into it may take it), and
 every target room of a robot that does not start there (only that robot may take it), so
@@ -31,7 +32,10 @@ tmpnav.task.objectives) the model also has a time dimension: each arc takes the 
 duration (the table's ``duration``, in centiseconds), every route starts at 0, and the
 global span cost prices the latest end, the makespan of the routes run at once, at
 ``span_weight`` per second (OR-Tools' min-max routing when the arc costs are left out:
-``arc_costs=False``).
+``arc_costs=False``). A job's window (``goals.jobs``) bounds the time its room is reached:
+the arc into it takes the move's travel time, the room's node waits (slack) until the window
+opens, and the service follows (arc out of it); the time dimension is added for windows
+whatever the objective.
 
 Search: a first solution (``PATH_CHEAPEST_ARC`` by default), then guided local search
 until the time limit (or ``solution_limit`` solutions). OR-Tools' local search is
@@ -105,19 +109,22 @@ def solve_routes(
         raise ValueError(f"first_solution {first_solution!r} is not one of {', '.join(FIRST_SOLUTION)}")
     if time_limit <= 0:
         raise ValueError(f"time_limit must be positive, got {time_limit}")
-    tasks = required_entries(table, goals)
+    ends = set(goals.ends)
+    tasks = [row for row in required_entries(table, goals) if row not in ends]  # an end is its route's end node
     robots = table.robots
-    if not tasks:
+    if not tasks and not goals.ends:
         return Routes({r: () for r in robots}, 0.0, "NOTHING_TO_VISIT", "optimal")
     allowed = [_allowed(table, robot, room) for robot, room in tasks]
     if not all(allowed):
         return Routes({}, math.inf, "NO_ROBOT_CAN_ENTER", "infeasible")
     waypoints: list[tuple[str | None, str]] = [(None, x) for x in _waypoints(table, goals)]
-    model = _Model(table, tasks + waypoints, allowed + [_allowed(table, None, x) for _, x in waypoints], arc_costs)
+    model = _Model(
+        table, tasks + waypoints, allowed + [_allowed(table, None, x) for _, x in waypoints], arc_costs, goals
+    )
     for node in range(model.first_task + len(tasks), len(model.location)):
         model.routing.AddDisjunction([model.manager.NodeToIndex(node)], 0)  # optional, free to skip
-    if span_weight > 0 and table.duration:
-        model.add_time(span_weight)
+    if (span_weight > 0 or goals.windows) and table.duration:
+        model.add_time(span_weight, goals)
     return model.solve(time_limit, solution_limit, first_solution)
 
 
@@ -141,18 +148,25 @@ class _Model:
     """The OR-Tools routing model of one task problem (nodes: starts, ends, tasks)."""
 
     def __init__(
-        self, table: CostTable, tasks: list[tuple[str | None, str]], allowed: list[list[int]], arc_costs: bool = True
+        self,
+        table: CostTable,
+        tasks: list[tuple[str | None, str]],
+        allowed: list[list[int]],
+        arc_costs: bool = True,
+        goals: Goals | None = None,
     ):
         from ortools.constraint_solver import pywrapcp
 
         self.table, self.tasks = table, tasks
         n_v = len(table.robots)
-        # nodes: 0..n_v-1 the robots' starts, n_v..2n_v-1 their (dummy) ends, then the tasks
-        self.location = [table.start_location[r] for r in table.robots] + [""] * n_v + [x for _, x in tasks]
+        ends = [(goals.end_of(r) if goals else None) or "" for r in table.robots]
+        # nodes: 0..n_v-1 the robots' starts, n_v..2n_v-1 their ends (dummy: ""), then the tasks
+        self.location = [table.start_location[r] for r in table.robots] + ends + [x for _, x in tasks]
+        self.n_v = n_v
         self.first_task = 2 * n_v
         self.vehicles = [[v] for v in range(n_v)] * 2 + allowed
-        starts, ends = list(range(n_v)), list(range(n_v, 2 * n_v))
-        self.manager = pywrapcp.RoutingIndexManager(len(self.location), n_v, starts, ends)
+        starts, end_nodes = list(range(n_v)), list(range(n_v, 2 * n_v))
+        self.manager = pywrapcp.RoutingIndexManager(len(self.location), n_v, starts, end_nodes)
         self.routing = pywrapcp.RoutingModel(self.manager)
         for v, r in enumerate(table.robots):
             callback = self.routing.RegisterTransitMatrix(self._matrix(r) if arc_costs else self._zeros())
@@ -171,33 +185,60 @@ class _Model:
         rows = []
         for i in range(n):
             row = [0] * n
-            for j in range(self.first_task, n):
-                cost = self.table.single.get((robot, self.location[i], self.location[j]))
+            for j in self._entered():
+                cost = self._move(robot, i, j, self.table.single)
                 row[j] = missing if cost is None else round(cost * COST_SCALE)
             rows.append(row)
         return rows
+
+    def _entered(self) -> list[int]:
+        """The nodes an arc's cost depends on: the tasks and the real ends."""
+        ends = [self.n_v + v for v in range(self.n_v) if self.location[self.n_v + v]]
+        return [*ends, *range(self.first_task, len(self.location))]
+
+    def _move(self, robot: str, i: int, j: int, values: dict[MoveKey, float]) -> float | None:
+        """The table's value of the move i -> j (0 for a robot that ends where it already is)."""
+        a, b = self.location[i], self.location[j]
+        if a == b and j < self.first_task:
+            return 0.0
+        return values.get((robot, a, b))
 
     def _zeros(self) -> list[list[int]]:
         n = len(self.location)
         return [[0] * n for _ in range(n)]
 
-    def add_time(self, span_weight: float) -> None:
+    def add_time(self, span_weight: float, goals: Goals) -> None:
         """A time dimension (each arc: its move's duration) whose global span costs
-        ``span_weight`` per second, in the arc costs' units (thousandths)."""
+        ``span_weight`` per second, in the arc costs' units (thousandths). With windows, an arc
+        into a room takes the travel, the room waits until its window opens, and the arc out
+        of it takes the room's service first (the table's durations end after the service)."""
         n, callbacks, longest = len(self.location), [], 1
+        service = [goals.service(x) if x else 0.0 for x in self.location]
         for r in self.table.robots:
             rows = []
             for i in range(n):
                 row = [0] * n
-                for j in range(self.first_task, n):
-                    d = self.table.duration.get((r, self.location[i], self.location[j]))
-                    row[j] = 0 if d is None else round(d / TIME_UNIT)
+                for j in self._entered():
+                    d = self._move(r, i, j, self.table.duration)
+                    row[j] = 0 if d is None else max(0, round((d - service[j] + service[i]) / TIME_UNIT))
+                for j in range(self.n_v, 2 * self.n_v):
+                    if not self.location[j]:  # a dummy end: the last room's service ends the route
+                        row[j] = round(service[i] / TIME_UNIT)
                 rows.append(row)
                 longest += max(row)
             callbacks.append(self.routing.RegisterTransitMatrix(rows))
-        self.routing.AddDimensionWithVehicleTransits(callbacks, 0, longest, True, "time")
-        per_unit = span_weight * COST_SCALE * TIME_UNIT
-        self.routing.GetDimensionOrDie("time").SetGlobalSpanCostCoefficient(max(1, round(per_unit)))
+        windows = goals.windows
+        longest += round(max((w[1] for w in windows.values()), default=0.0) / TIME_UNIT)
+        self.routing.AddDimensionWithVehicleTransits(callbacks, longest if windows else 0, longest, True, "time")
+        time = self.routing.GetDimensionOrDie("time")
+        if span_weight > 0:
+            per_unit = span_weight * COST_SCALE * TIME_UNIT
+            time.SetGlobalSpanCostCoefficient(max(1, round(per_unit)))
+        for node in range(self.first_task, n):
+            window = windows.get(self.location[node])
+            if window is not None:
+                earliest, latest = (round(w / TIME_UNIT) for w in window)
+                time.CumulVar(self.manager.NodeToIndex(node)).SetRange(earliest, latest)
 
     def _forbid_missing_moves(self) -> None:
         """Remove each arc i -> j from every vehicle whose table has no such move."""
@@ -205,6 +246,9 @@ class _Model:
         from_nodes = [*range(len(self.table.robots)), *range(self.first_task, n)]
         for i in from_nodes:
             next_i = self.routing.NextVar(self.manager.NodeToIndex(i))
+            for v, r in enumerate(self.table.robots):  # a robot's end: only by a move into it
+                if self.location[self.n_v + v] and self._move(r, i, self.n_v + v, self.table.single) is None:
+                    next_i.RemoveValue(self.routing.End(v))
             for j in range(self.first_task, n):
                 common = sorted(set(self.vehicles[i]) & set(self.vehicles[j]))
                 able = [v for v in common if self._has_move(v, i, j)]
@@ -242,8 +286,11 @@ class _Model:
 
     def _route(self, solution: object, v: int) -> tuple[str, ...]:
         index, out = self.routing.Start(v), list[str]()
+        end = self.location[self.n_v + v]
         while True:
             index = solution.Value(self.routing.NextVar(index))  # type: ignore[attr-defined]
             if self.routing.IsEnd(index):
+                if end and end != (out[-1] if out else self.location[v]):
+                    out.append(end)  # the move into its end
                 return tuple(out)
             out.append(self.location[self.manager.IndexToNode(index)])

@@ -13,6 +13,9 @@ it optimal). So the exact search with such an objective is this A* over the stat
 * a step is a single move (the robot starts when it is free) or an offered paired move (it
   starts when both robots are free), costing its table cost plus ``span_weight`` times what
   it adds to the makespan;
+* a move into a room with a window (``goals.jobs``) arrives after the drive (its duration
+  less the room's service); before the window opens the robot waits there, and a move that
+  would arrive after it closes is not a step;
 * the heuristic never overestimates: for every room still to enter, the cheapest way into
   it (the potentials of tmpnav.task.encodings, a paired move counting half for each of its
   rooms), plus ``span_weight`` times what the makespan must still grow, since each such room
@@ -35,7 +38,7 @@ from dataclasses import dataclass
 from tmpnav.task.encodings import COST_SCALE, offered_pairs, potentials
 from tmpnav.task.plans import Plan, Step
 from tmpnav.task.timing import table_durations
-from tmpnav.types import CostTable, Goals, MoveKey
+from tmpnav.types import WINDOW_TOL, CostTable, Goals, MoveKey
 
 #: states expanded before the exact search gives up (the anytime search takes over)
 MAX_STATES = 400_000
@@ -56,7 +59,7 @@ class _Space:
     def __init__(self, table: CostTable, goals: Goals, min_gain: float, span_weight: float):
         self.table, self.goals, self.w = table, goals, span_weight
         self.robots = table.robots
-        self.targets = frozenset((r, x) for r, rooms in goals.per_robot for x in rooms)
+        self.targets, self.entries = goals.targets, goals.entries
         self.duration = table_durations(table)
         self.moves: dict[tuple[str, str], list[MoveKey]] = {}
         for m in table.single:
@@ -67,6 +70,13 @@ class _Space:
         pair_costs = offered_pairs(table, min_gain)
         self.h = {x: v / COST_SCALE for x, v in potentials(table, goals, pair_costs).items()}
         self.quickest = self._quickest()
+        self.windows = goals.windows
+        self.ended = frozenset(goals.ends)
+        # the cheapest move of each robot into its end: a move no room's potential counts
+        self.end_cost = {
+            (r, x): min((c for m, c in table.single.items() if m[0] == r and m[2] == x), default=0.0)
+            for r, x in goals.ends
+        }
 
     def _quickest(self) -> dict[tuple[str, str], float]:
         """(robot, room) -> the shortest duration of a move of that robot into the room."""
@@ -77,39 +87,53 @@ class _Space:
 
     def start(self) -> _Node:
         at = tuple(self.table.start_location[r] for r in self.robots)
-        by = frozenset((r, x) for r, x in zip(self.robots, at, strict=True) if (r, x) in self.targets)
+        by = self.goals.marked_at_start(dict(zip(self.robots, at, strict=True)))
         return _Node(at, frozenset(at), by, (0.0,) * len(self.robots), 0.0)
 
     def done(self, n: _Node) -> bool:
-        return set(self.goals.visit) <= n.visited and self.targets <= n.by
+        return (
+            set(self.goals.visit) <= n.visited
+            and self.targets <= n.by
+            and self.goals.ended(dict(zip(self.robots, n.at, strict=True)))
+        )
 
     def may_enter(self, n: _Node, robot: str, room: str) -> bool:
         if not self.goals.may_visit(robot, room):  # the room's job is for other robots
             return False
-        return room not in n.visited or ((robot, room) in self.targets and (robot, room) not in n.by)
+        return room not in n.visited or ((robot, room) in self.entries and (robot, room) not in n.by)
 
     def steps(self, n: _Node) -> Iterator[tuple[Step, float, _Node]]:
         """Every step the rules allow in ``n``: (step, its cost with the time's price, next state)."""
         for i, (r, here) in enumerate(zip(self.robots, n.at, strict=True)):
+            if (r, here) in self.ended and (r, here) in n.by:
+                continue  # a robot back at its end stays there (it could not enter it again)
             for m in self.moves.get((r, here), ()):
-                if self.may_enter(n, r, m[2]):
-                    yield self._step(n, (m,), self.table.single[m], (i,))
+                if self.may_enter(n, r, m[2]) and (nxt := self._step(n, (m,), self.table.single[m], (i,))):
+                    yield nxt
         for (i, (r1, o1)), (j, (r2, o2)) in itertools.combinations(enumerate(zip(self.robots, n.at, strict=True)), 2):
+            if ((r1, o1) in self.ended and (r1, o1) in n.by) or ((r2, o2) in self.ended and (r2, o2) in n.by):
+                continue
             for step, c in self.pairs.get((r1, o1, r2, o2), ()):
-                if all(self.may_enter(n, r, t) for r, _, t in step) and not (
-                    step[0][2] == step[1][2] and not any((r, t) in self.targets for r, _, t in step)
+                if (
+                    all(self.may_enter(n, r, t) for r, _, t in step)
+                    and not (step[0][2] == step[1][2] and not any((r, t) in self.entries for r, _, t in step))
+                    and (nxt := self._step(n, step, c, (i, j)))
                 ):
-                    yield self._step(n, step, c, (i, j))
+                    yield nxt
 
-    def _step(self, n: _Node, step: Step, cost: float, idx: tuple[int, ...]) -> tuple[Step, float, _Node]:
+    def _step(self, n: _Node, step: Step, cost: float, idx: tuple[int, ...]) -> tuple[Step, float, _Node] | None:
         times = self.duration(step) or (0.0,) * len(step)
         start = max(n.clocks[i] for i in idx)
         clocks, at = list(n.clocks), list(n.at)
         visited, by = set(n.visited), set(n.by)
         for i, (r, _, x), d in zip(idx, step, times, strict=True):
-            clocks[i], at[i] = start + d, x
+            service = self.goals.service(x)
+            arrive = start + d - service
+            if self.goals.too_late(x, arrive):
+                return None  # it would arrive after the window closes
+            clocks[i], at[i] = arrive + self.goals.opens(x, arrive) + service, x
             visited.add(x)
-            if (r, x) in self.targets:
+            if (r, x) in self.entries:
                 by.add((r, x))
         span = max(n.span, *(clocks[i] for i in idx))
         nxt = _Node(tuple(at), frozenset(visited), frozenset(by), tuple(clocks), span)
@@ -119,8 +143,11 @@ class _Space:
         """A lower bound on what reaching the goals from ``n`` still costs (module docstring)."""
         todo = [x for x in self.goals.visit if x not in n.visited]
         todo += [x for r, x in self.targets - n.by]
+        todo += [x for i, (r, x) in enumerate(self.goals.ends) if n.at[self.robots.index(r)] != x]
         cost = sum(self.h.get(x, 0.0) for x in set(todo) if x in self.h and x not in n.visited)
-        if not self.w or not todo:
+        at = dict(zip(self.robots, n.at, strict=True))
+        cost += sum(c for (r, x), c in self.end_cost.items() if at[r] != x)  # a robot not at its end must go there
+        if not todo or (not self.w and not self.windows):
             return cost
         reach = 0.0
         for x in set(todo):
@@ -128,7 +155,15 @@ class _Space:
                 (n.clocks[i] + self.quickest.get((r, x), math.inf) for i, r in enumerate(self.robots)),
                 default=math.inf,
             )
-            reach = max(reach, earliest if math.isfinite(earliest) else 0.0)
+            if not math.isfinite(earliest):
+                continue
+            window = self.windows.get(x)
+            if window is not None:  # done at the earliest when the window opens, and its service ends
+                service = self.goals.service(x)
+                if earliest - service > window[1] + WINDOW_TOL:
+                    return math.inf  # no robot can get there before the window closes: a dead end
+                earliest = max(earliest, window[0] + service)
+            reach = max(reach, earliest)
         return cost + self.w * max(0.0, reach - n.span)
 
 
@@ -155,8 +190,10 @@ def exact_schedule(
             return None
         for step, cost, nxt in space.steps(node):
             if g + cost < best.get(nxt, math.inf) - 1e-12:
-                best[nxt], parent[nxt] = g + cost, (node, step)
-                heapq.heappush(queue, (g + cost + space.estimate(nxt), next(counter), g + cost, nxt))
+                h = space.estimate(nxt)
+                if math.isfinite(h):
+                    best[nxt], parent[nxt] = g + cost, (node, step)
+                    heapq.heappush(queue, (g + cost + h, next(counter), g + cost, nxt))
     return None
 
 

@@ -468,6 +468,7 @@ class AnytimeSearch:
         """What the opened moves achieved that is still to do after the head."""
         visit: list[str] = []
         per_robot: dict[str, list[str]] = {}
+        ends: list[tuple[str, str]] = []
         for k in sorted(hood.removed):
             for r, _, x in plan[k]:
                 if r not in hood.robots:
@@ -476,7 +477,14 @@ class AnytimeSearch:
                     visit.append(x)
                 if (r, x) in self.rules.targets and (r, x) not in state.visited_by:
                     per_robot.setdefault(r, []).append(x)
-        return Goals(tuple(dict.fromkeys(visit)), tuple((r, tuple(xs)) for r, xs in per_robot.items()))
+                if self.goals.end_of(r) == x and r not in hood.ends:  # its end is among its opened moves
+                    ends.append((r, x))
+        return Goals(
+            tuple(dict.fromkeys(visit)),
+            tuple((r, tuple(xs)) for r, xs in per_robot.items()),
+            self.goals.jobs,
+            tuple(dict.fromkeys(ends)),
+        )
 
     # ------------------------------------------------------------------ progress
 

@@ -152,7 +152,7 @@ def _schedules_result(task: TaskProblem, steps: Plan, remembered: bool) -> TaskR
     order = canonical_order(list(steps), task.table.robots)
     steps = tuple(steps[i] for i in order)
     step_costs = tuple(step_cost(task.table, s) for s in steps)
-    schedule = table_schedule(task.table, steps)
+    schedule = table_schedule(task.table, steps, task.goals)
     value = _objective(task, step_costs, schedule)
     return TaskResult(
         status=PlanStatus.SOLVED_OPTIMALLY,
@@ -181,7 +181,7 @@ def _result(task: TaskProblem, memo: Memo, encoded: EncodedTask | None) -> TaskR
     actions, pair_actions, reshaped = memo.sizes
     step_costs = tuple(step_cost(table, s) for s in steps)
     optimal = memo.status == PlanStatus.SOLVED_OPTIMALLY
-    schedule = table_schedule(table, steps)
+    schedule = table_schedule(table, steps, task.goals)
     cost = _objective(task, step_costs, schedule)
     return TaskResult(
         status=memo.status,

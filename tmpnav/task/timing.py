@@ -15,7 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 
 from tmpnav.results import Schedule, TimedMove
-from tmpnav.types import CostTable, MoveKey
+from tmpnav.types import CostTable, Goals, MoveKey
 
 #: the time each move of a step takes (seconds, in the step's order), None if it cannot be made
 Durations = Callable[[Sequence[MoveKey]], tuple[float, ...] | None]
@@ -26,9 +26,15 @@ def schedule(
     robots: Sequence[str],
     durations: Durations,
     delays: Mapping[int, float] | None = None,
+    goals: Goals | None = None,
 ) -> Schedule | None:
     """The earliest schedule of ``plan`` (see the module docstring); ``delays`` hold plan steps
-    back by that many seconds. None when a move has no duration (it cannot be made)."""
+    back by that many seconds. None when a move has no duration (it cannot be made).
+
+    With ``goals``, a move's duration (which ends after its target's service, as
+    :meth:`CostTable.with_service` counts it) is split into the drive and the service, and a
+    robot that arrives before its target's window opens waits there (``TimedMove.opens``);
+    :meth:`Schedule.late` names the moves that arrive after it closes."""
     free = dict.fromkeys(robots, 0.0)
     moves = []
     for k, step in enumerate(plan):
@@ -38,8 +44,11 @@ def schedule(
         start = max(free[m[0]] for m in step) + (delays or {}).get(k, 0.0)
         for (robot, origin, target), d in zip(step, times, strict=True):
             partner = next((m[0] for m in step if m[0] != robot), None)
-            moves.append(TimedMove(k, robot, origin, target, partner, free[robot], start, start + d))
-            free[robot] = start + d
+            service = goals.service(target) if goals is not None else 0.0
+            arrive = start + d - service
+            opens = goals.opens(target, arrive) if goals is not None else 0.0
+            moves.append(TimedMove(k, robot, origin, target, partner, free[robot], start, arrive, service, opens))
+            free[robot] = arrive + opens + service
     return Schedule(tuple(robots), tuple(moves))
 
 

@@ -78,7 +78,7 @@ def write_unfolded(
         eff = [f"(not (in c{edge.source}))", f"(in c{edge.target})"]
         for r, origin, dest in edge.step:
             pre.append(f"(robot_in {rob[r]} {loc[origin]})")
-            own = (r, dest) in rules.targets
+            own = (r, dest) in rules.entries
             pre.append(
                 f"(or (not (visited {loc[dest]})) (not (visited_by {rob[r]} {loc[dest]})))"
                 if own
@@ -87,7 +87,7 @@ def write_unfolded(
             eff.append(f"(not (robot_in {rob[r]} {loc[origin]}))")
         for r, _, dest in edge.step:
             eff.append(f"(robot_in {rob[r]} {loc[dest]}) (visited {loc[dest]})")
-            if (r, dest) in rules.targets:
+            if (r, dest) in rules.entries:
                 eff.append(f"(visited_by {rob[r]} {loc[dest]})")
         texts.append(
             f" (:action {name}\n  :parameters ()\n  :precondition (and {' '.join(pre)})\n"
@@ -107,7 +107,7 @@ def write_unfolded(
     init = ["(= (total-cost) 0)", "(in c0)"]
     for r, where in rules.start_location.items():
         init.append(f"(robot_in {rob[r]} {loc[where]}) (visited {loc[where]})")
-        if (r, where) in rules.targets:
+        if (r, where) in rules.goals.marked_at_start(rules.start_location):
             init.append(f"(visited_by {rob[r]} {loc[where]})")
     goals = _goal(rules.goals, rules, names) + "".join(f" (in c{g})" for g in graph.goal_contexts)
     problem = (
@@ -121,4 +121,5 @@ def write_unfolded(
 def _goal(goals: Goals, rules: Rules, names: PddlNames) -> str:
     parts = [f"(visited {names.location[x]})" for x in goals.visit]
     parts += [f"(visited_by {names.robot[r]} {names.location[x]})" for r, x in sorted(rules.targets)]
+    parts += [f"(robot_in {names.robot[r]} {names.location[x]})" for r, x in goals.ends]
     return " ".join(parts)

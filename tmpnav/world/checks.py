@@ -97,6 +97,8 @@ def _jobs(scenario: Scenario, world: World, problem: Callable[[str, str], Proble
                     )
                 )
         for robot in scenario.robots:
+            if scenario.goals.end_of(robot.name) == job.room:
+                continue  # a robot that starts at its end comes back to it: its job is done then
             if world.room_of([robot.pose.x, robot.pose.y]) == job.room:  # type: ignore[arg-type]
                 out.append(
                     problem(
