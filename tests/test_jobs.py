@@ -155,6 +155,10 @@ def test_every_search_keeps_the_jobs(tmp_path: Path, mode: tuple[str, ...]) -> N
             "goals:\n  visit: [A]\n  jobs:\n    - {name: A, window: [60 s, 30 s]}\n",
             "goals.jobs.A.window: [60, 30] s is no window; expected [earliest, latest] with 0 <= earliest <= latest",
         ),
+        (
+            "goals:\n  robots: {r1: [A]}\n  jobs:\n    - {name: A, penalty: 10}\n",
+            "goals.jobs.A.penalty: 'A' is a robot's target or end, which every plan must reach",
+        ),
     ],
     ids=[
         "not-a-goal",
@@ -170,6 +174,7 @@ def test_every_search_keeps_the_jobs(tmp_path: Path, mode: tuple[str, ...]) -> N
         "end-shared",
         "end-paper",
         "window-reversed",
+        "penalty-on-a-target",
     ],
 )
 def test_bad_jobs_get_one_line_each(tmp_path: Path, goals: str, fragment: str) -> None:
@@ -197,10 +202,7 @@ def test_a_robot_comes_back_to_its_end_and_a_window_is_kept(tmp_path: Path) -> N
     """Read from plan.json only: r1 starts in C and must end there, so its last move enters C;
     B's window opens at 60 s, so its robot waits there until then, serves 10 s, and arrives
     before the window closes."""
-    goals = (
-        "goals:\n  visit: [A, B]\n  ends: {r1: C}\n"
-        "  jobs:\n    - {name: B, service: 10 s, window: [60 s, 120 s]}\n"
-    )
+    goals = "goals:\n  visit: [A, B]\n  ends: {r1: C}\n  jobs:\n    - {name: B, service: 10 s, window: [60 s, 120 s]}\n"
     out = tmp_path / "out"
     proc = tmpnav("plan", str(scenario(tmp_path, goals)), "-q", "--cache-dir", str(tmp_path / "c"), "-o", str(out))
     assert proc.returncode == 0, proc.stderr
@@ -225,3 +227,29 @@ def test_a_window_nobody_can_reach_gets_one_line_and_exit_11(tmp_path: Path) -> 
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "jobs.yaml: goals.jobs.B.window: it closes at 2 s" in lines[0], lines
     assert "the earliest arrival possible is" in lines[0] and not out.exists()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("penalty", "dropped"), [(5.0, ["B"]), (500.0, [])])
+def test_an_optional_goal_is_left_undone_only_when_that_is_cheaper(
+    tmp_path: Path, penalty: float, dropped: list[str]
+) -> None:
+    """B is optional and r1 alone may do it: left undone at a penalty of 5, done at 500; the
+    objective in plan.json holds the penalty of what is left undone."""
+    goals = (
+        f"goals:\n  visit: [A, B]\n  jobs:\n    - {{name: A, robots: [r1]}}\n"
+        f"    - {{name: B, robots: [r1], penalty: {penalty}}}\n"
+    )
+    out = tmp_path / "out"
+    proc = tmpnav(
+        "plan", str(scenario(tmp_path, goals)), "-q", "--search", "exact", "--costs", "table",
+        "--cache-dir", str(tmp_path / "c"), "-o", str(out),
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads((out / "plan.json").read_text())
+    assert doc["goals"]["dropped"] == dropped and doc["goals"]["jobs"]["B"]["penalty"] == penalty
+    entered = {m["to"] for a in doc["actions"] for m in a["moves"]}
+    assert ("B" in entered) == (not dropped) and "A" in entered
+    o = doc["objective"]
+    expected = doc["cost"]["planner"] + o["span_weight"] * doc["makespan"]["planner"] + (penalty if dropped else 0.0)
+    assert o["planner"] == pytest.approx(expected)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import enum
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TypeVar
@@ -252,6 +253,9 @@ class Job:
     robots: tuple[str, ...] = ()
     pose: tuple[float, float, float] | None = None
     window: tuple[float, float] | None = None  # s on the team's clock
+    #: an optional goal: the plan may leave it undone at this price, in the objective's units
+    #: (a higher penalty: a higher priority); None: it must be done
+    penalty: float | None = None
 
 
 @dataclass(frozen=True)
@@ -299,6 +303,27 @@ class Goals:
     @property
     def windows(self) -> dict[str, tuple[float, float]]:
         return {j.room: j.window for j in self.jobs if j.window is not None}
+
+    @property
+    def optional(self) -> dict[str, float]:
+        """Room -> the penalty of leaving it undone, for the optional goals (``goals.jobs``)."""
+        return {j.room: j.penalty for j in self.jobs if j.penalty is not None}
+
+    @property
+    def required(self) -> tuple[str, ...]:
+        """The rooms of ``visit`` that every plan must visit (the others are optional)."""
+        optional = self.optional
+        return tuple(x for x in self.visit if x not in optional)
+
+    def dropped(self, entered: Iterable[str]) -> tuple[str, ...]:
+        """The optional goals a plan that enters ``entered`` (and the robots' starts) leaves undone."""
+        seen = set(entered)
+        return tuple(x for x in self.optional if x not in seen)
+
+    def drop_penalty(self, entered: Iterable[str]) -> float:
+        """The objective's price of the optional goals left undone."""
+        optional = self.optional
+        return float(sum(optional[x] for x in self.dropped(entered)))
 
     def opens(self, room: str, arrival: float) -> float:
         """Seconds a robot that arrives at ``room`` at ``arrival`` (team's clock) waits for its

@@ -28,7 +28,7 @@ from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import arrival_state, build_table, initial_state, start_locations
 from tmpnav.task.encodings import ENCODINGS
-from tmpnav.task.model import PlanCost, head_locations, robot_ends, sub_moves
+from tmpnav.task.model import PlanCost, entered, head_locations, robot_ends, sub_moves
 from tmpnav.task.plans import Plan
 from tmpnav.task.timing import schedule
 from tmpnav.types import CostTable, Goals, MoveKey
@@ -108,7 +108,8 @@ class CanonicalCosts:
         timed = schedule(plan, self.robots, self._step_durations, goals=goals)
         if timed is not None and timed.late(goals.windows):
             return PlanCost.impossible(len(plan))  # it arrives after a window closes
-        return PlanCost(float(sum(costs)), tuple(costs), timed)
+        dropped = goals.drop_penalty(entered(plan, self.start_location))
+        return PlanCost(float(sum(costs)), tuple(costs), timed, dropped)
 
     def ends(self, head: Plan) -> dict[str, float]:
         self.plan_cost(head)  # costs (and so times) every move of the head

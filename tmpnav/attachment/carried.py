@@ -36,7 +36,7 @@ from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import arrival_state
 from tmpnav.task.encodings import ENCODINGS
-from tmpnav.task.model import PlanCost, robot_ends, sub_moves
+from tmpnav.task.model import PlanCost, entered, robot_ends, sub_moves
 from tmpnav.task.plans import Plan
 from tmpnav.types import CostTable, Goals, MotionResult, MoveKey
 
@@ -73,7 +73,8 @@ class CarriedCosts:
         if run is None or run.end.late:  # it cannot be made, or arrives after a job's window closes
             return PlanCost.impossible(len(plan))
         costs = run.step_costs(len(plan), self.scenario.cost, self.scenario.planner.max_risk)
-        return PlanCost(float(sum(costs)), tuple(costs), run.schedule)
+        dropped = self.scenario.goals.drop_penalty(entered(plan, self.start_location))
+        return PlanCost(float(sum(costs)), tuple(costs), run.schedule, dropped)
 
     def ends(self, head: Plan) -> dict[str, float]:
         run = self.run(head)

@@ -14,6 +14,13 @@ from tmpnav.task.stage import plan_unfolded
 
 def exact_carried(run: TaskRun) -> Planned:
     """ENHSP's optimal plan over the unfolded belief space: the plan of least executed cost."""
+    if run.goals.optional:  # the unfolded search has no price for a goal left undone
+        if run.planner.search == "exact":
+            raise InputError(
+                "optional goals (goals.jobs[].penalty) are planned with carried costs by the anytime search; "
+                "plan them with --search anytime (or auto), or --costs table for an exact search"
+            )
+        return anytime_carried(run)
     with run.times.timed("oracle"):
         graph = unfold(run.carried, run.goals, run.planner.pair_min_gain, run.span_weight)
     if graph is None:

@@ -19,7 +19,7 @@ from dataclasses import asdict
 import numpy as np
 
 from tmpnav.report.quality import plan_conflicts, plan_warnings
-from tmpnav.report.schedule import bound_values, driving_steps, objective_values, step_windows
+from tmpnav.report.schedule import bound_values, driving_steps, dropped_goals, objective_values, step_windows
 from tmpnav.results import JSON, STAGES, CacheUse, PlanReport, Schedule, TimedMove
 from tmpnav.types import PlannedAction, Roadmap, TrajectoryStep
 from tmpnav.version import __version__
@@ -154,9 +154,12 @@ def _goals(report: PlanReport) -> JSON:
                 "robots": list(j.robots),
                 "pose": None if j.pose is None else [number(v, 9) for v in j.pose],
                 "window": None if j.window is None else [number(v, 9) for v in j.window],
+                "penalty": None if j.penalty is None else number(j.penalty, 9),
             }
             for j in goals.jobs
         }
+    if goals.optional:
+        out["dropped"] = list(dropped_goals(report))
     return out
 
 

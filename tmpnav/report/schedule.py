@@ -58,7 +58,8 @@ def move_at(schedule: Schedule, robot: str, t: float) -> TimedMove | None:
 class ObjectiveValues:
     """What the plan minimised and what it came to: as the planner saw it and as re-simulated.
 
-    ``value = cost + span_weight * makespan`` (:mod:`tmpnav.task.objectives`); the planner's
+    ``value = cost + span_weight * makespan`` (:mod:`tmpnav.task.objectives`), plus the penalties
+    of the optional goals left undone; the planner's
     makespan is None when its costs had no durations (then so is its value)."""
 
     name: str  # weighted | cost | makespan (tmpnav.choices)
@@ -79,13 +80,24 @@ class ObjectiveValues:
         return abs(self.planner_makespan - self.makespan) > T_TOL or abs(self.planner_value - self.value) > tol
 
 
+def visited_rooms(report: PlanReport) -> set[str]:
+    """The locations the plan visits: where its moves start (each robot's start among them) and end."""
+    return {loc for step in report.task.steps for m in step for loc in m[1:]}
+
+
+def dropped_goals(report: PlanReport) -> tuple[str, ...]:
+    """The optional goals (``goals.jobs[].penalty``) the plan leaves undone."""
+    return report.scenario.goals.dropped(visited_rooms(report))
+
+
 def objective_values(report: PlanReport) -> ObjectiveValues:
     """The objective of ``report``'s plan, planner's and re-simulated."""
     name = report.scenario.planner.objective
     objective, weights = OBJECTIVES[name], report.scenario.cost
     makespan, planned = report.schedule.makespan, report.task.makespan
-    value = objective.value(report.resimulated_cost, makespan, weights)
-    planner_value = None if planned is None else objective.value(report.planner_cost, planned, weights)
+    dropped = report.scenario.goals.drop_penalty(visited_rooms(report))  # optional goals left undone
+    value = objective.value(report.resimulated_cost, makespan, weights) + dropped
+    planner_value = None if planned is None else objective.value(report.planner_cost, planned, weights) + dropped
     dt = report.scenario.models.dt
     return ObjectiveValues(
         name=name,

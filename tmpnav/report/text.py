@@ -49,7 +49,15 @@ import numpy as np
 from tmpnav.belief.risk import position_std
 from tmpnav.choices import STOP_MEANINGS
 from tmpnav.report.quality import plan_conflicts, warning_lines
-from tmpnav.report.schedule import T_TOL, bound_values, driving_steps, objective_values, searched_gap, step_windows
+from tmpnav.report.schedule import (
+    T_TOL,
+    bound_values,
+    driving_steps,
+    dropped_goals,
+    objective_values,
+    searched_gap,
+    step_windows,
+)
 from tmpnav.results import STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
 from tmpnav.task.bound import OPTIMAL_GAP
@@ -76,6 +84,17 @@ def _goals(report: PlanReport) -> str:
     if goals.visit:
         parts.append("visit " + ", ".join(goals.visit))
     parts += [f"{robot} visits {', '.join(rooms)}" for robot, rooms in goals.per_robot]
+    parts += [f"{robot} ends at {room}" for robot, room in goals.ends]
+    if goals.optional:
+        dropped = dropped_goals(report)
+        parts.append(
+            f"optional {', '.join(goals.optional)}: "
+            + (
+                f"left undone {', '.join(dropped)} (penalty {sum(goals.optional[x] for x in dropped):g})"
+                if dropped
+                else "all done"
+            )
+        )
     return "; ".join(parts) or "none"
 
 
@@ -179,6 +198,8 @@ def _objective(report: PlanReport) -> list[str]:
         value = f"{o.own:.1f} s, then cost {_cost(report.resimulated_cost)}"
         return [f"{makespan}; objective {o.name} (the makespan, then the sum of action costs): {value}"]
     formula = f"cost + {o.span_weight:g} per s of makespan" if o.span_weight else "the sum of action costs"
+    if report.scenario.goals.optional:
+        formula += " + the penalties of optional goals left undone"
     value = _cost(o.value)
     if o.planner_value is not None and abs(o.planner_value - o.value) > 5e-4:
         value = f"planner {_cost(o.planner_value)}, re-simulated {value}"

@@ -446,6 +446,12 @@ JOB = Section(
             "the goal pose inside the room (a station): the robot ends its move there, turned to theta; "
             "without it, the room's sampled pose instantiations",
         ),
+        "penalty": Field(
+            Number(None, minimum=0.0, maximum=1e9),
+            "makes the goal optional: a plan may leave it undone when the team cannot do it for less, and pays "
+            "this much in the objective's units (a higher penalty: a higher priority); only for a room of "
+            "goals.visit; omitted: the goal must be done",
+        ),
         "window": Field(
             Vector(dimensions=("time", "time"), names="earliest, latest"),
             "when the robot may arrive, on the team's clock (s from the plan's start): one that arrives "

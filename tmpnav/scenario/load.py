@@ -351,6 +351,16 @@ def _job_problems(doc: YamlDoc, goals: dict[str, Any], robots: list[str]) -> lis
     for i, job in enumerate(goals.get("jobs") or ()):
         room, allowed = job["name"], list(job["robots"])
         where = ("goals", "jobs", i)
+        if job.get("penalty") is not None and room in goal_rooms and room not in visit:
+            problems.append(
+                Problem(
+                    doc.name,
+                    f"goals.jobs.{room}.penalty",
+                    f"{room!r} is a robot's target or end, which every plan must reach; expected a penalty only for "
+                    "a room of goals.visit",
+                    doc.line((*where, "penalty")),
+                )
+            )
         if room not in goal_rooms:
             problems.append(
                 Problem(
@@ -458,6 +468,7 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
                     tuple(j["robots"]),
                     None if j["pose"] is None else tuple(j["pose"]),
                     None if j["window"] is None else tuple(j["window"]),
+                    j["penalty"],
                 )
                 for j in d["goals"]["jobs"]
             ),

@@ -165,11 +165,11 @@ def move_prices(table: CostTable, min_gain: float = 0.0) -> dict[MoveKey, float]
 
 def required_entries(table: CostTable, goals: Goals) -> list[Row]:
     """The entries every plan makes: (None, x) for each room x entered exactly once (a goal
-    that is nobody's start and nobody's target), then (r, x) for each target room x of a
+    that is nobody's start, nobody's target and not optional), then (r, x) for each target room x of a
     robot r that does not start in it, and for each robot's end that it does not start in."""
     starts = set(table.start_location.values())
     targeted = {room for _, rooms in goals.per_robot for room in rooms}
-    once: list[Row] = [(None, x) for x in dict.fromkeys(goals.visit) if x not in starts and x not in targeted]
+    once: list[Row] = [(None, x) for x in dict.fromkeys(goals.required) if x not in starts and x not in targeted]
     entries: list[Row] = [
         (r, x) for r, rooms in goals.per_robot for x in dict.fromkeys(rooms) if table.start_location.get(r) != x
     ]

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Protocol
 
 from tmpnav.errors import InputError, PlannerCrashError
-from tmpnav.task.encodings import ENCODINGS, Encoding
+from tmpnav.task.encodings import ENCODINGS, Encoding, scaled
 from tmpnav.task.names import PddlNames
 from tmpnav.task.pddl_text import TEXT_ENCODINGS, PddlTask, write_task
 from tmpnav.task.solve import SolveResult, reads_pddl_text, solve
@@ -71,8 +71,12 @@ class EncodedProblem:
 
     def decode(self, result: SolveResult) -> list[Step]:
         """The plan's actions, each as the moves of the robots it moves (1 or 2)."""
+        from tmpnav.task.pddl_text import DROP_PREFIX
+
         steps: list[Step] = []
         for name, params in result.actions:
+            if name.lower().startswith(DROP_PREFIX):
+                continue  # an optional goal left undone: no step
             try:
                 step = self._step(name, params)
             except KeyError:
@@ -231,6 +235,7 @@ def encode(
         problem.add_goal(visited_by(robots[r], locs[room]))
     for r, room in goals.ends:
         problem.add_goal(robot_in(robots[r], locs[room]))
+    _add_drops(problem, goals, locs)
     act_cost_to_action_costs(problem)
     return builder.encoded
 
@@ -253,3 +258,21 @@ def act_cost_to_action_costs(problem: Problem) -> None:
             action._add_effect_instance(effect)
         costs[action] = cost if cost is not None else problem.environment.expression_manager.Int(0)
     problem.add_quality_metric(MinimizeActionCosts(costs))
+
+
+def _add_drops(problem: Problem, goals: Goals, locs: dict[str, Object]) -> None:
+    """One action per optional goal: leave it undone at its penalty (it then counts as visited)."""
+    from unified_planning.model import InstantaneousAction
+    from unified_planning.shortcuts import Not
+
+    from tmpnav.task.pddl_text import DROP_PREFIX
+
+    visited = problem.fluent("visited")
+    for k, (room, penalty) in enumerate(sorted(goals.optional.items())):
+        if room not in locs or room not in goals.visit:
+            continue
+        action = InstantaneousAction(f"{DROP_PREFIX}{k + 1}")
+        action.add_precondition(Not(visited(locs[room])))
+        action.add_effect(visited(locs[room]), True)
+        action.add_increase_effect(problem.fluent("act-cost")(), scaled(penalty))
+        problem.add_action(action)

@@ -214,10 +214,11 @@ def occupancy_filter(goals: Goals, start_location: dict[str, str]) -> PairFilter
 
 
 def potentials(table: CostTable, goals: Goals, pairs: dict[tuple[MoveKey, MoveKey], float]) -> dict[str, int]:
-    """h_x for each room entered exactly once: the cheapest move into it, pairs halved."""
+    """h_x for each room entered exactly once: the cheapest move into it, pairs halved (an
+    optional goal, which a plan may leave undone, has none)."""
     targeted = {room for _, rooms in goals.per_robot for room in rooms}
     starts = set(table.start_location.values())
-    rooms = {x for x in goals.visit if x not in targeted and x not in starts}
+    rooms = {x for x in goals.required if x not in targeted and x not in starts}
     h: dict[str, int] = {}
     for (_, _, dest), cost in table.single.items():
         if dest in rooms:

@@ -35,6 +35,7 @@ class PlanCost:
     total: float
     steps: tuple[float, ...]
     schedule: Schedule | None = None
+    dropped: float = 0.0  # the penalties of the optional goals it leaves undone (goals.jobs)
 
     @property
     def makespan(self) -> float:
@@ -44,8 +45,9 @@ class PlanCost:
         return self.schedule.makespan if self.schedule is not None else 0.0
 
     def value(self, span_weight: float) -> float:
-        """The objective: the total plus ``span_weight`` per second of makespan (tmpnav.task.objectives)."""
-        return self.total + span_weight * self.makespan if span_weight else self.total
+        """The objective: the total plus ``span_weight`` per second of makespan (tmpnav.task.objectives),
+        plus the penalties of the optional goals left undone."""
+        return self.total + self.dropped + (span_weight * self.makespan if span_weight else 0.0)
 
     @classmethod
     def impossible(cls, n: int) -> PlanCost:
@@ -79,6 +81,11 @@ class CostModel(Protocol):
     def ends(self, head: Plan) -> dict[str, float]:
         """When each robot ends its moves of ``head`` (seconds), the team moving at once."""
         ...
+
+
+def entered(plan: Plan, start_location: dict[str, str]) -> set[str]:
+    """The locations a plan visits: the robots' starts and every room it enters."""
+    return {*start_location.values(), *(m[2] for step in plan for m in step)}
 
 
 def head_locations(head: Plan, start_location: dict[str, str], robots: Sequence[str]) -> dict[str, str]:

@@ -35,13 +35,15 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from tmpnav.errors import PlannerCrashError
-from tmpnav.task.encodings import COST_SCALE, ENCODINGS, Encoding
+from tmpnav.task.encodings import COST_SCALE, ENCODINGS, Encoding, scaled
 from tmpnav.task.names import PddlNames
 from tmpnav.task.solve import SolveResult, solve_text
 from tmpnav.types import CostTable, Goals, MoveKey
 
 #: the encodings this module writes
 TEXT_ENCODINGS = ("single", "mixed")
+#: the name of the actions that leave an optional goal undone (``drop_goal_1``, ...)
+DROP_PREFIX = "drop_goal_"
 
 _DOMAIN_HEAD = """(define (domain {name})
  (:requirements :strips :typing :negative-preconditions :disjunctive-preconditions :conditional-effects
@@ -122,9 +124,12 @@ class PddlTask:
         return solve_text(self.domain, self.problem, planner, timeout)
 
     def decode(self, result: SolveResult) -> list[tuple[MoveKey, ...]]:
-        """The plan's actions, each as the moves of the robots it moves (1 or 2)."""
+        """The plan's actions, each as the moves of the robots it moves (1 or 2); an optional goal
+        left undone is no step."""
         steps = []
         for name, params in result.actions:
+            if name.lower().startswith(DROP_PREFIX):
+                continue
             step = self.decode_action(name, params)
             if step is None:
                 raise PlannerCrashError(f"the planner returned an action tmpnav does not know: {name}{params}")
@@ -222,7 +227,19 @@ class TextBuilder:
             locations=" ".join(self.names.location.values()),
             clock_functions=_CLOCK_FUNCTIONS if timed else "",
         )
-        return head + _move_actions(self.span_weight) + "".join(self.pair_texts) + ")\n"
+        return head + _move_actions(self.span_weight) + "".join(self.pair_texts) + self._drop_texts() + ")\n"
+
+    def _drop_texts(self) -> str:
+        """One action per optional goal of the problem: leave it undone, at its penalty (it then
+        counts as visited, so nobody enters it)."""
+        loc, out = self.names.location, []
+        for k, (room, penalty) in enumerate(sorted(self.goals.optional.items())):
+            if room in self.goals.visit and room in loc:
+                out.append(
+                    f" (:action {DROP_PREFIX}{k + 1}\n  :parameters ()\n  :precondition (not (visited {loc[room]}))\n"
+                    f"  :effect (and (visited {loc[room]}) (increase (total-cost) {scaled(penalty)})))\n"
+                )
+        return "".join(out)
 
     def problem_text(self, name: str, ends: dict[str, str] | None = None, clocks: Clocks | None = None) -> str:
         rob, loc = self.names.robot, self.names.location

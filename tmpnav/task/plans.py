@@ -7,8 +7,9 @@ visited it, or if the room is one of its own target rooms that it has not visite
 (for a pair, both moves are checked against the state before the step), and never a room
 whose job (``goals.jobs``) names other robots; a robot's end (``goals.ends``) counts as one
 of its targets for entry, but a robot that starts there must still come back to it; a plan is
-done when every room of ``goals.visit`` is visited, every robot has visited its targets, and
-every robot with an end is there (so its end is its last move).
+done when every room of ``goals.visit`` is visited (but the optional ones, which a plan may
+leave undone at their penalty), every robot has visited its targets, and every robot with an
+end is there (so its end is its last move).
 The search edits plans only through :func:`splice`, and keeps only plans that
 :meth:`Rules.check` accepts.
 """
@@ -87,14 +88,14 @@ class Rules:
         return state
 
     def done(self, state: State) -> bool:
-        visited = set(self.goals.visit) <= state.visited and self.targets <= state.visited_by
+        visited = set(self.goals.required) <= state.visited and self.targets <= state.visited_by
         return visited and self.goals.ended(state.at)
 
     def check(self, plan: Iterable[Step]) -> None:
         """Raise PlanError unless ``plan`` obeys the rules and reaches the goals."""
         state = self.run(plan)
         if not self.done(state):
-            missing = sorted(set(self.goals.visit) - state.visited)
+            missing = sorted(set(self.goals.required) - state.visited)
             missing += sorted(f"{x} by {r}" for r, x in self.targets - state.visited_by)
             missing += sorted(f"{r} ends at {x}" for r, x in self.goals.ends if state.at.get(r) != x)
             raise PlanError(f"the plan leaves goals undone: {', '.join(missing)}")

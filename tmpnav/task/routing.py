@@ -111,6 +111,9 @@ def solve_routes(
         raise ValueError(f"time_limit must be positive, got {time_limit}")
     ends = set(goals.ends)
     tasks = [row for row in required_entries(table, goals) if row not in ends]  # an end is its route's end node
+    starts = set(table.start_location.values())
+    optional = [(None, x) for x in goals.optional if x not in starts]  # visited, or left undone at their penalty
+    tasks += optional
     robots = table.robots
     if not tasks and not goals.ends:
         return Routes({r: () for r in robots}, 0.0, "NOTHING_TO_VISIT", "optimal")
@@ -123,6 +126,9 @@ def solve_routes(
     )
     for node in range(model.first_task + len(tasks), len(model.location)):
         model.routing.AddDisjunction([model.manager.NodeToIndex(node)], 0)  # optional, free to skip
+    for k, (_, x) in enumerate(optional):  # an optional goal: skipped at its penalty (in the arc costs' units)
+        node = model.first_task + len(tasks) - len(optional) + k
+        model.routing.AddDisjunction([model.manager.NodeToIndex(node)], round(goals.optional[x] * COST_SCALE))
     if (span_weight > 0 or goals.windows) and table.duration:
         model.add_time(span_weight, goals)
     return model.solve(time_limit, solution_limit, first_solution)

@@ -33,7 +33,7 @@ import heapq
 import itertools
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from tmpnav.task.encodings import COST_SCALE, offered_pairs, potentials
 from tmpnav.task.plans import Plan, Step
@@ -68,7 +68,9 @@ class _Space:
         for (m1, m2), c in offered_pairs(table, min_gain).items():
             self.pairs.setdefault((*m1[:2], *m2[:2]), []).append(((m1, m2), c))
         pair_costs = offered_pairs(table, min_gain)
-        self.h = {x: v / COST_SCALE for x, v in potentials(table, goals, pair_costs).items()}
+        # every room's potential, the optional goals' too (potentials() leaves them out of the PDDL's)
+        every = potentials(table, replace(goals, jobs=tuple(replace(j, penalty=None) for j in goals.jobs)), pair_costs)
+        self.h = {x: v / COST_SCALE for x, v in every.items()}
         self.quickest = self._quickest()
         self.windows = goals.windows
         self.ended = frozenset(goals.ends)
@@ -92,10 +94,14 @@ class _Space:
 
     def done(self, n: _Node) -> bool:
         return (
-            set(self.goals.visit) <= n.visited
+            set(self.goals.required) <= n.visited
             and self.targets <= n.by
             and self.goals.ended(dict(zip(self.robots, n.at, strict=True)))
         )
+
+    def drop_penalty(self, n: _Node) -> float:
+        """What ending in ``n`` costs more: the penalties of the optional goals not visited."""
+        return self.goals.drop_penalty(n.visited)
 
     def may_enter(self, n: _Node, robot: str, room: str) -> bool:
         if not self.goals.may_visit(robot, room):  # the room's job is for other robots
@@ -141,10 +147,12 @@ class _Space:
 
     def estimate(self, n: _Node) -> float:
         """A lower bound on what reaching the goals from ``n`` still costs (module docstring)."""
-        todo = [x for x in self.goals.visit if x not in n.visited]
+        todo = [x for x in self.goals.required if x not in n.visited]
         todo += [x for r, x in self.targets - n.by]
         todo += [x for i, (r, x) in enumerate(self.goals.ends) if n.at[self.robots.index(r)] != x]
         cost = sum(self.h.get(x, 0.0) for x in set(todo) if x in self.h and x not in n.visited)
+        # an optional goal not visited: entered (at least its potential) or left undone (its penalty)
+        cost += sum(min(self.h.get(x, 0.0), p) for x, p in self.goals.optional.items() if x not in n.visited)
         at = dict(zip(self.robots, n.at, strict=True))
         cost += sum(c for (r, x), c in self.end_cost.items() if at[r] != x)  # a robot not at its end must go there
         if not todo or (not self.w and not self.windows):
@@ -177,14 +185,19 @@ def exact_schedule(
     best: dict[_Node, float] = {start: 0.0}
     parent: dict[_Node, tuple[_Node, Step]] = {}
     counter = itertools.count()
-    queue = [(space.estimate(start), next(counter), 0.0, start)]
+    queue: list[tuple[float, int, float, _Node, bool]] = [(space.estimate(start), next(counter), 0.0, start, False)]
     expanded = 0
     while queue:
-        _, _, g, node = heapq.heappop(queue)
+        _, _, g, node, final = heapq.heappop(queue)
+        if final:  # the plan ends here, its optional goals left undone paid for
+            return _plan(parent, node), g
         if g > best[node]:
             continue
-        if space.done(node):
-            return _plan(parent, node), g
+        if space.done(node):  # end here (paying for what it leaves undone), or go on to an optional goal
+            if not goals.optional:
+                return _plan(parent, node), g
+            ended = g + space.drop_penalty(node)
+            heapq.heappush(queue, (ended, next(counter), ended, node, True))
         expanded += 1
         if expanded > max_states:
             return None
@@ -193,7 +206,7 @@ def exact_schedule(
                 h = space.estimate(nxt)
                 if math.isfinite(h):
                     best[nxt], parent[nxt] = g + cost, (node, step)
-                    heapq.heappush(queue, (g + cost + h, next(counter), g + cost, nxt))
+                    heapq.heappush(queue, (g + cost + h, next(counter), g + cost, nxt, False))
     return None
 
 

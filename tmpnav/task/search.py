@@ -40,6 +40,7 @@ from tmpnav.lifetime import gather
 from tmpnav.results import SearchProgress, StageTimes
 from tmpnav.task.decode import canonical_order
 from tmpnav.task.model import CostModel, PlanCost
+from tmpnav.task.model import entered as entered_by
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.pddl_text import Clocks, PddlTask, write_task
 from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_origins
@@ -422,8 +423,9 @@ class AnytimeSearch:
         # rooms nobody has to enter may be passed through (a detour can be cheaper than a direct move)
         entered = {m[2] for step in plan for m in step}
         free = [x for x in self.waypoints if x not in entered or x in hood.rooms]
+        dropped = [x for x in goals.visit if x not in hood.rooms]  # optional goals left undone, to take up
         with self.times.timed("oracle"):
-            table = self.model.subtable(opened.head, hood.robots, (*hood.rooms, *free), goals)
+            table = self.model.subtable(opened.head, hood.robots, (*hood.rooms, *dropped, *free), goals)
             clocks = self._clocks(opened, hood) if self.options.span_weight else None
         opts = self.options
         with self.times.timed("encode"):
@@ -469,12 +471,14 @@ class AnytimeSearch:
         visit: list[str] = []
         per_robot: dict[str, list[str]] = {}
         ends: list[tuple[str, str]] = []
+        # the optional goals the plan leaves undone: each sub-problem may take one up again
+        visit += [x for x in self.goals.dropped(entered_by(plan, self.model.start_location)) if x not in state.visited]
         for k in sorted(hood.removed):
             for r, _, x in plan[k]:
                 if r not in hood.robots:
                     continue
                 if x in self.goals.visit and x not in state.visited:
-                    visit.append(x)
+                    visit.append(x)  # an optional goal too: the sub-problem may leave it undone
                 if (r, x) in self.rules.targets and (r, x) not in state.visited_by:
                     per_robot.setdefault(r, []).append(x)
                 if self.goals.end_of(r) == x and r not in hood.ends:  # its end is among its opened moves

@@ -24,9 +24,9 @@ from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import EncodedTask, encode_task
 from tmpnav.task.export import pddl_texts
 from tmpnav.task.memo import EntryStore, Memo, entry_to_memo, memo_key, memo_to_entry
-from tmpnav.task.model import CostModel, table_schedule
+from tmpnav.task.model import CostModel, entered, table_schedule
 from tmpnav.task.objectives import OBJECTIVES
-from tmpnav.task.pddl_text import TEXT_ENCODINGS, sample_task
+from tmpnav.task.pddl_text import DROP_PREFIX, TEXT_ENCODINGS, sample_task
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.schedules import exact_schedule
 from tmpnav.task.search import SearchOptions, SearchRun, search
@@ -100,7 +100,7 @@ def plan_task(
     memo = Memo(
         status=solved.status,
         engine=solved.engine,
-        actions=solved.actions,
+        actions=tuple(a for a in solved.actions if not a[0].lower().startswith(DROP_PREFIX)),  # one per step
         steps=steps,
         sizes=(encoded.n_actions, len(encoded.pair_actions), len(encoded.potentials)),
     )
@@ -153,7 +153,7 @@ def _schedules_result(task: TaskProblem, steps: Plan, remembered: bool) -> TaskR
     steps = tuple(steps[i] for i in order)
     step_costs = tuple(step_cost(task.table, s) for s in steps)
     schedule = table_schedule(task.table, steps, task.goals)
-    value = _objective(task, step_costs, schedule)
+    value = _objective(task, steps, step_costs, schedule)
     return TaskResult(
         status=PlanStatus.SOLVED_OPTIMALLY,
         engine=SCHEDULES_ENGINE,
@@ -168,9 +168,11 @@ def _schedules_result(task: TaskProblem, steps: Plan, remembered: bool) -> TaskR
     )
 
 
-def _objective(task: TaskProblem, step_costs: tuple[float, ...], schedule: Schedule | None) -> float:
-    """The plan's objective on the table: its steps' costs plus the price of its makespan."""
-    return float(sum(step_costs)) + task.span_weight * (schedule.makespan if schedule is not None else 0.0)
+def _objective(task: TaskProblem, steps: Plan, step_costs: tuple[float, ...], schedule: Schedule | None) -> float:
+    """The plan's objective on the table: its steps' costs plus the price of its makespan (and
+    of the optional goals it leaves undone)."""
+    dropped = task.goals.drop_penalty(entered(steps, task.table.start_location))
+    return float(sum(step_costs)) + dropped + task.span_weight * (schedule.makespan if schedule is not None else 0.0)
 
 
 def _result(task: TaskProblem, memo: Memo, encoded: EncodedTask | None) -> TaskResult:
@@ -182,7 +184,7 @@ def _result(task: TaskProblem, memo: Memo, encoded: EncodedTask | None) -> TaskR
     step_costs = tuple(step_cost(table, s) for s in steps)
     optimal = memo.status == PlanStatus.SOLVED_OPTIMALLY
     schedule = table_schedule(table, steps, task.goals)
-    cost = _objective(task, step_costs, schedule)
+    cost = _objective(task, steps, step_costs, schedule)
     return TaskResult(
         status=memo.status,
         engine=memo.engine,

@@ -119,7 +119,7 @@ def write_unfolded(
 
 
 def _goal(goals: Goals, rules: Rules, names: PddlNames) -> str:
-    parts = [f"(visited {names.location[x]})" for x in goals.visit]
+    parts = [f"(visited {names.location[x]})" for x in goals.required]
     parts += [f"(visited_by {names.robot[r]} {names.location[x]})" for r, x in sorted(rules.targets)]
     parts += [f"(robot_in {names.robot[r]} {names.location[x]})" for r, x in goals.ends]
     return " ".join(parts)
