@@ -61,9 +61,13 @@ def test_the_search_reaches_the_exact_optimum_on_50_random_instances() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [3, 11, 29])
+@pytest.mark.parametrize("seed", [3, 12, 29])
 def test_every_plan_passes_the_validator(seed: int) -> None:
-    """The search's plan, written as actions of the whole problem's PDDL text, validates."""
+    """The search's plan, written as actions of the whole problem's PDDL text, validates.
+
+    Seed 12 (3 robots, a robot's own targets, paired moves in its plan) replaced seed 11 (the
+    same kind of instance): its text holds 1,137 paired actions, 430 KB that unified-planning's
+    parser took 35 s (84 s in CI) to read; seed 12's holds 108."""
     table, goals = instance(seed)
     result = search(TableModel(table, MIN_GAIN), goals, SearchOptions(budget=60, seed=seed, min_gain=MIN_GAIN))
     task = write_task(table, goals, "mixed", min_gain=MIN_GAIN)
