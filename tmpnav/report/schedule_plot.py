@@ -98,6 +98,17 @@ def _draw_windows(ax: Axes, schedule: Schedule, lay: Layout, windows: dict[str, 
                 ax.plot([latest, latest], [low - 0.06, low + 0.06], color=dark, lw=1.4, zorder=4)
             else:
                 ax.plot([latest], [low], marker=">", color=dark, markersize=5, zorder=4)
+            ax.text(
+                earliest,
+                low - 0.04,
+                f" {move.target} window ",
+                ha="left",
+                va="bottom",
+                fontsize=LABEL_PT - 2,
+                color=dark,
+                bbox={"fc": "white", "ec": "none", "alpha": 0.85, "pad": 0.5},
+                zorder=5,
+            )
             if move.opens > T_TOL:
                 ax.add_patch(
                     Rectangle(
@@ -295,8 +306,8 @@ def _legend(ax: Axes, report: PlanReport, lay: Layout) -> None:
     items: list[tuple[Patch | Line2D, str]] = [
         (Patch(fc=grey, ec="#555555"), "move: to the room named (#k: plan step k)")
     ]
-    if any(m.wait > T_TOL for m in schedule.moves):
-        items.append((Patch(fc="white", ec="#555555", hatch="////"), "wait: for a partner, or held back"))
+    if any(m.wait > T_TOL or m.opens > T_TOL for m in schedule.moves):
+        items.append((Patch(fc="white", ec="#555555", hatch="////"), "wait: for a partner, held back, or for a window"))
     if any(m.service > T_TOL for m in schedule.moves):
         items.append((Patch(fc=(*to_rgb(grey), 0.35), ec="#555555", hatch=".."), "service: at the station for its job"))
     if report.scenario.goals.windows and any(m.target in report.scenario.goals.windows for m in schedule.moves):
