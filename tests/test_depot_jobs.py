@@ -62,7 +62,7 @@ def test_every_job_of_the_depot_holds_in_plan_json(plan: dict[str, Any]) -> None
             assert math.remainder(theta - job["pose"][2], 2 * math.pi) == pytest.approx(0.0, abs=1e-6)
     # on the clock: each station's service after the arrival, each window kept
     makespan = schedule["makespan"]
-    for robot, entry in schedule["robots"].items():
+    for entry in schedule["robots"].values():
         for t in entry["moves"]:
             job = jobs.get(t["to"])
             assert t["service"] == pytest.approx(job["service"] if job else 0.0, abs=0.5)  # rounded up to steps
