@@ -96,8 +96,14 @@ def instance(seed: int) -> tuple[CostTable, Goals]:
     return with_durations(table, rnd), goals
 
 
+#: 24 instances: seeds 0 and 9 gave way to 24 and 25, the next ones. On seed 0 (3 robots, 6 rooms,
+#: 800 pairs) the enumeration of every schedule took 40 s per objective, on seed 9 (3 robots, 4
+#: rooms) 11-14 s, where the other instances take at most 2 s; seeds 24 and 25 are 3-robot ones too
+SEEDS = [s for s in range(26) if s not in (0, 9)]
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", range(24))
+@pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("objective", ["weighted", "makespan"])
 def test_the_exact_search_is_the_optimum_over_every_schedule(seed: int, objective: str) -> None:
     table, goals = instance(seed)
