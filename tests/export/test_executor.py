@@ -82,6 +82,21 @@ def test_a_late_robot_still_serves_its_station_before_its_next_move() -> None:
     assert sent(on_time.moves, "r1/2") == (15.0, 25.0, "depart")
 
 
+def test_an_early_robot_waits_at_its_station_for_the_window_to_open() -> None:
+    """r1's first move ends at a station whose window opens at 30 s (goals.jobs), with 5 s of
+    service: early or on time, it stands there until 30 s, serves, and leaves at 35 s; late
+    past the opening (arriving at 40 s), it serves at once."""
+    first = move("r1", 1, 1, 0.0, 10.0, 0.0)
+    first = MoveRequest(**{**first.__dict__, "service": 5.0, "opens_at": 30.0})
+    team = Team(("r1",), {"r1": (first, move("r1", 2, 2, 35.0, 45.0, 35.0))}, 45.0, "test")
+    on_time, _ = replay(team)
+    assert sent(on_time.moves, "r1/2") == (35.0, 45.0, "depart")
+    early, _ = replay(team, slower={"r1": 0.5})  # arrives at 5 s
+    assert sent(early.moves, "r1/2") == (35.0, 40.0, "depart")
+    late, _ = replay(team, slower={"r1": 4.0})  # arrives at 40 s
+    assert sent(late.moves, "r1/2") == (45.0, 85.0, "previous move")
+
+
 def test_a_failed_goal_stops_the_run_and_says_which_move() -> None:
     team = paired_team()
     clock = SimClock()
