@@ -70,7 +70,10 @@ def validate_with_unified_planning(task: PddlTask, actions: tuple[tuple[str, tup
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", range(6))
+# seed 7 stands for seed 1, the next of its kind (3 robots, the mixed encoding, a robot's own target,
+# a paired move in the plan): seed 1's 454 paired actions took unified-planning's parser 17 s (21 s
+# in CI), seed 7's 95 take 3 s
+@pytest.mark.parametrize("seed", [0, 2, 3, 4, 5, 7])
 def test_enhsp_on_the_text_finds_the_exhaustive_optimum_and_the_plan_validates(seed: int) -> None:
     table, goals = small_instance(random.Random(seed), 2 + seed % 2, 4, 0.3)
     task = write_task(table, goals, "mixed" if seed % 3 else "single", min_gain=0.0)
