@@ -12,11 +12,14 @@ from __future__ import annotations
 import itertools
 import math
 import random
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from tmpnav.task.plans import Rules
+from tmpnav.task.model import TableModel
+from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.schedules import exact_schedule
+from tmpnav.task.search import SearchOptions, search
 from tmpnav.task.timing import schedule, table_durations
 from tmpnav.types import CostTable, Goals, Job, MoveKey
 
@@ -122,3 +125,30 @@ def test_the_exact_search_keeps_windows_and_ends_and_is_optimal(seed: int) -> No
     penalty = goals.drop_penalty({*table.start_location.values(), *(m[2] for step in plan for m in step)})
     total = sum(table.single[m] for step in plan for m in step)
     assert timed.makespan + total + penalty == pytest.approx(value, rel=1e-9)
+
+
+def _anytime(seed: int) -> tuple[int, float, float, Plan]:
+    table, goals = instance(seed)
+    found = exact_schedule(table, goals, 0.0, SPAN_WEIGHT)
+    optimum = math.inf if found is None else found[1]
+    options = SearchOptions(budget=60, seed=seed, min_gain=0.0, span_weight=SPAN_WEIGHT, parallel=1)
+    result = search(TableModel(table, 0.0, goals), goals, options)
+    return seed, result.cost.value(SPAN_WEIGHT), optimum, result.plan
+
+
+@pytest.mark.slow
+def test_the_anytime_search_never_breaks_a_window_and_mostly_finds_the_optimum() -> None:
+    """The same 50 instances through the anytime search (OR-Tools' first plan with its time
+    windows, ENHSP's sub-problems, every plan priced on the clock with its windows): every plan
+    it returns keeps every window, every end and every goal, and most reach the exact optimum."""
+    with ThreadPoolExecutor(max_workers=2) as pool:  # each search waits on ENHSP processes
+        outcomes = list(pool.map(_anytime, range(50)))
+    equal = 0
+    for seed, value, optimum, plan in outcomes:
+        table, goals = instance(seed)
+        Rules(table.start_location, goals).check(plan)
+        timed = schedule(plan, table.robots, table_durations(table), goals=goals)
+        assert timed is not None and not timed.late(goals.windows), seed
+        assert value >= optimum - 1e-6, seed
+        equal += abs(value - optimum) <= 1e-6 * max(1.0, optimum)
+    assert equal >= 45, f"{equal} of 50 instances at the exact optimum"  # 49 when written

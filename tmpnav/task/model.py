@@ -107,15 +107,18 @@ def sub_moves(at: dict[str, str], rooms: Sequence[str]) -> list[MoveKey]:
 
 
 class TableModel:
-    """A fixed cost table: a move costs the same wherever in the plan it is made."""
+    """A fixed cost table: a move costs the same wherever in the plan it is made. With ``goals``,
+    a plan that arrives after a job's window closes costs infinity, and one that leaves optional
+    goals undone pays their penalties."""
 
     costs: Costs = "table"
 
-    def __init__(self, table: CostTable, min_gain: float = 0.0):
+    def __init__(self, table: CostTable, min_gain: float = 0.0, goals: Goals | None = None):
         self.table = table
         self.robots = table.robots
         self.start_location = dict(table.start_location)
         self.min_gain = min_gain
+        self.goals = goals
 
     def singles(self, goals: Goals) -> CostTable:
         t = self.table
@@ -129,11 +132,17 @@ class TableModel:
             else:
                 m1, m2 = step
                 costs.append(self.table.pair.get((m1, m2), self.table.pair.get((m2, m1), math.inf)))
-        return PlanCost(float(sum(costs)), tuple(costs), table_schedule(self.table, plan))
+        timed = table_schedule(self.table, plan, self.goals)
+        if self.goals is None:
+            return PlanCost(float(sum(costs)), tuple(costs), timed)
+        if timed is not None and timed.late(self.goals.windows):
+            return PlanCost.impossible(len(plan))
+        dropped = self.goals.drop_penalty(entered(plan, self.start_location))
+        return PlanCost(float(sum(costs)), tuple(costs), timed, dropped)
 
     def ends(self, head: Plan) -> dict[str, float]:
         """When each robot ends its moves of ``head`` (seconds; 0 without durations)."""
-        return robot_ends(table_schedule(self.table, head), self.robots)
+        return robot_ends(table_schedule(self.table, head, self.goals), self.robots)
 
     def subtable(self, head: Plan, robots: Sequence[str], rooms: Sequence[str], goals: Goals) -> CostTable:
         at = head_locations(head, self.start_location, robots)
