@@ -38,8 +38,8 @@ instances = st.tuples(
 @given(instances)
 def test_bound_never_exceeds_the_exact_optimum(case: tuple[int, int, int, float, float]) -> None:
     seed, robots, rooms, density, min_gain = case
-    if robots == 3 and density > 0:
-        rooms = min(rooms, 7)  # keeps the exhaustive search within a few seconds
+    if robots == 3:  # keeps the exhaustive search within a second: with 3 robots and 8 rooms it
+        rooms = min(rooms, 7)  # took 2 s on average and up to 15 s, with pairs or without
     table, goals = small_instance(random.Random(seed), robots, rooms, density)
     optimum = exact_optimum(table, goals, min_gain)
     bound = lower_bound(table, goals, min_gain)
