@@ -111,6 +111,10 @@ class WindowError(PlannerError):
     exit_code = 11
 
 
+#: ``tmpnav replan``: the revision is planned and written, but goals no robot can reach any more are left out
+UNREACHABLE_GOALS = 12
+
+
 class CacheError(TmpnavError):
     """The cache directory cannot be used at all (not a directory, not writable)."""
 
@@ -134,6 +138,8 @@ EXIT_CODES: dict[int, str] = {
     "and detours could not clear (the message names the first); --accept-risk takes the plan",
     WindowError.exit_code: "no plan arrives within a job's window (goals.jobs.window): the message names the goal "
     "and the earliest arrival possible",
+    UNREACHABLE_GOALS: "tmpnav replan: the rest is planned and written, but goals no robot can reach any more "
+    "(behind a closed door, a window closed, only robots that are down may do them) are left out, one line each",
     130: "interrupted (Ctrl-C)",
     143: "terminated (SIGTERM; a parent process sees it killed by the signal): the processes it started "
     "are stopped and earlier outputs kept, as after Ctrl-C",

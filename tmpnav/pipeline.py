@@ -54,6 +54,9 @@ class Overrides:
     keep_apart: bool | None = None
     clearance: float | None = None  # m: roadmap.clearance
     accept_risk: bool = False  # hand out a plan that breaks the chance constraint or leaves robots in the way
+    #: a plan to start the anytime search from, as steps of (robot, target room): the rest of the
+    #: plan being executed, when ``tmpnav replan`` revises it (tmpnav.replan)
+    incumbent: tuple[tuple[tuple[str, str], ...], ...] = ()
 
 
 #: ``Overrides.max_risk`` that lifts the chance constraint (``--max-risk none``)
@@ -359,6 +362,7 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
             store = prep.oracle.cache if options.execution.use_cache else None
             watch = SearchRun(times, in_own_units(options.reporters.search, prep.scenario))
             run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch)
+            run = replace(run, incumbent=options.overrides.incumbent)
             planned = plan_stage(run)
             task, apart = planned.task, None
             with times.timed("resimulate"):

@@ -31,6 +31,7 @@ from tmpnav.types import (
 )
 
 if TYPE_CHECKING:  # annotations only: the world is stage 2, built before this module's values
+    from tmpnav.replan.revise import Revision
     from tmpnav.world import World
 
 #: a JSON value (plan.json, cache entries), as the standard library's ``json`` reads and writes it
@@ -318,6 +319,8 @@ class PlanReport:
     oracle: OracleCounts
     #: waits and sidesteps that keep the robots apart, under a chance constraint (None: none applied)
     apart: KeptApart | None = None
+    #: what this plan revises, for a plan made by ``tmpnav replan`` (None: a first plan)
+    revision: Revision | None = None
 
     @property
     def encoding(self) -> str:

@@ -8,7 +8,7 @@ from tmpnav.planning.bound import certified_bound
 from tmpnav.planning.run import Planned, TaskRun
 from tmpnav.planning.table import full_table
 from tmpnav.task.bound import Bound
-from tmpnav.task.plans import Plan
+from tmpnav.task.plans import Plan, with_origins
 from tmpnav.task.stage import AnytimeTask, TaskProblem, plan_anytime, plan_task, warm_up
 
 #: seconds of the run's budget kept for what runs after the search's budget is spent (its last
@@ -21,8 +21,16 @@ def anytime_table(run: TaskRun) -> Planned:
     anytime = AnytimeTask(run.canonical, run.goals, run.planner, run.span_weight)
     _warm_up(run, anytime)
     bound = _bound(run)
-    task = plan_anytime(anytime, run.search, _left(run), bound)
+    task = plan_anytime(anytime, run.search, _left(run), bound, _incumbent(run))
     return Planned(run.canonical.seen(), task)
+
+
+def _incumbent(run: TaskRun) -> dict[str, Plan]:
+    """The plan being executed, revised, as a seed of the search (none when the run has none;
+    the search drops a seed its rules refuse)."""
+    if not run.incumbent:
+        return {}
+    return {"the plan being executed": with_origins(run.incumbent, run.canonical.start_location)}
 
 
 def anytime_carried(run: TaskRun) -> Planned:
@@ -37,7 +45,7 @@ def anytime_carried(run: TaskRun) -> Planned:
     time), so the whole budget goes to the costs the plan is judged by."""
     anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight)
     _warm_up(run, anytime)
-    seeds: dict[str, Plan] = {}
+    seeds: dict[str, Plan] = _incumbent(run)
     if exact_fits(len(run.goals.all_rooms), len(run.scenario.robots), "table"):
         table = full_table(run.scenario, run.world, run.canonical.oracle, run.times)
         exact = plan_task(TaskProblem.of(run.scenario, table), run.store, run.replan, run.times)

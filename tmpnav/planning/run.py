@@ -32,6 +32,9 @@ class TaskRun:
     store: EntryStore | None  # the cost database, which remembers task plans; None: --no-cache
     replan: bool  # search again even when the store remembers the plan
     search: SearchRun  # the run's clock (its stage times) and who is told of the search's progress
+    #: a plan the anytime search starts from besides its own first plans, as steps of (robot,
+    #: target): the rest of the plan being executed, for a replan (tmpnav.replan)
+    incumbent: tuple[tuple[tuple[str, str], ...], ...] = ()
 
     @classmethod
     def of(

@@ -228,7 +228,7 @@ def plan_document(report: PlanReport) -> dict[str, JSON]:
     timings: dict[str, JSON] = {stage: number(report.times.seconds.get(stage, 0.0), 6) for stage in (*STAGES, "total")}
     timings.update({k: number(v, 6) for k, v in report.times.seconds.items() if k not in timings})
     weights = sc.cost
-    return {
+    doc: dict[str, JSON] = {
         "schema": SCHEMA,
         "tmpnav_version": __version__,
         "scenario": {"name": sc.name, "file": str(sc.source), "description": sc.description},
@@ -265,6 +265,17 @@ def plan_document(report: PlanReport) -> dict[str, JSON]:
             for w in plan_warnings(report)
         ],
     }
+    if report.revision is not None:
+        r = report.revision
+        doc["revision"] = {
+            "number": r.number,
+            "start_time": number(r.start_time, 9),
+            "previous": r.previous,
+            "done": list(r.done),
+            "down": list(r.down),
+            "unreachable": [{"room": room, "why": why} for room, why in r.unreachable],
+        }
+    return doc
 
 
 def _search(report: PlanReport) -> JSON:

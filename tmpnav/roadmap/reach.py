@@ -47,7 +47,7 @@ def roadmap_cuts(scenario: Scenario, world: World, roadmap: Roadmap) -> str | No
     ]
     cut += [(None, room) for room in goals.visit if not any(reaches(r, room) for r in robots)]
     for robot, room in cut:
-        joined = [r for r in (robots if robot is None else [robot]) if _free_space_joins(scenario, world, r, room)]
+        joined = [r for r in (robots if robot is None else [robot]) if free_space_joins(scenario, world, r, room)]
         if joined:
             whose = "a robot's" if robot is None else f"robot {robot}'s"
             return (
@@ -58,7 +58,7 @@ def roadmap_cuts(scenario: Scenario, world: World, roadmap: Roadmap) -> str | No
     return None
 
 
-def _free_space_joins(scenario: Scenario, world: World, robot: str, room: str) -> bool:
+def free_space_joins(scenario: Scenario, world: World, robot: str, room: str) -> bool:
     """Is there room for ``robot`` all the way from its start into the room (the free space
     the roadmap samples, tmpnav.roadmap.prm.reachable_free_space)?"""
     from scipy import ndimage

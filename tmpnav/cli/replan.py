@@ -1,0 +1,91 @@
+"""``tmpnav replan``: the plan of the rest of the work, from where the team is (tmpnav/replan/)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+
+from tmpnav.cli.commands import cli, wrote_into
+from tmpnav.cli.options import (
+    SCENARIO_ARG,
+    oracle_options,
+    output_option,
+    plan_options,
+    report_errors,
+    writing,
+)
+from tmpnav.cli.planners import check_planner
+
+
+@cli.command()
+@SCENARIO_ARG
+@click.option(
+    "--plan",
+    "plan_path",
+    required=True,
+    type=click.Path(path_type=Path, dir_okay=False, exists=True),
+    help="The plan.json being executed (of tmpnav plan, or of an earlier tmpnav replan).",
+)
+@click.option(
+    "--state",
+    "state_path",
+    required=True,
+    type=click.Path(path_type=Path, dir_okay=False, exists=True),
+    help="Where the team is (YAML or JSON): time, robots' poses and covariances or status down, rooms visited, "
+    "doors, goals to add or remove (docs/replan.md).",
+)
+@output_option(
+    True,
+    "Directory for the revision's plan.json, plan.png, schedule.png, domain.pddl, problem.pddl (not the --plan's "
+    "own folder).",
+    default_text="write no files",
+)
+@oracle_options
+@report_errors
+def replan(scenario: Path, plan_path: Path, state_path: Path, output: Path | None, **kw: Any) -> None:
+    """Plan the rest of the work from where the team is now.
+
+    Reads the plan being executed and the team's state at TIME (docs/replan.md): each robot
+    starts from its belief then, the goals done are left out, robots that are down leave the
+    team (the others take their goals), doors close or open, goals are added or removed. The rest
+    of the old plan is the search's first incumbent; move costs the change leaves valid come from
+    the cache. The revision's plan.json has the old schema, times from the revision's start, and
+    its number and start time in ``revision``. Goals no robot can reach any more are named one
+    per line (exit code 12); the rest is planned and written.
+    """
+    from tmpnav.pipeline import pddl_texts
+    from tmpnav.replan import replan as run_replan
+    from tmpnav.report.text import plan_summary
+
+    if output is not None and output.resolve() == plan_path.resolve().parent:
+        raise click.BadParameter(
+            f"{output} holds the plan being revised ({plan_path.name}); expected another directory, so that the plan "
+            "stays as it was",
+            param_hint="'-o' / '--output'",
+        )
+    check_planner(scenario, kw["planner_name"])
+    report = run_replan(scenario, plan_path, state_path, plan_options(kw))
+    written: list[Path] = []
+    if output is not None:
+        from tmpnav.report.outputs import write_outputs
+
+        with writing(output):
+            written = write_outputs(report, output, pddl_texts(report), {})
+    revision = report.revision
+    assert revision is not None
+    click.echo(
+        f"revision {revision.number} of {Path(revision.previous).name}, from {revision.start_time:.1f} s: "
+        f"{len(revision.done)} goal rooms done" + (f", down: {', '.join(revision.down)}" if revision.down else "")
+    )
+    click.echo(plan_summary(report))
+    if output is not None:
+        click.echo(wrote_into(output, written))
+    for room, why in revision.unreachable:
+        click.echo(f"error: goal {room} is left out: {why}", err=True)
+    if revision.unreachable:
+        from tmpnav.errors import UNREACHABLE_GOALS
+
+        sys.exit(UNREACHABLE_GOALS)

@@ -1,0 +1,306 @@
+"""A plan revised from where the team is: the scenario of the rest of the work.
+
+Given the scenario, the plan being executed (its plan.json) and the team's state
+(:mod:`tmpnav.replan.state`), :func:`revise` writes the scenario the next plan solves:
+
+- **the robots** start where the state puts them, with its covariance (a robot the state leaves
+  out: its belief in the plan at ``time``, the last control step at or before it; a robot given
+  a pose but no covariance: the plan's covariance then). A robot that is down leaves the team;
+  its own targets go to the others (``goals.visit``), its end is dropped.
+- **the goals** are those not done yet: the rooms visited (the state's ``visited``, or the rooms
+  the plan's schedule had robots arrive in by ``time``) are done, ``goals.remove`` drops rooms,
+  ``goals.add`` adds rooms to visit. A job's window moves with the clock: the revision's clock
+  starts at the plan's ``time`` (plus the plan's own start, for a revision of a revision).
+- **the doors** the state names are opened or closed.
+- a goal **no robot can reach any more** (behind a closed door: free space no longer joins any
+  robot allowed there to it; its window closed; the only robots allowed to do it are down) is
+  named and left out; the rest is planned (the caller exits with its own code).
+- **the incumbent**: the rest of the old plan, each live robot's moves not yet ended in their
+  order, without the rooms now done or removed: the search's warm start.
+
+Bad input (an unknown robot, room or door; a pose inside a wall; a time outside the plan; a
+covariance that is not positive semi-definite; a plan.json of another scenario) is one line
+naming the file and the key (InputError, exit 2).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tmpnav.errors import InputError
+from tmpnav.replan.state import TeamState
+from tmpnav.roadmap.reach import free_space_joins
+from tmpnav.types import Goals, Pose, RobotSpec, Scenario
+from tmpnav.world import World
+
+#: a 3x3 covariance of (x, y, heading)
+Cov3 = tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]
+
+#: seconds by which the state's time may pass the plan's makespan and still count as within it
+TIME_TOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Revision:
+    """What a revised plan is: its number, when its clock starts on the first plan's, and what the
+    state changed (plan.json ``revision``)."""
+
+    number: int
+    start_time: float  # s on the team's clock of the first plan (revision 0)
+    previous: str  # the plan.json it revises
+    done: tuple[str, ...]  # goal rooms done before it
+    down: tuple[str, ...]  # robots out of the team
+    unreachable: tuple[tuple[str, str], ...]  # (room, why) goals no robot can reach any more
+    #: the rest of the old plan: steps of (robot, target) pairs, the search's incumbent
+    incumbent: tuple[tuple[tuple[str, str], ...], ...] = ()
+
+
+def revise(
+    scenario: Scenario, world_of: Any, plan_path: Path, doc: dict[str, Any], state: TeamState
+) -> tuple[Scenario, World, Revision]:
+    """The scenario of the rest of the work, its world (rebuilt by ``world_of`` when doors change)
+    and the revision (see the module docstring)."""
+    _same_scenario(scenario, plan_path, doc)
+    t = state.time
+    makespan = float(doc["schedule"]["makespan"])
+    if not 0.0 <= t <= makespan + TIME_TOL:
+        raise InputError(
+            f"{state.source}: time: {t:g} s is outside the plan ({plan_path.name}: 0 to {makespan:g} s); expected a "
+            "time since the plan's start within its makespan"
+        )
+    names = [r.name for r in scenario.robots]
+    rooms = {r.name for r in scenario.rooms}
+    for name in state.robots:
+        if name not in names:
+            raise InputError(
+                f"{state.source}: robots.{name}: not a robot of scenario {scenario.name!r}; "
+                f"expected one of {', '.join(names)}"
+            )
+    for key, listed in (("visited", state.visited or ()), ("goals.add", state.add), ("goals.remove", state.remove)):
+        for room in listed:
+            if room not in rooms:
+                raise InputError(f"{state.source}: {key}: {room!r} is not a room of scenario {scenario.name!r}")
+    doors = {d.name: d for d in scenario.doors}
+    for name in state.doors:
+        if name not in doors:
+            some = ", ".join(sorted(doors)[:8]) + (", ..." if len(doors) > 8 else "")
+            raise InputError(
+                f"{state.source}: doors.{name}: not a door of scenario {scenario.name!r}"
+                + (f"; expected one of {some}" if doors else "")
+            )
+    down = state.down
+    if len(down) == len(names):
+        raise InputError(f"{state.source}: robots: every robot is down; expected at least one robot to plan for")
+    revised = scenario
+    if state.doors:
+        revised = replace(
+            revised, doors=tuple(replace(d, open=state.doors.get(d.name, d.open)) for d in scenario.doors)
+        )
+    world = world_of(revised) if state.doors else world_of(None)
+    robots = tuple(_robot(spec, doc, state, world) for spec in scenario.robots if spec.name not in down)
+    done = state.visited if state.visited is not None else _arrived(doc, t)
+    offset = float((doc.get("revision") or {}).get("start_time", 0.0)) + t
+    revised = replace(revised, robots=robots)
+    closed_off: tuple[str, ...] = ()
+    if state.doors:  # rooms no robot can get into any more leave the world (the roadmap samples every room)
+        closed_off = tuple(
+            r.name for r in revised.rooms if not any(free_space_joins(revised, world, x.name, r.name) for x in robots)
+        )
+        if closed_off:
+            revised = replace(revised, rooms=tuple(r for r in revised.rooms if r.name not in closed_off))
+            world = world_of(revised)
+    goals, unreachable = _goals(scenario.goals, set(done), state, down, offset)
+    why = "no robot allowed there can reach it (a closed door, or no way through)"
+    unreachable += [(x, why) for x in closed_off if x in goals.all_rooms]
+    goals = _without(goals, set(closed_off))
+    revised = replace(revised, goals=goals)
+    goals, cut = _reachable(revised, world)
+    unreachable += cut
+    if not goals.all_rooms:
+        raise InputError(
+            f"{state.source}: no goal is left to plan"
+            + (f" ({len(unreachable)} no robot can reach any more)" if unreachable else "")
+            + "; expected goals not yet done"
+        )
+    roadmap = replace(revised.roadmap, poses=_poses(revised.roadmap.poses, goals))
+    revised = replace(revised, goals=goals, roadmap=roadmap)
+    number = int((doc.get("revision") or {}).get("number", 0)) + 1
+    incumbent = _rest(doc, t, set(done) | set(state.remove), set(down), goals)
+    revision = Revision(number, offset, str(plan_path), tuple(done), down, tuple(unreachable), incumbent)
+    return revised, world, revision
+
+
+def _same_scenario(scenario: Scenario, plan_path: Path, doc: dict[str, Any]) -> None:
+    """A plan.json of this scenario: its name, its robots, its rooms."""
+    if not isinstance(doc, dict) or not {"scenario", "actions", "schedule", "trajectories"} <= set(doc):
+        raise InputError(f"{plan_path}: not a plan.json of tmpnav plan (no scenario, actions, schedule, trajectories)")
+    name = (doc.get("scenario") or {}).get("name")
+    robots = sorted(doc["trajectories"])
+    rooms = {r.name for r in scenario.rooms} | {f"{r.name}-start" for r in scenario.robots}
+    entered = {m[k] for a in doc["actions"] for m in a["moves"] for k in ("from", "to")}
+    if name != scenario.name or robots != sorted(r.name for r in scenario.robots) or not entered <= rooms:
+        raise InputError(
+            f"{plan_path}: a plan of scenario {name!r} with robots {', '.join(robots)}, not of {scenario.name!r}; "
+            "expected the plan.json that tmpnav plan wrote for this scenario"
+        )
+
+
+def _belief_at(doc: dict[str, Any], robot: str, t: float) -> tuple[tuple[float, ...], Cov3]:
+    """The robot's belief in the plan at ``t``: the last control step at or before it."""
+    steps = doc["trajectories"][robot]
+    step = steps[0]
+    for s in steps:
+        if s["t"] > t + TIME_TOL:
+            break
+        step = s
+    a, b, c = (tuple(float(v) for v in row) for row in step["cov"])
+    return tuple(step["mean"]), ((a[0], a[1], a[2]), (b[0], b[1], b[2]), (c[0], c[1], c[2]))
+
+
+def _robot(spec: RobotSpec, doc: dict[str, Any], state: TeamState, world: World) -> RobotSpec:
+    """The robot's spec with its start where the state (or the plan at ``time``) has it."""
+    given = state.robots.get(spec.name)
+    mean, cov = _belief_at(doc, spec.name, state.time)
+    pose = given.pose if given is not None and given.pose is not None else mean
+    covariance = given.covariance if given is not None and given.covariance is not None else cov
+    x, y, theta = (float(v) for v in pose)
+    if given is not None and given.pose is not None and not bool(world.is_free(np.array([[x, y]]), spec.radius)[0]):
+        raise InputError(
+            f"{state.source}: robots.{spec.name}.pose: a robot of radius {spec.radius:g} m at [{x:g}, {y:g}] is inside "
+            "a wall or an obstacle, or off the map; expected a pose in free space"
+        )
+    return replace(spec, pose=Pose(x, y, math.remainder(theta, 2 * math.pi)), covariance=covariance)
+
+
+def _arrived(doc: dict[str, Any], t: float) -> tuple[str, ...]:
+    """The rooms the plan's schedule has robots arrive in by ``t``."""
+    out = []
+    for entry in doc["schedule"]["robots"].values():
+        out += [m["to"] for m in entry["moves"] if m["end"] <= t + TIME_TOL]
+    return tuple(dict.fromkeys(out))
+
+
+def _goals(
+    goals: Goals, done: set[str], state: TeamState, down: tuple[str, ...], offset: float
+) -> tuple[Goals, list[tuple[str, str]]]:
+    """The goals not done yet (module docstring); the goals left out, with why."""
+    removed = set(state.remove)
+    unreachable: list[tuple[str, str]] = []
+    per_robot: list[tuple[str, tuple[str, ...]]] = []
+    orphaned: list[str] = []
+    for robot, targets in goals.per_robot:
+        left = [x for x in targets if x not in done and x not in removed]
+        if robot in down:
+            orphaned += left  # a down robot's own targets: the others do them
+        elif left:
+            per_robot.append((robot, tuple(left)))
+    visit = [x for x in (*goals.visit, *orphaned, *state.add) if x not in done and x not in removed]
+    ends = tuple((r, x) for r, x in goals.ends if r not in down)
+    jobs = []
+    for job in goals.jobs:
+        allowed = tuple(r for r in job.robots if r not in down)
+        if job.robots and not allowed:
+            unreachable.append((job.room, f"only {', '.join(job.robots)} may do its job, and they are down"))
+            continue
+        window = job.window
+        if window is not None:
+            if window[1] < offset:
+                if job.room in visit or any(job.room in xs for _, xs in per_robot):
+                    unreachable.append((job.room, f"its window closed at {window[1]:g} s"))
+                continue
+            window = (max(0.0, window[0] - offset), window[1] - offset)
+        jobs.append(replace(job, robots=allowed, window=window))
+    gone = {room for room, _ in unreachable}
+    visit = [x for x in dict.fromkeys(visit) if x not in gone]
+    per_robot = [(r, tuple(x for x in xs if x not in gone)) for r, xs in per_robot]
+    kept = set(visit) | {x for _, xs in per_robot for x in xs} | {x for _, x in ends}
+    own = tuple((r, xs) for r, xs in per_robot if xs)
+    return Goals(tuple(visit), own, tuple(j for j in jobs if j.room in kept), ends), unreachable
+
+
+def _without(goals: Goals, rooms: set[str]) -> Goals:
+    """The goals without ``rooms``."""
+    if not rooms:
+        return goals
+    return Goals(
+        tuple(x for x in goals.visit if x not in rooms),
+        tuple((r, tuple(x for x in xs if x not in rooms)) for r, xs in goals.per_robot if set(xs) - rooms),
+        tuple(j for j in goals.jobs if j.room not in rooms),
+        tuple((r, x) for r, x in goals.ends if x not in rooms),
+    )
+
+
+def _reachable(scenario: Scenario, world: World) -> tuple[Goals, list[tuple[str, str]]]:
+    """The goals free space still joins to a robot allowed there; those it does not, with why."""
+    goals = scenario.goals
+    robots = [r.name for r in scenario.robots]
+    cut: list[tuple[str, str]] = []
+
+    def joins(robot: str, room: str) -> bool:
+        return goals.may_visit(robot, room) and free_space_joins(scenario, world, robot, room)
+
+    visit = []
+    for room in goals.visit:
+        if any(joins(r, room) for r in robots):
+            visit.append(room)
+        else:
+            cut.append((room, "no robot allowed there can reach it (a closed door, or no way through)"))
+    per_robot = []
+    for robot, targets in goals.per_robot:
+        kept = []
+        for room in targets:
+            if joins(robot, room):
+                kept.append(room)
+            elif any(joins(r, room) for r in robots):
+                visit.append(room)  # its robot cannot get there any more: another robot may
+            else:
+                cut.append((room, "no robot allowed there can reach it (a closed door, or no way through)"))
+        if kept:
+            per_robot.append((robot, tuple(kept)))
+    ends = []
+    for robot, room in goals.ends:
+        if joins(robot, room):
+            ends.append((robot, room))
+        else:
+            cut.append((room, f"{robot}'s end: it cannot get back there (a closed door, or no way through)"))
+    gone = {room for room, _ in cut}
+    jobs = tuple(j for j in goals.jobs if j.room not in gone)
+    return Goals(tuple(dict.fromkeys(visit)), tuple(per_robot), jobs, tuple(ends)), cut
+
+
+def _poses(poses: tuple[tuple[str, float, float], ...], goals: Goals) -> tuple[tuple[str, float, float], ...]:
+    """The jobs' goal poses the roadmap keeps: those of the goals left."""
+    rooms = {j.room for j in goals.jobs if j.pose is not None}
+    return tuple(p for p in poses if p[0] in rooms)
+
+
+def _rest(
+    doc: dict[str, Any], t: float, gone: set[str], down: set[str], goals: Goals
+) -> tuple[tuple[tuple[str, str], ...], ...]:
+    """The old plan's moves not yet ended, in plan order, as (robot, target) steps, without the
+    rooms done or removed and the robots down."""
+    ended = {
+        (robot, m["step"])
+        for robot, entry in doc["schedule"]["robots"].items()
+        for m in entry["moves"]
+        if m["end"] <= t + TIME_TOL
+    }
+    wanted = set(goals.all_rooms)
+    out = []
+    for action in doc["actions"]:
+        step = tuple(
+            (m["robot"], m["to"])
+            for m in action["moves"]
+            if (m["robot"], action["index"]) not in ended
+            and m["robot"] not in down
+            and m["to"] not in gone
+            and m["to"] in wanted
+        )
+        if step:
+            out.append(step)
+    return tuple(out)
