@@ -190,3 +190,28 @@ def test_the_plans_own_folder_is_not_overwritten(planned: tuple[Path, Path, Path
     proc = replan(planned, tmp_path, "time: 1\n", "-o", planned[1].parent)
     assert proc.returncode == 2 and "holds the plan being revised" in proc.stderr
     assert planned[1].read_bytes() == before
+
+
+@pytest.mark.slow
+def test_a_session_plans_updates_and_names_each_revisions_nav2_files(tmp_path: Path) -> None:
+    """The fleet manager's API: load once, plan, update twice (the second revises the first
+    revision: its time counts from the revision's start), each revision's nav2 files named with
+    its number."""
+    from tmpnav.pipeline import PlanOptions
+    from tmpnav.replan import Session, TeamState, nav2_files
+    from tmpnav.replan.state import RobotState
+
+    scenario = tmp_path / "replan.yaml"
+    scenario.write_text(WORLD.replace("visit: [A, B]", "visit: [A, B, D]"))
+    session = Session(scenario, PlanOptions.of(cache_dir=tmp_path / "cache"))
+    first = session.plan()
+    assert first.revision is None and "r1.moves.yaml" in nav2_files(first)
+    one = session.update(TeamState(tmp_path / "s1", 2.0, robots={"r2": RobotState("r2", down=True)}))
+    assert one.revision is not None and (one.revision.number, one.revision.start_time) == (1, 2.0)
+    assert [r.name for r in one.scenario.robots] == ["r1"]
+    names = set(nav2_files(one))
+    assert "r1.moves.rev1.yaml" in names and "schedule.rev1.yaml" in names and not any("r2" in n for n in names)
+    two = session.update(TeamState(tmp_path / "s2", 1.5))
+    assert two.revision is not None and (two.revision.number, two.revision.start_time) == (2, 3.5)
+    left = {m[2] for step in two.task.steps for m in step}
+    assert left <= {"A", "B", "D"} and not left & set(two.revision.done)

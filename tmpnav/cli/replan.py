@@ -11,6 +11,7 @@ import click
 from tmpnav.cli.commands import cli, wrote_into
 from tmpnav.cli.options import (
     SCENARIO_ARG,
+    option,
     oracle_options,
     output_option,
     plan_options,
@@ -43,9 +44,20 @@ from tmpnav.cli.planners import check_planner
     "own folder).",
     default_text="write no files",
 )
+@option(
+    "--export",
+    "exports",
+    multiple=True,
+    type=click.Choice(["nav2"]),
+    default_text="none",
+    help="Also write the revision for ROS 2 navigation into DIR/nav2/ (needs -o DIR), as tmpnav plan --export "
+    "nav2 does, each file name with the revision's number (r1.moves.rev1.yaml).",
+)
 @oracle_options
 @report_errors
-def replan(scenario: Path, plan_path: Path, state_path: Path, output: Path | None, **kw: Any) -> None:
+def replan(
+    scenario: Path, plan_path: Path, state_path: Path, output: Path | None, exports: tuple[str, ...], **kw: Any
+) -> None:
     """Plan the rest of the work from where the team is now.
 
     Reads the plan being executed and the team's state at TIME (docs/replan.md): each robot
@@ -66,14 +78,18 @@ def replan(scenario: Path, plan_path: Path, state_path: Path, output: Path | Non
             "stays as it was",
             param_hint="'-o' / '--output'",
         )
+    if exports and output is None:
+        raise click.UsageError("--export needs -o DIR: the waypoint files go to DIR/nav2/")
     check_planner(scenario, kw["planner_name"])
     report = run_replan(scenario, plan_path, state_path, plan_options(kw))
     written: list[Path] = []
     if output is not None:
+        from tmpnav.replan import nav2_files
         from tmpnav.report.outputs import write_outputs
 
+        nav2 = {f"nav2/{name}": text for name, text in nav2_files(report).items()} if "nav2" in exports else {}
         with writing(output):
-            written = write_outputs(report, output, pddl_texts(report), {})
+            written = write_outputs(report, output, pddl_texts(report), nav2)
     revision = report.revision
     assert revision is not None
     click.echo(

@@ -19,7 +19,7 @@ from tmpnav.world import World
 if TYPE_CHECKING:
     from tmpnav.pipeline import PlanOptions as Options
 
-__all__ = ["Revision", "TeamState", "read_plan", "read_state", "replan"]
+__all__ = ["Revision", "Session", "TeamState", "nav2_files", "read_plan", "read_state", "replan"]
 
 
 def read_plan(path: Path) -> dict[str, Any]:
@@ -44,16 +44,91 @@ def replan(
     (:func:`tmpnav.replan.revise.revise`) and planned as ``tmpnav plan`` plans, the rest of the
     old plan as the anytime search's incumbent; the report carries the revision."""
     from tmpnav import pipeline
-    from tmpnav.world.build import build
 
     options = options or pipeline.PlanOptions()
     team = state if isinstance(state, TeamState) else read_state(Path(state))
     doc = read_plan(Path(plan_path))
-    scenario, world = pipeline.load_world(scenario_path, options.overrides)
+    loaded = pipeline.load_world(scenario_path, options.overrides)
+    return _revised(scenario_path, loaded, Path(plan_path), doc, team, options)
+
+
+def _revised(
+    scenario_path: str | Path,
+    loaded: tuple[Scenario, World],
+    plan_path: Path,
+    doc: dict[str, Any],
+    team: TeamState,
+    options: Options,
+) -> PlanReport:
+    from tmpnav import pipeline
+    from tmpnav.world.build import build
+
+    scenario, world = loaded
 
     def world_of(revised: Scenario | None) -> World:
         return world if revised is None else build(revised)
 
-    revised, new_world, revision = revise(scenario, world_of, Path(plan_path), doc, team)
+    revised, new_world, revision = revise(scenario, world_of, plan_path, doc, team)
     report = pipeline.plan(scenario_path, options.but(incumbent=revision.incumbent), loaded=(revised, new_world))
     return replace(report, revision=revision)
+
+
+def nav2_files(report: PlanReport) -> dict[str, str]:
+    """The nav2 export of a plan (tmpnav.export.nav2) with the revision's number in every file
+    name (``r1.moves.rev2.yaml``; a first plan's names as ``tmpnav plan --export nav2`` writes
+    them): what a fleet adapter loads for each revision, the robots' interface unchanged."""
+    from tmpnav.export.nav2 import files
+    from tmpnav.report.plan_json import plan_document
+
+    out = files(plan_document(report))
+    if report.revision is None:
+        return out
+    tag = f".rev{report.revision.number}"
+    renamed = {}
+    for name, text in out.items():
+        stem, dot, suffix = name.rpartition(".")
+        renamed[f"{stem}{tag}{dot}{suffix}" if dot else f"{name}{tag}"] = text
+    return renamed
+
+
+class Session:
+    """A fleet manager's planning session: load once, plan, then update with the team's state as
+    it goes and get the next plan. Each update revises the current plan (its state's ``time`` is
+    counted from the current plan's start); the scenario and its world stay loaded, and the cost
+    cache is the options' (a warm cache keeps replans short).
+
+    ::
+
+        session = Session("configs/building-4robots.yaml")
+        first = session.plan()
+        second = session.update(TeamState(Path("state"), time=95.5, doors={"door-B6": False}))
+        files = nav2_files(second)        # r1.moves.rev1.yaml, ...
+    """
+
+    def __init__(self, scenario_path: str | Path, options: Options | None = None):
+        from tmpnav import pipeline
+
+        self.path = scenario_path
+        self.options = options or pipeline.PlanOptions()
+        self.loaded = pipeline.load_world(scenario_path, self.options.overrides)
+        self.current: PlanReport | None = None
+
+    def plan(self) -> PlanReport:
+        """The first plan (revision 0)."""
+        from tmpnav import pipeline
+
+        self.current = pipeline.plan(self.path, self.options, loaded=self.loaded)
+        return self.current
+
+    def update(self, state: TeamState | str | Path) -> PlanReport:
+        """The plan of the rest of the work from ``state`` (a TeamState, or a state file); it
+        becomes the current plan."""
+        from tmpnav.report.plan_json import plan_document
+
+        if self.current is None:
+            raise InputError("the session has no plan yet: call plan() first")
+        team = state if isinstance(state, TeamState) else read_state(Path(state))
+        doc = json.loads(json.dumps(plan_document(self.current)))  # plan.json as a fleet adapter reads it
+        number = self.current.revision.number if self.current.revision is not None else 0
+        self.current = _revised(self.path, self.loaded, Path(f"revision-{number}"), doc, team, self.options)
+        return self.current

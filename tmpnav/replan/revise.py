@@ -93,7 +93,8 @@ def revise(
                 f"{state.source}: doors.{name}: not a door of scenario {scenario.name!r}"
                 + (f"; expected one of {some}" if doors else "")
             )
-    down = state.down
+    # robots down now, and those down before the plan being revised (not in its team)
+    down = tuple(dict.fromkeys((*state.down, *(r for r in names if r not in doc["trajectories"]))))
     if len(down) == len(names):
         raise InputError(f"{state.source}: robots: every robot is down; expected at least one robot to plan for")
     revised = scenario
@@ -143,7 +144,9 @@ def _same_scenario(scenario: Scenario, plan_path: Path, doc: dict[str, Any]) -> 
     robots = sorted(doc["trajectories"])
     rooms = {r.name for r in scenario.rooms} | {f"{r.name}-start" for r in scenario.robots}
     entered = {m[k] for a in doc["actions"] for m in a["moves"] for k in ("from", "to")}
-    if name != scenario.name or robots != sorted(r.name for r in scenario.robots) or not entered <= rooms:
+    # a revision's team: the scenario's robots but those down before it
+    team = sorted(set(r.name for r in scenario.robots) - set((doc.get("revision") or {}).get("down", [])))
+    if name != scenario.name or robots != team or not entered <= rooms:
         raise InputError(
             f"{plan_path}: a plan of scenario {name!r} with robots {', '.join(robots)}, not of {scenario.name!r}; "
             "expected the plan.json that tmpnav plan wrote for this scenario"
