@@ -54,6 +54,7 @@ LAYERS: dict[str, int] = {
     "tmpnav.export": 13,
     "tmpnav.bench.table": 13,  # bench.csv as data, which the report draws
     "tmpnav.report": 14,
+    "tmpnav.replan": 14,  # a plan revised from the team's state: the pipeline on a plan.json document
     # entry points
     "tmpnav.bench": 15,
     "tmpnav.api": 15,

@@ -31,7 +31,6 @@ from tmpnav.types import (
 )
 
 if TYPE_CHECKING:  # annotations only: the world is stage 2, built before this module's values
-    from tmpnav.replan.revise import Revision
     from tmpnav.world import World
 
 #: a JSON value (plan.json, cache entries), as the standard library's ``json`` reads and writes it
@@ -300,6 +299,21 @@ class OracleCounts:
 
     def as_dict(self) -> dict[str, int | bool]:
         return dict(vars(self))
+
+
+@dataclass(frozen=True)
+class Revision:
+    """What a revised plan is: its number, when its clock starts on the first plan's, and what the
+    state changed (plan.json ``revision``)."""
+
+    number: int
+    start_time: float  # s on the team's clock of the first plan (revision 0)
+    previous: str  # the plan.json it revises
+    done: tuple[str, ...]  # goal rooms done before it
+    down: tuple[str, ...]  # robots out of the team
+    unreachable: tuple[tuple[str, str], ...]  # (room, why) goals no robot can reach any more
+    #: the rest of the old plan: steps of (robot, target) pairs, the search's incumbent
+    incumbent: tuple[tuple[tuple[str, str], ...], ...] = ()
 
 
 @dataclass(frozen=True)

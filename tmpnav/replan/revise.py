@@ -26,7 +26,7 @@ naming the file and the key (InputError, exit 2).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +34,7 @@ import numpy as np
 
 from tmpnav.errors import InputError
 from tmpnav.replan.state import TeamState
+from tmpnav.results import Revision
 from tmpnav.roadmap.reach import free_space_joins
 from tmpnav.types import Goals, Pose, RobotSpec, Scenario
 from tmpnav.world import World
@@ -43,21 +44,6 @@ Cov3 = tuple[tuple[float, float, float], tuple[float, float, float], tuple[float
 
 #: seconds by which the state's time may pass the plan's makespan and still count as within it
 TIME_TOL = 1e-6
-
-
-@dataclass(frozen=True)
-class Revision:
-    """What a revised plan is: its number, when its clock starts on the first plan's, and what the
-    state changed (plan.json ``revision``)."""
-
-    number: int
-    start_time: float  # s on the team's clock of the first plan (revision 0)
-    previous: str  # the plan.json it revises
-    done: tuple[str, ...]  # goal rooms done before it
-    down: tuple[str, ...]  # robots out of the team
-    unreachable: tuple[tuple[str, str], ...]  # (room, why) goals no robot can reach any more
-    #: the rest of the old plan: steps of (robot, target) pairs, the search's incumbent
-    incumbent: tuple[tuple[tuple[str, str], ...], ...] = ()
 
 
 def revise(
