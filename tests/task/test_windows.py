@@ -152,3 +152,25 @@ def test_the_anytime_search_never_breaks_a_window_and_mostly_finds_the_optimum()
         assert value >= optimum - 1e-6, seed
         equal += abs(value - optimum) <= 1e-6 * max(1.0, optimum)
     assert equal >= 45, f"{equal} of 50 instances at the exact optimum"  # 49 when written
+
+
+@pytest.mark.slow
+def test_enhsps_problem_holds_the_windows() -> None:
+    """The PDDL text ENHSP solves (tmpnav.task.pddl_text) holds the jobs' windows: grounded moves
+    into rooms with a window, on the team's clock. On 12 of the instances, ENHSP's plan of the
+    whole problem keeps every window, end and goal, and its value is the exact optimum or above."""
+    from tmpnav.task.pddl_text import write_task
+    from tmpnav.task.plans import with_origins
+
+    for seed in range(12):
+        table, goals = instance(seed)
+        task = write_task(table, goals, "mixed", span_weight=SPAN_WEIGHT)
+        assert bool(goals.windows) == ("(windowed " in task.problem) == bool(task.window_actions)
+        steps = task.decode(task.solve("enhsp-blind", 120))
+        plan = with_origins([[(r, t) for r, _, t in step] for step in steps], table.start_location)
+        Rules(table.start_location, goals).check(plan)
+        timed = schedule(plan, table.robots, table_durations(table), goals=goals)
+        assert timed is not None and not timed.late(goals.windows), seed
+        value = TableModel(table, 0.0, goals).plan_cost(plan).value(SPAN_WEIGHT)
+        found = exact_schedule(table, goals, 0.0, SPAN_WEIGHT)
+        assert found is not None and value >= found[1] - 1e-6, seed

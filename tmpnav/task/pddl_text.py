@@ -82,9 +82,10 @@ _CLOCK_FUNCTIONS = """
 _END = "(+ (clock ?r) (duration ?r ?from ?to))"
 
 
-def _move_actions(span_weight: float) -> str:
-    """``goto_room`` (and, with a price on time, ``goto_room_late``: the move that ends after the span)."""
-    if not span_weight:
+def _move_actions(span_weight: float, timed: bool | None = None) -> str:
+    """``goto_room`` (and, with a price on time or jobs' windows (``timed``), ``goto_room_late``:
+    the move that ends after the span)."""
+    if not (span_weight if timed is None else timed):
         return _MOVE.format(name="goto_room", when="", clock="", cost="(move-cost ?r ?from ?to)")
     clock = "\n               (increase (clock ?r) (duration ?r ?from ?to))"
     within = _MOVE.format(
@@ -118,6 +119,8 @@ class PddlTask:
     pair_actions: dict[str, tuple[MoveKey, MoveKey]] = field(default_factory=dict)
     potentials: dict[str, int] = field(default_factory=dict)  # room -> h_x (scaled)
     n_actions: int = 0  # goto_room groundings (moves) plus paired actions
+    #: grounded single moves into rooms with a job's window: action name -> the move
+    window_actions: dict[str, MoveKey] = field(default_factory=dict)
 
     def solve(self, planner: str, timeout: float) -> SolveResult:
         """Run the ENHSP engine ``planner`` on this text (see :func:`tmpnav.task.solve.solve_text`)."""
@@ -141,6 +144,8 @@ class PddlTask:
         name = name.lower()
         if name in self.pair_actions:
             return self.pair_actions[name]
+        if name in self.window_actions:
+            return (self.window_actions[name],)
         if name in ("goto_room", "goto_room_late") and len(params) == 3:
             try:
                 robot = self.names.robot_named(params[0])
@@ -168,6 +173,10 @@ class TextBuilder:
         self.pair_texts: list[str] = []
         self.pair_actions: dict[str, tuple[MoveKey, MoveKey]] = {}
         self.pairs_written = 0  # paired moves written (each is up to four actions)
+        self.windows = goals.windows  # room -> (earliest, latest) arrival, s on the problem's clock
+        # clocks when time has a price, and when a job's window bounds an arrival
+        self.timed = bool(self.span_weight) or bool(self.windows)
+        self.window_actions: dict[str, MoveKey] = {}
 
     def set_move_costs(self, cost: Callable[[MoveKey], int]) -> None:
         self.move_cost = cost
@@ -191,13 +200,20 @@ class TextBuilder:
             adds.append(f"(robot_in {rob[r]} {loc[dest]}) (visited {loc[dest]})")
             if (r, dest) in self.targets:
                 adds.append(f"(visited_by {rob[r]} {loc[dest]})")
-        if not self.span_weight:
+        if not self.timed:
             self._pair_text(name, (m1, m2), pre, [*dels, *adds], str(cost))
             return
         d1, d2 = self._pair_durations(m1, m2)
         for later, (ra, da), (rb, db) in (("a", (m1[0], d1), (m2[0], d2)), ("b", (m2[0], d2), (m1[0], d1))):
             ca, cb, end = f"(clock {rob[ra]})", f"(clock {rob[rb]})", f"(+ (clock {rob[ra]}) {_number(max(d1, d2))})"
             clocks = [f"(>= {ca} {cb})"]
+            # a job's window at a robot's target: the pair arrives within it (a paired move is
+            # not offered to arrive early and wait there: such a plan has single moves)
+            for (_, _, dest), d in ((m1, d1), (m2, d2)):
+                if dest in self.windows:
+                    earliest, latest = self.windows[dest]
+                    arrive = f"(+ {ca} {_number(d - self.goals.service(dest))})"
+                    clocks += [f"(>= {arrive} {_number(earliest)})", f"(<= {arrive} {_number(latest)})"]
             moved = [*dels, *adds, f"(increase {ca} {_number(da)})", f"(assign {cb} (+ {ca} {_number(db)}))"]
             self._pair_text(f"{name}_{later}", (m1, m2), [*pre, *clocks, f"(<= {end} (span))"], moved, str(cost))
             late = f"(+ {cost} (* {_number(self.span_weight)} (- {end} (span))))"
@@ -219,7 +235,7 @@ class TextBuilder:
         return d1, d2
 
     def domain_text(self, name: str) -> str:
-        timed = bool(self.span_weight)
+        timed = self.timed
         head = _DOMAIN_HEAD.format(
             name=f"{name}-domain",
             numeric=" :numeric-fluents" if timed else "",
@@ -227,7 +243,60 @@ class TextBuilder:
             locations=" ".join(self.names.location.values()),
             clock_functions=_CLOCK_FUNCTIONS if timed else "",
         )
-        return head + _move_actions(self.span_weight) + "".join(self.pair_texts) + self._drop_texts() + ")\n"
+        moves = _move_actions(self.span_weight, self.timed)
+        if self.windows:  # the lifted move only into rooms without a window; grounded moves into the others
+            head = head.replace(
+                "(visited_by ?r - robot ?l - location)\n",
+                "(visited_by ?r - robot ?l - location)\n   (windowed ?l - location)\n",
+            )
+            moves = moves.replace("(can_move ?r ?from ?to)", "(can_move ?r ?from ?to) (not (windowed ?to))")
+        return head + moves + "".join(self.pair_texts) + self._window_texts() + self._drop_texts() + ")\n"
+
+    def _window_texts(self) -> str:
+        """The single moves into rooms with a job's window, grounded (their numbers constants):
+        the robot arrives at clock + drive (its move's duration less the room's service) no later
+        than the latest; on time it is free at clock + duration, early (``_early``) it waits
+        there and is free at earliest + service; each within the span and extending it
+        (``_late``, at ``span_weight`` per s), as :func:`_move_actions`."""
+        if not self.windows:
+            return ""
+        rob, loc, out = self.names.robot, self.names.location, []
+        w = _number(self.span_weight)
+        for k, move in enumerate(m for m in self.table.single if m[2] in self.windows):
+            r, origin, dest = move
+            earliest, latest = self.windows[dest]
+            service, d = self.goals.service(dest), self.table.duration.get(move, 0.0)
+            clock = f"(clock {rob[r]})"
+            arrive = f"(+ {clock} {_number(d - service)})"
+            pre = [f"(robot_in {rob[r]} {loc[origin]})"]
+            if (r, dest) in self.targets:
+                pre.append(f"(or (not (visited {loc[dest]})) (not (visited_by {rob[r]} {loc[dest]})))")
+            else:
+                pre.append(f"(not (visited {loc[dest]}))")
+            eff = [f"(not (robot_in {rob[r]} {loc[origin]}))", f"(robot_in {rob[r]} {loc[dest]}) (visited {loc[dest]})"]
+            if (r, dest) in self.targets:
+                eff.append(f"(visited_by {rob[r]} {loc[dest]})")
+            cost = self.move_cost(move)
+            for kind, when, free, clock_effect in (
+                ("", f"(>= {arrive} {_number(earliest)})", f"(+ {clock} {_number(d)})",
+                 f"(increase {clock} {_number(d)})"),
+                ("_early", f"(<= {arrive} {_number(earliest)})", _number(earliest + service),
+                 f"(assign {clock} {_number(earliest + service)})"),
+            ):  # fmt: skip
+                bounds = [when, f"(<= {arrive} {_number(latest)})"]
+                for late in ("", "_late"):
+                    name = f"goto_room_window_{k + 1}{kind}{late}"
+                    if late:
+                        cond, more = f"(>= {free} (span))", [f"(assign (span) {free})"]
+                        price = f"(+ {cost} (* {w} (- {free} (span))))"
+                    else:
+                        cond, more, price = f"(<= {free} (span))", [], str(cost)
+                    out.append(
+                        f" (:action {name}\n  :parameters ()\n  :precondition (and {' '.join([*pre, *bounds, cond])})\n"
+                        f"  :effect (and {' '.join([*eff, clock_effect, *more])} (increase (total-cost) {price})))\n"
+                    )
+                    self.window_actions[name] = move
+        return "".join(out)
 
     def _drop_texts(self) -> str:
         """One action per optional goal of the problem: leave it undone, at its penalty (it then
@@ -244,8 +313,9 @@ class TextBuilder:
     def problem_text(self, name: str, ends: dict[str, str] | None = None, clocks: Clocks | None = None) -> str:
         rob, loc = self.names.robot, self.names.location
         table, init = self.table, []
-        if self.span_weight:
+        if self.timed:
             init += self._clock_facts(clocks or Clocks())
+        init.extend(f"(windowed {loc[x]})" for x in sorted(self.windows) if x in loc)
         for r, where in table.start_location.items():
             init.append(f"(robot_in {rob[r]} {loc[where]}) (visited {loc[where]})")
             if (r, where) in self.goals.marked_at_start(table.start_location):
@@ -324,6 +394,7 @@ def write_task(
         problem=builder.problem_text(pname, ends, clocks),
         names=builder.names,
         pair_actions=builder.pair_actions,
+        window_actions=builder.window_actions,
         potentials=builder.potentials,
         n_actions=len(table.single) + len(set(builder.pair_actions.values())),
     )

@@ -426,7 +426,7 @@ class AnytimeSearch:
         dropped = [x for x in goals.visit if x not in hood.rooms]  # optional goals left undone, to take up
         with self.times.timed("oracle"):
             table = self.model.subtable(opened.head, hood.robots, (*hood.rooms, *dropped, *free), goals)
-            clocks = self._clocks(opened, hood) if self.options.span_weight else None
+            clocks = self._clocks(opened, hood) if self.options.span_weight or self.goals.windows else None
         opts = self.options
         with self.times.timed("encode"):
             task = write_task(table, goals, opts.encoding, "sub", opts.min_gain, hood.ends, opts.span_weight, clocks)
