@@ -59,11 +59,16 @@ demo: $(RUNTIME)
 		echo "$(BIN)/tmpnav plan configs/corridor.yaml -o out/$$first"
 	@$(BIN)/tmpnav plan configs/corridor.yaml -o out/
 
-# pytest's exit code 5 means "no tests collected": not a failure of the suite. Two processes,
-# each running whole test files (a file's tests share their fixtures and their order): the suite
-# takes 11.4 min instead of about 18 on 2 cores (measured 2026-11-24).
+# pytest's exit code 5 means "no tests collected": not a failure of the suite. Three processes,
+# each running whole test files (a file's tests share their fixtures and their order), the
+# longest files first (tests/conftest.py): many tests wait on subprocesses and Java, so three
+# keep 2 cores busier than two. Before them, one small plan compiles the numba kernels once
+# (about 45 s on a fresh clone, a moment after that): each process would compile them again;
+# office-rooms' plan compiles the range sensor's code too.
 test: $(STAMP)
-	$(BIN)/pytest -q -n 2 --dist loadfile; rc=$$?; if [ $$rc -eq 5 ]; then exit 0; fi; exit $$rc
+	@$(BIN)/python -m tmpnav plan configs/two-rooms.yaml -q --no-cache > /dev/null
+	@$(BIN)/python -m tmpnav plan configs/office-rooms.yaml -q --no-cache --anytime-budget 1 > /dev/null
+	$(BIN)/pytest -q -n 3 --dist loadfile; rc=$$?; if [ $$rc -eq 5 ]; then exit 0; fi; exit $$rc
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py --quick

@@ -164,11 +164,19 @@ def test_goals_added_mid_run_and_a_belief_as_amcl_publishes_it(
 def test_bad_state_is_one_line_and_writes_nothing(
     planned: tuple[Path, Path, Path], tmp_path: Path, state: str, fragment: str
 ) -> None:
-    proc = replan(planned, tmp_path, state, "-o", tmp_path / "out")
-    assert proc.returncode == 2, proc.stdout + proc.stderr
-    lines = proc.stderr.strip().splitlines()
+    """In-process (click's runner): every one of these is refused before any planning."""
+    from click.testing import CliRunner
+
+    from tmpnav.cli import cli
+
+    scenario, plan, cache = planned
+    (tmp_path / "state.yaml").write_text(state)
+    args = ["replan", str(scenario), "--plan", str(plan), "--state", str(tmp_path / "state.yaml")]
+    result = CliRunner().invoke(cli, [*args, "--cache-dir", str(cache), "-o", str(tmp_path / "out")])
+    assert result.exit_code == 2, result.output
+    lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0], lines
-    assert "Traceback" not in proc.stderr and not (tmp_path / "out").exists()
+    assert "Traceback" not in result.stderr and not (tmp_path / "out").exists()
 
 
 def test_a_plan_of_another_scenario_is_refused(planned: tuple[Path, Path, Path], tmp_path: Path) -> None:
