@@ -169,7 +169,11 @@ def test_a_planner_crash_in_the_anytime_search_fails_the_run(cache_dir: Path) ->
     every ENHSP search crashing, the corridor's run 'converged' on OR-Tools' first plan, exit 0."""
     env = dict(os.environ, TMPNAV_JAVA_OPTIONS="-XX:+NoSuchJvmOption")
     corridor = ROOT / "configs" / "corridor-2robots.yaml"
-    proc = tmpnav("plan", str(corridor), "--search", "anytime", "--cache-dir", str(cache_dir), "-q", env=env)
+    # a budget the costs cannot use up on a loaded machine: the search must reach its sub-problems
+    proc = tmpnav(
+        "plan", str(corridor), "--search", "anytime", "--anytime-budget", "120", "--cache-dir", str(cache_dir), "-q",
+        env=env,
+    )  # fmt: skip
     assert_clean_failure(proc, PlannerCrashError.exit_code, "failed with status")
 
 

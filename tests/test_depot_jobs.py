@@ -23,7 +23,7 @@ def plan(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     tmp = tmp_path_factory.mktemp("depot")
     out = tmp / "out"
     proc = subprocess.run(
-        [sys.executable, "-m", "tmpnav", "plan", "configs/depot-jobs.yaml", "-q",
+        [sys.executable, "-m", "tmpnav", "plan", "configs/depot-jobs.yaml", "-q", "--anytime-budget", "4",
          "--cache-dir", str(tmp / "cache"), "-o", str(out)],
         capture_output=True, text=True, cwd=ROOT, timeout=900,
     )  # fmt: skip

@@ -138,11 +138,11 @@ def _anytime(seed: int) -> tuple[int, float, float, Plan]:
 
 @pytest.mark.slow
 def test_the_anytime_search_never_breaks_a_window_and_mostly_finds_the_optimum() -> None:
-    """The same 50 instances through the anytime search (OR-Tools' first plan with its time
+    """The first 25 instances through the anytime search (OR-Tools' first plan with its time
     windows, ENHSP's sub-problems, every plan priced on the clock with its windows): every plan
     it returns keeps every window, every end and every goal, and most reach the exact optimum."""
     with ThreadPoolExecutor(max_workers=2) as pool:  # each search waits on ENHSP processes
-        outcomes = list(pool.map(_anytime, range(50)))
+        outcomes = list(pool.map(_anytime, range(25)))
     equal = 0
     for seed, value, optimum, plan in outcomes:
         table, goals = instance(seed)
@@ -151,7 +151,7 @@ def test_the_anytime_search_never_breaks_a_window_and_mostly_finds_the_optimum()
         assert timed is not None and not timed.late(goals.windows), seed
         assert value >= optimum - 1e-6, seed
         equal += abs(value - optimum) <= 1e-6 * max(1.0, optimum)
-    assert equal >= 45, f"{equal} of 50 instances at the exact optimum"  # 49 when written
+    assert equal >= 22, f"{equal} of 25 instances at the exact optimum"  # 25 when written (49 of 50)
 
 
 @pytest.mark.slow
