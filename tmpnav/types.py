@@ -357,6 +357,12 @@ class Goals:
         service = self.service(room)
         return math.ceil(service / dt - 1e-9) if service > 0 else 0
 
+    def opens_steps(self, room: str, arrive: int, dt: float) -> int:
+        """Control steps of ``dt`` s a robot that arrives at ``room`` at step ``arrive`` waits
+        there for the job's window to open (0 without one): for the team's clock and the simulator."""
+        window = self.window(room)
+        return 0 if window is None else max(0, math.ceil(window[0] / dt - 1e-9) - arrive)
+
     @property
     def all_rooms(self) -> tuple[str, ...]:
         """Every room a plan enters: the rooms to visit, the robots' targets and ends."""

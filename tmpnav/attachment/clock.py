@@ -41,7 +41,6 @@ and :meth:`TeamClock.advance` return new ones, so the exact search can branch fr
 from __future__ import annotations
 
 import heapq
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
@@ -305,10 +304,7 @@ class TeamClock:
     def opens_steps(self, room: str, arrive: int) -> int:
         """Control steps a robot that arrives at ``room`` at step ``arrive`` waits there for the
         job's window to open (0 without one)."""
-        window = self.scenario.goals.window(room)
-        if window is None:
-            return 0
-        return max(0, math.ceil(window[0] / self.dt - 1e-9) - arrive)
+        return self.scenario.goals.opens_steps(room, arrive, self.dt)
 
     def service_steps(self, room: str) -> int:
         """Control steps a robot stands at ``room`` after it arrives, for the room's job: its

@@ -251,8 +251,7 @@ class Session:
         dt = self.dt
         goals = self.scenario.goals
         # it waits at the station for the job's window to open, then stands there for the service
-        window = goals.window(m.target)
-        opens = max(0, math.ceil(window[0] / dt - 1e-9) - self.step) if window is not None else 0
+        opens = goals.opens_steps(m.target, self.step, dt)
         stand = goals.service_steps(m.target, dt)
         self.trace.moves.append(
             TimedMove(
