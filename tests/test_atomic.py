@@ -97,6 +97,47 @@ def test_an_error_while_staging_names_the_target(tmp_path: Path, monkeypatch: py
     assert names(tmp_path) == []
 
 
+@pytest.fixture
+def ctrl_c(monkeypatch: pytest.MonkeyPatch) -> None:
+    """tmpnav's Ctrl-C handler for one test (and a clean record of signals after it)."""
+    from tmpnav import lifetime
+
+    monkeypatch.setattr(lifetime, "_signalled", None)
+    monkeypatch.setattr(lifetime, "_deferred", False)
+    previous = signal.signal(signal.SIGINT, lifetime._raise_interrupted)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+@pytest.mark.parametrize("when", ["temporary file made", "first rename done"])
+def test_ctrl_c_at_any_instant_of_a_write_leaves_the_earlier_files_and_no_temporary_one(
+    when: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, ctrl_c: None
+) -> None:
+    """A real SIGINT right after a temporary file is created (before it was recorded, it
+    leaked: a Ctrl-C'd plan left ``.plan.png.tmpnav-*.tmp``) and between two renames."""
+    for name in ("a.txt", "b.txt"):
+        (tmp_path / name).write_text(f"old {name}")
+    made, replace = atomic._temporary, os.replace
+
+    def temporary(target: Path, kind: str) -> Path:
+        path = made(target, kind)
+        if when == "temporary file made" and kind == "tmp" and target.name == "b.txt":
+            os.kill(os.getpid(), signal.SIGINT)
+        return path
+
+    def rename(src: str | os.PathLike[str], dst: str | os.PathLike[str]) -> None:
+        replace(src, dst)
+        if when == "first rename done" and Path(dst).name == "a.txt" and Path(src).suffix == ".tmp":
+            os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(atomic, "_temporary", temporary)
+    monkeypatch.setattr(atomic.os, "replace", rename)
+    with pytest.raises(KeyboardInterrupt):
+        write_files(tmp_path, {"a.txt": "new", "b.txt": "new", "c.txt": "new"})
+    assert names(tmp_path) == ["a.txt", "b.txt"]
+    assert [(tmp_path / n).read_text() for n in ("a.txt", "b.txt")] == ["old a.txt", "old b.txt"]
+
+
 def dead_pid() -> int:
     proc = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
     return int(proc.stdout)

@@ -27,7 +27,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 
-from tmpnav.lifetime import check_signals
+from tmpnav.lifetime import check_signals, signals_held
 
 #: what a file is written from: its text (UTF-8), its bytes, or a function that writes it
 #: to the path it is given (a figure's ``savefig``)
@@ -54,8 +54,9 @@ def write_files(directory: Path, contents: Mapping[str, Content]) -> list[Path]:
             created += _make_folder(folder)
             remove_stale(folder)
         for target, content in zip(targets, contents.values(), strict=True):
-            tmp = _temporary(target, "tmp")
-            staged.append((tmp, target))
+            with signals_held():  # created and recorded as one step: an interrupt between leaked it
+                tmp = _temporary(target, "tmp")
+                staged.append((tmp, target))
             try:
                 _stage(tmp, content)
             except OSError as err:
@@ -166,27 +167,35 @@ def _stage(tmp: Path, content: Content) -> None:
 
 
 def _commit(staged: list[tuple[Path, Path]]) -> None:
-    """Rename every temporary file over its target; on a failure, put the earlier files back."""
+    """Rename every temporary file over its target; on a failure, put the earlier files back.
+
+    Ctrl-C and SIGTERM are held during the renames (a rename and its record are one step) and
+    during a put-back; one that came during the renames is raised when they end, and puts the
+    earlier files back too: an interrupted run keeps them."""
     replaced: list[tuple[Path, Path | None]] = []  # (target, its earlier content or None)
     try:
-        for tmp, target in staged:
-            backup = _keep(target)
-            try:
-                os.replace(tmp, target)
-            except OSError as err:
-                _discard([backup] if backup is not None else [])
-                raise _about(err, target) from None
-            replaced.append((target, backup))
+        with signals_held():
+            for tmp, target in staged:
+                backup = _keep(target)
+                replaced.append((target, backup))
+                try:
+                    os.replace(tmp, target)
+                except OSError as err:
+                    replaced.pop()
+                    _discard([backup] if backup is not None else [])
+                    raise _about(err, target) from None
     except BaseException:
-        for target, backup in reversed(replaced):
-            with contextlib.suppress(OSError):
-                if backup is None:
-                    target.unlink()
-                else:
-                    os.replace(backup, target)
+        with signals_held():
+            for target, backup in reversed(replaced):
+                with contextlib.suppress(OSError):
+                    if backup is None:
+                        target.unlink()
+                    else:
+                        os.replace(backup, target)
         raise
     finally:
-        _discard(backup for _, backup in replaced if backup is not None)
+        with signals_held():
+            _discard(backup for _, backup in replaced if backup is not None)
 
 
 def _keep(target: Path) -> Path | None:

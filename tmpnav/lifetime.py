@@ -136,6 +136,9 @@ def signalled() -> signal.Signals | None:
 def check_signals() -> None:
     """Raise the exception of a signal that arrived, in case the code that was running when
     it did swallowed it (see the module docstring); nothing when no signal came."""
+    global _deferred
+    if _signalled is not None:
+        _deferred = False  # raised here: the end of a held block need not raise it again
     if _signalled == signal.SIGINT:
         raise KeyboardInterrupt
     if _signalled == signal.SIGTERM:
