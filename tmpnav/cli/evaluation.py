@@ -31,12 +31,28 @@ from tmpnav.cli.planners import check_planner
 @option(
     "--sessions",
     type=click.IntRange(min=1),
-    default=25,
-    show_default=True,
+    default=None,
+    default_text="25; 5 with --events",
     help="Simulated executions of the plan, each with its own noise.",
 )
 @option("--seed", type=int, default=0, show_default=True, help="Seed of the simulated noise.")
-@output_option(True, "Directory for errors.csv, sessions.csv, errors.png, summary.md.", default_text="write no files")
+@option(
+    "--events",
+    "events_path",
+    type=click.Path(path_type=Path, dir_okay=False),
+    default=None,
+    default_text="the plan executed as planned",
+    metavar="EVENTS",
+    help="Close the loop: a YAML file of what happens while the team works (robots stopped, slowed or "
+    "down, doors closed, goals added; docs/replan.md). The team replans at each change and when a robot "
+    "runs late; each session is also executed blind and with a plan that knew the events.",
+)
+@output_option(
+    True,
+    "Directory for errors.csv, sessions.csv, errors.png, summary.md (with --events: loop.csv, replans.csv, "
+    "loop.json, summary.md).",
+    default_text="write no files",
+)
 @click.option(
     "--replan",
     is_flag=True,
@@ -44,7 +60,9 @@ from tmpnav.cli.planners import check_planner
 )
 @oracle_options(mutual=False)
 @report_errors
-def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw: Any) -> None:
+def simulate(
+    scenario: Path, sessions: int | None, seed: int, events_path: Path | None, output: Path | None, **kw: Any
+) -> None:
     """Simulate the plan, with and without mutual observations.
 
     Each session samples the true initial poses from the initial beliefs; then every robot
@@ -55,11 +73,20 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
     draws. Prints the worst-case position error per robot and its reduction, the
     makespan executed against the planned one, and the executions in which a true pose hit
     a wall or two robots touched, with 95% Clopper-Pearson intervals.
+
+    With --events the loop is closed: the team replans from its beliefs at each event that
+    changes the problem and when a robot is late, and the summary gives each mode's goals
+    done, dropped and lost, executed makespan and cost, next to the plan run blind and to a
+    plan made knowing the events.
     """
     from tmpnav.execution import error_summary, execute
     from tmpnav.pipeline import plan as run_plan
 
     check_planner(scenario, kw["planner_name"])
+    if events_path is not None:
+        _closed_loop(scenario, events_path, sessions or 5, seed, output, kw)
+        return
+    sessions = sessions or 25
     report = run_plan(scenario, plan_options(kw))
     result = execute(report, sessions, seed, kw["workers"])
     lines = error_summary(result, sessions)
@@ -68,6 +95,37 @@ def simulate(scenario: Path, sessions: int, seed: int, output: Path | None, **kw
 
         with writing(output):
             written = write_execution_outputs(report, result, sessions, output)
+        lines += [f"wrote {path}" for path in written]
+    click.echo("\n".join(lines))
+
+
+def _closed_loop(scenario: Path, events_path: Path, sessions: int, seed: int, output: Path | None, kw: Any) -> None:
+    """``tmpnav simulate --events``: the closed loop (tmpnav.replan.loop)."""
+    import json
+
+    from tmpnav.pipeline import load_world
+    from tmpnav.replan.events import read_events
+    from tmpnav.replan.loop import closed_loop, document, replans_csv, runs_csv, summary
+
+    options = plan_options(kw)
+    loaded, _ = load_world(scenario, options.overrides)
+    events = read_events(events_path, loaded)
+    quiet = kw.get("quiet", False)
+    result = closed_loop(
+        scenario, events, sessions, seed, options, None if quiet else lambda m: click.echo(m, err=True)
+    )
+    lines = summary(result)
+    if output is not None:
+        from tmpnav.atomic import write_files
+
+        contents = {
+            "loop.csv": runs_csv(result),
+            "replans.csv": replans_csv(result),
+            "loop.json": json.dumps(document(result), indent=1) + "\n",
+            "summary.md": "\n".join(lines) + "\n",
+        }
+        with writing(output):
+            written = write_files(output, contents)
         lines += [f"wrote {path}" for path in written]
     click.echo("\n".join(lines))
 

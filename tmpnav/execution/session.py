@@ -33,8 +33,8 @@ observation noise are indexed by robot and control step), so their comparison is
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -79,6 +79,14 @@ class SessionTrace:
     #: first) -> control steps its true pose hit a wall / touched another robot's
     move_hits: dict[tuple[str, int], int] = field(default_factory=dict)
     move_contacts: dict[tuple[str, int], int] = field(default_factory=dict)
+    #: robot -> the cost terms as executed (docs/models.md): c_u = sum (v² + omega²) dt of the
+    #: commands, c_Sigma = sum trace(Sigma) dt of the filter's covariance while it drives, c_G the
+    #: distances between the estimate and the path's end at the end of each move
+    c_u: dict[str, float] = field(default_factory=dict)
+    c_sigma: dict[str, float] = field(default_factory=dict)
+    c_goal: dict[str, float] = field(default_factory=dict)
+    #: the moves of ``moves`` that were cut (out of budget or of draws): they never reached their room
+    cut: list[TimedMove] = field(default_factory=list)
 
     def schedule(self, robots: tuple[str, ...]) -> Schedule:
         """The moves as executed, in plan order: a schedule like the plan's."""
@@ -148,6 +156,8 @@ class Session:
         mutual: bool,
     ):
         self.scenario, self.world, self.draws, self.vis, self.mutual = scenario, world, draws, vis, mutual
+        self.base = world  # the world the session started in (a closed loop may close doors)
+        self.barriers: np.ndarray | None = None  # (k, 2) m: the centres of the cells closed since
         self.names = tuple(r.name for r in scenario.robots)
         self.robots = [_Robot(queues.get(r, ())) for r in self.names]
         self.dt = scenario.models.dt
@@ -163,6 +173,12 @@ class Session:
         self.trace.nees_sum = dict.fromkeys(self.names, 0.0)
         self.trace.nees_steps = dict.fromkeys(self.names, 0)
         self.trace.beams = {r: [0, 0] for r in self.names}
+        for terms in (self.trace.c_u, self.trace.c_sigma, self.trace.c_goal):
+            terms.update(dict.fromkeys(self.names, 0.0))
+        #: the robots' speed now, as a share of their commands (0: stopped; set by a closed loop's events)
+        self.speed = np.ones(len(self.names))
+        #: robots that are down: they stand where they are for the rest of the session
+        self.down: set[int] = set()
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -193,9 +209,17 @@ class Session:
 
     # ------------------------------------------------------------------ the run
 
-    def run(self) -> SessionTrace:
-        """Execute the schedule until every robot has made all its moves (or the draws run out)."""
+    def run(self, pause: Callable[[], bool] | None = None) -> SessionTrace:
+        """Execute the schedule until every robot has made all its moves (or the draws run out).
+
+        ``pause``, when given, is asked at each control step once the robots have reached their
+        waypoints and before any move starts: True returns at once, and a later ``run`` goes on
+        from there (a closed loop changes the team's speed, moves or world in between)."""
         while True:
+            if pause is not None:
+                self._arrive()
+                if pause():
+                    return self.trace
             self._arrive_and_start()
             if all(r.move is None and r.next is None for r in self.robots):
                 break
@@ -204,16 +228,72 @@ class Session:
                 break
             if not any(r.move is not None for r in self.robots):
                 self._check_waiting()
+                if all(r.move is None and r.next is None for r in self.robots):
+                    break
             u = np.zeros((len(self.names), 2))
             for i, r in enumerate(self.robots):
                 if r.waypoints:
                     spec = self.scenario.robots[i]
-                    u[i] = control(self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt)
+                    u[i] = self.speed[i] * control(
+                        self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt
+                    )
+                    if self.speed[i] == 0.0:
+                        r.since += 1  # a stopped robot's move does not use up its budget
             self._move(u)
             self._observe()
             self._collide()
+            self._add_costs(u)
             self.step += 1
         return self.trace
+
+    @property
+    def finished(self) -> bool:
+        """Every robot has made all its moves (or was cut)."""
+        return all(r.move is None and r.next is None for r in self.robots)
+
+    def adopt(self, moves: Mapping[str, tuple[QueuedMove, ...]]) -> None:
+        """Go on with new queues (a revised plan, its clock starting now): a move under way is
+        dropped where the robot is (the new plan starts there), a robot at a station ends its
+        service first, a robot down gets none."""
+        for i, (name, r) in enumerate(zip(self.names, self.robots, strict=True)):
+            queue = () if i in self.down else moves.get(name, ())
+            shifted = tuple(replace(m, start=m.start + self.step) for m in queue)
+            self.robots[i] = _Robot(shifted, ready=max(r.ready, self.step))
+
+    def set_down(self, robot: str) -> None:
+        """The robot is down from now: its move under way and its queue are dropped."""
+        i = self.names.index(robot)
+        self.down.add(i)
+        r = self.robots[i]
+        if r.move is not None:
+            self._cut(robot, len(r.waypoints))
+        self.robots[i] = _Robot((), started=0, ready=self.step)
+        self.speed[i] = 0.0
+
+    def set_world(self, world: World, vis: LandmarkVisibility) -> None:
+        """The world changed (a door closed): the true robots, their scans and sightings see the new
+        one, and a closed door stops a robot that drives into it (:meth:`_move`)."""
+        self.world, self.vis = world, vis
+        added = world.grid.occupied & ~self.base.grid.occupied  # the closed doors' cells
+        xs, ys = world.grid.cell_centers()
+        rows, cols = np.nonzero(added)
+        self.barriers = np.column_stack([xs[cols], ys[rows]]) if added.shape == self.base.grid.occupied.shape else None
+        sensor = self.scenario.models.range_sensor
+        self.scans = ScanSimulator(world, sensor) if sensor is not None else None
+
+    def _add_costs(self, u: np.ndarray) -> None:
+        """The executed cost terms of this step (SessionTrace.c_u, c_sigma)."""
+        for i, (name, r) in enumerate(zip(self.names, self.robots, strict=True)):
+            if r.waypoints:
+                self.trace.c_u[name] += float(u[i] @ u[i]) * self.dt
+                block = slice(3 * i, 3 * i + 3)
+                self.trace.c_sigma[name] += float(np.trace(self.belief.cov[block, block])) * self.dt
+
+    def _arrive(self) -> None:
+        """The waypoints reached now, and the moves ended by them."""
+        for i, r in enumerate(self.robots):
+            if r.move is not None:
+                self._advance(i, r)
 
     def _arrive_and_start(self) -> None:
         """Waypoints reached, moves ended, then moves started (a move that starts where it ends
@@ -241,11 +321,13 @@ class Session:
         if r.waypoints and self.step - r.since >= STEP_BUDGET * max(r.move.steps, 40 * (len(r.move.nodes) - 1)):
             self._cut(name, len(r.waypoints))
             r.waypoints = []
-        if not r.waypoints:
+            self._end(r, cut=True)
+        if not r.waypoints and r.move is not None:
             self._end(r)
 
-    def _end(self, r: _Robot) -> None:
-        """Robot r ends its move now: record it as executed; the robot is ready for its next."""
+    def _end(self, r: _Robot, cut: bool = False) -> None:
+        """Robot r ends its move now: record it as executed (``cut``: short of its room); the robot
+        is ready for its next."""
         m = r.move
         assert m is not None
         dt = self.dt
@@ -253,21 +335,25 @@ class Session:
         # it waits at the station for the job's window to open, then stands there for the service
         opens = goals.opens_steps(m.target, self.step, dt)
         stand = goals.service_steps(m.target, dt)
-        self.trace.moves.append(
-            TimedMove(
-                m.step,
-                m.robot,
-                m.origin,
-                m.target,
-                m.partner,
-                r.ready * dt,
-                r.since * dt,
-                self.step * dt,
-                stand * dt,
-                opens * dt,
-            )
+        executed = TimedMove(
+            m.step,
+            m.robot,
+            m.origin,
+            m.target,
+            m.partner,
+            r.ready * dt,
+            r.since * dt,
+            self.step * dt,
+            stand * dt,
+            opens * dt,
         )
+        self.trace.moves.append(executed)
+        if cut:
+            self.trace.cut.append(executed)
         r.move, r.ready = None, self.step + opens + stand
+        if len(m.points):
+            i = self.names.index(m.robot)
+            self.trace.c_goal[m.robot] += float(np.hypot(*(self.estimate(i)[:2] - m.points[-1])))
 
     def _start_moves(self) -> bool:
         """Start every move whose robots are free and whose planned start has come; whether any did."""
@@ -304,7 +390,7 @@ class Session:
             if r.move is not None:
                 self._cut(name, len(r.waypoints))
                 r.waypoints = []
-                self._end(r)
+                self._end(r, cut=True)
             for m in r.queue[r.started :]:
                 self._cut(name, len(m.waypoints))
             r.started = len(r.queue)
@@ -313,6 +399,13 @@ class Session:
         """Nobody drives: some robot must be waiting for a planned start still to come, else the
         schedule cannot go on (a paired move whose partner waits for another one)."""
         if any(r.next is not None and r.next.start > self.step for r in self.robots):
+            return
+        if self.down:  # robots waiting for a partner that is down wait for ever: their moves are cut
+            for i, r in enumerate(self.robots):
+                if r.next is not None:
+                    for left in r.queue[r.started :]:
+                        self._cut(self.names[i], len(left.waypoints))
+                    r.started = len(r.queue)
             return
         stuck = ", ".join(
             f"{m.robot} at step {m.step + 1} waits for {m.partner}" for r in self.robots if (m := r.next) is not None
@@ -328,8 +421,18 @@ class Session:
         for i in range(len(self.names)):
             W = motion_noise_cov(u[i], models.motion_noise)
             noisy = u[i] + np.sqrt(np.diag(W)) * self.draws.motion[i, self.step]
-            self.truth[i] = motion(self.truth[i], noisy, models.dt)
+            moved = motion(self.truth[i], noisy, models.dt)
+            if self.world is self.base or not self._closed_in_way(moved[:2], self.radii[i]):
+                self.truth[i] = moved
         self.belief = ekf.predict(self.belief, u, models.dt, models.motion_noise)
+
+    def _closed_in_way(self, xy: np.ndarray, radius: float) -> bool:
+        """Whether a robot at ``xy`` would touch a cell the world has now and had not at the start (a
+        closed door): such a robot stands where it is, blocked. Every other wall a true pose reaches
+        is counted as a hit (:meth:`_collide`) and passed, as the collision bound assumes."""
+        if self.barriers is None or not len(self.barriers):
+            return False
+        return bool(np.min(np.hypot(*(self.barriers - xy).T)) < radius)
 
     def _observe(self) -> None:
         """Every robot's landmark observations, then (config 1) every pair's mutual observations."""

@@ -59,6 +59,8 @@ def _revised(
     doc: dict[str, Any],
     team: TeamState,
     options: Options,
+    incumbent: tuple[tuple[tuple[str, str], ...], ...] | None = None,
+    within: bool = True,
 ) -> PlanReport:
     from tmpnav import pipeline
     from tmpnav.world.build import build
@@ -68,7 +70,11 @@ def _revised(
     def world_of(revised: Scenario | None) -> World:
         return world if revised is None else build(revised)
 
-    revised, new_world, revision = revise(scenario, world_of, plan_path, doc, team)
+    revised, new_world, revision = revise(scenario, world_of, plan_path, doc, team, within)
+    if incumbent is not None:  # the caller knows the rest of the work better than the plan's clock
+        wanted, live = set(revised.goals.all_rooms), {r.name for r in revised.robots}
+        kept = (tuple((r, x) for r, x in step if x in wanted and r in live) for step in incumbent)
+        revision = replace(revision, incumbent=tuple(step for step in kept if step))
     report = pipeline.plan(scenario_path, options.but(incumbent=revision.incumbent), loaded=(revised, new_world))
     return replace(report, revision=revision)
 

@@ -46,14 +46,19 @@ Cov3 = tuple[tuple[float, float, float], tuple[float, float, float], tuple[float
 TIME_TOL = 1e-6
 
 
+class NothingLeft(InputError):
+    """The state leaves no goal to plan (every one done, removed or out of reach)."""
+
+
 def revise(
-    scenario: Scenario, world_of: Any, plan_path: Path, doc: dict[str, Any], state: TeamState
+    scenario: Scenario, world_of: Any, plan_path: Path, doc: dict[str, Any], state: TeamState, within: bool = True
 ) -> tuple[Scenario, World, Revision]:
     """The scenario of the rest of the work, its world (rebuilt by ``world_of`` when doors change)
-    and the revision (see the module docstring)."""
+    and the revision (see the module docstring). ``within=False`` lets the state's time pass the
+    plan's makespan (a simulated team running late, tmpnav.replan.loop)."""
     _same_scenario(scenario, plan_path, doc)
     t = state.time
-    makespan = float(doc["schedule"]["makespan"])
+    makespan = float(doc["schedule"]["makespan"]) if within else math.inf
     if not 0.0 <= t <= makespan + TIME_TOL:
         raise InputError(
             f"{state.source}: time: {t:g} s is outside the plan ({plan_path.name}: 0 to {makespan:g} s); expected a "
@@ -109,7 +114,7 @@ def revise(
     goals, cut = _reachable(revised, world)
     unreachable += cut
     if not goals.all_rooms:
-        raise InputError(
+        raise NothingLeft(
             f"{state.source}: no goal is left to plan"
             + (f" ({len(unreachable)} no robot can reach any more)" if unreachable else "")
             + "; expected goals not yet done"

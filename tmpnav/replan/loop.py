@@ -1,0 +1,582 @@
+"""The closed loop of ``tmpnav simulate --events`` (docs/replan.md, "Closed loop").
+
+The team executes its plan as ``tmpnav simulate`` does (:class:`tmpnav.execution.Session`: true
+poses, noisy controls and sensors, the joint EKF with mutual observations), and the world
+changes under it as the EVENTS file says (:mod:`tmpnav.replan.events`): a robot stops or slows
+for a while, a robot goes down, a door closes, goals arrive or are cancelled. The team replans
+(:func:`tmpnav.replan._revised`, what ``tmpnav replan`` runs) from its state at that instant:
+
+- at every event that changes the problem (a robot down, a door, goals);
+- when a robot falls behind its plan by more than ``late`` s (its move under way should have
+  ended, or its next move should have started, that long ago): how a stop or a slowdown shows.
+  Lateness is the trigger, not a distance of the beliefs: the planned beliefs are those of the
+  plan's own paths, and the executing filter's agree with them (NEES near 2, ``tmpnav simulate``),
+  while a robot that is held up is late whatever its belief.
+
+Each robot's state is its filter's estimate and covariance (its block of the joint belief); the
+rooms done are those the session's moves ended in; the rest of the queues, in plan order, is the
+search's incumbent. The simulated clock stands still while the team replans; each replan's
+wall-clock latency is recorded. The new plan's moves go on from where the robots are.
+
+Every session is also executed two other ways, on the same random draws:
+
+- **blind**: the first plan, never revised, with the same events (a robot down stays down, a
+  closed door stays closed; added goals are never done);
+- **knowing the events**: a plan made at the start with every event's change of the problem
+  known (the doors as they end up, the goals added and removed, the robots that go down left out
+  of the team from the start), executed with the same stops and slowdowns. Its executed
+  makespan is the reference of the closed loop's.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from tmpnav.errors import TmpnavError
+from tmpnav.execution import STEP_BUDGET, Draws, QueuedMove, Session, queues
+from tmpnav.replan.events import Event, Events
+from tmpnav.replan.revise import NothingLeft
+from tmpnav.replan.state import RobotState, TeamState
+from tmpnav.results import PlanReport
+from tmpnav.types import Scenario
+from tmpnav.world import World
+from tmpnav.world.visibility import LandmarkVisibility
+
+if TYPE_CHECKING:
+    from tmpnav.pipeline import PlanOptions
+
+#: the three ways each session is executed
+MODES = ("closed loop", "blind", "knowing the events")
+#: replans one session may make at most (a robot stuck for ever would otherwise replan every ``late`` s)
+MAX_REPLANS = 20
+#: m: how far from its estimate a robot's start may be put to find free space for a replan
+NUDGE = 0.6
+
+
+@dataclass(frozen=True)
+class Replan:
+    """One replan of a session: when, why, how long it took, what came of it."""
+
+    session: int
+    time: float  # s on the team's clock
+    reason: str
+    latency: float  # s of wall-clock time
+    outcome: str  # "planned", "nothing left", or "failed: <why>"
+    unreachable: tuple[str, ...] = ()
+
+
+@dataclass
+class Run:
+    """One session executed one way (:data:`MODES`)."""
+
+    mode: str
+    session: int
+    goals: tuple[str, ...]  # the goal rooms to do: the scenario's, added, not removed
+    done: tuple[str, ...]  # goal rooms a move ended in, in order
+    twice: tuple[str, ...]  # goal rooms more than one move ended in
+    dropped: tuple[str, ...]  # goals the replans named as out of reach, or a down robot's end
+    makespan: float  # s: when the last robot was done
+    cost: float  # M_u c_u + M_G c_G + M_Sigma c_Sigma as executed (docs/models.md)
+    wall_hits: int  # control steps with a true pose in a wall (all robots)
+    contacts: int  # control steps with two robots touching
+    replans: list[Replan] = field(default_factory=list)
+
+    @property
+    def lost(self) -> tuple[str, ...]:
+        """Goals neither done nor dropped."""
+        return tuple(x for x in self.goals if x not in self.done and x not in self.dropped)
+
+
+@dataclass
+class LoopResult:
+    """Every session in the three modes, and the plans they started from."""
+
+    events: Events
+    planned: PlanReport  # the first plan
+    informed: PlanReport | None  # the plan knowing the events (None when it could not be made)
+    informed_error: str
+    runs: dict[str, list[Run]]
+
+
+@dataclass
+class _Context:
+    """What the sessions share: the scenario loaded once, its worlds by door states, the options."""
+
+    path: str | Path
+    loaded: tuple[Scenario, World]
+    options: PlanOptions
+    events: Events
+    seed: int
+    worlds: dict[tuple[tuple[str, bool], ...], tuple[World, LandmarkVisibility]] = field(default_factory=dict)
+
+    @property
+    def scenario(self) -> Scenario:
+        return self.loaded[0]
+
+    def world(self, doors: dict[str, bool]) -> tuple[World, LandmarkVisibility]:
+        """The world with these doors open (True) or closed, and its landmarks' visibility."""
+        from tmpnav.world.build import build
+
+        key = tuple(sorted(doors.items()))
+        if key not in self.worlds:
+            scenario, world = self.loaded
+            if doors:
+                scenario = replace(
+                    scenario, doors=tuple(replace(d, open=doors.get(d.name, d.open)) for d in scenario.doors)
+                )
+                world = build(scenario)
+            self.worlds[key] = (world, LandmarkVisibility(world, scenario.models.landmark_sensor.range))
+        return self.worlds[key]
+
+    def draws(self, session: int, planned: PlanReport) -> Draws:
+        """The session's draws, long enough for the slowest of its executions."""
+        scenario, world = self.loaded
+        steps = sum(len(t) for t in planned.trajectories.values())
+        held = sum(e.seconds for e in self.events.events if e.kind in ("stop", "slow"))
+        sensor = scenario.models.range_sensor
+        return Draws.draw(
+            self.seed,
+            session,
+            len(scenario.robots),
+            STEP_BUDGET * (steps + round(held / scenario.models.dt)) + 100,
+            world.landmark_xy.shape[0],
+            sensor.beams if sensor is not None else 0,
+        )
+
+
+def closed_loop(
+    path: str | Path,
+    events: Events,
+    sessions: int,
+    seed: int = 0,
+    options: PlanOptions | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> LoopResult:
+    """Plan ``path``, then execute it ``sessions`` times in the three :data:`MODES`."""
+    from tmpnav import pipeline
+
+    options = options or pipeline.PlanOptions()
+    loaded = pipeline.load_world(path, options.overrides)
+    ctx = _Context(path, loaded, options, events, seed)
+    planned = pipeline.plan(path, options, loaded=loaded)
+    informed, why = _informed(ctx, planned)
+    say = progress or (lambda _: None)
+    runs: dict[str, list[Run]] = {m: [] for m in MODES}
+    for s in range(sessions):
+        runs["closed loop"].append(_execute(ctx, planned, s, replanning=True, say=say))
+        runs["blind"].append(_execute(ctx, planned, s, replanning=False))
+        if informed is not None:
+            runs["knowing the events"].append(_execute(ctx, informed, s, replanning=False, known=True))
+    return LoopResult(events, planned, informed, why, runs)
+
+
+def _informed(ctx: _Context, planned: PlanReport) -> tuple[PlanReport | None, str]:
+    """The plan made at the start knowing every event's change of the problem (module docstring)."""
+    doors: dict[str, bool] = {}
+    down: list[str] = []
+    add: list[str] = []
+    remove: list[str] = []
+    for e in ctx.events.events:
+        _changes(e, doors, down, add, remove)
+    if not doors and not down and not add and not remove:
+        return planned, ""
+    team = TeamState(
+        ctx.events.source,
+        0.0,
+        {r: RobotState(r, down=True) for r in down},
+        (),
+        dict(doors),
+        tuple(add),
+        tuple(remove),
+    )
+    try:
+        return _plan(ctx, planned, team, None), ""
+    except TmpnavError as err:
+        return None, str(err)
+
+
+def _changes(e: Event, doors: dict[str, bool], down: list[str], add: list[str], remove: list[str]) -> None:
+    """Fold one event's change of the problem into the doors, robots down and goals so far."""
+    if e.kind in ("close", "open"):
+        assert e.door is not None
+        doors[e.door] = e.kind == "open"
+    elif e.kind == "down":
+        assert e.robot is not None
+        down.append(e.robot)
+    elif e.kind == "goals":
+        for x in e.add:
+            if x in remove:
+                remove.remove(x)
+            add.append(x)
+        for x in e.remove:
+            if x in add:
+                add.remove(x)
+            remove.append(x)
+
+
+def _plan(
+    ctx: _Context,
+    current: PlanReport,
+    team: TeamState,
+    incumbent: tuple[tuple[tuple[str, str], ...], ...] | None,
+) -> PlanReport:
+    """The revision of ``current`` from ``team`` (what ``tmpnav replan`` plans), its risk accepted:
+    a team under way cannot stop for a plan over its threshold."""
+    from tmpnav.replan import _revised
+    from tmpnav.report.plan_json import plan_document
+
+    doc = json.loads(json.dumps(plan_document(current)))
+    number = current.revision.number if current.revision is not None else 0
+    options = ctx.options.but(accept_risk=True, progress=None, search_progress=None)
+    return _revised(ctx.path, ctx.loaded, Path(f"revision-{number}"), doc, team, options, incumbent, within=False)
+
+
+def _execute(
+    ctx: _Context,
+    plan: PlanReport,
+    s: int,
+    replanning: bool,
+    known: bool = False,
+    say: Callable[[str], None] = lambda _: None,
+) -> Run:
+    """Session ``s`` of ``plan`` with the events; replanning (the closed loop) or not."""
+    scenario = ctx.scenario
+    names = [r.name for r in scenario.robots]
+    dt = scenario.models.dt
+    doors: dict[str, bool] = {}
+    down: list[str] = []
+    add: list[str] = []
+    remove: list[str] = []
+    if known:  # the plan knew every change of the problem: the world is as the events leave it
+        for e in ctx.events.events:
+            _changes(e, doors, down, add, remove)
+    session = Session(scenario, ctx.loaded[1], queues(plan), ctx.draws(s, plan), ctx.world({})[1], mutual=True)
+    if doors:
+        session.set_world(*ctx.world(doors))
+    for r in down:
+        session.set_down(r)
+    pending = [e for e in ctx.events.events if not (known and e.replans)]
+    restore: list[tuple[int, int]] = []  # (step, robot index) at which a stop or slowdown ends
+    current, start, checked = plan, 0, 0
+    replans: list[Replan] = []
+    dropped: list[str] = []
+    at_start = _at_start(plan)  # goals a robot visits by starting in them (revision by revision)
+    late_steps = max(1, round(ctx.events.late / dt))
+
+    def due() -> bool:
+        now = session.step
+        if any(round(e.at / dt) <= now for e in pending) or any(k <= now for k, _ in restore):
+            return True
+        return replanning and now - checked >= late_steps and _lateness(session, down) >= late_steps
+
+    while True:
+        session.run(due)
+        if session.finished and not (pending and replanning):
+            break
+        if session.finished:  # the team is done before an event: its clock jumps there
+            session.step = max(session.step, min(round(e.at / dt) for e in pending))
+        now = session.step
+        for k, i in [x for x in restore if x[0] <= now]:
+            restore.remove((k, i))
+            if i not in session.down:
+                session.speed[i] = 1.0
+        happened = [e for e in pending if round(e.at / dt) <= now]
+        pending = [e for e in pending if e not in happened]
+        reasons = []
+        for e in happened:
+            if e.kind in ("stop", "slow"):
+                i = names.index(e.robot or "")
+                if i not in session.down:
+                    session.speed[i] = 0.0 if e.kind == "stop" else e.factor
+                    restore.append((now + round(e.seconds / dt), i))
+                continue
+            _changes(e, doors, down, add, remove)
+            if e.kind == "down":
+                session.set_down(e.robot or "")
+            elif e.kind in ("close", "open"):
+                session.set_world(*ctx.world(doors))
+            reasons.append(e.text())
+        if not replanning:
+            continue
+        if not reasons and now - checked >= late_steps:
+            late = _lateness(session, down)
+            if late >= late_steps:
+                reasons.append(f"late by {late * dt:.1f} s")
+        checked = now
+        if not reasons or len(replans) >= MAX_REPLANS:
+            continue
+        team = _team(ctx, session, start, doors, down, add, remove, at_start)
+        began = time.perf_counter()
+        unreachable: tuple[str, ...] = ()
+        try:
+            revised = _plan(ctx, current, team, _incumbent(session, down, set(team.visited or ()) | set(remove)))
+        except NothingLeft:
+            session.adopt({})
+            outcome = "nothing left"
+        except TmpnavError as err:
+            outcome = f"failed: {err}"
+        else:
+            assert revised.revision is not None
+            unreachable = tuple(room for room, _why in revised.revision.unreachable)
+            dropped += [x for x in unreachable if x not in dropped]
+            session.adopt(queues(revised))
+            at_start += [x for x in _at_start(revised) if x not in at_start]
+            current, start, outcome = revised, now, "planned"
+        latency = time.perf_counter() - began
+        replans.append(Replan(s, now * dt, "; ".join(reasons), latency, outcome, unreachable))
+        say(f"session {s + 1}: t = {now * dt:.1f} s, {'; '.join(reasons)}: replanned in {latency:.1f} s ({outcome})")
+    if known and plan.revision is not None:
+        dropped = [room for room, _ in plan.revision.unreachable]
+    mode = MODES[0] if replanning else MODES[2] if known else MODES[1]
+    return _run(ctx, session, s, mode, add, remove, down, dropped, replans, at_start)
+
+
+def _lateness(session: Session, down: list[str]) -> int:
+    """Control steps by which the latest robot is behind its plan: its move under way should have
+    ended, or its next move should have started, that long ago (0 when none is)."""
+    worst = 0
+    for i, r in enumerate(session.robots):
+        if session.names[i] in down:
+            continue
+        if r.move is not None:
+            worst = max(worst, session.step - (r.move.start + r.move.steps))
+        elif r.next is not None and r.ready <= session.step:
+            worst = max(worst, session.step - r.next.start)
+    return worst
+
+
+def _at_start(plan: PlanReport) -> list[str]:
+    """The goal rooms the plan has visited by its robots' starts (a robot that starts in a room
+    it is to visit has visited it)."""
+    goals, where = plan.scenario.goals, plan.table.start_location
+    shared = [x for x in goals.visit if x in where.values()]
+    return list(dict.fromkeys([*shared, *(x for _, x in sorted(goals.marked_at_start(where)))]))
+
+
+def _team(
+    ctx: _Context,
+    session: Session,
+    start: int,
+    doors: dict[str, bool],
+    down: list[str],
+    add: list[str],
+    remove: list[str],
+    at_start: list[str],
+) -> TeamState:
+    """The team's state now: each live robot's estimate and covariance, the rooms done (entered by
+    a move, or visited by starting there)."""
+    dt = ctx.scenario.models.dt
+    world = session.world
+    robots: dict[str, RobotState] = {}
+    for i, spec in enumerate(ctx.scenario.robots):
+        if spec.name in down:
+            robots[spec.name] = RobotState(spec.name, down=True)
+            continue
+        mean = session.estimate(i)
+        x, y = _free_near(world, float(mean[0]), float(mean[1]), spec.radius)
+        block = session.belief.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
+        cov = tuple(tuple(float(v) for v in row) for row in 0.5 * (block + block.T))
+        robots[spec.name] = RobotState(spec.name, (x, y, float(mean[2])), cov)  # type: ignore[arg-type]
+    entered = [m.target for m in sorted(session.trace.moves, key=lambda m: m.end) if m not in session.trace.cut]
+    done = tuple(dict.fromkeys([*at_start, *entered]))
+    return TeamState(
+        ctx.events.source, (session.step - start) * dt, robots, done, dict(doors), tuple(add), tuple(remove)
+    )
+
+
+def _free_near(world: World, x: float, y: float, radius: float) -> tuple[float, float]:
+    """(x, y), or the nearest free point within :data:`NUDGE` m of it on rings of the map's cells
+    (an estimate that grazes a wall: the planner starts a robot in free space)."""
+    if bool(world.is_free(np.array([[x, y]]), radius)[0]):
+        return x, y
+    res = float(world.grid.resolution)
+    for ring in np.arange(res, NUDGE + res / 2, res):
+        angles = np.linspace(0.0, 2 * math.pi, max(8, int(2 * math.pi * ring / res)), endpoint=False)
+        points = np.column_stack([x + ring * np.cos(angles), y + ring * np.sin(angles)])
+        free = world.is_free(points, radius)
+        if free.any():
+            k = int(np.flatnonzero(free)[0])
+            return float(points[k, 0]), float(points[k, 1])
+    return x, y  # the planner names the pose as inside a wall
+
+
+def _incumbent(session: Session, down: list[str], gone: set[str]) -> tuple[tuple[tuple[str, str], ...], ...]:
+    """The rest of the session's queues (moves under way, then queued), grouped by plan step in
+    plan order, without the robots down and the rooms done or removed: the search's warm start."""
+    steps: dict[int, list[tuple[str, str]]] = {}
+    for i, r in enumerate(session.robots):
+        name = session.names[i]
+        if name in down:
+            continue
+        rest: list[QueuedMove] = ([r.move] if r.move is not None else []) + list(r.queue[r.started :])
+        for m in rest:
+            if m.target not in gone:
+                steps.setdefault(m.step, []).append((name, m.target))
+    return tuple(tuple(steps[k]) for k in sorted(steps))
+
+
+def _run(
+    ctx: _Context,
+    session: Session,
+    s: int,
+    mode: str,
+    add: list[str],
+    remove: list[str],
+    down: list[str],
+    dropped: list[str],
+    replans: list[Replan],
+    at_start: list[str],
+) -> Run:
+    """What the session did: the goals done (and twice), dropped, its makespan, cost and collisions."""
+    scenario = ctx.scenario
+    goals = scenario.goals
+    required = [x for x in (*goals.all_rooms, *add) if x not in remove]
+    ends_of_down = [x for r, x in goals.ends if r in down]
+    required = [x for x in dict.fromkeys(required) if x not in ends_of_down]
+    trace = session.trace
+    entered: dict[str, int] = dict.fromkeys(at_start, 1)
+    for m in sorted(trace.moves, key=lambda m: m.end):
+        if m in trace.cut:
+            continue
+        entered[m.target] = entered.get(m.target, 0) + 1
+    done = tuple(x for x in entered if x in required)
+    twice = tuple(x for x in done if entered[x] > 1)
+    cost = sum(float(scenario.cost.combine(trace.c_u[r], trace.c_goal[r], trace.c_sigma[r])) for r in trace.c_u)
+    return Run(
+        mode,
+        s,
+        tuple(required),
+        done,
+        twice,
+        tuple(x for x in dropped if x in required),
+        max((m.done for m in trace.moves), default=0.0),
+        cost,
+        sum(trace.wall_hits.values()),
+        sum(trace.contacts.values()),
+        replans,
+    )
+
+
+def summary(result: LoopResult) -> list[str]:
+    """What ``tmpnav simulate --events`` prints: the replans, the goals, the makespan and cost of
+    the three modes."""
+    closed = result.runs["closed loop"]
+    n = len(closed)
+    events = result.events
+    lines = [
+        f"closed loop: {n} session(s) with {len(events.events)} event(s) from {events.source.name} "
+        f"(replanning at each change of the problem and when a robot is {events.late:g} s late)"
+    ]
+    replans = [p for r in closed for p in r.replans]
+    if replans:
+        latencies = np.array([p.latency for p in replans])
+        failed = sum(p.outcome.startswith("failed") for p in replans)
+        lines.append(
+            f"  replans: {len(replans)} ({len(replans) / n:.1f} per session), latency median "
+            f"{np.median(latencies):.2f} s, max {latencies.max():.2f} s" + (f"; {failed} failed" if failed else "")
+        )
+        reasons: dict[str, int] = {}
+        for p in replans:
+            for why in p.reason.split("; "):
+                key = "lateness" if why.startswith("late by") else why
+                reasons[key] = reasons.get(key, 0) + 1
+        lines.append("  reasons: " + ", ".join(f"{k} {v}" for k, v in reasons.items()))
+    else:
+        lines.append("  replans: none")
+    for mode in MODES:
+        runs = result.runs[mode]
+        if not runs:
+            lines.append(f"  {mode}: no plan ({result.informed_error})")
+            continue
+        lines.append("  " + _mode_line(mode, runs))
+    return lines
+
+
+def _mode_line(mode: str, runs: list[Run]) -> str:
+    goals = np.mean([len(r.goals) for r in runs])
+    done = np.mean([len(r.done) for r in runs])
+    dropped = np.mean([len(r.dropped) for r in runs])
+    lost = np.mean([len(r.lost) for r in runs])
+    twice = sum(len(r.twice) for r in runs)
+    spans = np.array([r.makespan for r in runs])
+    costs = np.array([r.cost for r in runs])
+    walls = sum(r.wall_hits > 0 for r in runs)
+    touch = sum(r.contacts > 0 for r in runs)
+    return (
+        f"{mode}: goals done {done:.1f} of {goals:.1f}, dropped {dropped:.1f}, lost {lost:.1f}, twice {twice}; "
+        f"makespan median {np.median(spans):.1f} s; cost median {np.median(costs):.1f}; "
+        f"executions with a wall hit {walls}/{len(runs)}, with a contact {touch}/{len(runs)}"
+    )
+
+
+def runs_csv(result: LoopResult) -> str:
+    """One row per session and mode (loop.csv)."""
+    rows = ["mode,session,goals,done,dropped,lost,twice,makespan_s,cost,wall_hit_steps,contact_steps,replans"]
+    for mode in MODES:
+        for r in result.runs[mode]:
+            rows.append(
+                f"{mode},{r.session + 1},{len(r.goals)},{len(r.done)},{len(r.dropped)},{len(r.lost)},{len(r.twice)},"
+                f"{r.makespan:.6g},{r.cost:.6g},{r.wall_hits},{r.contacts},{len(r.replans)}"
+            )
+    return "\n".join(rows) + "\n"
+
+
+def replans_csv(result: LoopResult) -> str:
+    """One row per replan of the closed loop (replans.csv)."""
+    rows = ["session,time_s,reason,latency_s,outcome,unreachable"]
+    for r in result.runs["closed loop"]:
+        for p in r.replans:
+            rows.append(
+                f"{p.session + 1},{p.time:.6g},{_quoted(p.reason)},{p.latency:.4f},{_quoted(p.outcome)},"
+                f"{' '.join(p.unreachable)}"
+            )
+    return "\n".join(rows) + "\n"
+
+
+def _quoted(text: str) -> str:
+    return '"' + text.replace('"', '""') + '"'
+
+
+def document(result: LoopResult) -> dict[str, Any]:
+    """The closed loop's results as JSON data (loop.json)."""
+    return {
+        "events": str(result.events.source),
+        "late_s": result.events.late,
+        "planned_makespan_s": result.planned.schedule.makespan,
+        "informed_makespan_s": result.informed.schedule.makespan if result.informed is not None else None,
+        "runs": [
+            {
+                "mode": r.mode,
+                "session": r.session + 1,
+                "goals": list(r.goals),
+                "done": list(r.done),
+                "twice": list(r.twice),
+                "dropped": list(r.dropped),
+                "lost": list(r.lost),
+                "makespan_s": r.makespan,
+                "cost": r.cost,
+                "wall_hit_steps": r.wall_hits,
+                "contact_steps": r.contacts,
+                "replans": [
+                    {
+                        "time_s": p.time,
+                        "reason": p.reason,
+                        "latency_s": p.latency,
+                        "outcome": p.outcome,
+                        "unreachable": list(p.unreachable),
+                    }
+                    for p in r.replans
+                ],
+            }
+            for mode in MODES
+            for r in result.runs[mode]
+        ],
+    }
