@@ -9,6 +9,10 @@ done removed, a room added as a goal, a door of a goal room not yet done closed.
 in this process after the first plan (imports and the compiled kernels are warm, as in a planning
 service); its latency is the wall time of `replan`, the roadmap grown again for the new starts
 included. Writes `<name>.csv` (one row per event) and `<name>.txt` (median, p90, max) to -o.
+
+`--anytime-budget S` gives the replans (not the first plan) that run budget: the same events,
+seed for seed, trade latency for the objective (each replan's is in the CSV); the files are then
+`<name>-budget<S>.csv` and `.txt`.
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ from tmpnav.pipeline import PlanOptions, plan  # noqa: E402
 from tmpnav.replan import replan  # noqa: E402
 from tmpnav.replan.state import TeamState  # noqa: E402
 from tmpnav.report.plan_json import plan_document  # noqa: E402
+from tmpnav.report.schedule import objective_values  # noqa: E402
 
 KINDS = ("state", "down", "remove", "add", "door")
 
@@ -66,10 +71,11 @@ def main() -> None:
     ap.add_argument("--scenario", required=True)
     ap.add_argument("--events", type=int, default=20)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--anytime-budget", type=float, default=None, help="the replans' run budget (s)")
     ap.add_argument("-o", "--output", type=Path, required=True)
     args = ap.parse_args()
     args.output.mkdir(parents=True, exist_ok=True)
-    name = Path(args.scenario).stem
+    name = Path(args.scenario).stem + ("" if args.anytime_budget is None else f"-budget{args.anytime_budget:g}")
     cache = Path(tempfile.mkdtemp(prefix="tmpnav-replan-bench-"))
     options = PlanOptions.of(cache_dir=cache)
     t0 = time.perf_counter()
@@ -96,15 +102,20 @@ def main() -> None:
         kinds = {"down": state.down, "remove": state.remove, "add": state.add, "door": state.doors}
         kind = next((k for k, v in kinds.items() if v), "state")
         t0 = time.perf_counter()
+        budget = options if args.anytime_budget is None else options.but(time_budget=args.anytime_budget)
         try:
-            report = replan(args.scenario, plan_path, state, options)
+            report = replan(args.scenario, plan_path, state, budget)
             ok, left = "ok", len(report.revision.unreachable) if report.revision else 0
             steps = len(report.task.steps)
+            value = round(objective_values(report).value, 3)
+            resim = report.resimulated_cost  # the plan's cost as the planner saw it, against its re-simulation
+            agree = abs(report.planner_cost - resim) / abs(resim) if resim else 0.0
         except TmpnavError as err:
-            ok, left, steps = f"error: {err}", 0, 0
+            ok, left, steps, value, agree = f"error: {err}", 0, 0, float("nan"), float("nan")
         seconds = time.perf_counter() - t0
         rows.append({"event": k + 1, "time": state.time, "kind": kind, "seconds": round(seconds, 3), "result": ok,
-                     "steps": steps, "unreachable": left})  # fmt: skip
+                     "steps": steps, "unreachable": left, "objective": value,
+                     "planner_vs_resimulated": agree})  # fmt: skip
         print(rows[-1], flush=True)
     with (args.output / f"{name}.csv").open("w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -115,6 +126,8 @@ def main() -> None:
     text = (
         f"{args.scenario}: first plan {first_s:.2f} s (cold cache); {len(rows)} events ({len(secs)} replanned)\n"
         f"replan latency: median {statistics.median(secs):.2f} s, p90 {p90:.2f} s, max {max(secs):.2f} s\n"
+        f"planner's cost against the re-simulated one: largest relative difference "
+        f"{max((r['planner_vs_resimulated'] for r in rows if r['result'] == 'ok'), default=float('nan')):.2e}\n"
         f"by kind: "
         + ", ".join(
             f"{k} {statistics.median([r['seconds'] for r in rows if r['kind'] == k and r['result'] == 'ok']):.2f} s"
@@ -123,7 +136,9 @@ def main() -> None:
         )
         + f"\nmachine: {platform.processor() or platform.machine()}, python {platform.python_version()}\n"
         f"command: python benchmarks/bench_replan.py --scenario {args.scenario} --events {args.events} "
-        f"--seed {args.seed} -o {args.output}\n"
+        f"--seed {args.seed}"
+        + ("" if args.anytime_budget is None else f" --anytime-budget {args.anytime_budget:g}")
+        + f" -o {args.output}\n"
     )
     (args.output / f"{name}.txt").write_text(text)
     print(text)

@@ -56,6 +56,26 @@ def test_a_door_closing_on_a_robots_path_drops_its_room_and_the_rest_is_done(sce
     assert knowing.dropped == ("B",) and knowing.lost == ()
 
 
+#: the same building with a second door into B, further along the corridor
+TWO_DOORS = WORLD.replace(
+    "    - [[9.6, 4], [14.4, 4]]\n", "    - [[9.6, 4], [10.6, 4]]\n    - [[11.6, 4], [14.4, 4]]\n"
+).replace("  - {name: dD,", "  - {name: dB2, segment: [[10.6, 4], [11.6, 4]]}\n  - {name: dD,")
+
+
+@pytest.mark.slow
+def test_a_door_closing_on_a_robots_path_sends_it_the_other_way(tmp_path: Path) -> None:
+    """With a second door into B, the nearer one to r2 (dB2) closes at 2 s, on r2's way there: the
+    replan drops nothing and goes in by dB; blind, r2 is stopped at dB2 and B is lost."""
+    assert TWO_DOORS != WORLD and "dB2" in TWO_DOORS
+    scenario = tmp_path / "two-doors.yaml"
+    scenario.write_text(TWO_DOORS)
+    result = run(scenario, tmp_path, "events:\n  - {at: 2, close: dB2}\n")
+    loop = only(result, "closed loop")
+    assert [p.reason for p in loop.replans] == ["dB2 closed"] and loop.replans[0].unreachable == ()
+    assert sorted(loop.done) == ["A", "B"] and loop.dropped == () and loop.lost == () and loop.twice == ()
+    assert only(result, "blind").lost == ("B",)
+
+
 @pytest.mark.slow
 def test_a_robot_down_leaves_its_goals_to_the_other_and_goals_added_mid_run_are_done(
     scenario: Path, tmp_path: Path
