@@ -1,7 +1,7 @@
 """Every way of computing an action gives bit-identical results.
 
-Through the cache and without it, in this process, in 1 and 2 local workers, and on a
-real local Ray instance: the same costs, goal instantiations, paths and final beliefs.
+Through the cache and without it, in this process, in 1 and 2 local workers (and on a real local
+Ray instance: tests/oracle/test_ray.py): the same costs, goal instantiations, paths and final beliefs.
 """
 
 from __future__ import annotations
@@ -42,31 +42,6 @@ def test_local_workers(two_rooms: OracleContext, reference, workers: int, monkey
     monkeypatch.setattr(executors, "BLOCK", 4)  # several blocks, so two workers share the work
     result = Oracle(two_rooms, NullCache(), ProcessExecutor(workers)).evaluate(actions(two_rooms))
     assert result == reference
-
-
-@pytest.mark.ray
-@pytest.mark.slow
-def test_ray(two_rooms: OracleContext, reference, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
-    """The same results from a real local Ray instance; its start and shutdown leave the
-    process's handlers of fatal signals as they were (the JVM's, in a run that started it:
-    with Ray's or the default in place, the JVM's next safepoint poll ended the process)."""
-    pytest.importorskip("ray")
-    monkeypatch.setattr(executors, "BLOCK", 4)
-    before = fatal_handlers()
-    executor = executors.RayExecutor(num_cpus=2)
-    try:
-        assert executor.workers == 2
-        assert fatal_handlers() == before
-        result = Oracle(two_rooms, NullCache(), executor).evaluate(actions(two_rooms))
-    finally:
-        executor.close()
-    assert fatal_handlers() == before
-    assert result == reference
-
-
-def fatal_handlers() -> dict[int, int | None]:
-    """The C-level handler of each signal Ray's start and shutdown replace (Linux; else empty)."""
-    return {int(sig): action.handler for sig, action in executors.signal_actions().items()}
 
 
 def test_blocks_keep_start_groups_together(two_rooms: OracleContext) -> None:
