@@ -1,0 +1,78 @@
+"""Edits between routes (tmpnav.task.routes): relocate, exchange and 2-opt* on a line of rooms,
+screened on the single moves' table, never moving a robot's own target or its end."""
+
+from __future__ import annotations
+
+import itertools
+
+from tmpnav.task.plans import Rules, with_origins
+from tmpnav.task.routes import route_edits
+from tmpnav.types import CostTable, Goals, Job
+
+#: rooms on a line, 10 m apart; r1 starts at 0 m, r2 at 50 m
+ROOMS = ("L1", "L2", "L3", "L4", "L5")
+AT = {"r1-start": 0.0, "r2-start": 50.0, **{x: 10.0 * (k + 1) for k, x in enumerate(ROOMS)}}
+
+
+def line_table() -> CostTable:
+    """Cost and duration of a move: its length (m, at 1 m/s)."""
+    single, duration = {}, {}
+    for r in ("r1", "r2"):
+        for a, b in itertools.product((f"{r}-start", *ROOMS), ROOMS):
+            if a != b:
+                single[(r, a, b)] = duration[(r, a, b)] = abs(AT[a] - AT[b])
+    start = {"r1": "r1-start", "r2": "r2-start"}
+    return CostTable(("r1", "r2"), ROOMS, (*start.values(), *ROOMS), start, single, {}, duration)
+
+
+def plan_of(*steps: tuple[str, str]) -> tuple:
+    return with_origins([(s,) for s in steps], {"r1": "r1-start", "r2": "r2-start"})
+
+
+def routes(steps: list) -> dict[str, list[str]]:
+    out: dict[str, list[str]] = {"r1": [], "r2": []}
+    for step in steps:
+        for r, x in step:
+            out[r].append(x)
+    return out
+
+
+def test_the_robot_that_finishes_last_gives_a_room_to_the_other() -> None:
+    """r1 does all five rooms (50 m, 50 s); with time priced, moving L5 to r2 (10 m from it) is
+    the best edit by the screen: the makespan falls to 40 s."""
+    table, goals = line_table(), Goals(ROOMS, ())
+    plan = plan_of(*[("r1", x) for x in ROOMS])
+    rules = Rules(table.start_location, goals)
+    edits = route_edits(plan, table, goals, rules, span_weight=1.0)
+    assert edits, "an edit is better"
+    best = routes(edits[0])
+    assert best["r2"] and best["r1"] == [x for x in ROOMS if x not in best["r2"]]
+    for edit in edits:
+        assert rules.valid(with_origins(edit, table.start_location))
+
+
+def test_crossed_routes_are_untangled_by_exchange_or_tails() -> None:
+    """r1 goes to L5 and r2 to L1: both cross the line. An exchange (or the tails swapped) gives
+    each the room next to it; on cost alone the plan is dearer, so the screen finds it."""
+    table, goals = line_table(), Goals(("L1", "L5"), ())
+    plan = plan_of(("r1", "L5"), ("r2", "L1"))
+    edits = route_edits(plan, table, goals, Rules(table.start_location, goals), span_weight=0.0)
+    assert routes(edits[0]) == {"r1": ["L1"], "r2": ["L5"]}
+
+
+def test_no_plan_is_offered_when_the_routes_are_the_best_already() -> None:
+    table, goals = line_table(), Goals(("L1", "L5"), ())
+    plan = plan_of(("r1", "L1"), ("r2", "L5"))
+    assert route_edits(plan, table, goals, Rules(table.start_location, goals), span_weight=1.0) == []
+
+
+def test_a_robots_own_target_its_end_and_a_job_for_others_stay_where_they_are() -> None:
+    """L5 is r1's own target, L4 is r1's end, L3's job is for r1 only: whatever the screen says,
+    no edit moves them to r2."""
+    table = line_table()
+    goals = Goals(("L1", "L2", "L3"), (("r1", ("L5",)),), (Job("L3", robots=("r1",)),), (("r1", "L4"),))
+    plan = plan_of(("r1", "L1"), ("r1", "L2"), ("r1", "L3"), ("r1", "L5"), ("r1", "L4"))
+    rules = Rules(table.start_location, goals)
+    assert rules.valid(plan)
+    for edit in route_edits(plan, table, goals, rules, span_weight=1.0, limit=50):
+        assert not {"L3", "L4", "L5"} & set(routes(edit)["r2"])
