@@ -197,11 +197,11 @@ LARGE_NOISE = (0.3, 0.0, 0.3, 0.05)  # the corridor's: (0.01, 0, 0.02, 0.01)
 
 
 def test_a_robot_driving_along_a_wall_with_large_noise_hits_it(corridor_world: World3) -> None:
-    """The west corridor has no landmark in range, so r1 drives on dead reckoning: in 7 of 8
-    sessions its true pose hits the wall (in the other its start error lies away from it)."""
+    """The west corridor has no landmark in range, so r1 drives on dead reckoning: in 6 of 8
+    sessions its true pose hits the wall (in the others its start error lies away from it)."""
     queues = {"r1": (move(0, "r1", R1_OUT), move(1, "r1", ALONG_THE_WALL))}
     traces = [run(corridor_world, queues, seed=seed, alphas=LARGE_NOISE) for seed in range(8)]
-    assert sum(t.wall_hits["r1"] > 0 for t in traces) >= 7
+    assert sum(t.wall_hits["r1"] > 0 for t in traces) >= 6
     for t in traces:
         assert not t.truncated and t.wall_hits["r2"] == 0  # r2 stands in L10
         assert t.contacts == {"r1": 0, "r2": 0}
@@ -241,9 +241,9 @@ def corridor(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
 
 @pytest.mark.slow
 def test_mutual_observations_cut_the_worst_error_of_the_landmark_starved_robot(corridor: PlanReport) -> None:
-    """The paper's Fig. 3(a) on the corridor: 25 sessions, seeded, so the numbers are exact:
-    those recorded in benchmarks/full/simulate before the team moved at once (one paired move
-    runs the same either way).
+    """The paper's Fig. 3(a) on the corridor: 25 sessions, seeded, so the numbers are exact
+    (benchmarks/README.md, "Fig. 3(a)"), the waypoint follower turning at each path node as the
+    planned motions do.
 
     r2 starts in L10, out of every landmark's range; with mutual observations its error
     never exceeds what it starts with, without them it grows along the corridor."""
@@ -256,7 +256,7 @@ def test_mutual_observations_cut_the_worst_error_of_the_landmark_starved_robot(c
     for robot in ("r1", "r2"):
         assert result.worst(1, robot) < result.worst(2, robot)
     worst = {(c, r): round(result.worst(c, r), 3) for c in (1, 2) for r in ("r1", "r2")}
-    assert worst == {(1, "r1"): 0.222, (2, "r1"): 0.495, (1, "r2"): 0.123, (2, "r2"): 0.654}
+    assert worst == {(1, "r1"): 0.226, (2, "r1"): 0.42, (1, "r2"): 0.116, (2, "r2"): 0.652}
     # the paper's plan sends the robots head-on through facing doors at once: they touch in
     # every execution (what a separation constraint is for), and without mutual observations
     # the landmark-starved r2 hits walls far more often

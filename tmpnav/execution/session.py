@@ -42,7 +42,7 @@ from tmpnav.belief import ekf
 from tmpnav.belief.models import landmark_obs, motion, motion_noise_cov, mutual_obs, noisy_observation
 from tmpnav.belief.risk import hits_wall
 from tmpnav.errors import TmpnavError
-from tmpnav.execution.control import control, reached
+from tmpnav.execution.control import ALIGN, ALIGN_START, control, reached
 from tmpnav.execution.moves import QueuedMove
 from tmpnav.execution.scans import ScanSimulator
 from tmpnav.results import Schedule, TimedMove
@@ -134,6 +134,7 @@ class _Robot:
     previous: np.ndarray | None = None  # the last waypoint reached
     ready: int = 0  # step at which it ended its latest move, its job's service included
     since: int = 0  # step at which the move under way started
+    aligned: bool = False  # it has turned towards its next waypoint (the segment's start is behind it)
 
     @property
     def next(self) -> QueuedMove | None:
@@ -234,9 +235,10 @@ class Session:
             for i, r in enumerate(self.robots):
                 if r.waypoints:
                     spec = self.scenario.robots[i]
-                    u[i] = self.speed[i] * control(
-                        self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt
-                    )
+                    align = ALIGN if r.aligned else ALIGN_START
+                    command = control(self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt, align)
+                    r.aligned = r.aligned or bool(command[0] > 0.0)  # it drives: the turn at the node is done
+                    u[i] = self.speed[i] * command
                     if self.speed[i] == 0.0:
                         r.since += 1  # a stopped robot's move does not use up its budget
             self._move(u)
@@ -313,6 +315,7 @@ class Session:
         while r.waypoints and reached(self.estimate(i), r.previous, r.waypoints[0]):
             k = len(r.move.waypoints) - len(r.waypoints)  # the path point reached, after its start
             r.previous = r.waypoints.pop(0)
+            r.aligned = False  # a new segment: turn towards its end first
             error = self.truth[i, :2] - self.estimate(i)[:2]
             self.trace.errors[name].append(float(np.hypot(*error)))
             self.trace.times[name].append(self.step * self.dt)
@@ -373,7 +376,7 @@ class Session:
         return started
 
     def _start(self, r: _Robot, m: QueuedMove) -> None:
-        r.move, r.started, r.since = m, r.started + 1, self.step
+        r.move, r.started, r.since, r.aligned = m, r.started + 1, self.step, False
         r.waypoints, r.previous = m.waypoints, np.asarray(m.points[0], dtype=float)
 
     def _cut(self, name: str, points: int) -> None:
