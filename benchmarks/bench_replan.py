@@ -32,7 +32,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from tmpnav.errors import TmpnavError  # noqa: E402
-from tmpnav.pipeline import PlanOptions, plan  # noqa: E402
+from tmpnav.pipeline import PlanOptions, load_world, plan  # noqa: E402
 from tmpnav.replan import replan  # noqa: E402
 from tmpnav.replan.state import TeamState  # noqa: E402
 from tmpnav.report.plan_json import plan_document  # noqa: E402
@@ -96,6 +96,7 @@ def main() -> None:
                 doors[d.name] = room
                 break
     rng = random.Random(args.seed)
+    loaded = load_world(args.scenario, options.overrides)
     rows = []
     for k in range(args.events):
         state = event(rng, doc, rooms, doors, plan_path)
@@ -103,8 +104,8 @@ def main() -> None:
         kind = next((k for k, v in kinds.items() if v), "state")
         t0 = time.perf_counter()
         budget = options if args.anytime_budget is None else options.but(time_budget=args.anytime_budget)
-        try:
-            report = replan(args.scenario, plan_path, state, budget)
+        try:  # as tmpnav.replan.Session.update: the scenario and its world loaded once, by the service
+            report = replan(args.scenario, plan_path, state, budget, loaded=loaded)
             ok, left = "ok", len(report.revision.unreachable) if report.revision else 0
             steps = len(report.task.steps)
             value = round(objective_values(report).value, 3)

@@ -38,17 +38,23 @@ def read_plan(path: Path) -> dict[str, Any]:
 
 
 def replan(
-    scenario_path: str | Path, plan_path: str | Path, state: str | Path | TeamState, options: Options | None = None
+    scenario_path: str | Path,
+    plan_path: str | Path,
+    state: str | Path | TeamState,
+    options: Options | None = None,
+    loaded: tuple[Scenario, World] | None = None,
 ) -> PlanReport:
     """The plan of the rest of the work, from the team's state: the scenario revised
     (:func:`tmpnav.replan.revise.revise`) and planned as ``tmpnav plan`` plans, the rest of the
-    old plan as the anytime search's incumbent; the report carries the revision."""
+    old plan as the anytime search's incumbent; the report carries the revision. ``loaded``
+    (:func:`tmpnav.pipeline.load_world` of the scenario, with the options' overrides) skips
+    loading when the caller already has the world, as a planning service has."""
     from tmpnav import pipeline
 
     options = options or pipeline.PlanOptions()
     team = state if isinstance(state, TeamState) else read_state(Path(state))
     doc = read_plan(Path(plan_path))
-    loaded = pipeline.load_world(scenario_path, options.overrides)
+    loaded = loaded or pipeline.load_world(scenario_path, options.overrides)
     return _revised(scenario_path, loaded, Path(plan_path), doc, team, options)
 
 
