@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
 
 from tmpnav.task.plans import Plan, Rules, targets_only, with_origins
 from tmpnav.types import CostTable, Goals
@@ -89,62 +90,87 @@ class _Screen:
         return cost + self.span_weight * span if self.span_weight else cost
 
 
+Edit = tuple[dict[str, list[str]], Steps]  # the routes an edit changes (robot -> its rooms), the steps
+
+
+@dataclass(frozen=True)
+class _Routes:
+    """The plan's steps and routes, the robots whose routes may change, and which rooms may move."""
+
+    steps: Steps
+    routes: dict[str, list[tuple[int, str]]]  # robot -> (step index, room) of its single steps
+    free: list[str]  # robots in no paired step
+    goals: Goals
+    rules: Rules
+
+    def rooms(self, robot: str) -> list[str]:
+        return [x for _, x in self.routes[robot]]
+
+    def movable(self, robot: str, room: str, to: str) -> bool:
+        """Whether ``room`` may leave ``robot``'s route for ``to``'s: no one's end, not its own
+        target, a job ``to`` may do."""
+        ends = {x for _, x in self.goals.ends}
+        return room not in ends and (robot, room) not in self.rules.targets and self.goals.may_visit(to, room)
+
+
 def _edits(
     steps: Steps, routes: dict[str, list[tuple[int, str]]], pinned: set[str], goals: Goals, rules: Rules
-) -> Iterator[tuple[dict[str, list[str]], Steps]]:
-    """Every relocate, exchange and 2-opt* edit: the routes it changes (robot -> its rooms) and the steps."""
-    free = [r for r in routes if r not in pinned]
-    ends = {x for _, x in goals.ends}
+) -> Iterator[Edit]:
+    """Every relocate, exchange and 2-opt* edit."""
+    plan = _Routes(steps, routes, [r for r in routes if r not in pinned], goals, rules)
+    yield from _relocations(plan)
+    yield from _exchanges(plan)
+    yield from _tail_swaps(plan)
 
-    def movable(robot: str, room: str) -> bool:
-        return room not in ends and (robot, room) not in rules.targets
 
-    def may(robot: str, room: str) -> bool:
-        return goals.may_visit(robot, room)
-
-    rooms = {r: [x for _, x in routes[r]] for r in free}
-    # relocate: room i of a's route to position p of b's
-    for a in free:
-        for i, (k, x) in enumerate(routes[a]):
-            if not movable(a, x):
-                continue
-            for b in free:
-                if not may(b, x):
+def _relocations(plan: _Routes) -> Iterator[Edit]:
+    """Room i of a's route to position p of b's (b may be a)."""
+    rooms = {r: plan.rooms(r) for r in plan.free}
+    for a in plan.free:
+        for i, (k, x) in enumerate(plan.routes[a]):
+            for b in plan.free:
+                if not plan.movable(a, x, b):
                     continue
-                for p in range(len(routes[b]) + 1):
+                for p in range(len(plan.routes[b]) + 1):
                     if b == a and p in (i, i + 1):
                         continue
-                    changed = _relocated(rooms, a, i, b, p)
-                    yield changed, _relocate_steps(steps, routes, k, b, p, x)
-    # exchange: a's room i and b's room j
-    for ia, a in enumerate(free):
-        for b in free[ia + 1 :]:
-            for i, (k1, x) in enumerate(routes[a]):
-                if not movable(a, x) or not may(b, x):
+                    yield _relocated(rooms, a, i, b, p), _relocate_steps(plan.steps, plan.routes, k, b, p, x)
+
+
+def _exchanges(plan: _Routes) -> Iterator[Edit]:
+    """a's room i and b's room j swapped."""
+    for ia, a in enumerate(plan.free):
+        for b in plan.free[ia + 1 :]:
+            for i, (k1, x) in enumerate(plan.routes[a]):
+                if not plan.movable(a, x, b):
                     continue
-                for j, (k2, y) in enumerate(routes[b]):
-                    if not movable(b, y) or not may(a, y):
+                for j, (k2, y) in enumerate(plan.routes[b]):
+                    if not plan.movable(b, y, a):
                         continue
-                    changed = {a: list(rooms[a]), b: list(rooms[b])}
+                    changed = {a: plan.rooms(a), b: plan.rooms(b)}
                     changed[a][i], changed[b][j] = y, x
-                    edited = list(steps)
+                    edited = list(plan.steps)
                     edited[k1], edited[k2] = ((a, y),), ((b, x),)
                     yield changed, edited
-    # 2-opt*: a's tail from i and b's tail from j swapped
-    for ia, a in enumerate(free):
-        for b in free[ia + 1 :]:
-            for i in range(len(routes[a]) + 1):
-                tail_a = routes[a][i:]
-                if not all(movable(a, x) and may(b, x) for _, x in tail_a):
+
+
+def _tail_swaps(plan: _Routes) -> Iterator[Edit]:
+    """2-opt*: a's tail from i and b's tail from j swapped."""
+    for ia, a in enumerate(plan.free):
+        for b in plan.free[ia + 1 :]:
+            for i in range(len(plan.routes[a]) + 1):
+                tail_a = plan.routes[a][i:]
+                if not all(plan.movable(a, x, b) for _, x in tail_a):
                     continue
-                for j in range(len(routes[b]) + 1):
-                    tail_b = routes[b][j:]
-                    if not tail_a and not tail_b:
+                for j in range(len(plan.routes[b]) + 1):
+                    tail_b = plan.routes[b][j:]
+                    if (not tail_a and not tail_b) or not all(plan.movable(b, y, a) for _, y in tail_b):
                         continue
-                    if not all(movable(b, y) and may(a, y) for _, y in tail_b):
-                        continue
-                    changed = {a: rooms[a][:i] + [y for _, y in tail_b], b: rooms[b][:j] + [x for _, x in tail_a]}
-                    edited = list(steps)
+                    changed = {
+                        a: plan.rooms(a)[:i] + [y for _, y in tail_b],
+                        b: plan.rooms(b)[:j] + [x for _, x in tail_a],
+                    }
+                    edited = list(plan.steps)
                     for k, x in tail_a:
                         edited[k] = ((b, x),)
                     for k, y in tail_b:
