@@ -111,8 +111,9 @@ def test_a_robot_held_up_makes_the_team_replan_when_it_is_late(scenario: Path, t
         ("events:\n  - {at: 3, robot: r1, stop: 5, close: dA}\n", "events[0]: two kinds of event in one"),
         ("events:\n  - {at: 3, add: [Q]}\n", "events[0].add: 'Q' is not a room of scenario"),
         ("late: 0\nevents:\n  - {at: 3, add: [D]}\n", "late: 0 is not a number of seconds above 0"),
-        ("events:\n  - {at: 3, robot: r1, stop: 5, speed: 2}\n", "events[0].speed: not a key of a stop event"),
+        ("events:\n  - {at: 3, robot: r1, stop: 5, for: 2}\n", "events[0].for: not a key of a stop event"),
         ("[1, 2]\n", "not an events file"),
+        ("events:\n  - {at: 3, robot: r1, speed: 2}\n", "events[0].speed: not a key of an event"),
     ],
 )
 def test_a_bad_events_file_is_one_line_naming_the_key(scenario: Path, tmp_path: Path, text: str, said: str) -> None:

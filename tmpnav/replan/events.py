@@ -120,6 +120,13 @@ def _event(path: Path, key: str, entry: Any, scenario: Scenario) -> Event:
     if "at" not in entry:
         raise bad("at", "missing; expected the event's time in s since the plan's start")
     at = _seconds(entry["at"], bad, "at", zero=True)
+    known = {"at", *(key for keys in KINDS.values() for key in keys), *KINDS}
+    unknown = sorted(k for k in entry if k not in known)
+    if unknown:
+        raise bad(
+            str(unknown[0]),
+            "not a key of an event; expected at and one of stop, slow (with for), down, close, open, add/remove",
+        )
     kinds = [k for k in ("stop", "slow", "down", "close", "open") if k in entry]
     if "add" in entry or "remove" in entry:
         kinds.append("goals")
