@@ -88,6 +88,10 @@ class SessionTrace:
     #: the moves of ``moves`` that were cut (out of budget or of draws): they never reached their room
     cut: list[TimedMove] = field(default_factory=list)
 
+    def reached(self) -> list[TimedMove]:
+        """The moves that reached their room (not cut), in the order they ended."""
+        return [m for m in sorted(self.moves, key=lambda m: m.end) if m not in self.cut]
+
     def schedule(self, robots: tuple[str, ...]) -> Schedule:
         """The moves as executed, in plan order: a schedule like the plan's."""
         moves = sorted(self.moves, key=lambda m: (m.step, robots.index(m.robot)))

@@ -18,15 +18,13 @@ naming the file and the key for each problem.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from tmpnav.errors import InputError
+from tmpnav.replan.state import read_document
 from tmpnav.types import Scenario
 
 #: s a robot may fall behind its plan before the team replans, unless the file says otherwise
@@ -87,15 +85,7 @@ class Events:
 def read_events(path: Path, scenario: Scenario) -> Events:
     """The events in ``path`` (YAML or JSON), checked against ``scenario``; InputError naming the
     file and the key otherwise."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise InputError(f"{path}: cannot read the events file: {err.strerror or err}") from None
-    try:
-        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
-    except (json.JSONDecodeError, yaml.YAMLError) as err:
-        first = str(err).splitlines()[0] if str(err) else type(err).__name__
-        raise InputError(f"{path}: not a readable events file ({first}); expected YAML or JSON") from None
+    data = read_document(path, "events")
     if not isinstance(data, dict):
         raise InputError(f"{path}: not an events file; expected a mapping with an 'events' list")
     unknown = sorted(set(data) - {"events", "late"})

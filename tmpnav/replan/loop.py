@@ -385,7 +385,7 @@ def _team(
         block = session.belief.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
         cov = tuple(tuple(float(v) for v in row) for row in 0.5 * (block + block.T))
         robots[spec.name] = RobotState(spec.name, (x, y, float(mean[2])), cov)  # type: ignore[arg-type]
-    entered = [m.target for m in sorted(session.trace.moves, key=lambda m: m.end) if m not in session.trace.cut]
+    entered = [m.target for m in session.trace.reached()]
     done = tuple(dict.fromkeys([*at_start, *entered]))
     return TeamState(
         ctx.events.source, (session.step - start) * dt, robots, done, dict(doors), tuple(add), tuple(remove)
@@ -443,9 +443,7 @@ def _run(
     required = [x for x in dict.fromkeys(required) if x not in ends_of_down]
     trace = session.trace
     entered: dict[str, int] = dict.fromkeys(at_start, 1)
-    for m in sorted(trace.moves, key=lambda m: m.end):
-        if m in trace.cut:
-            continue
+    for m in trace.reached():
         entered[m.target] = entered.get(m.target, 0) + 1
     done = tuple(x for x in entered if x in required)
     twice = tuple(x for x in done if entered[x] > 1)

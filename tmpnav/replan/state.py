@@ -64,16 +64,21 @@ class TeamState:
 
 def read_state(path: Path) -> TeamState:
     """The team's state in ``path`` (YAML or JSON); InputError naming the file and key otherwise."""
+    return _state(path, read_document(path, "state"))
+
+
+def read_document(path: Path, what: str) -> Any:
+    """The data of a YAML or JSON file (JSON by its suffix) that the user gives tmpnav (a ``what``
+    file: state, events); InputError, one line naming the file, when it cannot be read or parsed."""
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as err:
-        raise InputError(f"{path}: cannot read the state file: {err.strerror or err}") from None
+        raise InputError(f"{path}: cannot read the {what} file: {err.strerror or err}") from None
     try:
-        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
+        return json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
     except (json.JSONDecodeError, yaml.YAMLError) as err:
         first = str(err).splitlines()[0] if str(err) else type(err).__name__
-        raise InputError(f"{path}: not a readable state file ({first}); expected YAML or JSON") from None
-    return _state(path, data)
+        raise InputError(f"{path}: not a readable {what} file ({first}); expected YAML or JSON") from None
 
 
 def _state(path: Path, data: Any) -> TeamState:

@@ -102,6 +102,7 @@ class _Routes:
     free: list[str]  # robots in no paired step
     goals: Goals
     rules: Rules
+    ends: frozenset[str]  # the robots' ends (goals.ends): rooms that stay where they are
 
     def rooms(self, robot: str) -> list[str]:
         return [x for _, x in self.routes[robot]]
@@ -109,15 +110,15 @@ class _Routes:
     def movable(self, robot: str, room: str, to: str) -> bool:
         """Whether ``room`` may leave ``robot``'s route for ``to``'s: no one's end, not its own
         target, a job ``to`` may do."""
-        ends = {x for _, x in self.goals.ends}
-        return room not in ends and (robot, room) not in self.rules.targets and self.goals.may_visit(to, room)
+        return room not in self.ends and (robot, room) not in self.rules.targets and self.goals.may_visit(to, room)
 
 
 def _edits(
     steps: Steps, routes: dict[str, list[tuple[int, str]]], pinned: set[str], goals: Goals, rules: Rules
 ) -> Iterator[Edit]:
     """Every relocate, exchange and 2-opt* edit."""
-    plan = _Routes(steps, routes, [r for r in routes if r not in pinned], goals, rules)
+    free = [r for r in routes if r not in pinned]
+    plan = _Routes(steps, routes, free, goals, rules, frozenset(x for _, x in goals.ends))
     yield from _relocations(plan)
     yield from _exchanges(plan)
     yield from _tail_swaps(plan)
