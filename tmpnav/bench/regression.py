@@ -113,7 +113,8 @@ CASES = (
     Case(
         "sparse-anytime",
         "configs/sparse-warehouse.yaml",
-        why="all eight places of the landmark-sparse hall: the anytime search with carried beliefs, to convergence",
+        ("P1", "P2", "P3", "P4", "P5", "P6", "P7"),
+        why="seven places of the landmark-sparse hall: the anytime search with carried beliefs, to convergence",
         time_budget=600.0,
     ),
 )
