@@ -15,7 +15,7 @@ import pytest
 #: test file (relative to the repository) -> rough seconds it takes
 HEAVY: dict[str, float] = {
     "tests/oracle/test_ray.py": 170,  # a local Ray instance: seconds alone, minutes beside the suite
-    "tests/test_regression.py": 115,
+    "tests/test_regression.py": 60,
     "tests/test_cli_risk.py": 90,
     "tests/test_fault_injection.py": 75,
     "tests/test_cli_bench.py": 65,

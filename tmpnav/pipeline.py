@@ -57,6 +57,9 @@ class Overrides:
     #: a plan to start the anytime search from, as steps of (robot, target room): the rest of the
     #: plan being executed, when ``tmpnav replan`` revises it (tmpnav.replan)
     incumbent: tuple[tuple[tuple[str, str], ...], ...] = ()
+    #: the roadmap of the plan being revised, when the world is unchanged: the revision's starts
+    #: are added to it (tmpnav.roadmap.with_starts) instead of growing a roadmap of its own
+    roadmap_base: Roadmap | None = None
 
 
 #: ``Overrides.max_risk`` that lifts the chance constraint (``--max-risk none``)
@@ -203,12 +206,17 @@ def _size_problems(scenario: Scenario) -> list[Problem]:
     return [Problem(file, p, message, scenario.line_of(p)) for p, message in plan_sizes(scenario)]
 
 
-def roadmap_for(scenario: Scenario, world: World, store: RoadmapStore | None) -> tuple[Roadmap, bool]:
-    """The scenario's roadmap, read from ``store`` when it holds it, else grown (and stored);
-    returns it and whether it was read."""
-    from tmpnav.roadmap import build_roadmap
+def roadmap_for(
+    scenario: Scenario, world: World, store: RoadmapStore | None, base: Roadmap | None = None
+) -> tuple[Roadmap, bool]:
+    """The scenario's roadmap: ``base`` with the robots' starts added (a replan's), else read
+    from ``store`` when it holds it, else grown (and stored); returns it and whether it was
+    read or added to."""
+    from tmpnav.roadmap import build_roadmap, with_starts
     from tmpnav.roadmap.store import roadmap_key
 
+    if base is not None and (added := with_starts(base, world, scenario.robots, scenario.roadmap)) is not None:
+        return added, True
     if store is None:
         return build_roadmap(world, scenario.robots, scenario.roadmap), False
     key = roadmap_key(world, scenario.robots, scenario.roadmap)
@@ -272,7 +280,7 @@ def prepare(
         cache.ensure()  # an unusable cache directory fails now, not after the roadmap
     store = RoadmapStore(cache) if cache is not None else None
     with times.timed("roadmap"):
-        roadmap, roadmap_hit = roadmap_for(scenario, world, store)
+        roadmap, roadmap_hit = roadmap_for(scenario, world, store, options.overrides.roadmap_base)
         check_reachable(scenario, world, roadmap)
         if cache is not None and store is not None and scenario.models.range_sensor is not None:
             # before the oracle's workers fork: they start with the table too

@@ -437,6 +437,11 @@ class Roadmap:
     ``nodes`` (N, 2) are positions in metres; ``edges`` (E, 2) index pairs of an
     undirected graph with Euclidean ``weights`` (E,); ``instantiations`` maps a room to
     the node indices of its pose instantiations; ``starts`` maps a robot to its start node.
+
+    ``sources`` are nodes added to a grown roadmap (``base`` its fingerprint) at the starts of
+    a replan (tmpnav.roadmap.prm.with_starts): their edges lead out only, so no path between
+    the grown roadmap's nodes passes through them, and every motion from those nodes is the
+    one the grown roadmap gives.
     """
 
     nodes: np.ndarray
@@ -445,6 +450,14 @@ class Roadmap:
     instantiations: dict[str, tuple[int, ...]]
     starts: dict[str, int]
     fingerprint: str = ""  # content hash: equal fingerprints, identical roadmaps
+    sources: tuple[int, ...] = ()
+    base: str = ""  # with sources: the fingerprint of the roadmap they were added to
+
+    @property
+    def grown(self) -> str:
+        """The fingerprint of the roadmap without its sources: what decides every path that
+        does not start at a source."""
+        return self.base or self.fingerprint
 
     @property
     def n_nodes(self) -> int:

@@ -20,7 +20,7 @@ from tmpnav.errors import InputError
 from tmpnav.oracle.cache import CacheStats, NullCache
 from tmpnav.oracle.evaluate import EvalStats, Request
 from tmpnav.oracle.executors import OracleContext, Outcome, Progress, SerialExecutor
-from tmpnav.oracle.keys import context_digest, from_json, request_key, to_json
+from tmpnav.oracle.keys import context_digest, from_json, request_key, source_bytes, to_json
 from tmpnav.oracle.results import penalised
 from tmpnav.results import OracleCounts
 from tmpnav.types import MotionResult
@@ -89,6 +89,7 @@ class Oracle:
         self.executor: Executor = executor if executor is not None else SerialExecutor()
         self.progress = progress
         self.context = context_digest(ctx.scenario, ctx.world, ctx.roadmap)
+        self.sources = source_bytes(ctx.roadmap)
         self.stats = OracleStats()
         #: results of this run, by key: the searches ask the same questions again (with --no-cache too)
         self._seen: OrderedDict[str, MotionResult | None] = OrderedDict()
@@ -121,7 +122,7 @@ class Oracle:
         delta = self.ctx.scenario.planner.max_risk
         if delta is not None:
             requests = [r if r.max_risk == delta else replace(r, max_risk=delta) for r in requests]
-        keys = [request_key(self.context, self.ctx.scenario, r) for r in requests]
+        keys = [request_key(self.context, self.ctx.scenario, r, self.sources) for r in requests]
         results: dict[str, MotionResult | None] = {k: self._seen[k] for k in keys if k in self._seen}
         cached = self.cache.get_many([k for k in keys if k not in results])
         missing = sorted({k: i for i, k in enumerate(keys) if k not in cached and k not in results}.values())

@@ -13,7 +13,7 @@ from tmpnav.errors import InputError
 from tmpnav.replan.revise import Revision, revise
 from tmpnav.replan.state import TeamState, read_state
 from tmpnav.results import PlanReport
-from tmpnav.types import Scenario
+from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 
 if TYPE_CHECKING:
@@ -81,8 +81,36 @@ def _revised(
         wanted, live = set(revised.goals.all_rooms), {r.name for r in revised.robots}
         kept = (tuple((r, x) for r, x in step if x in wanted and r in live) for step in incumbent)
         revision = replace(revision, incumbent=tuple(step for step in kept if step))
-    report = pipeline.plan(scenario_path, options.but(incumbent=revision.incumbent), loaded=(revised, new_world))
+    # the world unchanged (no door opened or closed): the plan's roadmap with the robots' starts added
+    base = _grown(scenario, world, options) if new_world is world else None
+    revised_options = options.but(incumbent=revision.incumbent, roadmap_base=base)
+    report = pipeline.plan(scenario_path, revised_options, loaded=(revised, new_world))
     return replace(report, revision=revision)
+
+
+#: the roadmaps of the plans being revised, by their store key: a service revising one plan
+#: again and again reads it once
+_GROWN: dict[str, Roadmap] = {}
+
+
+def _grown(scenario: Scenario, world: World, options: Options) -> Roadmap:
+    """The roadmap the scenario's first plan was made on (the robots at their starts): from
+    the cache, else grown as ``tmpnav plan`` grows it."""
+    from tmpnav import pipeline
+    from tmpnav.cachedir import CacheDir
+    from tmpnav.roadmap.store import RoadmapStore, roadmap_key
+
+    key = roadmap_key(world, scenario.robots, scenario.roadmap)
+    if key not in _GROWN:
+        run = options.execution
+        cache = CacheDir.at(run.cache_dir) if run.use_cache else None
+        if cache is not None:
+            cache.ensure()
+        store = RoadmapStore(cache) if cache is not None else None
+        _GROWN[key] = pipeline.roadmap_for(scenario, world, store)[0]
+        while len(_GROWN) > 2:
+            _GROWN.pop(next(iter(_GROWN)))
+    return _GROWN[key]
 
 
 def nav2_files(report: PlanReport) -> dict[str, str]:

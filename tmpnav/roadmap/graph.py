@@ -29,9 +29,43 @@ def safe_weights(roadmap: Roadmap, world: World, radius: float, clearance: float
     collision bound is near 1 whatever the belief (docs/models.md, "Collision bound"), so the
     shortest path is the wrong one to bound; a detour of a few per cent through the free middle
     makes the bound useful."""
-    margin = edge_margins(roadmap, world, radius)
+    key = (roadmap.grown, world.fingerprint, radius, clearance)
+    grown = ~_touches(roadmap.edges, roadmap.sources)  # the edges of the grown roadmap
+    known = _GROWN_WEIGHTS.get(key)
+    if known is None or known.shape[0] != int(grown.sum()):
+        # the grown roadmap's edges on their own: their margins are sampled as without sources
+        e = roadmap.edges[grown]
+        margin = segment_margins(roadmap.nodes[e[:, 0]], roadmap.nodes[e[:, 1]], world, radius)
+        known = _safe(roadmap.weights[grown], margin, clearance)
+        if roadmap.grown:  # a roadmap built by hand has no fingerprint to know it by
+            _GROWN_WEIGHTS[key] = known
+            while len(_GROWN_WEIGHTS) > 4:
+                _GROWN_WEIGHTS.pop(next(iter(_GROWN_WEIGHTS)))
+    if not roadmap.sources:
+        return known.copy()
+    out = np.empty(roadmap.edges.shape[0])
+    out[grown] = known  # a replan's roadmap: only its sources' edges are new
+    e = roadmap.edges[~grown]
+    margin = segment_margins(roadmap.nodes[e[:, 0]], roadmap.nodes[e[:, 1]], world, radius)
+    out[~grown] = _safe(roadmap.weights[~grown], margin, clearance)
+    return out
+
+
+#: the safe weights of grown roadmaps' edges (:func:`safe_weights`), by roadmap, world, radius and
+#: clearance: a replan adds a few edges to a roadmap whose other weights are known
+_GROWN_WEIGHTS: dict[tuple[str, str, float, float], np.ndarray] = {}
+
+
+def _safe(weights: np.ndarray, margin: np.ndarray, clearance: float) -> np.ndarray:
     g = (np.clip(clearance - margin, 0.0, clearance) / clearance) ** 2
-    return np.asarray(roadmap.weights * (1.0 + SAFE_PENALTY * g), dtype=float)
+    return np.asarray(weights * (1.0 + SAFE_PENALTY * g), dtype=float)
+
+
+def _touches(edges: np.ndarray, nodes: tuple[int, ...]) -> np.ndarray:
+    """Which edges have an end among ``nodes``."""
+    if not nodes:
+        return np.zeros(edges.shape[0], dtype=bool)
+    return np.asarray(np.isin(edges, np.asarray(nodes)).any(axis=1))
 
 
 def edge_margins(roadmap: Roadmap, world: World, radius: float) -> np.ndarray:
@@ -93,11 +127,16 @@ class RoadmapGraph:
 
     @cached_property
     def matrix(self) -> csr_matrix:
+        """The weighted adjacency: both ways along every edge, out only from the roadmap's
+        ``sources`` (Roadmap)."""
         rm = self.roadmap
         n = rm.n_nodes
         rows = np.concatenate([rm.edges[:, 0], rm.edges[:, 1]])
         cols = np.concatenate([rm.edges[:, 1], rm.edges[:, 0]])
         w = np.concatenate([self.weights, self.weights])
+        if rm.sources:
+            into = np.isin(cols, np.asarray(rm.sources))
+            rows, cols, w = rows[~into], cols[~into], w[~into]
         return csr_matrix((w, (rows, cols)), shape=(n, n))
 
     def prepare(self, sources: list[int]) -> None:
@@ -105,7 +144,9 @@ class RoadmapGraph:
         todo = sorted({s for s in sources if s not in self._trees})
         if not todo:
             return
-        dist, pred = dijkstra(self.matrix, directed=False, indices=todo, return_predecessors=True)
+        # undirected without sources: the same trees (and ties) as the roadmaps grown before them
+        directed = bool(self.roadmap.sources)
+        dist, pred = dijkstra(self.matrix, directed=directed, indices=todo, return_predecessors=True)
         for k, s in enumerate(todo):
             self._trees[s] = (dist[k], pred[k])
 

@@ -307,6 +307,67 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
     )
 
 
+def with_starts(base: Roadmap, world: World, robots: tuple[RobotSpec, ...], params: RoadmapParams) -> Roadmap | None:
+    """``base`` (grown by :func:`build_roadmap` for this world and ``params``) with a node at each
+    robot's start: a replan's roadmap, its robots where they are now.
+
+    A start joins the ``params.neighbors`` milestones nearest to it that a straight drive reaches
+    (the segment checked as OMPL's motion validator checks an edge), as PRM joins a milestone;
+    its edges lead out only (``Roadmap.sources``), so every path between the base's nodes, and
+    every motion from them, stays as it was. A start on a node of ``base`` is that node. None
+    when a start joins no milestone (the caller grows a roadmap of its own)."""
+    if base.sources:
+        raise ValueError("with_starts: the base roadmap already has sources")
+    radius = max(r.radius for r in robots)
+    positions = np.array([[r.pose.x, r.pose.y] for r in robots])
+    free = np.ascontiguousarray(reachable_free_space(world, radius, positions), dtype=np.bool_)
+    x0, y0 = (float(v) for v in world.grid.origin)
+    inv = 1.0 / world.grid.resolution
+    longest = 0.5 * world.grid.resolution  # the validity checking resolution of _grow
+    index = {(float(x), float(y)): i for i, (x, y) in enumerate(base.nodes)}
+    nodes, edges, sources = [base.nodes], [base.edges], []
+    starts: dict[str, int] = {}
+    added: dict[tuple[float, float], int] = {}
+    for robot, (x, y) in zip(robots, positions, strict=True):
+        key = (float(x), float(y))
+        if key in index or key in added:
+            starts[robot.name] = index.get(key, added.get(key, -1))
+            continue
+        if not _free_at(key[0], key[1], free, x0, y0, inv):
+            return None
+        d = np.hypot(base.nodes[:, 0] - x, base.nodes[:, 1] - y)
+        near = np.argsort(d, kind="stable")[: params.neighbors]
+        joined = []
+        for j in near:
+            bx, by = (float(v) for v in base.nodes[j])
+            if _segment_free(key[0], key[1], bx, by, max(1, math.ceil(d[j] / longest)), free, x0, y0, inv):
+                joined.append(int(j))
+        if not joined:
+            return None
+        node = base.n_nodes + len(added)
+        added[key] = starts[robot.name] = node
+        sources.append(node)
+        nodes.append(np.array([key]))
+        edges.append(np.array([[node, j] for j in joined], dtype=np.int64))
+    all_nodes, all_edges = np.vstack(nodes), np.vstack(edges)
+    weights = np.linalg.norm(all_nodes[all_edges[:, 0]] - all_nodes[all_edges[:, 1]], axis=1)
+    weights[: base.edges.shape[0]] = base.weights
+    digest = hashlib.sha256(
+        base.fingerprint.encode() + all_nodes[base.n_nodes :].tobytes() + all_edges[base.edges.shape[0] :].tobytes()
+    )
+    digest.update(repr(sorted(starts.items())).encode())
+    return Roadmap(
+        nodes=all_nodes,
+        edges=all_edges,
+        weights=weights,
+        instantiations=dict(base.instantiations),
+        starts=starts,
+        fingerprint=digest.hexdigest(),
+        sources=tuple(sources),
+        base=base.fingerprint,
+    )
+
+
 def _components(n: int, edges: np.ndarray) -> np.ndarray:
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
