@@ -158,8 +158,12 @@ def test_goals_added_mid_run_and_a_belief_as_amcl_publishes_it(
         ),
         ("time: 1\nrobots:\n  r1: {status: asleep}\n", "robots.r1.status: 'asleep' is not a status; expected down"),
         ("robots: {}\n", "time: missing"),
+        (
+            "time: 1\nrobots:\n  r1: {pose: [3.0, 4.1, 1.57]}\ndoors: {dA: closed}\n",
+            "doors: a door closed on r1, which stands at [3.00, 4.10] in the way of the doors closed (dA)",
+        ),
     ],
-    ids=["robot", "room", "door", "pose-in-wall", "before", "after", "covariance", "status", "no-time"],
+    ids=["robot", "room", "door", "pose-in-wall", "before", "after", "covariance", "status", "no-time", "door-on-robot"],
 )
 def test_bad_state_is_one_line_and_writes_nothing(
     planned: tuple[Path, Path, Path], tmp_path: Path, state: str, fragment: str

@@ -166,3 +166,16 @@ def test_compiled_edge_checks_agree_with_ompls_discrete_motion_validator(loaded)
         answers[expected] += 1
     assert min(answers.values()) > 300  # both answers were tested
     del validator, ours, theirs
+
+
+def test_a_start_too_close_to_a_wall_for_a_milestone_is_named(loaded) -> None:  # type: ignore[no-untyped-def]
+    """A robot that fits where it stands, but nearer a wall than the radius and a grid cell that
+    the roadmap's milestones keep: one error naming the robot and the clearance, not a crash."""
+    sc, world = loaded
+    radius = max(r.radius for r in sc.robots)
+    res = world.grid.resolution
+    i, j = np.argwhere((world.clearance > radius + 0.3 * res) & (world.clearance < radius + 0.7 * res))[0]
+    x, y = world.grid.origin[0] + (j + 0.5) * res, world.grid.origin[1] + (i + 0.5) * res
+    robots = (replace(sc.robots[0], pose=replace(sc.robots[0].pose, x=float(x), y=float(y))), *sc.robots[1:])
+    with pytest.raises(RoadmapError, match=rf"robot '{sc.robots[0].name}' starts at .* closer to a wall"):
+        build_roadmap(world, robots, sc.roadmap)

@@ -94,7 +94,10 @@ def revise(
             revised, doors=tuple(replace(d, open=state.doors.get(d.name, d.open)) for d in scenario.doors)
         )
     world = world_of(revised) if state.doors else world_of(None)
-    robots = tuple(_robot(spec, doc, state, world) for spec in scenario.robots if spec.name not in down)
+    # a pose in the map as it is; then none of the doors the state closes closed on a robot
+    robots = tuple(_robot(spec, doc, state, world_of(None)) for spec in scenario.robots if spec.name not in down)
+    if state.doors:
+        _doors_clear(robots, world, state)
     done = state.visited if state.visited is not None else _arrived(doc, t)
     offset = float((doc.get("revision") or {}).get("start_time", 0.0)) + t
     revised = replace(revised, robots=robots)
@@ -169,6 +172,19 @@ def _robot(spec: RobotSpec, doc: dict[str, Any], state: TeamState, world: World)
             "a wall or an obstacle, or off the map; expected a pose in free space"
         )
     return replace(spec, pose=Pose(x, y, math.remainder(theta, 2 * math.pi)), covariance=covariance)
+
+
+def _doors_clear(robots: tuple[RobotSpec, ...], world: World, state: TeamState) -> None:
+    """No door the state closes is closed on a robot: each robot fits where it stands in the
+    map with those doors closed."""
+    for spec in robots:
+        x, y = spec.pose.x, spec.pose.y
+        if not bool(world.is_free(np.array([[x, y]]), spec.radius)[0]):
+            shut = ", ".join(d for d, is_open in state.doors.items() if not is_open) or "none"
+            raise InputError(
+                f"{state.source}: doors: a door closed on {spec.name}, which stands at [{x:.2f}, {y:.2f}] in the "
+                f"way of the doors closed ({shut}); expected doors closed where no robot stands"
+            )
 
 
 def _arrived(doc: dict[str, Any], t: float) -> tuple[str, ...]:

@@ -241,6 +241,14 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
     rng = np.random.default_rng(params.seed)
     starts = np.array([[r.pose.x, r.pose.y] for r in robots])
     free_cells = reachable_free_space(world, radius, starts)
+    si_, sj_, _ = world.grid.cells(starts)
+    for robot, (x, y), ok in zip(robots, starts, free_cells[si_, sj_], strict=True):
+        if not ok:  # OMPL would refuse it as a start state: no milestone there
+            raise RoadmapError(
+                f"robot {robot.name!r} starts at [{x:g}, {y:g}], closer to a wall or a closed door than the "
+                f"roadmap's robot radius and a grid cell ({radius + world.grid.resolution:g} m); expected a start "
+                "with that clearance"
+            )
     # instantiations only where OMPL may put milestones: one in a pocket of the room cut off by
     # noise in the map would be refused as a start state, and its room would lose it
     given = {room: np.array([[x, y]]) for room, x, y in params.poses}  # a job's goal pose: the one instantiation
@@ -333,7 +341,7 @@ def with_starts(base: Roadmap, world: World, robots: tuple[RobotSpec, ...], para
         if key in index or key in added:
             starts[robot.name] = index.get(key, added.get(key, -1))
             continue
-        if not _free_at(key[0], key[1], free, x0, y0, inv):
+        if not bool(world.is_free(np.array([key]), robot.radius)[0]):  # the robot fits where it stands
             return None
         d = np.hypot(base.nodes[:, 0] - x, base.nodes[:, 1] - y)
         near = np.argsort(d, kind="stable")[: params.neighbors]
