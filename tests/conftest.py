@@ -34,7 +34,7 @@ HEAVY: dict[str, float] = {
     "tests/test_depot_jobs.py": 30,
     "tests/task/test_search.py": 30,
     "tests/attachment/test_unfold.py": 30,
-    "tests/scenario/test_yamlio.py": 28,
+    "tests/scenario/test_yamlio.py": 8,
     "tests/task/test_bound.py": 25,
     "tests/task/test_pddl_text.py": 25,
     "tests/test_cli_search.py": 25,
