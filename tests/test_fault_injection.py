@@ -1,9 +1,10 @@
 """Fault injection: ``tmpnav plan -o DIR`` killed by SIGINT, SIGTERM or SIGKILL at several points.
 
-For each signal one cache directory and one output folder go through four runs: killed
+For each signal one cache directory and one output folder go through its runs: killed
 while the oracle's worker processes compute costs, killed while ENHSP's JVM runs (held at
 its start by a JVM option: it would run on forever if nothing ended it), killed while the
-output files are being written, then run to its end. After each kill:
+output files are being written (SIGTERM only there: :data:`POINTS_OF`), then run to its end.
+After each kill:
 
 - no process of the run is left: the oracle's workers, the JVM (which unified-planning
   starts in a session of its own, out of reach of signals to tmpnav's process group) and
@@ -200,6 +201,10 @@ def undisturbed(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 #: how each signal ends the run: Ctrl-C is exit code 130; SIGTERM and SIGKILL end it by the signal
 ENDS = {signal.SIGINT: 130, signal.SIGTERM: -signal.SIGTERM, signal.SIGKILL: -signal.SIGKILL}
+#: where each signal is sent. SIGTERM goes through the handler SIGINT goes through (tmpnav.lifetime):
+#: it is sent while the outputs are written, where its exit differs; its end of the oracle's workers
+#: and of a solving JVM is tests/oracle/test_worker_lifetime.py's and tests/task/test_enhsp_persistent.py's
+POINTS_OF = {signal.SIGINT: tuple(POINTS), signal.SIGTERM: ("writing",), signal.SIGKILL: tuple(POINTS)}
 #: the one line each says (a process killed by SIGKILL says nothing)
 SAID = {signal.SIGINT: "error: interrupted", signal.SIGTERM: "error: terminated (SIGTERM)"}
 
@@ -211,7 +216,7 @@ def test_a_killed_plan_leaves_no_process_no_half_written_file_and_the_same_next_
     cache, out, log = tmp_path / "cache", tmp_path / "out", tmp_path / "log.txt"
     shutil.copytree(undisturbed, out)  # the earlier plan, which a killed run must leave as it was
     earlier = visible(out)
-    for point in POINTS:
+    for point in POINTS_OF[sig]:
         code, started = kill_at(point, sig, plan_args(cache, out), out, log)
         said = log.read_text()
         assert code == ENDS[sig], f"{point}: exit status {code}: {said}"

@@ -19,9 +19,9 @@ those increases into action costs (``MinimizeActionCosts``), the standard PDDL
 from __future__ import annotations
 
 import itertools
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from tmpnav.errors import InputError, PlannerCrashError
 from tmpnav.task.encodings import ENCODINGS, Encoding, scaled
@@ -148,17 +148,25 @@ class ProblemBuilder:
         self.robots: dict[str, Object] = {r: Object(names.robot[r], robot_t) for r in table.robots}
         self.locs: dict[str, Object] = {loc: Object(names.location[loc], loc_t) for loc in table.locations}
         problem.add_objects([*self.robots.values(), *self.locs.values()])
+        em = problem.environment.expression_manager
+        self._exp = {o: em.ObjectExp(o) for o in (*self.robots.values(), *self.locs.values())}
         self.problem = problem
         self.targets = goals.entries  # a robot's targets and its end: rooms it may enter after others
         self.encoded = EncodedProblem(problem, encoding, names)
         self.potentials = self.encoded.potentials
 
+    def _set(self, fluent: Any, args: Sequence[Any], value: int) -> None:
+        """One initial value, its arguments and value built as expressions once: unified-planning
+        promotes each argument of ``fluent(*args)`` again on every call (the paper's encoding sets
+        82,944 pair costs on the 10-room corridor: 5.8 s that way, 2.2 s this way)."""
+        em = self.problem.environment.expression_manager
+        self.problem.set_initial_value(em.FluentExp(fluent, [self._exp[a] for a in args]), em.Int(value))
+
     def set_move_costs(self, cost: Callable[[MoveKey], int]) -> None:
         """``move-cost`` of every robot, origin and target (every grounding, 0 where no move exists)."""
         move_cost = self.problem.fluent("move-cost")
         for r, origin, dest in itertools.product(self.robots, self.locs, self.locs):
-            args = (self.robots[r], self.locs[origin], self.locs[dest])
-            self.problem.set_initial_value(move_cost(*args), cost((r, origin, dest)))
+            self._set(move_cost, (self.robots[r], self.locs[origin], self.locs[dest]), cost((r, origin, dest)))
 
     def set_pair_costs(self, values: dict[tuple[str, ...], int]) -> None:
         """``pair-cost`` for every combination of its six arguments: the pair's cost, or
@@ -172,7 +180,7 @@ class ProblemBuilder:
         never = sum(values.values()) + 1
         for r1, f1, t1, r2, f2, t2 in itertools.product(robots, locs, locs, robots, locs, locs):
             args = (robots[r1], locs[f1], locs[t1], robots[r2], locs[f2], locs[t2])
-            self.problem.set_initial_value(pair_cost(*args), values.get((r1, f1, t1, r2, f2, t2), never))
+            self._set(pair_cost, args, values.get((r1, f1, t1, r2, f2, t2), never))
 
     def add_pair_action(self, m1: MoveKey, m2: MoveKey, cost: int) -> None:
         """One grounded action moving two robots together, with goto_room's entry rules."""
