@@ -163,7 +163,18 @@ def test_goals_added_mid_run_and_a_belief_as_amcl_publishes_it(
             "doors: a door closed on r1, which stands at [3.00, 4.10] in the way of the doors closed (dA)",
         ),
     ],
-    ids=["robot", "room", "door", "pose-in-wall", "before", "after", "covariance", "status", "no-time", "door-on-robot"],
+    ids=[
+        "robot",
+        "room",
+        "door",
+        "pose-in-wall",
+        "before",
+        "after",
+        "covariance",
+        "status",
+        "no-time",
+        "door-on-robot",
+    ],
 )
 def test_bad_state_is_one_line_and_writes_nothing(
     planned: tuple[Path, Path, Path], tmp_path: Path, state: str, fragment: str
