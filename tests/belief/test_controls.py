@@ -53,7 +53,7 @@ def test_repeated_points_produce_no_steps() -> None:
     np.testing.assert_allclose(single.poses, [[0.0, 0.0, 0.3]])
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=30, deadline=None)
 @given(
     st.lists(point, min_size=1, max_size=6),
     st.floats(-np.pi, np.pi),

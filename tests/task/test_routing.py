@@ -46,7 +46,7 @@ def routes_cost(table: CostTable, goals: Goals, routes: Routes) -> float:
 small = st.tuples(st.integers(0, 2**32 - 1), st.sampled_from([2, 3]), st.integers(1, 8), st.booleans())
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(small)
 def test_routes_are_plans_and_optimal_on_metric_tables(case: tuple[int, int, int, bool]) -> None:
     seed, robots, rooms, metric = case

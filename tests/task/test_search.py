@@ -46,9 +46,10 @@ def solve(seed: int) -> tuple[float, float, float, tuple]:
 
 
 @pytest.mark.slow
-def test_the_search_reaches_the_exact_optimum_on_50_random_instances() -> None:
+def test_the_search_reaches_the_exact_optimum_on_25_random_instances() -> None:
+    """How often over more instances: benchmarks/bench_references.py (Held-Karp on the same tables)."""
     with ThreadPoolExecutor(max_workers=2) as pool:  # each search waits on ENHSP processes
-        outcomes = list(pool.map(solve, range(50)))
+        outcomes = list(pool.map(solve, range(25)))
     equal = 0
     for seed, (cost, optimum, bound, plan) in enumerate(outcomes):
         table, goals = instance(seed)
@@ -57,7 +58,7 @@ def test_the_search_reaches_the_exact_optimum_on_50_random_instances() -> None:
         assert cost <= optimum * 1.02 + 1e-6, (seed, cost, optimum)
         assert bound <= optimum + 1e-6, (seed, bound, optimum)
         equal += abs(cost - optimum) <= 1e-6 * max(1.0, optimum)
-    assert equal >= 48, f"{equal} of 50 instances at the exact optimum"
+    assert equal >= 24, f"{equal} of 25 instances at the exact optimum"
 
 
 @pytest.mark.slow
