@@ -4,8 +4,8 @@
 on one worker, handed out in collection order as workers come free. Files that take minutes
 (end-to-end runs of the planner) handed out last leave the other workers idle at the end; handed
 out first, the short files fill in around them (longest processing time first). The weights are
-rough seconds on a 2-core machine, measured with ``pytest --durations``; a file not listed runs
-after these, in its usual order.
+rough seconds on a 2-core machine, measured with ``pytest --durations`` beside the rest of the
+suite; a file not listed runs after these, in its usual order.
 """
 
 from __future__ import annotations
@@ -15,30 +15,30 @@ import pytest
 #: test file (relative to the repository) -> rough seconds it takes
 HEAVY: dict[str, float] = {
     "tests/oracle/test_ray.py": 170,  # a local Ray instance: seconds alone, minutes beside the suite
-    "tests/test_regression.py": 60,
-    "tests/test_cli_risk.py": 90,
-    "tests/test_fault_injection.py": 75,
-    "tests/test_cli_bench.py": 65,
+    "tests/test_cli_risk.py": 150,
+    "tests/test_regression.py": 110,
+    "tests/test_fault_injection.py": 110,
+    "tests/test_cli_bench.py": 85,
+    "tests/fuzz/test_fuzz_cli.py": 75,
+    "tests/attachment/test_unfold.py": 63,
+    "tests/test_cli_files.py": 63,
+    "tests/task/test_search.py": 60,
+    "tests/test_jobs.py": 55,
+    "tests/rooms/test_cli_rooms.py": 47,
     "tests/belief/test_kernel.py": 45,
-    "tests/fuzz/test_fuzz_cli.py": 45,
-    "tests/test_cli_files.py": 42,
-    "tests/test_jobs.py": 42,
+    "tests/export/test_nav2_building.py": 41,
     "tests/task/test_windows.py": 40,
     "tests/test_replan.py": 40,
-    "tests/export/test_nav2_building.py": 40,
-    "tests/rooms/test_cli_rooms.py": 36,
+    "tests/oracle/test_cache.py": 36,
     "tests/test_cli_plan.py": 35,
     "tests/task/test_objectives.py": 35,
     "tests/task/test_enhsp_persistent.py": 34,
-    "tests/oracle/test_cache.py": 33,
+    "tests/task/test_pddl_text.py": 33,
     "tests/test_depot_jobs.py": 30,
-    "tests/task/test_search.py": 30,
-    "tests/attachment/test_unfold.py": 30,
-    "tests/scenario/test_yamlio.py": 8,
+    "tests/test_cli_search.py": 26,
+    "tests/planning/test_remember.py": 25,
     "tests/task/test_bound.py": 25,
-    "tests/task/test_pddl_text.py": 25,
-    "tests/test_cli_search.py": 25,
-    "tests/belief/test_controls.py": 20,
+    "tests/oracle/test_worker_lifetime.py": 19,
     "tests/rooms/test_segment.py": 18,
     "tests/test_closed_loop.py": 15,
 }
