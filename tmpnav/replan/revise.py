@@ -95,7 +95,8 @@ def revise(
         )
     world = world_of(revised) if state.doors else world_of(None)
     # a pose in the map as it is; then none of the doors the state closes closed on a robot
-    robots = tuple(_robot(spec, doc, state, world_of(None)) for spec in scenario.robots if spec.name not in down)
+    as_it_is = world_of(None)
+    robots = tuple(_robot(spec, doc, state, as_it_is) for spec in scenario.robots if spec.name not in down)
     if state.doors:
         _doors_clear(robots, world, state)
     done = state.visited if state.visited is not None else _arrived(doc, t)

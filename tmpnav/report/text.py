@@ -321,7 +321,7 @@ def _cache_line(report: PlanReport) -> str:
     table does not hold), the task plan."""
     cache = report.cache
     roadmap = "roadmap from cache" if cache.roadmap_hit else "roadmap grown"
-    if report.roadmap.sources or (report.roadmap.base and cache.roadmap_hit):
+    if report.roadmap.base:  # tmpnav.roadmap.with_starts: a replan's roadmap
         roadmap = "the revised plan's roadmap, the robots' starts added"
     hits, misses = cache.hits, cache.misses
     if not cache.enabled:
