@@ -96,6 +96,20 @@ BUDGET_PER_ROOM_ROBOT = 0.25
 BUDGET_RANGE = (10.0, 180.0)
 
 
+#: a replan's default budget (tmpnav.replan): this share of the first plan's, at least
+#: :data:`REPLAN_MIN_BUDGET` s. A team under way waits for its replan, and a replan starts from
+#: the plan being executed: on the shipped buildings' random events (benchmarks/bench_replan.py)
+#: the full budget found no better plan than a tenth of it
+REPLAN_BUDGET_SHARE = 0.1
+REPLAN_MIN_BUDGET = 1.0
+
+
+def replan_budget(rooms: int, robots: int, given: float | None) -> float:
+    """A replan's budget: :data:`REPLAN_BUDGET_SHARE` of the budget a first plan of this size
+    has (``given``: the scenario's own), at least :data:`REPLAN_MIN_BUDGET`."""
+    return max(REPLAN_MIN_BUDGET, REPLAN_BUDGET_SHARE * time_budget(rooms, robots, given))
+
+
 def exact_fits(rooms: int, robots: int, costs: Costs) -> bool:
     """Does ``auto`` choose the exact search for this many goal rooms and robots?"""
     if costs == "carried":

@@ -26,11 +26,12 @@ from tmpnav.choices import Costs, Objective, Search, choose, paper_conflict
 from tmpnav.errors import ConflictError, InputError, Problem, RiskError, ScenarioError
 from tmpnav.heap import long_lived_frozen
 from tmpnav.results import CacheUse, PlanReport, SearchProgress, StageTimes
-from tmpnav.types import DEFAULT_RISK_SOURCE, SAFE_MARGIN, Goals, Roadmap, Scenario
+from tmpnav.types import DEFAULT_RISK_SOURCE, SAFE_MARGIN, Goals, Roadmap, RobotSpec, Scenario
 from tmpnav.world import MapImageError, World
 
 if TYPE_CHECKING:
     from tmpnav.oracle.oracle import Oracle
+    from tmpnav.oracle.table import Origin
     from tmpnav.roadmap.store import RoadmapStore
     from tmpnav.task.encode import EncodedTask
 
@@ -60,6 +61,10 @@ class Overrides:
     #: the roadmap of the plan being revised, when the world is unchanged: the revision's starts
     #: are added to it (tmpnav.roadmap.with_starts) instead of growing a roadmap of its own
     roadmap_base: Roadmap | None = None
+    #: the robots as the plan being revised started, with ``roadmap_base``: the revision's cost
+    #: table reaches the rooms' canonical states from there, as that plan's table did, and reads
+    #: its moves between rooms from the cache (tmpnav.oracle.table.Origin)
+    origins: tuple[RobotSpec, ...] = ()
 
 
 #: ``Overrides.max_risk`` that lifts the chance constraint (``--max-risk none``)
@@ -369,7 +374,8 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
         try:
             store = prep.oracle.cache if options.execution.use_cache else None
             watch = SearchRun(times, in_own_units(options.reporters.search, prep.scenario))
-            run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch)
+            origin = _origins(options.overrides, prep)
+            run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch, origin)
             run = replace(run, incumbent=options.overrides.incumbent)
             planned = plan_stage(run)
             task, apart = planned.task, None
@@ -401,6 +407,17 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
         apart=apart,
     )
     return report
+
+
+def _origins(overrides: Overrides, prep: Prepared) -> dict[str, Origin]:
+    """A replan's origins (Overrides.origins) on the roadmap it grew from, for the robots it plans."""
+    from tmpnav.oracle.table import origins
+
+    base = overrides.roadmap_base
+    if base is None or prep.roadmap.grown != base.fingerprint:
+        return {}
+    names = {r.name for r in prep.scenario.robots}
+    return origins(tuple(r for r in overrides.origins if r.name in names and r.name in base.starts), prep.world, base)
 
 
 def _keep_scans(prep: Prepared) -> None:

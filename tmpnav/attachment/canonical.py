@@ -19,14 +19,14 @@ there are few enough; the certified lower bound of the whole task is computed fr
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 from tmpnav.attachment.floors import motion_floors
 from tmpnav.choices import Costs
 from tmpnav.oracle.executors import library
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
-from tmpnav.oracle.table import arrival_state, build_table, initial_state, start_locations
+from tmpnav.oracle.table import Origin, arrival_state, build_table, initial_state, start_locations
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.model import PlanCost, entered, head_locations, robot_ends, sub_moves
 from tmpnav.task.plans import Plan
@@ -47,7 +47,7 @@ class CanonicalCosts:
 
     costs: Costs = "table"
 
-    def __init__(self, oracle: Oracle, world: World, min_gain: float):
+    def __init__(self, oracle: Oracle, world: World, min_gain: float, origin: Mapping[str, Origin] | None = None):
         self.oracle = oracle
         scenario = oracle.ctx.scenario
         self.scenario = scenario
@@ -62,6 +62,12 @@ class CanonicalCosts:
         self.canonical: dict[tuple[str, str], StartState] = {
             (r, self.start_location[r]): initial_state(scenario, oracle.ctx.roadmap.starts[r], r) for r in self.robots
         }
+        #: a replan's origins (tmpnav.oracle.table.Origin): where its robots reach the canonical
+        #: states at the other rooms from, the plan being revised's table's; the others from their starts
+        self.origin = {r: o for r, o in (origin or {}).items() if r in self.robots}
+        for r, o in self.origin.items():
+            if o.location != self.start_location[r]:
+                self.canonical[(r, o.location)] = o.state
 
     # ------------------------------------------------------------------ CostModel
 
@@ -73,7 +79,7 @@ class CanonicalCosts:
         when a sub-problem asks for it."""
         rooms = tuple(dict.fromkeys(goals.all_rooms))
         if len(self.robots) * (len(rooms) + 1) * len(rooms) <= FULL_SINGLES:
-            table = build_table(self.oracle, self.oracle_world, "goals")
+            table = build_table(self.oracle, self.oracle_world, "goals", origin=self.origin)
             for move, cost in table.single.items():
                 self.single.setdefault(move, cost)
                 self.duration.setdefault(move, table.duration[move])
@@ -231,16 +237,22 @@ class CanonicalCosts:
                 self.duration[m] = res.steps[0] * self.dt + self.scenario.goals.service(m[2])
 
     def _ensure_canonical(self, states: set[tuple[str, str]]) -> None:
-        """Canonical states at rooms: where a robot arrives driving there from its start."""
+        """Canonical states at rooms: where a robot arrives driving there from its start (from
+        its origin, in a replan)."""
         missing = sorted(s for s in states if s not in self.canonical)
         if not missing:
             return
-        requests = [Request((r,), (self.canonical[(r, self.start_location[r])],), (room,)) for r, room in missing]
+        requests = [Request((r,), (self._origin_state(r),), (room,)) for r, room in missing]
         for (r, room), res in zip(missing, self.oracle.evaluate(requests), strict=True):
             if res is not None:
                 self.canonical[(r, room)] = arrival_state(res)
-                self.single.setdefault((r, self.start_location[r], room), res.cost)
-                self.duration.setdefault((r, self.start_location[r], room), res.steps[0] * self.dt)
+                if r not in self.origin:  # the move from its start, costed on the way
+                    self.single.setdefault((r, self.start_location[r], room), res.cost)
+                    self.duration.setdefault((r, self.start_location[r], room), res.steps[0] * self.dt)
+
+    def _origin_state(self, robot: str) -> StartState:
+        o = self.origin.get(robot)
+        return o.state if o is not None else self.canonical[(robot, self.start_location[robot])]
 
     def _ensure_pairs(self, pairs: Iterable[Pair]) -> None:
         todo = [p for p in dict.fromkeys(pairs) if p not in self.pair]

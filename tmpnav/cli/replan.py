@@ -64,8 +64,10 @@ def replan(
     starts from its belief then, the goals done are left out, robots that are down leave the
     team (the others take their goals), doors close or open, goals are added or removed. The rest
     of the old plan is the search's first incumbent; move costs the change leaves valid come from
-    the cache. The revision's plan.json has the old schema, times from the revision's start, and
-    its number and start time in ``revision``. Goals no robot can reach any more are named one
+    the cache. Unless --search or --anytime-budget say otherwise, the anytime search plans it with
+    a tenth of a first plan's budget, at least 1 s: the team is waiting. The revision's
+    plan.json has the old schema, times from the revision's start, and its number and start
+    time in ``revision``. Goals no robot can reach any more are named one
     per line (exit code 12); the rest is planned and written.
     """
     from tmpnav.pipeline import pddl_texts

@@ -56,12 +56,16 @@ _LIBRARIES: dict[tuple[str, ...], MotionLibrary] = {}
 def library(ctx: OracleContext) -> MotionLibrary:
     """The per-process motion library of a context (nominal motions are memoised in it).
 
-    Keyed by content, so a Ray worker that receives the same context again reuses it.
+    Keyed by content, so a Ray worker that receives the same context again reuses it; a new
+    context takes from the library before what holds for it too (MotionLibrary.inherit).
     """
     key = (ctx.world.fingerprint, ctx.roadmap.fingerprint, repr(ctx.scenario.models), repr(ctx.scenario.robots))
     if key not in _LIBRARIES:
+        before = list(_LIBRARIES.values())
         _LIBRARIES.clear()
-        _LIBRARIES[key] = MotionLibrary(ctx.scenario, ctx.world, ctx.roadmap)
+        made = _LIBRARIES[key] = MotionLibrary(ctx.scenario, ctx.world, ctx.roadmap)
+        for other in before:  # a replan's library takes what the one before computed (MotionLibrary.inherit)
+            made.inherit(other)
     return _LIBRARIES[key]
 
 

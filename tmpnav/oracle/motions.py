@@ -75,6 +75,26 @@ class NominalMotion:
         return np.float64((self.controls**2).sum(-1).sum())
 
 
+#: the landmarks' visibility of the last worlds, by world and sensor range: a replan's library
+#: (a new context on the same world) takes it as it is
+_VISIBILITY: dict[tuple[str, float], LandmarkVisibility] = {}
+
+
+def visibility_of(world: World, sensor_range: float) -> LandmarkVisibility:
+    """The landmarks' visibility polygons of ``world`` for a sensor of ``sensor_range``."""
+    key = (world.fingerprint, sensor_range)
+    if key not in _VISIBILITY:
+        _VISIBILITY[key] = LandmarkVisibility(world, sensor_range)
+        while len(_VISIBILITY) > 2:
+            _VISIBILITY.pop(next(iter(_VISIBILITY)))
+    return _VISIBILITY[key]
+
+
+def _specs(scenario: Scenario) -> tuple[tuple[str, float, float, float], ...]:
+    """What a nominal motion takes of the robots: not where they start."""
+    return tuple((r.name, r.radius, r.speed, r.turn_rate) for r in scenario.robots)
+
+
 def stable_seed(*parts: object) -> int:
     """A 63-bit seed from any printable parts (stable across processes and machines)."""
     digest = hashlib.sha256(repr(parts).encode()).digest()
@@ -104,7 +124,7 @@ class MotionLibrary:
         radius = max(r.radius for r in scenario.robots)
         clearance = scenario.roadmap.clearance or 0.0  # 0: the paper's shortest paths
         self.graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius, clearance) if clearance > 0 else None)
-        self.visibility = LandmarkVisibility(world, scenario.models.landmark_sensor.range)
+        self.visibility = visibility_of(world, scenario.models.landmark_sensor.range)
         sensor = scenario.models.range_sensor
         # a range scan's information per cell and heading (tmpnav.world.lidar)
         self.scans: ScanInformation | None = world.scans(sensor) if sensor is not None else None
@@ -117,6 +137,32 @@ class MotionLibrary:
             if j.pose is not None and roadmap.instantiations.get(j.room)
         }
         self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
+
+    def inherit(self, other: MotionLibrary) -> None:
+        """Take what ``other`` computed that holds here too, when it is the library of the same
+        world, models and robots on the same roadmap with other sources (a replan's starts,
+        Roadmap.sources; tmpnav.roadmap.with_starts): the shortest-path trees from the nodes
+        both share and the nominal motions from them (no path between those nodes passes
+        through a source). A planning service revising a plan again and again then computes
+        only what its new starts change."""
+        models, its = self.scenario.models, other.scenario.models
+        same = (
+            self.world.fingerprint == other.world.fingerprint
+            and self.roadmap.grown == other.roadmap.grown
+            and repr(models) == repr(its)
+            and _specs(self.scenario) == _specs(other.scenario)
+            and self.goal_headings == other.goal_headings
+        )
+        if not same:
+            return
+        self.graph.inherit(other.graph)
+        shared = self.roadmap.n_nodes - len(self.roadmap.sources)
+        for key, motion in other._motions.items():
+            if key[1] < shared and key not in self._motions:
+                self._motions[key] = motion
+        for key2, along in other._along.items():
+            if max(key2[1]) < shared:
+                self._along.setdefault(key2, along)
 
     def motion(self, robot: str, start: int, heading: float, goal: int) -> NominalMotion | None:
         """The nominal motion start -> goal, or None if the roadmap does not connect them."""

@@ -11,6 +11,11 @@ canonical start per robot and location:
   directly from its start (the chosen instantiation, the arrival heading, the belief at
   arrival).
 
+A replan's table (:mod:`tmpnav.replan`) costs the moves from the robots' new starts, but
+reaches the other rooms' canonical states from where the revised plan's robots started (its
+:class:`Origin`): the moves between rooms are that plan's, read from the cache, instead of
+a table of its own from every new start.
+
 Pairs start from the two robots' canonical states with uncorrelated beliefs. The
 re-simulation of the final plan (:mod:`tmpnav.resimulate`) carries the true beliefs,
 cross-correlations included, from action to action and reports how far its cost is from
@@ -20,21 +25,40 @@ the table's.
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
-from tmpnav.types import CostTable, MotionResult, MoveKey, Scenario, cov3, vec3
+from tmpnav.types import CostTable, MotionResult, MoveKey, Roadmap, RobotSpec, Scenario, cov3, vec3
 from tmpnav.world import World
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Where a robot's canonical states at rooms are reached from: its start location (a room,
+    or ``<robot>-start``) and its state there. A table's robots start at their origins unless
+    a replan gives them others (:func:`origins`)."""
+
+    location: str
+    state: StartState
+
+
+def origins(robots: tuple[RobotSpec, ...], world: World, base: Roadmap) -> dict[str, Origin]:
+    """The origins of a replan's table: the robots as the plan being revised had them at its
+    start, on the roadmap ``base`` that plan was made on (a replan's roadmap keeps its nodes)."""
+    return {r.name: Origin(start_location(r, world), start_state(r, base.starts[r.name])) for r in robots}
 
 
 def start_locations(scenario: Scenario, world: World) -> dict[str, str]:
     """Each robot's start location: the room its start pose lies in, else ``<robot>-start``."""
-    out = {}
-    for r in scenario.robots:
-        room = world.room_of([r.pose.x, r.pose.y])  # type: ignore[arg-type]
-        out[r.name] = room if room is not None else f"{r.name}-start"
-    return out
+    return {r.name: start_location(r, world) for r in scenario.robots}
+
+
+def start_location(robot: RobotSpec, world: World) -> str:
+    """The room the robot's start pose lies in, else ``<robot>-start``."""
+    room = world.room_of([robot.pose.x, robot.pose.y])  # type: ignore[arg-type]
+    return room if room is not None else f"{robot.name}-start"
 
 
 def destinations(scenario: Scenario, mode: str) -> dict[str, tuple[str, ...]]:
@@ -51,9 +75,13 @@ def destinations(scenario: Scenario, mode: str) -> dict[str, tuple[str, ...]]:
 
 
 def initial_state(scenario: Scenario, roadmap_start: int, robot: str) -> StartState:
-    spec = scenario.robot(robot)
-    pose = spec.pose
-    return StartState(roadmap_start, pose.theta, (pose.x, pose.y, pose.theta), spec.covariance)
+    return start_state(scenario.robot(robot), roadmap_start)
+
+
+def start_state(robot: RobotSpec, node: int) -> StartState:
+    """The robot at its start pose, with its initial belief, at roadmap node ``node``."""
+    pose = robot.pose
+    return StartState(node, pose.theta, (pose.x, pose.y, pose.theta), robot.covariance)
 
 
 def arrival_state(result: MotionResult, i: int = 0) -> StartState:
@@ -69,25 +97,30 @@ def build_table(
     pair_filter: Callable[[MoveKey, MoveKey], bool] | None = None,
     filter_key: str = "",
     pair_min_gain: float | None = None,
+    origin: Mapping[str, Origin] | None = None,
 ) -> CostTable:
     """The cost table: single moves for every robot, and the pairs ``pair_filter`` admits
     (none without a filter). The filter comes from the task encoding: only pairs that can
     ever apply together are worth simulating; ``filter_key`` names it for the cache. With
     ``pair_min_gain``, pairs proved unable to save that fraction are left out unsimulated.
+    ``origin`` (a replan's, :func:`origins`): where each robot named reaches its canonical
+    states at the rooms from, instead of its start.
 
     The whole table is also cached as one entry, so a warm run reads one record instead
     of one per action; its key covers the oracle's context (code, world, roadmap, models,
-    weights), the robots, the destinations and the pair filter.
+    weights), the robots, the destinations, the pair filter and the origins.
     """
     scenario = oracle.ctx.scenario
     starts = start_locations(scenario, world)
     dests = destinations(scenario, dest_mode)
-    key = table_key(oracle, starts, dests, pair_filter is not None, f"{filter_key}|{pair_min_gain!r}")
+    origin = dict(origin or {})
+    named = f"{filter_key}|{pair_min_gain!r}|{sorted(origin.items())!r}"
+    key = table_key(oracle, starts, dests, pair_filter is not None, named)
     found = oracle.cache.get_many([key]).get(key)
     if found is not None:
         oracle.stats.table_hit = True
         return _table_from_json(found).with_service(scenario.goals)
-    table = _compute_table(oracle, starts, dests, pair_filter, pair_min_gain)
+    table = _compute_table(oracle, starts, dests, pair_filter, pair_min_gain, origin)
     oracle.cache.put_many({key: _table_to_json(table)})  # the motions' own times: service added on reading
     return table.with_service(scenario.goals)
 
@@ -106,22 +139,36 @@ def _compute_table(
     dests: dict[str, tuple[str, ...]],
     pair_filter: Callable[[MoveKey, MoveKey], bool] | None,
     pair_min_gain: float | None = None,
+    origin: dict[str, Origin] | None = None,
 ) -> CostTable:
     scenario, roadmap = oracle.ctx.scenario, oracle.ctx.roadmap
+    origin = origin or {}
     dt = scenario.models.dt
     duration: dict[MoveKey, float] = {}
     canonical: dict[tuple[str, str], StartState] = {}
     for r in scenario.robots:
         canonical[(r.name, starts[r.name])] = initial_state(scenario, roadmap.starts[r.name], r.name)
 
-    # wave 1: from each robot's start to every destination; fixes the canonical starts
+    # wave 1: from each robot's start to every destination; fixes the canonical starts (a
+    # robot with an origin: from there, the origin's room its own state)
     first = [(r, starts[r], d) for r in dests for d in dests[r] if d != starts[r]]
+    reached = [(r, d) for r in dests if r in origin for d in dests[r] if d not in (starts[r], origin[r].location)]
+    requests = [_single(canonical, k) for k in first]
+    requests += [Request((r,), (origin[r].state,), (d,)) for r, d in reached]
+    results = oracle.evaluate(requests)
     singles: dict[MoveKey, float] = {}
-    for key, res in zip(first, oracle.evaluate([_single(canonical, k) for k in first]), strict=True):
+    for key, res in zip(first, results[: len(first)], strict=True):
         if res is not None:
             singles[key] = res.cost
             duration[key] = res.steps[0] * dt
-            canonical[(key[0], key[2])] = arrival_state(res)
+            if key[0] not in origin:
+                canonical[(key[0], key[2])] = arrival_state(res)
+    for (name, d), res in zip(reached, results[len(first) :], strict=True):
+        if res is not None:
+            canonical[(name, d)] = arrival_state(res)
+    for name, o in origin.items():
+        if name in dests and o.location in dests[name] and o.location != starts[name]:
+            canonical[(name, o.location)] = o.state
     # wave 2: between destinations, from their canonical starts
     second = [
         (r, a, b)

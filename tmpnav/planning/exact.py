@@ -15,7 +15,7 @@ def exact_table(run: TaskRun) -> Planned:
     """The table of every move and paired move the encoding asks for, and its optimal plan: ENHSP's
     for the sum of action costs, the A* over every schedule (tmpnav.task.schedules) when the
     objective prices time; where that is too large, the anytime search."""
-    table = full_table(run.scenario, run.world, run.canonical.oracle, run.times)
+    table = full_table(run.scenario, run.world, run.canonical.oracle, run.times, run.canonical.origin)
     task = TaskProblem.of(run.scenario, table)
     if not task.span_weight and not run.goals.windows:  # ENHSP's search has no clock for windows
         return Planned(table, plan_task(task, run.store, run.replan, run.times))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -17,6 +18,7 @@ from tmpnav.world import World
 
 if TYPE_CHECKING:
     from tmpnav.oracle.oracle import Oracle
+    from tmpnav.oracle.table import Origin
 
 
 @dataclass(frozen=True)
@@ -38,10 +40,18 @@ class TaskRun:
 
     @classmethod
     def of(
-        cls, scenario: Scenario, world: World, oracle: Oracle, store: EntryStore | None, replan: bool, search: SearchRun
+        cls,
+        scenario: Scenario,
+        world: World,
+        oracle: Oracle,
+        store: EntryStore | None,
+        replan: bool,
+        search: SearchRun,
+        origin: Mapping[str, Origin] | None = None,
     ) -> TaskRun:
-        """The task stage of a run whose oracle is open: its cost models on that oracle."""
-        canonical = CanonicalCosts(oracle, world, scenario.planner.pair_min_gain)
+        """The task stage of a run whose oracle is open: its cost models on that oracle
+        (``origin``: a replan's, tmpnav.oracle.table.origins)."""
+        canonical = CanonicalCosts(oracle, world, scenario.planner.pair_min_gain, origin)
         choice = choice_for(scenario)
         return cls(scenario, world, choice, canonical, CarriedCosts(oracle, canonical), store, replan, search)
 

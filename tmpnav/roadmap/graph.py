@@ -116,6 +116,11 @@ def _least_clearance(
     return out
 
 
+def _base_edges(roadmap: Roadmap) -> int:
+    """How many of the roadmap's edges are its base's (a source's edges come after them)."""
+    return int(roadmap.edges.shape[0] - np.isin(roadmap.edges, np.asarray(roadmap.sources)).any(axis=1).sum())
+
+
 class RoadmapGraph:
     """Shortest-path queries on a roadmap; one Dijkstra run per source node, memoised.
     ``weights`` replace the roadmap's edge lengths (:func:`safe_weights`)."""
@@ -138,6 +143,25 @@ class RoadmapGraph:
             into = np.isin(cols, np.asarray(rm.sources))
             rows, cols, w = rows[~into], cols[~into], w[~into]
         return csr_matrix((w, (rows, cols)), shape=(n, n))
+
+    def inherit(self, other: RoadmapGraph) -> None:
+        """Take ``other``'s shortest-path trees from the nodes both share, when both are the
+        same roadmap with other sources (Roadmap.sources, a replan's starts): no path between
+        those nodes passes through a source, so each tree is the same on them; the sources of
+        this roadmap are unreached from there."""
+        mine, theirs = self.roadmap, other.roadmap
+        shared = mine.n_nodes - len(mine.sources)
+        if mine.grown != theirs.grown or theirs.n_nodes - len(theirs.sources) != shared:
+            return
+        if not np.array_equal(self.weights[: _base_edges(mine)], other.weights[: _base_edges(theirs)]):
+            return
+        pad = mine.n_nodes - shared
+        for s, (dist, pred) in other._trees.items():
+            if s < shared and s not in self._trees:
+                self._trees[s] = (
+                    np.concatenate([dist[:shared], np.full(pad, np.inf)]),
+                    np.concatenate([pred[:shared], np.full(pad, -9999, dtype=pred.dtype)]),
+                )
 
     def prepare(self, sources: list[int]) -> None:
         """Run Dijkstra from many sources in one compiled call."""

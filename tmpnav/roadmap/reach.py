@@ -61,11 +61,8 @@ def roadmap_cuts(scenario: Scenario, world: World, roadmap: Roadmap) -> str | No
 def free_space_joins(scenario: Scenario, world: World, robot: str, room: str) -> bool:
     """Is there room for ``robot`` all the way from its start into the room (the free space
     the roadmap samples, tmpnav.roadmap.prm.reachable_free_space)?"""
-    from scipy import ndimage
-
     spec = scenario.robot(robot)
-    free = world.clearance >= spec.radius + world.grid.resolution
-    labels, _ = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))
+    labels = world.free_components(spec.radius)
     i, j, _ = world.grid.cells(np.array([[spec.pose.x, spec.pose.y]]))
     start = labels[i[0], j[0]]
     inside = world.free_cells_in_room(room, spec.radius)

@@ -16,10 +16,11 @@ The search edits plans only through :func:`splice`, and keeps only plans that
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from tmpnav.types import Goals, MoveKey
+from tmpnav.types import CostTable, Goals, MoveKey
 
 Step = tuple[MoveKey, ...]
 Plan = tuple[Step, ...]
@@ -119,6 +120,42 @@ def with_origins(steps: Iterable[Sequence[tuple[str, str]]], start_location: dic
             at[r] = t
         out.append(moves)
     return tuple(out)
+
+
+def with_missing(plan: Plan, rules: Rules, singles: CostTable) -> Plan:
+    """The plan with each goal room it leaves undone inserted where the single moves' costs
+    rise least (cheapest insertion, as dynamic vehicle routing takes a new order into routes
+    under way): as a move of a robot that may visit it, before one of that robot's moves or
+    after its last. The plan as it is when nothing is missing, when the plan breaks the rules,
+    or for a room no single move reaches."""
+    try:
+        state = rules.run(plan)
+    except PlanError:
+        return plan
+    missing: list[tuple[str | None, str]] = [(None, x) for x in rules.goals.required if x not in state.visited]
+    missing += sorted((r, x) for r, x in rules.targets - state.visited_by)
+    if not missing:
+        return plan
+    steps = targets_only(plan)
+    for robot, room in missing:
+        robots = [robot] if robot is not None else sorted(dict.fromkeys(m[0] for m in singles.single))
+        best: tuple[float, int, str] | None = None
+        for r in robots:
+            if not rules.goals.may_visit(r, room):
+                continue
+            route = [(k, t) for k, step in enumerate(steps) for who, t in step if who == r]
+            for p in range(len(route) + 1):
+                before = rules.start_location[r] if p == 0 else route[p - 1][1]
+                rise = singles.single.get((r, before, room), math.inf)
+                if p < len(route):
+                    after = route[p][1]
+                    rise += singles.single.get((r, room, after), math.inf) - singles.single.get((r, before, after), 0.0)
+                at = route[p][0] if p < len(route) else len(steps)
+                if math.isfinite(rise) and (best is None or rise < best[0]):
+                    best = (rise, at, r)
+        if best is not None:
+            steps.insert(best[1], ((best[2], room),))
+    return with_origins(steps, rules.start_location)
 
 
 def targets_only(plan: Iterable[Step]) -> list[tuple[tuple[str, str], ...]]:

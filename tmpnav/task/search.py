@@ -51,7 +51,7 @@ from tmpnav.task.model import CostModel, PlanCost
 from tmpnav.task.model import entered as entered_by
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.pddl_text import Clocks, PddlTask, write_task
-from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_origins
+from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_missing, with_origins
 from tmpnav.task.routes import route_edits
 from tmpnav.task.routing import solve_routes
 from tmpnav.task.solve import Background
@@ -249,7 +249,7 @@ class AnytimeSearch:
         plan, start = self.first_plan(singles)
         best, cost = plan, self.cost(plan)
         for name, seed in (seeds or {}).items():
-            seed = self.canonical(seed)
+            seed = self.canonical(with_missing(seed, self.rules, singles))  # a replan's new goals put in
             if not self.rules.valid(seed):
                 continue
             seed_cost = self.cost(seed)

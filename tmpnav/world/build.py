@@ -37,6 +37,8 @@ class World:
     _reach: dict[float, SectorReach] = field(default_factory=dict, repr=False)  # radius -> its cells' reach
     _scans: dict[RangeSensor, ScanInformation] = field(default_factory=dict, repr=False)  # sensor -> its scans
     _sdf: list[np.ndarray] = field(default_factory=list, repr=False)  # the signed distance field, once computed
+    _components: dict[float, np.ndarray] = field(default_factory=dict, repr=False)  # radius -> free-space labels
+    _polygons: list[tuple[str, np.ndarray, np.ndarray]] = field(default_factory=list, repr=False)  # name, vertices, box
 
     def is_free(self, points: np.ndarray, radius: float) -> np.ndarray:
         """Whether a disc of ``radius`` centred at each point (..., 2) is collision-free."""
@@ -53,6 +55,17 @@ class World:
         if radius not in self._reach:
             self._reach[radius] = SectorReach(self.grid, self.clearance, radius)
         return self._reach[radius]
+
+    def free_components(self, radius: float) -> np.ndarray:
+        """The connected components of the free space of a disc of ``radius`` (the cells
+        :meth:`is_free` accepts, 8-connected): a label per cell, 0 where it does not fit;
+        computed when first asked for and remembered for the world's lifetime."""
+        if radius not in self._components:
+            from scipy import ndimage
+
+            free = self.clearance >= radius + self.grid.resolution
+            self._components[radius] = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))[0]
+        return self._components[radius]
 
     @property
     def signed_distance(self) -> np.ndarray:
@@ -81,9 +94,15 @@ class World:
 
     def room_of(self, point: np.ndarray) -> str | None:
         """The name of the first room containing ``point`` (2,), or None."""
-        for room in self.rooms:
-            if points_in_polygon(np.atleast_2d(point), np.array(room.polygon))[0]:
-                return room.name
+        if not self._polygons:
+            for room in self.rooms:
+                vertices = np.array(room.polygon, dtype=float)
+                self._polygons.append((room.name, vertices, np.r_[vertices.min(axis=0), vertices.max(axis=0)]))
+        p = np.atleast_2d(np.asarray(point, dtype=float))
+        x, y = float(p[0, 0]), float(p[0, 1])
+        for name, vertices, box in self._polygons:
+            if box[0] <= x <= box[2] and box[1] <= y <= box[3] and points_in_polygon(p, vertices)[0]:
+                return name
         return None
 
     def free_cells_in_room(self, name: str, radius: float) -> np.ndarray:

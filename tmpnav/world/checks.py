@@ -13,7 +13,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-from scipy import ndimage
 
 from tmpnav.errors import Problem
 from tmpnav.scenario import display_path
@@ -265,8 +264,7 @@ def _reachability(scenario: Scenario, world: World, robots: list, problem) -> li
     for robot in robots:
         by_radius.setdefault(robot.radius, []).append(robot)
     for radius, group in by_radius.items():
-        free = world.clearance >= radius + world.grid.resolution
-        labels, _ = ndimage.label(free, structure=np.ones((3, 3), dtype=bool))
+        labels = world.free_components(radius)
         for room in scenario.rooms:
             cells = world.free_cells_in_room(room.name, radius)
             if cells.shape[0] == 0:
