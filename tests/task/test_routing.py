@@ -98,6 +98,20 @@ def test_a_solution_limit_makes_runs_identical() -> None:
     assert first == second
 
 
+def test_the_local_search_starts_from_the_routes_given() -> None:
+    """A replan's routes under way: one solution later they are those routes or better; routes
+    the model cannot take (a room that is no task) leave OR-Tools to its own first solution."""
+    table, goals = building_instance(random.Random(3), 20, 3)
+    best = solve_routes(table, goals, time_limit=30.0, solution_limit=300)
+    given = solve_routes(table, goals, time_limit=30.0, solution_limit=1, initial=dict(best.rooms))
+    assert given.rooms == best.rooms and routes_cost(table, goals, given) == pytest.approx(best.cost)
+    reversed_routes = {r: tuple(reversed(xs)) for r, xs in best.rooms.items()}
+    worse = solve_routes(table, goals, time_limit=30.0, solution_limit=1, initial=reversed_routes)
+    assert worse.cost <= sum(table.single.get(m, math.inf) for m in Routes(reversed_routes, 0.0, "", "").moves(table))
+    odd = solve_routes(table, goals, time_limit=30.0, solution_limit=300, initial={"r1": ("no-such-room",)})
+    assert odd == best
+
+
 def test_missing_moves_are_never_used() -> None:
     """Remove robot r1's cheap moves between neighbours: its routes must go around them."""
     table, goals = building_instance(random.Random(5), 12, 2, max_pairs=0)

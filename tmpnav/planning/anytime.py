@@ -9,6 +9,7 @@ from tmpnav.planning.run import Planned, TaskRun
 from tmpnav.planning.table import full_table
 from tmpnav.task.bound import Bound
 from tmpnav.task.plans import Plan, with_origins
+from tmpnav.task.search import UNDER_WAY
 from tmpnav.task.stage import AnytimeTask, TaskProblem, plan_anytime, plan_task, warm_up
 
 #: seconds of the run's budget kept for what runs after the search's budget is spent (its last
@@ -30,7 +31,7 @@ def _incumbent(run: TaskRun) -> dict[str, Plan]:
     the search drops a seed its rules refuse)."""
     if not run.incumbent:
         return {}
-    return {"the plan being executed": with_origins(run.incumbent, run.canonical.start_location)}
+    return {UNDER_WAY: with_origins(run.incumbent, run.canonical.start_location)}
 
 
 def anytime_carried(run: TaskRun) -> Planned:

@@ -8,7 +8,7 @@ from dataclasses import replace
 from tmpnav.attachment.floors import motion_floors
 from tmpnav.oracle.executors import library
 from tmpnav.planning.run import TaskRun
-from tmpnav.task.bound import Bound, lower_bound, makespan_bound
+from tmpnav.task.bound import CUT_ROUNDS, Bound, lower_bound, makespan_bound
 from tmpnav.types import CostTable, Goals
 
 #: paired moves beyond which the bound of the table gives way to the motion floors: bounding
@@ -39,23 +39,25 @@ def certified_bound(run: TaskRun) -> Bound:
             if sp.encoding != "mixed":
                 table = replace(table, pair={})
             bound = lower_bound(table, goals, sp.pair_min_gain)
+    # a replan (its incumbent the plan under way) has a short budget: the plain LP, no cuts
+    rounds = 0 if run.incumbent else CUT_ROUNDS
     if bound is None:
-        bound = lower_bound(floors, goals, 0.0)
+        bound = lower_bound(floors, goals, 0.0, rounds)
         bound = replace(bound, relaxation=f"motion floors, {bound.relaxation}")
     if not run.span_weight:
         return bound
-    span = max(makespan_bound(floors, goals), _work_bound(floors, goals))
+    span = max(makespan_bound(floors, goals), _work_bound(floors, goals, rounds))
     value = bound.value + run.span_weight * span
     parts = {**bound.parts, "makespan": span}
     return replace(bound, value=value, relaxation=f"{bound.relaxation} + makespan floor {span:.1f} s", parts=parts)
 
 
-def _work_bound(floors: CostTable, goals: Goals) -> float:
+def _work_bound(floors: CostTable, goals: Goals, rounds: int = CUT_ROUNDS) -> float:
     """A lower bound on every schedule's makespan: the relaxation of :func:`lower_bound` over
     the moves' time floors bounds the summed time of every plan's moves (the argument of
     tmpnav/task/bound.py holds for any non-negative move prices, and a paired move takes each
     of its robots at least its own floor), the robots share that driving and each is busy for
     at most the makespan, so the makespan is at least the sum over the number of robots."""
     durations = replace(floors, single={m: floors.duration[m] for m in floors.single if m in floors.duration})
-    work = lower_bound(durations, goals, 0.0).value
+    work = lower_bound(durations, goals, 0.0, rounds).value
     return max(0.0, work) / max(1, len(floors.robots)) if math.isfinite(work) else 0.0

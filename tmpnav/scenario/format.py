@@ -505,12 +505,12 @@ PLANNER = Section(
         ),
         "search": Field(
             Choice(choices=SEARCH_CHOICES),
-            "task-level search: exact (one optimal ENHSP search over the whole cost table), anytime (large-neighbourhood search with ENHSP on sub-problems and a certified lower bound), or auto (exact where it finishes quickly)",
+            "task-level search: exact (one optimal ENHSP search over the whole cost table), anytime (large-neighbourhood search with ENHSP on sub-problems and a certified lower bound), or auto (exact where it finishes quickly; a replan: anytime)",
             default="auto",
         ),
         "time_budget": Field(
             Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
-            "anytime search: time budget for the whole run; it stops earlier when the plan is proved optimal or no neighbourhood improves it (default: 0.25 s per goal room and robot, from 10 s to 180 s)",
+            "anytime search: time budget for the whole run; it stops earlier when the plan is proved optimal or no neighbourhood improves it (default: 0.25 s per goal room and robot, from 10 s to 180 s; a replan has a tenth of it, at least 1 s)",
             default=None,
         ),
         "objective": Field(

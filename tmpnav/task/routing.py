@@ -97,13 +97,16 @@ def solve_routes(
     first_solution: str = "PATH_CHEAPEST_ARC",
     span_weight: float = 0.0,
     arc_costs: bool = True,
+    initial: dict[str, tuple[str, ...]] | None = None,
 ) -> Routes:
     """Routes for the robots that visit every goal, by OR-Tools within ``time_limit`` s.
 
     ``solution_limit`` stops the search after that many solutions (reproducible runs);
     ``first_solution`` is one of ``FIRST_SOLUTION``; ``span_weight`` prices a second of the
-    routes' makespan, ``arc_costs=False`` leaves the moves' costs out (min-max routing). See
-    the module docstring for the model.
+    routes' makespan, ``arc_costs=False`` leaves the moves' costs out (min-max routing).
+    ``initial`` (each robot's rooms in order: a replan's plan under way) is the solution the
+    local search starts from instead of a first solution of its own, when the model accepts it.
+    See the module docstring for the model.
     """
     if first_solution not in FIRST_SOLUTION:
         raise ValueError(f"first_solution {first_solution!r} is not one of {', '.join(FIRST_SOLUTION)}")
@@ -131,7 +134,7 @@ def solve_routes(
         model.routing.AddDisjunction([model.manager.NodeToIndex(node)], round(goals.optional[x] * COST_SCALE))
     if (span_weight > 0 or goals.windows) and table.duration:
         model.add_time(span_weight, goals)
-    return model.solve(time_limit, solution_limit, first_solution)
+    return model.solve(time_limit, solution_limit, first_solution, initial)
 
 
 def _waypoints(table: CostTable, goals: Goals) -> list[str]:
@@ -270,7 +273,13 @@ class _Model:
     def _has_move(self, v: int, i: int, j: int) -> bool:
         return (self.table.robots[v], self.location[i], self.location[j]) in self.table.single
 
-    def solve(self, time_limit: float, solution_limit: int | None, first_solution: str) -> Routes:
+    def solve(
+        self,
+        time_limit: float,
+        solution_limit: int | None,
+        first_solution: str,
+        initial: dict[str, tuple[str, ...]] | None = None,
+    ) -> Routes:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
 
         params = pywrapcp.DefaultRoutingSearchParameters()
@@ -279,7 +288,11 @@ class _Model:
         params.time_limit.FromMilliseconds(max(1, round(time_limit * 1000)))
         if solution_limit is not None:
             params.solution_limit = solution_limit
-        solution = self.routing.SolveWithParameters(params)
+        start = self._initial(initial, params) if initial else None
+        if start is not None:
+            solution = self.routing.SolveFromAssignmentWithParameters(start, params)
+        else:
+            solution = self.routing.SolveWithParameters(params)
         status = routing_enums_pb2.RoutingSearchStatus.Value.Name(self.routing.status())
         proved = {"ROUTING_OPTIMAL": "optimal", "ROUTING_INFEASIBLE": "infeasible"}.get(status, "nothing")
         if solution is None:
@@ -289,6 +302,28 @@ class _Model:
         for r, here, room in Routes(rooms, 0.0, status, proved).moves(self.table):
             cost += self.table.single[(r, here, room)]
         return Routes(rooms, cost, status, proved)
+
+    def _initial(self, routes: dict[str, tuple[str, ...]], params: object) -> object | None:
+        """The assignment of ``routes`` (each robot's rooms in order, its end left out: the end
+        node is its route's end), or None when a room is no task of the robot or the model
+        refuses the routes."""
+        nodes: list[list[int]] = []
+        free = {j: self.location[j] for j in range(self.first_task, len(self.location))}
+        for v, r in enumerate(self.table.robots):
+            end = self.location[self.n_v + v]
+            rooms = list(routes.get(r, ()))
+            if end and rooms and rooms[-1] == end:
+                rooms.pop()
+            route = []
+            for room in rooms:
+                node = next((j for j, x in free.items() if x == room and v in self.vehicles[j]), None)
+                if node is None:
+                    return None
+                route.append(self.manager.NodeToIndex(node))
+                del free[node]
+            nodes.append(route)
+        self.routing.CloseModelWithParameters(params)
+        return self.routing.ReadAssignmentFromRoutes(nodes, True)
 
     def _route(self, solution: object, v: int) -> tuple[str, ...]:
         index, out = self.routing.Start(v), list[str]()

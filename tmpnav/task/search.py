@@ -37,7 +37,7 @@ import functools
 import os
 import random
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future
 from dataclasses import dataclass, field, replace
 from typing import Literal
@@ -199,8 +199,9 @@ class AnytimeSearch:
 
     # ------------------------------------------------------------------ start
 
-    def first_plan(self, singles: CostTable) -> tuple[Plan, str]:
-        """OR-Tools' routes on the single moves, as a plan of single moves."""
+    def first_plan(self, singles: CostTable, start_from: Plan | None = None) -> tuple[Plan, str]:
+        """OR-Tools' routes on the single moves, as a plan of single moves; its local search
+        starts from ``start_from``'s routes when given (a replan's plan under way)."""
         opts = self.options
         # guided local search stops after ROUTING_SOLUTIONS solutions (the same routes on every run),
         # or at its time limit on a very large or slow problem
@@ -213,6 +214,7 @@ class AnytimeSearch:
                 time_limit=max(0.1, min(limit, self.left())),
                 solution_limit=FEW_ROUTING_SOLUTIONS if few else ROUTING_SOLUTIONS,
                 span_weight=opts.span_weight,
+                initial=None if start_from is None else _routes_of(start_from, self.model.robots),
             )
         if not routes.found:
             raise PlannerError(
@@ -246,12 +248,15 @@ class AnytimeSearch:
         self.near = Closeness(singles, self.model.start_location, self.model.robots)
         taken = set(self.goals.all_rooms) | set(self.model.start_location.values())
         self.waypoints = tuple(dict.fromkeys(t for _, _, t in singles.single if t not in taken))
-        plan, start = self.first_plan(singles)
+        # the seeds with a replan's new goals put in; OR-Tools' routes start from the plan under way
+        valid = {
+            name: p
+            for name, seed in (seeds or {}).items()
+            if self.rules.valid(p := self.canonical(with_missing(seed, self.rules, singles)))
+        }
+        plan, start = self.first_plan(singles, valid.get(UNDER_WAY))
         best, cost = plan, self.cost(plan)
-        for name, seed in (seeds or {}).items():
-            seed = self.canonical(with_missing(seed, self.rules, singles))  # a replan's new goals put in
-            if not self.rules.valid(seed):
-                continue
+        for name, seed in valid.items():
             seed_cost = self.cost(seed)
             if self.value(seed_cost) < self.value(cost):
                 best, cost, start = seed, seed_cost, name
@@ -549,6 +554,11 @@ class AnytimeSearch:
         self.watch.note(cost, what)
 
 
+#: the name of a seed that is the plan being executed (a replan's incumbent): OR-Tools' routes
+#: start from it
+UNDER_WAY = "the plan being executed"
+
+
 def search(
     model: CostModel,
     goals: Goals,
@@ -559,3 +569,12 @@ def search(
 ) -> SearchResult:
     """Run the anytime search (see the module docstring)."""
     return AnytimeSearch(model, goals, options, run, proves_optimal).run(seeds)
+
+
+def _routes_of(plan: Plan, robots: Sequence[str]) -> dict[str, tuple[str, ...]]:
+    """Each robot's rooms in the order the plan takes it there."""
+    out: dict[str, list[str]] = {r: [] for r in robots}
+    for step in plan:
+        for r, _, target in step:
+            out[r].append(target)
+    return {r: tuple(xs) for r, xs in out.items()}
