@@ -163,16 +163,42 @@ class RoadmapGraph:
                     np.concatenate([pred[:shared], np.full(pad, -9999, dtype=pred.dtype)]),
                 )
 
+    @cached_property
+    def base_matrix(self) -> csr_matrix:
+        """The adjacency of the roadmap without its sources: the matrix of the roadmap they
+        were added to, entry for entry (its edges come first)."""
+        rm = self.roadmap
+        shared, kept = rm.n_nodes - len(rm.sources), _base_edges(rm)
+        edges, w = rm.edges[:kept], self.weights[:kept]
+        rows = np.concatenate([edges[:, 0], edges[:, 1]])
+        cols = np.concatenate([edges[:, 1], edges[:, 0]])
+        return csr_matrix((np.concatenate([w, w]), (rows, cols)), shape=(shared, shared))
+
     def prepare(self, sources: list[int]) -> None:
-        """Run Dijkstra from many sources in one compiled call."""
+        """Run Dijkstra from many sources in one compiled call. From a node of a roadmap with
+        sources that is not one of them: on the roadmap without them (undirected, as it was
+        searched before the sources were added: the same trees, ties included), the sources
+        unreached; from a source: directed, never into another source."""
         todo = sorted({s for s in sources if s not in self._trees})
         if not todo:
             return
-        # undirected without sources: the same trees (and ties) as the roadmaps grown before them
-        directed = bool(self.roadmap.sources)
-        dist, pred = dijkstra(self.matrix, directed=directed, indices=todo, return_predecessors=True)
-        for k, s in enumerate(todo):
-            self._trees[s] = (dist[k], pred[k])
+        rm = self.roadmap
+        shared = rm.n_nodes - len(rm.sources)
+        base = [s for s in todo if s < shared]
+        if base:
+            matrix = self.base_matrix if rm.sources else self.matrix
+            dist, pred = dijkstra(matrix, directed=False, indices=base, return_predecessors=True)
+            pad = rm.n_nodes - shared
+            for k, s in enumerate(base):
+                self._trees[s] = (
+                    np.concatenate([dist[k], np.full(pad, np.inf)]) if pad else dist[k],
+                    np.concatenate([pred[k], np.full(pad, -9999, dtype=pred.dtype)]) if pad else pred[k],
+                )
+        added = [s for s in todo if s >= shared]
+        if added:
+            dist, pred = dijkstra(self.matrix, directed=True, indices=added, return_predecessors=True)
+            for k, s in enumerate(added):
+                self._trees[s] = (dist[k], pred[k])
 
     def tree(self, source: int) -> tuple[np.ndarray, np.ndarray]:
         """The shortest-path tree from ``source``: distances and predecessors of every node."""
