@@ -106,7 +106,9 @@ def test_a_closed_door_leaves_its_room_out_and_plans_the_rest(planned: tuple[Pat
     robots' beliefs in the first plan at 5 s, and nothing done is done again."""
     proc = replan(planned, tmp_path, "time: 5\ndoors: {dB: closed}\n", "-o", tmp_path / "out")
     assert proc.returncode == 12, proc.stderr
-    errors = [line for line in proc.stderr.strip().splitlines() if not line.startswith("search ")]  # the search's progress
+    errors = [
+        line for line in proc.stderr.strip().splitlines() if not line.startswith("search ")
+    ]  # the search's progress
     assert errors == [
         "error: goal B is left out: no robot allowed there can reach it (a closed door, or no way through)"
     ]

@@ -75,12 +75,12 @@ def test_a_replans_motion_library_takes_what_holds_from_the_plans(ctx: OracleCon
             plans.motion("r1", start, 0.5, goal)
     inherited, fresh = MotionLibrary(scenario, ctx.world, grown), MotionLibrary(scenario, ctx.world, grown)
     inherited.inherit(plans)
-    assert inherited._motions and inherited.graph._trees  # noqa: SLF001 - what it took
-    for (robot, start, heading, goal), motion in list(inherited._motions.items()):  # noqa: SLF001
+    assert inherited._motions and inherited.graph._trees
+    for (robot, start, heading, goal), motion in list(inherited._motions.items()):
         again = fresh.motion(robot, start, heading, goal)
         assert motion is not None and again is not None and motion.path == again.path
         assert np.array_equal(motion.poses, again.poses) and np.array_equal(motion.lm_visible, again.lm_visible)
-    for s, (dist, pred) in inherited.graph._trees.items():  # noqa: SLF001
+    for s, (dist, pred) in inherited.graph._trees.items():
         d, p = fresh.graph.tree(s)
         assert np.array_equal(dist, d) and np.array_equal(pred, p)
     new = grown.starts["r1"]
