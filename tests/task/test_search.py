@@ -62,9 +62,10 @@ def test_the_search_reaches_the_exact_optimum_on_25_random_instances() -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", [3, 12, 29])
+@pytest.mark.parametrize("seed", [12, 29])
 def test_every_plan_passes_the_validator(seed: int) -> None:
-    """The search's plan, written as actions of the whole problem's PDDL text, validates.
+    """The search's plan, written as actions of the whole problem's PDDL text, validates
+    (two instances here; the validator's rate over more is benchmarks/'s).
 
     Seed 12 (3 robots, a robot's own targets, paired moves in its plan) replaced seed 11 (the
     same kind of instance): its text holds 1,137 paired actions, 430 KB that unified-planning's
