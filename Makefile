@@ -12,7 +12,7 @@ STAMP   := $(VENV)/.installed
 LOG     := $(VENV)/install.log
 comma   := ,
 
-.PHONY: demo test bench bench-full lint regression-update clean java
+.PHONY: demo test bench bench-full lint regression regression-update clean java
 
 # $(call install,EXTRAS,WHAT): an editable install of tmpnav with EXTRAS into .venv, quietly: pip's
 # output goes to $(LOG) and only its end is shown if it fails. Then the bytecode of everything
@@ -79,6 +79,9 @@ bench-full: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check tmpnav tests benchmarks
 	$(BIN)/mypy tmpnav
+
+regression: $(STAMP)
+	$(BIN)/python -m tmpnav.bench.regression
 
 regression-update: $(STAMP)
 	$(BIN)/python -m tmpnav.bench.regression --update

@@ -1,7 +1,9 @@
 """The recorded regression plans (benchmarks/regression/) still come out the same.
 
 A change of plan or cost fails here until the baseline is rewritten on purpose with
-`make regression-update` (and the new JSON files are committed with the change).
+`make regression-update` (and the new JSON files are committed with the change). The cases the
+suite leaves out for their time (``Case.suite``: the paper's encoding on the ten-room corridor)
+are checked with every other by `make regression`.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ from tmpnav.bench.regression import BASELINE, CASES, compare, run_case
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+@pytest.mark.parametrize("case", [c for c in CASES if c.suite], ids=[c.name for c in CASES if c.suite])
 def test_plan_and_cost_unchanged(case) -> None:  # type: ignore[no-untyped-def]
     recorded = json.loads((BASELINE / f"{case.name}.json").read_text())
     assert compare(recorded, run_case(case)) == [], (

@@ -45,6 +45,9 @@ class Case:
     objective: str | None = None  # None: the default (weighted); "cost": the paper's sum, the plans of before
     keep_apart: bool | None = None  # None: the default (robots kept apart); False: the plan as planned
     range_sensor: bool = True  # False: without the scenario's range sensor (the paper's model)
+    #: checked by the test suite too; False: only by ``make regression`` (a case that takes most
+    #: of a minute of the suite's time)
+    suite: bool = True
 
 
 CASES = (
@@ -81,6 +84,7 @@ CASES = (
         search="exact",
         objective="cost",
         keep_apart=False,
+        suite=False,  # 30-50 s: every pair of moves between the corridor's ten rooms (82,944) into ENHSP
     ),
     Case(
         "three-robots",
