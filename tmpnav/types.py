@@ -463,6 +463,11 @@ class Roadmap:
     def n_nodes(self) -> int:
         return int(self.nodes.shape[0])
 
+    @property
+    def base_nodes(self) -> int:
+        """How many nodes are the roadmap's without its sources (they are numbered after them)."""
+        return self.n_nodes - len(self.sources)
+
 
 # --------------------------------------------------------------------------- belief
 

@@ -156,7 +156,7 @@ class MotionLibrary:
         if not same:
             return
         self.graph.inherit(other.graph)
-        shared = self.roadmap.n_nodes - len(self.roadmap.sources)
+        shared = self.roadmap.base_nodes
         for key, motion in other._motions.items():
             if key[1] < shared and key not in self._motions:
                 self._motions[key] = motion

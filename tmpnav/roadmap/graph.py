@@ -118,7 +118,17 @@ def _least_clearance(
 
 def _base_edges(roadmap: Roadmap) -> int:
     """How many of the roadmap's edges are its base's (a source's edges come after them)."""
-    return int(roadmap.edges.shape[0] - np.isin(roadmap.edges, np.asarray(roadmap.sources)).any(axis=1).sum())
+    return int((roadmap.edges < roadmap.base_nodes).all(axis=1).sum())
+
+
+def _padded(dist: np.ndarray, pred: np.ndarray, shared: int, pad: int) -> tuple[np.ndarray, np.ndarray]:
+    """A tree over the first ``shared`` nodes, with ``pad`` unreached nodes (sources) after them."""
+    if not pad and len(dist) == shared:
+        return dist, pred
+    return (
+        np.concatenate([dist[:shared], np.full(pad, np.inf)]),
+        np.concatenate([pred[:shared], np.full(pad, -9999, dtype=pred.dtype)]),
+    )
 
 
 class RoadmapGraph:
@@ -150,29 +160,25 @@ class RoadmapGraph:
         those nodes passes through a source, so each tree is the same on them; the sources of
         this roadmap are unreached from there."""
         mine, theirs = self.roadmap, other.roadmap
-        shared = mine.n_nodes - len(mine.sources)
-        if mine.grown != theirs.grown or theirs.n_nodes - len(theirs.sources) != shared:
+        shared = mine.base_nodes
+        if mine.grown != theirs.grown or theirs.base_nodes != shared:
             return
         if not np.array_equal(self.weights[: _base_edges(mine)], other.weights[: _base_edges(theirs)]):
             return
-        pad = mine.n_nodes - shared
         for s, (dist, pred) in other._trees.items():
             if s < shared and s not in self._trees:
-                self._trees[s] = (
-                    np.concatenate([dist[:shared], np.full(pad, np.inf)]),
-                    np.concatenate([pred[:shared], np.full(pad, -9999, dtype=pred.dtype)]),
-                )
+                self._trees[s] = _padded(dist, pred, shared, len(mine.sources))
 
     @cached_property
     def base_matrix(self) -> csr_matrix:
         """The adjacency of the roadmap without its sources: the matrix of the roadmap they
         were added to, entry for entry (its edges come first)."""
         rm = self.roadmap
-        shared, kept = rm.n_nodes - len(rm.sources), _base_edges(rm)
+        kept = _base_edges(rm)
         edges, w = rm.edges[:kept], self.weights[:kept]
         rows = np.concatenate([edges[:, 0], edges[:, 1]])
         cols = np.concatenate([edges[:, 1], edges[:, 0]])
-        return csr_matrix((np.concatenate([w, w]), (rows, cols)), shape=(shared, shared))
+        return csr_matrix((np.concatenate([w, w]), (rows, cols)), shape=(rm.base_nodes, rm.base_nodes))
 
     def prepare(self, sources: list[int]) -> None:
         """Run Dijkstra from many sources in one compiled call. From a node of a roadmap with
@@ -183,17 +189,13 @@ class RoadmapGraph:
         if not todo:
             return
         rm = self.roadmap
-        shared = rm.n_nodes - len(rm.sources)
+        shared = rm.base_nodes
         base = [s for s in todo if s < shared]
         if base:
             matrix = self.base_matrix if rm.sources else self.matrix
             dist, pred = dijkstra(matrix, directed=False, indices=base, return_predecessors=True)
-            pad = rm.n_nodes - shared
             for k, s in enumerate(base):
-                self._trees[s] = (
-                    np.concatenate([dist[k], np.full(pad, np.inf)]) if pad else dist[k],
-                    np.concatenate([pred[k], np.full(pad, -9999, dtype=pred.dtype)]) if pad else pred[k],
-                )
+                self._trees[s] = _padded(dist[k], pred[k], shared, len(rm.sources))
         added = [s for s in todo if s >= shared]
         if added:
             dist, pred = dijkstra(self.matrix, directed=True, indices=added, return_predecessors=True)

@@ -138,7 +138,7 @@ def with_missing(plan: Plan, rules: Rules, singles: CostTable) -> Plan:
         return plan
     steps = targets_only(plan)
     for robot, room in missing:
-        robots = [robot] if robot is not None else sorted(dict.fromkeys(m[0] for m in singles.single))
+        robots = [robot] if robot is not None else sorted(singles.robots)
         best: tuple[float, int, str] | None = None
         for r in robots:
             if not rules.goals.may_visit(r, room):
