@@ -330,7 +330,9 @@ def _cache_line(report: PlanReport) -> str:
     if cache.table_hit:
         more = f", then {hits} more from cache and {misses} computed" if hits + misses else ""
         costs = "cost table from cache" + more
-    plan = "; task plan from cache (--replan runs the planner)" if cache.plan_hit else ""
+    # tmpnav replan has no --replan: a revision is planned again from another state, or without the cache
+    again = "--no-cache plans it again" if report.revision is not None else "--replan runs the planner"
+    plan = f"; task plan from cache ({again})" if cache.plan_hit else ""
     where = f" ({cache.directory})" if cache.directory is not None else ""
     return f"cache{where}: {roadmap}; move costs: {costs}{plan}"
 
