@@ -11,7 +11,13 @@ import pytest
 from tests.attachment.support import carried_problem
 from tmpnav.attachment.canonical import CanonicalCosts
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.attachment.conflicts import _sidesteps, keep_apart, resolve_conflicts, resolve_with_sidesteps
+from tmpnav.attachment.conflicts import (
+    ExecutedCost,
+    _sidesteps,
+    keep_apart,
+    resolve_conflicts,
+    resolve_with_sidesteps,
+)
 from tmpnav.belief.conflicts import find_conflicts
 from tmpnav.oracle.executors import OracleContext
 from tmpnav.oracle.oracle import Oracle
@@ -213,3 +219,26 @@ def test_sidesteps_are_named_with_the_room_the_robot_goes_on_to() -> None:
     kept: Plan = ((("r2", "L10", "L2"),), (("r1", "L1", "L10"),), (("r2", "L2", "L1"),))
     assert _sidesteps(SWAP, kept) == (("r2", "L10", "L2", "L1"),)
     assert _sidesteps(SWAP, SWAP) == ()
+
+
+def test_the_executed_cost_is_the_plan_kept_apart_as_run(tmp_path: Path) -> None:
+    """What the anytime search prices (ExecutedCost) is what keep_apart makes of the plan, run
+    on the clock: r2's wait in the bay in its schedule, its steps' costs as executed; a plan
+    without conflicts keeps its cost as planned; each plan is priced once."""
+    carried = carried_world(tmp_path, BAY)
+    plan: Plan = ((("r1", "W", "E"),), (("r2", "B", "W"),))
+    planned = carried.plan_cost(plan)
+    executed = ExecutedCost(carried, None)
+    cost = executed(plan, planned)
+    task = TaskResult(
+        PlanStatus.SOLVED_OPTIMALLY, "test", plan, ("goto_room",) * 2, planned.steps, TaskCounts(0, 0, 0, 0, 0), False
+    )
+    kept = keep_apart(carried, task, None, planned.total, planned.makespan)
+    assert kept is not None and kept.delays
+    run = carried.replay(kept.task.steps, kept.delays, kept.detours)
+    assert cost.makespan == run.makespan and cost.schedule is not None
+    assert cost.schedule.timeline("r2")[0].wait == kept.delays[1] > 0  # the wait is in the schedule priced
+    assert cost.steps == kept.task.step_costs == tuple(run.step_costs(len(plan), carried.scenario.cost))
+    assert executed(plan, planned) is cost and executed.priced == 1
+    alone: Plan = ((("r1", "W", "E"),),)
+    assert executed(alone, carried.plan_cost(alone)) == carried.plan_cost(alone)

@@ -53,6 +53,7 @@ waits only), then run ``res.plan`` with ``res.delays`` and ``res.detours``
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
@@ -65,6 +66,7 @@ from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, mar
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.results import KeptApart, Schedule, TaskResult, TimedMove
 from tmpnav.roadmap.graph import segment_margins
+from tmpnav.task.model import PlanCost
 from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Step
 from tmpnav.task.stage import action_names
@@ -462,26 +464,19 @@ def keep_apart(
     they belong to as a TaskResult, the delays and detours to run it with, and what was done.
     None when the plan has no conflict, or nothing found removes one (without a move over
     ``delta``). The plan changed is no longer the planner's proved optimum: its status becomes
-    satisficing, and its bound's gap is measured against it; where detours or sidesteps changed
-    a step, its cost is its executed cost (the task planner never saw that motion).
+    satisficing, and its bound's gap is measured against it; its steps' costs are their
+    executed costs, waits included (the anytime search priced them so: :class:`ExecutedCost`).
     ``cost_before`` and ``makespan_before`` are those of the plan as planned, run on the clock.
 
     Without a threshold, a plan kept apart is returned only when its objective is at most
     (1 + MAX_RISE) times the plan's as planned, and no sidestep is tried past RUN_BUDGET clock
     runs (the search is long where nothing clears the robots: up to 17 s on the 4-robot building)."""
-    res = resolve_with_sidesteps(carried, task.steps, delta=delta, budget=None if delta is not None else RUN_BUDGET)
-    if not res.conflicts_before or len(res.conflicts_left) >= len(res.conflicts_before):
+    res = _kept(carried, task.steps, delta, cost_before, makespan_before)
+    if res is None:
         return None
-    if delta is not None and max((m.risk for m in res.run.moves), default=0.0) > delta:
-        return None  # kept apart only by a move over the chance constraint: the conflicts stay reported
-    w, objective = carried.scenario.cost, OBJECTIVES[carried.scenario.planner.objective]
-    if delta is None:
-        value = objective.value(sum(res.run.step_costs(len(res.plan), w)), res.run.makespan, w)
-        if value > (1.0 + MAX_RISE) * objective.value(cost_before, makespan_before, w):
-            return None  # a wait or detour that costs the robots their localisation: reported, not applied
     replanned = res.plan != task.steps  # sidesteps or a split pair: steps the planner never saw
-    executed = res.run.step_costs(len(res.plan), carried.scenario.cost, delta)
-    step_costs = tuple(executed) if replanned or res.detours else task.step_costs
+    step_costs = tuple(res.run.step_costs(len(res.plan), carried.scenario.cost, delta))
+    w, objective = carried.scenario.cost, OBJECTIVES[carried.scenario.planner.objective]
     value = objective.value(sum(step_costs), res.run.makespan, w)
     kept = replace(
         task,
@@ -504,6 +499,68 @@ def keep_apart(
         detours=_detour_lengths(carried.clock.lib, res),
     )
     return Kept(kept, dict(res.delays), dict(res.detours), apart)
+
+
+def _kept(
+    carried: CarriedCosts, plan: Plan, delta: float | None, cost_before: float, makespan_before: float
+) -> Resolution | None:
+    """The resolution :func:`keep_apart` applies to ``plan``, or None (its docstring says when)."""
+    res = resolve_with_sidesteps(carried, plan, delta=delta, budget=None if delta is not None else RUN_BUDGET)
+    if not res.conflicts_before or len(res.conflicts_left) >= len(res.conflicts_before):
+        return None
+    if delta is not None and max((m.risk for m in res.run.moves), default=0.0) > delta:
+        return None  # kept apart only by a move over the chance constraint: the conflicts stay reported
+    w, objective = carried.scenario.cost, OBJECTIVES[carried.scenario.planner.objective]
+    if delta is None:
+        value = objective.value(sum(res.run.step_costs(len(res.plan), w)), res.run.makespan, w)
+        if value > (1.0 + MAX_RISE) * objective.value(cost_before, makespan_before, w):
+            return None  # a wait or detour that costs the robots their localisation: reported, not applied
+    return res
+
+
+class ExecutedCost:
+    """A plan's cost as it will be executed, robots kept apart: what ``tmpnav plan`` does to the
+    plan the search returns (:func:`keep_apart`), done to every plan the anytime search would
+    take as its best, so that the plan it picks is the plan executed, waits, detours and
+    sidesteps priced. ``price(plan, cost)``, with ``cost`` the plan's as planned (run on the
+    clock, robots passing through each other), gives the executed cost; ``cost`` itself when
+    the plan has no conflict, when nothing removes one, or when a move is over ``delta`` (the
+    run then fails its chance constraint whatever is done). Remembered per plan.
+
+    The executed cost is never below the cost as planned on the cases measured (waits and
+    detours only add time and motion), so the search prices a candidate only where its cost
+    as planned beats its best plan's executed cost (tmpnav.task.search)."""
+
+    def __init__(self, carried: CarriedCosts, delta: float | None):
+        self.carried, self.delta = carried, delta
+        self._memo: dict[Plan, PlanCost] = {}
+        self.priced = 0  # plans checked for conflicts (runs recorded)
+
+    def __call__(self, plan: Plan, cost: PlanCost) -> PlanCost:
+        plan = tuple(plan)
+        if plan not in self._memo:
+            self._memo[plan] = self._price(plan, cost)
+        return self._memo[plan]
+
+    def _price(self, plan: Plan, cost: PlanCost) -> PlanCost:
+        run = self.carried.run(plan)
+        if run is None or not math.isfinite(cost.total):
+            return cost
+        if self.delta is not None and max((m.risk for m in run.moves), default=0.0) > self.delta:
+            return cost
+        self.priced += 1
+        res = _kept(self.carried, plan, self.delta, cost.total, cost.makespan)
+        if res is None:
+            return cost
+        executed = tuple(res.run.step_costs(len(res.plan), self.carried.scenario.cost, self.delta))
+        same = len(res.plan) == len(plan)  # no sidestep split a move: the steps are the plan's
+        return PlanCost(
+            float(sum(executed)),
+            executed if same else cost.steps,
+            res.run.schedule if same else cost.schedule,
+            cost.dropped,
+            None if same else res.run.makespan,
+        )
 
 
 def _detour_lengths(lib: MotionLibrary, res: Resolution) -> tuple[tuple[int, str, float], ...]:

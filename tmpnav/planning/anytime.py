@@ -3,6 +3,7 @@ for them, or on carried costs."""
 
 from __future__ import annotations
 
+from tmpnav.attachment.conflicts import ExecutedCost
 from tmpnav.choices import exact_fits
 from tmpnav.planning.bound import certified_bound
 from tmpnav.planning.run import Planned, TaskRun
@@ -44,8 +45,10 @@ def anytime_carried(run: TaskRun) -> Planned:
     nothing the carried search did not find (the corridor's 10 rooms: the same plan, 5.4 s
     instead of 9.6 s; the 20-room building and the landmark-sparse hall: the same plans; 40
     rooms and 4 robots: 2081.0 instead of 2281.1 at the budget, the carried search having the
-    time), so the whole budget goes to the costs the plan is judged by."""
-    anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight)
+    time), so the whole budget goes to the costs the plan is judged by. A plan is judged as it
+    will be executed: with its robots kept apart (waits, detours, sidesteps) when the scenario
+    keeps them apart."""
+    anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight, _executed(run))
     _warm_up(run, anytime)
     seeds: dict[str, Plan] = _incumbent(run)
     # a replan starts from its incumbent: the exact search of the table is not budgeted (3-6 s
@@ -57,6 +60,13 @@ def anytime_carried(run: TaskRun) -> Planned:
     bound = _bound(run)
     task = plan_anytime(anytime, run.search, _left(run), bound, seeds)
     return Planned(run.canonical.seen(), task)
+
+
+def _executed(run: TaskRun) -> ExecutedCost | None:
+    """Every plan the search would take priced as ``tmpnav plan`` will execute it, robots kept
+    apart (planner.keep_apart), so that the plan it picks is the plan executed."""
+    planner = run.scenario.planner
+    return ExecutedCost(run.carried, planner.max_risk) if planner.keep_apart else None
 
 
 def _warm_up(run: TaskRun, anytime: AnytimeTask) -> None:

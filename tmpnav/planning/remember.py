@@ -11,7 +11,8 @@ searches again.
 
 The key covers the oracle's context (its code, the world, the roadmap, the models and
 weights), the robots, the goals, the planner options that shape the search (engine,
-encoding, pair_min_gain, search, costs), the objective (and its price of time) and the code
+encoding, pair_min_gain, search, costs), the objective (and its price of time, the chance
+constraint, whether robots are kept apart, which the search prices) and the code
 of the task stage (task/, attachment/, planning/). On
 a hit the plan's costs are computed again by the cost model (from the oracle's cache: the
 same numbers), so a remembered plan is reported exactly as a searched one.
@@ -45,7 +46,8 @@ def search_key(scenario: Scenario, context: str) -> str:
     sp = scenario.planner
     robots = [(r.name, r.pose, r.covariance, r.radius, r.speed, r.turn_rate) for r in scenario.robots]
     parts = (VERSION, _code_version(), context, robots, scenario.goals, sp.name, sp.encoding, repr(sp.pair_min_gain))
-    time = (sp.objective, repr(scenario.cost.M_T), repr(sp.max_risk))  # what the plan minimises, within what
+    # what the plan minimises, within what, and whether it is judged with its robots kept apart
+    time = (sp.objective, repr(scenario.cost.M_T), repr(sp.max_risk), sp.keep_apart)
     return hashlib.sha256(repr((*parts, sp.search, sp.costs, *time)).encode()).hexdigest()
 
 

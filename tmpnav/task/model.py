@@ -36,12 +36,17 @@ class PlanCost:
     steps: tuple[float, ...]
     schedule: Schedule | None = None
     dropped: float = 0.0  # the penalties of the optional goals it leaves undone (goals.jobs)
+    #: the makespan when it is not the schedule's: a plan executed with a move split in two
+    #: (a sidestep, tmpnav.attachment.conflicts.ExecutedCost) keeps the plan's own schedule
+    span: float | None = None
 
     @property
     def makespan(self) -> float:
         """When the last robot ends its last move (inf for an impossible plan; 0 without durations)."""
         if not math.isfinite(self.total):
             return math.inf
+        if self.span is not None:
+            return self.span
         return self.schedule.makespan if self.schedule is not None else 0.0
 
     def value(self, span_weight: float) -> float:

@@ -34,13 +34,14 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import math
 import os
 import random
 import time
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future
 from dataclasses import dataclass, field, replace
-from typing import Literal
+from typing import Literal, TypeVar
 
 from tmpnav.choices import StopReason
 from tmpnav.errors import PlannerError, PlannerTimeoutError, UnsolvableError
@@ -59,6 +60,11 @@ from tmpnav.types import CostTable, Goals
 
 #: relative improvement below which a new plan does not count as better
 EPSILON = 1e-9
+
+#: a plan's cost as it will be executed, from the plan and its cost as planned
+#: (tmpnav.attachment.conflicts.ExecutedCost: robots kept apart)
+Executed = Callable[[Plan, PlanCost], PlanCost]
+_T = TypeVar("_T")
 
 #: OR-Tools' guided local search stops after this many solutions: on 20-60 rooms and 2-8
 #: robots it reaches in 0.1-1.2 s the routes it reaches in 10 s (within 0.02%)
@@ -175,8 +181,10 @@ class AnytimeSearch:
         options: SearchOptions,
         run: SearchRun | None = None,
         proves_optimal: Callable[[float], bool] | None = None,
+        executed: Executed | None = None,
     ):
         self.model, self.goals, self.options = model, goals, options
+        self.executed = executed
         self.watch = run if run is not None else SearchRun()
         self.times = self.watch.times
         self.rules = Rules(model.start_location, goals)
@@ -255,9 +263,9 @@ class AnytimeSearch:
             if self.rules.valid(p := self.canonical(with_missing(seed, self.rules, singles)))
         }
         plan, start = self.first_plan(singles, valid.get(UNDER_WAY))
-        best, cost = plan, self.cost(plan)
+        best, cost = plan, self.priced(plan, self.cost(plan))
         for name, seed in valid.items():
-            seed_cost = self.cost(seed)
+            seed_cost = self.priced(seed, self.cost(seed))
             if self.value(seed_cost) < self.value(cost):
                 best, cost, start = seed, seed_cost, name
         self.rules.check(best)
@@ -311,22 +319,21 @@ class AnytimeSearch:
         cheapest kept if it beats the best plan. True when one did."""
         with self.times.timed("planner"):
             edits = route_edits(self.best, self.singles, self.goals, self.rules, self.options.span_weight)
-        best: tuple[Plan, PlanCost] | None = None
+        costed: list[tuple[Plan, PlanCost, None]] = []
         for edit in edits[: self.options.route_candidates]:
             if self.left() <= 0:
                 break
             candidate = self.canonical(with_origins(edit, self.model.start_location))
             if not self.rules.valid(candidate):
                 continue
-            cost = self.cost(candidate)
-            if best is None or self.value(cost) < self.value(best[1]):
-                best = (candidate, cost)
+            costed.append((candidate, self.cost(candidate), None))
+        best = self._cheapest(costed)
         if best is None:
             return False
         new, old = self.value(best[1]), self.value(self.best_cost)
         if not new < old * (1 - EPSILON) - EPSILON:
             return False
-        self.best, self.best_cost = best
+        self.best, self.best_cost = best[0], best[1]
         self.stats.improvements += 1
         self.stats.route_improvements += 1
         self._note(new, "between routes")
@@ -441,16 +448,15 @@ class AnytimeSearch:
                 else:  # a search two batches asked for: counted once
                     self.stats.reused += 1
                 steps.append(solved)
-        best: tuple[Plan, PlanCost, _Sub] | None = None
+        costed: list[tuple[Plan, PlanCost, _Sub]] = []
         for sub, found in zip(batch.subs, steps, strict=True):  # in the neighbourhoods' order
             if found is None:
                 continue
             candidate = self.canonical(splice(sub.opened, found, self.model.start_location))
             if not self.rules.valid(candidate):
                 continue
-            cost = self.cost(candidate)
-            if best is None or self.value(cost) < self.value(best[1]):
-                best = (candidate, cost, sub)
+            costed.append((candidate, self.cost(candidate), sub))
+        best = self._cheapest(costed)
         if best is None:
             return False
         new, old = self.value(best[1]), self.value(self.best_cost)
@@ -512,6 +518,36 @@ class AnytimeSearch:
         with self.times.timed("oracle"):
             return self.model.plan_cost(plan)
 
+    def priced(self, plan: Plan, cost: PlanCost) -> PlanCost:
+        """The plan's cost as it will be executed (robots kept apart, ``executed``), from
+        ``cost``, its cost as planned; ``cost`` without ``executed``."""
+        if self.executed is None:
+            return cost
+        with self.times.timed("oracle"):
+            return self.executed(plan, cost)
+
+    def _cheapest(self, costed: list[tuple[Plan, PlanCost, _T]]) -> tuple[Plan, PlanCost, _T] | None:
+        """Of the candidates (plan, cost as planned, what made it), the one of least objective as
+        executed (:meth:`priced`), the first of equals; None without candidates. Priced lazily,
+        cheapest as planned first: one whose cost as planned is no less than the best found, or
+        than the best plan's, is not priced (executing with robots kept apart adds waits and
+        detours, never takes away)."""
+        order = sorted(range(len(costed)), key=lambda i: (self.value(costed[i][1]), i))
+        if not order:
+            return None
+        if self.executed is None:
+            return costed[order[0]]
+        limit = self.value(self.best_cost)
+        best: tuple[Plan, PlanCost, _T] | None = None
+        for i in order:
+            plan, cost, made = costed[i]
+            if self.value(cost) >= min(limit, self.value(best[1]) if best is not None else math.inf):
+                break
+            executed = self.priced(plan, cost)
+            if best is None or self.value(executed) < self.value(best[1]):
+                best = (plan, executed, made)
+        return best if best is not None else costed[order[0]]
+
     def value(self, cost: PlanCost) -> float:
         """The objective of a plan of this cost (tmpnav.task.objectives)."""
         return cost.value(self.options.span_weight)
@@ -566,9 +602,11 @@ def search(
     run: SearchRun | None = None,
     proves_optimal: Callable[[float], bool] | None = None,
     seeds: dict[str, Plan] | None = None,
+    executed: Executed | None = None,
 ) -> SearchResult:
-    """Run the anytime search (see the module docstring)."""
-    return AnytimeSearch(model, goals, options, run, proves_optimal).run(seeds)
+    """Run the anytime search (see the module docstring); ``executed`` prices a plan as it will
+    be executed (robots kept apart), from its cost as planned."""
+    return AnytimeSearch(model, goals, options, run, proves_optimal, executed).run(seeds)
 
 
 def _routes_of(plan: Plan, robots: Sequence[str]) -> dict[str, tuple[str, ...]]:

@@ -29,7 +29,7 @@ from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.pddl_text import DROP_PREFIX, TEXT_ENCODINGS, sample_task
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.schedules import exact_schedule
-from tmpnav.task.search import SearchOptions, SearchRun, search
+from tmpnav.task.search import Executed, SearchOptions, SearchRun, search
 from tmpnav.task.unfolded import BeliefGraph, write_unfolded
 from tmpnav.types import CostTable, Goals, PlannerOptions, PlanStatus, Scenario
 
@@ -216,6 +216,8 @@ class AnytimeTask:
     goals: Goals
     planner: PlannerOptions  # engine (an ENHSP one), encoding (single or mixed), time limit, pair_min_gain
     span_weight: float = 0.0  # the objective's price of a second of makespan (tmpnav.task.objectives)
+    #: a plan's cost as it will be executed (robots kept apart); None: as planned
+    executed: Executed | None = None
 
     def options(self, budget: float) -> SearchOptions:
         """The search's options: with costs that depend on the context (carried beliefs), smaller
@@ -261,7 +263,7 @@ def plan_anytime(
     seconds, from the cheapest of OR-Tools' routes and the ``seeds``; ``bound``, a certified
     lower bound on every plan's cost, can prove a plan optimal and gives the gap."""
     proves, told = (bound.proves_optimal, bound.value) if bound is not None else (None, None)
-    result = search(task.model, task.goals, task.options(budget), run.bounded(told), proves, seeds)
+    result = search(task.model, task.goals, task.options(budget), run.bounded(told), proves, seeds, task.executed)
     plan, cost = result.plan, result.cost
     proved = result.stopped == "optimal"
     stats = result.stats
