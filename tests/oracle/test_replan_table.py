@@ -85,3 +85,16 @@ def test_a_replans_motion_library_takes_what_holds_from_the_plans(ctx: OracleCon
         assert np.array_equal(dist, d) and np.array_equal(pred, p)
     new = grown.starts["r1"]
     assert inherited.motion("r1", new, 0.0, a) is not None  # its own start: computed on the grown roadmap
+
+
+def test_a_library_is_never_shared_by_scenarios_with_other_goals(ctx: OracleContext) -> None:
+    """One process planning two goal sets on one map: each run's clock reads its own goals and
+    cost weights (a library kept for the first gave the second its goals: other sidings for its
+    sidesteps, other windows and service times)."""
+    from tmpnav.oracle.executors import library
+    from tmpnav.types import Goals
+
+    other = OracleContext(replace(ctx.scenario, goals=Goals(("B",), ())), ctx.world, ctx.roadmap)
+    first, second = library(ctx), library(other)
+    assert second is not first and second.scenario.goals == Goals(("B",), ())
+    assert library(other) is second  # the same context again: the same library

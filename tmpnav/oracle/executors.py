@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import multiprocessing
 import os
 import signal
@@ -49,6 +50,13 @@ class OracleContext:
     world: World
     roadmap: Roadmap
 
+    @functools.cached_property
+    def library_key(self) -> tuple[str, ...]:
+        """What a motion library and the clocks on it read: the world, the roadmap and the whole
+        scenario (its goals' windows and service times, its cost weights, not only its models
+        and robots)."""
+        return (self.world.fingerprint, self.roadmap.fingerprint, repr(self.scenario))
+
 
 _LIBRARIES: dict[tuple[str, ...], MotionLibrary] = {}
 
@@ -57,9 +65,12 @@ def library(ctx: OracleContext) -> MotionLibrary:
     """The per-process motion library of a context (nominal motions are memoised in it).
 
     Keyed by content, so a Ray worker that receives the same context again reuses it; a new
-    context takes from the library before what holds for it too (MotionLibrary.inherit).
+    context takes from the library before what holds for it too (MotionLibrary.inherit). The
+    key is the whole scenario: a library kept for a scenario with other goals gave the team's
+    clock those goals (lib.scenario), so one process planning two goal sets on one map gave the
+    second plan another plan than a process of its own.
     """
-    key = (ctx.world.fingerprint, ctx.roadmap.fingerprint, repr(ctx.scenario.models), repr(ctx.scenario.robots))
+    key = ctx.library_key
     if key not in _LIBRARIES:
         before = list(_LIBRARIES.values())
         _LIBRARIES.clear()
