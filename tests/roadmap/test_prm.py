@@ -179,3 +179,40 @@ def test_a_start_too_close_to_a_wall_for_a_milestone_is_named(loaded) -> None:  
     robots = (replace(sc.robots[0], pose=replace(sc.robots[0].pose, x=float(x), y=float(y))), *sc.robots[1:])
     with pytest.raises(RoadmapError, match=rf"robot '{sc.robots[0].name}' starts at .* closer to a wall"):
         build_roadmap(world, robots, sc.roadmap)
+
+
+def test_a_door_gets_milestones_along_its_middle_and_paths_through_it_keep_off_its_frames(loaded) -> None:  # type: ignore[no-untyped-def]
+    """With a clearance, each 1.2 m door of the two-rooms world gets a milestone in its middle and
+    one on either side along its axis (the wall's normal); the roadmap holds them, and the path
+    from room A to room B crosses each door near its middle. Without a
+    clearance (the paper's roadmap), none."""
+    import itertools
+
+    import numpy as np
+
+    from tmpnav.roadmap.prm import passage_milestones, reachable_free_space
+
+    sc, world = loaded
+    radius = max(r.radius for r in sc.robots)
+    starts = np.array([[r.pose.x, r.pose.y] for r in sc.robots])
+    free = reachable_free_space(world, radius, starts)
+    points = passage_milestones(world, radius, 0.5, free)
+    res = world.grid.resolution
+    for middle in (3.0, 9.0):  # door-A and door-B, in the wall y = 4
+        mine = points[np.abs(points[:, 0] - middle) < 2 * res]
+        assert len(mine) == 3, points
+        assert sorted(np.round(mine[:, 1] - 4.0, 1).tolist()) == pytest.approx([-0.8, 0.0, 0.8], abs=0.1)
+    assert len(passage_milestones(world, radius, 0.0, free)) == 0
+    roadmap = build_roadmap(world, sc.robots, replace(sc.roadmap, clearance=0.5))
+    for p in points:
+        assert np.min(np.linalg.norm(roadmap.nodes - p, axis=1)) < 1e-9
+    from tmpnav.roadmap.graph import safe_weights
+
+    graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius, 0.5))  # as the motions use it
+    path = graph.path(roadmap.instantiations["A"][0], roadmap.instantiations["B"][0])
+    assert path is not None
+    xy = roadmap.nodes[list(path)]
+    pairs = itertools.pairwise(xy)
+    crossings = [a + (b - a) * (4.0 - a[1]) / (b[1] - a[1]) for a, b in pairs if (a[1] - 4.0) * (b[1] - 4.0) < 0]
+    # within 0.1 m of a door's middle: its footprint 0.25 m and more from the frames (0.6 m away)
+    assert len(crossings) == 2 and all(min(abs(c[0] - 3.0), abs(c[0] - 9.0)) <= 0.1 for c in crossings)

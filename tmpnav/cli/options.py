@@ -303,7 +303,8 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             metavar="M",
             default_text="the scenario's roadmap.clearance, else 0.5 with a range sensor or a threshold, else 0",
             help="The margin from the walls (m, beyond the robot's radius) that paths prefer and goal poses "
-            "keep, as nav2's inflation does; 0 gives the paper's shortest paths.",
+            "keep, as nav2's inflation does, with roadmap nodes through the middle of every passage narrower "
+            "than it (doors); 0 gives the paper's shortest paths.",
         ),
         click.option(
             "--accept-risk",

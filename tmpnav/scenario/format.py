@@ -405,7 +405,8 @@ ROADMAP = Section(
             Number("length", minimum=0.0, maximum=5.0, reason="beyond 5 m no corridor has a middle"),
             "the margin from the walls (beyond the robot's radius) that paths prefer, as nav2's inflation "
             "does (an edge weighs more as its margin falls below it), and that goal poses keep where the room "
-            "allows; 0: the paper's shortest paths (default: 0.5 m when the robots carry a range sensor, "
+            "allows; the roadmap then also gets milestones through the middle of every passage narrower than "
+            "it (doors); 0: the paper's shortest paths (default: 0.5 m when the robots carry a range sensor, "
             "models.range_sensor, or plan within a threshold, planner.max_risk; else 0)",
         ),
     }
