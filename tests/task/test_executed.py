@@ -10,16 +10,20 @@ from tests.task.instances import small_instance
 from tmpnav.task.model import PlanCost, TableModel
 from tmpnav.task.plans import Plan
 from tmpnav.task.search import SearchOptions, search
+from tmpnav.types import Goals
 
 MIN_GAIN = 0.05
 PENALTY = 1000.0
 
 
+def problem(seed: int) -> tuple[TableModel, Goals, SearchOptions]:
+    """A random cost table of 5 rooms and 2 robots (tests/task/instances.py), its goals, options."""
+    table, goals = small_instance(random.Random(seed), 2, 5, 0.3)
+    return TableModel(table, MIN_GAIN), goals, SearchOptions(budget=60, seed=seed, min_gain=MIN_GAIN, parallel=1)
+
+
 def test_a_plan_dear_as_executed_is_not_the_plan_returned() -> None:
-    rnd = random.Random(3)
-    table, goals = small_instance(rnd, 2, 5, 0.3)
-    model = TableModel(table, MIN_GAIN)
-    options = SearchOptions(budget=60, seed=3, min_gain=MIN_GAIN, parallel=1)
+    model, goals, options = problem(3)
     planned = search(model, goals, options)
     dear = planned.plan
     priced: list[Plan] = []
@@ -39,10 +43,7 @@ def test_a_plan_dear_as_executed_is_not_the_plan_returned() -> None:
 
 
 def test_without_a_price_the_search_is_unchanged() -> None:
-    rnd = random.Random(5)
-    table, goals = small_instance(rnd, 2, 5, 0.3)
-    model = TableModel(table, MIN_GAIN)
-    options = SearchOptions(budget=60, seed=5, min_gain=MIN_GAIN, parallel=1)
+    model, goals, options = problem(5)
     plain = search(model, goals, options)
     same = search(model, goals, options, executed=lambda plan, cost: cost)
     assert (same.plan, same.cost.total) == (plain.plan, plain.cost.total)
