@@ -381,9 +381,8 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
             task, apart = planned.task, None
             with times.timed("resimulate"):
                 resim = resimulate(run.carried, task)
-                delta = prep.scenario.planner.max_risk
-                within = delta is None or max((p for a in resim.actions for p in a.risk), default=0.0) <= delta
-                if prep.scenario.planner.keep_apart and within:
+                if prep.scenario.planner.keep_apart:  # the search's own resolution, if it priced this plan
+                    delta = prep.scenario.planner.max_risk
                     kept = keep_apart(run.carried, task, delta, resim.cost, resim.schedule.makespan)
                     if kept is not None:
                         task, apart = kept.task, kept.apart

@@ -54,8 +54,10 @@ waits only), then run ``res.plan`` with ``res.delays`` and ``res.detours``
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from weakref import WeakKeyDictionary
 
 import numpy as np
 
@@ -463,9 +465,10 @@ def keep_apart(
     (:func:`resolve_with_sidesteps`), at the margin k(delta) (k(0.05) without one); the plan
     they belong to as a TaskResult, the delays and detours to run it with, and what was done.
     None when the plan has no conflict, or nothing found removes one (without a move over
-    ``delta``). The plan changed is no longer the planner's proved optimum: its status becomes
-    satisficing, and its bound's gap is measured against it; its steps' costs are their
-    executed costs, waits included (the anytime search priced them so: :class:`ExecutedCost`).
+    ``delta``), or a move of the plan as planned is over ``delta``. The plan changed is no
+    longer the planner's proved optimum: its status becomes satisficing, and its bound's gap is
+    measured against it; its steps' costs are their executed costs, waits included (the anytime
+    search priced them so: :class:`ExecutedCost`).
     ``cost_before`` and ``makespan_before`` are those of the plan as planned, run on the clock.
 
     Without a threshold, a plan kept apart is returned only when its objective is at most
@@ -501,10 +504,39 @@ def keep_apart(
     return Kept(kept, dict(res.delays), dict(res.detours), apart)
 
 
+#: resolutions remembered per cost model (the least recently used dropped first): the anytime
+#: search prices its best plans with them (:class:`ExecutedCost`), and ``tmpnav plan`` keeps the
+#: plan it returns apart with the same one (:func:`keep_apart`) instead of searching again
+MAX_RESOLVED = 64
+_RESOLVED: WeakKeyDictionary[CarriedCosts, OrderedDict[tuple[Plan, float | None], Resolution | None]] = (
+    WeakKeyDictionary()
+)
+
+
 def _kept(
     carried: CarriedCosts, plan: Plan, delta: float | None, cost_before: float, makespan_before: float
 ) -> Resolution | None:
-    """The resolution :func:`keep_apart` applies to ``plan``, or None (its docstring says when)."""
+    """The resolution :func:`keep_apart` applies to ``plan``, or None (its docstring says when;
+    also for a plan with a move over ``delta`` as planned: its run fails the chance constraint
+    whatever is done). Remembered by plan and ``delta``: ``cost_before`` and ``makespan_before``
+    are the plan's own, as planned on the clock."""
+    memo = _RESOLVED.setdefault(carried, OrderedDict())
+    key = (tuple(plan), delta)
+    if key in memo:
+        memo.move_to_end(key)
+        return memo[key]
+    found = memo[key] = _resolve(carried, key[0], delta, cost_before, makespan_before)
+    if len(memo) > MAX_RESOLVED:
+        memo.popitem(last=False)
+    return found
+
+
+def _resolve(
+    carried: CarriedCosts, plan: Plan, delta: float | None, cost_before: float, makespan_before: float
+) -> Resolution | None:
+    planned = carried.run(plan)
+    if planned is None or (delta is not None and max((m.risk for m in planned.moves), default=0.0) > delta):
+        return None
     res = resolve_with_sidesteps(carried, plan, delta=delta, budget=None if delta is not None else RUN_BUDGET)
     if not res.conflicts_before or len(res.conflicts_left) >= len(res.conflicts_before):
         return None
@@ -543,10 +575,7 @@ class ExecutedCost:
         return self._memo[plan]
 
     def _price(self, plan: Plan, cost: PlanCost) -> PlanCost:
-        run = self.carried.run(plan)
-        if run is None or not math.isfinite(cost.total):
-            return cost
-        if self.delta is not None and max((m.risk for m in run.moves), default=0.0) > self.delta:
+        if not math.isfinite(cost.total):
             return cost
         self.priced += 1
         res = _kept(self.carried, plan, self.delta, cost.total, cost.makespan)

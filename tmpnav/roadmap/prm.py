@@ -121,8 +121,9 @@ def passage_milestones(world: World, radius: float, clearance: float, free_cells
         return out
 
     out: list[np.ndarray] = []
-    for k in range(1, n + 1):
-        ii, jj = np.nonzero(labels == k)
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):  # each plateau within its bounding box
+        ii, jj = np.nonzero(labels[box] == k)
+        ii, jj = ii + box[0].start, jj + box[1].start
         m = int(np.argmin((ii - ii.mean()) ** 2 + (jj - jj.mean()) ** 2))
         p = np.array([x0 + (jj[m] + 0.5) * grid.resolution, y0 + (ii[m] + 0.5) * grid.resolution])
         both = np.minimum(clearance_at(p + d * axes), clearance_at(p - d * axes))
