@@ -78,3 +78,32 @@ def test_a_standing_robot_never_grows_less_certain() -> None:
     assert run.trajectories is not None
     traces = [np.trace(np.array(s.cov)) for s in run.trajectories["r2"]]
     assert len(traces) > 100 and all(b <= a + 1e-12 for a, b in itertools.pairwise(traces))
+
+
+@pytest.mark.parametrize(
+    ("config", "rooms"),
+    [("corridor-3robots.yaml", ("L3", "L4", "L6", "L7")), ("building-20.yaml", ("S1", "S2", "N1", "N2"))],
+)
+def test_pairs_below_their_floors_are_not_asked_for(
+    config: str, rooms: tuple[str, ...], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A sub-problem's pairs whose motion floors cannot save pair_min_gain are not asked of the
+    oracle, and its table is the one with every pair asked for."""
+    _, _, carried = carried_problem(config, rooms, 2)
+    head: Plan = ((("r1", "r1-start", rooms[0]),),)
+    goals = carried.scenario.goals
+    skipped = [0]
+    hopeless = CarriedCosts._hopeless
+
+    def counted(self: CarriedCosts, *args: object) -> bool:
+        out = hopeless(self, *args)  # type: ignore[arg-type]
+        skipped[0] += out
+        return out
+
+    monkeypatch.setattr(CarriedCosts, "_hopeless", counted)
+    fast = carried.subtable(head, ("r1", "r2"), rooms[1:], goals)
+    monkeypatch.setattr(CarriedCosts, "_hopeless", lambda *args: False)
+    every = carried.subtable(head, ("r1", "r2"), rooms[1:], goals)
+    assert fast.pair == every.pair and fast.pair_duration == every.pair_duration and fast.single == every.single
+    if config.startswith("building"):  # with a range sensor the floors are most of a move's cost
+        assert skipped[0] > 0

@@ -26,11 +26,14 @@ from __future__ import annotations
 
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
+from functools import cached_property
 
 from tmpnav.attachment.canonical import CanonicalCosts, _offered, _ordered
 from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
+from tmpnav.attachment.floors import motion_floors
 from tmpnav.attachment.team import Team
 from tmpnav.choices import Costs
+from tmpnav.oracle.bounds import cannot_save
 from tmpnav.oracle.executors import library
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
@@ -158,7 +161,7 @@ class CarriedCosts:
             _ordered(m1, m2, self.robots)
             for i, m1 in enumerate(moves)
             for m2 in moves[i + 1 :]
-            if m1[0] != m2[0] and keep(m1, m2)
+            if m1[0] != m2[0] and keep(m1, m2) and not self._hopeless(m1, m2, single)
         ]
         requests = []
         for m1, m2 in wanted:
@@ -177,6 +180,23 @@ class CarriedCosts:
                 d1, d2 = self._seconds(res)
                 times[p] = (d1, d2)
         return out, times
+
+    def _hopeless(self, m1: MoveKey, m2: MoveKey, single: Mapping[MoveKey, float]) -> bool:
+        """Whether the pair of ``m1`` and ``m2`` cannot save ``min_gain`` of their single moves'
+        costs whatever its robots' beliefs: each robot of a pair drives its own path, so the pair
+        costs at least the two moves' motion floors (:mod:`tmpnav.attachment.floors`). Such a
+        pair is never offered (the oracle would prune it, or simulate it and find it dearer),
+        so it is not asked for: with a range sensor, where the floors are most of a move's
+        cost, that is nearly every pair of a sub-problem."""
+        f1, f2 = self._floors.get(m1), self._floors.get(m2)
+        return f1 is not None and f2 is not None and cannot_save(f1 + f2, single[m1] + single[m2], self.min_gain)
+
+    @cached_property
+    def _floors(self) -> dict[MoveKey, float]:
+        """The motion floor of every single move between rooms of the roadmap, goals or not,
+        from any heading (a robot may stand on a room's node turned to a job's heading)."""
+        rooms = tuple(self.lib.roadmap.instantiations)
+        return motion_floors(self.scenario, self.lib.graph, self.start_location, Goals(rooms, ())).single
 
 
 def _location(start: str, head: Plan, robot: str) -> str:

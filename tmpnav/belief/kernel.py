@@ -460,7 +460,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
     step 1, by X_t after (tmpnav.belief.risk.move_bound)."""
     h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk, h_step = hist
     work, PHt, K, H, cols, y, g, Cx, masses, qs, support = scratch
-    m_off, m_T, ctrl, pose, vis, stream, reach, scan_row, scan_table = motions  # the fields of MotionArrays, in order
+    m_off, m_T, ctrl, pose, vis, stream, reach, reach_row, scan_row, scan_table = motions  # MotionArrays' fields
     dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans = ekf  # and of EKFConstants
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
     priced = reach.shape[1] > 1
@@ -526,7 +526,8 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
                 C00, C01 = Cx[3 * i, 2 * i], Cx[3 * i, 2 * i + 1]
                 C10, C11 = Cx[3 * i + 1, 2 * i], Cx[3 * i + 1, 2 * i + 1]
                 row = m_off[m] + m + t
-                p, x = _step_risk(row - 1, ap, bp, dp, row, a, b, d, C00, C01, C10, C11, reach, masses, qs, support)
+                prev, here = reach_row[row - 1], reach_row[row]  # their rows of the reach table
+                p, x = _step_risk(prev, ap, bp, dp, here, a, b, d, C00, C01, C10, C11, reach, masses, qs, support)
                 h_step[t, i, 0] = p
                 h_step[t, i, 1] = x
                 h_risk[t, i] = h_risk[k, i] + (min(p, h_step[k, i, 0] + x) if t == 1 else x)
@@ -592,7 +593,8 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
                         groups.cov0[g, 3 * i + 1, 3 * i + 1],
                     )
                     m = seqs.motions[c, i]
-                    h_step[0, i, 0] = _step_bound(a, b, d, motions.reach, motions.offset[m] + m, masses, qs)[0]
+                    row = motions.reach_row[motions.offset[m] + m]
+                    h_step[0, i, 0] = _step_bound(a, b, d, motions.reach, row, masses, qs)[0]
                 h_fxy[0, i, 0] = groups.mean0[g, 3 * i]
                 h_fxy[0, i, 1] = groups.mean0[g, 3 * i + 1]
             h_mut[0] = 0

@@ -13,7 +13,9 @@ from __future__ import annotations
 import functools
 import hashlib
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,6 +27,9 @@ from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 from tmpnav.world.lidar import ScanInformation
 from tmpnav.world.visibility import LandmarkVisibility
+
+if TYPE_CHECKING:
+    from tmpnav.oracle.motionsets import MotionSet
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,6 +83,11 @@ class NominalMotion:
 #: the landmarks' visibility of the last worlds, by world and sensor range: a replan's library
 #: (a new context on the same world) takes it as it is
 _VISIBILITY: dict[tuple[str, float], LandmarkVisibility] = {}
+
+
+def _scan_keys(m: NominalMotion) -> np.ndarray:
+    """The motion's scan keys; -1 (no scan) at every pose of a motion without them."""
+    return m.scan_keys if m.scan_keys is not None else np.full(m.poses.shape[0], -1, dtype=np.int64)
 
 
 def visibility_of(world: World, sensor_range: float) -> LandmarkVisibility:
@@ -137,6 +147,15 @@ class MotionLibrary:
             if j.pose is not None and roadmap.instantiations.get(j.room)
         }
         self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
+        #: the motion sets built from a robot's node and heading to a set of goals, whatever the
+        #: belief there (tmpnav.oracle.motionsets.motion_sets)
+        self.sets: OrderedDict[tuple[str, int, float, frozenset[int]], MotionSet | None] = OrderedDict()
+        #: each motion's rows of the reach and scan tables (:meth:`reach_layout`), by the motion's
+        #: id, with the motion (an id is only reused once its motion is gone)
+        self._pose_rows: dict[str, OrderedDict[int, tuple[NominalMotion, np.ndarray]]] = {
+            "reach": OrderedDict(),
+            "scans": OrderedDict(),
+        }
 
     def inherit(self, other: MotionLibrary) -> None:
         """Take what ``other`` computed that holds here too, when it is the library of the same
@@ -181,16 +200,45 @@ class MotionLibrary:
         """The sector reach (T+1, K) m of ``motion``'s footprint at its poses (``rows`` of them)."""
         return self.world.reach(self.scenario.robot(motion.robot).radius).of_cells(motion.cells[rows])
 
-    def reach_all(self, motions: list[NominalMotion]) -> np.ndarray:
-        """The sector reach of every pose of ``motions``, laid end to end (sum (T+1), K) m: one
-        lookup per robot radius rather than one per motion (a table of an evaluation holds
-        hundreds of motions, and each lookup cost about 30 us)."""
-        radius = np.array([self.scenario.robot(m.robot).radius for m in motions])
-        cells = [m.cells for m in motions]
-        if len(set(radius.tolist())) <= 1:
-            r = float(radius[0]) if len(motions) else 0.0
-            return self.world.reach(r).of_cells(np.concatenate(cells) if cells else np.zeros(0, np.int64))
-        return np.concatenate([self.reach(m) for m in motions])
+    def reach_layout(self, motions: list[NominalMotion]) -> tuple[np.ndarray, np.ndarray]:
+        """The sector reach of every pose of ``motions`` laid end to end, as a table (R, K) m and
+        the row of it of each pose (sum (T+1),): the pose's reach is ``table[rows[k]]``.
+
+        With one robot radius the table is that radius' :class:`~tmpnav.world.reach.SectorReach`
+        table and each motion's rows are found once and remembered (:meth:`_rows`): an
+        evaluation lays out hundreds of motions, most of them laid out before, and finding
+        their cells' rows and copying 64 sectors per pose took a fifth of a sub-problem's
+        oracle time. With several radii, the reach itself, one row per pose."""
+        radii = {self.scenario.robot(m.robot).radius for m in motions}
+        if len(radii) > 1:
+            full = np.concatenate([self.reach(m) for m in motions])
+            return full, np.arange(full.shape[0], dtype=np.int64)
+        reach = self.world.reach(radii.pop() if radii else 0.0)
+        rows = self._rows(motions, "reach", lambda cells: reach.rows_of(cells))
+        return reach.table, rows  # the table after the rows were added to it
+
+    def scan_rows_all(self, motions: list[NominalMotion]) -> np.ndarray:
+        """The rows of :attr:`scans`' table of every pose's scan of ``motions``, laid end to end
+        (0: no scan), each motion's found once and remembered."""
+        scans = self.scans
+        assert scans is not None
+        return self._rows(motions, "scans", lambda keys: scans.rows(keys))
+
+    def _rows(self, motions: list[NominalMotion], kind: str, find: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+        """``find`` applied to the keys of ``kind`` (reach cells, scan keys) of the poses of the
+        motions laid end to end, remembering each motion's rows (found for all new ones at once)."""
+        memo = self._pose_rows[kind]
+        new = [m for m in dict.fromkeys(motions) if memo.get(id(m), (None,))[0] is not m]
+        if new:
+            keys = [m.cells if kind == "reach" else _scan_keys(m) for m in new]
+            found = np.split(find(np.concatenate(keys)), np.cumsum([k.shape[0] for k in keys])[:-1])
+            for m, rows in zip(new, found, strict=True):
+                memo[id(m)] = (m, rows)
+            while len(memo) > 2 * MAX_MOTIONS:
+                memo.popitem(last=False)
+        if not motions:
+            return np.zeros(0, dtype=np.int64)
+        return np.concatenate([memo[id(m)][1] for m in motions])
 
     def prepare(self, starts: list[int]) -> None:
         """Run Dijkstra from many start nodes at once."""

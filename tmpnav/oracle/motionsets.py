@@ -10,7 +10,7 @@ plan needs.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import NamedTuple
 
 import numpy as np
@@ -77,14 +77,32 @@ SetKey = tuple[str, StartState]
 
 def motion_sets(lib: MotionLibrary, wanted: dict[SetKey, set[int]]) -> dict[SetKey, MotionSet]:
     """The motion set of each (robot, start state) to the goal nodes wanted from it; a
-    start that reaches none of them has no set."""
+    start that reaches none of them has no set.
+
+    A set's motions and their order depend on the robot, its start node and heading and the
+    goals, not on its belief: a set built before from the same node and heading to the same
+    goals is taken with the new start (``lib.sets``; a sub-problem asks for the sets of its
+    singles again for its pairs, and the next sub-problem for many of the same)."""
     sets = {}
+    memo = lib.sets
     for (robot, start), goals in wanted.items():
-        motions = {g: lib.motion(robot, start.node, start.heading, g) for g in sorted(goals)}
-        valid = {g: m for g, m in motions.items() if m is not None}
-        if valid:
-            sets[(robot, start)] = MotionSet.build(robot, start, valid, lib.scenario.models.dt)
+        key = (robot, start.node, start.heading, frozenset(goals))
+        found = memo.get(key)
+        if found is None:
+            motions = {g: lib.motion(robot, start.node, start.heading, g) for g in sorted(goals)}
+            valid = {g: m for g, m in motions.items() if m is not None}
+            found = memo[key] = MotionSet.build(robot, start, valid, lib.scenario.models.dt) if valid else None
+            while len(memo) > MAX_SETS:
+                memo.popitem(last=False)
+        else:
+            memo.move_to_end(key)
+        if found is not None:
+            sets[(robot, start)] = found if found.start == start else replace(found, start=start)
     return sets
+
+
+#: motion sets remembered per library (the least recently used dropped first)
+MAX_SETS = 4096
 
 
 def chain_restarts(
@@ -131,7 +149,7 @@ class MotionTable:
             [m.lm_visible for m in motions],
             stream,
             landmarks,
-            lib.reach_all(motions) if priced else None,
+            lib.reach_layout(motions) if priced else None,
             scan_layout(motions, lib),
         )
 
@@ -192,8 +210,7 @@ def scan_layout(motions: list[NominalMotion], lib: MotionLibrary) -> tuple[np.nd
     without a range sensor)."""
     if lib.scans is None:
         return None
-    keys = [m.scan_keys if m.scan_keys is not None else np.full(m.poses.shape[0], -1) for m in motions]
-    rows = lib.scans.rows(np.concatenate(keys)) if keys else np.zeros(0, dtype=np.int64)
+    rows = lib.scan_rows_all(motions)
     return rows, lib.scans.table  # the table after the rows were added to it
 
 

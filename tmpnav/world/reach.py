@@ -77,7 +77,14 @@ class SectorReach:
     def of_cells(self, cells: np.ndarray) -> np.ndarray:
         """R (..., K) m for sub-cell keys (...,) (:meth:`cells`)."""
         cells = np.asarray(cells, dtype=np.int64)
-        flat = cells.ravel()
+        rows = self.rows_of(cells.ravel())  # before the table is read: it may grow
+        return self.table[rows].reshape(*cells.shape, SECTORS)
+
+    def rows_of(self, cells: np.ndarray) -> np.ndarray:
+        """The row of :attr:`table` holding the reach of each sub-cell key (N,) (:meth:`cells`),
+        computing those not known yet; row 0 (reach 0) off the grid. Rows stay where they are
+        as the table grows."""
+        flat = np.asarray(cells, dtype=np.int64)
         on = flat >= 0
         new = np.unique(flat[on])
         at = np.minimum(np.searchsorted(self.keys, new), max(self.keys.size - 1, 0))
@@ -86,7 +93,7 @@ class SectorReach:
             self._compute(new)
         rows = np.zeros(flat.size, dtype=np.int64)
         rows[on] = self.key_rows[np.searchsorted(self.keys, flat[on])]
-        return self.table[rows].reshape(*cells.shape, SECTORS)
+        return rows
 
     def at(self, points: np.ndarray) -> np.ndarray:
         """R (..., K) m at positions (..., 2)."""

@@ -1,0 +1,58 @@
+"""The motion library's layouts of many motions for the kernel: each pose's sector reach and
+scan found once per motion, and read through rows that stay valid as the tables grow."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from tests.oracle.support import make_two_rooms
+from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.types import RangeSensor
+
+LIDAR = RangeSensor(12.0, 2 * np.pi, 60, 0.05, 0.1, 1.3)
+
+
+def test_the_reach_and_scan_rows_of_motions_are_their_poses_own() -> None:
+    ctx = make_two_rooms()
+    scenario = replace(ctx.scenario, models=replace(ctx.scenario.models, range_sensor=LIDAR))
+    lib = MotionLibrary(scenario, ctx.world, ctx.roadmap)
+    assert lib.scans is not None
+    nodes = sorted(g for goals in ctx.roadmap.instantiations.values() for g in goals)
+    start = ctx.roadmap.starts["r1"]
+    motions = [m for g in nodes if (m := lib.motion("r1", start, 0.0, g)) is not None]
+    first, later = motions[: len(motions) // 2], motions[len(motions) // 2 :]
+    assert first and later
+
+    def check(batch: list) -> None:
+        table, rows = lib.reach_layout(batch)
+        assert np.array_equal(table[rows], np.concatenate([lib.reach(m) for m in batch]))
+        scans = lib.scan_rows_all(batch)
+        assert np.array_equal(scans, np.concatenate([m.scan_rows(lib) for m in batch]))
+
+    check(first)
+    check(later)  # new cells and scans: both tables grow
+    check([*later, *first, first[0]])  # remembered rows, in any order, repeated
+
+
+def test_a_motion_set_built_before_is_taken_with_the_new_start() -> None:
+    """The same node, heading and goals from another belief: the set built before, with the new
+    start; what the kernel reads of it is what building it anew gives."""
+    from tmpnav.oracle.motionsets import MotionSet, motion_sets
+    from tmpnav.oracle.requests import StartState
+
+    ctx = make_two_rooms()
+    lib = MotionLibrary(ctx.scenario, ctx.world, ctx.roadmap)
+    node = ctx.roadmap.starts["r1"]
+    goals = {g for goals in ctx.roadmap.instantiations.values() for g in goals}
+    cov = ((0.01, 0.0, 0.0), (0.0, 0.01, 0.0), (0.0, 0.0, 0.001))
+    a = StartState(node, 0.0, (1.0, 2.0, 0.0), cov)
+    b = StartState(node, 0.0, (1.1, 2.0, 0.0), cov)
+    first = motion_sets(lib, {("r1", a): goals})[("r1", a)]
+    again = motion_sets(lib, {("r1", b): goals})[("r1", b)]
+    valid = {g: m for g in goals if (m := lib.motion("r1", node, 0.0, g)) is not None}
+    fresh = MotionSet.build("r1", b, valid, ctx.scenario.models.dt)
+    assert again.start == b and again.motions == first.motions == fresh.motions
+    assert again.by_goal == fresh.by_goal and np.array_equal(again.prefix, fresh.prefix)
+    assert np.array_equal(again.steps, fresh.steps) and np.array_equal(again.c_u, fresh.c_u)
