@@ -14,8 +14,7 @@ import functools
 import hashlib
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -27,9 +26,6 @@ from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 from tmpnav.world.lidar import ScanInformation
 from tmpnav.world.visibility import LandmarkVisibility
-
-if TYPE_CHECKING:
-    from tmpnav.oracle.motionsets import MotionSet
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,6 +41,8 @@ class NominalMotion:
     noise_seed: int
     cells: np.ndarray  # (T+1,) the sub-cell key of each pose (World.reach(radius).cells)
     scan_keys: np.ndarray | None = None  # (T+1,) each pose's scan (World.scans(sensor).keys); None: no scans
+    #: the poses' rows of a reach or scan table, by the table's token (MotionLibrary.reach_layout)
+    rows: dict[tuple[str, int], np.ndarray] = field(default_factory=dict, repr=False)
 
     def scan_rows(self, lib: MotionLibrary) -> np.ndarray:
         """(T+1,) the rows of ``lib.scans.table`` of the poses' scans (0: no scan)."""
@@ -83,6 +81,11 @@ class NominalMotion:
 #: the landmarks' visibility of the last worlds, by world and sensor range: a replan's library
 #: (a new context on the same world) takes it as it is
 _VISIBILITY: dict[tuple[str, float], LandmarkVisibility] = {}
+
+
+#: what a motion set keeps whatever its start belief: its goals in its order, its prefix matrix,
+#: steps, c_u and final positions (tmpnav.oracle.motionsets.MotionSet)
+SetLayout = tuple[tuple[int, ...], np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
 def _scan_keys(m: NominalMotion) -> np.ndarray:
@@ -147,15 +150,9 @@ class MotionLibrary:
             if j.pose is not None and roadmap.instantiations.get(j.room)
         }
         self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
-        #: the motion sets built from a robot's node and heading to a set of goals, whatever the
-        #: belief there (tmpnav.oracle.motionsets.motion_sets)
-        self.sets: OrderedDict[tuple[str, int, float, frozenset[int]], MotionSet | None] = OrderedDict()
-        #: each motion's rows of the reach and scan tables (:meth:`reach_layout`), by the motion's
-        #: id, with the motion (an id is only reused once its motion is gone)
-        self._pose_rows: dict[str, OrderedDict[int, tuple[NominalMotion, np.ndarray]]] = {
-            "reach": OrderedDict(),
-            "scans": OrderedDict(),
-        }
+        #: the order and arrays of the motion sets built from a robot's node and heading to a set
+        #: of goals, whatever the belief there (tmpnav.oracle.motionsets.motion_sets)
+        self.sets: OrderedDict[tuple[str, int, float, frozenset[int]], SetLayout] = OrderedDict()
 
     def inherit(self, other: MotionLibrary) -> None:
         """Take what ``other`` computed that holds here too, when it is the library of the same
@@ -205,7 +202,7 @@ class MotionLibrary:
         the row of it of each pose (sum (T+1),): the pose's reach is ``table[rows[k]]``.
 
         With one robot radius the table is that radius' :class:`~tmpnav.world.reach.SectorReach`
-        table and each motion's rows are found once and remembered (:meth:`_rows`): an
+        table and each motion's rows are found once and kept with it (:meth:`_rows`): an
         evaluation lays out hundreds of motions, most of them laid out before, and finding
         their cells' rows and copying 64 sectors per pose took a fifth of a sub-problem's
         oracle time. With several radii, the reach itself, one row per pose."""
@@ -214,31 +211,35 @@ class MotionLibrary:
             full = np.concatenate([self.reach(m) for m in motions])
             return full, np.arange(full.shape[0], dtype=np.int64)
         reach = self.world.reach(radii.pop() if radii else 0.0)
-        rows = self._rows(motions, "reach", lambda cells: reach.rows_of(cells))
+        rows = self._rows(motions, ("reach", reach.token), lambda m: m.cells, reach.rows_of)
         return reach.table, rows  # the table after the rows were added to it
 
     def scan_rows_all(self, motions: list[NominalMotion]) -> np.ndarray:
         """The rows of :attr:`scans`' table of every pose's scan of ``motions``, laid end to end
-        (0: no scan), each motion's found once and remembered."""
+        (0: no scan), each motion's found once and kept with it."""
         scans = self.scans
         assert scans is not None
-        return self._rows(motions, "scans", lambda keys: scans.rows(keys))
+        return self._rows(motions, ("scans", scans.token), _scan_keys, scans.rows)
 
-    def _rows(self, motions: list[NominalMotion], kind: str, find: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
-        """``find`` applied to the keys of ``kind`` (reach cells, scan keys) of the poses of the
-        motions laid end to end, remembering each motion's rows (found for all new ones at once)."""
-        memo = self._pose_rows[kind]
-        new = [m for m in dict.fromkeys(motions) if memo.get(id(m), (None,))[0] is not m]
+    @staticmethod
+    def _rows(
+        motions: list[NominalMotion],
+        token: tuple[str, int],
+        keys: Callable[[NominalMotion], np.ndarray],
+        find: Callable[[np.ndarray], np.ndarray],
+    ) -> np.ndarray:
+        """``find`` applied to the ``keys`` of the poses of the motions laid end to end. Each
+        motion keeps its rows under the table's ``token`` (a table's rows stay where they are as
+        it grows); those of the motions without them are found at once."""
+        new = [m for m in dict.fromkeys(motions) if token not in m.rows]
         if new:
-            keys = [m.cells if kind == "reach" else _scan_keys(m) for m in new]
-            found = np.split(find(np.concatenate(keys)), np.cumsum([k.shape[0] for k in keys])[:-1])
-            for m, rows in zip(new, found, strict=True):
-                memo[id(m)] = (m, rows)
-            while len(memo) > 2 * MAX_MOTIONS:
-                memo.popitem(last=False)
+            found = [keys(m) for m in new]
+            split = np.split(find(np.concatenate(found)), np.cumsum([k.shape[0] for k in found])[:-1])
+            for m, rows in zip(new, split, strict=True):
+                m.rows[token] = rows
         if not motions:
             return np.zeros(0, dtype=np.int64)
-        return np.concatenate([memo[id(m)][1] for m in motions])
+        return np.concatenate([m.rows[token] for m in motions])
 
     def prepare(self, starts: list[int]) -> None:
         """Run Dijkstra from many start nodes at once."""

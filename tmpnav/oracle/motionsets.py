@@ -10,7 +10,7 @@ plan needs.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -80,24 +80,32 @@ def motion_sets(lib: MotionLibrary, wanted: dict[SetKey, set[int]]) -> dict[SetK
     start that reaches none of them has no set.
 
     A set's motions and their order depend on the robot, its start node and heading and the
-    goals, not on its belief: a set built before from the same node and heading to the same
-    goals is taken with the new start (``lib.sets``; a sub-problem asks for the sets of its
-    singles again for its pairs, and the next sub-problem for many of the same)."""
+    goals, not on its belief: the order and the arrays of a set built before from the same
+    node and heading to the same goals are taken with the new start (``lib.sets``; a
+    sub-problem asks for the sets of its singles again for its pairs, and the next
+    sub-problem for many of the same). The motions themselves are the library's."""
     sets = {}
-    memo = lib.sets
+    memo, dt = lib.sets, lib.scenario.models.dt
     for (robot, start), goals in wanted.items():
         key = (robot, start.node, start.heading, frozenset(goals))
-        found = memo.get(key)
-        if found is None:
-            motions = {g: lib.motion(robot, start.node, start.heading, g) for g in sorted(goals)}
-            valid = {g: m for g, m in motions.items() if m is not None}
-            found = memo[key] = MotionSet.build(robot, start, valid, lib.scenario.models.dt) if valid else None
-            while len(memo) > MAX_SETS:
-                memo.popitem(last=False)
-        else:
+        layout = memo.get(key)
+        if layout is not None:
             memo.move_to_end(key)
-        if found is not None:
-            sets[(robot, start)] = found if found.start == start else replace(found, start=start)
+            order, prefix, steps, c_u, goal_xy = layout
+            motions = [m for g in order if (m := lib.motion(robot, start.node, start.heading, g)) is not None]
+            if len(motions) == len(order):
+                by_goal = {g: k for k, g in enumerate(order)}
+                sets[(robot, start)] = MotionSet(robot, start, motions, by_goal, prefix, steps, c_u, goal_xy)
+                continue
+        found = {g: lib.motion(robot, start.node, start.heading, g) for g in sorted(goals)}
+        valid = {g: m for g, m in found.items() if m is not None}
+        if not valid:
+            continue
+        built = sets[(robot, start)] = MotionSet.build(robot, start, valid, dt)
+        order = tuple(sorted(built.by_goal, key=built.by_goal.__getitem__))
+        memo[key] = (order, built.prefix, built.steps, built.c_u, built.goal_xy)
+        while len(memo) > MAX_SETS:
+            memo.popitem(last=False)
     return sets
 
 
