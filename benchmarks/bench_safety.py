@@ -188,7 +188,12 @@ def main() -> None:
     parser.add_argument("--sessions", type=int, default=1000, help="simulate: executions")
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
-    runs = {"plans": plans, "default": lambda: default(args.runs), "simulate": lambda: simulate(args.sessions), "paths": paths}
+    runs = {
+        "plans": plans,
+        "default": lambda: default(args.runs),
+        "simulate": lambda: simulate(args.sessions),
+        "paths": paths,
+    }
     text = runs[args.what]()
     stamp = f"# {' '.join(sys.argv[1:])}, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}\n"
     (OUT / f"{args.what}.txt").write_text(stamp + text + "\n")
