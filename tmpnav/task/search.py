@@ -74,6 +74,10 @@ ROUTING_SOLUTIONS = 500
 #: 0.23 s for 100 against 0.32 s and 1.42 s for 500 (at 40 rooms, 200 gave dearer routes; on the
 #: 20 rooms of building-4robots, 100 left a robot two rooms where 500 balanced the team)
 FEW_ROUTING_SOLUTIONS, FEW_ROOMS = 100, 20
+#: OR-Tools' time limit at most (a quarter of the budget below it): its solutions, not the clock,
+#: should end it. At 60 rooms and 8 robots its 500 solutions took 9.8 s on a busy 2-core machine,
+#: and a cap of 10 s left the first plan to the machine's speed (962.0 or 1016.7 on one office)
+ROUTING_CAP = 30.0
 
 
 @dataclass(frozen=True)
@@ -111,7 +115,7 @@ class SearchOptions:
     sizes: tuple[int, ...] = (6, 8)
     sub_robots: int = 3  # robots per neighbourhood, at most
     sub_timeout: float = 30.0  # seconds for one sub-problem's ENHSP run
-    routing_time: float | None = None  # OR-Tools' time limit; None: a quarter of the budget, 1-10 s
+    routing_time: float | None = None  # OR-Tools' time limit; None: a quarter of the budget, 1-30 s
     seed: int = 0
     parallel: int = min(2, os.cpu_count() or 1)  # sub-problems ENHSP solves at once
     #: the model's costs are context-free (a cost table): a sub-problem that is the whole
@@ -213,7 +217,7 @@ class AnytimeSearch:
         opts = self.options
         # guided local search stops after ROUTING_SOLUTIONS solutions (the same routes on every run),
         # or at its time limit on a very large or slow problem
-        limit = opts.routing_time if opts.routing_time is not None else min(10.0, max(1.0, opts.budget / 4))
+        limit = opts.routing_time if opts.routing_time is not None else min(ROUTING_CAP, max(1.0, opts.budget / 4))
         few = len(self.goals.all_rooms) <= FEW_ROOMS and len(self.model.robots) <= 2
         with self.times.timed("planner"):
             routes = solve_routes(
