@@ -41,8 +41,8 @@ class NominalMotion:
     noise_seed: int
     cells: np.ndarray  # (T+1,) the sub-cell key of each pose (World.reach(radius).cells)
     scan_keys: np.ndarray | None = None  # (T+1,) each pose's scan (World.scans(sensor).keys); None: no scans
-    #: the poses' rows of a reach or scan table, by the table's token (MotionLibrary.reach_layout)
-    rows: dict[tuple[str, int], np.ndarray] = field(default_factory=dict, repr=False)
+    #: the poses' rows of a reach or scan table, by the table (MotionLibrary.reach_layout)
+    rows: dict[object, np.ndarray] = field(default_factory=dict, repr=False)
 
     def scan_rows(self, lib: MotionLibrary) -> np.ndarray:
         """(T+1,) the rows of ``lib.scans.table`` of the poses' scans (0: no scan)."""
@@ -211,7 +211,7 @@ class MotionLibrary:
             full = np.concatenate([self.reach(m) for m in motions])
             return full, np.arange(full.shape[0], dtype=np.int64)
         reach = self.world.reach(radii.pop() if radii else 0.0)
-        rows = self._rows(motions, ("reach", reach.token), lambda m: m.cells, reach.rows_of)
+        rows = self._rows(motions, reach, lambda m: m.cells, reach.rows_of)
         return reach.table, rows  # the table after the rows were added to it
 
     def scan_rows_all(self, motions: list[NominalMotion]) -> np.ndarray:
@@ -219,27 +219,28 @@ class MotionLibrary:
         (0: no scan), each motion's found once and kept with it."""
         scans = self.scans
         assert scans is not None
-        return self._rows(motions, ("scans", scans.token), _scan_keys, scans.rows)
+        return self._rows(motions, scans, _scan_keys, scans.rows)
 
     @staticmethod
     def _rows(
         motions: list[NominalMotion],
-        token: tuple[str, int],
+        table: object,
         keys: Callable[[NominalMotion], np.ndarray],
         find: Callable[[np.ndarray], np.ndarray],
     ) -> np.ndarray:
         """``find`` applied to the ``keys`` of the poses of the motions laid end to end. Each
-        motion keeps its rows under the table's ``token`` (a table's rows stay where they are as
-        it grows); those of the motions without them are found at once."""
-        new = [m for m in dict.fromkeys(motions) if token not in m.rows]
+        motion keeps its rows by the ``table`` they index (the object itself: a table's rows stay
+        where they are as it grows, and no other table, a copy of it included, shares the key);
+        those of the motions without them are found at once."""
+        new = [m for m in dict.fromkeys(motions) if table not in m.rows]
         if new:
             found = [keys(m) for m in new]
             split = np.split(find(np.concatenate(found)), np.cumsum([k.shape[0] for k in found])[:-1])
             for m, rows in zip(new, split, strict=True):
-                m.rows[token] = rows
+                m.rows[table] = rows
         if not motions:
             return np.zeros(0, dtype=np.int64)
-        return np.concatenate([m.rows[token] for m in motions])
+        return np.concatenate([m.rows[table] for m in motions])
 
     def prepare(self, starts: list[int]) -> None:
         """Run Dijkstra from many start nodes at once."""

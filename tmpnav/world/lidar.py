@@ -24,7 +24,6 @@ when first asked for (the oracle's motions read a few thousand cells of a buildi
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass
 
@@ -204,9 +203,6 @@ def information_matrices(sdf: np.ndarray, grid: OccupancyGrid, sensor: RangeSens
     return np.matmul(G.transpose(0, 2, 1), G).reshape(*poses.shape[:-1], 3, 3)
 
 
-_TOKENS = itertools.count(1)
-
-
 class ScanInformation:
     """One scan's information, as the factor G (3, 3) of J = G^T G, per grid cell and heading bin.
 
@@ -220,7 +216,6 @@ class ScanInformation:
 
     def __init__(self, grid: OccupancyGrid, sdf: np.ndarray, sensor: RangeSensor):
         self.grid, self.sdf, self.sensor = grid, sdf, sensor
-        self.token = next(_TOKENS)  # names this table (its rows kept with motions, tmpnav.oracle.motions)
         self.angles = sensor.beam_angles()
         self.bins = 1 if sensor.fov >= 2.0 * math.pi - 1e-9 else HEADINGS
         self._keys = np.zeros(0, dtype=np.int64)  # sorted

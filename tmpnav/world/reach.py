@@ -25,7 +25,6 @@ a building asks for some thousands among millions of poses.
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numba as nb
@@ -45,9 +44,6 @@ SUBDIVISIONS = 2
 OFF_GRID = -1
 
 
-_TOKENS = itertools.count(1)
-
-
 class SectorReach:
     """The reach of every sub-cell of ``grid`` for a disc of ``radius`` (m), computed on demand.
 
@@ -58,7 +54,6 @@ class SectorReach:
 
     def __init__(self, grid: OccupancyGrid, clear: np.ndarray, radius: float, subdivisions: int = SUBDIVISIONS):
         self.grid = grid
-        self.token = next(_TOKENS)  # names this table (its rows kept with motions, tmpnav.oracle.motions)
         self.subdivisions = subdivisions
         hit = np.ones((grid.shape[0] + 2, grid.shape[1] + 2), dtype=bool)  # one ring off the grid
         hit[1:-1, 1:-1] = clear <= radius
