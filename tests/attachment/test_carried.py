@@ -81,16 +81,20 @@ def test_a_standing_robot_never_grows_less_certain() -> None:
 
 
 @pytest.mark.parametrize(
-    ("config", "rooms"),
-    [("corridor-3robots.yaml", ("L3", "L4", "L6", "L7")), ("building-20.yaml", ("S1", "S2", "N1", "N2"))],
+    ("config", "rooms", "head"),
+    [
+        ("corridor-3robots.yaml", ("L3", "L4", "L6", "L7"), ((("r1", "r1-start", "L3"),),)),
+        ("building-20.yaml", ("S1", "S2", "N1", "N2"), ((("r1", "r1-start", "S1"),),)),
+        # r1 starts in room A and comes back to it: it stands on one of A's instantiations
+        ("two-rooms.yaml", ("A", "C", "B"), ((("r1", "A", "C"),), (("r1", "C", "A"),))),
+    ],
 )
 def test_pairs_below_their_floors_are_not_asked_for(
-    config: str, rooms: tuple[str, ...], monkeypatch: pytest.MonkeyPatch
+    config: str, rooms: tuple[str, ...], head: Plan, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """A sub-problem's pairs whose motion floors cannot save pair_min_gain are not asked of the
     oracle, and its table is the one with every pair asked for."""
     _, _, carried = carried_problem(config, rooms, 2)
-    head: Plan = ((("r1", "r1-start", rooms[0]),),)
     goals = carried.scenario.goals
     skipped = [0]
     hopeless = CarriedCosts._hopeless
