@@ -157,11 +157,12 @@ class CarriedCosts:
         keep = ENCODINGS["mixed"].pair_filter(goals, at)
         assert keep is not None
         moves = list(single)
+        floor = {m: self._floor(m) for m in moves}
         wanted = [
             _ordered(m1, m2, self.robots)
             for i, m1 in enumerate(moves)
             for m2 in moves[i + 1 :]
-            if m1[0] != m2[0] and keep(m1, m2) and not self._hopeless(m1, m2, single)
+            if m1[0] != m2[0] and keep(m1, m2) and not self._hopeless(m1, m2, single, floor)
         ]
         requests = []
         for m1, m2 in wanted:
@@ -181,15 +182,16 @@ class CarriedCosts:
                 times[p] = (d1, d2)
         return out, times
 
-    def _hopeless(self, m1: MoveKey, m2: MoveKey, single: Mapping[MoveKey, float]) -> bool:
+    def _hopeless(
+        self, m1: MoveKey, m2: MoveKey, single: Mapping[MoveKey, float], floor: Mapping[MoveKey, float]
+    ) -> bool:
         """Whether the pair of ``m1`` and ``m2`` cannot save ``min_gain`` of their single moves'
         costs whatever its robots' beliefs: each robot of a pair drives its own path, so the pair
         costs at least the two moves' motion floors (:mod:`tmpnav.attachment.floors`). Such a
         pair is never offered (the oracle would prune it, or simulate it and find it dearer),
         so it is not asked for (on a generated 40-room office with a lidar, 4,011 of the 26,694
-        pairs the oracle pruned)."""
-        f1, f2 = self._floor(m1), self._floor(m2)
-        return cannot_save(f1 + f2, single[m1] + single[m2], self.min_gain)
+        pairs the oracle pruned). ``floor``: each move's :meth:`_floor`."""
+        return cannot_save(floor[m1] + floor[m2], single[m1] + single[m2], self.min_gain)
 
     def _floor(self, move: MoveKey) -> float:
         """The least ``move`` costs from wherever its robot stands at its origin: a room's pose

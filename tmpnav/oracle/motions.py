@@ -194,8 +194,11 @@ class MotionLibrary:
         return found  # type: ignore[return-value]
 
     def reach(self, motion: NominalMotion, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
-        """The sector reach (T+1, K) m of ``motion``'s footprint at its poses (``rows`` of them)."""
-        return self.world.reach(self.scenario.robot(motion.robot).radius).of_cells(motion.cells[rows])
+        """The sector reach (T+1, K) m of ``motion``'s footprint at its poses (``rows`` of them),
+        through the rows the motion keeps (:meth:`_rows`)."""
+        table = self.world.reach(self.scenario.robot(motion.robot).radius)
+        found = self._rows([motion], table, lambda m: m.cells, table.rows_of)
+        return table.table[found[rows]]
 
     def reach_layout(self, motions: list[NominalMotion]) -> tuple[np.ndarray, np.ndarray]:
         """The sector reach of every pose of ``motions`` laid end to end, as a table (R, K) m and
