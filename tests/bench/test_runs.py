@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tmpnav.bench.runs import Job, kill_group, rows
+from tmpnav.bench.runs import Job, kill_group, make_jobs, rows
 from tmpnav.bench.table import COLUMNS
 from tmpnav.errors import InputError
 
@@ -34,6 +34,18 @@ def alive(pid: int) -> bool:
             return fh.read().split()[2] != "Z"
     except FileNotFoundError:
         return False
+
+
+def test_each_session_draws_its_own_goals_and_every_encoding_plans_the_same() -> None:
+    names = [f"L{i}" for i in range(1, 11)]
+    jobs = make_jobs("rooms", [2], [4], 3, ["mixed", "paper"], 0, Path("configs/corridor.yaml"), lambda _: names)
+    by_session = {s: {j.goals for j in jobs if j.session == s} for s in range(3)}
+    assert all(len(goals) == 1 for goals in by_session.values())  # both encodings, the same goals
+    assert len({next(iter(g)) for g in by_session.values()}) == 3  # each session its own
+    assert all(len(j.goals) == 4 and set(j.goals) <= set(names) for j in jobs)
+    assert make_jobs("rooms", [2], [4], 3, ["mixed"], 0, Path("configs/corridor.yaml"), lambda _: names)[0].goals == (
+        jobs[0].goals
+    )  # drawn from the seed: the same on every run
 
 
 def test_killing_a_run_kills_the_processes_it_started() -> None:
