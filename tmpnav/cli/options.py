@@ -317,7 +317,7 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             default=None,
             default_text=scenario_default("keep_apart", "true"),
             help="Keep robots out of each other's way on the team's clock (the anytime search prices every "
-            "plan so; an exact search's plan is kept apart after it): a move held back "
+            "plan so; an exact plan that keeping apart makes dearer is searched on so): a move held back "
             "(a wait), driven along another roadmap path around the other robot (a detour) or made through a "
             "room no goal names (a sidestep), if that costs at most 1.5 times the plan's objective (under "
             "--max-risk: if every move stays within it). --no-keep-apart: the plan as planned, its conflicts "

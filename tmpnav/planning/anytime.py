@@ -35,7 +35,7 @@ def _incumbent(run: TaskRun) -> dict[str, Plan]:
     return {UNDER_WAY: with_origins(run.incumbent, run.canonical.start_location)}
 
 
-def anytime_carried(run: TaskRun) -> Planned:
+def anytime_carried(run: TaskRun, seeds: dict[str, Plan] | None = None, floor: Bound | None = None) -> Planned:
     """The anytime search with carried costs, every plan costed as executed, from the cheapest
     of OR-Tools' routes, the plan being executed (a replan's) or else (where quick) the exact
     plan of the cost table.
@@ -47,22 +47,25 @@ def anytime_carried(run: TaskRun) -> Planned:
     rooms and 4 robots: 2081.0 instead of 2281.1 at the budget, the carried search having the
     time), so the whole budget goes to the costs the plan is judged by. A plan is judged as it
     will be executed: with its robots kept apart (waits, detours, sidesteps) when the scenario
-    keeps them apart."""
-    anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight, _executed(run))
+    keeps them apart. ``seeds`` (name -> plan), when given, take the place of the exact plan of
+    the cost table, and ``floor`` the certified bound: the unfolded search's plan that keeping
+    robots apart made dearer, and its cost as planned, the least of every plan as planned
+    (tmpnav.planning.unfolded)."""
+    anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight, executed_cost(run))
     _warm_up(run, anytime)
-    seeds: dict[str, Plan] = _incumbent(run)
+    seeds = {**_incumbent(run), **(seeds or {})}
     # a replan starts from its incumbent: the exact search of the table is not budgeted (3-6 s
     # for 3 rooms and 4 robots, against a replan's 1-2 s)
     if not seeds and exact_fits(len(run.goals.all_rooms), len(run.scenario.robots), "table"):
         table = full_table(run.scenario, run.world, run.canonical.oracle, run.times, run.canonical.origin)
         exact = plan_task(TaskProblem.of(run.scenario, table), run.store, run.replan, run.times)
         seeds["the exact plan of the cost table"] = exact.steps
-    bound = _bound(run)
+    bound = floor if floor is not None else _bound(run)
     task = plan_anytime(anytime, run.search, _left(run), bound, seeds)
     return Planned(run.canonical.seen(), task)
 
 
-def _executed(run: TaskRun) -> ExecutedCost | None:
+def executed_cost(run: TaskRun) -> ExecutedCost | None:
     """Every plan the search would take priced as ``tmpnav plan`` will execute it, robots kept
     apart (planner.keep_apart), so that the plan it picks is the plan executed."""
     planner = run.scenario.planner

@@ -1,14 +1,19 @@
 """The exact search with carried costs: the belief space unfolded (:mod:`tmpnav.attachment.unfold`)
 and searched by ENHSP (:func:`tmpnav.task.stage.plan_unfolded`); where it is too large to
-unfold, the anytime search, unless the exact search was asked for by name."""
+unfold, the anytime search, unless the exact search was asked for by name. Where robots are kept
+apart and that makes the exact plan dearer, the anytime search goes on from it, every plan
+priced as executed."""
 
 from __future__ import annotations
 
 from tmpnav.attachment.unfold import unfold
 from tmpnav.errors import InputError
-from tmpnav.planning.anytime import anytime_carried
+from tmpnav.planning.anytime import anytime_carried, executed_cost
 from tmpnav.planning.run import Planned, TaskRun
+from tmpnav.results import TaskResult
+from tmpnav.task.bound import Bound
 from tmpnav.task.plans import Rules
+from tmpnav.task.search import EPSILON
 from tmpnav.task.stage import plan_unfolded
 
 
@@ -31,6 +36,24 @@ def exact_carried(run: TaskRun) -> Planned:
             )
         return anytime_carried(run)
     rules = Rules(run.canonical.start_location, run.goals)
-    return Planned(
-        run.canonical.seen(), plan_unfolded(graph, run.carried, rules, run.planner, run.search, run.span_weight)
-    )
+    task = plan_unfolded(graph, run.carried, rules, run.planner, run.search, run.span_weight)
+    if _dearer_kept_apart(run, task):
+        # its optimum as planned bounds every plan as executed (kept apart, a plan costs no less)
+        floor = None if task.bound is None else Bound(task.bound.value, "exact, as planned")
+        return anytime_carried(run, {"the exact plan of the unfolded belief space": task.steps}, floor)
+    return Planned(run.canonical.seen(), task)
+
+
+def _dearer_kept_apart(run: TaskRun, task: TaskResult) -> bool:
+    """Whether keeping the robots of the unfolded search's plan apart (waits, detours,
+    sidesteps: what ``tmpnav plan`` will execute) costs more than the plan as searched. The
+    unfolded belief space has no clock of where each robot is, so its optimum is the optimum as
+    planned, robots passing through each other; where keeping them apart costs nothing it is
+    the plan executed, else the anytime search goes on from it with every plan priced as
+    executed (tmpnav.planning.anytime), so that the plan picked is the plan executed."""
+    executed = executed_cost(run)
+    if executed is None or not task.steps:
+        return False
+    planned = run.carried.plan_cost(task.steps)
+    value = planned.value(run.span_weight)
+    return executed(task.steps, planned).value(run.span_weight) > value * (1 + EPSILON) + EPSILON

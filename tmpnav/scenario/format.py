@@ -526,7 +526,7 @@ PLANNER = Section(
         ),
         "keep_apart": Field(
             Flag(),
-            "robots in each other's way on the team's clock (closer than their radii plus a margin for their uncertainty) are kept apart, every plan the anytime search would take priced so (an exact search's plan is kept apart after it): a move held back (a wait), driven along another roadmap path around the other robot (a detour) or made through a room no goal names (a sidestep), if that raises the plan's objective by at most half (under max_risk: if every move stays within it); false: the plan as planned, its conflicts reported (the paper's model)",
+            "robots in each other's way on the team's clock (closer than their radii plus a margin for their uncertainty) are kept apart, every plan the anytime search would take priced so (an exact plan that keeping apart makes dearer is searched on so): a move held back (a wait), driven along another roadmap path around the other robot (a detour) or made through a room no goal names (a sidestep), if that raises the plan's objective by at most half (under max_risk: if every move stays within it); false: the plan as planned, its conflicts reported (the paper's model)",
             default=True,
         ),
         "costs": Field(
