@@ -51,7 +51,9 @@ def anytime_carried(run: TaskRun, seeds: dict[str, Plan] | None = None, floor: B
     the cost table, and ``floor`` the certified bound: the unfolded search's plan that keeping
     robots apart made dearer, and its cost as planned, the least of every plan as planned
     (tmpnav.planning.unfolded)."""
-    anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight, executed_cost(run))
+    # an exact plan as a seed is no worse as planned than OR-Tools' routes of single moves
+    routes = not seeds
+    anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight, executed_cost(run), routes)
     _warm_up(run, anytime)
     seeds = {**_incumbent(run), **(seeds or {})}
     # a replan starts from its incumbent: the exact search of the table is not budgeted (3-6 s

@@ -126,6 +126,9 @@ class SearchOptions:
     span_weight: float = 0.0
     #: edits between routes costed by the model per pass, the best by the single moves first
     route_candidates: int = 6
+    #: OR-Tools' routes as a first plan; False: the seeds', where there are seeds (a search that
+    #: goes on from an exact plan, which OR-Tools' routes of single moves cannot beat as planned)
+    first_routes: bool = True
 
 
 @dataclass
@@ -266,9 +269,12 @@ class AnytimeSearch:
             for name, seed in (seeds or {}).items()
             if self.rules.valid(p := self.canonical(with_missing(seed, self.rules, singles)))
         }
-        plan, start = self.first_plan(singles, valid.get(UNDER_WAY))
-        best, cost = plan, self.priced(plan, self.cost(plan))
-        for name, seed in valid.items():
+        starts = list(valid.items())
+        if self.options.first_routes or not starts:
+            plan, routed = self.first_plan(singles, valid.get(UNDER_WAY))
+            starts.insert(0, (routed, plan))
+        (start, best), cost = starts[0], self.priced(starts[0][1], self.cost(starts[0][1]))
+        for name, seed in starts[1:]:
             seed_cost = self.priced(seed, self.cost(seed))
             if self.value(seed_cost) < self.value(cost):
                 best, cost, start = seed, seed_cost, name

@@ -218,6 +218,8 @@ class AnytimeTask:
     span_weight: float = 0.0  # the objective's price of a second of makespan (tmpnav.task.objectives)
     #: a plan's cost as it will be executed (robots kept apart); None: as planned
     executed: Executed | None = None
+    #: OR-Tools' routes as a first plan (SearchOptions.first_routes)
+    first_routes: bool = True
 
     def options(self, budget: float) -> SearchOptions:
         """The search's options: with costs that depend on the context (carried beliefs), smaller
@@ -232,6 +234,7 @@ class AnytimeTask:
             whole_is_exact=context_free,
             sizes=SearchOptions.sizes if context_free else CARRIED_SIZES,
             span_weight=self.span_weight,
+            first_routes=self.first_routes,
         )
 
 
