@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 import random
 import re
+import time
 from collections import Counter
 from pathlib import Path
 
@@ -96,6 +97,28 @@ def test_a_solution_limit_makes_runs_identical() -> None:
     first = solve_routes(table, goals, time_limit=30.0, solution_limit=300)
     second = solve_routes(table, goals, time_limit=30.0, solution_limit=300)
     assert first == second
+
+
+def test_a_stagnation_limit_stops_that_many_solutions_after_the_last_improvement() -> None:
+    table, goals = building_instance(random.Random(3), 20, 3)
+    full = solve_routes(table, goals, time_limit=30.0, solution_limit=300)
+    assert full.solutions == 300 and 0 < full.last_improvement <= 300
+    stopped = solve_routes(table, goals, time_limit=30.0, solution_limit=300, stagnation=20)
+    assert stopped.solutions == min(300, stopped.last_improvement + 20)
+    # until it stops it is the same search: it ends on the routes the full one had then
+    assert stopped.last_improvement <= full.last_improvement
+    if stopped.last_improvement == full.last_improvement:
+        assert stopped.rooms == full.rooms
+
+
+def test_a_search_with_nothing_left_to_try_ends_long_before_its_time_limit() -> None:
+    """One robot, one room: OR-Tools finds its only solution at once and, without the limit
+    on failures since the last solution (routing.IDLE_FAILURES), failed on until its time limit."""
+    table, goals = small_instance(random.Random(0), 1, 1, 0.0, metric=True)
+    start = time.perf_counter()
+    routes = solve_routes(table, goals, time_limit=60.0, solution_limit=500)
+    assert routes.found and routes.solutions == 1
+    assert time.perf_counter() - start < 30.0  # measured: about 0.05 s
 
 
 def test_the_local_search_starts_from_the_routes_given() -> None:

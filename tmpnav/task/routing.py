@@ -73,6 +73,11 @@ class Routes:
     cost: float
     status: str
     proved: str
+    #: the solutions OR-Tools found, at which of them its objective last improved, and the most
+    #: in a row that did not improve it before one that did
+    solutions: int = 0
+    last_improvement: int = 0
+    plateau: int = 0
 
     @property
     def found(self) -> bool:
@@ -98,10 +103,12 @@ def solve_routes(
     span_weight: float = 0.0,
     arc_costs: bool = True,
     initial: dict[str, tuple[str, ...]] | None = None,
+    stagnation: int | None = None,
 ) -> Routes:
     """Routes for the robots that visit every goal, by OR-Tools within ``time_limit`` s.
 
-    ``solution_limit`` stops the search after that many solutions (reproducible runs);
+    ``solution_limit`` stops the search after that many solutions (reproducible runs), and
+    ``stagnation`` after that many solutions in a row that did not improve its objective;
     ``first_solution`` is one of ``FIRST_SOLUTION``; ``span_weight`` prices a second of the
     routes' makespan, ``arc_costs=False`` leaves the moves' costs out (min-max routing).
     ``initial`` (each robot's rooms in order: a replan's plan under way) is the solution the
@@ -134,7 +141,42 @@ def solve_routes(
         model.routing.AddDisjunction([model.manager.NodeToIndex(node)], round(goals.optional[x] * COST_SCALE))
     if (span_weight > 0 or goals.windows) and table.duration:
         model.add_time(span_weight, goals)
-    return model.solve(time_limit, solution_limit, first_solution, initial)
+    return model.solve(time_limit, solution_limit, first_solution, initial, stagnation)
+
+
+#: OR-Tools' search ends when it has failed this many times since its last solution: its local
+#: search has nothing left to try. On a problem of two rooms it finds one solution and would fail
+#: on until its time limit (about 24,000 failures a second); on 10-60 rooms and 2-8 robots at
+#: most 5 failures came between two solutions (benchmarks/routing/first_routes.txt).
+IDLE_FAILURES = 1000
+
+
+class _Trace:
+    """OR-Tools' solutions counted as it finds them, and the last that improved its objective;
+    the search's limit once ``stagnation`` solutions in a row did not improve it (where given),
+    or it failed :data:`IDLE_FAILURES` times since its last solution."""
+
+    def __init__(self, routing: object, stagnation: int | None):
+        self.routing, self.stagnation = routing, stagnation
+        self.solver = routing.solver()  # type: ignore[attr-defined]
+        self.solutions, self.last_improvement, self.plateau, self.best = 0, 0, 0, math.inf
+        self.failures = 0  # the solver's failures at the last solution
+
+    def at_solution(self) -> None:
+        self.solutions += 1
+        self.failures = self.solver.Failures()
+        value = self.routing.CostVar().Value()  # type: ignore[attr-defined]
+        if value < self.best:
+            self.plateau = max(self.plateau, self.solutions - self.last_improvement - 1)
+            self.best, self.last_improvement = value, self.solutions
+
+    def counts(self) -> tuple[int, int, int]:
+        return self.solutions, self.last_improvement, self.plateau
+
+    def stagnated(self) -> bool:
+        if self.solutions and self.solver.Failures() - self.failures >= IDLE_FAILURES:
+            return True
+        return self.stagnation is not None and self.solutions - self.last_improvement >= self.stagnation
 
 
 def _waypoints(table: CostTable, goals: Goals) -> list[str]:
@@ -279,6 +321,7 @@ class _Model:
         solution_limit: int | None,
         first_solution: str,
         initial: dict[str, tuple[str, ...]] | None = None,
+        stagnation: int | None = None,
     ) -> Routes:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
 
@@ -288,6 +331,9 @@ class _Model:
         params.time_limit.FromMilliseconds(max(1, round(time_limit * 1000)))
         if solution_limit is not None:
             params.solution_limit = solution_limit
+        trace = _Trace(self.routing, stagnation)
+        self.routing.AddAtSolutionCallback(trace.at_solution)
+        self.routing.AddSearchMonitor(self.routing.solver().CustomLimit(trace.stagnated))
         start = self._initial(initial, params) if initial else None
         if start is not None:
             solution = self.routing.SolveFromAssignmentWithParameters(start, params)
@@ -296,12 +342,12 @@ class _Model:
         status = routing_enums_pb2.RoutingSearchStatus.Value.Name(self.routing.status())
         proved = {"ROUTING_OPTIMAL": "optimal", "ROUTING_INFEASIBLE": "infeasible"}.get(status, "nothing")
         if solution is None:
-            return Routes({}, math.inf, status, proved)
+            return Routes({}, math.inf, status, proved, *trace.counts())
         rooms = {r: self._route(solution, v) for v, r in enumerate(self.table.robots)}
         cost = 0.0
         for r, here, room in Routes(rooms, 0.0, status, proved).moves(self.table):
             cost += self.table.single[(r, here, room)]
-        return Routes(rooms, cost, status, proved)
+        return Routes(rooms, cost, status, proved, *trace.counts())
 
     def _initial(self, routes: dict[str, tuple[str, ...]], params: object) -> object | None:
         """The assignment of ``routes`` (each robot's rooms in order, its end left out: the end

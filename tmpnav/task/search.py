@@ -69,11 +69,15 @@ _T = TypeVar("_T")
 #: OR-Tools' guided local search stops after this many solutions: on 20-60 rooms and 2-8
 #: robots it reaches in 0.1-1.2 s the routes it reaches in 10 s (within 0.02%)
 ROUTING_SOLUTIONS = 500
-#: ... and after this many up to :data:`FEW_ROOMS` rooms and two robots: on the 10-room corridor
-#: and the 20-room building, 50, 100, 500 and 2,000 solutions gave the same routes, in 0.11 s and
-#: 0.23 s for 100 against 0.32 s and 1.42 s for 500 (at 40 rooms, 200 gave dearer routes; on the
-#: 20 rooms of building-4robots, 100 left a robot two rooms where 500 balanced the team)
-FEW_ROUTING_SOLUTIONS, FEW_ROOMS = 100, 20
+#: ... and up to :data:`FEW_ROOMS` rooms and two robots, also after this many in a row that did
+#: not improve its objective. On the generated 20-room offices and warehouses with 2 robots
+#: (benchmarks/routing/first_routes.txt) it gave the same or cheaper first plans than the fixed
+#: 100 solutions it replaces on all 20 (cheaper on 4, by 2.3-10.9%), in 0.2-0.5 s more; against
+#: all 500 solutions, the same on 17, dearer on 2 warehouses (1.6%, 15.7%: improvements after 122
+#: and 400 solutions without one), in a quarter of the time. With more robots or rooms such long
+#: plateaus are common (188-297 solutions on building-4robots, building-8robots and a 60-room
+#: office, whose first plans it made 0.3-5.6% dearer): those run all :data:`ROUTING_SOLUTIONS`.
+FEW_STAGNATION, FEW_ROOMS = 100, 20
 #: OR-Tools' time limit at most (a quarter of the budget below it): its solutions, not the clock,
 #: should end it. At 60 rooms and 8 robots its 500 solutions took 9.8 s on a busy 2-core machine,
 #: and a cap of 10 s left the first plan to the machine's speed (962.0 or 1016.7 on one office)
@@ -219,7 +223,8 @@ class AnytimeSearch:
         starts from ``start_from``'s routes when given (a replan's plan under way)."""
         opts = self.options
         # guided local search stops after ROUTING_SOLUTIONS solutions (the same routes on every run),
-        # or at its time limit on a very large or slow problem
+        # few rooms and robots after FEW_STAGNATION without improvement, or at its time limit on a
+        # very large or slow problem
         limit = opts.routing_time if opts.routing_time is not None else min(ROUTING_CAP, max(1.0, opts.budget / 4))
         few = len(self.goals.all_rooms) <= FEW_ROOMS and len(self.model.robots) <= 2
         with self.times.timed("planner"):
@@ -227,7 +232,8 @@ class AnytimeSearch:
                 singles,
                 self.goals,
                 time_limit=max(0.1, min(limit, self.left())),
-                solution_limit=FEW_ROUTING_SOLUTIONS if few else ROUTING_SOLUTIONS,
+                solution_limit=ROUTING_SOLUTIONS,
+                stagnation=FEW_STAGNATION if few else None,
                 span_weight=opts.span_weight,
                 initial=None if start_from is None else _routes_of(start_from, self.model.robots),
             )
