@@ -35,7 +35,12 @@ def _incumbent(run: TaskRun) -> dict[str, Plan]:
     return {UNDER_WAY: with_origins(run.incumbent, run.canonical.start_location)}
 
 
-def anytime_carried(run: TaskRun, seeds: dict[str, Plan] | None = None, floor: Bound | None = None) -> Planned:
+def anytime_carried(
+    run: TaskRun,
+    seeds: dict[str, Plan] | None = None,
+    floor: Bound | None = None,
+    executed: ExecutedCost | None = None,
+) -> Planned:
     """The anytime search with carried costs, every plan costed as executed, from the cheapest
     of OR-Tools' routes, the plan being executed (a replan's) or else (where quick) the exact
     plan of the cost table.
@@ -50,10 +55,12 @@ def anytime_carried(run: TaskRun, seeds: dict[str, Plan] | None = None, floor: B
     keeps them apart. ``seeds`` (name -> plan), when given, take the place of the exact plan of
     the cost table, and ``floor`` the certified bound: the unfolded search's plan that keeping
     robots apart made dearer, and its cost as planned, the least of every plan as planned
-    (tmpnav.planning.unfolded)."""
+    (tmpnav.planning.unfolded); ``executed``, the pricing that found it dearer (:func:`executed_cost`,
+    which remembers that plan's price)."""
     # an exact plan as a seed is no worse as planned than OR-Tools' routes of single moves
     routes = not seeds
-    anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight, executed_cost(run), routes)
+    executed = executed if executed is not None else executed_cost(run)
+    anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight, executed, routes)
     _warm_up(run, anytime)
     seeds = {**_incumbent(run), **(seeds or {})}
     # a replan starts from its incumbent: the exact search of the table is not budgeted (3-6 s

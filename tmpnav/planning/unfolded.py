@@ -6,6 +6,7 @@ priced as executed."""
 
 from __future__ import annotations
 
+from tmpnav.attachment.conflicts import ExecutedCost
 from tmpnav.attachment.unfold import unfold
 from tmpnav.errors import InputError
 from tmpnav.planning.anytime import anytime_carried, executed_cost
@@ -37,22 +38,23 @@ def exact_carried(run: TaskRun) -> Planned:
         return anytime_carried(run)
     rules = Rules(run.canonical.start_location, run.goals)
     task = plan_unfolded(graph, run.carried, rules, run.planner, run.search, run.span_weight)
-    if _dearer_kept_apart(run, task):
+    executed = executed_cost(run)
+    if executed is not None and _dearer_kept_apart(run, task, executed):
         # its optimum as planned bounds every plan as executed (kept apart, a plan costs no less)
         floor = None if task.bound is None else Bound(task.bound.value, "exact, as planned")
-        return anytime_carried(run, {"the exact plan of the unfolded belief space": task.steps}, floor)
+        seeds = {"the exact plan of the unfolded belief space": task.steps}
+        return anytime_carried(run, seeds, floor, executed)
     return Planned(run.canonical.seen(), task)
 
 
-def _dearer_kept_apart(run: TaskRun, task: TaskResult) -> bool:
+def _dearer_kept_apart(run: TaskRun, task: TaskResult, executed: ExecutedCost) -> bool:
     """Whether keeping the robots of the unfolded search's plan apart (waits, detours,
     sidesteps: what ``tmpnav plan`` will execute) costs more than the plan as searched. The
     unfolded belief space has no clock of where each robot is, so its optimum is the optimum as
     planned, robots passing through each other; where keeping them apart costs nothing it is
     the plan executed, else the anytime search goes on from it with every plan priced as
     executed (tmpnav.planning.anytime), so that the plan picked is the plan executed."""
-    executed = executed_cost(run)
-    if executed is None or not task.steps:
+    if not task.steps:
         return False
     planned = run.carried.plan_cost(task.steps)
     value = planned.value(run.span_weight)
