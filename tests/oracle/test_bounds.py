@@ -9,11 +9,12 @@ import pytest
 
 from tests.oracle.support import actions
 from tmpnav import shipped
+from tmpnav.attachment.canonical import _offered
 from tmpnav.oracle import pairs
-from tmpnav.oracle.bounds import cannot_save
+from tmpnav.oracle.bounds import ControlFloors, cannot_save
 from tmpnav.oracle.cache import NullCache
 from tmpnav.oracle.evaluate import Request
-from tmpnav.oracle.executors import OracleContext, SerialExecutor
+from tmpnav.oracle.executors import OracleContext, SerialExecutor, library
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.table import initial_state
 from tmpnav.pipeline import load_world
@@ -79,3 +80,41 @@ def test_combinations_past_their_cutoff_are_skipped_without_changing_what_is_off
             assert b.cost <= f.cost + 1e-12
         else:
             assert b == f
+
+
+@pytest.mark.parametrize("min_gain", [0.0, 0.05, 0.3])
+@pytest.mark.parametrize("sigma_scale", [1.0, 0.01])
+def test_a_pair_costs_at_least_its_robots_least_control_efforts(min_gain: float, sigma_scale: float) -> None:
+    """ControlFloors: every pair's exact cost is at least the sum of its robots' least M_u c_u
+    to their rooms, so a pair it turns away would never be offered. With M_Sigma a hundredth of
+    the paper's, uncertainty weighs as little as with a lidar: pairs are turned away."""
+    ctx, requests = _corridor_pairs()
+    cost = ctx.scenario.cost
+    ctx = replace(ctx, scenario=replace(ctx.scenario, cost=replace(cost, M_Sigma=cost.M_Sigma * sigma_scale)))
+    oracle = Oracle(ctx, NullCache(), SerialExecutor())
+    joint = oracle.evaluate(requests)
+    alone = {
+        (r, room): res.cost
+        for req in requests[:1]
+        for r, s in zip(req.robots, req.starts, strict=True)
+        for room, res in zip(
+            [room.name for room in ctx.scenario.rooms],
+            oracle.evaluate([Request((r,), (s,), (room.name,)) for room in ctx.scenario.rooms]),
+            strict=True,
+        )
+        if res is not None
+    }
+    floors = ControlFloors(library(ctx))
+    turned_away = 0
+    for req, res in zip(requests, joint, strict=True):
+        assert res is not None and not res.pruned
+        least = sum(
+            floors.least(r, s.node, s.heading, room)
+            for r, s, room in zip(req.robots, req.starts, req.rooms, strict=True)
+        )
+        assert 0.0 < least <= res.cost + 1e-12
+        singles = alone[(req.robots[0], req.rooms[0])] + alone[(req.robots[1], req.rooms[1])]
+        if floors.cannot_pair(req, singles, min_gain):
+            turned_away += 1
+            assert not _offered(res.cost, singles, min_gain)
+    assert turned_away > 0 or sigma_scale == 1.0 or min_gain == 0.0  # (singles cost at least their least efforts)

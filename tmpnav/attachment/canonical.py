@@ -20,9 +20,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
+from functools import cached_property
 
 from tmpnav.attachment.floors import motion_floors
 from tmpnav.choices import Costs
+from tmpnav.oracle.bounds import ControlFloors
 from tmpnav.oracle.executors import library
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
@@ -68,6 +70,11 @@ class CanonicalCosts:
         for r, o in self.origin.items():
             if o.location != self.start_location[r]:
                 self.canonical[(r, o.location)] = o.state
+
+    @cached_property
+    def controls(self) -> ControlFloors:
+        """The robots' least control efforts, which turn away pairs before the oracle simulates them."""
+        return ControlFloors(library(self.oracle.ctx))
 
     # ------------------------------------------------------------------ CostModel
 
@@ -272,6 +279,13 @@ class CanonicalCosts:
         ]
         for p in todo:
             self.pair[p] = None
+        # those whose control effort alone cannot save min_gain are not offered (tmpnav.oracle.bounds.ControlFloors)
+        worth = [
+            k
+            for k, ((m1, m2), req) in enumerate(zip(ready, requests, strict=True))
+            if not self.controls.cannot_pair(req, self.single[m1] + self.single[m2], self.min_gain)  # type: ignore[operator]
+        ]
+        ready, requests = [ready[k] for k in worth], [requests[k] for k in worth]
         for (m1, m2), res in zip(ready, self.oracle.evaluate(requests), strict=True):
             if res is None or res.pruned:
                 continue

@@ -33,7 +33,7 @@ from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
 from tmpnav.attachment.floors import motion_floors
 from tmpnav.attachment.team import Team
 from tmpnav.choices import Costs
-from tmpnav.oracle.bounds import cannot_save
+from tmpnav.oracle.bounds import ControlFloors, cannot_save
 from tmpnav.oracle.executors import library
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
@@ -62,6 +62,7 @@ class CarriedCosts:
         self.min_gain = canonical.min_gain
         self.start = Team.at_start(self.lib, self.scenario)
         self.clock = TeamClock(oracle, self.lib, self.start)
+        self.controls = ControlFloors(self.lib)
         self._runs: OrderedDict[Plan, ClockRun | None] = OrderedDict()  # None: a step cannot be made
         self.plans_run = 0
 
@@ -164,7 +165,7 @@ class CarriedCosts:
             for m2 in moves[i + 1 :]
             if m1[0] != m2[0] and keep(m1, m2) and not self._hopeless(m1, m2, single, floor)
         ]
-        requests = []
+        asked, requests = [], []
         for m1, m2 in wanted:
             if m1[1] == at[m1[0]] and m2[1] == at[m2[0]]:
                 req = team.request([m1[0], m2[0]], [m1[2], m2[2]])
@@ -172,10 +173,13 @@ class CarriedCosts:
                 s1 = team.start_state(idx[m1[0]]) if m1[1] == at[m1[0]] else arrived[(m1[0], m1[1])]
                 s2 = team.start_state(idx[m2[0]]) if m2[1] == at[m2[0]] else arrived[(m2[0], m2[1])]
                 req = Request((m1[0], m2[0]), (s1, s2), (m1[2], m2[2]))
+            if self.controls.cannot_pair(req, single[m1] + single[m2], self.min_gain):
+                continue  # (tmpnav.oracle.bounds.ControlFloors)
             gain = self.min_gain if self.min_gain > 0 and req.joint_cov is None else None
+            asked.append((m1, m2))
             requests.append(Request(req.robots, req.starts, req.rooms, req.joint_cov, min_gain=gain))
         out, times = {}, {}
-        for p, res in zip(wanted, self.oracle.evaluate(requests), strict=True):
+        for p, res in zip(asked, self.oracle.evaluate(requests), strict=True):
             if res is not None and not res.pruned and _offered(res.cost, single[p[0]] + single[p[1]], self.min_gain):
                 out[p] = res.cost
                 d1, d2 = self._seconds(res)

@@ -21,13 +21,24 @@ combination is within the cutoff (each skipped one costs more); otherwise none c
 10-room corridor's carried sub-problems, 2,532 of 9,156 joint simulations were such
 combinations (tmpnav.oracle.pairs). Not under a threshold on the collision bound
 (``max_risk``): there a dearer combination may be the one chosen, being within it.
+
+**Before any simulation** (:class:`ControlFloors`): a paired move drives its robots' own
+nominal motions, the very ones of their single moves from the same start states, so it costs
+at least the sum of each robot's least M_u c_u to its room, whatever the beliefs and their
+correlations. The callers that make pair requests (the carried sub-problems, the canonical
+table) ask for none whose control effort alone cannot save ``min_gain``: with a lidar, a
+robot's single move costs little more than its control effort, and on the generated 20-room
+offices every pair of the carried sub-problems was pruned this way before being simulated
+alone (tests/oracle/test_bounds.py).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.oracle.motionsets import MotionSet
+from tmpnav.oracle.requests import Request
 from tmpnav.oracle.singles import SingleRuns
 from tmpnav.types import CostWeights
 
@@ -72,3 +83,38 @@ def cannot_save(bound: float, alone: float, min_gain: float) -> bool:
     """Does a pair whose cost is at least ``bound`` fail to save ``min_gain`` of ``alone``,
     the cost of its two single moves? (With a margin that absorbs rounding.)"""
     return bound > (1.0 - min_gain) * alone + 1e-9 * alone + 0.002
+
+
+class ControlFloors:
+    """The least control effort M_u c_u of a robot's nominal motions from a start state (its
+    node and heading: the motion does not depend on the belief) to the instantiations of a
+    room (the module docstring), each found once."""
+
+    #: floors remembered before the memory is cleared
+    MAX = 1 << 17
+
+    def __init__(self, lib: MotionLibrary):
+        self.lib = lib
+        self._least: dict[tuple[str, int, float, str], float] = {}
+
+    def least(self, robot: str, node: int, heading: float, room: str) -> float:
+        """The least M_u c_u from ``node`` with ``heading`` to ``room`` (0 when none reaches it)."""
+        key = (robot, node, heading, room)
+        found = self._least.get(key)
+        if found is None:
+            if len(self._least) >= self.MAX:
+                self._least.clear()
+            lib = self.lib
+            dt, weights = lib.scenario.models.dt, lib.scenario.cost
+            motions = (lib.motion(robot, node, heading, g) for g in lib.roadmap.instantiations.get(room, ()))
+            found = self._least[key] = min((weights.M_u * m.c_u(dt) for m in motions if m is not None), default=0.0)
+        return found
+
+    def cannot_pair(self, request: Request, alone: float, min_gain: float) -> bool:
+        """Whether the pair ``request`` cannot save ``min_gain`` of ``alone`` (its two single
+        moves' cost) on its robots' control effort alone."""
+        least = sum(
+            self.least(r, s.node, s.heading, room)
+            for r, s, room in zip(request.robots, request.starts, request.rooms, strict=True)
+        )
+        return cannot_save(least, alone, min_gain)
