@@ -197,3 +197,21 @@ def world_of(grid: OccupancyGrid) -> World:
     from tmpnav.world.grid import clearance
 
     return World(grid, clearance(grid), (), (), np.zeros((0, 2)), "test")
+
+
+def test_a_poses_key_is_its_cell_and_nearest_heading_bin() -> None:
+    """ScanInformation.keys (compiled) against the grid's cells and the bin arithmetic written out,
+    on poses off the grid, on cell edges and with headings of any sign and size."""
+    grid = box()
+    sdf = signed_distance(grid)
+    rng = np.random.default_rng(3)
+    poses = np.column_stack([rng.uniform(-1.0, 11.0, 500), rng.uniform(-1.0, 7.0, 500), rng.uniform(-20, 20, 500)])
+    edges = np.array([[0.0, 0.0, 0.0], [0.05, 0.1, -math.pi], [9.999, 5.999, 2 * math.pi], [10.0, 3.0, 1e-12]])
+    poses = np.concatenate([poses, edges])
+    for sensor in (LIDAR, RangeSensor(8.0, math.radians(270), 40, 0.02, 0.1, math.radians(70))):
+        table = ScanInformation(grid, sdf, sensor)
+        i, j, inside = grid.cells(poses[:, :2])
+        b = np.floor(np.mod(poses[:, 2], 2 * math.pi) * (table.bins / (2 * math.pi)) + 0.5).astype(np.int64)
+        expected = np.where(inside, (i * grid.shape[1] + j) * table.bins + b % table.bins, -1)
+        np.testing.assert_array_equal(table.keys(poses), expected)
+        assert table.keys(poses.reshape(2, -1, 3)).shape == (2, poses.shape[0] // 2)

@@ -55,3 +55,19 @@ def test_cells_are_computed_once_and_remembered() -> None:
     rows = table.rows
     assert rows == 1 + 2  # row 0 is off the grid; the first two points share a cell
     assert np.array_equal(table.at(pts[::-1]), first[::-1]) and table.rows == rows
+
+
+def test_a_points_key_is_its_sub_cell() -> None:
+    """SectorReach.cells (compiled) against the sub-cell arithmetic written out, off the grid too."""
+    grid, _ = PATHS["corner"]
+    table = SectorReach(grid, clearance(grid), RADIUS)
+    rng = np.random.default_rng(5)
+    lo, hi = np.array(grid.origin) - 1.0, np.array(grid.origin) + np.array(grid.shape[::-1]) * grid.resolution + 1.0
+    pts = np.concatenate([rng.uniform(lo, hi, (500, 2)), np.array([grid.origin]), [hi - 1.0]])
+    size = grid.resolution / table.subdivisions
+    col = np.floor((pts[:, 0] - grid.origin[0]) / size).astype(np.int64)
+    row = np.floor((pts[:, 1] - grid.origin[1]) / size).astype(np.int64)
+    rows, cols = grid.shape[0] * table.subdivisions, grid.shape[1] * table.subdivisions
+    inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
+    np.testing.assert_array_equal(table.cells(pts), np.where(inside, row * cols + col, OFF_GRID))
+    assert table.cells(pts[:4].reshape(2, 2, 2)).shape == (2, 2)

@@ -225,12 +225,14 @@ class ScanInformation:
         self._preloaded = 0
 
     def keys(self, poses: np.ndarray) -> np.ndarray:
-        """The key (..., ) int64 of each pose (..., 3): its cell and its heading's bin; OFF_GRID off the grid."""
+        """The key (..., ) int64 of each pose (..., 3): its cell and its heading's bin; OFF_GRID off the grid.
+        (Compiled: every nominal motion asks for the keys of its poses.)"""
         poses = np.asarray(poses, dtype=float)
-        i, j, inside = self.grid.cells(poses[..., :2])
-        b = np.floor(np.mod(poses[..., 2], 2.0 * math.pi) * (self.bins / (2.0 * math.pi)) + 0.5).astype(np.int64)
-        cell = i * self.grid.shape[1] + j
-        return np.where(inside, cell * self.bins + b % self.bins, OFF_GRID).astype(np.int64)
+        flat = np.ascontiguousarray(poses.reshape(-1, 3))
+        g = self.grid
+        rows, cols = g.shape
+        out = _scan_keys(flat, float(g.origin[0]), float(g.origin[1]), float(g.resolution), rows, cols, self.bins)
+        return out.reshape(poses.shape[:-1])
 
     def rows(self, keys: np.ndarray) -> np.ndarray:
         """The :attr:`table` row (...,) of each key (...,), computing those not seen before."""
@@ -351,3 +353,23 @@ def _worst_position_std(J: np.ndarray) -> np.ndarray:
     top = np.maximum(0.5 * (a + c) + np.sqrt(0.25 * (a - c) ** 2 + b**2), 0.0)
     with np.errstate(divide="ignore"):
         return np.where(smallest > 1e-9 * top, 1.0 / np.sqrt(np.maximum(smallest, 1e-300)), np.inf)
+
+
+@nb.njit(cache=True)
+def _scan_keys(
+    poses: np.ndarray, x0: float, y0: float, resolution: float, rows: int, cols: int, bins: int
+) -> np.ndarray:
+    """:meth:`ScanInformation.keys` of poses (P, 3): the cell of (x, y) as
+    :meth:`tmpnav.world.grid.OccupancyGrid.cells` finds it, times ``bins``, plus the bin
+    nearest the heading taken modulo 2 pi; OFF_GRID off the grid."""
+    out = np.empty(poses.shape[0], dtype=np.int64)
+    turn = 2.0 * math.pi
+    for k in range(poses.shape[0]):
+        j = np.int64(math.floor((poses[k, 0] - x0) / resolution))
+        i = np.int64(math.floor((poses[k, 1] - y0) / resolution))
+        if i < 0 or i >= rows or j < 0 or j >= cols:
+            out[k] = OFF_GRID
+            continue
+        b = np.int64(math.floor((poses[k, 2] % turn) * (bins / turn) + 0.5)) % bins
+        out[k] = (i * cols + j) * bins + b
+    return out

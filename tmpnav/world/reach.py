@@ -65,14 +65,14 @@ class SectorReach:
         self.rows = 1
 
     def cells(self, points: np.ndarray) -> np.ndarray:
-        """The key of each point's sub-cell (..., 2) -> (...,) int64, OFF_GRID off the grid."""
+        """The key of each point's sub-cell (..., 2) -> (...,) int64, OFF_GRID off the grid.
+        (Compiled: every nominal motion asks for the sub-cells of its poses.)"""
         p = np.asarray(points, dtype=float)[..., :2]
+        flat = np.ascontiguousarray(p.reshape(-1, 2))
         size = self.grid.resolution / self.subdivisions
-        col = np.floor((p[..., 0] - self.grid.origin[0]) / size).astype(np.int64)
-        row = np.floor((p[..., 1] - self.grid.origin[1]) / size).astype(np.int64)
         rows, cols = self.grid.shape[0] * self.subdivisions, self.grid.shape[1] * self.subdivisions
-        inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
-        return np.where(inside, row * cols + col, OFF_GRID).astype(np.int64)
+        x0, y0 = float(self.grid.origin[0]), float(self.grid.origin[1])
+        return _sub_cells(flat, x0, y0, size, rows, cols).reshape(p.shape[:-1])
 
     def of_cells(self, cells: np.ndarray) -> np.ndarray:
         """R (..., K) m for sub-cell keys (...,) (:meth:`cells`)."""
@@ -167,3 +167,15 @@ def _sector_reach(hit, boundary, res, sub, si, sj, reach, out):
                     kk = k % K
                     if d < out[p, kk]:
                         out[p, kk] = d
+
+
+@nb.njit(cache=True)
+def _sub_cells(points: np.ndarray, x0: float, y0: float, size: float, rows: int, cols: int) -> np.ndarray:
+    """:meth:`SectorReach.cells` of points (P, 2): ``row * cols + col`` of the sub-cell of side
+    ``size``, OFF_GRID off the grid."""
+    out = np.empty(points.shape[0], dtype=np.int64)
+    for k in range(points.shape[0]):
+        col = np.int64(math.floor((points[k, 0] - x0) / size))
+        row = np.int64(math.floor((points[k, 1] - y0) / size))
+        out[k] = row * cols + col if 0 <= row < rows and 0 <= col < cols else OFF_GRID
+    return out
