@@ -333,17 +333,21 @@ def build_roadmap(world: World, robots: tuple[RobotSpec, ...], params: RoadmapPa
             tuple(int(i) for i in special_ids[lo:hi] if labels[i] in reachable) for lo, hi in itertools.pairwise(bounds)
         ]
 
-    # the roadmap is complete when every two specials that free space joins are in one of its
-    # components: each room then reaches every robot that free space lets into it
+    # the roadmap is complete when every two instantiations or starts that free space joins are in
+    # one of its components: each room then reaches every robot that free space lets into it. The
+    # passages' milestones only help it get there: one left alone in a pocket of a passage (a
+    # generated depot: one of its 2,430, at 0.30 m from the racks) grew the roadmap to 16 times
+    # its milestones, 8 s, for nothing a room needed
     from scipy import ndimage
 
     space, _ = ndimage.label(world.clearance >= radius + world.grid.resolution, structure=np.ones((3, 3), dtype=bool))
-    si, sj, _ = world.grid.cells(specials)
+    needed = np.vstack([*inst.values(), starts])
+    si, sj, _ = world.grid.cells(needed)
     joined = space[si, sj]
 
     def complete(nodes: np.ndarray, edges: np.ndarray) -> bool:
         index = {(float(x), float(y)): i for i, (x, y) in enumerate(nodes)}
-        labels = _components(nodes.shape[0], edges)[[index[(float(x), float(y))] for x, y in specials]]
+        labels = _components(nodes.shape[0], edges)[[index[(float(x), float(y))] for x, y in needed]]
         return all(len(set(labels[joined == g].tolist())) == 1 for g in np.unique(joined))
 
     nodes, edges, grown = _grow(world, free_cells, params, specials, complete)
