@@ -268,35 +268,38 @@ class CanonicalCosts:
         self._ensure_singles([m for p in todo for m in p])
         self._ensure_canonical({(m[0], m[1]) for p in todo for m in p})
         ready = [p for p in todo if all(self.single.get(m) is not None and (m[0], m[1]) in self.canonical for m in p)]
-        requests = [
-            Request(
-                (m1[0], m2[0]),
-                (self.canonical[(m1[0], m1[1])], self.canonical[(m2[0], m2[1])]),
-                (m1[2], m2[2]),
-                min_gain=self.min_gain if self.min_gain > 0 else None,
+        gain = self.min_gain if self.min_gain > 0 else None
+        asked = [
+            (
+                (m1, m2),
+                Request(
+                    (m1[0], m2[0]),
+                    (self.canonical[(m1[0], m1[1])], self.canonical[(m2[0], m2[1])]),
+                    (m1[2], m2[2]),
+                    min_gain=gain,
+                ),
             )
             for m1, m2 in ready
         ]
+        # those whose control effort alone cannot save min_gain are not offered (tmpnav.oracle.bounds.ControlFloors)
+        asked = [(p, req) for p, req in asked if not self.controls.cannot_pair(req, self._alone(p), self.min_gain)]
         for p in todo:
             self.pair[p] = None
-        # those whose control effort alone cannot save min_gain are not offered (tmpnav.oracle.bounds.ControlFloors)
-        worth = [
-            k
-            for k, ((m1, m2), req) in enumerate(zip(ready, requests, strict=True))
-            if not self.controls.cannot_pair(req, self.single[m1] + self.single[m2], self.min_gain)  # type: ignore[operator]
-        ]
-        ready, requests = [ready[k] for k in worth], [requests[k] for k in worth]
-        for (m1, m2), res in zip(ready, self.oracle.evaluate(requests), strict=True):
+        for ((m1, m2), _), res in zip(asked, self.oracle.evaluate([req for _, req in asked]), strict=True):
             if res is None or res.pruned:
                 continue
-            alone = self.single[m1] + self.single[m2]  # type: ignore[operator]
-            if _offered(res.cost, alone, self.min_gain):
+            if _offered(res.cost, self._alone((m1, m2)), self.min_gain):
                 self.pair[(m1, m2)] = res.cost
                 service = self.scenario.goals.service
                 self.pair_duration[(m1, m2)] = (
                     res.steps[0] * self.dt + service(m1[2]),
                     res.steps[1] * self.dt + service(m2[2]),
                 )
+
+    def _alone(self, pair: Pair) -> float:
+        """The cost of the pair's two single moves (both costed: the pair is ready)."""
+        m1, m2 = pair
+        return self.single[m1] + self.single[m2]  # type: ignore[operator]
 
 
 def _offered(cost: float, alone: float, min_gain: float) -> bool:

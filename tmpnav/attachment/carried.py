@@ -33,7 +33,7 @@ from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
 from tmpnav.attachment.floors import motion_floors
 from tmpnav.attachment.team import Team
 from tmpnav.choices import Costs
-from tmpnav.oracle.bounds import ControlFloors, cannot_save
+from tmpnav.oracle.bounds import cannot_save
 from tmpnav.oracle.executors import library
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
@@ -62,7 +62,7 @@ class CarriedCosts:
         self.min_gain = canonical.min_gain
         self.start = Team.at_start(self.lib, self.scenario)
         self.clock = TeamClock(oracle, self.lib, self.start)
-        self.controls = ControlFloors(self.lib)
+        self.controls = canonical.controls  # (the same library: one memory of least efforts)
         self._runs: OrderedDict[Plan, ClockRun | None] = OrderedDict()  # None: a step cannot be made
         self.plans_run = 0
 

@@ -153,7 +153,7 @@ IDLE_FAILURES = 1000
 
 #: OR-Tools asks its limit whether to stop at every node of its search (about 145,000 times a
 #: second); the failures are read from the solver every this many asks only. Reading them on
-#: every ask took a third of OR-Tools' time (40 rooms and 4 robots: 6.6-9.6 s, 4.8-6.5 s so)
+#: every ask took a third of OR-Tools' time (40 rooms and 4 robots: 6.4-9.6 s, 4.8-5.8 s so)
 FAILURE_CHECK = 64
 
 

@@ -8,8 +8,10 @@ p's cell is at least rho + r (one cell of margin covers the discretisation).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 from scipy import ndimage
 
@@ -163,3 +165,13 @@ def line_of_sight_traced(grid: OccupancyGrid, clear: np.ndarray, a: np.ndarray, 
         keep = ~hit & (t[active] < length[active] - margin)
         active = active[keep]
     return visible
+
+
+@nb.njit(cache=True)
+def cell_key(x: float, y: float, x0: float, y0: float, size: float, rows: int, cols: int) -> int:
+    """``row * cols + col`` of the cell of side ``size`` holding (x, y) on a grid of ``rows`` x
+    ``cols`` cells from (x0, y0), as :meth:`OccupancyGrid.cells` finds it; -1 off the grid. For
+    the compiled loops that key a motion's poses (tmpnav.world.lidar, tmpnav.world.reach)."""
+    col = np.int64(math.floor((x - x0) / size))
+    row = np.int64(math.floor((y - y0) / size))
+    return int(row * cols + col) if 0 <= row < rows and 0 <= col < cols else -1

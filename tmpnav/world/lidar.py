@@ -32,7 +32,7 @@ import numpy as np
 from scipy import ndimage
 
 from tmpnav.types import RangeSensor
-from tmpnav.world.grid import OccupancyGrid
+from tmpnav.world.grid import OccupancyGrid, cell_key
 
 #: heading bins of the scan information table (5 degrees each) for a sensor with a limited field of view
 HEADINGS = 72
@@ -365,11 +365,10 @@ def _scan_keys(
     out = np.empty(poses.shape[0], dtype=np.int64)
     turn = 2.0 * math.pi
     for k in range(poses.shape[0]):
-        j = np.int64(math.floor((poses[k, 0] - x0) / resolution))
-        i = np.int64(math.floor((poses[k, 1] - y0) / resolution))
-        if i < 0 or i >= rows or j < 0 or j >= cols:
+        cell = cell_key(poses[k, 0], poses[k, 1], x0, y0, resolution, rows, cols)
+        if cell < 0:
             out[k] = OFF_GRID
             continue
         b = np.int64(math.floor((poses[k, 2] % turn) * (bins / turn) + 0.5)) % bins
-        out[k] = (i * cols + j) * bins + b
+        out[k] = cell * bins + b
     return out

@@ -31,7 +31,7 @@ import numba as nb
 import numpy as np
 from scipy import ndimage
 
-from tmpnav.world.grid import OccupancyGrid
+from tmpnav.world.grid import OccupancyGrid, cell_key
 
 #: sectors of the directional bound (5.625 degrees each)
 SECTORS = 64
@@ -175,7 +175,6 @@ def _sub_cells(points: np.ndarray, x0: float, y0: float, size: float, rows: int,
     ``size``, OFF_GRID off the grid."""
     out = np.empty(points.shape[0], dtype=np.int64)
     for k in range(points.shape[0]):
-        col = np.int64(math.floor((points[k, 0] - x0) / size))
-        row = np.int64(math.floor((points[k, 1] - y0) / size))
-        out[k] = row * cols + col if 0 <= row < rows and 0 <= col < cols else OFF_GRID
+        cell = cell_key(points[k, 0], points[k, 1], x0, y0, size, rows, cols)
+        out[k] = cell if cell >= 0 else OFF_GRID
     return out
