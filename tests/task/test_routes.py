@@ -76,3 +76,28 @@ def test_a_robots_own_target_its_end_and_a_job_for_others_stay_where_they_are() 
     assert rules.valid(plan)
     for edit in route_edits(plan, table, goals, rules, span_weight=1.0, limit=50):
         assert not {"L3", "L4", "L5"} & set(routes(edit)["r2"])
+
+
+def test_routes_that_cross_the_line_are_swapped_and_turned_round() -> None:
+    """r1 (at 0 m) drives to L4 then L5, r2 (at 50 m) to L2 then L1: 90 m in all. Swapping the
+    tails alone gives 50 m (r1 L2, L1; r2 L4, L5); swapped and each turned round, 30 m: the
+    screen finds that one first."""
+    table, goals = line_table(), Goals(("L1", "L2", "L4", "L5"), ())
+    plan = plan_of(("r1", "L4"), ("r1", "L5"), ("r2", "L2"), ("r2", "L1"))
+    rules = Rules(table.start_location, goals)
+    edits = route_edits(plan, table, goals, rules, span_weight=0.0)
+    assert routes(edits[0]) == {"r1": ["L1", "L2"], "r2": ["L5", "L4"]}
+    assert len({tuple(e) for e in edits}) == len(edits)  # no edit offered twice
+
+
+def test_a_reordered_route_keeps_its_robots_end_last() -> None:
+    """r2 must end at L1 (its dock): however its rooms are reordered, L1 stays its last."""
+    table = line_table()
+    goals = Goals(("L2", "L4", "L5"), (), (), (("r2", "L1"),))
+    plan = plan_of(("r1", "L4"), ("r1", "L5"), ("r2", "L2"), ("r2", "L1"))
+    rules = Rules(table.start_location, goals)
+    assert rules.valid(plan)
+    edits = route_edits(plan, table, goals, rules, span_weight=0.0, limit=50)
+    assert edits
+    for edit in edits:
+        assert routes(edit)["r2"][-1] == "L1"
