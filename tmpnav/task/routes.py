@@ -321,60 +321,81 @@ def _improve_routes(
     room stays last where ``fixed_last[k]``."""
     for k in range(len(offsets) - 1):
         a, b = offsets[k], offsets[k + 1]
-        n = b - a
-        m = n - 1 if fixed_last[k] else n  # rooms 0..m-1 may move
+        m = b - a - 1 if fixed_last[k] else b - a  # rooms 0..m-1 may move
         if m < 2:
             continue
-        matrix = value[robot_of[k]]
+        matrix, start = value[robot_of[k]], starts[k]
         route = rooms[a:b].copy()
-        trial = np.empty(n, dtype=np.int64)
-        best = _route_value(matrix, starts[k], route)
+        trial = np.empty(b - a, dtype=np.int64)
+        best = _route_value(matrix, start, route)
         for _ in range(MAX_PASSES):
-            found = False
-            # Or-opt: rooms i..i+s-1 taken out and put back before the room at position j of the rest
-            for s in range(1, min(OR_OPT, m - 1) + 1):
-                for i in range(m - s + 1):
-                    for j in range(m - s + 1):
-                        if j == i:
-                            continue
-                        w = 0
-                        for p in range(m):  # the rest, with the string put in at position j
-                            if w == j:
-                                for q in range(s):
-                                    trial[w] = route[i + q]
-                                    w += 1
-                            if i <= p < i + s:
-                                continue
-                            trial[w] = route[p]
-                            w += 1
-                        if w == j:
-                            for q in range(s):
-                                trial[w] = route[i + q]
-                                w += 1
-                        for p in range(m, n):
-                            trial[p] = route[p]
-                        v = _route_value(matrix, starts[k], trial)
-                        if v < best - 1e-9 * max(1.0, abs(best)):
-                            best, found = v, True
-                            route[:] = trial
-                            break
-                    if found:
-                        break
-                if found:
-                    break
-            if not found:  # 2-opt: rooms i..j reversed
-                for i in range(m - 1):
-                    for j in range(i + 1, m):
-                        trial[:] = route
-                        for q in range(j - i + 1):
-                            trial[i + q] = route[j - q]
-                        v = _route_value(matrix, starts[k], trial)
-                        if v < best - 1e-9 * max(1.0, abs(best)):
-                            best, found = v, True
-                            route[:] = trial
-                            break
-                    if found:
-                        break
-            if not found:
+            better = _or_opt(matrix, start, route, m, trial, best)
+            if better == best:
+                better = _two_opt(matrix, start, route, m, trial, best)
+            if better == best:
                 break
+            best = better
         rooms[a:b] = route
+
+
+@nb.njit(cache=True)
+def _improves(value: float, best: float) -> bool:
+    return value < best - 1e-9 * max(1.0, abs(best))
+
+
+@nb.njit(cache=True)
+def _or_opt(
+    matrix: npt.NDArray[np.float64],
+    start: int,
+    route: npt.NDArray[np.int64],
+    m: int,
+    trial: npt.NDArray[np.int64],
+    best: float,
+) -> float:
+    """The first Or-opt move that improves ``route`` (rooms i..i+s-1 taken out and put back
+    before the room at position j of the rest, among its first ``m`` rooms), made in place; the
+    route's new value, or ``best`` where none improves."""
+    n = len(route)
+    for s in range(1, min(OR_OPT, m - 1) + 1):
+        for i in range(m - s + 1):
+            for j in range(m - s + 1):
+                if j == i:
+                    continue
+                w = 0
+                for p in range(m + 1):  # the rest, with the string put in at position j
+                    if w == j:
+                        for q in range(s):
+                            trial[w] = route[i + q]
+                            w += 1
+                    if p < m and not i <= p < i + s:
+                        trial[w] = route[p]
+                        w += 1
+                trial[m:n] = route[m:n]
+                v = _route_value(matrix, start, trial)
+                if _improves(v, best):
+                    route[:] = trial
+                    return v
+    return best
+
+
+@nb.njit(cache=True)
+def _two_opt(
+    matrix: npt.NDArray[np.float64],
+    start: int,
+    route: npt.NDArray[np.int64],
+    m: int,
+    trial: npt.NDArray[np.int64],
+    best: float,
+) -> float:
+    """The first 2-opt move that improves ``route`` (rooms i..j reversed, j < ``m``), made in
+    place; the route's new value, or ``best`` where none improves."""
+    for i in range(m - 1):
+        for j in range(i + 1, m):
+            trial[:] = route
+            for q in range(j - i + 1):
+                trial[i + q] = route[j - q]
+            v = _route_value(matrix, start, trial)
+            if _improves(v, best):
+                route[:] = trial
+                return v
+    return best
