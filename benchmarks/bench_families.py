@@ -1,14 +1,14 @@
 """tmpnav on buildings it was not tuned on: generated families (benchmarks/families.py), fresh commands.
 
-    .venv/bin/python benchmarks/bench_families.py [--seeds 10] [--sizes office:20:2,office:40:4,office:60:8:5]
+    .venv/bin/python benchmarks/bench_families.py [--seeds 10] [--sizes office:20:2,office:40:4,office:60:8:5] [-o DIR]
 
 For every size (kind, rooms, robots) and seed, one fresh ``tmpnav plan`` of the generated scenario
 with its default settings (a cold cache each): exit code, time, the objective, whether the
 anytime search converged or stopped at its budget, how far the roadmap grew, and the peak
 memory of the command and its worker processes as the proportional set size (PSS: a page shared
-by n processes counts 1/n to each), sampled every 0.2 s. Writes benchmarks/families/runs.csv, a
-table of median and p90 per size (summary.md) and families.png (time and objective against
-rooms and robots).
+by n processes counts 1/n to each), sampled every 0.2 s. Writes runs.csv, a table of median and
+p90 per size (summary.md) and families.png (time and objective against rooms and robots) into
+benchmarks/families/ (or ``-o DIR``).
 """
 
 from __future__ import annotations
@@ -98,8 +98,10 @@ def main() -> None:
     parser.add_argument(
         "--sizes", default=SIZES, help="kind:rooms:robots[:seeds], comma-separated (seeds: --seeds unless given)"
     )
+    parser.add_argument("-o", "--output", type=Path, default=OUT, help="folder of the results (default: %(default)s)")
     args = parser.parse_args()
-    OUT.mkdir(parents=True, exist_ok=True)
+    out = args.output
+    out.mkdir(parents=True, exist_ok=True)
     fields = [s.split(":") for s in args.sizes.split(",")]
     seeds = {(f[0], int(f[1]), int(f[2])): int(f[3]) if len(f) > 3 else args.seeds for f in fields}
     sizes = list(seeds)
@@ -111,7 +113,7 @@ def main() -> None:
                 result = run(path, Path(tmp) / f"cache-{kind}-{rooms}-{robots}-{seed}")
                 rows.append({"kind": kind, "rooms": rooms, "robots": robots, "seed": seed, **result})
                 print(rows[-1], flush=True)
-    with open(OUT / "runs.csv", "w", newline="") as fh:
+    with open(out / "runs.csv", "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
@@ -140,12 +142,12 @@ def main() -> None:
         for r in rows
         if r["exit"]
     ]
-    (OUT / "summary.md").write_text("\n".join(lines + (["", *failures] if failures else [])) + "\n")
-    _figure(rows, sizes)
+    (out / "summary.md").write_text("\n".join(lines + (["", *failures] if failures else [])) + "\n")
+    _figure(rows, sizes, out)
     print("\n".join(lines))
 
 
-def _figure(rows: list[dict[str, object]], sizes: list[tuple[str, int, int]]) -> None:
+def _figure(rows: list[dict[str, object]], sizes: list[tuple[str, int, int]], out: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -170,7 +172,7 @@ def _figure(rows: list[dict[str, object]], sizes: list[tuple[str, int, int]]) ->
         ax.grid(True, lw=0.3)
     fig.suptitle("Generated families, one dot per seed (benchmarks/families.py)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(OUT / "families.png", dpi=110)
+    fig.savefig(out / "families.png", dpi=110)
 
 
 if __name__ == "__main__":
