@@ -101,3 +101,16 @@ def test_a_reordered_route_keeps_its_robots_end_last() -> None:
     assert edits
     for edit in edits:
         assert routes(edit)["r2"][-1] == "L1"
+
+
+def test_a_room_the_table_does_not_know_is_screened_not_reordered() -> None:
+    """A plan's room with no move in the table (an incumbent's, say) prices its route at inf:
+    the screen offers nothing for it and nothing fails."""
+    full = line_table()
+    single = {m: c for m, c in full.single.items() if "L5" not in m[1:]}
+    duration = {m: c for m, c in full.duration.items() if "L5" not in m[1:]}
+    table = CostTable(full.robots, ROOMS[:4], full.locations[:-1], full.start_location, single, {}, duration)
+    goals = Goals(ROOMS, ())
+    plan = plan_of(("r1", "L5"), ("r1", "L1"), ("r2", "L4"), ("r2", "L2"), ("r2", "L3"))
+    for edit in route_edits(plan, table, goals, Rules(table.start_location, goals), span_weight=0.0, limit=50):
+        assert "L5" in routes(edit)["r1"] + routes(edit)["r2"]

@@ -67,7 +67,8 @@ def route_edits(
     legs = {r: screen.route(r, [x for _, x in route]) for r, route in routes.items()}
     now = screen.value(legs.values())
     edits = list(_edits(steps, routes, pinned, goals, rules))
-    orders = _Orders(singles, goals, span_weight, robots).improved([changed for changed, _ in edits])
+    in_routes = [x for route in routes.values() for _, x in route]
+    orders = _Orders(singles, goals, span_weight, list(routes), in_routes).improved([changed for changed, _ in edits])
     scored: list[tuple[float, int, Steps]] = []
     for n, ((changed, edited), order) in enumerate(zip(edits, orders, strict=True)):
         variants = [(changed, edited)]
@@ -242,13 +243,16 @@ def _reordered(steps: Steps, order: dict[str, list[str]]) -> Steps:
 class _Orders:
     """Routes reordered on the single moves (module docstring, "Each edit also reordered"): one
     matrix per robot of a move's cost plus ``span_weight`` times its duration and its target's
-    service, inf where the table has no move."""
+    service, inf where the table has no move (a route with such a move is never reordered: its
+    value stays inf). ``robots`` and ``rooms``: every robot and room of the plan's routes."""
 
-    def __init__(self, singles: CostTable, goals: Goals, span_weight: float, robots: Sequence[str]):
+    def __init__(
+        self, singles: CostTable, goals: Goals, span_weight: float, robots: Sequence[str], rooms: Sequence[str]
+    ):
         self.goals = goals
         self.robots = {r: i for i, r in enumerate(robots)}
         self.start = {r: singles.start_location.get(r, f"{r}-start") for r in robots}
-        names = list(dict.fromkeys([*self.start.values(), *singles.locations, *singles.rooms]))
+        names = list(dict.fromkeys([*self.start.values(), *singles.locations, *singles.rooms, *rooms]))
         self.index = {x: i for i, x in enumerate(names)}
         self.value = np.full((len(robots), len(names), len(names)), np.inf)
         for (r, a, b), cost in singles.single.items():
