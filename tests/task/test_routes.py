@@ -114,3 +114,26 @@ def test_a_room_the_table_does_not_know_is_screened_not_reordered() -> None:
     plan = plan_of(("r1", "L5"), ("r1", "L1"), ("r2", "L4"), ("r2", "L2"), ("r2", "L3"))
     for edit in route_edits(plan, table, goals, Rules(table.start_location, goals), span_weight=0.0, limit=50):
         assert "L5" in routes(edit)["r1"] + routes(edit)["r2"]
+
+
+def test_the_compiled_screen_adds_up_routes_as_the_plain_one() -> None:
+    """Every route's (cost, time) from the vectorised sums equals _Screen.route's, for routes
+    empty, whole, and through a move the table lacks (inf)."""
+    from tmpnav.task.routes import _Orders, _Screen
+
+    full = line_table()
+    single = {m: c for m, c in full.single.items() if m != ("r2", "L1", "L3")}
+    table = CostTable(full.robots, ROOMS, full.locations, full.start_location, single, {}, full.duration)
+    goals = Goals(ROOMS, (), (Job("L2", service=3.0),))
+    plain = _Screen(table, goals, 0.5)
+    changes = [
+        {"r1": ["L1", "L2"], "r2": []},
+        {"r2": ["L1", "L3", "L5"]},
+        {"r1": list(ROOMS), "r2": ["L4"]},
+        {"r1": [], "r2": []},
+    ]
+    screened = _Orders(table, goals, 0.5, ["r1", "r2"], list(ROOMS)).screen(changes)
+    for changed, (as_is, order, reordered) in zip(changes, screened, strict=True):
+        assert as_is == {r: plain.route(r, xs) for r, xs in changed.items()}
+        assert reordered == {r: plain.route(r, xs) for r, xs in order.items()}
+        assert {r: sorted(xs) for r, xs in order.items()} == {r: sorted(xs) for r, xs in changed.items()}

@@ -68,26 +68,21 @@ def route_edits(
     now = screen.value(legs.values())
     edits = list(_edits(steps, routes, pinned, goals, rules))
     in_routes = [x for route in routes.values() for _, x in route]
-    orders = _Orders(singles, goals, span_weight, list(routes), in_routes).improved([changed for changed, _ in edits])
-    scored: list[tuple[float, int, Steps]] = []
-    for n, ((changed, edited), order) in enumerate(zip(edits, orders, strict=True)):
-        variants = [(changed, edited)]
-        if order != changed:
-            variants.append((order, _reordered(edited, order)))
-        for v, (rooms, trial_steps) in enumerate(variants):
-            trial = dict(legs)
-            for r, xs in rooms.items():
-                trial[r] = screen.route(r, xs)
-            value = screen.value(trial.values())
+    screened = _Orders(singles, goals, span_weight, list(routes), in_routes).screen([changed for changed, _ in edits])
+    scored: list[tuple[float, int]] = []  # (screened value, 2 n for edit n as it is, 2 n + 1 reordered)
+    for n, (changed, (as_is, order, reordered)) in enumerate(zip((c for c, _ in edits), screened, strict=True)):
+        for v, changed_legs in enumerate((as_is, reordered) if order != changed else (as_is,)):
+            value = screen.value({**legs, **changed_legs}.values())
             if value < now - EPSILON * max(1.0, abs(now)):
-                scored.append((value, 2 * n + v, trial_steps))
-    scored.sort(key=lambda s: (s[0], s[1]))
+                scored.append((value, 2 * n + v))
+    scored.sort()
     out: list[Steps] = []
     seen: set[tuple[tuple[tuple[str, str], ...], ...]] = set()
-    for _, _, edited in scored:
-        key = tuple(edited)
-        if key not in seen and rules.valid(with_origins(edited, rules.start_location)):
-            seen.add(key)
+    for _, key in scored:
+        n, v = divmod(key, 2)
+        edited = edits[n][1] if v == 0 else _reordered(edits[n][1], screened[n][1])
+        if tuple(edited) not in seen and rules.valid(with_origins(edited, rules.start_location)):
+            seen.add(tuple(edited))
             out.append(edited)
             if len(out) >= limit:
                 break
@@ -240,11 +235,17 @@ def _reordered(steps: Steps, order: dict[str, list[str]]) -> Steps:
     return out
 
 
+#: a route's screened (cost, time) by robot
+Legs = dict[str, tuple[float, float]]
+
+
 class _Orders:
-    """Routes reordered on the single moves (module docstring, "Each edit also reordered"): one
-    matrix per robot of a move's cost plus ``span_weight`` times its duration and its target's
-    service, inf where the table has no move (a route with such a move is never reordered: its
-    value stays inf). ``robots`` and ``rooms``: every robot and room of the plan's routes."""
+    """Routes reordered and screened on the single moves (module docstring, "Each edit also
+    reordered"), as :class:`_Screen` screens them: per robot, matrices of a move's cost and of
+    its duration plus its target's service (inf where the table has no move: a route with such a
+    move is never reordered, its value stays inf), and of the cost plus ``span_weight`` times
+    that time, which the reordering minimises. ``robots`` and ``rooms``: every robot and room of
+    the plan's routes."""
 
     def __init__(
         self, singles: CostTable, goals: Goals, span_weight: float, robots: Sequence[str], rooms: Sequence[str]
@@ -254,17 +255,19 @@ class _Orders:
         self.start = {r: singles.start_location.get(r, f"{r}-start") for r in robots}
         names = list(dict.fromkeys([*self.start.values(), *singles.locations, *singles.rooms, *rooms]))
         self.index = {x: i for i, x in enumerate(names)}
-        self.value = np.full((len(robots), len(names), len(names)), np.inf)
-        for (r, a, b), cost in singles.single.items():
-            if r in self.robots and a in self.index and b in self.index:
-                seconds = singles.duration.get((r, a, b), math.inf) + goals.service(b)
-                self.value[self.robots[r], self.index[a], self.index[b]] = (
-                    cost + span_weight * seconds if span_weight else cost
-                )
+        self.cost = np.full((len(robots), len(names), len(names)), np.inf)
+        self.time = np.full_like(self.cost, np.inf)
+        for matrix, known, service in ((self.cost, singles.single, False), (self.time, singles.duration, True)):
+            for (r, a, b), amount in known.items():
+                if r in self.robots and a in self.index and b in self.index:
+                    matrix[self.robots[r], self.index[a], self.index[b]] = amount + (
+                        goals.service(b) if service else 0.0
+                    )
+        self.value = self.cost + span_weight * self.time if span_weight else self.cost
 
-    def improved(self, changes: list[dict[str, list[str]]]) -> list[dict[str, list[str]]]:
-        """Each edit's changed routes reordered (the same lists where no order is better), all in
-        one compiled call."""
+    def screen(self, changes: list[dict[str, list[str]]]) -> list[tuple[Legs, dict[str, list[str]], Legs]]:
+        """For each edit's changed routes: their legs as they are, the routes reordered (the same
+        lists where no order is better), and their legs reordered; all in one compiled call."""
         flat: list[int] = []
         offsets, robot_of, starts, fixed = [0], [], [], []
         for changed in changes:
@@ -277,23 +280,50 @@ class _Orders:
         if not changes:
             return []
         order = np.array(flat, dtype=np.int64)
-        _improve_routes(
-            self.value,
-            np.array(robot_of, dtype=np.int64),
-            np.array(starts, dtype=np.int64),
-            np.array(offsets, dtype=np.int64),
-            order,
-            np.array(fixed, dtype=np.bool_),
-        )
+        bounds = np.array(offsets, dtype=np.int64)
+        whose, first = np.array(robot_of, dtype=np.int64), np.array(starts, dtype=np.int64)
+        before = self._legs(order, bounds, whose, first)
+        _improve_routes(self.value, whose, first, bounds, order, np.array(fixed, dtype=np.bool_))
+        after = self._legs(order, bounds, whose, first)
         names = list(self.index)
         out, k = [], 0
         for changed in changes:
-            routes = {}
+            routes: dict[str, list[str]] = {}
+            as_is: Legs = {}
+            reordered: Legs = {}
             for r in changed:
                 routes[r] = [names[i] for i in order[offsets[k] : offsets[k + 1]]]
+                as_is[r], reordered[r] = before[k], after[k]
                 k += 1
-            out.append(routes)
+            out.append((as_is, routes, reordered))
         return out
+
+    def _legs(
+        self,
+        order: npt.NDArray[np.int64],
+        bounds: npt.NDArray[np.int64],
+        whose: npt.NDArray[np.int64],
+        first: npt.NDArray[np.int64],
+    ) -> list[tuple[float, float]]:
+        """(cost, time) of each route ``order[bounds[k]:bounds[k + 1]]`` of robot ``whose[k]`` from
+        ``first[k]``, as :meth:`_Screen.route` adds them up (inf where a move is missing)."""
+        lengths = np.diff(bounds)
+        robot = np.repeat(whose, lengths)
+        prev = np.empty_like(order)
+        prev[1:] = order[:-1]
+        starts_at = bounds[:-1][lengths > 0]
+        prev[starts_at] = first[lengths > 0]
+        costs, times = _sums(self.cost[robot, prev, order], bounds), _sums(self.time[robot, prev, order], bounds)
+        return list(zip(costs, times, strict=True))
+
+
+def _sums(values: npt.NDArray[np.float64], bounds: npt.NDArray[np.int64]) -> list[float]:
+    """The sum of each stretch ``values[bounds[k]:bounds[k + 1]]`` (0 when empty, inf when it holds inf)."""
+    missing = np.isinf(values)
+    total = np.concatenate(([0.0], np.cumsum(np.where(missing, 0.0, values))))
+    count = np.concatenate(([0], np.cumsum(missing)))
+    sums = total[bounds[1:]] - total[bounds[:-1]]
+    return [math.inf if c else float(s) for s, c in zip(sums, count[bounds[1:]] - count[bounds[:-1]], strict=True)]
 
 
 #: passes of the route improvement at most (each pass ends at its first improvement)
