@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -61,6 +62,10 @@ def test_plan_succeeds_and_prints_a_summary(cache_dir: Path, tmp_path: Path) -> 
     assert proc.returncode == 0, proc.stderr
     assert "nanobind" not in proc.stderr and "Traceback" not in proc.stderr
     assert "r1" in proc.stdout and "r2" in proc.stdout
+    # figures an engineer can believe: no bound below 1e-6 as an exponent, no std rounded to nothing
+    assert "collision bound: plan " in proc.stdout
+    assert not re.search(r"\de-(\d{2,}|[7-9])\b", proc.stdout), proc.stdout
+    assert not re.search(r"\b0\.00 m\b|\b0\.0 deg\b", proc.stdout), proc.stdout
     for name in ("plan.json", "plan.png", "schedule.png", "domain.pddl", "problem.pddl"):
         assert (out / name).stat().st_size > 0
     doc = json.loads((out / "plan.json").read_text())

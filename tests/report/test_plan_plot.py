@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from tmpnav.report.plan_plot import ellipse_spacing, ellipse_steps, goal_steps, plan_extent, plot_plan
+from tmpnav.report.plan_plot import at_most, ellipse_spacing, ellipse_steps, goal_steps, plan_extent, plot_plan
 from tmpnav.types import TrajectoryStep
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -125,7 +125,7 @@ def test_the_plan_says_when_and_in_what_units(plan_report: Any) -> None:
         assert at.node == action.paths[[m[0] for m in action.moves].index(a.robot)][-1]
     notes = {t.get_text() for t in ax.texts}
     # with the move's collision bound beside it
-    assert all(f"{a.t:.1f} s, p≤{a.risk:.2g}" in notes for a in found)
+    assert all(f"{a.t:.1f} s, {at_most(a.risk)}" in notes for a in found)
     assert "collision bound: plan" in title
 
 

@@ -4,6 +4,7 @@ makespan and the objective, the robots' time, their beliefs, time per stage."""
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 from typing import Any
 
@@ -11,6 +12,7 @@ import numpy as np
 import pytest
 
 from tmpnav.belief.risk import position_std
+from tmpnav.numbers import angle, length, percent, probability
 from tmpnav.report.text import plan_summary
 from tmpnav.types import PlanStatus
 
@@ -114,11 +116,15 @@ def test_beliefs_per_robot(lines: list[str], plan_report: Any) -> None:
     rows = lines[i + 1 : i + 3]
     assert [r.split()[0] for r in rows] == ["r1", "r2"]
     for row, robot in zip(rows, ["r1", "r2"], strict=True):
-        match = re.search(r"(\d+\.\d) m\s+(\d+\.\d{2}) / (\d+\.\d{2}) m\s+\d+\.\d deg\s+([\d.e+-]+)$", row)
-        assert match, row
+        travelled, pos_std, heading, bound = re.split(r"\s{2,}", row.strip())[5:]  # cells: two spaces apart
+        assert re.fullmatch(r"\d+\.\d m", travelled), row
         stds = [float(position_std(np.array(s.cov))) for s in plan_report.trajectories[robot]]  # sqrt(lambda_max)
-        assert float(match[2]) == pytest.approx(max(stds), abs=0.005)
-        assert float(match[3]) == pytest.approx(stds[-1], abs=0.005)
+        assert pos_std == f"{length(max(stds))} / {length(stds[-1])}"
+        assert heading == angle(math.sqrt(plan_report.trajectories[robot][-1].cov[2][2]))
+        risks = [p for a in plan_report.actions for (r, _, _), p in zip(a.moves, a.risk, strict=True) if r == robot]
+        assert bound == probability(max(risks))
+    # figures an engineer can believe: no exponent below 1e-6, no std rounded to nothing
+    assert not re.search(r"e-(\d\d|[7-9])\b", "\n".join(lines)) and "0.00 m" not in "\n".join(lines)
     # the plan's collision bound and the conflicts in one line under the table
     assert lines[i + 4].startswith("(pos. std: along the widest axis")
     assert lines[i + 5].startswith("collision bound: plan ")
@@ -190,7 +196,7 @@ def test_robots_kept_apart(kept_report: Any) -> None:
     assert bound is not None and not bound.proved_optimal
     (line,) = [line for line in lines if line.startswith("lower bound")]
     assert line.endswith(
-        f"; gap {100 * bound.gap:.2f}% after keeping the robots apart; the plan searched: proved optimal"
+        f"; gap {percent(bound.gap)} after keeping the robots apart; the plan searched: proved optimal"
     )
     assert any(line.endswith("robots in each other's way: none") for line in lines)
     i = next(i for i, line in enumerate(lines) if line.startswith("kept apart: 1 -> 0 conflicts by "))

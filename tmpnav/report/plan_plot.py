@@ -23,6 +23,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Ellipse
 from numpy.typing import NDArray
 
+from tmpnav.numbers import probability
 from tmpnav.report import figures as fg
 from tmpnav.results import PlanReport
 from tmpnav.types import TrajectoryStep
@@ -189,10 +190,16 @@ def _draw_step_badges(ax: Axes, report: PlanReport) -> None:
         fg.step_badge(ax, (x, y), str(arrival.step), color, offset)
         note = [] if arrival.t is None else [f"{arrival.t:.1f} s"]
         if arrival.risk is not None:
-            note.append(f"p≤{arrival.risk:.2g}")
+            note.append(at_most(arrival.risk))
         if note:
             fg.badge_note(ax, (x, y), ", ".join(note), color, offset)
         placed.append((x, y))
+
+
+def at_most(risk: float) -> str:
+    """A move's collision bound beside its goal: ``p≤0.012``, ``p<1e-6`` (tmpnav.numbers.probability)."""
+    text = probability(risk)
+    return "p<" + text[2:] if text.startswith("< ") else "p≤" + text
 
 
 def _legend(ax: Axes, report: PlanReport, spacing: float) -> None:
@@ -257,7 +264,8 @@ def _title(report: PlanReport) -> str:
         f"{sc.name}: {n} plan step{'s' if n != 1 else ''}{duration}, {mutual}\n"
         f"cost (unit-less): planner {report.planner_cost:.3f}, "
         f"re-simulated {report.resimulated_cost:.3f} ({report.encoding} encoding, {report.planner}, {status}); "
-        f"collision bound: plan {report.risk:.2g}, largest move {report.worst_risk:.2g} (p≤ at each goal)"
+        f"collision bound: plan {probability(report.risk)}, largest move {probability(report.worst_risk)} "
+        "(p≤ at each goal)"
     )
 
 

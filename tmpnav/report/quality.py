@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from tmpnav.belief.conflicts import Conflict
 from tmpnav.choices import time_budget
+from tmpnav.numbers import length
 from tmpnav.planning.safety import conflicts_left, riskiest_point, what_would_help
 from tmpnav.report.schedule import bound_values, move_at, objective_values, searched_gap
 from tmpnav.results import PlanReport
@@ -79,7 +80,7 @@ def _in_the_way(report: PlanReport) -> PlanWarning | None:
     first = left[0]
     text = (
         f"robots stay in each other's way: {' and '.join(first.robots)} at {first.t_from:.1f} s, "
-        f"{first.closest_distance:.2f} m apart where {first.required_separation:.2f} m are needed"
+        f"{length(first.closest_distance)} apart where {length(first.required_separation)} are needed"
         + (f" (and {len(left) - 1} more)." if len(left) > 1 else ".")
     )
     return PlanWarning("conflict", first.robots[0], first.closest_distance, first.required_separation, text)
@@ -167,8 +168,8 @@ def _worst_door(report: PlanReport, robot: str, radius: float) -> PlanWarning | 
     move = move_at(report.schedule, robot, step.t)
     way = "" if move is None else f" on its way to {move.target} (step {move.step + 1}),"
     text = (
-        f"{robot} passes door {door.name} ({width:.2f} m wide, {room:.2f} m to spare each side) "
-        f"at t {step.t:.1f} s,{way} with a {N_SIGMA:g}-sigma position spread of {spread:.2f} m across it: "
+        f"{robot} passes door {door.name} ({width:.2f} m wide, {length(room)} to spare each side) "
+        f"at t {step.t:.1f} s,{way} with a {N_SIGMA:g}-sigma position spread of {length(spread)} across it: "
         "as executed it may hit the frame. "
         "Try landmarks near that door, a partner robot that sees it there, or less models.motion_noise."
     )

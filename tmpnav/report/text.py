@@ -9,6 +9,8 @@ moves (``waits``) and neither (``idle``, after its last move: busy + waits + idl
 the distance its belief mean drives, its position std along the widest axis of its covariance
 (sqrt of the largest eigenvalue; largest / at the end), its heading std at the end and the collision
 bound of its riskiest move; then the plan's collision bound and robots in each other's way.
+Figures read as tmpnav.numbers prints them: a std below 0.1 m in cm, a bound below 1e-6 as
+``< 1e-6``, a heading std below 0.1 deg as ``< 0.1 deg``.
 
 Example (the paper's Fig. 2 task, ``tmpnav plan configs/corridor.yaml --costs table``, a
 second time)::
@@ -25,12 +27,12 @@ second time)::
     makespan 20.5 s; objective weighted (cost + 1 per s of makespan): 31.198
 
     robot  rooms    busy   waits  idle [s]  travelled  pos. std max / end  heading std  collision bound
-    r1         1    18.5     0.0       2.0      7.1 m       0.21 / 0.21 m      6.4 deg            0.045
-    r2         1    20.5     0.0       0.0      7.6 m       0.16 / 0.12 m      2.3 deg            0.005
+    r1         1    18.5     0.0       2.0      7.1 m     0.21 m / 0.21 m      6.4 deg            0.045
+    r2         1    20.5     0.0       0.0      7.6 m     0.16 m / 0.12 m      2.3 deg            0.005
     (busy: driving, in control steps of 0.5 s; idle: after the last move; busy + waits + idle: makespan)
     (pos. std: along the widest axis of the position covariance, the sqrt of its largest eigenvalue)
     collision bound: plan 0.05 (no --max-risk); robots in each other's way: 1, the first:
-     r1 and r2 at 8.0 s, 0.04 m apart, 0.94 m needed; --max-risk keeps robots apart: docs/planning.md
+     r1 and r2 at 8.0 s, 4.0 cm apart, 0.94 m needed; --max-risk keeps robots apart: docs/planning.md
 
     time [s]  roadmap  oracle  planner  resimulate   total  (load)
                  0.00    0.00     0.00        0.20    0.21    0.05
@@ -48,6 +50,7 @@ import numpy as np
 
 from tmpnav.belief.risk import position_std
 from tmpnav.choices import STOP_MEANINGS
+from tmpnav.numbers import angle, length, percent, probability
 from tmpnav.report.quality import plan_conflicts, warning_lines
 from tmpnav.report.schedule import (
     T_TOL,
@@ -143,7 +146,7 @@ def _search(report: PlanReport) -> list[str]:
         lines.append(line)
     own = bound_values(report)
     if bound is not None and own is not None:
-        verdict = "proved optimal" if own.proved_optimal else f"gap {100 * own.gap:.2f}%"
+        verdict = "proved optimal" if own.proved_optimal else f"gap {percent(own.gap)}"
         searched = None if own.proved_optimal else searched_gap(report)
         if searched is not None and searched <= OPTIMAL_GAP:
             verdict += " after keeping the robots apart; the plan searched: proved optimal"
@@ -232,12 +235,11 @@ def _robots(report: PlanReport) -> list[str]:
         legs = np.linalg.norm(np.diff(means[:, :2], axis=0), axis=1)
         travelled = float(np.sum(legs[driving[1:]]))  # standing, the mean only shifts with observations
         pos_std = position_std(covs)  # sqrt(lambda_max) of the (x, y) block: along its widest axis
-        heading_std = math.degrees(math.sqrt(max(covs[-1, 2, 2], 0.0)))
+        heading_std = angle(math.sqrt(max(covs[-1, 2, 2], 0.0)))
         risks = [p for a in report.actions for (r, _, _), p in zip(a.moves, a.risk, strict=False) if r == robot]
-        stds = f"{pos_std.max():.2f} / {pos_std[-1]:.2f} m"
-        rows.append(
-            f"{timing}  {travelled:>7.1f} m  {stds:>18}  {heading_std:>7.1f} deg  {max(risks, default=0.0):>15.2g}"
-        )
+        stds = f"{length(float(pos_std.max()))} / {length(float(pos_std[-1]))}"
+        riskiest = probability(max(risks)) if risks else "-"  # no move, no bound
+        rows.append(f"{timing}  {travelled:>7.1f} m  {stds:>18}  {heading_std:>11}  {riskiest:>15}")
     if served:
         rows += [
             f"(busy: driving, in control steps of {dt:g} s; service: standing at stations for their jobs;",
@@ -257,7 +259,7 @@ def _risk_lines(report: PlanReport) -> list[str]:
     the table above), what kept robots apart, and robots still in each other's way."""
     delta = report.scenario.planner.max_risk
     within = "no --max-risk" if delta is None else f"every move within max_risk {delta:g}"
-    bound = f"collision bound: plan {report.risk:.2g} ({within}); robots in each other's way: "
+    bound = f"collision bound: plan {probability(report.risk)} ({within}); robots in each other's way: "
     conflicts = plan_conflicts(report)
     if not conflicts:
         return [bound + "none", *_apart_lines(report)]
@@ -268,8 +270,8 @@ def _risk_lines(report: PlanReport) -> list[str]:
         hint = "no wait or detour clears them" if delta is None else "no wait, detour or sidestep clears them"
     return [
         f"{bound}{len(conflicts)}, the first:",
-        f" {' and '.join(first.robots)} at {first.t_from:.1f} s, {first.closest_distance:.2f} m apart, "
-        f"{first.required_separation:.2f} m needed; {hint}: docs/planning.md",
+        f" {' and '.join(first.robots)} at {first.t_from:.1f} s, {length(first.closest_distance)} apart, "
+        f"{length(first.required_separation)} needed; {hint}: docs/planning.md",
         *_apart_lines(report),
     ]
 
