@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 import io
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -29,6 +30,7 @@ from tmpnav.execution import (
     sessions_csv,
 )
 from tmpnav.pipeline import PlanOptions, load_world, plan
+from tmpnav.report.text import plan_summary
 from tmpnav.results import PlanReport, Schedule, TimedMove
 from tmpnav.types import Goals, Scenario
 from tmpnav.world import World
@@ -347,8 +349,8 @@ def test_the_counts_are_rates_of_executions_in_the_summary(waiting: PlanReport) 
     assert result.contact_rate(2) == Rate(0, 2)
     text = "\n".join(error_summary(result, 2))
     assert "wall hits (executions with a true pose" in text
-    assert "  with mutual observations: 1/2 = 50.0% (95% CI 1.3-98.7%); per robot r1 0, r2 1" in text
-    assert "robot contacts" in text and "  without: 0/2 = 0.0% (95% CI 0.0-84.2%); per robot r1 0, r2 0" in text
+    assert "  with mutual observations: 1/2 = 50.0% (95% CI 1.3% to 98.7%); per robot r1 0, r2 1" in text
+    assert "robot contacts" in text and "  without: 0/2 = 0% (95% CI 0% to 84.2%); per robot r1 0, r2 0" in text
 
 
 @pytest.mark.slow
@@ -384,6 +386,16 @@ def test_robots_with_a_lidar_are_localised_as_their_filter_says(lidar_rooms: Pla
     assert used > 10_000 and rejected / used < 0.05
     lines = "\n".join(error_summary(result, 6))
     assert "position NEES with mutual observations" in lines and "rejected by the innovation gate" in lines
+
+
+@pytest.mark.slow
+def test_a_lidar_plans_tiny_figures_read_as_figures(lidar_rooms: PlanReport) -> None:
+    """With a lidar the bounds fall far below 1e-6 and the stds to centimetres: the summary says
+    "< 1e-6" and cm, never an exponent like 6.5e-300, a bound of 0 or "0.00 m"."""
+    text = plan_summary(lidar_rooms)
+    assert lidar_rooms.risk < 1e-6 and "collision bound: plan < 1e-6 " in text
+    assert not re.search(r"\de-(\d{2,}|[7-9])\b", text) and not re.search(r"\b0\.00 m\b|\b0\.0 deg\b", text)
+    assert re.search(r"\d\.\d cm", text)
 
 
 @pytest.mark.slow

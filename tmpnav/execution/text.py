@@ -7,7 +7,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from tmpnav.execution.result import CONFIGS, ExecutionResult
+from tmpnav.execution.result import CONFIGS, ExecutionResult, Rate
+from tmpnav.numbers import length, nees, percent, probability
 from tmpnav.types import Roadmap
 
 
@@ -17,13 +18,13 @@ def error_summary(result: ExecutionResult, sessions: int) -> list[str]:
     lines = [f"{sessions} sessions; worst-case position error (largest average error over the path's nodes):"]
     for robot in result.robots:
         lines.append(
-            f"  {robot}: with mutual observations {result.worst(1, robot):.3f} m, "
-            f"without {result.worst(2, robot):.3f} m, {result.reduction(robot):.1f}% lower"
+            f"  {robot}: with mutual observations {length(result.worst(1, robot))}, "
+            f"without {length(result.worst(2, robot))}, {_lower(result.reduction(robot))}"
         )
     starved = result.starved
     lines.append(
         f"landmark-starved robot (largest error without mutual observations): {starved}, "
-        f"{result.reduction(starved):.1f}% lower with mutual observations"
+        f"{_lower(result.reduction(starved))} with mutual observations"
     )
     lines.append(makespan_line(result))
     lines += wait_lines(result)
@@ -62,18 +63,18 @@ def consistency_lines(result: ExecutionResult) -> list[str]:
     range sensor the share of beams the filters' innovation gate rejected."""
     lines = []
     for config, label in ((1, "with mutual observations"), (2, "without")):
-        robots = ", ".join(f"{r} {result.nees(config, r):.2f}" for r in result.robots)
+        robots = ", ".join(f"{r} {nees(result.nees(config, r))}" for r in result.robots)
         lines.append(
             f"position NEES {label} (2 when the errors agree with the covariance): against the plan's covariance "
-            f"at the path's nodes {result.nees(config):.2f} ({robots}); against the filter's own at every step "
-            f"{result.own_nees(config):.2f}"
+            f"at the path's nodes {nees(result.nees(config))} ({robots}); against the filter's own at every step "
+            f"{nees(result.own_nees(config))}"
         )
     used = sum(result.beams[(1, r)][0] for r in result.robots)
     if used:
         rejected = sum(result.beams[(1, r)][1] for r in result.robots)
         lines.append(
             f"range beams with mutual observations: {used} returned in both the true and the predicted scan, "
-            f"{100 * rejected / used:.2f}% rejected by the innovation gate"
+            f"{percent(rejected / used)} rejected by the innovation gate"
         )
     return lines
 
@@ -92,8 +93,22 @@ def collision_lines(result: ExecutionResult) -> list[str]:
         lines.append(f"{what}:")
         for config, label in ((1, "with mutual observations"), (2, "without")):
             robots = ", ".join(f"{r} {rate(config, r).events}" for r in result.robots)
-            lines.append(f"  {label}: {rate(config).text()}; per robot {robots}")
+            lines.append(f"  {label}: {rate_text(rate(config))}; per robot {robots}")
     return lines
+
+
+def rate_text(rate: Rate) -> str:
+    """Executions with an event out of all, as a percentage with its exact 95% interval:
+    ``1/200 = 0.5% (95% CI < 0.1% to 2.8%)``."""
+    lo, hi = rate.interval
+    return f"{rate.events}/{rate.sessions} = {percent(rate.value)} (95% CI {percent(lo)} to {percent(hi)})"
+
+
+def _lower(reduction: float) -> str:
+    """How much lower (%) the worst-case error is with mutual observations, or how much higher."""
+    if reduction < 0:
+        return f"{percent(-reduction / 100)} higher"
+    return f"{percent(reduction / 100)} lower"
 
 
 #: moves listed by name in the summary (moves.csv has them all)
@@ -109,7 +124,9 @@ def move_lines(result: ExecutionResult) -> list[str]:
         return []
     above = [m for m in moves if m[2].interval[0] > m[4]]
     worst = sorted(moves, key=lambda m: (-m[2].events, -m[4]))[:MOVES_SHOWN]
-    shown = "; ".join(f"{r} step {k + 1}: {hits.text()}, bound {bound:.2g}" for r, k, hits, _, bound in worst)
+    shown = "; ".join(
+        f"{r} step {k + 1}: {rate_text(hits)}, bound {probability(bound)}" for r, k, hits, _, bound in worst
+    )
     return [
         f"moves against their bounds, with mutual observations ({len(moves)} moves; moves.csv has each): "
         f"{len(above)} with a wall-hit rate whose 95% interval lies above the move's bound; most hits: {shown}"
