@@ -166,7 +166,8 @@ def test_the_site_parses_the_command_line_form() -> None:
         ("seed=1.5", ["seed", "integer"]),
         ("people=nan", ["people"]),
         ("typical,,people=1", ["empty"]),
-        ("people", ["people", "key=value"]),
+        ("people", ["people", "people=VALUE"]),
+        ("clutter=1,none", ["'none'", "first"]),
     ]:
         with pytest.raises(ValueError) as e:
             SiteNoise.parse(text)

@@ -59,7 +59,7 @@ class SiteNoise:
     # a few centimetres more; AMCL's sigma_hit of 0.2 m is there to absorb it and the rest
     wall_offset: float = 0.03  # m, std of a wall's offset along its normal
     # an occupied office holds about one person per 15 m² of free floor, of whom about 5% walk
-    # at any moment; a corridor or hall with anybody in it has at least one
+    # at any moment; a site with any people has at least one walking, however small
     people: float = 3.0  # people walking at once per 1000 m² of free floor
     # the ring a lidar at knee height sees of a person: legs apart, a bag, a coat
     person_radius: float = 0.25  # m
@@ -71,7 +71,7 @@ class SiteNoise:
         for term in fields(self):
             value = getattr(self, term.name)
             if term.name == "seed":
-                ok = isinstance(value, int) and value >= 0
+                ok = isinstance(value, int | np.integer) and value >= 0
             else:
                 low_ok = value > 0 if term.name in ("clutter_size", "person_radius") else value >= 0
                 ok = math.isfinite(value) and low_ok and (term.name != "wall_offset" or value <= 0.5)
@@ -97,7 +97,9 @@ class SiteNoise:
         changes: dict[str, float | int] = {}
         for part in parts:
             key, eq, value = (s.strip() for s in part.partition("="))
-            if key not in TERMS or not eq:
+            if key in TERMS and not eq:
+                raise ValueError(f"site: {key} has no value: expected {key}=VALUE, {TERMS[key]}")
+            if key not in TERMS:
                 raise ValueError(
                     f"site: unknown term {part!r}: expected none or typical first, then key=value with the key "
                     f"one of {', '.join(TERMS)}"
