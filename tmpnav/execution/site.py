@@ -176,6 +176,17 @@ class Site:
         other.field = self._field_of(world.signed_distance)
         return other
 
+    def walls(self) -> np.ndarray:
+        """The signed distance field (rows, cols) m of the site's walls alone, without the clutter."""
+        sdf = self.world.signed_distance
+        return sdf if self._offsets is None else shifted_walls(sdf, self.res, self._offsets)
+
+    @property
+    def walk_lines(self) -> np.ndarray:
+        """The straight line each person walks back and forth along: its ends (P, 2, 2) m."""
+        ends = self._walk_start + self._walk_length[:, None] * self._walk_dir
+        return np.stack([self._walk_start, ends], axis=1)
+
     def _field_of(self, sdf: np.ndarray) -> np.ndarray:
         """The site's signed distance field around the map's field ``sdf``: its walls moved, with the clutter."""
         field = sdf if self._offsets is None else shifted_walls(sdf, self.res, self._offsets)
