@@ -365,11 +365,15 @@ def test_sessions_on_worker_processes_are_the_sessions_run_in_one(waiting: PlanR
 
 @pytest.fixture(scope="module")
 def lidar_rooms(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
-    """The two rooms off a corridor, the robots with the shipped scenarios' lidar."""
+    """The two rooms off a corridor, the robots with the shipped scenarios' lidar, planned with the
+    sensor's own bound (every beam independent), which the simulator's EKF executes."""
     folder = tmp_path_factory.mktemp("lidar")
     text = (ROOT / "configs" / "two-rooms.yaml").read_text()
     scenario = folder / "two-rooms-lidar.yaml"
-    scenario.write_text(text + "models:\n  range_sensor: {range: 12, beams: 60, sigma_range: 0.03, divergence: 0.01}\n")
+    scenario.write_text(
+        text + "models:\n  range_sensor: {range: 12, beams: 60, sigma_range: 0.03, divergence: 0.01, "
+        "localiser: {model: beams}}\n"
+    )
     return plan(scenario, PlanOptions.of(cache_dir=folder / "cache"))
 
 

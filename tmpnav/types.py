@@ -130,6 +130,66 @@ class RangeBearingSensor:
         return np.diag([self.sigma_range**2, self.sigma_bearing**2])
 
 
+class ScanModelKind(enum.StrEnum):
+    """How a robot's localiser turns a scan into information about its pose."""
+
+    BEAMS = "beams"  # every beam an independent range measurement of the sensor's own noise (Censi)
+    AMCL = "amcl"  # nav2's AMCL: a particle filter with the likelihood-field model, calibrated
+
+
+@dataclass(frozen=True)
+class ScanModel:
+    """What one scan tells the robot's localiser (docs/models.md, "What a localiser achieves").
+
+    ``beams``: Censi's bound, each beam of the sensor an independent range measurement with
+    the sensor's noise; the information the sensor could give, far more than a localiser
+    takes from it. ``amcl``: nav2's AMCL with the likelihood-field model. A beam's endpoint is
+    scored by its distance to the nearest wall with noise ``sigma_hit`` (m) against a share
+    ``z_hit`` of hits and ``z_rand`` of random returns; AMCL weighs ``max_beams`` beams of a
+    scan and updates only after the robot has moved ``update_min_d`` (m) or turned
+    ``update_min_a`` (rad). What the derivation cannot give (beams correlated through the map's
+    errors, AMCL's sum of cubed beam likelihoods in place of their product, its particles) is
+    one factor, ``information``: the share of the likelihood field's information that AMCL's
+    estimate realises, fitted by ``tmpnav calibrate`` against nav2's AMCL."""
+
+    kind: ScanModelKind = ScanModelKind.BEAMS
+    sigma_hit: float = 0.2  # m
+    z_hit: float = 0.5
+    z_rand: float = 0.5
+    max_beams: int = 60
+    update_min_d: float = 0.25  # m
+    update_min_a: float = 0.2  # rad
+    information: float = 1.0
+
+    def update_rate(self, v: float, omega: float, dt: float) -> float:
+        """The share of control steps at which the localiser updates with a scan, driving at (v, omega)
+        for dt: 1 for ``beams`` (every step, standing or not); for ``amcl`` the distance or turn of
+        the step over AMCL's thresholds, at most 1, 0 standing (AMCL does not update a robot that
+        stands)."""
+        if self.kind is ScanModelKind.BEAMS:
+            return 1.0
+        return min(1.0, max(abs(v) * dt / self.update_min_d, abs(omega) * dt / self.update_min_a))
+
+    def mixture_factor(self, range_max: float) -> float:
+        """eta in (0, 1]: the Fisher information about a beam endpoint's distance to the wall under
+        the likelihood-field mixture z_hit N(0, sigma_hit²) + z_rand / range_max, over that of the
+        Gaussian alone (docs/models.md); 1 for ``beams``."""
+        if self.kind is ScanModelKind.BEAMS:
+            return 1.0
+        s = self.sigma_hit
+        d = np.linspace(-8.0 * s, 8.0 * s, 4001)
+        phi = np.exp(-0.5 * (d / s) ** 2) / (s * math.sqrt(2.0 * math.pi))
+        dphi = -d / s**2 * phi
+        c = self.z_rand / max(range_max, 1e-9) / max(self.z_hit, 1e-12)
+        return float(s**2 * np.sum(dphi**2 / (phi + c)) * (d[1] - d[0]))
+
+
+#: nav2's AMCL at its default parameters (docs/amcl.md), with the information share fitted by
+#: ``tmpnav calibrate`` on the shipped lidar scenarios (benchmarks/amcl/): the model the shipped
+#: lidar configs and ``tmpnav rooms`` skeletons plan with when they name no other
+NAV2_AMCL = ScanModel(ScanModelKind.AMCL, information=1.0)
+
+
 @dataclass(frozen=True)
 class RangeSensor:
     """A 2D range finder (lidar) that measures, per beam, the range to the map's walls.
@@ -150,6 +210,7 @@ class RangeSensor:
     min_range: float  # m
     max_incidence: float  # rad
     divergence: float = 0.0  # rad
+    localiser: ScanModel = ScanModel()  # what the robot's localiser makes of a scan
 
     def beam_angles(self) -> np.ndarray:
         """(beams,) rad: each beam's direction relative to the heading, evenly over the field of view."""

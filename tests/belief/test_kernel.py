@@ -267,4 +267,5 @@ def test_the_kernel_unpacks_the_named_tuples_in_field_order() -> None:
         "max_likelihood",
         "landmarks",
         "scans",
+        "scan_thresholds",
     )

@@ -171,17 +171,26 @@ def _update_scalar(mean, cov, g, c0, y, n, work, PHt, K):
 
 
 @nb.njit(cache=True, inline="always")
-def _scan_update(mean, cov, i, G, px, py, pth, e, max_likelihood, n, work, PHt, K, g, Cx, priced):
+def scan_weight(thresholds: np.ndarray, v: float, omega: float, dt: float) -> float:
+    """sqrt of the share of a scan the localiser takes in a step driven at (v, omega) for dt
+    (:meth:`tmpnav.types.ScanModel.update_rate`): the factor of the scan's rows G."""
+    if thresholds[0] <= 0.0:
+        return 1.0
+    return math.sqrt(min(1.0, max(abs(v) * dt / thresholds[0], abs(omega) * dt / thresholds[1])))
+
+
+@nb.njit(cache=True, inline="always")
+def _scan_update(mean, cov, i, G, w, px, py, pth, e, max_likelihood, n, work, PHt, K, g, Cx, priced):
     """Robot i's range scan: three scalar updates with the rows g_k of its information's factor
-    G (J = Gᵀ G, tmpnav.world.lidar), each a pseudo-measurement g_k x of unit noise. Simulated
-    from the nominal pose (px, py, pth) and the draws ``e`` (3,): y_k = g_k (x_nominal - mean) +
-    e_k, or 0 in maximum-likelihood mode. Together they are the update with every beam of the
-    scan, linearised at the nominal pose: the posterior depends on the beams only through
+    G (J = Gᵀ G, tmpnav.world.lidar) times ``w`` (:func:`scan_weight`), each a pseudo-measurement
+    g_k x of unit noise. Simulated from the nominal pose (px, py, pth) and the draws ``e`` (3,):
+    y_k = g_k (x_nominal - mean) + e_k, or 0 in maximum-likelihood mode. Together they are the
+    update with every beam of the scan, linearised at the nominal pose: the posterior depends on the beams only through
     Hᵀ R⁻¹ H and Hᵀ R⁻¹ y (docs/models.md, "Range sensor"). ``priced``: carry Cov(e, e_prev)
     ``Cx`` through them too."""
     c0 = 3 * i
     for k in range(3):
-        g[0], g[1], g[2] = G[k, 0], G[k, 1], G[k, 2]
+        g[0], g[1], g[2] = w * G[k, 0], w * G[k, 1], w * G[k, 2]
         if g[0] == 0.0 and g[1] == 0.0 and g[2] == 0.0:
             continue
         y = 0.0
@@ -461,7 +470,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
     h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk, h_step = hist
     work, PHt, K, H, cols, y, g, Cx, masses, qs, support = scratch
     m_off, m_T, ctrl, pose, vis, stream, reach, reach_row, scan_row, scan_table = motions  # MotionArrays' fields
-    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans = ekf  # and of EKFConstants
+    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds = ekf  # and of EKFConstants
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
     priced = reach.shape[1] > 1
     for k in range(seqs.restart[c], seqs.horizon[c]):
@@ -496,9 +505,12 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
                 m = sim[i]
                 row = m_off[m] + m + (t if t <= m_T[m] else m_T[m])
                 G = scan_table[scan_row[row]]
+                w = scan_weight(thresholds, u[i, 0], u[i, 1], dt)
+                if w == 0.0:
+                    continue  # a localiser that updates only on the move: no update standing
                 e = scan_noise[stream[m], t]
                 px, py, pth = pose[row, 0], pose[row, 1], pose[row, 2]
-                _scan_update(mean, cov, i, G, px, py, pth, e, ml, n, work, PHt, K, g, Cx, priced)
+                _scan_update(mean, cov, i, G, w, px, py, pth, e, ml, n, work, PHt, K, g, Cx, priced)
         seen = False
         for i in range(n):
             for j in range(n):

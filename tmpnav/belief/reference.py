@@ -88,7 +88,11 @@ def propagate_reference(
                 b = ekf.update_landmark(b, i, landmarks[l_], z, Q_lm)
         if rollout.scans is not None and models.range_sensor is not None:
             for i in range(n):
-                G = rollout.scans[i, t]
+                v, omega = rollout.controls[i, k]
+                w = models.range_sensor.localiser.update_rate(float(v), float(omega), models.dt) ** 0.5
+                if w == 0.0:
+                    continue  # a localiser that updates only on the move
+                G = w * rollout.scans[i, t]
                 if ml:
                     y = np.zeros(3)
                 else:

@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from tmpnav.belief.kernel import run_sequences
-from tmpnav.types import Models, ObservationMode
+from tmpnav.types import Models, ObservationMode, ScanModelKind
 
 
 class EKFConstants(NamedTuple):
@@ -36,6 +36,9 @@ class EKFConstants(NamedTuple):
     max_likelihood: bool  # simulate z = h(mean) (no innovation) instead of h(pose) + noise
     landmarks: np.ndarray  # (L, 2) landmark positions (m)
     scans: bool  # the robots carry a range sensor (MotionArrays.scan_row, SequenceBatch.scan_noise)
+    #: (2,) the localiser's update thresholds (m, rad): a step's scan counts by the share of them the
+    #: step drives or turns, at most 1 (0, 0: every step's scan counts whole; ScanModel.update_rate)
+    scan_thresholds: np.ndarray
 
     @staticmethod
     def of(models: Models, landmarks: np.ndarray) -> EKFConstants:
@@ -51,7 +54,16 @@ class EKFConstants(NamedTuple):
             max_likelihood=models.observations is ObservationMode.MAX_LIKELIHOOD,
             landmarks=np.ascontiguousarray(landmarks, dtype=float).reshape(-1, 2),
             scans=models.range_sensor is not None,
+            scan_thresholds=scan_thresholds(models),
         )
+
+
+def scan_thresholds(models: Models) -> np.ndarray:
+    """:attr:`EKFConstants.scan_thresholds` of a scenario's models."""
+    sensor = models.range_sensor
+    if sensor is None or sensor.localiser.kind is ScanModelKind.BEAMS:
+        return np.zeros(2)
+    return np.array([sensor.localiser.update_min_d, sensor.localiser.update_min_a], dtype=float)
 
 
 class MotionArrays(NamedTuple):

@@ -35,6 +35,16 @@ class QueuedMove:
     steps: int  # control steps: the planned duration
     arrivals: tuple[float | None, ...]  # s: planned arrival at each node after the first (None: not found)
     planned_covs: tuple[np.ndarray | None, ...] = ()  # (2, 2) m²: the planned position covariance there
+    #: (T + 1, 2, 2) m²: the planned position covariance at each control step of the move, its start first
+    planned_track: np.ndarray | None = None
+
+    def planned_at(self, k: int) -> np.ndarray | None:
+        """The plan's position covariance (2, 2) k control steps into the move (its last after the
+        planned end); None when the plan has none."""
+        track = self.planned_track
+        if track is None or not len(track):
+            return None
+        return track[min(max(k, 0), len(track) - 1)]
 
     @property
     def waypoints(self) -> list[np.ndarray]:
@@ -74,7 +84,14 @@ def _queued(report: PlanReport, move: TimedMove, steps: Sequence[TrajectoryStep]
             None if k is None else np.array(steps[k].cov, dtype=float)[:2, :2]
             for k in _arrival_steps(steps, nodes[1:], move.start, move.end)
         ),
+        planned_track=_track(steps, move.start, move.end),
     )
+
+
+def _track(steps: Sequence[TrajectoryStep], start: float, end: float) -> np.ndarray | None:
+    """The position covariances (T + 1, 2, 2) of the trajectory's steps from ``start`` to ``end`` (s)."""
+    covs = [np.asarray(s.cov, dtype=float)[:2, :2] for s in steps if start - _T_TOL <= s.t <= end + _T_TOL]
+    return np.array(covs) if covs else None
 
 
 def planned_arrivals(

@@ -20,11 +20,13 @@ import multiprocessing
 import os
 import signal
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from tmpnav.belief.risk import clopper_pearson
+from tmpnav.execution.consistency import gather as gather_consistency
+from tmpnav.execution.localisers import Localisation
 from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
 from tmpnav.lifetime import gather, signals_held
@@ -80,6 +82,14 @@ class ExecutionResult:
     move_hits: dict[tuple[int, str, int], np.ndarray]
     move_contacts: dict[tuple[int, str, int], np.ndarray]
     bounds: dict[tuple[str, int], float]  # (robot, plan step) -> the move's collision bound as planned
+    #: (robot, plan step) -> every driving step's actual error, localiser's and plan's covariance, of
+    #: config 1 (tmpnav.execution.consistency)
+    consistency: dict[tuple[str, int], np.ndarray] = field(default_factory=dict)
+    #: the executing localiser, the site and the true motion noise, in words
+    localiser: str = ""
+    #: the configurations run: both (1 with mutual observations, 2 without) with the EKF; 1 only with
+    #: AMCL, which localises each robot on its own
+    configs: tuple[int, ...] = (1, 2)
 
     def mean_errors(self, config: int, robot: str) -> np.ndarray:
         """(points,) m: the robot's position error at each point of its paths, averaged over the sessions."""
@@ -168,6 +178,12 @@ class _Sessions:
     seed: int
     steps: int  # control steps drawn per session
     beams: int
+    localisation: Localisation
+
+    @property
+    def configs(self) -> dict[int, bool]:
+        """Config -> with mutual observations: both with the EKF, the first alone with AMCL."""
+        return {1: True} if self.localisation.particle_filter else CONFIGS
 
     def run(self, s: int) -> tuple[dict[int, SessionTrace], bool]:
         """Session ``s`` in both configurations (the same draws), and whether it was cut short."""
@@ -175,7 +191,8 @@ class _Sessions:
         robots = len(scenario.robots)
         draws = Draws.draw(self.seed, s, robots, self.steps, world.landmark_xy.shape[0], self.beams)
         traces = {
-            c: Session(scenario, world, self.moves, draws, self.vis, mutual).run() for c, mutual in CONFIGS.items()
+            c: Session(scenario, world, self.moves, draws, self.vis, mutual, self.localisation, s).run()
+            for c, mutual in self.configs.items()
         }
         return traces, any(t.truncated for t in traces.values())
 
@@ -196,9 +213,17 @@ def _run_session(s: int) -> tuple[dict[int, SessionTrace], bool]:
     return _SHARED.run(s)
 
 
-def execute(report: PlanReport, sessions: int = 25, seed: int = 0, workers: int | None = None) -> ExecutionResult:
+def execute(
+    report: PlanReport,
+    sessions: int = 25,
+    seed: int = 0,
+    workers: int | None = None,
+    localisation: Localisation | None = None,
+) -> ExecutionResult:
     """Execute ``report``'s schedule ``sessions`` times in both configurations, on ``workers``
-    local processes (one per core when None; the same results, session by session, as in one)."""
+    local processes (one per core when None; the same results, session by session, as in one),
+    localised as ``localisation`` says (tmpnav's EKF by default)."""
+    localisation = localisation or Localisation()
     scenario, world = report.scenario, report.world
     robots = [r.name for r in scenario.robots]
     moves = queues(report)
@@ -214,6 +239,7 @@ def execute(report: PlanReport, sessions: int = 25, seed: int = 0, workers: int 
         seed,
         STEP_BUDGET * planned + 100,
         sensor.beams if sensor is not None else 0,
+        localisation,
     )
     if sensor is not None:
         _ = world.signed_distance  # once, before the workers fork
@@ -222,9 +248,11 @@ def execute(report: PlanReport, sessions: int = 25, seed: int = 0, workers: int 
         done = [shared.run(s) for s in range(sessions)]
     else:
         done = _in_workers(shared, sessions, workers)
-    traces: dict[int, list[SessionTrace]] = {c: [t[c] for t, _ in done] for c in CONFIGS}
+    traces: dict[int, list[SessionTrace]] = {c: [t[c] for t, _ in done] for c in shared.configs}
     truncated = sum(cut for _, cut in done)
-    return _result(report, robots, moves, traces, truncated)
+    result = _result(report, robots, moves, traces, truncated)
+    result.localiser = localisation.describe(scenario.models.motion_noise)
+    return result
 
 
 def _in_workers(shared: _Sessions, sessions: int, workers: int) -> list[tuple[dict[int, SessionTrace], bool]]:
@@ -253,28 +281,29 @@ def _result(
     truncated: int,
 ) -> ExecutionResult:
     names = tuple(robots)
+    configs = tuple(traces)
     return ExecutionResult(
         robots=robots,
         nodes=recorded_nodes(moves, report.roadmap.starts),
-        errors={(c, r): np.array([t.errors[r] for t in traces[c]], dtype=float) for c in CONFIGS for r in robots},
+        errors={(c, r): np.array([t.errors[r] for t in traces[c]], dtype=float) for c in configs for r in robots},
         truncated_sessions=truncated,
-        times={(c, r): np.array([t.times[r] for t in traces[c]], dtype=float) for c in CONFIGS for r in robots},
+        times={(c, r): np.array([t.times[r] for t in traces[c]], dtype=float) for c in configs for r in robots},
         planned_times={r: [0.0, *(t for m in moves[r] for t in m.arrivals)] for r in robots},
-        schedules={c: [t.schedule(names) for t in traces[c]] for c in CONFIGS},
+        schedules={c: [t.schedule(names) for t in traces[c]] for c in configs},
         planned=report.schedule,
-        wall_hits={(c, r): np.array([t.wall_hits[r] for t in traces[c]], dtype=int) for c in CONFIGS for r in robots},
-        contacts={(c, r): np.array([t.contacts[r] for t in traces[c]], dtype=int) for c in CONFIGS for r in robots},
+        wall_hits={(c, r): np.array([t.wall_hits[r] for t in traces[c]], dtype=int) for c in configs for r in robots},
+        contacts={(c, r): np.array([t.contacts[r] for t in traces[c]], dtype=int) for c in configs for r in robots},
         planned_nees={
-            (c, r): np.array([t.planned_nees[r] for t in traces[c]], dtype=float) for c in CONFIGS for r in robots
+            (c, r): np.array([t.planned_nees[r] for t in traces[c]], dtype=float) for c in configs for r in robots
         },
         filter_nees={
             (c, r): (sum(t.nees_sum[r] for t in traces[c]), sum(t.nees_steps[r] for t in traces[c]))
-            for c in CONFIGS
+            for c in configs
             for r in robots
         },
         beams={
             (c, r): (sum(t.beams[r][0] for t in traces[c]), sum(t.beams[r][1] for t in traces[c]))
-            for c in CONFIGS
+            for c in configs
             for r in robots
         },
         move_hits=_per_move(traces, "move_hits"),
@@ -284,6 +313,8 @@ def _result(
             for action in report.actions
             for (robot, _, _), bound in zip(action.moves, action.risk, strict=False)
         },
+        consistency=gather_consistency([t.consistency for t in traces[configs[0]]]),
+        configs=configs,
     )
 
 

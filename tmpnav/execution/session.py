@@ -42,7 +42,9 @@ from tmpnav.belief import ekf
 from tmpnav.belief.models import landmark_obs, motion, motion_noise_cov, mutual_obs, noisy_observation
 from tmpnav.belief.risk import hits_wall
 from tmpnav.errors import TmpnavError
+from tmpnav.execution.consistency import ConsistencyTrace
 from tmpnav.execution.control import ALIGN, ALIGN_START, control, reached
+from tmpnav.execution.localisers import Localisation, Localiser
 from tmpnav.execution.moves import QueuedMove
 from tmpnav.execution.scans import ScanSimulator
 from tmpnav.results import Schedule, TimedMove
@@ -87,6 +89,8 @@ class SessionTrace:
     c_goal: dict[str, float] = field(default_factory=dict)
     #: the moves of ``moves`` that were cut (out of budget or of draws): they never reached their room
     cut: list[TimedMove] = field(default_factory=list)
+    #: every driving step's actual error, the localiser's covariance and the plan's (consistency.py)
+    consistency: ConsistencyTrace = field(default_factory=ConsistencyTrace)
 
     def reached(self) -> list[TimedMove]:
         """The moves that reached their room (not cut), in the order they ended."""
@@ -159,8 +163,11 @@ class Session:
         draws: Draws,
         vis: LandmarkVisibility,
         mutual: bool,
+        localisation: Localisation | None = None,
+        session: int = 0,
     ):
         self.scenario, self.world, self.draws, self.vis, self.mutual = scenario, world, draws, vis, mutual
+        self.localisation = localisation or Localisation()
         self.base = world  # the world the session started in (a closed loop may close doors)
         self.barriers: np.ndarray | None = None  # (k, 2) m: the centres of the cells closed since
         self.names = tuple(r.name for r in scenario.robots)
@@ -184,6 +191,32 @@ class Session:
         self.speed = np.ones(len(self.names))
         #: robots that are down: they stand where they are for the rest of the session
         self.down: set[int] = set()
+        #: with AMCL (Localisation.particle_filter): each robot's particle filter, its odometry pose
+        #: (the commands integrated, from its initial estimate) and the site its lidar scans
+        self.localisers: list[Localiser] = []
+        if self.localisation.particle_filter:
+            self._start_particle_filters(queues, session)
+
+    def _start_particle_filters(self, queues: Mapping[str, tuple[QueuedMove, ...]], session: int) -> None:
+        from tmpnav.execution.amcl import AmclLocaliser
+        from tmpnav.execution.site import Site, SiteNoise
+
+        sensor = self.scenario.models.range_sensor
+        if sensor is None:
+            raise TmpnavError(
+                "--localiser amcl: the scenario's robots carry no range sensor (models.range_sensor); "
+                "expected a scenario with a lidar (AMCL localises with it)"
+            )
+        noise = self.localisation.site if isinstance(self.localisation.site, SiteNoise) else SiteNoise.parse("none")
+        paths = [np.asarray(m.points, dtype=float).reshape(-1, 2) for q in queues.values() for m in q]
+        self.site = Site(self.world, noise, session, keep_clear=paths or None)  # no clutter on the paths
+        self.odom = np.array([self.estimate(i) for i in range(len(self.names))])
+        params, blocks = self.localisation.amcl, [slice(3 * i, 3 * i + 3) for i in range(len(self.names))]
+        self.localisers = [
+            # the process's AMCL random stream is seeded by the session (the last filter's seed holds)
+            AmclLocaliser(self.world.grid, sensor, params, self.odom[i], self.belief.cov[b, b], seed=session + 1)
+            for i, b in enumerate(blocks)
+        ]
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -209,8 +242,16 @@ class Session:
         return groups
 
     def estimate(self, i: int) -> np.ndarray:
-        """Robot i's estimated pose: its part of the joint belief's mean."""
+        """Robot i's estimated pose: its localiser's (its part of the joint belief's mean, or AMCL's)."""
+        if self.localisers:
+            return self.localisers[i].mean
         return self.belief.mean[3 * i : 3 * i + 3]
+
+    def estimate_cov(self, i: int) -> np.ndarray:
+        """Robot i's covariance (3, 3) as its localiser reports it."""
+        if self.localisers:
+            return self.localisers[i].cov
+        return self.belief.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
 
     # ------------------------------------------------------------------ the run
 
@@ -286,14 +327,15 @@ class Session:
         self.barriers = np.column_stack([xs[cols], ys[rows]]) if added.shape == self.base.grid.occupied.shape else None
         sensor = self.scenario.models.range_sensor
         self.scans = ScanSimulator(world, sensor) if sensor is not None else None
+        if self.localisers:  # the site keeps its clutter and people; the doors close on its walls
+            self.site = self.site.with_world(world)
 
     def _add_costs(self, u: np.ndarray) -> None:
         """The executed cost terms of this step (SessionTrace.c_u, c_sigma)."""
         for i, (name, r) in enumerate(zip(self.names, self.robots, strict=True)):
             if r.waypoints:
                 self.trace.c_u[name] += float(u[i] @ u[i]) * self.dt
-                block = slice(3 * i, 3 * i + 3)
-                self.trace.c_sigma[name] += float(np.trace(self.belief.cov[block, block])) * self.dt
+                self.trace.c_sigma[name] += float(np.trace(self.estimate_cov(i))) * self.dt
 
     def _arrive(self) -> None:
         """The waypoints reached now, and the moves ended by them."""
@@ -431,6 +473,9 @@ class Session:
             moved = motion(self.truth[i], noisy, models.dt)
             if self.world is self.base or not self._closed_in_way(moved[:2], self.radii[i]):
                 self.truth[i] = moved
+        if self.localisers:  # odometry: the commands integrated (the wheels' error is the control noise)
+            self.odom = motion(self.odom, u, models.dt)
+            return
         self.belief = ekf.predict(self.belief, u, models.dt, models.motion_noise)
 
     def _closed_in_way(self, xy: np.ndarray, radius: float) -> bool:
@@ -442,8 +487,12 @@ class Session:
         return bool(np.min(np.hypot(*(self.barriers - xy).T)) < radius)
 
     def _observe(self) -> None:
-        """Every robot's landmark observations, then (config 1) every pair's mutual observations."""
+        """Every robot's landmark observations, then (config 1) every pair's mutual observations;
+        with AMCL, every robot's scan of the site and odometry, to its own particle filter."""
         models, truth, step = self.scenario.models, self.truth, self.step
+        if self.localisers:
+            self._scan_site()
+            return
         q_lm = models.landmark_sensor.Q
         chol_lm = np.linalg.cholesky(q_lm)
         landmarks = self.world.landmark_xy
@@ -465,12 +514,35 @@ class Session:
             z = noisy_observation(mutual_obs(truth[i], truth[j]), chol_mu, self.draws.mutual[i, j, step])
             self.belief = ekf.update_mutual(self.belief, i, j, z, q_mu)
 
+    def _scan_site(self) -> None:
+        """Each robot's lidar scans the site from its true pose (the sensor's range noise on every
+        return), and its AMCL updates with the scan and its odometry."""
+        sensor = self.scenario.models.range_sensor
+        assert sensor is not None
+        angles, t = sensor.beam_angles(), self.step * self.dt
+        for i, name in enumerate(self.names):
+            ranges = (
+                self.site.ranges(self.truth[i], angles, sensor, t) + sensor.sigma_range * self.draws.scan[i, self.step]
+            )
+            self.localisers[i].update(self.odom[i], ranges)
+            returned = int(np.count_nonzero(~np.isnan(ranges)))
+            self.trace.beams[name][0] += returned
+
+    def _record_consistency(self) -> None:
+        """Each driving robot's actual error, its localiser's covariance and the plan's at this step of its move."""
+        for i, (name, r) in enumerate(zip(self.names, self.robots, strict=True)):
+            if r.move is None or not r.waypoints:
+                continue
+            own = self.estimate_cov(i)[:2, :2]
+            error = self.truth[i, :2] - self.estimate(i)[:2]
+            self.trace.consistency.record(name, r.move.step, error, own, r.move.planned_at(self.step - r.since + 1))
+
     def _collide(self) -> None:
         """Count the true poses, after this control step, that hit a wall, and the robots that touch
         (closer than their radii added): what the collision bound (docs/models.md) bounds."""
+        self._record_consistency()
         for i, name in enumerate(self.names):
-            cols = slice(3 * i, 3 * i + 2)
-            nees = _nees(self.truth[i, :2] - self.belief.mean[cols], self.belief.cov[cols, cols])
+            nees = _nees(self.truth[i, :2] - self.estimate(i)[:2], self.estimate_cov(i)[:2, :2])
             if math.isfinite(nees):
                 self.trace.nees_sum[name] += nees
                 self.trace.nees_steps[name] += 1

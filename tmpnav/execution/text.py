@@ -7,7 +7,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from tmpnav.execution.result import CONFIGS, ExecutionResult, Rate
+from tmpnav.execution.consistency import summary_lines
+from tmpnav.execution.result import ExecutionResult, Rate
 from tmpnav.numbers import length, nees, percent, probability
 from tmpnav.types import Roadmap
 
@@ -16,6 +17,9 @@ def error_summary(result: ExecutionResult, sessions: int) -> list[str]:
     """The worst-case position error per robot in both configurations, the makespan executed
     against the planned one, and the robots' waits (what ``tmpnav simulate`` prints)."""
     lines = [f"{sessions} sessions; worst-case position error (largest average error over the path's nodes):"]
+    if result.configs == (1,):  # one localiser per robot (AMCL): no mutual observations to compare
+        lines.append("  " + ", ".join(f"{robot} {length(result.worst(1, robot))}" for robot in result.robots))
+        return _rest(result, lines)
     for robot in result.robots:
         lines.append(
             f"  {robot}: with mutual observations {length(result.worst(1, robot))}, "
@@ -26,9 +30,14 @@ def error_summary(result: ExecutionResult, sessions: int) -> list[str]:
         f"landmark-starved robot (largest error without mutual observations): {starved}, "
         f"{_lower(result.reduction(starved))} with mutual observations"
     )
+    return _rest(result, lines)
+
+
+def _rest(result: ExecutionResult, lines: list[str]) -> list[str]:
     lines.append(makespan_line(result))
     lines += wait_lines(result)
     lines += consistency_lines(result)
+    lines += summary_lines(result.consistency, result.localiser) if result.localiser else []
     lines += collision_lines(result)
     lines += move_lines(result)
     if result.truncated_sessions:
@@ -36,10 +45,18 @@ def error_summary(result: ExecutionResult, sessions: int) -> list[str]:
     return lines
 
 
+def labels(result: ExecutionResult) -> list[tuple[int, str]]:
+    """The configurations run, each with its label: with and without mutual observations (the
+    EKF), or one with each robot's AMCL."""
+    if result.configs == (1,):
+        return [(1, "with AMCL")]
+    return [(1, "with mutual observations"), (2, "without")]
+
+
 def makespan_line(result: ExecutionResult) -> str:
     """Planned makespan, and the executed one's mean and worst over the sessions, per configuration."""
     parts = []
-    for config, label in ((1, "with mutual observations"), (2, "without")):
+    for config, label in labels(result):
         spans = result.makespans(config)
         worst = int(np.argmax(spans))
         parts.append(f"{label} {spans.mean():.1f} s mean, {spans[worst]:.1f} s worst (session {worst + 1})")
@@ -55,14 +72,14 @@ def wait_lines(result: ExecutionResult) -> list[str]:
     if not any(planned.values()) and not any(executed.values()):
         return []
     cells = ", ".join(f"{r} {executed[r]:.1f} s (planned {planned[r]:.1f} s)" for r in result.robots)
-    return [f"waiting for partners and planned starts, mean per session with mutual observations: {cells}"]
+    return [f"waiting for partners and planned starts, mean per session {labels(result)[0][1]}: {cells}"]
 
 
 def consistency_lines(result: ExecutionResult) -> list[str]:
     """How well the errors agree with the covariances (position NEES, 2 when they do), and with a
     range sensor the share of beams the filters' innovation gate rejected."""
     lines = []
-    for config, label in ((1, "with mutual observations"), (2, "without")):
+    for config, label in labels(result):
         robots = ", ".join(f"{r} {nees(result.nees(config, r))}" for r in result.robots)
         lines.append(
             f"position NEES {label} (2 when the errors agree with the covariance): against the plan's covariance "
@@ -70,7 +87,7 @@ def consistency_lines(result: ExecutionResult) -> list[str]:
             f"{nees(result.own_nees(config))}"
         )
     used = sum(result.beams[(1, r)][0] for r in result.robots)
-    if used:
+    if used and result.configs != (1,):  # AMCL has no innovation gate
         rejected = sum(result.beams[(1, r)][1] for r in result.robots)
         lines.append(
             f"range beams with mutual observations: {used} returned in both the true and the predicted scan, "
@@ -91,7 +108,7 @@ def collision_lines(result: ExecutionResult) -> list[str]:
         ("robot contacts (executions with two true positions closer than their radii added)", result.contact_rate),
     ):
         lines.append(f"{what}:")
-        for config, label in ((1, "with mutual observations"), (2, "without")):
+        for config, label in labels(result):
             robots = ", ".join(f"{r} {rate(config, r).events}" for r in result.robots)
             lines.append(f"  {label}: {rate_text(rate(config))}; per robot {robots}")
     return lines
@@ -128,7 +145,7 @@ def move_lines(result: ExecutionResult) -> list[str]:
         f"{r} step {k + 1}: {rate_text(hits)}, bound {probability(bound)}" for r, k, hits, _, bound in worst
     )
     return [
-        f"moves against their bounds, with mutual observations ({len(moves)} moves; moves.csv has each): "
+        f"moves against their bounds, {labels(result)[0][1]} ({len(moves)} moves; moves.csv has each): "
         f"{len(above)} with a wall-hit rate whose 95% interval lies above the move's bound; most hits: {shown}"
     ]
 
@@ -140,7 +157,7 @@ def moves_csv(result: ExecutionResult) -> str:
         "config,mutual_observations,robot,step,sessions,wall_hit_executions,wall_hit_rate,wall_hit_ci_low,"
         "wall_hit_ci_high,contact_executions,contact_rate,contact_ci_low,contact_ci_high,bound"
     ]
-    for config in CONFIGS:
+    for config in result.configs:
         for robot, step, hits, touches, bound in result.move_rates(config):
             (hl, hh), (cl, ch) = hits.interval, touches.interval
             rows.append(
@@ -158,7 +175,7 @@ def errors_csv(result: ExecutionResult, roadmap: Roadmap) -> str:
         "config,mutual_observations,robot,node_index,roadmap_node,x,y,mean_error_m,std_error_m,max_error_m,sessions,"
         "planned_t_s,mean_t_s,max_t_s"
     ]
-    for config in CONFIGS:
+    for config in result.configs:
         for robot in result.robots:
             errors, times = result.errors[(config, robot)], result.times[(config, robot)]
             for k, node in enumerate(result.nodes[robot]):
@@ -178,7 +195,7 @@ def sessions_csv(result: ExecutionResult) -> str:
     waited, the session's makespan next to the planned one, and the control steps after which
     the robot's true pose hit a wall (``wall_hits``) or touched another robot (``contacts``)."""
     rows = ["config,mutual_observations,session,robot,done_s,wait_s,makespan_s,planned_makespan_s,wall_hits,contacts"]
-    for config in CONFIGS:
+    for config in result.configs:
         for s, schedule in enumerate(result.schedules[config]):
             for robot in result.robots:
                 done = max((m.done for m in schedule.timeline(robot)), default=0.0)

@@ -42,6 +42,7 @@ import numpy as np
 
 from tmpnav.errors import TmpnavError
 from tmpnav.execution import STEP_BUDGET, Draws, QueuedMove, Session, queues
+from tmpnav.execution.localisers import Localisation
 from tmpnav.replan.events import Event, Events
 from tmpnav.replan.revise import NothingLeft
 from tmpnav.replan.state import RobotState, TeamState
@@ -116,6 +117,7 @@ class _Context:
     events: Events
     seed: int
     worlds: dict[tuple[tuple[str, bool], ...], tuple[World, LandmarkVisibility]] = field(default_factory=dict)
+    localisation: Localisation | None = None  # who localises the robots (tmpnav's EKF when None)
 
     @property
     def scenario(self) -> Scenario:
@@ -159,13 +161,15 @@ def closed_loop(
     seed: int = 0,
     options: PlanOptions | None = None,
     progress: Callable[[str], None] | None = None,
+    localisation: Localisation | None = None,
 ) -> LoopResult:
-    """Plan ``path``, then execute it ``sessions`` times in the three :data:`MODES`."""
+    """Plan ``path``, then execute it ``sessions`` times in the three :data:`MODES`, the robots
+    localised as ``localisation`` says (tmpnav's EKF when None)."""
     from tmpnav import pipeline
 
     options = options or pipeline.PlanOptions()
     loaded = pipeline.load_world(path, options.overrides)
-    ctx = _Context(path, loaded, options, events, seed)
+    ctx = _Context(path, loaded, options, events, seed, localisation=localisation)
     planned = pipeline.plan(path, options, loaded=loaded)
     informed, why = _informed(ctx, planned)
     say = progress or (lambda _: None)
@@ -258,7 +262,9 @@ def _execute(
     if known:  # the plan knew every change of the problem: the world is as the events leave it
         for e in ctx.events.events:
             _changes(e, doors, down, add, remove)
-    session = Session(scenario, ctx.loaded[1], queues(plan), ctx.draws(s, plan), ctx.world({})[1], mutual=True)
+    session = Session(
+        scenario, ctx.loaded[1], queues(plan), ctx.draws(s, plan), ctx.world({})[1], True, ctx.localisation, s
+    )
     if doors:
         session.set_world(*ctx.world(doors))
     for r in down:
@@ -382,7 +388,7 @@ def _team(
             continue
         mean = session.estimate(i)
         x, y = _free_near(world, float(mean[0]), float(mean[1]), spec.radius)
-        block = session.belief.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
+        block = session.estimate_cov(i)
         cov = tuple(tuple(float(v) for v in row) for row in 0.5 * (block + block.T))
         robots[spec.name] = RobotState(spec.name, (x, y, float(mean[2])), cov)  # type: ignore[arg-type]
     entered = [m.target for m in session.trace.reached()]

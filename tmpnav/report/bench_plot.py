@@ -67,8 +67,12 @@ def errors_figure(result: ExecutionResult, title: str) -> Figure:
     for index, robot in enumerate(result.robots):
         color = fg.robot_color(index)
         for config, style in ((1, "-"), (2, "--")):
+            if config not in result.configs:
+                continue
             err = result.mean_errors(config, robot)
             label = f"{robot}, {'with' if config == 1 else 'without'} mutual observations (config {config})"
+            if result.configs == (1,):
+                label = f"{robot}, localised by AMCL"
             ax.plot(np.arange(len(err)), err, style, marker="o", ms=3, color=color, label=label)
     ax.set_xlabel("node along the robot's planned trajectory")
     ax.set_ylabel("average position error [m]")

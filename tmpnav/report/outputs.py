@@ -48,9 +48,11 @@ def write_outputs(
 
 def write_execution_outputs(report: PlanReport, result: ExecutionResult, sessions: int, out_dir: Path) -> list[Path]:
     """``tmpnav simulate -o DIR``: errors.csv, sessions.csv (each session's makespan and waits),
-    moves.csv (each move's wall hits and contacts against its bound), errors.png and summary.md,
-    all or nothing."""
+        moves.csv (each move's wall hits and contacts against its bound), consistency.csv (each move's
+    actual error against the localiser's and the plan's covariance), errors.png and summary.md,
+        all or nothing."""
     from tmpnav.execution import error_summary, errors_csv
+    from tmpnav.execution.consistency import csv_text
     from tmpnav.execution.text import moves_csv, sessions_csv
     from tmpnav.report.bench_plot import errors_figure
 
@@ -60,6 +62,7 @@ def write_execution_outputs(report: PlanReport, result: ExecutionResult, session
         "sessions.csv": sessions_csv(result),
         "moves.csv": moves_csv(result),
         "errors.png": lambda tmp: fg.render(errors_figure(result, title), tmp),
+        "consistency.csv": csv_text(result.consistency),
         "summary.md": "\n".join(error_summary(result, sessions)) + "\n",
     }
     return write_files(out_dir, contents)

@@ -31,6 +31,7 @@ from tmpnav.scenario.schema import (
     Text,
     Vector,
 )
+from tmpnav.types import NAV2_AMCL, ScanModelKind
 
 DEG = math.pi / 180.0
 
@@ -259,6 +260,55 @@ def _range_sensor_reach(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple
 #: over-trust anyway (beams of one scan are correlated through the map; docs/models.md)
 MAX_BEAMS = 2000
 
+_NAV2 = NAV2_AMCL
+LOCALISER = Section(
+    fields={
+        "model": Field(
+            Choice(choices=tuple(k.value for k in ScanModelKind)),
+            "amcl: nav2's AMCL (likelihood field), the information a particle filter takes from a scan; "
+            "beams: every beam an independent measurement of the sensor's own noise (the sensor's bound, "
+            "which no localiser reaches)",
+            default=_NAV2.kind.value,
+        ),
+        "sigma_hit": Field(
+            Number("length", minimum=MIN_SIGMA, maximum=5.0, reason=PRECISE),
+            "amcl: noise of a beam endpoint's distance to the nearest wall (nav2's sigma_hit)",
+            default=_NAV2.sigma_hit,
+        ),
+        "z_hit": Field(
+            Number(None, minimum=0.0, maximum=1.0, exclusive_minimum=True, reason="a share of the beams"),
+            "amcl: share of beams that hit the mapped walls (nav2's z_hit)",
+            default=_NAV2.z_hit,
+        ),
+        "z_rand": Field(
+            Number(None, minimum=0.0, maximum=1.0, reason="a share of the beams"),
+            "amcl: share of random returns (nav2's z_rand)",
+            default=_NAV2.z_rand,
+        ),
+        "max_beams": Field(
+            Number(None, minimum=1, maximum=MAX_BEAMS, integer=True, reason="AMCL weighs at least one beam"),
+            "amcl: beams of a scan the localiser weighs, evenly spaced (nav2's max_beams)",
+            default=_NAV2.max_beams,
+        ),
+        "update_min_d": Field(
+            Number("length", minimum=0.0, exclusive_minimum=True, maximum=10.0),
+            "amcl: distance driven before the localiser updates with a scan (nav2's update_min_d)",
+            default=_NAV2.update_min_d,
+        ),
+        "update_min_a": Field(
+            Number("angle", minimum=0.0, exclusive_minimum=True, maximum=2 * math.pi),
+            "amcl: turn before the localiser updates with a scan (nav2's update_min_a)",
+            default=_NAV2.update_min_a,
+        ),
+        "information": Field(
+            Number(None, minimum=0.0, exclusive_minimum=True, maximum=1000.0),
+            "amcl: the share of the likelihood field's information that the localiser's estimate "
+            "realises, fitted by tmpnav calibrate (beams correlated through the map, AMCL's particles)",
+            default=_NAV2.information,
+        ),
+    }
+)
+
 RANGE_SENSOR = Section(
     fields={
         "range": Field(
@@ -304,6 +354,11 @@ RANGE_SENSOR = Section(
             ),
             "range sensor: a beam that meets a surface farther than this from head-on returns nothing",
             default=75 * DEG,
+        ),
+        "localiser": Field(
+            LOCALISER,
+            'what the robots\' localiser makes of a scan (docs/models.md, "What a localiser achieves"); '
+            "omitted: nav2's AMCL at its default parameters, calibrated (docs/amcl.md)",
         ),
     },
     post=_range_sensor_reach,

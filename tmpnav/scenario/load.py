@@ -38,6 +38,8 @@ from tmpnav.types import (
     RobotSpec,
     Room,
     RosMap,
+    ScanModel,
+    ScanModelKind,
     Scenario,
 )
 
@@ -492,8 +494,26 @@ def _planner(p: dict[str, Any], range_sensor: bool) -> PlannerOptions:
 def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
     if s is None:
         return None
+    m = s["localiser"]
+    localiser = ScanModel(
+        ScanModelKind(m["model"]),
+        m["sigma_hit"],
+        m["z_hit"],
+        m["z_rand"],
+        m["max_beams"],
+        m["update_min_d"],
+        m["update_min_a"],
+        m["information"],
+    )
     return RangeSensor(
-        s["range"], s["fov"], s["beams"], s["sigma_range"], s["min_range"], s["max_incidence"], s["divergence"]
+        s["range"],
+        s["fov"],
+        s["beams"],
+        s["sigma_range"],
+        s["min_range"],
+        s["max_incidence"],
+        s["divergence"],
+        localiser,
     )
 
 

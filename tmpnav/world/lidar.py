@@ -31,7 +31,7 @@ import numba as nb
 import numpy as np
 from scipy import ndimage
 
-from tmpnav.types import RangeSensor
+from tmpnav.types import RangeSensor, ScanModelKind
 from tmpnav.world.grid import OccupancyGrid, cell_key
 
 #: heading bins of the scan information table (5 degrees each) for a sensor with a limited field of view
@@ -120,12 +120,37 @@ def _beam_row(r, gx, gy, psi):
     return -gx / gd, -gy / gd, -r * gdp / gd
 
 
-def sensor_params(sensor: RangeSensor) -> np.ndarray:
+def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
     """The sensor as the compiled functions take it: (min_range m, range m, cos of the largest
-    incidence, sigma_range m, divergence rad)."""
+    incidence, sigma_range m, divergence rad), then its localiser's scan model on a map of
+    ``resolution`` m: (1 for the likelihood field else 0, its endpoint variance
+    sigma_hit² + resolution²/12 m², the information share times the mixture factor eta;
+    docs/models.md, "What a localiser achieves")."""
+    model = sensor.localiser
+    field = model.kind is ScanModelKind.AMCL
     return np.array(
-        [sensor.min_range, sensor.range, math.cos(sensor.max_incidence), sensor.sigma_range, sensor.divergence]
+        [
+            sensor.min_range,
+            sensor.range,
+            math.cos(sensor.max_incidence),
+            sensor.sigma_range,
+            sensor.divergence,
+            1.0 if field else 0.0,
+            model.sigma_hit**2 + resolution**2 / 12.0,
+            model.information * model.mixture_factor(sensor.range),
+        ]
     )
+
+
+def localiser_angles(sensor: RangeSensor) -> np.ndarray:
+    """The beams (rad from the heading) the robot's localiser weighs: every beam for ``beams``;
+    for ``amcl`` at most ``max_beams`` of them, evenly spaced, as nav2's AMCL picks them."""
+    angles = sensor.beam_angles()
+    keep = sensor.localiser.max_beams
+    if sensor.localiser.kind is ScanModelKind.BEAMS or angles.size <= keep:
+        return angles
+    step = (angles.size - 1) / (keep - 1) if keep > 1 else 0.0
+    return angles[np.round(np.arange(keep) * step).astype(int)]
 
 
 @nb.njit(cache=True, inline="always")
@@ -159,15 +184,20 @@ def scan(sdf, x0, y0, res, pose, angles, params, ranges, H, var):
 
 @nb.njit(cache=True)
 def _information(sdf, x0, y0, res, x, y, theta, angles, params, J):
-    """J (3, 3) = sum over the returning beams of H_i^T H_i / var_i."""
+    """J (3, 3) = sum over the returning beams of H_i^T H_i / var_i: var_i the range's variance
+    (``beams``), or for the likelihood field (params[5] = 1) the endpoint's variance params[6]
+    stretched along the beam by 1/cos beta (cos² beta = 1 / (h0² + h1²)) and divided by the
+    information share params[7]: a_i a_iᵀ eta kappa / sigma², a_i = cos beta H_i the endpoint's
+    distance to the wall (docs/models.md, "What a localiser achieves")."""
     for a in range(3):
         for b in range(3):
             J[a, b] = 0.0
+    field = params[5] > 0.0
     for k in range(angles.shape[0]):
         ok, _, h0, h1, h2, v = _beam(sdf, x0, y0, res, x, y, theta + angles[k], params)
         if not ok:
             continue
-        w = 1.0 / v
+        w = params[7] / (params[6] * (h0 * h0 + h1 * h1)) if field else 1.0 / v
         J[0, 0] += h0 * h0 * w
         J[0, 1] += h0 * h1 * w
         J[0, 2] += h0 * h2 * w
@@ -198,7 +228,16 @@ def information_matrices(sdf: np.ndarray, grid: OccupancyGrid, sensor: RangeSens
     G = np.empty((flat.shape[0], 3, 3))
     x0, y0 = grid.origin
     _factors(
-        sdf, x0, y0, grid.resolution, flat[:, 0], flat[:, 1], flat[:, 2], sensor.beam_angles(), sensor_params(sensor), G
+        sdf,
+        x0,
+        y0,
+        grid.resolution,
+        flat[:, 0],
+        flat[:, 1],
+        flat[:, 2],
+        localiser_angles(sensor),
+        sensor_params(sensor, grid.resolution),
+        G,
     )
     return np.matmul(G.transpose(0, 2, 1), G).reshape(*poses.shape[:-1], 3, 3)
 
@@ -216,7 +255,8 @@ class ScanInformation:
 
     def __init__(self, grid: OccupancyGrid, sdf: np.ndarray, sensor: RangeSensor):
         self.grid, self.sdf, self.sensor = grid, sdf, sensor
-        self.angles = sensor.beam_angles()
+        self.angles = localiser_angles(sensor)
+        self.params = sensor_params(sensor, grid.resolution)
         self.bins = 1 if sensor.fov >= 2.0 * math.pi - 1e-9 else HEADINGS
         self._keys = np.zeros(0, dtype=np.int64)  # sorted
         self._rows = np.zeros(0, dtype=np.int64)  # table row of each of _keys
@@ -273,7 +313,7 @@ class ScanInformation:
         ys = y0 + (cell // cols + 0.5) * res
         thetas = b * (2.0 * math.pi / self.bins)
         G = np.empty((keys.size, 3, 3))
-        _factors(self.sdf, x0, y0, res, xs, ys, thetas, self.angles, sensor_params(self.sensor), G)
+        _factors(self.sdf, x0, y0, res, xs, ys, thetas, self.angles, self.params, G)
         self._add(keys, G)
 
     def _add(self, keys: np.ndarray, G: np.ndarray) -> None:

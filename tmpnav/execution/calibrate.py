@@ -1,0 +1,169 @@
+"""``tmpnav calibrate``: fit the planner's scan model to what nav2's AMCL achieves on a scenario.
+
+The planner's ``amcl`` scan model (docs/models.md, "What a localiser achieves") derives a
+scan's information from nav2's likelihood-field model: the endpoint noise ``sigma_hit``, the
+map's resolution, the mixture of hits and random returns, ``max_beams`` and the update
+thresholds. What the derivation cannot give (beams correlated through the map's errors, AMCL's
+sum of cubed beam likelihoods, its particles) is one factor, ``information``. Calibration
+finds it:
+
+1. plan the scenario with the current factor kappa_n and execute the plan ``sessions`` times
+   with AMCL localising every robot on a site that differs from the map
+   (:func:`tmpnav.execution.execute`), recording every driving step's actual error e and the
+   plan's predicted covariance P (:mod:`tmpnav.execution.consistency`);
+2. a scan's information scales with kappa, and the predicted covariance with about kappa^-g
+   (g = 1 where the scans' information dominates, 1/2 where motion noise balances it), so
+   each step's NEES eᵀ P⁻¹ e scales with about kappa^g. The next factor puts the NEES's
+   :data:`QUANTILE` quantile at 9 (that share of the driving steps within 3 predicted sigma):
+   kappa_n+1 = kappa_n (9 / q_n)^(1/g), with g measured from the last two rounds once there
+   are two (1 before);
+3. repeat until the quantile is within :data:`TOLERANCE` of 9 or the rounds run out.
+
+The plan is re-made each round: the factor changes the beliefs, and with them the moves.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from tmpnav.errors import Problem, ScenarioError
+from tmpnav.execution.consistency import Agreement, overall
+from tmpnav.execution.localisers import Localisation
+from tmpnav.types import ScanModel, ScanModelKind, Scenario
+
+#: the share of driving steps the fitted model keeps within 3 predicted sigma (the target allows 5% out)
+QUANTILE = 0.97
+#: a round whose quantile is within this ratio of 9 ends the fit
+TOLERANCE = 0.1
+#: the exponent g of NEES ~ kappa^g assumed before two rounds measure it, and the range it is kept in
+FIRST_EXPONENT = 1.0
+EXPONENTS = (0.25, 2.0)
+
+
+@dataclass(frozen=True)
+class Round:
+    """One round: the factor planned with and how the executions agreed with that plan."""
+
+    information: float
+    agreement: Agreement
+    quantile: float  # the NEES's QUANTILE quantile over the driving steps
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """The fitted scan model, and the rounds that fitted it."""
+
+    model: ScanModel
+    rounds: tuple[Round, ...]
+    localiser: str  # the executing localiser, the site and the true motion noise, in words
+
+    def yaml(self, scenario: str) -> str:
+        """The result as the scenario takes it (models.range_sensor.localiser), with the rounds as comments."""
+        m = self.model
+        lines = [
+            f"# tmpnav calibrate {scenario}: the planner's scan model fitted to nav2's AMCL",
+            f"# {self.localiser}",
+            "# round  information  steps  rms error  AMCL std  planned std  median NEES  beyond 3 sigma",
+        ]
+        for k, r in enumerate(self.rounds, 1):
+            a = r.agreement
+            lines.append(
+                f"# {k:5d}  {r.information:11.4g}  {a.steps:5d}  {100 * a.rms_error:7.1f} cm  {100 * a.own_std:6.1f} cm"
+                f"  {100 * a.planned_std:8.1f} cm  {a.nees:11.2f}  {100 * a.beyond:12.1f}%"
+            )
+        lines += [
+            "# put it under models.range_sensor of the scenario (docs/scenario.md):",
+            f"localiser: {{model: amcl, sigma_hit: {m.sigma_hit:g}, z_hit: {m.z_hit:g}, z_rand: {m.z_rand:g}, "
+            f"max_beams: {m.max_beams}, update_min_d: {m.update_min_d:g}, update_min_a: {m.update_min_a:g}, "
+            f"information: {m.information:.4g}}}",
+        ]
+        return "\n".join(lines) + "\n"
+
+
+def nees_quantile(rows: np.ndarray, q: float = QUANTILE) -> float:
+    """The q quantile of the driving steps' NEES eᵀ P⁻¹ e (rows as :mod:`consistency` records them)."""
+    e, a, b, c = rows[:, :2], rows[:, 5], rows[:, 6], rows[:, 7]
+    det = a * c - b * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        nees = np.where(det > 0, (c * e[:, 0] ** 2 - 2 * b * e[:, 0] * e[:, 1] + a * e[:, 1] ** 2) / det, np.inf)
+    return float(np.quantile(nees, q)) if nees.size else math.nan
+
+
+def with_model(scenario: Scenario, model: ScanModel) -> Scenario:
+    """The scenario with its robots' localiser model replaced."""
+    sensor = scenario.models.range_sensor
+    assert sensor is not None
+    return replace(scenario, models=replace(scenario.models, range_sensor=replace(sensor, localiser=model)))
+
+
+def calibrate(
+    path: str | Path,
+    localisation: Localisation,
+    sessions: int = 8,
+    rounds: int = 4,
+    seed: int = 0,
+    workers: int | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> Calibration:
+    """Fit ``information`` of the scenario's scan model to AMCL (the module docstring); AMCL's
+    analytic parameters (sigma_hit, z_hit, z_rand, max_beams, update thresholds) are those of
+    ``localisation.amcl``."""
+    from tmpnav import pipeline
+    from tmpnav.execution.result import execute
+
+    say = progress or (lambda _: None)
+    scenario, world = pipeline.load_world(path)
+    sensor = scenario.models.range_sensor
+    if sensor is None:
+        raise ScenarioError(
+            [
+                Problem(
+                    str(path),
+                    "models.range_sensor",
+                    "the robots carry no range sensor; expected a lidar for AMCL to localise with (calibration "
+                    "fits the lidar's scan model)",
+                )
+            ]
+        )
+    p = localisation.amcl
+    start = sensor.localiser.information if sensor.localiser.kind is ScanModelKind.AMCL else 1.0
+    model = ScanModel(
+        ScanModelKind.AMCL, p.sigma_hit, p.z_hit, p.z_rand, p.max_beams, p.update_min_d, p.update_min_a, start
+    )
+    done: list[Round] = []
+    described = ""
+    for k in range(rounds):
+        options = pipeline.PlanOptions.of(accept_risk=True)
+        report = pipeline.plan(path, options, loaded=(with_model(scenario, model), world))
+        result = execute(report, sessions, seed, workers, localisation)
+        described = result.localiser
+        rows = np.concatenate(list(result.consistency.values())) if result.consistency else np.zeros((0, 8))
+        r = Round(model.information, overall(result.consistency), nees_quantile(rows))
+        done.append(r)
+        say(
+            f"round {k + 1}: information {r.information:.4g}: median NEES {r.agreement.nees:.2f}, "
+            f"{100 * r.agreement.beyond:.1f}% of {r.agreement.steps} driving steps beyond 3 sigma"
+        )
+        if not math.isfinite(r.quantile) or r.quantile <= 0 or abs(r.quantile / 9.0 - 1.0) <= TOLERANCE:
+            break
+        model = replace(model, information=_next(done))
+    best = min(done, key=lambda r: abs(math.log(r.quantile / 9.0)) if r.quantile > 0 else math.inf)
+    return Calibration(replace(model, information=best.information), tuple(done), described)
+
+
+def _next(done: list[Round]) -> float:
+    """The next factor: kappa (9 / q)^(1/g), g from the last two rounds (module docstring)."""
+    last = done[-1]
+    g = FIRST_EXPONENT
+    if len(done) >= 2:
+        prev = done[-2]
+        dk = math.log(last.information / prev.information)
+        dq = math.log(last.quantile / prev.quantile) if prev.quantile > 0 and last.quantile > 0 else 0.0
+        if dk != 0.0 and dq / dk > 0:
+            g = min(max(dq / dk, EXPONENTS[0]), EXPONENTS[1])
+    return last.information * (9.0 / last.quantile) ** (1.0 / g)

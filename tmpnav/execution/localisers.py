@@ -1,0 +1,81 @@
+"""Who localises the simulated robots of ``tmpnav simulate``: the choice, in one place.
+
+Two localisers execute a plan, behind one small interface (:class:`Localiser`), the way nav2
+keeps its localiser a plugin:
+
+* ``ekf`` (the default): tmpnav's own joint EKF (:mod:`tmpnav.belief.ekf`, the filterpy
+  reference) with the landmarks, the range scans and the mutual observations of the planner's
+  model. It checks the plan against the model it was made with.
+* ``amcl``: nav2's AMCL (:mod:`tmpnav.execution.amcl`, the optional extra ``tmpnav[amcl]``),
+  one particle filter per robot, fed with the simulator's odometry and the scans of a site
+  that differs from the map (:mod:`tmpnav.execution.site`). It checks the plan against the
+  localiser nav2 robots run: what the plan's beliefs must agree with.
+
+:class:`Localisation` is what ``simulate`` and the closed loop pass to every
+:class:`~tmpnav.execution.session.Session`; :data:`LOCALISERS` names the choices.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from tmpnav.scenario.nav2_params import AmclParams
+
+#: the localisers ``tmpnav simulate --localiser`` offers, and what each is
+LOCALISERS = {
+    "ekf": "tmpnav's joint EKF with the planner's own sensor models",
+    "amcl": "nav2's AMCL (particle filter, likelihood field) on each robot, scans of a site unlike the map",
+}
+
+
+class Localiser(Protocol):
+    """One robot's localiser fed by odometry and scans (``amcl``); the joint EKF is the session's own."""
+
+    name: str
+
+    def update(self, odom: np.ndarray, ranges: np.ndarray) -> bool:
+        """Odometry pose (3,) and one scan's ranges (B,) m (nan: no return); whether the filter updated."""
+        ...
+
+    @property
+    def mean(self) -> np.ndarray:
+        """(3,) the pose estimate now."""
+        ...
+
+    @property
+    def cov(self) -> np.ndarray:
+        """(3, 3) the localiser's own covariance of its estimate."""
+        ...
+
+
+@dataclass(frozen=True)
+class Localisation:
+    """How a simulation localises its robots: ``kind`` (a key of :data:`LOCALISERS`), AMCL's
+    parameters (nav2's defaults or a nav2 params file), and how the site differs from the map
+    (a :class:`tmpnav.execution.site.SiteNoise`; None: the map exactly)."""
+
+    kind: str = "ekf"
+    amcl: AmclParams = field(default_factory=AmclParams)
+    site: object | None = None  # SiteNoise (kept untyped here: the site module is built on demand)
+
+    @property
+    def particle_filter(self) -> bool:
+        """Each robot localises on its own with AMCL (no landmarks, no partners)."""
+        return self.kind == "amcl"
+
+    def describe(self, motion_noise: tuple[float, float, float, float]) -> str:
+        """One line for reports: the executing localiser, the site and the true motion noise."""
+        a1, a2, a3, a4 = motion_noise
+        noise = f"true motion noise alpha1-4 {a1:g}, {a2:g}, {a3:g}, {a4:g}"
+        if not self.particle_filter:
+            return f"localiser: ekf ({LOCALISERS['ekf']}); {noise}"
+        site = getattr(self.site, "text", None)
+        where = site() if callable(site) else "the map exactly"
+        p = self.amcl
+        return (
+            f"localiser: nav2 AMCL ({p.min_particles}-{p.max_particles} particles, sigma_hit {p.sigma_hit:g} m, "
+            f"max_beams {p.max_beams}, alphas {p.alpha1:g}); site: {where}; {noise}"
+        )
