@@ -27,7 +27,7 @@ from tmpnav.scenario.nav2_params import AmclParams
 #: the localisers ``tmpnav simulate --localiser`` offers, and what each is
 LOCALISERS = {
     "ekf": "tmpnav's joint EKF with the planner's own sensor models",
-    "amcl": "nav2's AMCL (particle filter, likelihood field) on each robot, scans of a site unlike the map",
+    "amcl": "nav2's AMCL (a particle filter per robot, its beam model) on scans of a site unlike the map",
 }
 
 
