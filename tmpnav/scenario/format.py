@@ -268,7 +268,7 @@ LOCALISER = Section(
             "amcl: nav2's AMCL (likelihood field), the information a particle filter takes from a scan; "
             "beams: every beam an independent measurement of the sensor's own noise (the sensor's bound, "
             "which no localiser reaches)",
-            default=_NAV2.kind.value,
+            default=ScanModelKind.BEAMS.value,
         ),
         "sigma_hit": Field(
             Number("length", minimum=MIN_SIGMA, maximum=5.0, reason=PRECISE),
@@ -358,7 +358,7 @@ RANGE_SENSOR = Section(
         "localiser": Field(
             LOCALISER,
             'what the robots\' localiser makes of a scan (docs/models.md, "What a localiser achieves"); '
-            "omitted: nav2's AMCL at its default parameters, calibrated (docs/amcl.md)",
+            "omitted: the sensor's own bound (model beams); model amcl: nav2's AMCL at its defaults, calibrated",
         ),
     },
     post=_range_sensor_reach,
