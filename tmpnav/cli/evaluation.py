@@ -32,6 +32,28 @@ if TYPE_CHECKING:
 LOCALISER_NAMES = ("ekf", "amcl")
 
 
+def amcl_options(command: Any) -> Any:
+    """--nav2-params and --site: nav2's AMCL and the site it localises on (simulate --localiser amcl, calibrate)."""
+    command = option(
+        "--site",
+        "site_text",
+        default="typical",
+        show_default=True,
+        metavar="SITE",
+        help="With nav2's AMCL: how the site the lidar scans differs from the map: typical (unmapped clutter, "
+        "walls a few cm off, passing people), none (the map exactly), or key=value overrides of typical, e.g. "
+        "clutter=1,people=0 (docs/site.md).",
+    )(command)
+    return option(
+        "--nav2-params",
+        type=click.Path(path_type=Path, dir_okay=False),
+        default=None,
+        metavar="FILE",
+        default_text="nav2's defaults",
+        help="With nav2's AMCL: a nav2 params YAML whose amcl: section sets AMCL's parameters (your robots').",
+    )(command)
+
+
 @cli.command()
 @SCENARIO_ARG
 @option(
@@ -73,24 +95,7 @@ LOCALISER_NAMES = ("ekf", "amcl")
     "amcl, nav2's AMCL on each robot from its odometry and the lidar's scans of --site (needs the "
     "optional extra tmpnav[amcl], GPL-3; docs/amcl.md).",
 )
-@option(
-    "--nav2-params",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    metavar="FILE",
-    default_text="nav2's defaults",
-    help="With --localiser amcl: a nav2 params YAML whose amcl: section sets AMCL's parameters.",
-)
-@option(
-    "--site",
-    "site_text",
-    default="typical",
-    show_default=True,
-    metavar="SITE",
-    help="With --localiser amcl: how the site the lidar scans differs from the map: typical (unmapped "
-    "clutter, walls a few cm off, passing people), none (the map exactly), or key=value overrides of "
-    "typical, e.g. clutter=1,people=0 (docs/site.md).",
-)
+@amcl_options
 @oracle_options(mutual=False)
 @report_errors
 def simulate(
@@ -301,22 +306,7 @@ def bench(
 
 @cli.command(short_help="Fit the planner's lidar model to nav2's AMCL on a scenario.")
 @SCENARIO_ARG
-@option(
-    "--nav2-params",
-    type=click.Path(path_type=Path, dir_okay=False),
-    default=None,
-    metavar="FILE",
-    default_text="nav2's defaults",
-    help="A nav2 params YAML whose amcl: section sets AMCL's parameters (those of your robots).",
-)
-@option(
-    "--site",
-    "site_text",
-    default="typical",
-    show_default=True,
-    metavar="SITE",
-    help="How the site the lidar scans differs from the map: typical, none, or key=value overrides (docs/site.md).",
-)
+@amcl_options
 @option(
     "--sessions",
     type=click.IntRange(min=1),

@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from tmpnav.errors import Problem, ScenarioError
-from tmpnav.execution.consistency import Agreement, overall
+from tmpnav.execution.consistency import Agreement, overall, planned_nees
 from tmpnav.execution.localisers import Localisation
 from tmpnav.types import ScanModel, ScanModelKind, Scenario
 
@@ -87,10 +87,7 @@ class Calibration:
 
 def nees_quantile(rows: np.ndarray, q: float = QUANTILE) -> float:
     """The q quantile of the driving steps' NEES eᵀ P⁻¹ e (rows as :mod:`consistency` records them)."""
-    e, a, b, c = rows[:, :2], rows[:, 5], rows[:, 6], rows[:, 7]
-    det = a * c - b * b
-    with np.errstate(divide="ignore", invalid="ignore"):
-        nees = np.where(det > 0, (c * e[:, 0] ** 2 - 2 * b * e[:, 0] * e[:, 1] + a * e[:, 1] ** 2) / det, np.inf)
+    nees = planned_nees(rows)
     return float(np.quantile(nees, q)) if nees.size else math.nan
 
 

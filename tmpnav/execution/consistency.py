@@ -52,6 +52,15 @@ class ConsistencyTrace:
         )
 
 
+def planned_nees(rows: np.ndarray) -> np.ndarray:
+    """(N,) each driving step's NEES eᵀ P⁻¹ e of the actual error against the plan's covariance
+    (inf where P is singular); rows (N, COLUMNS)."""
+    e, a, b, c = rows[:, :2], rows[:, 5], rows[:, 6], rows[:, 7]
+    det = a * c - b * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(det > 0, (c * e[:, 0] ** 2 - 2 * b * e[:, 0] * e[:, 1] + a * e[:, 1] ** 2) / det, np.inf)
+
+
 @dataclass(frozen=True)
 class Agreement:
     """The figures of the module docstring over a set of driving steps."""
@@ -68,12 +77,8 @@ class Agreement:
         """The figures of ``rows`` (N, COLUMNS); nan for none."""
         if rows.size == 0:
             return Agreement(0, math.nan, math.nan, math.nan, math.nan, math.nan)
-        e = rows[:, :2]
-        a, b, c = rows[:, 5], rows[:, 6], rows[:, 7]
-        det = a * c - b * b
-        ok = det > 0
-        with np.errstate(divide="ignore", invalid="ignore"):
-            nees = np.where(ok, (c * e[:, 0] ** 2 - 2 * b * e[:, 0] * e[:, 1] + a * e[:, 1] ** 2) / det, np.inf)
+        e, a, c = rows[:, :2], rows[:, 5], rows[:, 7]
+        nees = planned_nees(rows)
         return Agreement(
             steps=int(rows.shape[0]),
             rms_error=float(np.sqrt(np.mean(np.sum(e * e, axis=1)) / 2.0)),

@@ -18,11 +18,14 @@ keeps its localiser a plugin:
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from tmpnav.scenario.nav2_params import AmclParams
+
+if TYPE_CHECKING:  # the site (numba kernels) is imported only by the sessions that scan it
+    from tmpnav.execution.site import SiteNoise
 
 #: the localisers ``tmpnav simulate --localiser`` offers, and what each is
 LOCALISERS = {
@@ -59,7 +62,7 @@ class Localisation:
 
     kind: str = "ekf"
     amcl: AmclParams = field(default_factory=AmclParams)
-    site: object | None = None  # SiteNoise (kept untyped here: the site module is built on demand)
+    site: SiteNoise | None = None
 
     @property
     def particle_filter(self) -> bool:
@@ -72,8 +75,7 @@ class Localisation:
         noise = f"true motion noise alpha1-4 {a1:g}, {a2:g}, {a3:g}, {a4:g}"
         if not self.particle_filter:
             return f"localiser: ekf ({LOCALISERS['ekf']}); {noise}"
-        site = getattr(self.site, "text", None)
-        where = site() if callable(site) else "the map exactly"
+        where = self.site.text() if self.site is not None else "the map exactly"
         p = self.amcl
         return (
             f"localiser: nav2 AMCL ({p.min_particles}-{p.max_particles} particles, sigma_hit {p.sigma_hit:g} m, "

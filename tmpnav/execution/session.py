@@ -207,7 +207,7 @@ class Session:
                 "--localiser amcl: the scenario's robots carry no range sensor (models.range_sensor); "
                 "expected a scenario with a lidar (AMCL localises with it)"
             )
-        noise = self.localisation.site if isinstance(self.localisation.site, SiteNoise) else SiteNoise.parse("none")
+        noise = self.localisation.site or SiteNoise.none()
         paths = [np.asarray(m.points, dtype=float).reshape(-1, 2) for q in queues.values() for m in q]
         self.site = Site(self.world, noise, session, keep_clear=paths or None)  # no clutter on the paths
         self.odom = np.array([self.estimate(i) for i in range(len(self.names))])
