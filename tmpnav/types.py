@@ -150,7 +150,8 @@ class ScanModel:
     ``update_min_a`` (rad). What the derivation cannot give (beams correlated through the map's
     errors, AMCL's sum of cubed beam likelihoods in place of their product, its particles) is
     one factor, ``information``: the share of the likelihood field's information that AMCL's
-    estimate realises, fitted by ``tmpnav calibrate`` against nav2's AMCL."""
+    estimate realises, fitted by ``tmpnav calibrate`` against nav2's AMCL. AMCL fuses the lidar
+    alone (``lidar_only``): the landmarks and the partners a robot sees are then not in its belief."""
 
     kind: ScanModelKind = ScanModelKind.BEAMS
     sigma_hit: float = 0.2  # m
@@ -160,6 +161,14 @@ class ScanModel:
     update_min_d: float = 0.25  # m
     update_min_a: float = 0.2  # rad
     information: float = 1.0
+    #: ``amcl``: the robot's belief fuses its lidar alone, as nav2's AMCL does (no landmarks, no
+    #: partners seen); False: the landmarks and mutual observations update it too
+    lidar_only: bool = True
+
+    @property
+    def fuses_others(self) -> bool:
+        """Landmarks and mutual observations update the robot's belief (all but AMCL alone)."""
+        return self.kind is ScanModelKind.BEAMS or not self.lidar_only
 
     def update_rate(self, v: float, omega: float, dt: float) -> float:
         """The share of control steps at which the localiser updates with a scan, driving at (v, omega)

@@ -268,4 +268,5 @@ def test_the_kernel_unpacks_the_named_tuples_in_field_order() -> None:
         "landmarks",
         "scans",
         "scan_thresholds",
+        "fuse_others",
     )

@@ -13,7 +13,7 @@ from tests.belief.test_kernel import assert_same_propagation
 from tests.world.test_lidar import LIDAR
 from tmpnav.belief.reference import propagate_reference
 from tmpnav.belief.rollout import ObservationNoise, Rollout, propagate_rollout
-from tmpnav.types import Belief
+from tmpnav.types import NAV2_AMCL, Belief, ScanModel
 from tmpnav.world.grid import OccupancyGrid
 from tmpnav.world.lidar import ScanInformation, signed_distance
 
@@ -29,15 +29,20 @@ def _with_scans(rng: np.random.Generator, rollout: Rollout) -> Rollout:
     return replace(rollout, scans=scans)
 
 
+#: the localiser models a scan may update with: every beam independent; nav2's AMCL (a scan per
+#: update threshold, none standing) alone, and with the landmarks and partners fused too
+LOCALISERS = (ScanModel(), NAV2_AMCL, replace(NAV2_AMCL, lidar_only=False))
+
+
 @settings(max_examples=30, deadline=None)
-@given(st.integers(0, 2**32 - 1), st.sampled_from([1, 2, 3]), st.booleans())
-def test_kernel_matches_filterpy_with_range_scans(seed: int, n: int, ml: bool) -> None:
+@given(st.integers(0, 2**32 - 1), st.sampled_from([1, 2, 3]), st.booleans(), st.sampled_from(LOCALISERS))
+def test_kernel_matches_filterpy_with_range_scans(seed: int, n: int, ml: bool, localiser: ScanModel) -> None:
     rng = np.random.default_rng(seed)
     T, L = int(rng.integers(1, 12)), int(rng.integers(0, 3))
     belief, rollout, landmarks, noise = random_case(rng, n, T, L)
     rollout = _with_scans(rng, rollout)
     noise = ObservationNoise(noise.landmark, noise.mutual, rng.standard_normal((n, T + 1, 3)))
-    m = replace(models(ml), range_sensor=LIDAR)
+    m = replace(models(ml), range_sensor=replace(LIDAR, localiser=localiser))
     assert_same_propagation(
         propagate_rollout(belief, rollout, landmarks, m, noise),
         propagate_reference(belief, rollout, landmarks, m, noise),

@@ -470,7 +470,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
     h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk, h_step = hist
     work, PHt, K, H, cols, y, g, Cx, masses, qs, support = scratch
     m_off, m_T, ctrl, pose, vis, stream, reach, reach_row, scan_row, scan_table = motions  # MotionArrays' fields
-    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds = ekf  # and of EKFConstants
+    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds, others = ekf  # EKFConstants
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
     priced = reach.shape[1] > 1
     for k in range(seqs.restart[c], seqs.horizon[c]):
@@ -491,7 +491,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
         for i in range(n):
             m = sim[i]
             row = m_off[m] + m + (t if t <= m_T[m] else m_T[m])
-            for l in range(landmarks.shape[0]):
+            for l in range(landmarks.shape[0] if others else 0):
                 if vis[row, l]:
                     e0, e1 = lm_noise[stream[m], t, l, 0], lm_noise[stream[m], t, l, 1]
                     lx, ly = landmarks[l, 0], landmarks[l, 1]
@@ -514,7 +514,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
         seen = False
         for i in range(n):
             for j in range(n):
-                if i == j or not mutual_visible[row0 + t, i, j]:
+                if i == j or not others or not mutual_visible[row0 + t, i, j]:
                     continue
                 seen = True
                 ri = m_off[sim[i]] + sim[i] + (t if t <= m_T[sim[i]] else m_T[sim[i]])

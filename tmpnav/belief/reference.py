@@ -72,6 +72,11 @@ def propagate_reference(
     Q_lm, Q_mu = models.landmark_sensor.Q, models.mutual_sensor.Q
     chol_lm, chol_mu = np.linalg.cholesky(Q_lm), np.linalg.cholesky(Q_mu)
     mutual_visible = observed_mutually(rollout, models)
+    if models.range_sensor is not None and not models.range_sensor.localiser.fuses_others:
+        mutual_visible = np.zeros_like(mutual_visible)  # a localiser of the lidar alone (nav2's AMCL)
+        lm_visible = np.zeros_like(rollout.lm_visible)
+    else:
+        lm_visible = rollout.lm_visible
     poses = rollout.true_poses
 
     beliefs = [Belief(np.array(belief.mean, dtype=float), np.array(belief.cov, dtype=float))]
@@ -80,7 +85,7 @@ def propagate_reference(
         t = k + 1
         b = ekf.predict(b, rollout.controls[:, k], models.dt, models.motion_noise)
         for i in range(n):
-            for l_ in np.flatnonzero(rollout.lm_visible[i, t]):
+            for l_ in np.flatnonzero(lm_visible[i, t]):
                 if ml:
                     z = landmark_obs(b.mean[3 * i : 3 * i + 3], landmarks[l_])
                 else:

@@ -39,6 +39,9 @@ class EKFConstants(NamedTuple):
     #: (2,) the localiser's update thresholds (m, rad): a step's scan counts by the share of them the
     #: step drives or turns, at most 1 (0, 0: every step's scan counts whole; ScanModel.update_rate)
     scan_thresholds: np.ndarray
+    #: landmarks and mutual observations update the beliefs (False: a localiser of the lidar alone,
+    #: nav2's AMCL; ScanModel.fuses_others)
+    fuse_others: bool
 
     @staticmethod
     def of(models: Models, landmarks: np.ndarray) -> EKFConstants:
@@ -55,6 +58,7 @@ class EKFConstants(NamedTuple):
             landmarks=np.ascontiguousarray(landmarks, dtype=float).reshape(-1, 2),
             scans=models.range_sensor is not None,
             scan_thresholds=scan_thresholds(models),
+            fuse_others=models.range_sensor is None or models.range_sensor.localiser.fuses_others,
         )
 
 

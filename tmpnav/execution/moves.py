@@ -37,10 +37,23 @@ class QueuedMove:
     planned_covs: tuple[np.ndarray | None, ...] = ()  # (2, 2) m²: the planned position covariance there
     #: (T + 1, 2, 2) m²: the planned position covariance at each control step of the move, its start first
     planned_track: np.ndarray | None = None
+    #: (T + 1, 2) m: the planned mean position at those steps
+    planned_means: np.ndarray | None = None
+
+    def planned_from(self, k: int, xy: np.ndarray) -> int:
+        """The step of the planned track a robot at ``xy`` has come to, from step ``k`` on: the next
+        steps are taken while they lie nearer (an execution that drives slower or faster than
+        planned is compared at the same point of its path, not at the same time)."""
+        means = self.planned_means
+        if means is None:
+            return k
+        while k + 1 < len(means) and np.sum((means[k + 1] - xy) ** 2) <= np.sum((means[k] - xy) ** 2):
+            k += 1
+        return k
 
     def planned_at(self, k: int) -> np.ndarray | None:
-        """The plan's position covariance (2, 2) k control steps into the move (its last after the
-        planned end); None when the plan has none."""
+        """The plan's position covariance (2, 2) at step k of the move (its last past the end);
+        None when the plan has none."""
         track = self.planned_track
         if track is None or not len(track):
             return None
@@ -84,14 +97,20 @@ def _queued(report: PlanReport, move: TimedMove, steps: Sequence[TrajectoryStep]
             None if k is None else np.array(steps[k].cov, dtype=float)[:2, :2]
             for k in _arrival_steps(steps, nodes[1:], move.start, move.end)
         ),
-        planned_track=_track(steps, move.start, move.end),
+        **_track(steps, move.start, move.end),
     )
 
 
-def _track(steps: Sequence[TrajectoryStep], start: float, end: float) -> np.ndarray | None:
-    """The position covariances (T + 1, 2, 2) of the trajectory's steps from ``start`` to ``end`` (s)."""
-    covs = [np.asarray(s.cov, dtype=float)[:2, :2] for s in steps if start - _T_TOL <= s.t <= end + _T_TOL]
-    return np.array(covs) if covs else None
+def _track(steps: Sequence[TrajectoryStep], start: float, end: float) -> dict[str, np.ndarray | None]:
+    """The position covariances (T + 1, 2, 2) and means (T + 1, 2) of the trajectory's steps from
+    ``start`` to ``end`` (s): QueuedMove.planned_track and planned_means."""
+    within = [s for s in steps if start - _T_TOL <= s.t <= end + _T_TOL]
+    if not within:
+        return {"planned_track": None, "planned_means": None}
+    return {
+        "planned_track": np.array([np.asarray(s.cov, dtype=float)[:2, :2] for s in within]),
+        "planned_means": np.array([s.mean[:2] for s in within], dtype=float),
+    }
 
 
 def planned_arrivals(

@@ -143,6 +143,7 @@ class _Robot:
     ready: int = 0  # step at which it ended its latest move, its job's service included
     since: int = 0  # step at which the move under way started
     aligned: bool = False  # it has turned towards its next waypoint (the segment's start is behind it)
+    track: int = 0  # the step of the move's planned track it has come to (QueuedMove.planned_from)
 
     @property
     def next(self) -> QueuedMove | None:
@@ -422,7 +423,7 @@ class Session:
         return started
 
     def _start(self, r: _Robot, m: QueuedMove) -> None:
-        r.move, r.started, r.since, r.aligned = m, r.started + 1, self.step, False
+        r.move, r.started, r.since, r.aligned, r.track = m, r.started + 1, self.step, False, 0
         r.waypoints, r.previous = m.waypoints, np.asarray(m.points[0], dtype=float)
 
     def _cut(self, name: str, points: int) -> None:
@@ -535,7 +536,8 @@ class Session:
                 continue
             own = self.estimate_cov(i)[:2, :2]
             error = self.truth[i, :2] - self.estimate(i)[:2]
-            self.trace.consistency.record(name, r.move.step, error, own, r.move.planned_at(self.step - r.since + 1))
+            r.track = r.move.planned_from(r.track, self.truth[i, :2])
+            self.trace.consistency.record(name, r.move.step, error, own, r.move.planned_at(r.track))
 
     def _collide(self) -> None:
         """Count the true poses, after this control step, that hit a wall, and the robots that touch

@@ -306,6 +306,12 @@ LOCALISER = Section(
             "realises, fitted by tmpnav calibrate (beams correlated through the map, AMCL's particles)",
             default=_NAV2.information,
         ),
+        "lidar_only": Field(
+            Flag(),
+            "amcl: the robots' beliefs fuse the lidar alone, as nav2's AMCL does (the landmarks and the partners "
+            "a robot sees do not update it); false: they do too",
+            default=_NAV2.lidar_only,
+        ),
     }
 )
 

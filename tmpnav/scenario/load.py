@@ -504,6 +504,7 @@ def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
         m["update_min_d"],
         m["update_min_a"],
         m["information"],
+        m["lidar_only"],
     )
     return RangeSensor(
         s["range"],
