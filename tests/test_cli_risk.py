@@ -53,6 +53,11 @@ def test_a_threshold_no_plan_meets_names_the_least_one_and_that_one_plans(cache_
     assert found, proc.stderr
     least = found.group(1)
     assert "what would help there" in proc.stderr or "rerun with --max-risk" in proc.stderr
+    taken = tmpnav(
+        "plan", str(OFFICE), paper, "-q", "--max-risk", "1e-20", "--accept-risk", "--cache-dir", str(cache_dir)
+    )
+    assert taken.returncode == 0, taken.stderr
+    assert "moves over max_risk 1e-20" in taken.stdout and "every move within" not in taken.stdout
     out = tmp_path / "out"
     again = tmpnav(
         "plan",

@@ -196,7 +196,7 @@ class ScanModel:
 #: nav2's AMCL at its default parameters (docs/amcl.md), with the information share fitted by
 #: ``tmpnav calibrate`` on the shipped lidar scenarios (benchmarks/amcl/): the model the shipped
 #: lidar configs and ``tmpnav rooms`` skeletons plan with when they name no other
-NAV2_AMCL = ScanModel(ScanModelKind.AMCL, information=0.014)
+NAV2_AMCL = ScanModel(ScanModelKind.AMCL, information=0.000875)
 
 
 @dataclass(frozen=True)

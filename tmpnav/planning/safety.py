@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
 from tmpnav.belief.risk import position_std, step_bound
+from tmpnav.numbers import length, probability
 from tmpnav.results import PlanReport
 
 #: a door within this of the riskiest point (m) is named as the place
@@ -100,13 +101,18 @@ def what_would_help(report: PlanReport, point: RiskyPoint) -> str:
     x, y = point.xy
     where = f"({x:.1f}, {y:.1f})" + (f", by {point.door}" if point.door else f", in {point.room}" if point.room else "")
     said = (
-        f"{point.robot}'s move {point.origin} -> {point.target} is at {min(1.0, point.bound):.2g}, made at {where}, "
-        f"where its position std is {point.std:.2g} m and its footprint {max(point.margin, 0.0):.2g} m from the walls"
+        f"{point.robot}'s move {point.origin} -> {point.target} is at {probability(min(1.0, point.bound))}, made at "
+        f"{where}, where its position std is {length(point.std)} and its footprint {length(max(point.margin, 0.0))} "
+        "from the walls"
     )
     helps = []
+    sensor = report.scenario.models.range_sensor
     if point.std > max(point.margin, 0.0) / 3.0:  # too uncertain for the room there
-        helps.append(f"a landmark or a partner near ({x:.1f}, {y:.1f})")
-        if report.scenario.models.range_sensor is None:
+        if sensor is None or sensor.localiser.fuses_others:  # AMCL alone sees neither
+            helps.append(f"a landmark or a partner near ({x:.1f}, {y:.1f})")
+        else:
+            helps.append("a localiser that takes more from the lidar (models.range_sensor.localiser)")
+        if sensor is None:
             helps.append("a range sensor (models.range_sensor)")
         helps.append("less motion noise (models.motion_noise)")
     if point.margin < 0.3:  # the walls leave little room

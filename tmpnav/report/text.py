@@ -258,7 +258,14 @@ def _risk_lines(report: PlanReport) -> list[str]:
     """The plan's collision bound against the chance constraint (each robot's riskiest move is in
     the table above), what kept robots apart, and robots still in each other's way."""
     delta = report.scenario.planner.max_risk
-    within = "no --max-risk" if delta is None else f"every move within max_risk {delta:g}"
+    risks = [float(r) for action in report.actions for r in action.risk]
+    over = sum(r > delta for r in risks) if delta is not None else 0
+    if delta is None:
+        within = "no --max-risk"
+    elif over:  # a plan taken as it is (--accept-risk)
+        within = f"{over} of {len(risks)} moves over max_risk {delta:g}"
+    else:
+        within = f"every move within max_risk {delta:g}"
     bound = f"collision bound: plan {probability(report.risk)} ({within}); robots in each other's way: "
     conflicts = plan_conflicts(report)
     if not conflicts:
