@@ -258,6 +258,9 @@ def _title(report: PlanReport) -> str:
     sc = report.scenario
     status = report.status.value
     mutual = "with mutual observations" if sc.models.mutual_observations else "without mutual observations"
+    sensor = sc.models.range_sensor
+    if sensor is not None and not sensor.localiser.fuses_others:
+        mutual = "localised by the lidar alone (AMCL)"
     n = len(report.actions)
     duration = f", makespan {report.schedule.makespan:.1f} s (all robots at once)" if n else ""
     return (

@@ -107,6 +107,8 @@ def _header(report: PlanReport) -> list[str]:
     if report.task.bound is None and report.status is PlanStatus.SOLVED_SATISFICING:
         status += " (not proven optimal)"  # with a bound, its line below says how far from it
     mutual = "on" if sc.models.mutual_observations else "off"
+    if sc.models.range_sensor is not None and not sc.models.range_sensor.localiser.fuses_others:
+        mutual = "off (the lidar alone)"
     return [
         f"{sc.name} ({_display_path(sc.source)}): encoding {report.encoding}, planner {report.planner}, {status}",
         f"{len(sc.robots)} robots, mutual observations {mutual}; goals: {_goals(report)}",
@@ -124,6 +126,9 @@ def _sensing_line(report: PlanReport) -> str:
         "landmarks and partners only (the paper's model)"
         if lidar is None
         else f"a {lidar.range:g} m lidar of {lidar.beams} beams against the walls, landmarks and partners"
+        if lidar.localiser.fuses_others
+        else f"a {lidar.range:g} m lidar of {lidar.beams} beams against the walls, as nav2's AMCL takes it "
+        f"(information share {lidar.localiser.information:g}), alone"
     )
     delta, source = sc.planner.max_risk, sc.planner.max_risk_from
     constraint = "none" if delta is None else f"max_risk {delta:g} ({source})" if source else f"max_risk {delta:g}"
