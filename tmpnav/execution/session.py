@@ -446,9 +446,10 @@ class Session:
             r.started = len(r.queue)
 
     def _check_waiting(self) -> None:
-        """Nobody drives: some robot must be waiting for a planned start still to come, else the
-        schedule cannot go on (a paired move whose partner waits for another one)."""
-        if any(r.next is not None and r.next.start > self.step for r in self.robots):
+        """Nobody drives: some robot must be waiting for a planned start still to come, or still at
+        a station (waiting for a window, in service), else the schedule cannot go on (a paired
+        move whose partner waits for another one)."""
+        if any(r.next is not None and max(r.next.start, r.ready) > self.step for r in self.robots):
             return
         if self.down:  # robots waiting for a partner that is down wait for ever: their moves are cut
             for i, r in enumerate(self.robots):
