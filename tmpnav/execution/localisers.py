@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from tmpnav.execution.rpp import RppParams
 from tmpnav.scenario.nav2_params import AmclParams
 
 if TYPE_CHECKING:  # the site (numba kernels) is imported only by the sessions that scan it
@@ -31,6 +32,12 @@ if TYPE_CHECKING:  # the site (numba kernels) is imported only by the sessions t
 LOCALISERS = {
     "ekf": "tmpnav's joint EKF with the planner's own sensor models",
     "amcl": "nav2's AMCL (a particle filter per robot, its beam model) on scans of a site unlike the map",
+}
+
+#: the controllers ``tmpnav simulate --follower`` offers, and what each is
+FOLLOWERS = {
+    "waypoint": "turns on the spot at each node of the path, then drives straight (the plan's own motions)",
+    "rpp": "nav2's Regulated Pure Pursuit: turns while it drives, slows at bends and near walls",
 }
 
 
@@ -63,6 +70,10 @@ class Localisation:
     kind: str = "ekf"
     amcl: AmclParams = field(default_factory=AmclParams)
     site: SiteNoise | None = None
+    #: who steers each robot along its moves (a key of :data:`FOLLOWERS`) and, for ``rpp``, nav2's
+    #: Regulated Pure Pursuit parameters: the controller belongs to the same navigation stack
+    follower: str = "waypoint"
+    rpp: RppParams = field(default_factory=RppParams)
 
     @property
     def particle_filter(self) -> bool:
@@ -73,6 +84,12 @@ class Localisation:
         """One line for reports: the executing localiser, the site and the true motion noise."""
         a1, a2, a3, a4 = motion_noise
         noise = f"true motion noise alpha1-4 {a1:g}, {a2:g}, {a3:g}, {a4:g}"
+        if self.follower == "rpp":
+            r = self.rpp
+            noise += (
+                f"; follower: nav2 Regulated Pure Pursuit (lookahead {r.lookahead_dist:g} m, "
+                f"min radius {r.regulated_linear_scaling_min_radius:g} m, goal tolerance {r.xy_goal_tolerance:g} m)"
+            )
         if not self.particle_filter:
             return f"localiser: ekf ({LOCALISERS['ekf']}); {noise}"
         where = self.site.text() if self.site is not None else "the map exactly"

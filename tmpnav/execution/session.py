@@ -46,6 +46,7 @@ from tmpnav.execution.consistency import ConsistencyTrace
 from tmpnav.execution.control import ALIGN, ALIGN_START, control, reached
 from tmpnav.execution.localisers import Localisation, Localiser
 from tmpnav.execution.moves import QueuedMove
+from tmpnav.execution.rpp import RppFollower
 from tmpnav.execution.scans import ScanSimulator
 from tmpnav.results import Schedule, TimedMove
 from tmpnav.types import Belief, Scenario
@@ -144,6 +145,7 @@ class _Robot:
     since: int = 0  # step at which the move under way started
     aligned: bool = False  # it has turned towards its next waypoint (the segment's start is behind it)
     track: int = 0  # the step of the move's planned track it has come to (QueuedMove.planned_from)
+    rpp: RppFollower | None = None  # with --follower rpp: nav2's RPP along the move under way
 
     @property
     def next(self) -> QueuedMove | None:
@@ -280,10 +282,14 @@ class Session:
             u = np.zeros((len(self.names), 2))
             for i, r in enumerate(self.robots):
                 if r.waypoints:
-                    spec = self.scenario.robots[i]
-                    align = ALIGN if r.aligned else ALIGN_START
-                    command = control(self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt, align)
-                    r.aligned = r.aligned or bool(command[0] > 0.0)  # it drives: the turn at the node is done
+                    if r.rpp is not None:  # the local costmap holds the walls where they truly are
+                        cell = self.world.grid.cells(self.truth[i, :2][None])
+                        command = r.rpp.command(self.estimate(i), float(self.world.clearance[cell[0], cell[1]][0]))
+                    else:
+                        spec = self.scenario.robots[i]
+                        align = ALIGN if r.aligned else ALIGN_START
+                        command = control(self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt, align)
+                        r.aligned = r.aligned or bool(command[0] > 0.0)  # it drives: the turn at the node is done
                     u[i] = self.speed[i] * command
                     if self.speed[i] == 0.0:
                         r.since += 1  # a stopped robot's move does not use up its budget
@@ -359,7 +365,7 @@ class Session:
         none is left, or cut it when it has run out of its budget."""
         name = self.names[i]
         assert r.previous is not None and r.move is not None
-        while r.waypoints and reached(self.estimate(i), r.previous, r.waypoints[0]):
+        while r.waypoints and self._reached(i, r):
             k = len(r.move.waypoints) - len(r.waypoints)  # the path point reached, after its start
             r.previous = r.waypoints.pop(0)
             r.aligned = False  # a new segment: turn towards its end first
@@ -374,6 +380,18 @@ class Session:
             self._end(r, cut=True)
         if not r.waypoints and r.move is not None:
             self._end(r)
+
+    def _reached(self, i: int, r: _Robot) -> bool:
+        """Whether robot i has reached its next waypoint. With RPP, which cuts corners, a bend is
+        reached once the robot is abreast of it, and the move's end within nav2's goal tolerance."""
+        assert r.previous is not None
+        est = self.estimate(i)
+        if r.rpp is None:
+            return reached(est, r.previous, r.waypoints[0])
+        if len(r.waypoints) == 1:
+            return r.rpp.at_goal(est)
+        k = len(r.rpp.vertices) - len(r.waypoints)  # the path vertex of the next waypoint
+        return r.rpp.passed(k) or reached(est, r.previous, r.waypoints[0])
 
     def _end(self, r: _Robot, cut: bool = False) -> None:
         """Robot r ends its move now: record it as executed (``cut``: short of its room); the robot
@@ -425,6 +443,11 @@ class Session:
     def _start(self, r: _Robot, m: QueuedMove) -> None:
         r.move, r.started, r.since, r.aligned, r.track = m, r.started + 1, self.step, False, 0
         r.waypoints, r.previous = m.waypoints, np.asarray(m.points[0], dtype=float)
+        if self.localisation.follower == "rpp" and len(m.points) > 1:
+            spec = self.scenario.robots[self.names.index(m.robot)]
+            r.rpp = RppFollower(m.points, self.localisation.rpp, spec.speed, spec.turn_rate, self.dt)
+        else:
+            r.rpp = None
 
     def _cut(self, name: str, points: int) -> None:
         """Points of a path never reached: no error, no time."""
