@@ -253,24 +253,59 @@ def _able_to_enter(table: CostTable, goals: Goals) -> dict[str, set[str]]:
 
 def makespan_bound(table: CostTable, goals: Goals) -> float:
     """A lower bound on the makespan of every schedule whose moves take at least
-    ``table.duration`` (time floors, tmpnav.attachment.floors), the robots moving at once.
+    ``table.duration`` (time floors, tmpnav.attachment.floors, each ending after the service at
+    its target: :meth:`CostTable.with_service`), the robots moving at once, each waiting at a
+    job's room for its window to open.
 
-    Every required entry (:func:`required_entries`) is made by some robot. (1) The robot that
-    enters room x gets there at the earliest after driving there directly from its start
-    (shortest times obey the triangle inequality; waiting only adds), so the makespan is at
-    least the largest, over x, of the quickest such arrival. (2) Every entry takes at least
-    the quickest move into its room from anywhere; the robots share that work, so the
-    makespan is at least its sum divided by the number of robots. 0 without durations."""
+    Every required entry (:func:`required_entries`) is made by some robot, one that may do the
+    room's job. (1) That robot finishes there at the earliest after driving there directly from
+    its start, waiting for the window and serving (shortest times obey the triangle inequality;
+    waiting only adds), then, if it has an end elsewhere, driving on to its end and serving
+    there (:func:`round_trip`): the makespan is at least the largest, over the entries, of the
+    least such round trip of a robot that may make it. (2) Every entry takes at least the
+    quickest move into its room from anywhere; the robots share that work, so the makespan is
+    at least its sum divided by the number of robots. 0 without durations."""
     rows = required_entries(table, goals)
     if not rows or not table.duration:
         return 0.0
     into: dict[Row, float] = {}
-    direct: dict[Row, float] = {}
-    for (r, o, x), d in table.duration.items():
+    for (r, _, x), d in table.duration.items():
         for row in ((None, x), (r, x)):
             into[row] = min(into.get(row, math.inf), d)
-            if o == table.start_location[r]:
-                direct[row] = min(direct.get(row, math.inf), d)
-    arrival = max((direct.get(row, 0.0) for row in rows), default=0.0)
+    trips = [_least_trip(table, goals, row) for row in rows]
     work = sum(into.get(row, 0.0) for row in rows) / max(1, len(table.robots))
-    return max(arrival, work)
+    return max(max(trips, default=0.0), work)
+
+
+def _least_trip(table: CostTable, goals: Goals, row: Row) -> float:
+    """The least :func:`round_trip` through ``row``'s room of a robot that may make the entry
+    (0 when the table has none: no bound from it)."""
+    robot, x = row
+    robots = (robot,) if robot is not None else tuple(r for r in table.robots if goals.may_visit(r, x))
+    trips = [round_trip(table, goals, r, x) for r in robots]
+    finite = [t for t in trips if math.isfinite(t)]
+    return min(finite, default=0.0)
+
+
+def round_trip(table: CostTable, goals: Goals, robot: str, room: str) -> float:
+    """The earliest ``robot`` can be done if it serves ``room``: its quickest move there from its
+    start, a wait for the room's window, the service, then its quickest move on to its end (and
+    the end's window and service), when it has an end elsewhere. ``table.duration`` ends each
+    move after its target's service; inf when the table has no move of the robot there."""
+    start = table.start_location[robot]
+    there = table.duration.get((robot, start, room), math.inf)
+    done = _served(goals, room, 0.0, there)
+    end = goals.end_of(robot)
+    if end is None or end == room or not math.isfinite(done):
+        return done
+    back = table.duration.get((robot, room, end))
+    # without the move in the table (a floor of no path), the way on is not counted
+    return done if back is None else _served(goals, end, done, back)
+
+
+def _served(goals: Goals, room: str, leave: float, move: float) -> float:
+    """When a robot that leaves at ``leave`` on a move of ``move`` s into ``room`` (service
+    included) is done there: the service starts at its arrival, or when the window opens."""
+    service = goals.service(room)
+    arrival = leave + move - service
+    return arrival + goals.opens(room, arrival) + service
