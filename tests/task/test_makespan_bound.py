@@ -77,6 +77,21 @@ def test_a_robot_not_allowed_at_a_station_does_not_lower_its_trip() -> None:
     assert makespan_bound(table, only_b) == pytest.approx(30.0)
 
 
+def test_of_three_stations_two_robots_serve_one_twice() -> None:
+    """Two robots, three stations of 30 s a metre apart, 20 m east of both docks: one robot
+    serves two of them, so the shift lasts at least the least trip through two (40 s out, 30 s,
+    2 s on, 30 s, 40 s back: 142 s), more than any one station's round trip (110 s). Without
+    this pigeonhole bound the makespan's bound was 110.4 s."""
+    points = {"D1": (0.0, 0.0), "D2": (0.0, 1.0), "A": (20.0, 0.0), "B": (20.0, 1.0), "C": (20.0, 2.0)}
+    jobs = tuple(Job(x, service=30.0) for x in "ABC")
+    goals = Goals(visit=("A", "B", "C"), per_robot=(), jobs=jobs, ends=(("r1", "D1"), ("r2", "D2")))
+    table = shift_table(points, {"r1": "D1", "r2": "D2"}, goals)
+    assert max(round_trip(table, goals, r, x) for r in ("r1", "r2") for x in "ABC") < 111.0
+    bound, optimum = makespan_bound(table, goals), optimal_makespan(table, goals)
+    assert 140.0 <= bound <= optimum + 1e-9
+    assert bound == pytest.approx(optimum, rel=0.02)
+
+
 def random_shift(seed: int) -> tuple[CostTable, Goals]:
     rnd = random.Random(seed)
     robots = rnd.choice([2, 3])

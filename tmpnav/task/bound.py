@@ -70,6 +70,7 @@ ENHSP's optimum; on a 60-room building table with 8 robots and 20,000 pairs it t
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -85,6 +86,8 @@ ROUNDING = 1e-9
 OPTIMAL_GAP = 1e-6
 #: rounds of connectivity cuts in relaxation (c)
 CUT_ROUNDS = 50
+#: choices of n + 1 rooms (n robots) the makespan's pair bound tries at most (20 rooms, 4 robots: 15,504)
+MAX_PAIR_SUBSETS = 20_000
 
 Row = tuple[str | None, str]  # (robot, room): robot None for a room of U, else an entry of E
 
@@ -264,7 +267,10 @@ def makespan_bound(table: CostTable, goals: Goals) -> float:
     there (:func:`round_trip`): the makespan is at least the largest, over the entries, of the
     least such round trip of a robot that may make it. (2) Every entry takes at least the
     quickest move into its room from anywhere; the robots share that work, so the makespan is
-    at least its sum divided by the number of robots. 0 without durations."""
+    at least its sum divided by the number of robots. (3) Among any n + 1 of the rooms entered
+    exactly once (n robots), some robot serves two: the makespan is at least the least round
+    trip of a robot through two of them, for the n + 1 rooms where that is largest
+    (:func:`_pair_bound`). 0 without durations."""
     rows = required_entries(table, goals)
     if not rows or not table.duration:
         return 0.0
@@ -274,7 +280,28 @@ def makespan_bound(table: CostTable, goals: Goals) -> float:
             into[row] = min(into.get(row, math.inf), d)
     trips = [_least_trip(table, goals, row) for row in rows]
     work = sum(into.get(row, 0.0) for row in rows) / max(1, len(table.robots))
-    return max(max(trips, default=0.0), work)
+    return max(max(trips, default=0.0), work, _pair_bound(table, goals, rows))
+
+
+def _pair_bound(table: CostTable, goals: Goals, rows: list[Row]) -> float:
+    """(3) of :func:`makespan_bound`: the largest, over every n + 1 rooms entered exactly once,
+    of the least round trip through two of them (in either order) of a robot that may serve
+    both; 0 where there are no more such rooms than robots or more than
+    :data:`MAX_PAIR_SUBSETS` choices of n + 1 of them."""
+    once = [x for r, x in rows if r is None]
+    n = len(table.robots)
+    if len(once) <= n or math.comb(len(once), n + 1) > MAX_PAIR_SUBSETS:
+        return 0.0
+    pair: dict[tuple[str, str], float] = {}
+    for x, y in itertools.combinations(once, 2):
+        both = [r for r in table.robots if goals.may_visit(r, x) and goals.may_visit(r, y)]
+        pair[(x, y)] = min((_through(table, goals, r, p) for r in both for p in ((x, y), (y, x))), default=math.inf)
+    best = 0.0
+    for rooms in itertools.combinations(once, n + 1):
+        least = min(pair[p] for p in itertools.combinations(rooms, 2))
+        if math.isfinite(least):  # infinite: no robot may serve two of them, and no plan exists
+            best = max(best, least)
+    return best
 
 
 def _least_trip(table: CostTable, goals: Goals, row: Row) -> float:
@@ -292,13 +319,19 @@ def round_trip(table: CostTable, goals: Goals, robot: str, room: str) -> float:
     start, a wait for the room's window, the service, then its quickest move on to its end (and
     the end's window and service), when it has an end elsewhere. ``table.duration`` ends each
     move after its target's service; inf when the table has no move of the robot there."""
-    start = table.start_location[robot]
-    there = table.duration.get((robot, start, room), math.inf)
-    done = _served(goals, room, 0.0, there)
+    return _through(table, goals, robot, (room,))
+
+
+def _through(table: CostTable, goals: Goals, robot: str, rooms: tuple[str, ...]) -> float:
+    """:func:`round_trip` through ``rooms`` in their order (inf without a move of the table)."""
+    done, at = 0.0, table.start_location[robot]
+    for room in rooms:
+        done = _served(goals, room, done, table.duration.get((robot, at, room), math.inf))
+        at = room
     end = goals.end_of(robot)
-    if end is None or end == room or not math.isfinite(done):
+    if end is None or end == at or not math.isfinite(done):
         return done
-    back = table.duration.get((robot, room, end))
+    back = table.duration.get((robot, at, end))
     # without the move in the table (a floor of no path), the way on is not counted
     return done if back is None else _served(goals, end, done, back)
 
