@@ -57,7 +57,7 @@ def table(rows: list[dict]) -> str:
     for r in rows:
         by.setdefault(r["scenario"], {})[r["asked"] or "default"] = r
     lines = [
-        "| scenario | objective | makespan [s] | / `makespan`'s | cost | idle all shift |",
+        "| scenario | objective | makespan [s] | / `makespan`'s | cost | robots that never move |",
         "|---|---|---|---|---|---|",
     ]
     for name, runs in by.items():
