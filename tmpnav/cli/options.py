@@ -281,7 +281,7 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
         option(
             "--objective",
             type=click.Choice(list(OBJECTIVES)),
-            default_text=scenario_default("objective"),
+            default_text=scenario_default("objective", "makespan for a team on a shift, weighted otherwise"),
             help="What the plan minimises, the robots moving at once: weighted (the costs of all moves plus "
             "cost.M_T per second until the last robot is done), cost (the costs of all moves, as in the paper) "
             "or makespan (the time until the last robot is done first).",

@@ -50,20 +50,19 @@ import numpy as np
 
 from tmpnav.belief.risk import position_std
 from tmpnav.choices import STOP_MEANINGS
-from tmpnav.numbers import angle, length, percent, probability
+from tmpnav.numbers import angle, length, probability
 from tmpnav.report.quality import plan_conflicts, warning_lines
 from tmpnav.report.schedule import (
     T_TOL,
     bound_values,
+    bound_verdict,
     driving_steps,
     dropped_goals,
     objective_values,
-    searched_gap,
     step_windows,
 )
 from tmpnav.results import STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
-from tmpnav.task.bound import OPTIMAL_GAP
 from tmpnav.types import PlanStatus
 
 
@@ -149,12 +148,8 @@ def _search(report: PlanReport) -> list[str]:
                 f"{_plural(search.improvements, 'improvement')}; stopped: {STOP_MEANINGS[search.stopped]}"
             )
         lines.append(line)
-    own = bound_values(report)
+    own, verdict = bound_values(report), bound_verdict(report)
     if bound is not None and own is not None:
-        verdict = "proved optimal" if own.proved_optimal else f"gap {percent(own.gap)}"
-        searched = None if own.proved_optimal else searched_gap(report)
-        if searched is not None and searched <= OPTIMAL_GAP:
-            verdict += " after keeping the robots apart; the plan searched: proved optimal"
         if own.units == "s":
             lines.append(f"lower bound on the makespan: {own.value:.1f} s ({own.relaxation}); {verdict}")
         else:
