@@ -134,7 +134,7 @@ def test_beliefs_per_robot(lines: list[str], plan_report: Any) -> None:
 def test_times_and_cache(lines: list[str], plan_report: Any) -> None:
     i = next(i for i, line in enumerate(lines) if line.startswith("time [s]  "))
     names, values = lines[i].split()[2:], lines[i + 1].split()
-    assert names == ["roadmap", "oracle", "encode", "planner", "resimulate", "total", "(load)"]
+    assert names == ["roadmap", "oracle", "encode", "planner", "resimulate", "other", "total", "(load)"]
     seconds = plan_report.times.seconds
     for name, value in zip(names, values, strict=True):
         assert float(value) == pytest.approx(seconds[name.strip("()")], abs=5e-3)

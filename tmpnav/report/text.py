@@ -34,8 +34,8 @@ second time)::
     collision bound: plan 0.05 (no --max-risk); robots in each other's way: 1, the first:
      r1 and r2 at 8.0 s, 4.0 cm apart, 0.94 m needed; --max-risk keeps robots apart: docs/planning.md
 
-    time [s]  roadmap  oracle  planner  resimulate   total  (load)
-                 0.00    0.00     0.00        0.20    0.21    0.05
+    time [s]  roadmap  oracle  planner  resimulate   other   total  (load)
+                 0.00    0.00     0.00        0.20    0.01    0.21    0.05
     cache (/home/me/.cache/tmpnav): roadmap from cache; move costs: cost table from cache, then 1 more
     from cache and 0 computed
 """
@@ -61,7 +61,7 @@ from tmpnav.report.schedule import (
     objective_values,
     step_windows,
 )
-from tmpnav.results import STAGES, PlanReport
+from tmpnav.results import OTHER, STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
 from tmpnav.types import PlanStatus
 
@@ -313,10 +313,12 @@ def _plural(n: int, word: str) -> str:
 
 
 def _times(report: PlanReport) -> list[str]:
-    """Seconds per stage as a small table (``total`` excludes ``load``), then the oracle cache."""
+    """Seconds per stage as a small table, then the oracle cache. ``total`` is the run's wall-clock
+    time but ``load``: the stages before it (``other``: the time in none) add up to it."""
     seconds = report.times.seconds
     cache = report.cache
-    stages = [s for s in (*STAGES, "total") if s != "load" and s in seconds] + (["load"] if "load" in seconds else [])
+    stages = [s for s in (*STAGES, OTHER, "total") if s != "load" and s in seconds]
+    stages += ["load"] if "load" in seconds else []
     names = [f"({s})" if s == "load" else s for s in stages]
     widths = [max(len(n), 6) for n in names]
     head = "time [s]  " + "  ".join(f"{n:>{w}}" for n, w in zip(names, widths, strict=True))
