@@ -18,8 +18,9 @@ summary and the CSV files.
 from tmpnav.execution.control import ALIGN, ARRIVED, control, reached
 from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.result import ExecutionResult, Rate, execute
-from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
+from tmpnav.execution.session import STEP_BUDGET, Session
 from tmpnav.execution.text import error_summary, errors_csv, moves_csv, sessions_csv
+from tmpnav.execution.trace import Draws, SessionTrace
 
 __all__ = [
     "ALIGN",

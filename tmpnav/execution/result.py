@@ -28,7 +28,8 @@ from tmpnav.belief.risk import clopper_pearson
 from tmpnav.execution.consistency import gather as gather_consistency
 from tmpnav.execution.localisers import Localisation
 from tmpnav.execution.moves import QueuedMove, queues
-from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
+from tmpnav.execution.session import STEP_BUDGET, Session
+from tmpnav.execution.trace import Draws, SessionTrace
 from tmpnav.lifetime import gather, signals_held
 from tmpnav.oracle.executors import die_with_parent
 from tmpnav.results import PlanReport, Schedule
