@@ -110,8 +110,7 @@ class Session:
         self.trace.wall_hits = dict.fromkeys(self.names, 0)
         self.trace.contacts = dict.fromkeys(self.names, 0)
         self.trace.planned_nees = {r: [math.nan] for r in self.names}
-        self.trace.nees_sum = dict.fromkeys(self.names, 0.0)
-        self.trace.nees_steps = dict.fromkeys(self.names, 0)
+        self.trace.own_nees = {r: [] for r in self.names}
         self.trace.beams = {r: [0, 0] for r in self.names}
         for terms in (self.trace.c_u, self.trace.c_sigma, self.trace.c_goal):
             terms.update(dict.fromkeys(self.names, 0.0))
@@ -494,9 +493,8 @@ class Session:
         self._record_consistency()
         for i, name in enumerate(self.names):
             value = nees(self.truth[i, :2] - self.estimate(i)[:2], self.estimate_cov(i)[:2, :2])
-            if math.isfinite(value):
-                self.trace.nees_sum[name] += value
-                self.trace.nees_steps[name] += 1
+            if not math.isnan(value):
+                self.trace.own_nees[name].append(value)
         walls = hits_wall(self.world.grid, self.world.clearance, self.truth[:, :2], self.radii)
         gap = np.hypot(*(self.truth[:, None, :2] - self.truth[None, :, :2]).transpose(2, 0, 1))
         touch = (gap < self.radii[:, None] + self.radii[None, :]) & ~np.eye(len(self.names), dtype=bool)

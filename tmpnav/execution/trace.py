@@ -28,9 +28,8 @@ class SessionTrace:
     #: robot -> the position NEES (true - estimated position against the plan's covariance) at
     #: each point of its paths (nan where the plan has no covariance or the point was not reached)
     planned_nees: dict[str, list[float]] = field(default_factory=dict)
-    #: robot -> the filter's own position NEES summed over its control steps, and their number
-    nees_sum: dict[str, float] = field(default_factory=dict)
-    nees_steps: dict[str, int] = field(default_factory=dict)
+    #: robot -> the position NEES against the filter's own covariance at each control step
+    own_nees: dict[str, list[float]] = field(default_factory=dict)
     #: robot -> range beams used by its filter and rejected by the innovation gate
     beams: dict[str, list[int]] = field(default_factory=dict)
     #: (robot, plan step of the move under way, or of its last one when it stands; -1 before its
