@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from tmpnav.cli.commands import cli
+from tmpnav.cli.commands import cli, warn_conflicts, warn_scenario
 from tmpnav.cli.options import (
     SCENARIO_ARG,
     option,
@@ -139,6 +139,8 @@ def simulate(
         return
     sessions = sessions or 25
     report = run_plan(scenario, plan_options(kw))
+    warn_scenario(report.scenario, bool(kw.get("no_range_sensor")))
+    warn_conflicts(report)
     result = execute(report, sessions, seed, kw["workers"], localisation)
     lines = error_summary(result, sessions)
     if output is not None:
