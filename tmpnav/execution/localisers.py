@@ -27,6 +27,8 @@ from tmpnav.scenario.nav2_params import AmclParams
 
 if TYPE_CHECKING:  # the site (numba kernels) is imported only by the sessions that scan it
     from tmpnav.execution.site import SiteNoise
+    from tmpnav.world import World
+    from tmpnav.world.visibility import LandmarkVisibility
 
 #: the localisers ``tmpnav simulate --localiser`` offers, and what each is
 LOCALISERS = {
@@ -58,6 +60,33 @@ class Localiser(Protocol):
     @property
     def cov(self) -> np.ndarray:
         """(3, 3) the localiser's own covariance of its estimate."""
+        ...
+
+
+class TeamLocaliser(Protocol):
+    """Who estimates the poses of a session's robots (:class:`~tmpnav.execution.session.Session`
+    calls it once per control step): the joint EKF (:mod:`.joint_ekf`) or every robot's AMCL
+    (:mod:`.amcl_team`)."""
+
+    def estimate(self, i: int) -> np.ndarray:
+        """Robot i's pose estimate (3,) now."""
+        ...
+
+    def estimate_cov(self, i: int) -> np.ndarray:
+        """Robot i's covariance (3, 3) as its localiser reports it."""
+        ...
+
+    def predict(self, u: np.ndarray) -> None:
+        """The commands (n, 2) of the control step just driven."""
+        ...
+
+    def observe(self, truth: np.ndarray, step: int) -> list[tuple[int, int]]:
+        """The robots' observations at control ``step`` from their true poses (n, 3); per robot,
+        the range beams used and rejected by an innovation gate."""
+        ...
+
+    def set_world(self, world: World, vis: LandmarkVisibility) -> None:
+        """The world changed (a door closed)."""
         ...
 
 

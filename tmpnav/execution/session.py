@@ -15,13 +15,14 @@ Each control step, for the whole team together:
    a robot that reached its last one ends its move, and moves that may start now start;
 2. every driving robot gets the waypoint controller's command (:mod:`tmpnav.execution.control`),
    every other robot (waiting, idle, done) none: zero control, so its uncertainty does not grow;
-3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the joint
-   EKF of :mod:`tmpnav.belief.ekf` (the filterpy reference) predicts with the commands;
-4. every robot observes the landmarks it sees from its true pose (range, field of view, line of
-   sight) with sensor noise, moving or standing; with a range sensor, every robot scans the
-   walls from its true pose and the filter compares the scan with one ray cast from its
-   estimate (:mod:`tmpnav.execution.scans`); with mutual observations (config 1) any two
-   robots observe each other whenever they are in range and line of sight at that instant;
+3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the
+   team's localiser (:class:`~tmpnav.execution.localisers.TeamLocaliser`: the joint EKF of
+   :mod:`.joint_ekf`, or every robot's AMCL) predicts with the commands;
+4. every robot observes from its true pose, moving or standing, what its localiser takes: the
+   landmarks it sees (range, field of view, line of sight) with sensor noise; with a range
+   sensor, a scan of the walls the filter compares with one ray cast from its estimate
+   (:mod:`tmpnav.execution.scans`); with mutual observations (config 1) any two robots in
+   range and line of sight of each other at that instant;
 5. the true poses are checked (:meth:`Session._collide`): a robot whose true position hits a
    wall (:func:`tmpnav.belief.risk.hits_wall`: its cell's clearance at most its radius, or off
    the map), and two robots whose true positions are closer than their radii added, are counted.
@@ -38,20 +39,19 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from tmpnav.belief import ekf
-from tmpnav.belief.models import landmark_obs, motion, motion_noise_cov, mutual_obs, noisy_observation
+from tmpnav.belief.models import motion, motion_noise_cov
 from tmpnav.belief.risk import hits_wall
 from tmpnav.errors import TmpnavError
 from tmpnav.execution.control import ALIGN, ALIGN_START, control, reached
-from tmpnav.execution.localisers import Localisation, Localiser
+from tmpnav.execution.joint_ekf import JointEkf
+from tmpnav.execution.localisers import Localisation, TeamLocaliser
 from tmpnav.execution.moves import QueuedMove
 from tmpnav.execution.rpp import RppFollower
-from tmpnav.execution.scans import ScanSimulator
 from tmpnav.execution.trace import Draws, SessionTrace, nees
 from tmpnav.results import TimedMove
 from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
-from tmpnav.world.visibility import LandmarkVisibility, MutualSensing
+from tmpnav.world.visibility import LandmarkVisibility
 
 #: a move may take this many times its planned steps (or 40 steps per waypoint) before it is cut
 STEP_BUDGET = 6
@@ -102,11 +102,8 @@ class Session:
         self.robots = [_Robot(queues.get(r, ())) for r in self.names]
         self.dt = scenario.models.dt
         self.step = 0  # control steps taken (indexes the draws)
-        self.truth, self.belief, self.trace = self._initial()
-        self.sensing = self._sensing()
+        self.truth, belief, self.trace = self._initial()
         self.radii = np.array([r.radius for r in scenario.robots], dtype=float)
-        sensor = scenario.models.range_sensor
-        self.scans = ScanSimulator(world, sensor) if sensor is not None else None
         self.trace.wall_hits = dict.fromkeys(self.names, 0)
         self.trace.contacts = dict.fromkeys(self.names, 0)
         self.trace.planned_nees = {r: [math.nan] for r in self.names}
@@ -118,32 +115,15 @@ class Session:
         self.speed = np.ones(len(self.names))
         #: robots that are down: they stand where they are for the rest of the session
         self.down: set[int] = set()
-        #: with AMCL (Localisation.particle_filter): each robot's particle filter, its odometry pose
-        #: (the commands integrated, from its initial estimate) and the site its lidar scans
-        self.localisers: list[Localiser] = []
+        self.localiser = self._localiser(belief, queues, session)
+
+    def _localiser(self, belief: Belief, queues: Mapping[str, tuple[QueuedMove, ...]], session: int) -> TeamLocaliser:
+        """Who localises the team, as ``localisation`` says (tmpnav.execution.localisers)."""
         if self.localisation.particle_filter:
-            self._start_particle_filters(queues, session)
+            from tmpnav.execution.amcl_team import AmclTeam
 
-    def _start_particle_filters(self, queues: Mapping[str, tuple[QueuedMove, ...]], session: int) -> None:
-        from tmpnav.execution.amcl import AmclLocaliser
-        from tmpnav.execution.site import Site, SiteNoise
-
-        sensor = self.scenario.models.range_sensor
-        if sensor is None:
-            raise TmpnavError(
-                "--localiser amcl: the scenario's robots carry no range sensor (models.range_sensor); "
-                "expected a scenario with a lidar (AMCL localises with it)"
-            )
-        noise = self.localisation.site or SiteNoise.none()
-        paths = [np.asarray(m.points, dtype=float).reshape(-1, 2) for q in queues.values() for m in q]
-        self.site = Site(self.world, noise, session, keep_clear=paths or None)  # no clutter on the paths
-        self.odom = np.array([self.estimate(i) for i in range(len(self.names))])
-        params, blocks = self.localisation.amcl, [slice(3 * i, 3 * i + 3) for i in range(len(self.names))]
-        self.localisers = [
-            # the process's AMCL random stream is seeded by the session (the last filter's seed holds)
-            AmclLocaliser(self.world.grid, sensor, params, self.odom[i], self.belief.cov[b, b], seed=session + 1)
-            for i, b in enumerate(blocks)
-        ]
+            return AmclTeam(self.scenario, self.world, self.draws, belief, self.localisation, queues, session)
+        return JointEkf(self.scenario, self.world, self.vis, self.draws, belief, self.mutual)
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -158,27 +138,13 @@ class Session:
         errors = {r.name: [float(np.hypot(*(truth[i, :2] - mean[3 * i : 3 * i + 2])))] for i, r in enumerate(robots)}
         return truth, Belief(mean, cov), SessionTrace(errors, {r.name: [0.0] for r in robots})
 
-    def _sensing(self) -> dict[MutualSensing, list[tuple[int, int]]]:
-        """The ordered pairs of robots that observe each other (config 1), grouped by sensor."""
-        groups: dict[MutualSensing, list[tuple[int, int]]] = {}
-        if self.mutual:  # config 1 senses whatever the scenario's switch says
-            for i, a in enumerate(self.names):
-                for j, b in enumerate(self.names):
-                    if i != j:
-                        groups.setdefault(MutualSensing.of_sensor(self.scenario, a, b), []).append((i, j))
-        return groups
-
     def estimate(self, i: int) -> np.ndarray:
-        """Robot i's estimated pose: its localiser's (its part of the joint belief's mean, or AMCL's)."""
-        if self.localisers:
-            return self.localisers[i].mean
-        return self.belief.mean[3 * i : 3 * i + 3]
+        """Robot i's estimated pose: its localiser's."""
+        return self.localiser.estimate(i)
 
     def estimate_cov(self, i: int) -> np.ndarray:
         """Robot i's covariance (3, 3) as its localiser reports it."""
-        if self.localisers:
-            return self.localisers[i].cov
-        return self.belief.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
+        return self.localiser.estimate_cov(i)
 
     # ------------------------------------------------------------------ the run
 
@@ -256,10 +222,7 @@ class Session:
         xs, ys = world.grid.cell_centers()
         rows, cols = np.nonzero(added)
         self.barriers = np.column_stack([xs[cols], ys[rows]]) if added.shape == self.base.grid.occupied.shape else None
-        sensor = self.scenario.models.range_sensor
-        self.scans = ScanSimulator(world, sensor) if sensor is not None else None
-        if self.localisers:  # the site keeps its clutter and people; the doors close on its walls
-            self.site = self.site.with_world(world)
+        self.localiser.set_world(world, vis)
 
     def _add_costs(self, u: np.ndarray) -> None:
         """The executed cost terms of this step (SessionTrace.c_u, c_sigma)."""
@@ -422,10 +385,7 @@ class Session:
             moved = motion(self.truth[i], noisy, models.dt)
             if self.world is self.base or not self._closed_in_way(moved[:2], self.radii[i]):
                 self.truth[i] = moved
-        if self.localisers:  # odometry: the commands integrated (the wheels' error is the control noise)
-            self.odom = motion(self.odom, u, models.dt)
-            return
-        self.belief = ekf.predict(self.belief, u, models.dt, models.motion_noise)
+        self.localiser.predict(u)
 
     def _closed_in_way(self, xy: np.ndarray, radius: float) -> bool:
         """Whether a robot at ``xy`` would touch a cell the world has now and had not at the start (a
@@ -436,46 +396,10 @@ class Session:
         return bool(np.min(np.hypot(*(self.barriers - xy).T)) < radius)
 
     def _observe(self) -> None:
-        """Every robot's landmark observations, then (config 1) every pair's mutual observations;
-        with AMCL, every robot's scan of the site and odometry, to its own particle filter."""
-        models, truth, step = self.scenario.models, self.truth, self.step
-        if self.localisers:
-            self._scan_site()
-            return
-        q_lm = models.landmark_sensor.Q
-        chol_lm = np.linalg.cholesky(q_lm)
-        landmarks = self.world.landmark_xy
-        seen = self.vis.visible(truth, models.landmark_sensor.fov)
-        for i in range(len(self.names)):
-            for lm in np.flatnonzero(seen[i]):
-                z = noisy_observation(landmark_obs(truth[i], landmarks[lm]), chol_lm, self.draws.landmark[i, step, lm])
-                self.belief = ekf.update_landmark(self.belief, i, landmarks[lm], z, q_lm)
-        if self.scans is not None:
-            for i, name in enumerate(self.names):
-                self.belief, count = self.scans.update(self.belief, i, truth[i], self.draws.scan[i, step])
-                self.trace.beams[name][0] += count.used
-                self.trace.beams[name][1] += count.rejected
-        if not self.sensing:
-            return
-        q_mu = models.mutual_sensor.Q
-        chol_mu = np.linalg.cholesky(q_mu)
-        for i, j in self._mutually_visible():
-            z = noisy_observation(mutual_obs(truth[i], truth[j]), chol_mu, self.draws.mutual[i, j, step])
-            self.belief = ekf.update_mutual(self.belief, i, j, z, q_mu)
-
-    def _scan_site(self) -> None:
-        """Each robot's lidar scans the site from its true pose (the sensor's range noise on every
-        return), and its AMCL updates with the scan and its odometry."""
-        sensor = self.scenario.models.range_sensor
-        assert sensor is not None
-        angles, t = sensor.beam_angles(), self.step * self.dt
-        for i, name in enumerate(self.names):
-            ranges = (
-                self.site.ranges(self.truth[i], angles, sensor, t) + sensor.sigma_range * self.draws.scan[i, self.step]
-            )
-            self.localisers[i].update(self.odom[i], ranges)
-            returned = int(np.count_nonzero(~np.isnan(ranges)))
-            self.trace.beams[name][0] += returned
+        """The robots' observations from their true poses, to their localiser."""
+        for name, (used, rejected) in zip(self.names, self.localiser.observe(self.truth, self.step), strict=True):
+            self.trace.beams[name][0] += used
+            self.trace.beams[name][1] += rejected
 
     def _record_consistency(self) -> None:
         """Each driving robot's actual error, its localiser's covariance and the plan's at this step of its move."""
@@ -512,12 +436,3 @@ class Session:
         if r.move is not None:
             return r.move.step
         return r.queue[r.started - 1].step if r.started else -1
-
-    def _mutually_visible(self) -> list[tuple[int, int]]:
-        """The ordered pairs (observer, observed) in range and line of sight now, in team order."""
-        out = []
-        for sensing, pairs in self.sensing.items():
-            a, b = np.array(pairs).T
-            seen = sensing.visible(self.world, self.truth[a], self.truth[b])
-            out += [p for p, s in zip(pairs, seen, strict=True) if s]
-        return sorted(out)
