@@ -65,8 +65,8 @@ class Localiser(Protocol):
 
 class TeamLocaliser(Protocol):
     """Who estimates the poses of a session's robots (:class:`~tmpnav.execution.session.Session`
-    calls it once per control step): the joint EKF (:mod:`.joint_ekf`) or every robot's AMCL
-    (:mod:`.amcl_team`)."""
+    calls it once per control step): the joint EKF (:mod:`.joint_ekf`, its compiled twin
+    :mod:`.fast_ekf`) or every robot's AMCL (:mod:`.amcl_team`)."""
 
     def estimate(self, i: int) -> np.ndarray:
         """Robot i's pose estimate (3,) now."""
@@ -103,6 +103,9 @@ class Localisation:
     #: Regulated Pure Pursuit parameters: the controller belongs to the same navigation stack
     follower: str = "waypoint"
     rpp: RppParams = field(default_factory=RppParams)
+    #: ekf: the compiled joint EKF (tmpnav.execution.fast_ekf); False: its filterpy reference
+    #: (tmpnav.execution.joint_ekf), the same figures to rounding, many times slower
+    compiled: bool = True
 
     @property
     def particle_filter(self) -> bool:

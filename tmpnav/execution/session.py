@@ -25,7 +25,8 @@ Each control step, for the whole team together:
    range and line of sight of each other at that instant;
 5. the true poses are checked (:meth:`Session._collide`): a robot whose true position hits a
    wall (:func:`tmpnav.belief.risk.hits_wall`: its cell's clearance at most its radius, or off
-   the map), and two robots whose true positions are closer than their radii added, are counted.
+   the map), and two robots whose true positions are closer than their radii added, are counted
+   (compiled: :mod:`.contact`).
 
 Both configurations of a session use the same random draws (initial poses, control noise and
 observation noise are indexed by robot and control step), so their comparison is paired.
@@ -40,8 +41,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from tmpnav.belief.models import motion, motion_noise_cov
-from tmpnav.belief.risk import hits_wall
 from tmpnav.errors import TmpnavError
+from tmpnav.execution.contact import walls_and_touches
 from tmpnav.execution.control import ALIGN, ALIGN_START, control, reached
 from tmpnav.execution.joint_ekf import JointEkf
 from tmpnav.execution.localisers import Localisation, TeamLocaliser
@@ -123,6 +124,10 @@ class Session:
             from tmpnav.execution.amcl_team import AmclTeam
 
             return AmclTeam(self.scenario, self.world, self.draws, belief, self.localisation, queues, session)
+        if self.localisation.compiled:
+            from tmpnav.execution.fast_ekf import CompiledJointEkf
+
+            return CompiledJointEkf(self.scenario, self.world, self.vis, self.draws, belief, self.mutual)
         return JointEkf(self.scenario, self.world, self.vis, self.draws, belief, self.mutual)
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
@@ -379,12 +384,15 @@ class Session:
         """The true robots move with noisy controls (none for a robot standing: W(0) = 0); the
         filter predicts with the commands."""
         models = self.scenario.models
-        for i in range(len(self.names)):
-            W = motion_noise_cov(u[i], models.motion_noise)
-            noisy = u[i] + np.sqrt(np.diag(W)) * self.draws.motion[i, self.step]
-            moved = motion(self.truth[i], noisy, models.dt)
-            if self.world is self.base or not self._closed_in_way(moved[:2], self.radii[i]):
-                self.truth[i] = moved
+        W = motion_noise_cov(u, models.motion_noise)  # (n, 2, 2), diagonal
+        noisy = u + np.sqrt(np.stack([W[:, 0, 0], W[:, 1, 1]], axis=-1)) * self.draws.motion[:, self.step]
+        moved = motion(self.truth, noisy, models.dt)
+        if self.world is self.base:
+            self.truth = moved
+        else:
+            for i in range(len(self.names)):
+                if not self._closed_in_way(moved[i, :2], self.radii[i]):
+                    self.truth[i] = moved[i]
         self.localiser.predict(u)
 
     def _closed_in_way(self, xy: np.ndarray, radius: float) -> bool:
@@ -419,16 +427,14 @@ class Session:
             value = nees(self.truth[i, :2] - self.estimate(i)[:2], self.estimate_cov(i)[:2, :2])
             if not math.isnan(value):
                 self.trace.own_nees[name].append(value)
-        walls = hits_wall(self.world.grid, self.world.clearance, self.truth[:, :2], self.radii)
-        gap = np.hypot(*(self.truth[:, None, :2] - self.truth[None, :, :2]).transpose(2, 0, 1))
-        touch = (gap < self.radii[:, None] + self.radii[None, :]) & ~np.eye(len(self.names), dtype=bool)
+        walls, touch = walls_and_touches(self.world, self.truth, self.radii)
         for i, name in enumerate(self.names):
-            self.trace.wall_hits[name] += int(walls[i])
-            self.trace.contacts[name] += int(touch[i].any())
-            if walls[i] or touch[i].any():
+            if walls[i] or touch[i]:
+                self.trace.wall_hits[name] += int(walls[i])
+                self.trace.contacts[name] += int(touch[i])
                 key = (name, self._move_step(self.robots[i]))
                 self.trace.move_hits[key] = self.trace.move_hits.get(key, 0) + int(walls[i])
-                self.trace.move_contacts[key] = self.trace.move_contacts.get(key, 0) + int(touch[i].any())
+                self.trace.move_contacts[key] = self.trace.move_contacts.get(key, 0) + int(touch[i])
 
     @staticmethod
     def _move_step(r: _Robot) -> int:

@@ -91,7 +91,9 @@ def nees(error: np.ndarray, cov: np.ndarray | None) -> float:
     covariance Σ (2, 2): 2 on average for a consistent filter; nan without a usable Σ."""
     if cov is None:
         return math.nan
-    try:
-        return float(error @ np.linalg.solve(cov, error))
-    except np.linalg.LinAlgError:
+    a, b, c, d = float(cov[0, 0]), float(cov[0, 1]), float(cov[1, 0]), float(cov[1, 1])
+    det = a * d - b * c
+    if det == 0.0:
         return math.nan
+    e0, e1 = float(error[0]), float(error[1])
+    return (d * e0 * e0 - (b + c) * e0 * e1 + a * e1 * e1) / det  # eᵀ Σ⁻¹ e, Σ⁻¹ = [[d, -b], [-c, a]] / det
