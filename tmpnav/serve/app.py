@@ -41,7 +41,23 @@ def create_app(service: Service, token: str | None = None) -> FastAPI:
     _plans(app, service)
     _jobs(app, service)
     _view(app, service)
+    _describe_problems(app)
     return app
+
+
+def _describe_problems(app: FastAPI) -> None:
+    """The Problem schema in the OpenAPI document, which every route's error answers name."""
+    from fastapi.openapi.utils import get_openapi
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            doc = get_openapi(title=app.title, version=app.version, summary=app.summary,
+                              description=app.description, routes=app.routes)
+            doc.setdefault("components", {}).setdefault("schemas", {})["Problem"] = models.Problem.model_json_schema()
+            app.openapi_schema = doc
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
 
 
 def _errors(app: FastAPI) -> None:
