@@ -76,6 +76,8 @@ def _errors(app: FastAPI) -> None:
 
     @app.exception_handler(StarletteHTTPException)
     async def http_error(request: Request, err: StarletteHTTPException) -> JSONResponse:
+        if err.status_code == 400:  # FastAPI's "error parsing the body": bytes that are not UTF-8 text
+            return problems.answer(422, "body: not JSON (not UTF-8 text)")
         return problems.answer(err.status_code, str(err.detail), 2, headers=dict(err.headers or {}))
 
     @app.exception_handler(Exception)
