@@ -20,8 +20,9 @@ ADDRESS = re.compile(r"at (http://\S+/) ")
 class Server:
     """``tmpnav serve SCENARIO --port 0`` with ``args``; ``url`` once it listens."""
 
-    def __init__(self, scenario: str, cache: Path, *args: str):
-        self.log = cache / f"serve-{time.monotonic_ns()}.log"
+    def __init__(self, scenario: str, cache: Path, *args: str, logs: Path | None = None):
+        self.cache = cache
+        self.log = (logs or cache) / f"serve-{time.monotonic_ns()}.log"
         env = dict(os.environ, PYTHONPATH=str(ROOT))
         self.process = subprocess.Popen(
             [sys.executable, "-m", "tmpnav", "serve", scenario, "--port", "0", "--cache-dir", str(cache), *args],

@@ -9,7 +9,6 @@ import os
 import subprocess
 import sys
 import threading
-from pathlib import Path
 
 import pytest
 
@@ -28,7 +27,7 @@ def test_a_shift_is_planned_as_the_command_line_plans_it(server: Server, client:
     assert client.schedule(first["id"]) == doc["schedule"]
     files = client.nav2(first["id"])
     assert {"r1.csv", "r2.csv", "r1.moves.yaml", "r2.moves.yaml"} <= set(files)
-    cache = Path(server.log).parent
+    cache = server.cache
     out = cache / "cli-plan"
     command = [sys.executable, "-m", "tmpnav", "plan", "configs/two-rooms.yaml", "-q", "--cache-dir", str(cache)]
     subprocess.run([*command, "-o", str(out)], cwd=ROOT, check=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))

@@ -16,7 +16,7 @@ from tmpnav.cli.options import CACHE_DIR_OPTION, SCENARIO_ARG, option, report_er
         help="The address to listen on; without --token only a loopback address.")
 @option("--port", type=click.IntRange(0, 65535), default=8765, show_default=True,
         help="The port to listen on (0: a free one, printed at start).")
-@option("--token", envvar="TMPNAV_SERVE_TOKEN", default=None,
+@option("--token", envvar="TMPNAV_SERVE_TOKEN", default=None, default_text="none: loopback only",
         help="A secret every request must carry (Authorization: Bearer TOKEN); also $TMPNAV_SERVE_TOKEN.")
 @CACHE_DIR_OPTION
 @seconds_option("--time-limit", default=300.0, show_default=True,
@@ -26,8 +26,10 @@ from tmpnav.cli.options import CACHE_DIR_OPTION, SCENARIO_ARG, option, report_er
 @report_errors
 def serve(scenario: Path, host: str, port: int, token: str | None, cache_dir: Path | None,
           time_limit: float, max_body: int) -> None:
-    """Serve SCENARIO's site over HTTP: plan shifts, post the team's state, get revisions,
-    and watch them live in a browser at the printed address.
+    """Serve a site over HTTP: plans, revisions, a live view.
+
+    Plan shifts of SCENARIO's site, post the team's state and get each revision, and watch
+    them live in a browser at the printed address (docs/serve.md).
 
     The site is loaded once and kept warm; plans and revisions are kept in the cache
     directory and reloaded at start. Without --token it listens on loopback only.
