@@ -69,7 +69,7 @@ def percentile(values: list[float], q: float) -> float:
     return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
 
 
-def latency(client: Client, events: int, seed: int) -> list[dict[str, Any]]:
+def latency(client: Any, events: int, seed: int) -> list[dict[str, Any]]:
     rng = random.Random(seed)
     plan = client.plan()
     rows = []
@@ -86,6 +86,32 @@ def latency(client: Client, events: int, seed: int) -> list[dict[str, Any]]:
                      "outcome": outcome, "revision": plan["revision"]})
         print(rows[-1], flush=True)
     return rows
+
+
+class Direct:
+    """The service's own calls in this process, without HTTP: the same site, store and jobs (for
+    the latency of HTTP itself, side by side with the service's)."""
+
+    def __init__(self, scenario: str, cache: Path):
+        from tmpnav.serve.service import Service
+
+        self.service = Service.start(scenario, cache)
+
+    def _wait(self, job: Any) -> dict[str, Any]:
+        job.done.wait()
+        if job.status != "done":
+            raise ServiceError(job.problem["status"], job.problem)
+        result: dict[str, Any] = job.result
+        return result
+
+    def plan(self) -> dict[str, Any]:
+        return self._wait(self.service.plan(None, None))
+
+    def document(self, plan: str) -> dict[str, Any]:
+        return self.service.document(plan, None)
+
+    def post_state(self, plan: str, revision: int, state: dict[str, Any]) -> dict[str, Any]:
+        return self._wait(self.service.revise(plan, revision, state, None))
 
 
 def load(client: Client, clients: int, plans: int, seconds: float, seed: int) -> str:
@@ -146,10 +172,19 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=90.0)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--cache-dir", type=Path, default=None)
+    parser.add_argument("--direct", action="store_true", help="latency: the service's calls in this process, no HTTP")
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "benchmarks" / "serve")
     args = parser.parse_args()
     args.output.mkdir(parents=True, exist_ok=True)
     name = Path(args.scenario).stem
+    if args.direct:
+        rows = latency(Direct(args.scenario, args.cache_dir or default_cache_dir()), args.events, args.seed)
+        took = [r["seconds"] for r in rows if r["outcome"] == "revision"]
+        text = (f"# {args.scenario}, in process (no HTTP): {len(took)} of {len(rows)} revisions: median "
+                f"{statistics.median(took):.3f} s, p90 {percentile(took, 0.9):.3f} s, max {max(took):.3f} s\n")
+        (args.output / f"{name}-direct.txt").write_text(text)
+        print(text, end="")
+        return
     server = Server(args.scenario, args.cache_dir or default_cache_dir(), logs=Path(tempfile.gettempdir()))
     try:
         client = Client(server.url)

@@ -19,12 +19,12 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from tmpnav.errors import TmpnavError
 from tmpnav.serve import models, problems
 from tmpnav.serve.guard import Guard
-from tmpnav.serve.service import NotFound, Service
+from tmpnav.serve.service import NotFound, Service, Stale
 from tmpnav.serve.sitemap import site_geometry
 from tmpnav.version import __version__
 
-#: how long a request that waits for its search waits at most between looks at it
-WAIT_SLICE = 0.25
+#: how long a request that waits for its search waits at most between looks at its client
+WAIT_SLICE = 1.0
 
 
 def create_app(service: Service, token: str | None = None) -> FastAPI:
@@ -65,6 +65,10 @@ def _errors(app: FastAPI) -> None:
     async def tmpnav_error(request: Request, err: TmpnavError) -> JSONResponse:
         return problems.respond(problems.of_error(err))
 
+    @app.exception_handler(Stale)
+    async def stale(request: Request, err: Stale) -> JSONResponse:
+        return problems.answer(409, str(err), latest=err.latest)
+
     @app.exception_handler(NotFound)
     async def not_found(request: Request, err: NotFound) -> JSONResponse:
         return problems.answer(404, str(err))
@@ -96,11 +100,11 @@ def _validation_line(error: Any) -> str:
 async def _answer(request: Request, service: Service, job_id: str, wait: bool, created: int) -> JSONResponse:
     """The job's result when it ends (``created``), its problem if it fails; or at once (202)."""
     job = service.job(job_id)
-    while wait and not job.done.is_set():
+    # waited for in a worker thread, a slice at a time: the answer leaves as soon as the job ends
+    while wait and not await asyncio.to_thread(job.done.wait, WAIT_SLICE):
         if await request.is_disconnected():  # the client went: its search is not wanted
             service.cancel(job_id)
             break
-        await asyncio.sleep(WAIT_SLICE)
     if not job.done.is_set():
         return JSONResponse(job.summary(), status_code=202, headers={"Location": f"/jobs/{job.id}"})
     if job.status == "done":
@@ -119,7 +123,7 @@ def _plans(app: FastAPI, service: Service) -> None:
     @app.get("/plans", response_model=list[models.PlanInfo], tags=["plans"])
     def plans() -> list[dict[str, Any]]:
         """Every plan the service holds, with its latest revision."""
-        return [service.info(p) for p in service.store.plans.values()]
+        return [service.info(p) for p in list(service.store.plans.values())]
 
     @app.get("/plans/{plan_id}", tags=["plans"])
     def plan_json(plan_id: str, revision: int | None = Query(None, ge=0)) -> dict[str, Any]:

@@ -89,6 +89,8 @@ class Service:
     def revise(self, plan_id: str, based_on: int, state: dict[str, Any], time_budget: float | None) -> Job:
         """Start revising a plan from the team's state observed against revision ``based_on``."""
         stored = self.get(plan_id)
+        if based_on != stored.latest:  # stale already: refused without waiting for the plan's turn
+            raise Stale(plan_id, based_on, stored.latest)
         job = self._job(plan_id, "revision")
 
         def run() -> dict[str, Any]:

@@ -112,7 +112,7 @@ class Store:
 
 
 def _json(data: Any) -> str:
-    return json.dumps(data, indent=1, allow_nan=False) + "\n"
+    return json.dumps(data, separators=(",", ":"), allow_nan=False) + "\n"
 
 
 def _read(path: Path) -> dict[str, Any]:
