@@ -51,7 +51,8 @@ class Watch:
 
     def oracle(self, done: int, total: int) -> None:
         self.check()
-        self.tell({"stage": "costs", "done": done, "total": total})
+        if done == total or done % max(1, total // 50) == 0:  # about 50 events for the costs, not thousands
+            self.tell({"stage": "costs", "done": done, "total": total})
 
     def search(self, seconds: float, best: float, bound: float | None, what: str) -> None:
         self.check()
