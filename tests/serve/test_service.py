@@ -136,3 +136,24 @@ def test_the_shipped_openapi_document_is_current(client: Client) -> None:
     served = client._call("GET", "/openapi.json")
     shipped = json.loads((ROOT / "docs" / "openapi.json").read_text())
     assert served == shipped, "regenerate it: python -m tmpnav.serve.openapi > docs/openapi.json"
+
+
+def test_a_revision_is_the_one_tmpnav_replan_plans(server: Server, client: Client, first: dict, tmp_path) -> None:
+    plan = client.plan(goals={"robots": {"r1": ["B", "C"], "r2": ["A"]}})
+    state = {"time": 12.0, "robots": {"r1": {"pose": [3.0, 4.8, -1.57], "covariance": AMCL}}}
+    revised = client.post_state(plan["id"], 0, state)
+    served = client.document(plan["id"], revised["revision"])
+    (tmp_path / "state.json").write_text(json.dumps(state))
+    (tmp_path / "plan.json").write_text(json.dumps(client.document(plan["id"], 0)))
+    scenario = tmp_path / "shift.yaml"  # the site with the shift's goals, as a scenario file
+    text = (ROOT / "configs" / "two-rooms.yaml").read_text().split("\ngoals:")[0]
+    scenario.write_text(text + "\ngoals:\n  robots: {r1: [B, C], r2: [A]}\n")
+    command = [sys.executable, "-m", "tmpnav", "replan", str(scenario), "--plan", str(tmp_path / "plan.json"),
+               "--state", str(tmp_path / "state.json"), "-q", "--cache-dir", str(server.cache)]
+    command += ["-o", str(tmp_path / "out")]
+    subprocess.run(command, cwd=ROOT, check=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    cli = json.loads((tmp_path / "out" / "plan.json").read_text())
+    assert [[(m["robot"], m["to"]) for m in a["moves"]] for a in served["actions"]] == [
+        [(m["robot"], m["to"]) for m in a["moves"]] for a in cli["actions"]]
+    assert served["cost"]["resimulated"] == pytest.approx(cli["cost"]["resimulated"], rel=1e-9)
+    assert served["revision"]["done"] == cli["revision"]["done"]
