@@ -169,13 +169,13 @@ class Service:
         number = stored.latest if revision is None else revision
         if not 0 <= number <= stored.latest:
             raise NotFound(f"plan {plan_id} has no revision {number}; its latest is {stored.latest}")
-        return stored.revisions[number]
+        return stored.document(number)
 
     def feed(self, plan_id: str) -> Feed:
         return self.feeds.setdefault(plan_id, Feed())
 
     def info(self, stored: StoredPlan) -> dict[str, Any]:
-        doc = stored.revisions[-1]
+        doc = stored.current
         base = f"/plans/{stored.id}"
         return {
             "id": stored.id,

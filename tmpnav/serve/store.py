@@ -31,18 +31,20 @@ _PLAN = re.compile(r"^p(\d+)$")
 
 @dataclass
 class StoredPlan:
-    """A plan as the store holds it: its request and its revisions' plan.json documents."""
+    """A plan as the store holds it: its request, its latest revision's plan.json in memory and
+    every revision on disk (a service revising all day keeps one document per plan in memory)."""
 
     id: str
     folder: Path
     request: dict[str, Any]
-    revisions: list[dict[str, Any]] = field(default_factory=list)
+    latest: int = 0
+    current: dict[str, Any] = field(default_factory=dict)  # the latest revision's plan.json
     #: updates to this plan are applied one at a time, in the order of their revision numbers
     lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
-    @property
-    def latest(self) -> int:
-        return len(self.revisions) - 1
+    def document(self, number: int) -> dict[str, Any]:
+        """The plan.json of revision ``number`` (0 <= number <= latest)."""
+        return self.current if number == self.latest else _read(self.path_of(number))
 
     def path_of(self, number: int) -> Path:
         return self.folder / revision_name(number)
@@ -73,8 +75,9 @@ class Store:
             numbers = [n for i, n in enumerate(numbers) if n == i]
             if not numbers:
                 continue
-            plan = StoredPlan(folder.name, folder, _read(folder / "request.json"))
-            plan.revisions = [_read(folder / revision_name(n)) for n in numbers]
+            latest = numbers[-1]
+            plan = StoredPlan(folder.name, folder, _read(folder / "request.json"), latest)
+            plan.current = _read(folder / revision_name(latest))
             self.plans[plan.id] = plan
 
     def new_id(self) -> str:
@@ -91,17 +94,17 @@ class Store:
         """Store a new plan: its request and its first plan, together."""
         folder = self.root / plan_id
         write_files(folder, {"request.json": _json(request), revision_name(0): _json(first)})
-        plan = StoredPlan(plan_id, folder, request, [first])
+        plan = StoredPlan(plan_id, folder, request, 0, first)
         self.plans[plan_id] = plan
         return plan
 
     def add_revision(self, plan: StoredPlan, state: Any, revision: dict[str, Any]) -> int:
         """Store the next revision of ``plan`` with the state it was planned from; its number."""
-        number = len(plan.revisions)
+        number = plan.latest + 1
         write_files(
             plan.folder, {f"rev-{number:04d}.state.json": _json(state), revision_name(number): _json(revision)}
         )
-        plan.revisions.append(revision)
+        plan.latest, plan.current = number, revision
         return number
 
     def drop(self, plan_id: str) -> None:
