@@ -22,7 +22,7 @@ from tmpnav.client import Client
 from tmpnav.errors import EXIT_CODES
 
 #: the statuses docs/serve.md documents for a request body (a valid one: 201, or 202 at once)
-DOCUMENTED = {201, 202, 401, 404, 409, 413, 422}
+DOCUMENTED = {201, 202, 401, 404, 405, 409, 413, 422}
 SMOKE = settings(max_examples=8, derandomize=True, deadline=None, database=None,
                  suppress_health_check=list(HealthCheck))
 STATE = {
@@ -110,6 +110,8 @@ def test_oversize_and_malformed_bodies(http: httpx.Client, first: dict) -> None:
     for body in (b"", b"null", b"[]", b'{"goals": 3}', b'{"wait": "soon"}', b'{"time_budget": -1}', b"\xff\xfe"):
         check(send(http, "/plans", body))
     check(http.get("/plans/nope/schedule"))
+    check(http.get(f"/plans/{first['id']}/states"))  # 405
+    check(http.put("/plans", content=b"{}"))
     check(http.delete("/jobs/nope"))
     assert http.get("/health").json()["status"] == "ok"
 

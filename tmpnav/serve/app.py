@@ -19,7 +19,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from tmpnav.errors import TmpnavError
 from tmpnav.serve import models, problems
 from tmpnav.serve.guard import Guard
-from tmpnav.serve.service import NotFound, Service, Stale
+from tmpnav.serve.service import Busy, NotFound, Service, Stale
 from tmpnav.serve.sitemap import site_geometry
 from tmpnav.version import __version__
 
@@ -68,6 +68,10 @@ def _errors(app: FastAPI) -> None:
     @app.exception_handler(Stale)
     async def stale(request: Request, err: Stale) -> JSONResponse:
         return problems.answer(409, str(err), latest=err.latest)
+
+    @app.exception_handler(Busy)
+    async def busy(request: Request, err: Busy) -> JSONResponse:
+        return problems.answer(503, str(err), 1, headers={"Retry-After": "10"})
 
     @app.exception_handler(NotFound)
     async def not_found(request: Request, err: NotFound) -> JSONResponse:

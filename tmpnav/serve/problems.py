@@ -85,11 +85,12 @@ RESPONSES: dict[int | str, dict[str, Any]] = {
     for code, text in (
         (401, "no or wrong token (with --token)"),
         (404, "no such plan or job"),
+        (405, "a method the path does not take"),
         (409, "a stale update (the plan's latest revision in `latest`), or a cancelled search"),
         (413, "the body is larger than the service's limit"),
         (422, "malformed body, or goals or a state that are not valid, or no plan for them"),
         (500, "the planner or the service failed"),
-        (503, "no usable planner (Java 17+ missing)"),
+        (503, "no usable planner (Java 17+ missing), or too many searches running or waiting (Retry-After)"),
         (504, "the search ran past the service's time limit"),
     )
 }

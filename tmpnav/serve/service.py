@@ -36,6 +36,10 @@ class Stale(Exception):
         self.latest = latest
 
 
+class Busy(Exception):
+    """As many searches running or waiting as the service takes."""
+
+
 class NotFound(Exception):
     """No such plan, revision or job."""
 
@@ -46,6 +50,7 @@ class Limits:
 
     time_limit: float = 300.0  # s a search may run before it is cancelled
     max_body: int = 1 << 20  # bytes of a request body
+    max_queue: int = 64  # searches running or waiting their turn; more are refused (503)
 
 
 @dataclass
@@ -71,7 +76,11 @@ class Service:
         if goals is not None:
             self.site.loaded(goals)  # bad goals are the request's problem (422), before any job
         plan_id = self.store.new_id()
-        job = self._job(plan_id, "plan")
+        try:
+            job = self._job(plan_id, "plan")
+        except Busy:
+            self.store.drop(plan_id)
+            raise
 
         def run() -> dict[str, Any]:
             try:
@@ -118,6 +127,8 @@ class Service:
         return None if asked is None else min(asked, self.limits.time_limit)
 
     def _job(self, plan_id: str, kind: str) -> Job:
+        if sum(not j.done.is_set() for j in list(self.jobs.values())) >= self.limits.max_queue:
+            raise Busy(f"{self.limits.max_queue} searches are running or waiting already; try again later")
         job = Job(f"j{next(self._job_ids)}", plan_id, kind)
         self.jobs[job.id] = job
         while len(self.jobs) > 1000:  # the oldest ended jobs are forgotten
