@@ -107,7 +107,7 @@ class Service:
                 if based_on != stored.latest:
                     raise Stale(plan_id, based_on, stored.latest)
                 report = self.site.revise(
-                    stored.request.get("goals"), stored.path_of(based_on), state, time_budget, job.watch
+                    stored.request.get("goals"), stored.path_of(based_on), state, self._budget(time_budget), job.watch
                 )
                 self.store.add_revision(stored, state, _document(report))
             info = self.info(stored)

@@ -13,6 +13,7 @@ the cache directory.
 
 from __future__ import annotations
 
+import math
 import tempfile
 import threading
 from collections.abc import Callable
@@ -56,7 +57,8 @@ class Watch:
 
     def search(self, seconds: float, best: float, bound: float | None, what: str) -> None:
         self.check()
-        self.tell({"stage": "search", "seconds": round(seconds, 3), "best": best, "bound": bound, "what": what})
+        self.tell({"stage": "search", "seconds": round(seconds, 3), "best": _finite(best), "bound": _finite(bound),
+                   "what": what})
 
 
 class Site:
@@ -136,6 +138,11 @@ class Site:
     def _watched(self, watch: Watch, time_budget: float | None) -> Any:
         extra: dict[str, Any] = {} if time_budget is None else {"time_budget": time_budget}
         return self.options.but(progress=watch.oracle, search_progress=watch.search, **extra)
+
+
+def _finite(value: float | None) -> float | None:
+    """A number for JSON: None for none, or for one that is not finite (no plan yet)."""
+    return None if value is None or not math.isfinite(value) else float(value)
 
 
 def _in_body(problem: Problem) -> Problem:
