@@ -33,7 +33,7 @@ def serve(scenario: Path, host: str, port: int, token: str | None, cache_dir: Pa
 
     The site is loaded once and kept warm; plans and revisions are kept in the cache
     directory and reloaded at start. Without --token it listens on loopback only.
-    Stop it with Ctrl-C. Needs the serve extra: pip install 'tmpnav[serve]'.
+    End it with Ctrl-C. Needs the serve extra: pip install 'tmpnav[serve]'.
     """
     from tmpnav.serve import serve as run
 
