@@ -12,7 +12,7 @@ STAMP   := $(VENV)/.installed
 LOG     := $(VENV)/install.log
 comma   := ,
 
-.PHONY: demo test bench bench-full lint regression regression-update clean java
+.PHONY: demo test browser bench bench-full lint regression regression-update clean java
 
 # $(call install,EXTRAS,WHAT): an editable install of tmpnav with EXTRAS into .venv, quietly: pip's
 # output goes to $(LOG) and only its end is shown if it fails. Then the bytecode of everything
@@ -65,10 +65,26 @@ demo: $(RUNTIME)
 # keep 2 cores busier than two. Before them, one small plan compiles the numba kernels once
 # (about 45 s on a fresh clone, a moment after that): each process would compile them again;
 # office-rooms' plan compiles the range sensor's code too.
-test: $(STAMP)
+test: $(STAMP) browser
 	@$(BIN)/python -m tmpnav plan configs/two-rooms.yaml -q --no-cache > /dev/null
 	@$(BIN)/python -m tmpnav plan configs/office-rooms.yaml -q --no-cache --anytime-budget 1 > /dev/null
 	$(BIN)/pytest -q -n 3 --dist loadfile; rc=$$?; if [ $$rc -eq 5 ]; then exit 0; fi; exit $$rc
+
+# The live view's test (tests/serve/test_view.py) drives Debian's chromium through chromium-driver.
+# Installed here when missing and possible (as root, with apt-get; quietly, its log in .venv/apt.log;
+# apt-get update only when the install fails without it); elsewhere the test skips and says why.
+APT_BROWSER := DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium chromium-driver >>$(VENV)/apt.log 2>&1
+browser:
+	@if [ ! -x /usr/bin/chromium ] || [ ! -x /usr/bin/chromedriver ]; then \
+		if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+			mkdir -p $(VENV); \
+			echo "installing Debian's chromium and chromium-driver for the live view's test (log: $(VENV)/apt.log)"; \
+			$(APT_BROWSER) || { apt-get update -qq >>$(VENV)/apt.log 2>&1 && $(APT_BROWSER); } \
+				|| echo "warning: chromium could not be installed (see $(VENV)/apt.log): the view's test will skip"; \
+		else \
+			echo "note: no chromium and chromium-driver, and no apt-get as root to install them: the view's test will skip"; \
+		fi; \
+	fi
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py --quick

@@ -41,6 +41,10 @@ HEAVY: dict[str, float] = {
     "tests/oracle/test_worker_lifetime.py": 19,
     "tests/rooms/test_segment.py": 18,
     "tests/test_closed_loop.py": 15,
+    "tests/serve/test_bad_input.py": 80,  # tests/serve: a real `tmpnav serve` per file, planning two-rooms
+    "tests/serve/test_service.py": 60,
+    "tests/serve/test_restart.py": 50,
+    "tests/serve/test_view.py": 45,
 }
 
 

@@ -60,6 +60,8 @@ LAYERS: dict[str, int] = {
     "tmpnav.bench": 15,
     "tmpnav.api": 15,
     "tmpnav.cli": 15,
+    "tmpnav.serve": 15,  # `tmpnav serve`: the pipeline and replan behind HTTP
+    "tmpnav.client": 15,  # a client of tmpnav serve (the standard library only)
     "tmpnav": 16,  # the package itself: ``import tmpnav`` is the Python API (tmpnav.api, on first use)
     "tmpnav.__main__": 16,
 }

@@ -9,6 +9,7 @@ exceptions (tmpnav.errors); only this package turns them into messages and exit 
 from tmpnav.cli import evaluation as _evaluation  # noqa: F401  (registers `tmpnav simulate`, `tmpnav bench`)
 from tmpnav.cli import replan as _replan  # noqa: F401  (registers `tmpnav replan`)
 from tmpnav.cli import rooms as _rooms  # noqa: F401  (registers `tmpnav rooms`)
+from tmpnav.cli import serve as _serve  # noqa: F401  (registers `tmpnav serve`)
 from tmpnav.cli.commands import cli, main
 from tmpnav.cli.options import writing
 

@@ -1,0 +1,86 @@
+"""The live view in a real headless Chromium (Debian's chromium and chromium-driver, driven by
+selenium): the page loads a plan, draws every robot, the time slider moves them, and a state
+posted to the service redraws the page with the revision, pushed as a server-sent event."""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from tests.serve.server import Server
+from tmpnav.client import Client
+
+CHROMIUM, DRIVER = Path("/usr/bin/chromium"), Path("/usr/bin/chromedriver")
+webdriver = pytest.importorskip("selenium.webdriver", reason="the view's test needs selenium (the test extra)")
+if not (CHROMIUM.exists() and DRIVER.exists()):
+    pytest.skip(
+        "Debian's chromium and chromium-driver are not installed (make test installs them as root: "
+        "apt-get install chromium chromium-driver)",
+        allow_module_level=True,
+    )
+
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.common.keys import Keys  # noqa: E402
+from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
+
+FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         "--disable-dev-shm-usage", "--window-size=1200,900")  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[object]:
+    profile = tempfile.mkdtemp(prefix="tmpnav-chromium-")
+    options = webdriver.ChromeOptions()
+    options.binary_location = str(CHROMIUM)
+    for flag in (*FLAGS, f"--user-data-dir={profile}"):
+        options.add_argument(flag)
+    driver = webdriver.Chrome(options=options, service=webdriver.ChromeService(executable_path=str(DRIVER)))
+    try:
+        yield driver
+    finally:
+        driver.quit()
+        shutil.rmtree(profile, ignore_errors=True)
+
+
+def robots(driver: object) -> dict[str, tuple[float, float]]:
+    items = driver.find_elements(By.CSS_SELECTOR, "#robots li")  # type: ignore[attr-defined]
+    return {i.get_attribute("data-robot"): (float(i.get_attribute("data-x")), float(i.get_attribute("data-y")))
+            for i in items if i.get_attribute("data-x") is not None}
+
+
+def painted(driver: object, colour: tuple[int, int, int]) -> int:
+    """How many pixels of the map's canvas are ``colour``."""
+    script = """
+        const [r, g, b] = arguments[0], c = document.getElementById('map');
+        const data = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+        let n = 0;
+        for (let i = 0; i < data.length; i += 4)
+            if (Math.abs(data[i] - r) < 8 && Math.abs(data[i + 1] - g) < 8 && Math.abs(data[i + 2] - b) < 8) n++;
+        return n;"""
+    return int(driver.execute_script(script, list(colour)))  # type: ignore[attr-defined]
+
+
+def test_the_view_draws_the_plan_moves_the_robots_and_shows_revisions(
+    server: Server, client: Client, first: dict, browser: object
+) -> None:
+    wait = WebDriverWait(browser, 120)
+    browser.get(f"{server.url}/?plan={first['id']}")  # type: ignore[attr-defined]
+    wait.until(lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-drawn") == "0")
+    start = robots(browser)
+    assert set(start) == set(first["robots"])
+    assert painted(browser, (0xD6, 0x27, 0x28)) > 50 and painted(browser, (0x1F, 0x77, 0xB4)) > 50  # r1, r2
+    slider = browser.find_element(By.ID, "time")  # type: ignore[attr-defined]
+    slider.send_keys(Keys.END)  # the end of the schedule
+    wait.until(lambda d: robots(d) != start)
+    end = robots(browser)
+    assert all(abs(end[r][0] - start[r][0]) + abs(end[r][1] - start[r][1]) > 1.0 for r in start)
+    assert browser.find_element(By.ID, "clock").text == f"{first['makespan']:.1f} s"  # type: ignore[attr-defined]
+    revised = client.post_state(first["id"], first["revision"], {"time": 10.0, "robots": {"r2": {"status": "down"}}})
+    wait.until(lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-drawn") == str(revised["revision"]))
+    assert browser.find_element(By.ID, "revision").text == str(revised["revision"])  # type: ignore[attr-defined]
+    assert f"revision {revised['revision']}" in browser.find_element(By.ID, "summary").text  # type: ignore[attr-defined]
