@@ -20,6 +20,13 @@ from tmpnav.cli.options import (
 )
 from tmpnav.cli.planners import check_planner
 
+#: what decided a revision's plan (tmpnav.results.Revision.rule), as the command says it
+RULES = {
+    "search": "the search (its best plan)",
+    "repair": "repair (the rest of the old plan, with the goals left over inserted where they cost least "
+    "within their windows; the search found nothing better)",
+}
+
 
 @cli.command()
 @SCENARIO_ARG
@@ -98,6 +105,12 @@ def replan(
         f"revision {revision.number} of {Path(revision.previous).name}, from {revision.start_time:.1f} s: "
         f"{len(revision.done)} goal rooms done" + (f", down: {', '.join(revision.down)}" if revision.down else "")
     )
+    if revision.held:
+        click.echo(
+            "finishing their services first: "
+            + ", ".join(f"{robot} at {room} for {seconds:.1f} s" for robot, room, seconds in revision.held)
+        )
+    click.echo(f"decided by: {RULES[revision.rule]}")
     click.echo(plan_summary(report))
     if output is not None:
         click.echo(wrote_into(output, written))

@@ -43,7 +43,11 @@ def check_windows(run: TaskRun) -> None:
             raise WindowError(
                 f"{run.scenario.source.name}: goals.jobs.{room}.window: it closes at {latest:g} s, but the earliest "
                 f"arrival possible is {can} (the quickest robot allowed, driving there first); expected a window "
-                "that closes later"
+                "that closes later",
+                room,
+                latest,
+                earliest,
+                certain=True,
             )
 
 
@@ -56,5 +60,8 @@ def check_arrivals(run: TaskRun, schedule: Schedule | None) -> None:
         raise WindowError(
             f"{run.scenario.source.name}: goals.jobs.{m.target}.window: it closes at {latest:g} s, and the best "
             f"plan found arrives at {m.end:.1f} s ({m.robot}); no plan found meets every window; expected a window "
-            "that closes later, fewer goals before it, or another robot allowed to do it"
+            "that closes later, fewer goals before it, or another robot allowed to do it",
+            m.target,
+            latest,
+            m.end,
         )
