@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 from tmpnav.errors import InputError, WindowError
 from tmpnav.replan.revise import Revision, leave_out, revise
 from tmpnav.replan.state import TeamState, read_state
-from tmpnav.results import PlanReport
+from tmpnav.results import PlanReport, SearchProgress
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 
@@ -86,8 +86,13 @@ def _revised(
     # the robots' starts added
     same = new_world is world and set(revised.roadmap.poses) <= set(scenario.roadmap.poses)
     base = _grown(scenario, world, options) if same else None
+    search = _search_of(revised, options)
     revised_options = options.but(
-        incumbent=revision.incumbent, roadmap_base=base, origins=scenario.robots, **_search_of(revised, options)
+        incumbent=revision.incumbent,
+        roadmap_base=base,
+        origins=scenario.robots,
+        search_progress=_against_budget(options.reporters.search, search.get("time_budget")),
+        **search,
     )
     while True:
         try:
@@ -148,6 +153,21 @@ def _search_of(revised: Scenario, options: Options) -> dict[str, Any]:
     if options.overrides.time_budget is None:
         out["time_budget"] = replan_budget(len(revised.goals.all_rooms), len(revised.robots), sp.time_budget)
     return out
+
+
+def _against_budget(progress: SearchProgress | None, budget: float | None) -> SearchProgress | None:
+    """The search's progress, each event saying how much of the run's budget the run had spent
+    by then: the budget counts from the run's start, and the stages before the search (the
+    roadmap with the new starts, the moves from them) and its first plan are made whatever it
+    is, so a replan may pass it before the search improves anything (docs/replan.md)."""
+    if progress is None or budget is None:
+        return progress
+    tell = progress
+
+    def told(seconds: float, best: float, bound: float | None, what: str) -> None:
+        tell(seconds, best, bound, f"{what}; the run at {seconds:.1f} s of its budget of {budget:g} s")
+
+    return told
 
 
 #: the roadmaps of the plans being revised, by their store key: a service revising one plan
