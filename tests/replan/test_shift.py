@@ -5,6 +5,7 @@ through a revision of a revision; a revision's nav2 files read back and run by t
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -180,3 +181,12 @@ def test_windows_on_the_first_plans_clock_through_a_revision_of_a_revision(hall:
         m["to"] for r in rev1["schedule"]["robots"] for m in moves_of(rev1, r) if m["end"] <= 25.0
     }
     assert not done & set(entered) and goals <= done | {"B"} | set(entered)
+
+
+def test_the_progress_line_says_how_much_of_the_budget_the_run_had_spent(hall: Planned, tmp_path: Path) -> None:
+    """The line's first time is the command's; the budget is the run's, and the run had spent
+    part of it (or more) before the search's first plan: the line says how much."""
+    proc = hall.replan(tmp_path, "time: 21.5\n", "--anytime-budget", "3")
+    assert proc.returncode == 0, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("search ")]
+    assert lines and all(re.search(r"; the run at \d+\.\d s of its budget of 3 s\)$", line) for line in lines), lines

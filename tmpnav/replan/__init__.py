@@ -91,7 +91,9 @@ def _revised(
         incumbent=revision.incumbent,
         roadmap_base=base,
         origins=scenario.robots,
-        search_progress=_against_budget(options.reporters.search, search.get("time_budget")),
+        search_progress=_against_budget(
+            options.reporters.search, search.get("time_budget", options.overrides.time_budget)
+        ),
         **search,
     )
     while True:
