@@ -4,8 +4,9 @@ A job's window (``goals.jobs``: [earliest, latest] on the team's clock) bounds w
 arrive at its room. Before the search, each window is checked against the earliest arrival
 possible: the least time floor (:mod:`tmpnav.attachment.floors`: the least any move of the
 roadmap takes, whatever the beliefs) of a move into the room from the start of a robot that may
-do the job. A robot that must first go elsewhere arrives later still, so a window that closes
-before that floor is met by no plan. After the search, a plan that still arrives late (every
+do the job, after the robot's hold at its station (a replan's ``goals.held``). A robot that
+must first go elsewhere arrives later still, so a window that closes before that floor is met
+by no plan. After the search, a plan that still arrives late (every
 plan the search tried was) gets the same error, with the arrival of its latest move.
 """
 
@@ -32,7 +33,7 @@ def check_windows(run: TaskRun) -> None:
     for room, (_, latest) in goals.windows.items():
         earliest = min(
             (
-                d
+                goals.held_for(r) + d  # a robot held at its station leaves after its hold
                 for (r, origin, x), d in floors.duration.items()
                 if x == room and origin == canonical.start_location[r] and goals.may_visit(r, room)
             ),

@@ -105,12 +105,12 @@ def revise(
     robots = tuple(_robot(spec, doc, state, as_it_is) for spec in scenario.robots if spec.name not in down)
     if state.doors:
         _doors_clear(robots, world, state)
-    held = in_service(doc, t, state, {r.name for r in robots})
+    held = in_service(doc, t, state, robots, as_it_is)
     again = interrupted(doc, t, state, robots, as_it_is)
     now = state.visited if state.visited is not None else _arrived(doc, t, again)
     # a revision of a revision: the goals done before the plan being revised stay done
     before = [str(x) for x in (doc.get("revision") or {}).get("done", ())]
-    done = tuple(dict.fromkeys((*before, *now)))
+    done = tuple(dict.fromkeys((*before, *now, *(room for _, room, _ in held))))
     offset = float((doc.get("revision") or {}).get("start_time", 0.0)) + t
     revised = replace(revised, robots=robots)
     closed_off: tuple[str, ...] = ()
@@ -267,14 +267,15 @@ def _goals(
 
 
 def _without(goals: Goals, rooms: set[str]) -> Goals:
-    """The goals without ``rooms``."""
+    """The goals without ``rooms`` (the robots' holds kept)."""
     if not rooms:
         return goals
-    return Goals(
-        tuple(x for x in goals.visit if x not in rooms),
-        tuple((r, tuple(x for x in xs if x not in rooms)) for r, xs in goals.per_robot if set(xs) - rooms),
-        tuple(j for j in goals.jobs if j.room not in rooms),
-        tuple((r, x) for r, x in goals.ends if x not in rooms),
+    return replace(
+        goals,
+        visit=tuple(x for x in goals.visit if x not in rooms),
+        per_robot=tuple((r, tuple(x for x in xs if x not in rooms)) for r, xs in goals.per_robot if set(xs) - rooms),
+        jobs=tuple(j for j in goals.jobs if j.room not in rooms),
+        ends=tuple((r, x) for r, x in goals.ends if x not in rooms),
     )
 
 

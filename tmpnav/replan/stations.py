@@ -19,15 +19,20 @@ from tmpnav.world import World
 TIME_TOL = 1e-6
 
 
-def _serving(doc: dict[str, Any], robot: str, t: float) -> tuple[str, float] | None:
+def _serving(doc: dict[str, Any], robot: str, t: float, inside: str | None = None) -> tuple[str, float] | None:
     """Where ``robot`` is at its station at ``t`` in the plan (waiting for the window, then
     serving), and when it is free: (room, free); None when it is not at a station then. A
-    revision's own hold (its first move's ``ready``) counts as a service at its start room."""
+    robot whose move under way ends in ``inside``, the room it stands in, is there already: it
+    ends its move, then waits and serves. A revision's own hold counts as a service at its
+    start room."""
     entry = doc["schedule"]["robots"].get(robot)
     if entry is None:
         return None
     moves = entry["moves"]
     ended = [m for m in moves if m["end"] <= t + TIME_TOL]
+    under_way = [m for m in moves if m["start"] <= t + TIME_TOL < m["end"]]
+    if under_way and inside is not None and under_way[0]["to"] == inside:
+        ended = under_way
     if ended:
         m = ended[-1]
         free = float(m["end"]) + float(m.get("opens") or 0.0) + float(m.get("service") or 0.0)
@@ -38,17 +43,21 @@ def _serving(doc: dict[str, Any], robot: str, t: float) -> tuple[str, float] | N
     return None
 
 
-def in_service(doc: dict[str, Any], t: float, state: TeamState, live: set[str]) -> tuple[tuple[str, str, float], ...]:
-    """(robot, room, s) for each live robot at its station at ``t`` whose service the state does
-    not say was interrupted: it stays there the rest of its wait and service (``Goals.held``)."""
+def in_service(
+    doc: dict[str, Any], t: float, state: TeamState, robots: tuple[RobotSpec, ...], world: World
+) -> tuple[tuple[str, str, float], ...]:
+    """(robot, room, s) for each robot at its station at ``t`` (or already inside the room its
+    move under way ends in) whose service the state does not say was interrupted: it stays
+    there the rest of its move, wait and service (``Goals.held``)."""
     out = []
-    for robot in doc["schedule"]["robots"]:
-        given = state.robots.get(robot)
-        if robot not in live or (given is not None and given.interrupted):
+    for spec in robots:
+        given = state.robots.get(spec.name)
+        if given is not None and given.interrupted:
             continue
-        serving = _serving(doc, robot, t)
+        inside = world.room_of([spec.pose.x, spec.pose.y])  # type: ignore[arg-type]
+        serving = _serving(doc, spec.name, t, inside)
         if serving is not None:
-            out.append((robot, serving[0], serving[1] - t))
+            out.append((spec.name, serving[0], serving[1] - t))
     return tuple(out)
 
 
