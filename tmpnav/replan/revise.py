@@ -110,7 +110,7 @@ def revise(
     now = state.visited if state.visited is not None else _arrived(doc, t, again)
     # a revision of a revision: the goals done before the plan being revised stay done
     before = [str(x) for x in (doc.get("revision") or {}).get("done", ())]
-    done = tuple(dict.fromkeys((*before, *now, *(room for _, room, _ in held))))
+    done = tuple(dict.fromkeys((*before, *now)))
     offset = float((doc.get("revision") or {}).get("start_time", 0.0)) + t
     revised = replace(revised, robots=robots)
     closed_off: tuple[str, ...] = ()
