@@ -106,9 +106,18 @@ class ConflictError(PlannerError):
 
 
 class WindowError(PlannerError):
-    """A job's window that no robot can arrive within (goals.jobs.window)."""
+    """A job's window that no robot can arrive within (goals.jobs.window): its room, when it
+    closes and the arrival found, on the clock of the plan (a revision's starts at its
+    ``start_time``); ``certain``: the arrival is the earliest possible, so no plan meets the
+    window (else it is the best plan's the search found)."""
 
     exit_code = 11
+
+    def __init__(
+        self, message: str, room: str = "", latest: float = 0.0, arrival: float = 0.0, certain: bool = False
+    ):
+        super().__init__(message)
+        self.room, self.latest, self.arrival, self.certain = room, latest, arrival, certain
 
 
 #: ``tmpnav replan``: the revision is planned and written, but goals no robot can reach any more are left out

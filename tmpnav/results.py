@@ -336,6 +336,12 @@ class Revision:
     unreachable: tuple[tuple[str, str], ...]  # (room, why) goals no robot can reach any more
     #: the rest of the old plan: steps of (robot, target) pairs, the search's incumbent
     incumbent: tuple[tuple[tuple[str, str], ...], ...] = ()
+    #: (robot, room, s): a robot at its station when the revision starts, held there for the rest
+    #: of its wait and service (Goals.held)
+    held: tuple[tuple[str, str, float], ...] = ()
+    #: what decided the plan: "search" (the planner), or "repair" (the rest of the old plan with
+    #: the goals of robots down inserted where they cost least, when the search found no plan)
+    rule: str = "search"
 
 
 @dataclass(frozen=True)

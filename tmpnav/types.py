@@ -335,6 +335,13 @@ class Goals:
     jobs: tuple[Job, ...] = ()
     #: (robot, room) where a robot must finish (its dock, a charger): its last move enters it
     ends: tuple[tuple[str, str], ...] = ()
+    #: (robot, s): a robot that stands where it is for that long before its first move, on the
+    #: team's clock (a replan: the rest of the service it is doing when the team replans)
+    held: tuple[tuple[str, float], ...] = ()
+
+    def held_for(self, robot: str) -> float:
+        """Seconds ``robot`` stands where it starts before it may move (0: it may at once)."""
+        return dict(self.held).get(robot, 0.0)
 
     def for_robot(self, robot: str) -> tuple[str, ...]:
         """The rooms ``robot`` must enter: its targets, then its end."""

@@ -41,6 +41,7 @@ and :meth:`TeamClock.advance` return new ones, so the exact search can branch fr
 from __future__ import annotations
 
 import heapq
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
@@ -242,7 +243,10 @@ class TeamClock:
             seed = stable_seed(self.scenario.models.seed, "landmarks", r, node, "standing")
             legs.append((Leg(0, None, node, heading, np.array([x, y, heading]), seed),))
         n = len(team.names)
-        return ClockState(0, team, tuple(legs), (0,) * n, (0.0,) * n, (0.0,) * n)
+        # a robot held where it starts (the rest of a service, Goals.held) is free after its hold
+        goals = self.scenario.goals
+        free = tuple(math.ceil(goals.held_for(r) / self.dt - 1e-9) for r in team.names)
+        return ClockState(0, team, tuple(legs), free, (0.0,) * n, (0.0,) * n)
 
     def ready(self, state: ClockState, step: Step) -> int:
         """The step at which all the robots of ``step`` have ended their latest moves."""

@@ -20,6 +20,13 @@ from tmpnav.cli.options import (
 )
 from tmpnav.cli.planners import check_planner
 
+#: what decided a revision's plan (tmpnav.results.Revision.rule), as the command says it
+RULES = {
+    "search": "the search (its best plan)",
+    "repair": "repair (the rest of the old plan, with the goals left over inserted where they cost least "
+    "within their windows; the search found nothing better)",
+}
+
 
 @cli.command()
 @SCENARIO_ARG
@@ -35,8 +42,8 @@ from tmpnav.cli.planners import check_planner
     "state_path",
     required=True,
     type=click.Path(path_type=Path, dir_okay=False, exists=True),
-    help="Where the team is (YAML or JSON): time, robots' poses and covariances or status down, rooms visited, "
-    "doors, goals to add or remove (docs/replan.md).",
+    help="Where the team is (YAML or JSON): time, robots' poses and covariances, status down or a service "
+    "interrupted, rooms visited, doors, goals (rooms or jobs) to add or remove (docs/replan.md).",
 )
 @output_option(
     True,
@@ -62,13 +69,16 @@ def replan(
 
     Reads the plan being executed and the team's state at TIME (docs/replan.md): each robot
     starts from its belief then, the goals done are left out, robots that are down leave the
-    team (the others take their goals), doors close or open, goals are added or removed. The rest
-    of the old plan is the search's first incumbent; move costs the change leaves valid come from
-    the cache. Unless --search or --anytime-budget say otherwise, the anytime search plans it with
-    a tenth of a first plan's budget, at least 1 s: the team is waiting. The revision's
-    plan.json has the old schema, times from the revision's start, and its number and start
-    time in ``revision``. Goals no robot can reach any more are named one
-    per line (exit code 12); the rest is planned and written.
+    team (the others take their goals), a robot at its station finishes its service first,
+    doors close or open, goals (rooms or jobs) are added or removed. The rest of the old plan,
+    with the goals left over inserted where they cost least within their windows, is the
+    search's first incumbent; move costs the change leaves valid come from the cache. Unless
+    --search or --anytime-budget say otherwise, the anytime search plans it with a tenth of a
+    first plan's budget, at least 1 s: the team is waiting. The revision's plan.json has the
+    old schema, times from the revision's start, and its number and start time in
+    ``revision``. Goals no robot can reach any more (a closed door, a window that closes
+    before any robot can get there) are named one per line (exit code 12); the rest is
+    planned and written.
     """
     from tmpnav.pipeline import pddl_texts
     from tmpnav.replan import replan as run_replan
@@ -98,6 +108,12 @@ def replan(
         f"revision {revision.number} of {Path(revision.previous).name}, from {revision.start_time:.1f} s: "
         f"{len(revision.done)} goal rooms done" + (f", down: {', '.join(revision.down)}" if revision.down else "")
     )
+    if revision.held:
+        click.echo(
+            "finishing their services first: "
+            + ", ".join(f"{robot} at {room} for {seconds:.1f} s" for robot, room, seconds in revision.held)
+        )
+    click.echo(f"decided by: {RULES[revision.rule]}")
     click.echo(plan_summary(report))
     if output is not None:
         click.echo(wrote_into(output, written))

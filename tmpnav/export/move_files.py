@@ -9,6 +9,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +20,7 @@ from tmpnav.export.moves import MoveRequest, NavigateThroughPoses, Pose, Team
 from tmpnav.export.plan_times import FRAME, UNITS
 
 FORMAT = "tmpnav-nav2/1"  # the ``format`` of the files: bump it when a reader of the old one would misread them
-SCHEDULE_FILE = "schedule.yaml"
+SCHEDULE_FILE = "schedule.yaml"  # a first plan's (a revision's: schedule_file_name)
 
 
 def export_id(plan: Team) -> str:
@@ -29,12 +30,24 @@ def export_id(plan: Team) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def files(plan: Team) -> dict[str, str]:
-    """File name -> text: ``<robot>.moves.yaml`` per robot and ``schedule.yaml`` for the team."""
+def files(plan: Team, tag: str = "") -> dict[str, str]:
+    """File name -> text: ``<robot>.moves.yaml`` per robot and ``schedule.yaml`` for the team;
+    with a ``tag`` (a revision's ``.rev2``) before each suffix, and the schedule naming its
+    robots' files so tagged."""
     export = export_id(plan)
-    out = {f"{robot}.moves.yaml": _robot_file(plan, robot, export) for robot in plan.robots}
-    out[SCHEDULE_FILE] = _schedule_file(plan, export)
+    out = {robot_file_name(robot, tag): _robot_file(plan, robot, export) for robot in plan.robots}
+    out[schedule_file_name(tag)] = _schedule_file(plan, export, tag)
     return out
+
+
+def robot_file_name(robot: str, tag: str = "") -> str:
+    """``<robot>.moves<tag>.yaml``: a robot's move requests."""
+    return f"{robot}.moves{tag}.yaml"
+
+
+def schedule_file_name(tag: str = "") -> str:
+    """``schedule<tag>.yaml``: the team's schedule (``schedule.rev1.yaml`` for revision 1)."""
+    return f"schedule{tag}.yaml"
 
 
 _TIMES = (
@@ -65,7 +78,7 @@ def _robot_file(plan: Team, robot: str, export: str) -> str:
     return header + _dump(data)
 
 
-def _schedule_file(plan: Team, export: str) -> str:
+def _schedule_file(plan: Team, export: str, tag: str) -> str:
     header = (
         f"# The team's moves by planned departure: tmpnav plan of scenario {plan.scenario}. Units: {UNITS}.\n"
         + _TIMES
@@ -79,7 +92,7 @@ def _schedule_file(plan: Team, export: str) -> str:
         "scenario": plan.scenario,
         "frame": FRAME,
         "makespan": plan.makespan,
-        "robots": {r: {"file": f"{r}.moves.yaml", "moves": len(plan.moves[r])} for r in plan.robots},
+        "robots": {r: {"file": robot_file_name(r, tag), "moves": len(plan.moves[r])} for r in plan.robots},
     }
     rows = (
         {"move": m.name, "robot": m.robot, **_timing(m), "after": [a.name for a in plan.after(m)]} for m in order
@@ -116,18 +129,22 @@ def _dump(data: dict[str, Any]) -> str:
 # ---------------------------------------------------------------- reading them back
 
 
-def read_team(folder: str | Path) -> Team:
-    """The moves of an export (``schedule.yaml`` and the robot files it names, in ``folder``);
-    a file that is missing, malformed or of another export raises :class:`InputError`."""
+def read_team(folder: str | Path, revision: int | None = None) -> Team:
+    """The moves of an export in ``folder``: its schedule file and the robot files it names. The
+    schedule is ``schedule.rev<revision>.yaml`` (``schedule.yaml`` for revision 0, a first plan);
+    with no ``revision``, the newest in the folder (the highest revision's, else
+    ``schedule.yaml``). A file that is missing, malformed or of another export raises
+    :class:`InputError`."""
     folder = Path(folder)
-    schedule = _load(folder / SCHEDULE_FILE)
-    robots = _get(schedule, "robots", dict, SCHEDULE_FILE)
+    schedule_name = schedule_file_name(_tag(revision) if revision is not None else _newest(folder))
+    schedule = _load(folder / schedule_name)
+    robots = _get(schedule, "robots", dict, schedule_name)
     moves = {}
     for robot, entry in robots.items():
-        name = _get(_expect(entry, dict, SCHEDULE_FILE, f"robots.{robot}"), "file", str, SCHEDULE_FILE)
+        name = _get(_expect(entry, dict, schedule_name, f"robots.{robot}"), "file", str, schedule_name)
         doc = _load(folder / name)
         if doc.get("export") != schedule.get("export") or doc.get("robot") != robot:
-            raise InputError(f"{folder / name} is not robot {robot}'s file of {SCHEDULE_FILE}'s export: export again")
+            raise InputError(f"{folder / name} is not robot {robot}'s file of {schedule_name}'s export: export again")
         frame = _get(doc, "frame", str, name)
         entries = _get(doc, "moves", list, name)
         moves[str(robot)] = tuple(_read_move(str(robot), k, e, frame, name) for k, e in enumerate(entries, 1))
@@ -135,9 +152,21 @@ def read_team(folder: str | Path) -> Team:
     return Team(
         tuple(map(str, robots)),
         moves,
-        None if planned is None else _number(planned, SCHEDULE_FILE, "makespan"),
+        None if planned is None else _number(planned, schedule_name, "makespan"),
         str(schedule.get("scenario", "")),
     )
+
+
+def _tag(revision: int) -> str:
+    """The tag of a revision's file names: "" for a first plan (0), else ``.rev<revision>``."""
+    return f".rev{revision}" if revision else ""
+
+
+def _newest(folder: Path) -> str:
+    """The tag of the newest schedule in ``folder`` ("" when it holds no revision's)."""
+    found = (re.fullmatch(r"schedule\.rev(\d+)\.yaml", p.name) for p in folder.glob("schedule.rev*.yaml"))
+    numbers = [int(m[1]) for m in found if m is not None]
+    return _tag(max(numbers)) if numbers else ""
 
 
 def _load(path: Path) -> dict[str, Any]:

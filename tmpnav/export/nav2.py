@@ -210,16 +210,19 @@ def _cell(value: float | None) -> str:
     return "" if value is None else repr(value)
 
 
-def files(doc: dict[str, Any]) -> dict[str, str]:
+def files(doc: dict[str, Any], tag: str = "") -> dict[str, str]:
     """File name -> text of every file of the export: per robot its waypoint files and its move
-    requests (:mod:`tmpnav.export.move_files`), and the team's schedule."""
-    requests = move_files.files(moves.team(doc))
+    requests (:mod:`tmpnav.export.move_files`), and the team's schedule. A ``tag`` (a revision's
+    ``.rev1``) goes before each file's suffix, in the names and in the schedule's references:
+    ``r1.rev1.csv``, ``r1.moves.rev1.yaml``, ``schedule.rev1.yaml``."""
+    requests = move_files.files(moves.team(doc), tag)
     out = {}
     for robot, points in waypoints(doc).items():
-        out[f"{robot}.csv"] = csv_text(doc, robot, points)
-        out[f"{robot}.follow_waypoints.yaml"] = follow_waypoints_yaml(doc, robot, points)
-        out[f"{robot}.rviz_waypoints.yaml"] = rviz_waypoints_yaml(doc, robot, points)
-        out[f"{robot}.moves.yaml"] = requests.pop(f"{robot}.moves.yaml")
+        out[f"{robot}{tag}.csv"] = csv_text(doc, robot, points)
+        out[f"{robot}.follow_waypoints{tag}.yaml"] = follow_waypoints_yaml(doc, robot, points)
+        out[f"{robot}.rviz_waypoints{tag}.yaml"] = rviz_waypoints_yaml(doc, robot, points)
+        name = move_files.robot_file_name(robot, tag)
+        out[name] = requests.pop(name)
     return out | requests
 
 

@@ -4,8 +4,9 @@ A job's window (``goals.jobs``: [earliest, latest] on the team's clock) bounds w
 arrive at its room. Before the search, each window is checked against the earliest arrival
 possible: the least time floor (:mod:`tmpnav.attachment.floors`: the least any move of the
 roadmap takes, whatever the beliefs) of a move into the room from the start of a robot that may
-do the job. A robot that must first go elsewhere arrives later still, so a window that closes
-before that floor is met by no plan. After the search, a plan that still arrives late (every
+do the job, after the robot's hold at its station (a replan's ``goals.held``). A robot that
+must first go elsewhere arrives later still, so a window that closes before that floor is met
+by no plan. After the search, a plan that still arrives late (every
 plan the search tried was) gets the same error, with the arrival of its latest move.
 """
 
@@ -32,7 +33,7 @@ def check_windows(run: TaskRun) -> None:
     for room, (_, latest) in goals.windows.items():
         earliest = min(
             (
-                d
+                goals.held_for(r) + d  # a robot held at its station leaves after its hold
                 for (r, origin, x), d in floors.duration.items()
                 if x == room and origin == canonical.start_location[r] and goals.may_visit(r, room)
             ),
@@ -43,7 +44,11 @@ def check_windows(run: TaskRun) -> None:
             raise WindowError(
                 f"{run.scenario.source.name}: goals.jobs.{room}.window: it closes at {latest:g} s, but the earliest "
                 f"arrival possible is {can} (the quickest robot allowed, driving there first); expected a window "
-                "that closes later"
+                "that closes later",
+                room,
+                latest,
+                earliest,
+                certain=True,
             )
 
 
@@ -56,5 +61,8 @@ def check_arrivals(run: TaskRun, schedule: Schedule | None) -> None:
         raise WindowError(
             f"{run.scenario.source.name}: goals.jobs.{m.target}.window: it closes at {latest:g} s, and the best "
             f"plan found arrives at {m.end:.1f} s ({m.robot}); no plan found meets every window; expected a window "
-            "that closes later, fewer goals before it, or another robot allowed to do it"
+            "that closes later, fewer goals before it, or another robot allowed to do it",
+            m.target,
+            latest,
+            m.end,
         )

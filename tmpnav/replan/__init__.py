@@ -5,14 +5,15 @@ that plans it, the rest of the old plan as the search's incumbent."""
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from tmpnav.errors import InputError
-from tmpnav.replan.revise import Revision, revise
+from tmpnav.errors import InputError, WindowError
+from tmpnav.replan.revise import Revision, leave_out, revise
 from tmpnav.replan.state import TeamState, read_state
-from tmpnav.results import PlanReport
+from tmpnav.results import PlanReport, SearchProgress
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 
@@ -81,13 +82,64 @@ def _revised(
         wanted, live = set(revised.goals.all_rooms), {r.name for r in revised.robots}
         kept = (tuple((r, x) for r, x in step if x in wanted and r in live) for step in incumbent)
         revision = replace(revision, incumbent=tuple(step for step in kept if step))
-    # the world unchanged (no door opened or closed): the plan's roadmap with the robots' starts added
-    base = _grown(scenario, world, options) if new_world is world else None
+    # the world unchanged (no door opened or closed) and no station added: the plan's roadmap with
+    # the robots' starts added
+    same = new_world is world and set(revised.roadmap.poses) <= set(scenario.roadmap.poses)
+    base = _grown(scenario, world, options) if same else None
+    search = _search_of(revised, options)
     revised_options = options.but(
-        incumbent=revision.incumbent, roadmap_base=base, origins=scenario.robots, **_search_of(revised, options)
+        incumbent=revision.incumbent,
+        roadmap_base=base,
+        origins=scenario.robots,
+        search_progress=_against_budget(
+            options.reporters.search, search.get("time_budget", options.overrides.time_budget)
+        ),
+        **search,
     )
-    report = pipeline.plan(scenario_path, revised_options, loaded=(revised, new_world))
-    return replace(report, revision=revision)
+    while True:
+        try:
+            report = pipeline.plan(scenario_path, revised_options, loaded=(revised, new_world))
+        except WindowError as err:
+            if not (err.certain and err.room in revised.goals.all_rooms):
+                raise _on_first_clock(err, revision, scenario) from None
+            # no robot can get there in time: out of reach, as a goal whose window closed before
+            t0 = revision.start_time
+            why = (
+                f"its window closes at {err.latest + t0:g} s, before any robot allowed there can arrive "
+                f"(at the earliest {err.arrival + t0:.1f} s)"
+            )
+            revised, revision = leave_out(revised, revision, err.room, why, team)
+            revised_options = revised_options.but(incumbent=revision.incumbent)
+            continue
+        return replace(report, revision=replace(revision, rule=_rule(report)))
+
+
+def _rule(report: PlanReport) -> str:
+    """What decided a revision: "repair" when its plan is the rest of the old plan with the goals
+    left by robots down (and added) inserted where they cost least within their windows, the
+    search's first plan, which it found nothing better than; else "search"."""
+    from tmpnav.task.search import UNDER_WAY
+
+    search = report.task.search
+    return "repair" if search is not None and search.start == UNDER_WAY and search.improvements == 0 else "search"
+
+
+def _on_first_clock(err: WindowError, revision: Revision, scenario: Scenario) -> WindowError:
+    """A revision's window error with its times on the first plan's clock, where the scenario
+    gives the windows (and on the revision's, from its start)."""
+    if not err.room:
+        return err
+    t0 = revision.start_time
+    arrival = "never" if math.isinf(err.arrival) else f"at {err.arrival + t0:.1f} s ({err.arrival:.1f} s into it)"
+    return WindowError(
+        f"{scenario.source.name}: goals.jobs.{err.room}.window: it closes at {err.latest + t0:g} s on the first "
+        f"plan's clock ({err.latest:g} s into revision {revision.number}, which starts at {t0:g} s), and the "
+        f"earliest arrival found is {arrival}; no plan found meets every window; expected a window that closes "
+        "later, another robot allowed to do the job, or the goal removed (goals.remove)",
+        err.room,
+        err.latest + t0,
+        err.arrival + t0,
+    )
 
 
 def _search_of(revised: Scenario, options: Options) -> dict[str, Any]:
@@ -103,6 +155,21 @@ def _search_of(revised: Scenario, options: Options) -> dict[str, Any]:
     if options.overrides.time_budget is None:
         out["time_budget"] = replan_budget(len(revised.goals.all_rooms), len(revised.robots), sp.time_budget)
     return out
+
+
+def _against_budget(progress: SearchProgress | None, budget: float | None) -> SearchProgress | None:
+    """The search's progress, each event saying how much of the run's budget the run had spent
+    by then: the budget counts from the run's start, and the stages before the search (the
+    roadmap with the new starts, the moves from them) and its first plan are made whatever it
+    is, so a replan may pass it before the search improves anything (docs/replan.md)."""
+    if progress is None or budget is None:
+        return progress
+    tell = progress
+
+    def told(seconds: float, best: float, bound: float | None, what: str) -> None:
+        tell(seconds, best, bound, f"{what}; the run at {seconds:.1f} s of its budget of {budget:g} s")
+
+    return told
 
 
 #: the roadmaps of the plans being revised, by their store key: a service revising one plan
@@ -132,20 +199,14 @@ def _grown(scenario: Scenario, world: World, options: Options) -> Roadmap:
 
 def nav2_files(report: PlanReport) -> dict[str, str]:
     """The nav2 export of a plan (tmpnav.export.nav2) with the revision's number in every file
-    name (``r1.moves.rev2.yaml``; a first plan's names as ``tmpnav plan --export nav2`` writes
-    them): what a fleet adapter loads for each revision, the robots' interface unchanged."""
+    name (``r1.moves.rev2.yaml``, and ``schedule.rev2.yaml`` naming those; a first plan's names as
+    ``tmpnav plan --export nav2`` writes them): what a fleet adapter loads for each revision, the
+    robots' interface unchanged, and what :func:`tmpnav.export.move_files.read_team` reads back."""
     from tmpnav.export.nav2 import files
     from tmpnav.report.plan_json import plan_document
 
-    out = files(plan_document(report))
-    if report.revision is None:
-        return out
-    tag = f".rev{report.revision.number}"
-    renamed = {}
-    for name, text in out.items():
-        stem, dot, suffix = name.rpartition(".")
-        renamed[f"{stem}{tag}{dot}{suffix}" if dot else f"{name}{tag}"] = text
-    return renamed
+    tag = "" if report.revision is None else f".rev{report.revision.number}"
+    return files(plan_document(report), tag)
 
 
 class Session:

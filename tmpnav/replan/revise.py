@@ -8,9 +8,12 @@ Given the scenario, the plan being executed (its plan.json) and the team's state
   a pose but no covariance: the plan's covariance then). A robot that is down leaves the team;
   its own targets go to the others (``goals.visit``), its end is dropped.
 - **the goals** are those not done yet: the rooms visited (the state's ``visited``, or the rooms
-  the plan's schedule had robots arrive in by ``time``) are done, ``goals.remove`` drops rooms,
-  ``goals.add`` adds rooms to visit. A job's window moves with the clock: the revision's clock
-  starts at the plan's ``time`` (plus the plan's own start, for a revision of a revision).
+  the plan's schedule had robots arrive in by ``time``, and those done before the plan being
+  revised, for a revision of a revision) are done, ``goals.remove`` drops rooms,
+  ``goals.add`` adds rooms to visit, with their jobs where it gives them. A job's window moves
+  with the clock: the revision's clock starts at the plan's ``time`` (plus the plan's own
+  start, for a revision of a revision).
+- **a robot at its station** stays there for the rest of its service (:mod:`tmpnav.replan.stations`).
 - **the doors** the state names are opened or closed.
 - a goal **no robot can reach any more** (behind a closed door: free space no longer joins any
   robot allowed there to it; its window closed; the only robots allowed to do it are down) is
@@ -26,6 +29,7 @@ naming the file and the key (InputError, exit 2).
 from __future__ import annotations
 
 import math
+from collections.abc import Collection
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -34,6 +38,7 @@ import numpy as np
 
 from tmpnav.errors import InputError
 from tmpnav.replan.state import TeamState
+from tmpnav.replan.stations import check_jobs, in_service, interrupted
 from tmpnav.results import Revision
 from tmpnav.roadmap.reach import free_space_joins
 from tmpnav.types import Goals, Pose, RobotSpec, Scenario
@@ -76,6 +81,7 @@ def revise(
         for room in listed:
             if room not in rooms:
                 raise InputError(f"{state.source}: {key}: {room!r} is not a room of scenario {scenario.name!r}")
+    check_jobs(scenario, world_of(None), state)
     doors = {d.name: d for d in scenario.doors}
     for name in state.doors:
         if name not in doors:
@@ -99,7 +105,12 @@ def revise(
     robots = tuple(_robot(spec, doc, state, as_it_is) for spec in scenario.robots if spec.name not in down)
     if state.doors:
         _doors_clear(robots, world, state)
-    done = state.visited if state.visited is not None else _arrived(doc, t)
+    held = in_service(doc, t, state, robots, as_it_is)
+    again = interrupted(doc, t, state, robots, as_it_is)
+    now = state.visited if state.visited is not None else _arrived(doc, t, again)
+    # a revision of a revision: the goals done before the plan being revised stay done
+    before = [str(x) for x in (doc.get("revision") or {}).get("done", ())]
+    done = tuple(dict.fromkeys((*before, *now)))
     offset = float((doc.get("revision") or {}).get("start_time", 0.0)) + t
     revised = replace(revised, robots=robots)
     closed_off: tuple[str, ...] = ()
@@ -123,12 +134,31 @@ def revise(
             + (f" ({len(unreachable)} no robot can reach any more)" if unreachable else "")
             + "; expected goals not yet done"
         )
-    roadmap = replace(revised.roadmap, poses=_poses(revised.roadmap.poses, goals))
+    roadmap = replace(revised.roadmap, poses=_poses(goals))
+    goals = replace(goals, held=tuple((r, s) for r, _, s in held))
     revised = replace(revised, goals=goals, roadmap=roadmap)
     number = int((doc.get("revision") or {}).get("number", 0)) + 1
     incumbent = _rest(doc, t, set(done) | set(state.remove), set(down), goals)
-    revision = Revision(number, offset, str(plan_path), tuple(done), down, tuple(unreachable), incumbent)
+    revision = Revision(number, offset, str(plan_path), tuple(done), down, tuple(unreachable), incumbent, held)
     return revised, world, revision
+
+
+def leave_out(
+    revised: Scenario, revision: Revision, room: str, why: str, state: TeamState
+) -> tuple[Scenario, Revision]:
+    """The revised scenario without goal ``room``, and the revision naming it out of reach with
+    ``why``; NothingLeft when no goal is left."""
+    goals = _without(revised.goals, {room})
+    unreachable = (*revision.unreachable, (room, why))
+    if not goals.all_rooms:
+        raise NothingLeft(
+            f"{state.source}: no goal is left to plan ({len(unreachable)} no robot can reach any more); expected goals "
+            "not yet done"
+        )
+    roadmap = replace(revised.roadmap, poses=_poses(goals))
+    incumbent = tuple(s for s in (tuple(m for m in step if m[1] != room) for step in revision.incumbent) if s)
+    revision = replace(revision, unreachable=unreachable, incumbent=incumbent)
+    return replace(revised, goals=goals, roadmap=roadmap), revision
 
 
 def _same_scenario(scenario: Scenario, plan_path: Path, doc: dict[str, Any]) -> None:
@@ -188,11 +218,12 @@ def _doors_clear(robots: tuple[RobotSpec, ...], world: World, state: TeamState) 
             )
 
 
-def _arrived(doc: dict[str, Any], t: float) -> tuple[str, ...]:
-    """The rooms the plan's schedule has robots arrive in by ``t``."""
+def _arrived(doc: dict[str, Any], t: float, interrupted: Collection[str] = ()) -> tuple[str, ...]:
+    """The rooms the plan's schedule has robots arrive in by ``t``, but ``interrupted`` (services
+    cut short: their stations are to be served again)."""
     out = []
     for entry in doc["schedule"]["robots"].values():
-        out += [m["to"] for m in entry["moves"] if m["end"] <= t + TIME_TOL]
+        out += [m["to"] for m in entry["moves"] if m["end"] <= t + TIME_TOL and m["to"] not in interrupted]
     return tuple(dict.fromkeys(out))
 
 
@@ -213,7 +244,8 @@ def _goals(
     visit = [x for x in (*goals.visit, *orphaned, *state.add) if x not in done and x not in removed]
     ends = tuple((r, x) for r, x in goals.ends if r not in down)
     jobs = []
-    for job in goals.jobs:
+    added = {j.room for j in state.jobs}  # an added job replaces the room's job in the scenario
+    for job in (*(j for j in goals.jobs if j.room not in added), *state.jobs):
         allowed = tuple(r for r in job.robots if r not in down)
         if job.robots and not allowed:
             unreachable.append((job.room, f"only {', '.join(job.robots)} may do its job, and they are down"))
@@ -235,14 +267,15 @@ def _goals(
 
 
 def _without(goals: Goals, rooms: set[str]) -> Goals:
-    """The goals without ``rooms``."""
+    """The goals without ``rooms`` (the robots' holds kept)."""
     if not rooms:
         return goals
-    return Goals(
-        tuple(x for x in goals.visit if x not in rooms),
-        tuple((r, tuple(x for x in xs if x not in rooms)) for r, xs in goals.per_robot if set(xs) - rooms),
-        tuple(j for j in goals.jobs if j.room not in rooms),
-        tuple((r, x) for r, x in goals.ends if x not in rooms),
+    return replace(
+        goals,
+        visit=tuple(x for x in goals.visit if x not in rooms),
+        per_robot=tuple((r, tuple(x for x in xs if x not in rooms)) for r, xs in goals.per_robot if set(xs) - rooms),
+        jobs=tuple(j for j in goals.jobs if j.room not in rooms),
+        ends=tuple((r, x) for r, x in goals.ends if x not in rooms),
     )
 
 
@@ -284,10 +317,9 @@ def _reachable(scenario: Scenario, world: World) -> tuple[Goals, list[tuple[str,
     return Goals(tuple(dict.fromkeys(visit)), tuple(per_robot), jobs, tuple(ends)), cut
 
 
-def _poses(poses: tuple[tuple[str, float, float], ...], goals: Goals) -> tuple[tuple[str, float, float], ...]:
-    """The jobs' goal poses the roadmap keeps: those of the goals left."""
-    rooms = {j.room for j in goals.jobs if j.pose is not None}
-    return tuple(p for p in poses if p[0] in rooms)
+def _poses(goals: Goals) -> tuple[tuple[str, float, float], ...]:
+    """The jobs' goal poses the roadmap holds: those of the goals left (an added job's too)."""
+    return tuple((j.room, j.pose[0], j.pose[1]) for j in goals.jobs if j.pose is not None)
 
 
 def _rest(

@@ -6,9 +6,12 @@ A YAML or JSON mapping::
     robots:
       r1: {pose: [12.0, 3.1, 0.2], covariance: [[...], [...], [...]]}   # or a 6x6 (36) from AMCL
       r2: {status: down}
+      r3: {interrupted: true}       # its service under way was cut short: the station is not done
     visited: [L3, L7]               # optional: else what the plan had done by `time`
     doors: {door-B6: closed}
-    goals: {add: [L12], remove: [L4]}
+    goals:
+      add: [L12, {name: L14, service: 30 s, pose: [4.0, 9.5, 90 deg], window: [300 s, 600 s]}]
+      remove: [L4]
 
 This module reads and checks the file's shape and values on their own (numbers, a covariance
 that is positive semi-definite, AMCL's 6x6 row-major array reduced to x, y, yaw); what the
@@ -28,6 +31,7 @@ import numpy as np
 import yaml
 
 from tmpnav.errors import InputError
+from tmpnav.types import Job
 
 #: the indices of x, y and yaw in a ROS PoseWithCovariance's 6x6 covariance (x, y, z, roll, pitch, yaw)
 AMCL_AXES = (0, 1, 5)
@@ -43,6 +47,8 @@ class RobotState:
     pose: tuple[float, float, float] | None = None  # x, y (m), heading (rad); None: where the plan has it
     covariance: tuple[tuple[float, float, float], ...] | None = None  # 3x3; None: the plan's at `time`
     down: bool = False
+    #: its service under way at ``time`` was cut short: no hold, and its station is not done
+    interrupted: bool = False
 
 
 @dataclass(frozen=True)
@@ -56,6 +62,8 @@ class TeamState:
     doors: dict[str, bool] = field(default_factory=dict)  # door -> open
     add: tuple[str, ...] = ()
     remove: tuple[str, ...] = ()
+    #: the jobs of ``goals.add`` entries given with job fields (windows on the first plan's clock)
+    jobs: tuple[Job, ...] = ()
 
     @property
     def down(self) -> tuple[str, ...]:
@@ -108,22 +116,56 @@ def _state(path: Path, data: Any) -> TeamState:
     extra = sorted(set(map(str, goals)) - {"add", "remove"})
     if extra:
         raise bad(f"goals.{extra[0]}", "unknown key; expected add or remove")
-    add = _names(goals.get("add") or [], lambda what: bad("goals.add", what))
+    add, jobs = _added(goals.get("add") or [], path)
     remove = _names(goals.get("remove") or [], lambda what: bad("goals.remove", what))
-    return TeamState(path, t, robots, visited, doors, add, remove)
+    return TeamState(path, t, robots, visited, doors, add, remove, jobs)
+
+
+def _added(value: Any, path: Path) -> tuple[tuple[str, ...], tuple[Job, ...]]:
+    """The rooms of ``goals.add`` and the jobs of its entries given as a scenario's ``goals.jobs``
+    entries (name, service, pose, window, robots, penalty), checked as the scenario's are."""
+    from tmpnav.scenario.format import JOB
+    from tmpnav.scenario.schema import Ctx
+
+    if not isinstance(value, list):
+        raise InputError(
+            f"{path}: goals.add: {value!r} is not a list; expected room names or jobs ({{name: ROOM, service: ...}})"
+        )
+    names, jobs = [], []
+    for i, entry in enumerate(value):
+        where = f"goals.add[{i}]"
+        if isinstance(entry, str):
+            names.append(entry)
+            continue
+        if not isinstance(entry, dict):
+            raise InputError(
+                f"{path}: {where}: {entry!r} is neither a room name nor a job; expected a name or a mapping with name, "
+                "service, pose, window, robots, penalty"
+            )
+        ctx = Ctx()
+        job = JOB.check(entry, ctx, where, ("goals", "add", i))
+        if ctx.issues:
+            issue = ctx.issues[0]
+            raise InputError(f"{path}: {issue.path}: {issue.message}")
+        names.append(job["name"])
+        jobs.append(Job(job["name"], job["service"], tuple(job["robots"]), job["pose"], job["window"], job["penalty"]))
+    return tuple(names), tuple(jobs)
 
 
 def _robot(name: str, entry: Any, bad: Any) -> RobotState:
     if not isinstance(entry, dict):
         raise bad("", "expected a mapping with pose and covariance, or status: down")
-    unknown = sorted(set(map(str, entry)) - {"pose", "covariance", "status"})
+    unknown = sorted(set(map(str, entry)) - {"pose", "covariance", "status", "interrupted"})
     if unknown:
-        raise bad(f".{unknown[0]}", "unknown key; expected pose, covariance or status")
+        raise bad(f".{unknown[0]}", "unknown key; expected pose, covariance, status or interrupted")
+    interrupted = entry.get("interrupted", False)
+    if not isinstance(interrupted, bool):
+        raise bad(".interrupted", f"{interrupted!r} is not true or false; expected true for a service cut short")
     if "status" in entry:
         if entry["status"] != "down":
             raise bad(".status", f"{entry['status']!r} is not a status; expected down")
-        if "pose" in entry or "covariance" in entry:
-            raise bad(".status", "a robot that is down has no pose or covariance; expected one or the other")
+        if "pose" in entry or "covariance" in entry or "interrupted" in entry:
+            raise bad(".status", "a robot that is down has no pose, covariance or service; expected one or the other")
         return RobotState(name, down=True)
     pose = None
     if "pose" in entry:
@@ -134,7 +176,7 @@ def _robot(name: str, entry: Any, bad: Any) -> RobotState:
     cov = None
     if "covariance" in entry:
         cov = covariance_of(entry["covariance"], lambda what: bad(".covariance", what))
-    return RobotState(name, pose, cov)  # type: ignore[arg-type]
+    return RobotState(name, pose, cov, interrupted=interrupted)  # type: ignore[arg-type]
 
 
 def covariance_of(raw: Any, bad: Any) -> tuple[tuple[float, float, float], ...]:

@@ -275,6 +275,8 @@ def plan_document(report: PlanReport) -> dict[str, JSON]:
             "done": list(r.done),
             "down": list(r.down),
             "unreachable": [{"room": room, "why": why} for room, why in r.unreachable],
+            "held": {robot: {"room": room, "seconds": number(sec, 9)} for robot, room, sec in r.held},
+            "rule": r.rule,
         }
     return doc
 

@@ -314,7 +314,7 @@ class TextBuilder:
         rob, loc = self.names.robot, self.names.location
         table, init = self.table, []
         if self.timed:
-            init += self._clock_facts(clocks or Clocks())
+            init += self._clock_facts(clocks or Clocks(dict(self.goals.held)))
         init.extend(f"(windowed {loc[x]})" for x in sorted(self.windows) if x in loc)
         for r, where in table.start_location.items():
             init.append(f"(robot_in {rob[r]} {loc[where]}) (visited {loc[where]})")

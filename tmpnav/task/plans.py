@@ -20,6 +20,7 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+from tmpnav.task.timing import schedule, table_durations
 from tmpnav.types import CostTable, Goals, MoveKey
 
 Step = tuple[MoveKey, ...]
@@ -126,7 +127,9 @@ def with_missing(plan: Plan, rules: Rules, singles: CostTable) -> Plan:
     """The plan with each goal room it leaves undone inserted where the single moves' costs
     rise least (cheapest insertion, as dynamic vehicle routing takes a new order into routes
     under way): as a move of a robot that may visit it, before one of that robot's moves or
-    after its last. The plan as it is when nothing is missing, when the plan breaks the rules,
+    after its last, at the cheapest place where every robot still arrives within its jobs'
+    windows (the single moves' durations, the robots' holds: ``goals.held``), else at the
+    cheapest place. The plan as it is when nothing is missing, when the plan breaks the rules,
     or for a room no single move reaches."""
     try:
         state = rules.run(plan)
@@ -138,24 +141,54 @@ def with_missing(plan: Plan, rules: Rules, singles: CostTable) -> Plan:
         return plan
     steps = targets_only(plan)
     for robot, room in missing:
-        robots = [robot] if robot is not None else sorted(singles.robots)
-        best: tuple[float, int, str] | None = None
-        for r in robots:
-            if not rules.goals.may_visit(r, room):
-                continue
-            route = [(k, t) for k, step in enumerate(steps) for who, t in step if who == r]
-            for p in range(len(route) + 1):
-                before = rules.start_location[r] if p == 0 else route[p - 1][1]
-                rise = singles.single.get((r, before, room), math.inf)
-                if p < len(route):
-                    after = route[p][1]
-                    rise += singles.single.get((r, room, after), math.inf) - singles.single.get((r, before, after), 0.0)
-                at = route[p][0] if p < len(route) else len(steps)
-                if math.isfinite(rise) and (best is None or rise < best[0]):
-                    best = (rise, at, r)
+        places = _insertions(steps, robot, room, rules, singles)
+        on_time = (p for p in places if not _late(_inserted(steps, p), rules, singles))
+        best = next(on_time, places[0] if places else None)
         if best is not None:
-            steps.insert(best[1], ((best[2], room),))
+            steps = _inserted(steps, best)
     return with_origins(steps, rules.start_location)
+
+
+#: where a room goes into a plan's steps: (the rise of the single moves' costs, the step index
+#: it goes before, the robot, the room)
+_Place = tuple[float, int, str, str]
+
+
+def _insertions(
+    steps: list[tuple[tuple[str, str], ...]], robot: str | None, room: str, rules: Rules, singles: CostTable
+) -> list[_Place]:
+    """Every place ``room`` can go into a route of ``robot`` (any robot that may visit it when
+    None), cheapest first."""
+    robots = [robot] if robot is not None else sorted(singles.robots)
+    out: list[_Place] = []
+    for r in robots:
+        if not rules.goals.may_visit(r, room):
+            continue
+        route = [(k, t) for k, step in enumerate(steps) for who, t in step if who == r]
+        for p in range(len(route) + 1):
+            before = rules.start_location[r] if p == 0 else route[p - 1][1]
+            rise = singles.single.get((r, before, room), math.inf)
+            if p < len(route):
+                after = route[p][1]
+                rise += singles.single.get((r, room, after), math.inf) - singles.single.get((r, before, after), 0.0)
+            if math.isfinite(rise):
+                out.append((rise, route[p][0] if p < len(route) else len(steps), r, room))
+    return sorted(out, key=lambda p: p[0])
+
+
+def _inserted(steps: list[tuple[tuple[str, str], ...]], place: _Place) -> list[tuple[tuple[str, str], ...]]:
+    _, at, robot, room = place
+    return [*steps[:at], ((robot, room),), *steps[at:]]
+
+
+def _late(steps: list[tuple[tuple[str, str], ...]], rules: Rules, singles: CostTable) -> bool:
+    """Whether a robot of ``steps`` arrives after a job's window closes (on the single moves'
+    durations); False when nothing has a window or a move has no duration."""
+    goals = rules.goals
+    if not goals.windows:
+        return False
+    timed = schedule(with_origins(steps, rules.start_location), singles.robots, table_durations(singles), goals=goals)
+    return timed is not None and bool(timed.late(goals.windows))
 
 
 def targets_only(plan: Iterable[Step]) -> list[tuple[tuple[str, str], ...]]:

@@ -97,7 +97,7 @@ class _Screen:
 
     def route(self, robot: str, rooms: list[str]) -> tuple[float, float]:
         at = self.singles.start_location.get(robot, f"{robot}-start")
-        cost = time = 0.0
+        cost, time = 0.0, self.goals.held_for(robot)
         for x in rooms:
             move = (robot, at, x)
             cost += self.singles.single.get(move, math.inf)

@@ -29,7 +29,8 @@ triangle inequality they cost the same (tests/task/test_routing.py).
 
 Time. With ``span_weight`` > 0 (an objective that prices the team's time,
 tmpnav.task.objectives) the model also has a time dimension: each arc takes the move's
-duration (the table's ``duration``, in centiseconds), every route starts at 0, and the
+duration (the table's ``duration``, in centiseconds), every route starts at 0 (a robot's
+hold, ``goals.held``, later), and the
 global span cost prices the latest end, the makespan of the routes run at once, at
 ``span_weight`` per second (OR-Tools' min-max routing when the arc costs are left out:
 ``arc_costs=False``). A job's window (``goals.jobs``) bounds the time its room is reached:
@@ -139,7 +140,7 @@ def solve_routes(
     for k, (_, x) in enumerate(optional):  # an optional goal: skipped at its penalty (in the arc costs' units)
         node = model.first_task + len(tasks) - len(optional) + k
         model.routing.AddDisjunction([model.manager.NodeToIndex(node)], round(goals.optional[x] * COST_SCALE))
-    if (span_weight > 0 or goals.windows) and table.duration:
+    if (span_weight > 0 or goals.windows or goals.held) and table.duration:
         model.add_time(span_weight, goals)
     return model.solve(time_limit, solution_limit, first_solution, initial, stagnation)
 
@@ -293,8 +294,16 @@ class _Model:
             callbacks.append(self.routing.RegisterTransitMatrix(rows))
         windows = goals.windows
         longest += round(max((w[1] for w in windows.values()), default=0.0) / TIME_UNIT)
-        self.routing.AddDimensionWithVehicleTransits(callbacks, longest if windows else 0, longest, True, "time")
+        held = [round(goals.held_for(r) / TIME_UNIT) for r in self.table.robots]
+        longest += max(held, default=0)
+        # a route starts at 0, or after its robot's hold (Goals.held: the rest of a service under way)
+        self.routing.AddDimensionWithVehicleTransits(
+            callbacks, longest if windows else 0, longest, not any(held), "time"
+        )
         time = self.routing.GetDimensionOrDie("time")
+        for v, h in enumerate(held):
+            if any(held):
+                time.CumulVar(self.routing.Start(v)).SetRange(h, h)
         if span_weight > 0:
             per_unit = span_weight * COST_SCALE * TIME_UNIT
             time.SetGlobalSpanCostCoefficient(max(1, round(per_unit)))

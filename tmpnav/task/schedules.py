@@ -90,7 +90,8 @@ class _Space:
     def start(self) -> _Node:
         at = tuple(self.table.start_location[r] for r in self.robots)
         by = self.goals.marked_at_start(dict(zip(self.robots, at, strict=True)))
-        return _Node(at, frozenset(at), by, (0.0,) * len(self.robots), 0.0)
+        clocks = tuple(self.goals.held_for(r) for r in self.robots)  # a robot held where it starts
+        return _Node(at, frozenset(at), by, clocks, 0.0)
 
     def done(self, n: _Node) -> bool:
         return (

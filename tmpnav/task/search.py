@@ -277,8 +277,13 @@ class AnytimeSearch:
         }
         starts = list(valid.items())
         if self.options.first_routes or not starts:
-            plan, routed = self.first_plan(singles, valid.get(UNDER_WAY))
-            starts.insert(0, (routed, plan))
+            try:
+                plan, routed = self.first_plan(singles, valid.get(UNDER_WAY))
+            except PlannerError:
+                if not starts:
+                    raise
+            else:  # no routes found in time: the seeds (a replan's repaired plan) are the first plans
+                starts.insert(0, (routed, plan))
         (start, best), cost = starts[0], self.priced(starts[0][1], self.cost(starts[0][1]))
         for name, seed in starts[1:]:
             seed_cost = self.priced(seed, self.cost(seed))

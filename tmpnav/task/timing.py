@@ -34,8 +34,9 @@ def schedule(
     With ``goals``, a move's duration (which ends after its target's service, as
     :meth:`CostTable.with_service` counts it) is split into the drive and the service, and a
     robot that arrives before its target's window opens waits there (``TimedMove.opens``);
-    :meth:`Schedule.late` names the moves that arrive after it closes."""
-    free = dict.fromkeys(robots, 0.0)
+    :meth:`Schedule.late` names the moves that arrive after it closes; a robot ``goals.held``
+    holds starts free after its hold."""
+    free = {r: goals.held_for(r) if goals is not None else 0.0 for r in robots}
     moves = []
     for k, step in enumerate(plan):
         times = durations(step)
