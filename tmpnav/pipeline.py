@@ -315,11 +315,18 @@ def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
     from tmpnav.task.stage import TaskProblem
 
     times = StageTimes()
-    prep = prepare(path, options, times)
-    try:
-        table = full_table(prep.scenario, prep.world, prep.oracle, times)
-    finally:
-        prep.oracle.close()
+    deadline = Deadline(started=times.started)
+
+    def loaded_now(scenario: Scenario) -> None:
+        deadline.seconds = scenario.planner.time_limit
+
+    with _named_stage(times, deadline):
+        prep = prepare(path, options.but(progress=deadline.watch(options.reporters.oracle)), times, None, loaded_now)
+        try:
+            deadline.check()
+            table = full_table(prep.scenario, prep.world, prep.oracle, times)
+        finally:
+            prep.oracle.close()
     return TaskProblem.of(prep.scenario, table).encode()
 
 

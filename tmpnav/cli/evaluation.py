@@ -7,6 +7,7 @@ runs against the number of rooms or robots (tmpnav/bench/). Registered on the gr
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -126,9 +127,16 @@ def simulate(
         _closed_loop(scenario, events_path, sessions or 5, seed, output, kw, localisation)
         return
     sessions = sessions or 25
+    started = time.perf_counter()
     report = run_plan(scenario, plan_options(kw))
-    result = execute(report, sessions, seed, kw["workers"], localisation)
-    lines = error_summary(result, sessions)
+    limit = report.scenario.planner.time_limit  # --time-limit: the plan and its executions
+    left = None if limit is None else limit - (time.perf_counter() - started)
+    result = execute(report, sessions, seed, kw["workers"], localisation, left)
+    ran = len(next(iter(result.errors.values()), ()))
+    lines = error_summary(result, ran)
+    if ran < sessions:
+        lines.insert(0, f"--time-limit {limit:g} s: {ran} of {sessions} sessions ran")
+        sessions = ran
     if output is not None:
         from tmpnav.report.outputs import write_execution_outputs
 

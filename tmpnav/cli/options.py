@@ -285,8 +285,8 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             "--time-limit",
             "time_limit",
             default_text=scenario_default("time_limit", "none"),
-            help="Seconds the whole command may take: past it, the best plan found so far; with none yet, exit "
-            "code 5 naming the stage that took the time.",
+            help="Seconds the whole command may take: past it, the best plan found so far (simulate: the "
+            "executions done so far); with no plan yet, exit code 5 naming the stage that took the time.",
         ),
         option(
             "--costs",

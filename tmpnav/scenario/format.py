@@ -582,7 +582,7 @@ PLANNER = Section(
         ),
         "time_limit": Field(
             Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
-            "seconds a whole plan, replan or simulate may take: past it the best plan found so far, else exit code 5 naming the stage that took the time (default: none)",
+            "seconds a whole plan, replan, simulate or export-pddl may take: past it the best plan found so far (simulate: the executions done so far), else exit code 5 naming the stage that took the time (default: none)",
             default=None,
         ),
         "objective": Field(
