@@ -240,7 +240,7 @@ def _closed_loop(
     "time_budget",
     old=("--time-budget",),
     default_text="the scenario's planner.time_budget",
-    help="The anytime search's budget in every run.",
+    help="A time cap on the anytime search in every run (its budget is work: the scenario's planner.work_budget).",
 )
 @option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
 @seconds_option(
