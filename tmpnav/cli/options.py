@@ -260,7 +260,7 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             type=click.Choice(list(SEARCHES)),
             default_text=scenario_default("search"),
             help="How the task plan is searched: exact (one optimal search over all plans), anytime (a first "
-            "plan improved piece by piece until --anytime-budget, with a lower bound on the best cost) or auto "
+            "plan improved piece by piece until --anytime-work, with a lower bound on the best cost) or auto "
             "(exact where that finishes quickly).",
         ),
         option(
