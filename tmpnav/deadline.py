@@ -8,8 +8,10 @@ A :class:`Deadline` is made when a run starts and handed down with its clock (th
 * the pipeline between stages (:meth:`Deadline.check`);
 * the anytime search, whose time cap it lowers: past it the search returns its best plan.
 
-Once the task stage has a plan the deadline is spent (:meth:`Deadline.disarm`): the plan's
-re-simulation, which the plan's report needs, runs to its end. Before any plan, passing the
+Once the run has a plan (the anytime search's first, or the task stage's) the deadline is
+disarmed (:meth:`Deadline.disarm`): the search's time cap, which the limit lowered, ends the
+search between its batches, and the plan's re-simulation, which its report needs, runs to
+its end. Before any plan, passing the
 limit raises :class:`tmpnav.errors.TimeLimitError` (exit code 5), which the pipeline completes
 with the stage that took the time.
 """

@@ -312,6 +312,9 @@ class AnytimeSearch:
         if not best:
             return SearchResult(best, cost, "nothing to do", self.stats, start, tuple(self.budget.capped))
         self.best, self.best_cost = best, cost
+        # a plan: from here the search's time cap (the run's limit among its caps) ends it, between
+        # batches, and the oracle no longer cuts its work short
+        self.watch.deadline.disarm()
         try:
             return self._improve(start)
         except TimeLimitError:  # the run's time limit passed in the oracle's work: the best plan so far
