@@ -360,7 +360,9 @@ def test_sessions_on_worker_processes_are_the_sessions_run_in_one(waiting: PlanR
     for key, errors in one.errors.items():
         np.testing.assert_array_equal(errors, two.errors[key])
         np.testing.assert_array_equal(one.planned_nees[key], two.planned_nees[key])
-    assert one.filter_nees == two.filter_nees and one.makespans(1).tolist() == two.makespans(1).tolist()
+    for key, values in one.filter_nees.items():
+        np.testing.assert_array_equal(values, two.filter_nees[key])
+    assert one.makespans(1).tolist() == two.makespans(1).tolist()
 
 
 @pytest.fixture(scope="module")
@@ -380,11 +382,13 @@ def lidar_rooms(tmp_path_factory: pytest.TempPathFactory) -> PlanReport:
 @pytest.mark.slow
 def test_robots_with_a_lidar_are_localised_as_their_filter_says(lidar_rooms: PlanReport) -> None:
     """True scans ray cast from the true poses, predicted ones from the estimates: the filter's
-    position NEES is about 2 (a consistent filter), the error agrees with the plan's covariance
-    too, the errors are centimetres, and the innovation gate rejects few beams."""
+    position NEES reads as a consistent filter's (a median of about 1.39, about 1.1% of the steps
+    beyond 3 sigma), the error agrees with the plan's covariance too, the errors are
+    centimetres, and the innovation gate rejects few beams."""
     result = execute(lidar_rooms, sessions=6)
-    assert 1.0 <= result.own_nees(1) <= 3.0
-    assert 1.0 <= result.nees(1) <= 3.5
+    own, planned = result.own_nees(1), result.nees(1)
+    assert 0.7 <= own.median <= 2.2 and own.beyond <= 0.05
+    assert 0.7 <= planned.median <= 2.8
     assert max(result.worst(1, r) for r in result.robots) < 0.15  # the start's own uncertainty: 0.1 m
     used, rejected = (sum(result.beams[(1, r)][k] for r in result.robots) for k in (0, 1))
     assert used > 10_000 and rejected / used < 0.05

@@ -24,8 +24,11 @@ so a choice is added once. What each choice *does* lives in its registry: the en
 ``OBJECTIVES``, what the plan minimises (:mod:`tmpnav.task.objectives`):
 
 * ``cost``: the paper's sum of action costs (the team's time does not count);
-* ``weighted``: that sum plus ``cost.M_T`` per second of makespan (the default);
+* ``weighted``: that sum plus ``cost.M_T`` per second of makespan;
 * ``makespan``: the makespan first, the sum of action costs between plans as fast.
+
+A scenario that names none gets :func:`default_objective`'s: ``makespan`` for a team on a shift
+(robots back to their docks, or jobs with service times), else ``weighted``.
 """
 
 from __future__ import annotations
@@ -162,6 +165,17 @@ def choose(encoding: str, search: Search, costs: Costs, rooms: int, robots: int)
     if search == "auto":
         return TaskChoice("exact" if exact_fits(rooms, robots, costs) else "anytime", costs)
     return TaskChoice(search, costs)
+
+
+def default_objective(robots: int, shift: bool) -> Objective:
+    """The objective of a scenario that names none: ``makespan`` for a team (two robots or more)
+    on a ``shift`` -- some robot must end at its dock (``goals.ends``) or some job has a service
+    time -- else ``weighted``. On a shift the team's time is what its operator counts: the
+    weighted objective's price of a second (``cost.M_T``) left a robot at its dock all shift
+    where it could shorten the makespan by a fifth (benchmarks/README.md, "Objectives: a default
+    that uses the team"); on tours of rooms without jobs it stays ``weighted``, whose price of
+    time keeps robots out of stretches without landmarks at a small loss of makespan."""
+    return "makespan" if robots >= 2 and shift else "weighted"
 
 
 def paper_conflict(

@@ -304,7 +304,8 @@ def prepare(
         if cache is not None and store is not None and scenario.models.range_sensor is not None:
             # before the oracle's workers fork: they start with the table too
             ScanStore(cache, store).load(world, scenario.models.range_sensor)
-    oracle = make_oracle(scenario, world, roadmap, run, options.reporters)
+    with times.timed("oracle"):
+        oracle = make_oracle(scenario, world, roadmap, run, options.reporters)
     warnings = tuple(store.warnings) if store is not None else ()
     return Prepared(scenario, world, roadmap, roadmap_hit, cache, warnings, oracle)
 
@@ -420,8 +421,10 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
                         task, apart = kept.task, kept.apart
                         resim = resimulate(run.carried, task, kept.delays, kept.detours)
         finally:
-            prep.oracle.close()
-            _keep_scans(prep)
+            with times.timed("oracle"):  # its workers end
+                prep.oracle.close()
+            with times.timed("roadmap"):  # the scans' information stored with the roadmap
+                _keep_scans(prep)
     times.close()
     report = PlanReport(
         scenario=prep.scenario,

@@ -46,40 +46,62 @@ _Name = TypeVar("_Name", bound=str)
 #: In the anytime search the stages interleave: ``oracle`` counts the costs it asks for,
 #: ``encode`` and ``planner`` its sub-problems, ``bound`` the lower bound.
 STAGES = ("load", "roadmap", "oracle", "encode", "planner", "bound", "resimulate")
+#: the run's time in no stage: starting and closing the oracle's workers, the steps between stages
+OTHER = "other"
 
 
 @dataclass
 class StageTimes:
     """Seconds spent in each stage of a run (keys of :data:`STAGES`), filled in as it runs, and
-    the run's clock (:meth:`elapsed`), started when the run starts."""
+    the run's clock (:meth:`elapsed`), started when the run starts.
+
+    A stage timed inside another (the oracle asked for costs while the planner's time runs) is
+    counted once, in the inner stage: the outer one's clock stops meanwhile. So the stages never
+    add up to more than the run's wall-clock time, and :meth:`close` records the rest as
+    :data:`OTHER`: every stage but ``load``, and ``other``, add up to ``total``."""
 
     seconds: dict[str, float] = field(default_factory=dict)
-    started: float = field(default_factory=time.perf_counter, compare=False, repr=False)
+    started: float = field(default_factory=lambda: time.perf_counter(), compare=False, repr=False)
+    #: the stages timed now, the innermost last, each with when its clock last started
+    _open: list[tuple[str, float]] = field(default_factory=list, compare=False, repr=False)
 
     def elapsed(self) -> float:
-        """Wall-clock seconds since the run started: the one clock of its progress."""
-        return time.perf_counter() - self.started
+        """Wall-clock seconds of the run so far, less ``load`` (the scenario read and the world
+        built, before anything else): the one clock of its progress, which ``total`` ends."""
+        return time.perf_counter() - self.started - self.seconds.get("load", 0.0)
 
     def add(self, stage: str, dt: float) -> None:
         self.seconds[stage] = self.seconds.get(stage, 0.0) + dt
 
     @contextmanager
     def timed(self, stage: str) -> Iterator[None]:
-        """Add the wall-clock time of the ``with`` block to ``stage``."""
-        start = time.perf_counter()
+        """Add the wall-clock time of the ``with`` block to ``stage``, less the time of the stages
+        timed inside it."""
+        now = time.perf_counter()
+        if self._open:  # the enclosing stage's clock stops
+            outer, since = self._open[-1]
+            self.add(outer, now - since)
+        self._open.append((stage, now))
         try:
             yield
         finally:
-            self.add(stage, time.perf_counter() - start)
+            now = time.perf_counter()
+            _, since = self._open.pop()
+            self.add(stage, now - since)
+            if self._open:  # and starts again
+                self._open[-1] = (self._open[-1][0], now)
 
     def spent(self) -> float:
         """Seconds of every stage so far but ``load`` (scenario parsing and world building):
         what a run's time budget counts."""
-        return sum(v for k, v in self.seconds.items() if k not in ("load", "total"))
+        return sum(v for k, v in self.seconds.items() if k not in ("load", "total", OTHER))
 
     def close(self) -> None:
-        """Record ``total``: :meth:`spent`, once the run is done."""
-        self.seconds["total"] = self.spent()
+        """Record ``total``, the run's wall-clock time but ``load`` (:meth:`elapsed`), and as
+        ``other`` the part of it in no stage, once the run is done."""
+        total = self.elapsed()
+        self.seconds[OTHER] = max(0.0, total - self.spent())
+        self.seconds["total"] = self.spent() + self.seconds[OTHER]
 
 
 @dataclass(frozen=True)

@@ -99,7 +99,9 @@ def motion_floors(
     node of the origin to a pose instantiation of the target (``paths``' shortest path) costs
     and takes (the module docstring). ``arrived``: a move from a room starts with the heading of
     an edge into its node, as a robot that drove there has (carried beliefs); else with any
-    heading (the canonical states of table costs)."""
+    heading (the canonical states of table costs). A robot whose end is its start also has the
+    time floor (no cost) of each move back into its start: the makespan's bound counts the way
+    back to its dock."""
     dt, w = scenario.models.dt, scenario.cost
     n, lms, models = len(scenario.robots), len(scenario.landmarks), scenario.models
     roadmap = paths.roadmap
@@ -124,6 +126,7 @@ def motion_floors(
         for x in rooms:
             if x != start:
                 origins[x] = tuple((g, arrivals[g]) for g in inst[x])
+        home = goals.end_of(spec.name) == start  # it must come back to where it starts
         for o, nodes in origins.items():
             cost, seconds = np.full(len(rooms), np.inf), np.full(len(rooms), np.inf)
             for node, headings in nodes:  # the least over the origin's nodes and the target's instantiations
@@ -131,8 +134,13 @@ def motion_floors(
                 np.minimum.at(cost, room_of, c)
                 np.minimum.at(seconds, room_of, t_s)
             for k, t in enumerate(rooms):
-                if t not in (o, start) and np.isfinite(cost[k]):
+                if t == o or not np.isfinite(cost[k]):
+                    continue
+                if t != start:
                     single[(spec.name, o, t)], duration[(spec.name, o, t)] = float(cost[k]), float(seconds[k])
+                elif home:  # the way back to a dock it started at: its time only, for the makespan's
+                    # floor (the cost bound's rows never enter a robot's start, see tmpnav.task.bound)
+                    duration[(spec.name, o, t)] = float(seconds[k])
     locations = tuple(dict.fromkeys([*rooms, *start_location.values()]))
     names = tuple(r.name for r in scenario.robots)
     return CostTable(names, rooms, locations, dict(start_location), single, {}, duration)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
@@ -20,7 +20,12 @@ from tmpnav.cli.options import (
 )
 from tmpnav.cli.planners import check_planner
 from tmpnav.errors import EXIT_CODES
+from tmpnav.numbers import length
 from tmpnav.version import __version__
+
+if TYPE_CHECKING:
+    from tmpnav.results import PlanReport
+    from tmpnav.types import Scenario
 
 EPILOG = "Exit codes: " + "; ".join(f"{code} {meaning}" for code, meaning in EXIT_CODES.items())
 
@@ -60,6 +65,42 @@ def validate(scenario: Path) -> None:
     click.echo(
         f"{scenario}: ok: {len(sc.rooms)} rooms, {len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
         f"{len(sc.robots)} robots, map {cols}x{rows} cells of {world.grid.resolution:g} m"
+    )
+    warn_scenario(sc)
+
+
+def warn_scenario(scenario: Scenario, asked_without_sensor: bool = False) -> None:
+    """The scenario's warnings (tmpnav.scenario.advice), one line each on stderr; none about the
+    range sensor when the command line asked to plan without it (--no-range-sensor)."""
+    from tmpnav.scenario.advice import warnings
+
+    for line in warnings(scenario):
+        if not (asked_without_sensor and "models.range_sensor" in line):
+            click.echo(f"warning: {line}", err=True)
+
+
+def warn_conflicts(report: PlanReport) -> None:
+    """One line on stderr when the plan leaves robots in each other's way (a plan without a
+    chance constraint, taken with --accept-risk, or not kept apart): a run that exits 0 with
+    such a plan says so where scripts look, not only in the summary."""
+    from tmpnav.report.quality import plan_conflicts
+
+    conflicts = plan_conflicts(report)
+    if not conflicts:
+        return
+    first, planner = conflicts[0], report.scenario.planner
+    more = f" (and {len(conflicts) - 1} more)" if len(conflicts) > 1 else ""
+    if not planner.keep_apart:
+        hint = "--keep-apart keeps robots apart"
+    elif planner.max_risk is None:
+        hint = "--max-risk keeps robots apart within a threshold"
+    else:
+        hint = "taken as it is with --accept-risk"
+    click.echo(
+        f"warning: the plan leaves robots in each other's way: {' and '.join(first.robots)} at {first.t_from:.1f} s, "
+        f"{length(first.closest_distance)} apart where {length(first.required_separation)} are needed{more}; "
+        f"{hint} (docs/planning.md)",
+        err=True,
     )
 
 
@@ -176,6 +217,8 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
         raise click.UsageError("--export needs -o DIR: the waypoint files go to DIR/nav2/")
     check_planner(scenario, kw["planner_name"])
     report = run_plan(scenario, plan_options(kw))
+    warn_scenario(report.scenario, bool(kw.get("no_range_sensor")))
+    warn_conflicts(report)
     written: list[Path] = []
     if output is not None:
         from tmpnav.export.nav2 import files as nav2_files

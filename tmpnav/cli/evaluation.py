@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 
 import click
 
-from tmpnav.cli.commands import cli
+from tmpnav.cli.commands import cli, warn_conflicts, warn_scenario
 from tmpnav.cli.options import (
     SCENARIO_ARG,
     option,
@@ -31,6 +31,8 @@ if TYPE_CHECKING:
 
 #: tmpnav.execution.localisers.LOCALISERS' names (that module is imported only by the commands that run them)
 LOCALISER_NAMES = ("ekf", "amcl")
+#: tmpnav.execution.localisers.FOLLOWERS' names
+FOLLOWER_NAMES = ("waypoint", "rpp")
 
 
 def amcl_options(command: Any) -> Any:
@@ -96,6 +98,15 @@ def amcl_options(command: Any) -> Any:
     "amcl, nav2's AMCL on each robot from its odometry and the lidar's scans of --site (needs the "
     "optional extra tmpnav[amcl], GPL-3; docs/amcl.md).",
 )
+@option(
+    "--follower",
+    type=click.Choice(FOLLOWER_NAMES),
+    default="waypoint",
+    show_default=True,
+    help="Who steers the simulated robots along their moves: waypoint, turning on the spot at each node "
+    "of the path as the plan does; rpp, nav2's Regulated Pure Pursuit with nav2's defaults (turns while "
+    "it drives, slows at bends, near walls and on approach; docs/rpp.md).",
+)
 @amcl_options
 @oracle_options(mutual=False)
 @report_errors
@@ -105,10 +116,11 @@ def simulate(
     """Simulate the plan, with and without mutual observations.
 
     Each session samples the true initial poses from the initial beliefs; then every robot
-    follows its own moves at once (a waypoint follower steering on the estimate, noisy
-    controls), a paired move starting when both robots are there and no move before its
-    planned start, with noisy observations of landmarks and of other robots, and the joint
-    EKF with mutual observations (config 1) and without (config 2), on the same random
+    follows its own moves at once (a waypoint follower, or nav2's Regulated Pure Pursuit
+    with --follower rpp, steering on the estimate, noisy controls), a paired move
+    starting when both robots are there and no move before its planned start, with noisy
+    observations of landmarks and of other robots, and the joint EKF with mutual
+    observations (config 1) and without (config 2), on the same random
     draws. Prints the worst-case position error per robot and its reduction, the
     makespan executed against the planned one, and the executions in which a true pose hit
     a wall or two robots touched, with 95% Clopper-Pearson intervals.
@@ -122,13 +134,15 @@ def simulate(
     from tmpnav.pipeline import plan as run_plan
 
     check_planner(scenario, kw["planner_name"])
-    localisation = _localisation(kw.pop("localiser"), kw.pop("nav2_params"), kw.pop("site_text"))
+    localisation = _localisation(kw.pop("localiser"), kw.pop("nav2_params"), kw.pop("site_text"), kw.pop("follower"))
     if events_path is not None:
         _closed_loop(scenario, events_path, sessions or 5, seed, output, kw, localisation)
         return
     sessions = sessions or 25
     started = time.perf_counter()
     report = run_plan(scenario, plan_options(kw))
+    warn_scenario(report.scenario, bool(kw.get("no_range_sensor")))
+    warn_conflicts(report)
     limit = report.scenario.planner.time_limit  # --time-limit: the plan and its executions
     left = None if limit is None else limit - (time.perf_counter() - started)
     result = execute(report, sessions, seed, kw["workers"], localisation, left)
@@ -146,13 +160,13 @@ def simulate(
     click.echo("\n".join(lines))
 
 
-def _localisation(kind: str, nav2_params: Path | None, site_text: str) -> Localisation:
-    """The simulation's localiser from the command line: AMCL's parameters read and the site
-    parsed only for ``amcl`` (one error line for a bad file or value)."""
+def _localisation(kind: str, nav2_params: Path | None, site_text: str, follower: str = "waypoint") -> Localisation:
+    """The simulation's localiser and follower from the command line: AMCL's parameters read and
+    the site parsed only for ``amcl`` (one error line for a bad file or value)."""
     from tmpnav.execution.localisers import Localisation
 
     if kind != "amcl":
-        return Localisation(kind)
+        return Localisation(kind, follower=follower)
     from tmpnav.execution.site import SiteNoise
     from tmpnav.scenario.nav2_params import AmclParams, read_nav2_params
 
@@ -161,7 +175,7 @@ def _localisation(kind: str, nav2_params: Path | None, site_text: str) -> Locali
         site = SiteNoise.parse(site_text)
     except ValueError as e:
         raise click.BadParameter(str(e), param_hint="--site") from None
-    return Localisation(kind, params, site)
+    return Localisation(kind, params, site, follower)
 
 
 def _closed_loop(

@@ -8,7 +8,6 @@ import functools
 import math
 import os
 import sys
-import time
 import traceback
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -298,7 +297,7 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
         option(
             "--objective",
             type=click.Choice(list(OBJECTIVES)),
-            default_text=scenario_default("objective"),
+            default_text=scenario_default("objective", "makespan for a team on a shift, weighted otherwise"),
             help="What the plan minimises, the robots moving at once: weighted (the costs of all moves plus "
             "cost.M_T per second until the last robot is done), cost (the costs of all moves, as in the paper) "
             "or makespan (the time until the last robot is done first).",
@@ -435,19 +434,17 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
     return PlanOptions(overrides, execution, reporters)
 
 
-def search_progress(clock: Callable[[], float] = time.monotonic) -> Callable[[float, float, float | None, str], None]:
-    """The anytime search's progress on stderr: time since the run started, best cost, lower bound,
-    gap. On a terminal one line is rewritten in place; otherwise a line per event.
+def search_progress() -> Callable[[float, float, float | None, str], None]:
+    """The anytime search's progress on stderr: the run's time, best cost, lower bound, gap. On a
+    terminal one line is rewritten in place; otherwise a line per event.
 
-    The time is this run's one clock, started here (when the command starts planning): the
-    search reports its own time since it started, and a run that searches in phases (a first
-    search, then another on a sub-problem) restarts that one, so it is not shown.
+    The time is the run's clock (tmpnav.results.StageTimes.elapsed), the one its summary's
+    ``total`` ends: it counts from the end of ``load``, through every phase of the search.
     """
     tty = sys.stderr.isatty()
-    start = clock()
 
     def show(seconds: float, best: float, bound: float | None, what: str) -> None:
-        text = f"search {clock() - start:7.1f} s  best {best:12.3f}"
+        text = f"search {seconds:7.1f} s  best {best:12.3f}"
         if bound is not None:
             gap = max(0.0, (best - bound) / best) if best > 0 else 0.0
             text += f"  bound {bound:12.3f}  gap {100 * gap:5.1f}%"

@@ -7,7 +7,8 @@ of moves (:mod:`.moves`) with a waypoint follower steering on its own estimate
 (:mod:`.control`), a paired move starts when both robots are ready, and no move starts before
 its planned start. Observations are generated from the true poses (landmarks in range, field
 of view and line of sight; any two robots in range and line of sight) with sensor noise, and
-the joint EKF of :mod:`tmpnav.belief.ekf` (the filterpy reference) estimates the poses.
+the team's joint EKF estimates the poses (:mod:`.fast_ekf`, compiled, held to the filterpy
+reference :mod:`.joint_ekf`), or with ``--localiser amcl`` every robot's AMCL (:mod:`.amcl_team`).
 
 Config 1 uses mutual observations, config 2 ignores them, on the same random draws
 (:mod:`.result`). Every session counts the true poses that hit a wall and the robots that
@@ -18,8 +19,9 @@ summary and the CSV files.
 from tmpnav.execution.control import ALIGN, ARRIVED, control, reached
 from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.result import ExecutionResult, Rate, execute
-from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
+from tmpnav.execution.session import STEP_BUDGET, Session
 from tmpnav.execution.text import error_summary, errors_csv, moves_csv, sessions_csv
+from tmpnav.execution.trace import Draws, SessionTrace
 
 __all__ = [
     "ALIGN",

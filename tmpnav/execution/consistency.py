@@ -21,6 +21,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+#: the NEES of a consistent 2-D Gaussian error: its median (chi-square of 2 degrees of freedom, 2 ln 2)
+#: and the share of steps beyond 3 sigma (exp(-9/2))
+CONSISTENT_MEDIAN = 2.0 * math.log(2.0)
+CONSISTENT_BEYOND = math.exp(-(3.0**2) / 2.0)
 #: a row per driving step: e_x, e_y (m), L_xx, L_xy, L_yy, P_xx, P_xy, P_yy (m²)
 COLUMNS = 8
 #: the Mahalanobis distance beyond which a step counts as outside the plan's belief
@@ -50,6 +54,29 @@ class ConsistencyTrace:
                 float(planned[1, 1]),
             )
         )
+
+
+@dataclass(frozen=True)
+class Nees:
+    """The position NEES eᵀ Σ⁻¹ e of a set of steps, summed up robustly: its median (1.39 for
+    a consistent filter, :data:`CONSISTENT_MEDIAN`) and the share of steps beyond 3 sigma (1.1%,
+    :data:`CONSISTENT_BEYOND`). Not the mean (2 for a consistent filter): a filter that has
+    lost track (a landmark-only robot metres off with a covariance of decimetres) gives a few
+    steps of NEES 10⁴-10⁶ that outweigh every other step of the run (docs/models.md, "NEES")."""
+
+    steps: int  # steps with a NEES (a step whose covariance is singular counts, as beyond 3 sigma)
+    median: float  # nan for no step
+    beyond: float  # share of the steps beyond 3 sigma; nan for no step
+
+    @staticmethod
+    def of(values: np.ndarray) -> Nees:
+        """The summary of NEES ``values`` (any shape; nan: no covariance there, left out; inf:
+        a singular covariance)."""
+        v = np.asarray(values, dtype=float).ravel()
+        v = v[~np.isnan(v)]
+        if not v.size:
+            return Nees(0, math.nan, math.nan)
+        return Nees(int(v.size), float(np.median(v)), float(np.mean(v > SIGMAS**2)))
 
 
 def planned_nees(rows: np.ndarray) -> np.ndarray:

@@ -22,15 +22,24 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from tmpnav.execution.rpp import RppParams
 from tmpnav.scenario.nav2_params import AmclParams
 
 if TYPE_CHECKING:  # the site (numba kernels) is imported only by the sessions that scan it
     from tmpnav.execution.site import SiteNoise
+    from tmpnav.world import World
+    from tmpnav.world.visibility import LandmarkVisibility
 
 #: the localisers ``tmpnav simulate --localiser`` offers, and what each is
 LOCALISERS = {
     "ekf": "tmpnav's joint EKF with the planner's own sensor models",
     "amcl": "nav2's AMCL (a particle filter per robot, its beam model) on scans of a site unlike the map",
+}
+
+#: the controllers ``tmpnav simulate --follower`` offers, and what each is
+FOLLOWERS = {
+    "waypoint": "turns on the spot at each node of the path, then drives straight (the plan's own motions)",
+    "rpp": "nav2's Regulated Pure Pursuit: turns while it drives, slows at bends and near walls",
 }
 
 
@@ -54,6 +63,33 @@ class Localiser(Protocol):
         ...
 
 
+class TeamLocaliser(Protocol):
+    """Who estimates the poses of a session's robots (:class:`~tmpnav.execution.session.Session`
+    calls it once per control step): the joint EKF (:mod:`.joint_ekf`, its compiled twin
+    :mod:`.fast_ekf`) or every robot's AMCL (:mod:`.amcl_team`)."""
+
+    def estimate(self, i: int) -> np.ndarray:
+        """Robot i's pose estimate (3,) now."""
+        ...
+
+    def estimate_cov(self, i: int) -> np.ndarray:
+        """Robot i's covariance (3, 3) as its localiser reports it."""
+        ...
+
+    def predict(self, u: np.ndarray) -> None:
+        """The commands (n, 2) of the control step just driven."""
+        ...
+
+    def observe(self, truth: np.ndarray, step: int) -> list[tuple[int, int]]:
+        """The robots' observations at control ``step`` from their true poses (n, 3); per robot,
+        the range beams used and rejected by an innovation gate."""
+        ...
+
+    def set_world(self, world: World, vis: LandmarkVisibility) -> None:
+        """The world changed (a door closed)."""
+        ...
+
+
 @dataclass(frozen=True)
 class Localisation:
     """How a simulation localises its robots: ``kind`` (a key of :data:`LOCALISERS`), AMCL's
@@ -63,6 +99,13 @@ class Localisation:
     kind: str = "ekf"
     amcl: AmclParams = field(default_factory=AmclParams)
     site: SiteNoise | None = None
+    #: who steers each robot along its moves (a key of :data:`FOLLOWERS`) and, for ``rpp``, nav2's
+    #: Regulated Pure Pursuit parameters: the controller belongs to the same navigation stack
+    follower: str = "waypoint"
+    rpp: RppParams = field(default_factory=RppParams)
+    #: ekf: the compiled joint EKF (tmpnav.execution.fast_ekf); False: its filterpy reference
+    #: (tmpnav.execution.joint_ekf), the same figures to rounding, many times slower
+    compiled: bool = True
 
     @property
     def particle_filter(self) -> bool:
@@ -73,6 +116,12 @@ class Localisation:
         """One line for reports: the executing localiser, the site and the true motion noise."""
         a1, a2, a3, a4 = motion_noise
         noise = f"true motion noise alpha1-4 {a1:g}, {a2:g}, {a3:g}, {a4:g}"
+        if self.follower == "rpp":
+            r = self.rpp
+            noise += (
+                f"; follower: nav2 Regulated Pure Pursuit (lookahead {r.lookahead_dist:g} m, "
+                f"min radius {r.regulated_linear_scaling_min_radius:g} m, goal tolerance {r.xy_goal_tolerance:g} m)"
+            )
         if not self.particle_filter:
             return f"localiser: ekf ({LOCALISERS['ekf']}); {noise}"
         where = self.site.text() if self.site is not None else "the map exactly"

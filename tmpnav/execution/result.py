@@ -26,10 +26,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tmpnav.belief.risk import clopper_pearson
+from tmpnav.execution.consistency import Nees
 from tmpnav.execution.consistency import gather as gather_consistency
 from tmpnav.execution.localisers import Localisation
 from tmpnav.execution.moves import QueuedMove, queues
-from tmpnav.execution.session import STEP_BUDGET, Draws, Session, SessionTrace
+from tmpnav.execution.session import STEP_BUDGET, Session
+from tmpnav.execution.trace import Draws, SessionTrace
 from tmpnav.lifetime import gather, signals_held
 from tmpnav.oracle.executors import die_with_parent
 from tmpnav.results import PlanReport, Schedule
@@ -76,7 +78,7 @@ class ExecutionResult:
     wall_hits: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions,) control steps hitting a wall
     contacts: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions,) control steps touching a robot
     planned_nees: dict[tuple[int, str], np.ndarray]  # (config, robot) -> (sessions, points): NEES vs the plan
-    filter_nees: dict[tuple[int, str], tuple[float, int]]  # (config, robot) -> the filter's NEES summed, steps
+    filter_nees: dict[tuple[int, str], np.ndarray]  # (config, robot) -> the filter's own NEES at every step
     beams: dict[tuple[int, str], tuple[int, int]]  # (config, robot) -> range beams used, rejected by the gate
     #: (config, robot, plan step) -> (sessions,) control steps hitting a wall / touching a robot during the
     #: move (or standing after it; step -1: before the robot's first move)
@@ -126,22 +128,17 @@ class ExecutionResult:
         """Executions in which the robot (any pair of robots, for None) touched another."""
         return self._rate(self.contacts, config, robot)
 
-    def nees(self, config: int, robot: str | None = None) -> float:
-        """The average position NEES against the planned covariance at the path points the
-        robot (every robot, for None) reached: 2 when the error agrees with the plan's
-        covariance (a position has two dimensions); nan when there is none."""
+    def nees(self, config: int, robot: str | None = None) -> Nees:
+        """The position NEES against the planned covariance at the path points the robot (every
+        robot, for None) reached (:class:`~tmpnav.execution.consistency.Nees`: its median, 1.39
+        when the errors agree with the plan, and its share beyond 3 sigma)."""
         robots = self.robots if robot is None else [robot]
-        values = np.concatenate([self.planned_nees[(config, r)].ravel() for r in robots])
-        values = values[np.isfinite(values)]
-        return float(values.mean()) if values.size else math.nan
+        return Nees.of(np.concatenate([self.planned_nees[(config, r)].ravel() for r in robots]))
 
-    def own_nees(self, config: int, robot: str | None = None) -> float:
-        """The average position NEES against the executing filter's own covariance over every
-        control step (2 for a consistent filter)."""
+    def own_nees(self, config: int, robot: str | None = None) -> Nees:
+        """The position NEES against the executing filter's own covariance over every control step."""
         robots = self.robots if robot is None else [robot]
-        total = sum(self.filter_nees[(config, r)][0] for r in robots)
-        steps = sum(self.filter_nees[(config, r)][1] for r in robots)
-        return total / steps if steps else math.nan
+        return Nees.of(np.concatenate([self.filter_nees[(config, r)] for r in robots]))
 
     def move_rates(self, config: int) -> list[tuple[str, int, Rate, Rate, float]]:
         """Per move (robot, plan step): the executions with a wall hit and with a contact during it,
@@ -318,7 +315,7 @@ def _result(
             (c, r): np.array([t.planned_nees[r] for t in traces[c]], dtype=float) for c in configs for r in robots
         },
         filter_nees={
-            (c, r): (sum(t.nees_sum[r] for t in traces[c]), sum(t.nees_steps[r] for t in traces[c]))
+            (c, r): np.array([v for t in traces[c] for v in t.own_nees[r]], dtype=float)
             for c in configs
             for r in robots
         },

@@ -15,16 +15,18 @@ Each control step, for the whole team together:
    a robot that reached its last one ends its move, and moves that may start now start;
 2. every driving robot gets the waypoint controller's command (:mod:`tmpnav.execution.control`),
    every other robot (waiting, idle, done) none: zero control, so its uncertainty does not grow;
-3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the joint
-   EKF of :mod:`tmpnav.belief.ekf` (the filterpy reference) predicts with the commands;
-4. every robot observes the landmarks it sees from its true pose (range, field of view, line of
-   sight) with sensor noise, moving or standing; with a range sensor, every robot scans the
-   walls from its true pose and the filter compares the scan with one ray cast from its
-   estimate (:mod:`tmpnav.execution.scans`); with mutual observations (config 1) any two
-   robots observe each other whenever they are in range and line of sight at that instant;
+3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the
+   team's localiser (:class:`~tmpnav.execution.localisers.TeamLocaliser`: the joint EKF of
+   :mod:`.joint_ekf`, or every robot's AMCL) predicts with the commands;
+4. every robot observes from its true pose, moving or standing, what its localiser takes: the
+   landmarks it sees (range, field of view, line of sight) with sensor noise; with a range
+   sensor, a scan of the walls the filter compares with one ray cast from its estimate
+   (:mod:`tmpnav.execution.scans`); with mutual observations (config 1) any two robots in
+   range and line of sight of each other at that instant;
 5. the true poses are checked (:meth:`Session._collide`): a robot whose true position hits a
    wall (:func:`tmpnav.belief.risk.hits_wall`: its cell's clearance at most its radius, or off
-   the map), and two robots whose true positions are closer than their radii added, are counted.
+   the map), and two robots whose true positions are closer than their radii added, are counted
+   (compiled: :mod:`.contact`).
 
 Both configurations of a session use the same random draws (initial poses, control noise and
 observation noise are indexed by robot and control step), so their comparison is paired.
@@ -38,97 +40,22 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from tmpnav.belief import ekf
-from tmpnav.belief.models import landmark_obs, motion, motion_noise_cov, mutual_obs, noisy_observation
-from tmpnav.belief.risk import hits_wall
+from tmpnav.belief.models import motion, motion_noise_cov
 from tmpnav.errors import TmpnavError
-from tmpnav.execution.consistency import ConsistencyTrace
+from tmpnav.execution.contact import walls_and_touches
 from tmpnav.execution.control import ALIGN, ALIGN_START, control, reached
-from tmpnav.execution.localisers import Localisation, Localiser
+from tmpnav.execution.joint_ekf import JointEkf
+from tmpnav.execution.localisers import Localisation, TeamLocaliser
 from tmpnav.execution.moves import QueuedMove
-from tmpnav.execution.scans import ScanSimulator
-from tmpnav.results import Schedule, TimedMove
+from tmpnav.execution.rpp import RppFollower
+from tmpnav.execution.trace import Draws, SessionTrace, nees
+from tmpnav.results import TimedMove
 from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
-from tmpnav.world.visibility import LandmarkVisibility, MutualSensing
+from tmpnav.world.visibility import LandmarkVisibility
 
 #: a move may take this many times its planned steps (or 40 steps per waypoint) before it is cut
 STEP_BUDGET = 6
-
-
-@dataclass
-class SessionTrace:
-    """One session in one configuration: robot -> the position error (m) at each point of its
-    paths and when it got there (s, nan for a point never reached), and the moves as executed;
-    robot -> the control steps after which its true pose hit a wall (``wall_hits``) and touched
-    another robot's (``contacts``)."""
-
-    errors: dict[str, list[float]] = field(default_factory=dict)
-    times: dict[str, list[float]] = field(default_factory=dict)
-    moves: list[TimedMove] = field(default_factory=list)
-    truncated: bool = False
-    wall_hits: dict[str, int] = field(default_factory=dict)
-    contacts: dict[str, int] = field(default_factory=dict)
-    #: robot -> the position NEES (true - estimated position against the plan's covariance) at
-    #: each point of its paths (nan where the plan has no covariance or the point was not reached)
-    planned_nees: dict[str, list[float]] = field(default_factory=dict)
-    #: robot -> the filter's own position NEES summed over its control steps, and their number
-    nees_sum: dict[str, float] = field(default_factory=dict)
-    nees_steps: dict[str, int] = field(default_factory=dict)
-    #: robot -> range beams used by its filter and rejected by the innovation gate
-    beams: dict[str, list[int]] = field(default_factory=dict)
-    #: (robot, plan step of the move under way, or of its last one when it stands; -1 before its
-    #: first) -> control steps its true pose hit a wall / touched another robot's
-    move_hits: dict[tuple[str, int], int] = field(default_factory=dict)
-    move_contacts: dict[tuple[str, int], int] = field(default_factory=dict)
-    #: robot -> the cost terms as executed (docs/models.md): c_u = sum (v² + omega²) dt of the
-    #: commands, c_Sigma = sum trace(Sigma) dt of the filter's covariance while it drives, c_G the
-    #: distances between the estimate and the path's end at the end of each move
-    c_u: dict[str, float] = field(default_factory=dict)
-    c_sigma: dict[str, float] = field(default_factory=dict)
-    c_goal: dict[str, float] = field(default_factory=dict)
-    #: the moves of ``moves`` that were cut (out of budget or of draws): they never reached their room
-    cut: list[TimedMove] = field(default_factory=list)
-    #: every driving step's actual error, the localiser's covariance and the plan's (consistency.py)
-    consistency: ConsistencyTrace = field(default_factory=ConsistencyTrace)
-
-    def reached(self) -> list[TimedMove]:
-        """The moves that reached their room (not cut), in the order they ended."""
-        return [m for m in sorted(self.moves, key=lambda m: m.end) if m not in self.cut]
-
-    def schedule(self, robots: tuple[str, ...]) -> Schedule:
-        """The moves as executed, in plan order: a schedule like the plan's."""
-        moves = sorted(self.moves, key=lambda m: (m.step, robots.index(m.robot)))
-        return Schedule(robots, tuple(moves))
-
-
-@dataclass(frozen=True)
-class Draws:
-    """A session's random numbers, indexed so that both configurations share them."""
-
-    initial: np.ndarray  # (N, 3)
-    motion: np.ndarray  # (N, S, 2)
-    landmark: np.ndarray  # (N, S, L, 2)
-    mutual: np.ndarray  # (N, N, S, 2)
-    scan: np.ndarray  # (N, S, B): the range beams' noise (B = 0 without a range sensor)
-
-    @staticmethod
-    def draw(seed: int, session: int, n: int, steps: int, landmarks: int, beams: int = 0) -> Draws:
-        """The draws of session ``session`` for ``n`` robots, ``steps`` control steps, ``landmarks``
-        and ``beams`` per range scan (drawn last: the others do not depend on them)."""
-        rng = np.random.default_rng([seed, session])
-        return Draws(
-            initial=rng.standard_normal((n, 3)),
-            motion=rng.standard_normal((n, steps, 2)),
-            landmark=rng.standard_normal((n, steps, landmarks, 2)),
-            mutual=rng.standard_normal((n, n, steps, 2)),
-            scan=rng.standard_normal((n, steps, beams)),
-        )
-
-    @property
-    def steps(self) -> int:
-        """Control steps drawn: a session that needs more is cut there."""
-        return int(self.motion.shape[1])
 
 
 @dataclass
@@ -144,6 +71,7 @@ class _Robot:
     since: int = 0  # step at which the move under way started
     aligned: bool = False  # it has turned towards its next waypoint (the segment's start is behind it)
     track: int = 0  # the step of the move's planned track it has come to (QueuedMove.planned_from)
+    rpp: RppFollower | None = None  # with --follower rpp: nav2's RPP along the move under way
 
     @property
     def next(self) -> QueuedMove | None:
@@ -175,16 +103,12 @@ class Session:
         self.robots = [_Robot(queues.get(r, ())) for r in self.names]
         self.dt = scenario.models.dt
         self.step = 0  # control steps taken (indexes the draws)
-        self.truth, self.belief, self.trace = self._initial()
-        self.sensing = self._sensing()
+        self.truth, belief, self.trace = self._initial()
         self.radii = np.array([r.radius for r in scenario.robots], dtype=float)
-        sensor = scenario.models.range_sensor
-        self.scans = ScanSimulator(world, sensor) if sensor is not None else None
         self.trace.wall_hits = dict.fromkeys(self.names, 0)
         self.trace.contacts = dict.fromkeys(self.names, 0)
         self.trace.planned_nees = {r: [math.nan] for r in self.names}
-        self.trace.nees_sum = dict.fromkeys(self.names, 0.0)
-        self.trace.nees_steps = dict.fromkeys(self.names, 0)
+        self.trace.own_nees = {r: [] for r in self.names}
         self.trace.beams = {r: [0, 0] for r in self.names}
         for terms in (self.trace.c_u, self.trace.c_sigma, self.trace.c_goal):
             terms.update(dict.fromkeys(self.names, 0.0))
@@ -192,32 +116,19 @@ class Session:
         self.speed = np.ones(len(self.names))
         #: robots that are down: they stand where they are for the rest of the session
         self.down: set[int] = set()
-        #: with AMCL (Localisation.particle_filter): each robot's particle filter, its odometry pose
-        #: (the commands integrated, from its initial estimate) and the site its lidar scans
-        self.localisers: list[Localiser] = []
+        self.localiser = self._localiser(belief, queues, session)
+
+    def _localiser(self, belief: Belief, queues: Mapping[str, tuple[QueuedMove, ...]], session: int) -> TeamLocaliser:
+        """Who localises the team, as ``localisation`` says (tmpnav.execution.localisers)."""
         if self.localisation.particle_filter:
-            self._start_particle_filters(queues, session)
+            from tmpnav.execution.amcl_team import AmclTeam
 
-    def _start_particle_filters(self, queues: Mapping[str, tuple[QueuedMove, ...]], session: int) -> None:
-        from tmpnav.execution.amcl import AmclLocaliser
-        from tmpnav.execution.site import Site, SiteNoise
+            return AmclTeam(self.scenario, self.world, self.draws, belief, self.localisation, queues, session)
+        if self.localisation.compiled:
+            from tmpnav.execution.fast_ekf import CompiledJointEkf
 
-        sensor = self.scenario.models.range_sensor
-        if sensor is None:
-            raise TmpnavError(
-                "--localiser amcl: the scenario's robots carry no range sensor (models.range_sensor); "
-                "expected a scenario with a lidar (AMCL localises with it)"
-            )
-        noise = self.localisation.site or SiteNoise.none()
-        paths = [np.asarray(m.points, dtype=float).reshape(-1, 2) for q in queues.values() for m in q]
-        self.site = Site(self.world, noise, session, keep_clear=paths or None)  # no clutter on the paths
-        self.odom = np.array([self.estimate(i) for i in range(len(self.names))])
-        params, blocks = self.localisation.amcl, [slice(3 * i, 3 * i + 3) for i in range(len(self.names))]
-        self.localisers = [
-            # the process's AMCL random stream is seeded by the session (the last filter's seed holds)
-            AmclLocaliser(self.world.grid, sensor, params, self.odom[i], self.belief.cov[b, b], seed=session + 1)
-            for i, b in enumerate(blocks)
-        ]
+            return CompiledJointEkf(self.scenario, self.world, self.vis, self.draws, belief, self.mutual)
+        return JointEkf(self.scenario, self.world, self.vis, self.draws, belief, self.mutual)
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -232,27 +143,13 @@ class Session:
         errors = {r.name: [float(np.hypot(*(truth[i, :2] - mean[3 * i : 3 * i + 2])))] for i, r in enumerate(robots)}
         return truth, Belief(mean, cov), SessionTrace(errors, {r.name: [0.0] for r in robots})
 
-    def _sensing(self) -> dict[MutualSensing, list[tuple[int, int]]]:
-        """The ordered pairs of robots that observe each other (config 1), grouped by sensor."""
-        groups: dict[MutualSensing, list[tuple[int, int]]] = {}
-        if self.mutual:  # config 1 senses whatever the scenario's switch says
-            for i, a in enumerate(self.names):
-                for j, b in enumerate(self.names):
-                    if i != j:
-                        groups.setdefault(MutualSensing.of_sensor(self.scenario, a, b), []).append((i, j))
-        return groups
-
     def estimate(self, i: int) -> np.ndarray:
-        """Robot i's estimated pose: its localiser's (its part of the joint belief's mean, or AMCL's)."""
-        if self.localisers:
-            return self.localisers[i].mean
-        return self.belief.mean[3 * i : 3 * i + 3]
+        """Robot i's estimated pose: its localiser's."""
+        return self.localiser.estimate(i)
 
     def estimate_cov(self, i: int) -> np.ndarray:
         """Robot i's covariance (3, 3) as its localiser reports it."""
-        if self.localisers:
-            return self.localisers[i].cov
-        return self.belief.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
+        return self.localiser.estimate_cov(i)
 
     # ------------------------------------------------------------------ the run
 
@@ -280,10 +177,14 @@ class Session:
             u = np.zeros((len(self.names), 2))
             for i, r in enumerate(self.robots):
                 if r.waypoints:
-                    spec = self.scenario.robots[i]
-                    align = ALIGN if r.aligned else ALIGN_START
-                    command = control(self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt, align)
-                    r.aligned = r.aligned or bool(command[0] > 0.0)  # it drives: the turn at the node is done
+                    if r.rpp is not None:  # the local costmap holds the walls where they truly are
+                        cell = self.world.grid.cells(self.truth[i, :2][None])
+                        command = r.rpp.command(self.estimate(i), float(self.world.clearance[cell[0], cell[1]][0]))
+                    else:
+                        spec = self.scenario.robots[i]
+                        align = ALIGN if r.aligned else ALIGN_START
+                        command = control(self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt, align)
+                        r.aligned = r.aligned or bool(command[0] > 0.0)  # it drives: the turn at the node is done
                     u[i] = self.speed[i] * command
                     if self.speed[i] == 0.0:
                         r.since += 1  # a stopped robot's move does not use up its budget
@@ -326,10 +227,7 @@ class Session:
         xs, ys = world.grid.cell_centers()
         rows, cols = np.nonzero(added)
         self.barriers = np.column_stack([xs[cols], ys[rows]]) if added.shape == self.base.grid.occupied.shape else None
-        sensor = self.scenario.models.range_sensor
-        self.scans = ScanSimulator(world, sensor) if sensor is not None else None
-        if self.localisers:  # the site keeps its clutter and people; the doors close on its walls
-            self.site = self.site.with_world(world)
+        self.localiser.set_world(world, vis)
 
     def _add_costs(self, u: np.ndarray) -> None:
         """The executed cost terms of this step (SessionTrace.c_u, c_sigma)."""
@@ -359,7 +257,7 @@ class Session:
         none is left, or cut it when it has run out of its budget."""
         name = self.names[i]
         assert r.previous is not None and r.move is not None
-        while r.waypoints and reached(self.estimate(i), r.previous, r.waypoints[0]):
+        while r.waypoints and self._reached(i, r):
             k = len(r.move.waypoints) - len(r.waypoints)  # the path point reached, after its start
             r.previous = r.waypoints.pop(0)
             r.aligned = False  # a new segment: turn towards its end first
@@ -367,13 +265,25 @@ class Session:
             self.trace.errors[name].append(float(np.hypot(*error)))
             self.trace.times[name].append(self.step * self.dt)
             planned = r.move.planned_covs[k] if k < len(r.move.planned_covs) else None
-            self.trace.planned_nees[name].append(_nees(error, planned))
+            self.trace.planned_nees[name].append(nees(error, planned))
         if r.waypoints and self.step - r.since >= STEP_BUDGET * max(r.move.steps, 40 * (len(r.move.nodes) - 1)):
             self._cut(name, len(r.waypoints))
             r.waypoints = []
             self._end(r, cut=True)
         if not r.waypoints and r.move is not None:
             self._end(r)
+
+    def _reached(self, i: int, r: _Robot) -> bool:
+        """Whether robot i has reached its next waypoint. With RPP, which cuts corners, a bend is
+        reached once the robot is abreast of it, and the move's end within nav2's goal tolerance."""
+        assert r.previous is not None
+        est = self.estimate(i)
+        if r.rpp is None:
+            return reached(est, r.previous, r.waypoints[0])
+        if len(r.waypoints) == 1:
+            return r.rpp.at_goal(est)
+        k = len(r.rpp.vertices) - len(r.waypoints)  # the path vertex of the next waypoint
+        return r.rpp.passed(k) or reached(est, r.previous, r.waypoints[0])
 
     def _end(self, r: _Robot, cut: bool = False) -> None:
         """Robot r ends its move now: record it as executed (``cut``: short of its room); the robot
@@ -425,6 +335,11 @@ class Session:
     def _start(self, r: _Robot, m: QueuedMove) -> None:
         r.move, r.started, r.since, r.aligned, r.track = m, r.started + 1, self.step, False, 0
         r.waypoints, r.previous = m.waypoints, np.asarray(m.points[0], dtype=float)
+        if self.localisation.follower == "rpp" and len(m.points) > 1:
+            spec = self.scenario.robots[self.names.index(m.robot)]
+            r.rpp = RppFollower(m.points, self.localisation.rpp, spec.speed, spec.turn_rate, self.dt)
+        else:
+            r.rpp = None
 
     def _cut(self, name: str, points: int) -> None:
         """Points of a path never reached: no error, no time."""
@@ -446,9 +361,10 @@ class Session:
             r.started = len(r.queue)
 
     def _check_waiting(self) -> None:
-        """Nobody drives: some robot must be waiting for a planned start still to come, else the
-        schedule cannot go on (a paired move whose partner waits for another one)."""
-        if any(r.next is not None and r.next.start > self.step for r in self.robots):
+        """Nobody drives: some robot must be waiting for a planned start still to come, or still at
+        a station (waiting for a window, in service), else the schedule cannot go on (a paired
+        move whose partner waits for another one)."""
+        if any(r.next is not None and max(r.next.start, r.ready) > self.step for r in self.robots):
             return
         if self.down:  # robots waiting for a partner that is down wait for ever: their moves are cut
             for i, r in enumerate(self.robots):
@@ -468,16 +384,16 @@ class Session:
         """The true robots move with noisy controls (none for a robot standing: W(0) = 0); the
         filter predicts with the commands."""
         models = self.scenario.models
-        for i in range(len(self.names)):
-            W = motion_noise_cov(u[i], models.motion_noise)
-            noisy = u[i] + np.sqrt(np.diag(W)) * self.draws.motion[i, self.step]
-            moved = motion(self.truth[i], noisy, models.dt)
-            if self.world is self.base or not self._closed_in_way(moved[:2], self.radii[i]):
-                self.truth[i] = moved
-        if self.localisers:  # odometry: the commands integrated (the wheels' error is the control noise)
-            self.odom = motion(self.odom, u, models.dt)
-            return
-        self.belief = ekf.predict(self.belief, u, models.dt, models.motion_noise)
+        W = motion_noise_cov(u, models.motion_noise)  # (n, 2, 2), diagonal
+        noisy = u + np.sqrt(np.stack([W[:, 0, 0], W[:, 1, 1]], axis=-1)) * self.draws.motion[:, self.step]
+        moved = motion(self.truth, noisy, models.dt)
+        if self.world is self.base:
+            self.truth = moved
+        else:
+            for i in range(len(self.names)):
+                if not self._closed_in_way(moved[i, :2], self.radii[i]):
+                    self.truth[i] = moved[i]
+        self.localiser.predict(u)
 
     def _closed_in_way(self, xy: np.ndarray, radius: float) -> bool:
         """Whether a robot at ``xy`` would touch a cell the world has now and had not at the start (a
@@ -488,46 +404,10 @@ class Session:
         return bool(np.min(np.hypot(*(self.barriers - xy).T)) < radius)
 
     def _observe(self) -> None:
-        """Every robot's landmark observations, then (config 1) every pair's mutual observations;
-        with AMCL, every robot's scan of the site and odometry, to its own particle filter."""
-        models, truth, step = self.scenario.models, self.truth, self.step
-        if self.localisers:
-            self._scan_site()
-            return
-        q_lm = models.landmark_sensor.Q
-        chol_lm = np.linalg.cholesky(q_lm)
-        landmarks = self.world.landmark_xy
-        seen = self.vis.visible(truth, models.landmark_sensor.fov)
-        for i in range(len(self.names)):
-            for lm in np.flatnonzero(seen[i]):
-                z = noisy_observation(landmark_obs(truth[i], landmarks[lm]), chol_lm, self.draws.landmark[i, step, lm])
-                self.belief = ekf.update_landmark(self.belief, i, landmarks[lm], z, q_lm)
-        if self.scans is not None:
-            for i, name in enumerate(self.names):
-                self.belief, count = self.scans.update(self.belief, i, truth[i], self.draws.scan[i, step])
-                self.trace.beams[name][0] += count.used
-                self.trace.beams[name][1] += count.rejected
-        if not self.sensing:
-            return
-        q_mu = models.mutual_sensor.Q
-        chol_mu = np.linalg.cholesky(q_mu)
-        for i, j in self._mutually_visible():
-            z = noisy_observation(mutual_obs(truth[i], truth[j]), chol_mu, self.draws.mutual[i, j, step])
-            self.belief = ekf.update_mutual(self.belief, i, j, z, q_mu)
-
-    def _scan_site(self) -> None:
-        """Each robot's lidar scans the site from its true pose (the sensor's range noise on every
-        return), and its AMCL updates with the scan and its odometry."""
-        sensor = self.scenario.models.range_sensor
-        assert sensor is not None
-        angles, t = sensor.beam_angles(), self.step * self.dt
-        for i, name in enumerate(self.names):
-            ranges = (
-                self.site.ranges(self.truth[i], angles, sensor, t) + sensor.sigma_range * self.draws.scan[i, self.step]
-            )
-            self.localisers[i].update(self.odom[i], ranges)
-            returned = int(np.count_nonzero(~np.isnan(ranges)))
-            self.trace.beams[name][0] += returned
+        """The robots' observations from their true poses, to their localiser."""
+        for name, (used, rejected) in zip(self.names, self.localiser.observe(self.truth, self.step), strict=True):
+            self.trace.beams[name][0] += used
+            self.trace.beams[name][1] += rejected
 
     def _record_consistency(self) -> None:
         """Each driving robot's actual error, its localiser's covariance and the plan's at this step of its move."""
@@ -544,20 +424,17 @@ class Session:
         (closer than their radii added): what the collision bound (docs/models.md) bounds."""
         self._record_consistency()
         for i, name in enumerate(self.names):
-            nees = _nees(self.truth[i, :2] - self.estimate(i)[:2], self.estimate_cov(i)[:2, :2])
-            if math.isfinite(nees):
-                self.trace.nees_sum[name] += nees
-                self.trace.nees_steps[name] += 1
-        walls = hits_wall(self.world.grid, self.world.clearance, self.truth[:, :2], self.radii)
-        gap = np.hypot(*(self.truth[:, None, :2] - self.truth[None, :, :2]).transpose(2, 0, 1))
-        touch = (gap < self.radii[:, None] + self.radii[None, :]) & ~np.eye(len(self.names), dtype=bool)
+            value = nees(self.truth[i, :2] - self.estimate(i)[:2], self.estimate_cov(i)[:2, :2])
+            if not math.isnan(value):
+                self.trace.own_nees[name].append(value)
+        walls, touch = walls_and_touches(self.world, self.truth, self.radii)
         for i, name in enumerate(self.names):
-            self.trace.wall_hits[name] += int(walls[i])
-            self.trace.contacts[name] += int(touch[i].any())
-            if walls[i] or touch[i].any():
+            if walls[i] or touch[i]:
+                self.trace.wall_hits[name] += int(walls[i])
+                self.trace.contacts[name] += int(touch[i])
                 key = (name, self._move_step(self.robots[i]))
                 self.trace.move_hits[key] = self.trace.move_hits.get(key, 0) + int(walls[i])
-                self.trace.move_contacts[key] = self.trace.move_contacts.get(key, 0) + int(touch[i].any())
+                self.trace.move_contacts[key] = self.trace.move_contacts.get(key, 0) + int(touch[i])
 
     @staticmethod
     def _move_step(r: _Robot) -> int:
@@ -565,23 +442,3 @@ class Session:
         if r.move is not None:
             return r.move.step
         return r.queue[r.started - 1].step if r.started else -1
-
-    def _mutually_visible(self) -> list[tuple[int, int]]:
-        """The ordered pairs (observer, observed) in range and line of sight now, in team order."""
-        out = []
-        for sensing, pairs in self.sensing.items():
-            a, b = np.array(pairs).T
-            seen = sensing.visible(self.world, self.truth[a], self.truth[b])
-            out += [p for p, s in zip(pairs, seen, strict=True) if s]
-        return sorted(out)
-
-
-def _nees(error: np.ndarray, cov: np.ndarray | None) -> float:
-    """The normalised estimation error squared eᵀ Σ⁻¹ e of a position error e (2,) against its
-    covariance Σ (2, 2): 2 on average for a consistent filter; nan without a usable Σ."""
-    if cov is None:
-        return math.nan
-    try:
-        return float(error @ np.linalg.solve(cov, error))
-    except np.linalg.LinAlgError:
-        return math.nan

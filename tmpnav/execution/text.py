@@ -7,7 +7,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from tmpnav.execution.consistency import summary_lines
+from tmpnav.execution.consistency import CONSISTENT_BEYOND, CONSISTENT_MEDIAN, Nees, summary_lines
 from tmpnav.execution.result import ExecutionResult, Rate
 from tmpnav.numbers import length, nees, percent, probability
 from tmpnav.types import Roadmap
@@ -15,20 +15,35 @@ from tmpnav.types import Roadmap
 
 def error_summary(result: ExecutionResult, sessions: int) -> list[str]:
     """The worst-case position error per robot in both configurations, the makespan executed
-    against the planned one, and the robots' waits (what ``tmpnav simulate`` prints)."""
-    lines = [f"{sessions} sessions; worst-case position error (largest average error over the path's nodes):"]
+    against the planned one, and the robots' waits (what ``tmpnav simulate`` prints). A robot
+    without moves has no error to report: it is named as such, not given its start's error."""
+    head = f"{sessions} sessions; worst-case position error (largest average error over the path's nodes)"
+    moving = [r for r in result.robots if result.planned.timeline(r)]
+    idle = [f"{r} no moves" for r in result.robots if r not in moving]
     if result.configs == (1,):  # one localiser per robot (AMCL): no mutual observations to compare
-        lines.append("  " + ", ".join(f"{robot} {length(result.worst(1, robot))}" for robot in result.robots))
-        return _rest(result, lines)
-    for robot in result.robots:
+        cells = [f"{robot} {length(result.worst(1, robot))}" for robot in moving] + idle
+        return _rest(result, [f"{head}:", "  " + ", ".join(cells)])
+    differ = [r for r in moving if length(result.worst(1, r)) != length(result.worst(2, r))]
+    if not differ:  # the same figure for every robot: one line, no "0% lower" per robot
+        cells = [f"{robot} {length(result.worst(1, robot))}" for robot in moving] + idle
+        return _rest(result, [f"{head}, the same with and without mutual observations:", "  " + ", ".join(cells)])
+    lines = [f"{head}:"]
+    for robot in moving:
+        w1, w2 = length(result.worst(1, robot)), length(result.worst(2, robot))
         lines.append(
-            f"  {robot}: with mutual observations {length(result.worst(1, robot))}, "
-            f"without {length(result.worst(2, robot))}, {_lower(result.reduction(robot))}"
+            f"  {robot}: with mutual observations {w1}, without {w2}, {_lower(result.reduction(robot))}"
+            if robot in differ
+            else f"  {robot}: {w1} with and without mutual observations"
         )
-    starved = result.starved
+    lines += [f"  {cell}" for cell in idle]
+    starved = max(moving, key=lambda r: result.worst(2, r))
     lines.append(
         f"landmark-starved robot (largest error without mutual observations): {starved}, "
-        f"{_lower(result.reduction(starved))} with mutual observations"
+        + (
+            f"{_lower(result.reduction(starved))} with mutual observations"
+            if starved in differ
+            else "the same with them"
+        )
     )
     return _rest(result, lines)
 
@@ -76,16 +91,18 @@ def wait_lines(result: ExecutionResult) -> list[str]:
 
 
 def consistency_lines(result: ExecutionResult) -> list[str]:
-    """How well the errors agree with the covariances (position NEES, 2 when they do), and with a
-    range sensor the share of beams the filters' innovation gate rejected."""
-    lines = []
-    for config, label in labels(result):
-        robots = ", ".join(f"{r} {nees(result.nees(config, r))}" for r in result.robots)
-        lines.append(
-            f"position NEES {label} (2 when the errors agree with the covariance): against the plan's covariance "
-            f"at the path's nodes {nees(result.nees(config))} ({robots}); against the filter's own at every step "
-            f"{nees(result.own_nees(config))}"
-        )
+    """How well the errors agree with the covariances: the position NEES's median and share
+    beyond 3 sigma (:class:`~tmpnav.execution.consistency.Nees`), one line per configuration (one
+    for both when they agree), and with a range sensor the share of beams the filters' innovation
+    gate rejected."""
+    texts = [(label, _nees_text(result, config)) for config, label in labels(result)]
+    if len(texts) == 2 and texts[0][1] == texts[1][1]:
+        texts = [("with and without mutual observations alike", texts[0][1])]
+    lines = [
+        f"position NEES {label}, median and share beyond 3 sigma ({nees(CONSISTENT_MEDIAN)} and "
+        f"{percent(CONSISTENT_BEYOND)} when the errors agree with the covariance): {text}"
+        for label, text in texts
+    ]
     used = sum(result.beams[(1, r)][0] for r in result.robots)
     if used and result.configs != (1,):  # AMCL has no innovation gate
         rejected = sum(result.beams[(1, r)][1] for r in result.robots)
@@ -94,6 +111,31 @@ def consistency_lines(result: ExecutionResult) -> list[str]:
             f"{percent(rejected / used)} rejected by the innovation gate"
         )
     return lines
+
+
+def _nees_text(result: ExecutionResult, config: int) -> str:
+    """The NEES of a configuration against the plan's covariance at the path's nodes (per robot:
+    a robot without moves, or whose path has no planned covariance, says so) and against the
+    filter's own at every step."""
+
+    def figures(n: Nees) -> str:
+        return f"{nees(n.median)}, {percent(n.beyond)}"
+
+    cells = []
+    for r in result.robots:
+        n = result.nees(config, r)
+        cells.append(
+            f"{r} {nees(n.median)}"
+            if n.steps
+            else f"{r} none ({'no moves' if not result.planned.timeline(r) else 'no planned covariance'})"
+        )
+    planned, own = result.nees(config), result.own_nees(config)
+    against_plan = (
+        f"against the plan's covariance at the path's nodes {figures(planned)} ({', '.join(cells)})"
+        if planned.steps
+        else "no path node with a planned covariance"
+    )
+    return f"{against_plan}; against the filter's own at every step {figures(own) if own.steps else 'none'}"
 
 
 def collision_lines(result: ExecutionResult) -> list[str]:

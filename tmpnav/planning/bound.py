@@ -25,8 +25,10 @@ def certified_bound(run: TaskRun) -> Bound:
     cost depends on the beliefs it starts from), the bound of the moves' motion floors
     (:mod:`tmpnav.attachment.floors`), which hold in every context and for every paired move.
     When the objective prices time, plus its price of the makespan's lower bound from the
-    moves' time floors (:func:`tmpnav.task.bound.makespan_bound`, or :func:`_work_bound` where
-    higher): both bounds hold for every plan at once, so their weighted sum bounds its objective."""
+    moves' time floors and the jobs' services and windows (:func:`tmpnav.task.bound.makespan_bound`:
+    each goal's least round trip of a robot that may serve it, from its start to its end; or
+    :func:`_work_bound` where higher): both bounds hold for every plan at once, so their
+    weighted sum bounds its objective."""
     sp, goals, canonical = run.planner, run.goals, run.canonical
     # with carried beliefs a robot leaves a room with the heading it arrived with
     arrived = run.choice.costs == "carried"
@@ -46,7 +48,8 @@ def certified_bound(run: TaskRun) -> Bound:
         bound = replace(bound, relaxation=f"motion floors, {bound.relaxation}")
     if not run.span_weight:
         return bound
-    span = max(makespan_bound(floors, goals), _work_bound(floors, goals, rounds))
+    timed = floors.with_service(goals)  # a move's time until its robot is free again
+    span = max(makespan_bound(timed, goals), _work_bound(timed, goals, rounds))
     value = bound.value + run.span_weight * span
     parts = {**bound.parts, "makespan": span}
     return replace(bound, value=value, relaxation=f"{bound.relaxation} + makespan floor {span:.1f} s", parts=parts)

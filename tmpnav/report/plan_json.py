@@ -20,7 +20,7 @@ import numpy as np
 
 from tmpnav.report.quality import plan_conflicts, plan_warnings
 from tmpnav.report.schedule import bound_values, driving_steps, dropped_goals, objective_values, step_windows
-from tmpnav.results import JSON, STAGES, CacheUse, PlanReport, Schedule, TimedMove
+from tmpnav.results import JSON, OTHER, STAGES, CacheUse, PlanReport, Schedule, TimedMove
 from tmpnav.types import PlannedAction, Roadmap, TrajectoryStep
 from tmpnav.version import __version__
 
@@ -225,7 +225,8 @@ def plan_document(report: PlanReport) -> dict[str, JSON]:
     sc = report.scenario
     windows = step_windows(report.schedule, len(report.actions))
     makespan, objective = _objective(report)
-    timings: dict[str, JSON] = {stage: number(report.times.seconds.get(stage, 0.0), 6) for stage in (*STAGES, "total")}
+    seconds = report.times.seconds
+    timings: dict[str, JSON] = {stage: number(seconds.get(stage, 0.0), 6) for stage in (*STAGES, OTHER, "total")}
     timings.update({k: number(v, 6) for k, v in report.times.seconds.items() if k not in timings})
     weights = sc.cost
     doc: dict[str, JSON] = {

@@ -12,7 +12,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from tmpnav.numbers import percent
 from tmpnav.results import PlanReport, Schedule, TimedMove
+from tmpnav.task.bound import OPTIMAL_GAP
 from tmpnav.task.objectives import OBJECTIVES
 
 #: s: trajectory times are rounded to 1e-9 s, schedule times are multiples of the control step
@@ -137,6 +139,22 @@ def searched_gap(report: PlanReport) -> float | None:
         apart.cost_before, apart.makespan_before, report.scenario.cost
     )
     return (value - b.value) / value if value > 0.0 else None
+
+
+def bound_verdict(report: PlanReport) -> str | None:
+    """The plan against its bound, in words: "proved optimal" or its gap, never both (None
+    without a bound). A plan kept apart after a search whose plan met its bound has a gap, the
+    whole of it from keeping the robots apart: the line says that, and proves nothing of it."""
+    own = bound_values(report)
+    if own is None:
+        return None
+    if own.proved_optimal:
+        return "proved optimal"
+    verdict = f"gap {percent(own.gap)}"
+    searched = searched_gap(report)
+    if searched is not None and searched <= OPTIMAL_GAP:
+        verdict += ", all of it from keeping the robots apart (the plan as searched met the bound)"
+    return verdict
 
 
 def bound_values(report: PlanReport) -> BoundValues | None:

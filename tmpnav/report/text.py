@@ -34,8 +34,8 @@ second time)::
     collision bound: plan 0.05 (no --max-risk); robots in each other's way: 1, the first:
      r1 and r2 at 8.0 s, 4.0 cm apart, 0.94 m needed; --max-risk keeps robots apart: docs/planning.md
 
-    time [s]  roadmap  oracle  planner  resimulate   total  (load)
-                 0.00    0.00     0.00        0.20    0.21    0.05
+    time [s]  roadmap  oracle  planner  resimulate   other   total  (load)
+                 0.00    0.00     0.00        0.20    0.01    0.21    0.05
     cache (/home/me/.cache/tmpnav): roadmap from cache; move costs: cost table from cache, then 1 more
     from cache and 0 computed
 """
@@ -50,20 +50,19 @@ import numpy as np
 
 from tmpnav.belief.risk import position_std
 from tmpnav.choices import STOP_MEANINGS
-from tmpnav.numbers import angle, length, percent, probability
+from tmpnav.numbers import angle, length, probability
 from tmpnav.report.quality import plan_conflicts, warning_lines
 from tmpnav.report.schedule import (
     T_TOL,
     bound_values,
+    bound_verdict,
     driving_steps,
     dropped_goals,
     objective_values,
-    searched_gap,
     step_windows,
 )
-from tmpnav.results import STAGES, PlanReport
+from tmpnav.results import OTHER, STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
-from tmpnav.task.bound import OPTIMAL_GAP
 from tmpnav.types import PlanStatus
 
 
@@ -154,12 +153,8 @@ def _search(report: PlanReport) -> list[str]:
                 f"time cap: {', '.join(search.capped)} cut the search short: another machine, or this one less "
                 "busy, may give another plan"
             )
-    own = bound_values(report)
+    own, verdict = bound_values(report), bound_verdict(report)
     if bound is not None and own is not None:
-        verdict = "proved optimal" if own.proved_optimal else f"gap {percent(own.gap)}"
-        searched = None if own.proved_optimal else searched_gap(report)
-        if searched is not None and searched <= OPTIMAL_GAP:
-            verdict += " after keeping the robots apart; the plan searched: proved optimal"
         if own.units == "s":
             lines.append(f"lower bound on the makespan: {own.value:.1f} s ({own.relaxation}); {verdict}")
         else:
@@ -323,10 +318,12 @@ def _plural(n: int, word: str) -> str:
 
 
 def _times(report: PlanReport) -> list[str]:
-    """Seconds per stage as a small table (``total`` excludes ``load``), then the oracle cache."""
+    """Seconds per stage as a small table, then the oracle cache. ``total`` is the run's wall-clock
+    time but ``load``: the stages before it (``other``: the time in none) add up to it."""
     seconds = report.times.seconds
     cache = report.cache
-    stages = [s for s in (*STAGES, "total") if s != "load" and s in seconds] + (["load"] if "load" in seconds else [])
+    stages = [s for s in (*STAGES, OTHER, "total") if s != "load" and s in seconds]
+    stages += ["load"] if "load" in seconds else []
     names = [f"({s})" if s == "load" else s for s in stages]
     widths = [max(len(n), 6) for n in names]
     head = "time [s]  " + "  ".join(f"{n:>{w}}" for n, w in zip(names, widths, strict=True))

@@ -587,8 +587,8 @@ PLANNER = Section(
         ),
         "objective": Field(
             Choice(choices=OBJECTIVE_CHOICES),
-            "what the plan minimises: weighted (the sum of action costs plus cost.M_T per second of makespan), cost (the paper's sum of action costs) or makespan (the team's time first, then the sum)",
-            default="weighted",
+            "what the plan minimises: weighted (the sum of action costs plus cost.M_T per second of makespan), cost (the paper's sum of action costs) or makespan (the team's time first, then the sum); omitted: makespan for a team on a shift (two robots or more, and goals.ends or a job with a service time), else weighted",
+            default=None,
         ),
         "max_risk": Field(
             Number(None, minimum=0.0, exclusive_minimum=True, maximum=1.0),

@@ -14,6 +14,7 @@ from typing import Any
 
 import yaml
 
+from tmpnav.choices import Objective, default_objective
 from tmpnav.errors import Problem, ScenarioError
 from tmpnav.scenario.format import ROS_MAP, SCENARIO, polygonal_cells
 from tmpnav.scenario.limits import MAP_CELLS, YAML_BYTES
@@ -476,14 +477,25 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
             ),
             ends=tuple(d["goals"]["ends"].items()),
         ),
-        planner=_planner(d["planner"], d["models"]["range_sensor"] is not None),
+        planner=_planner(d["planner"], d["models"]["range_sensor"] is not None, _objective(d)),
         key_lines={_display(raw, doc): line for raw, line in doc.lines.items()},
     )
 
 
-def _planner(p: dict[str, Any], range_sensor: bool) -> PlannerOptions:
+def _objective(d: dict[str, Any]) -> Objective:
+    """The scenario's objective: its own, else the default for its team and goals."""
+    named: Objective | None = d["planner"]["objective"]
+    if named is not None:
+        return named
+    goals = d["goals"]
+    shift = bool(goals["ends"]) or any(j["service"] for j in goals["jobs"])
+    return default_objective(len(d["robots"]), shift)
+
+
+def _planner(p: dict[str, Any], range_sensor: bool, objective: Objective) -> PlannerOptions:
     """The planner's options; a team with a range sensor plans within DEFAULT_MAX_RISK unless the
     scenario names its own threshold."""
+    p = {**p, "objective": objective}
     if p["max_risk"] is not None:
         return PlannerOptions(**p, max_risk_from="planner.max_risk")
     if range_sensor:

@@ -70,6 +70,7 @@ ENHSP's optimum; on a 60-room building table with 8 robots and 20,000 pairs it t
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -85,6 +86,8 @@ ROUNDING = 1e-9
 OPTIMAL_GAP = 1e-6
 #: rounds of connectivity cuts in relaxation (c)
 CUT_ROUNDS = 50
+#: choices of n + 1 rooms (n robots) the makespan's pair bound tries at most (20 rooms, 4 robots: 15,504)
+MAX_PAIR_SUBSETS = 20_000
 
 Row = tuple[str | None, str]  # (robot, room): robot None for a room of U, else an entry of E
 
@@ -253,24 +256,89 @@ def _able_to_enter(table: CostTable, goals: Goals) -> dict[str, set[str]]:
 
 def makespan_bound(table: CostTable, goals: Goals) -> float:
     """A lower bound on the makespan of every schedule whose moves take at least
-    ``table.duration`` (time floors, tmpnav.attachment.floors), the robots moving at once.
+    ``table.duration`` (time floors, tmpnav.attachment.floors, each ending after the service at
+    its target: :meth:`CostTable.with_service`), the robots moving at once, each waiting at a
+    job's room for its window to open.
 
-    Every required entry (:func:`required_entries`) is made by some robot. (1) The robot that
-    enters room x gets there at the earliest after driving there directly from its start
-    (shortest times obey the triangle inequality; waiting only adds), so the makespan is at
-    least the largest, over x, of the quickest such arrival. (2) Every entry takes at least
-    the quickest move into its room from anywhere; the robots share that work, so the
-    makespan is at least its sum divided by the number of robots. 0 without durations."""
+    Every required entry (:func:`required_entries`) is made by some robot, one that may do the
+    room's job. (1) That robot finishes there at the earliest after driving there directly from
+    its start, waiting for the window and serving (shortest times obey the triangle inequality;
+    waiting only adds), then, if it has an end elsewhere, driving on to its end and serving
+    there (:func:`round_trip`): the makespan is at least the largest, over the entries, of the
+    least such round trip of a robot that may make it. (2) Every entry takes at least the
+    quickest move into its room from anywhere; the robots share that work, so the makespan is
+    at least its sum divided by the number of robots. (3) Among any n + 1 of the rooms entered
+    exactly once (n robots), some robot serves two: the makespan is at least the least round
+    trip of a robot through two of them, for the n + 1 rooms where that is largest
+    (:func:`_pair_bound`). 0 without durations."""
     rows = required_entries(table, goals)
     if not rows or not table.duration:
         return 0.0
     into: dict[Row, float] = {}
-    direct: dict[Row, float] = {}
-    for (r, o, x), d in table.duration.items():
+    for (r, _, x), d in table.duration.items():
         for row in ((None, x), (r, x)):
             into[row] = min(into.get(row, math.inf), d)
-            if o == table.start_location[r]:
-                direct[row] = min(direct.get(row, math.inf), d)
-    arrival = max((direct.get(row, 0.0) for row in rows), default=0.0)
+    trips = [_least_trip(table, goals, row) for row in rows]
     work = sum(into.get(row, 0.0) for row in rows) / max(1, len(table.robots))
-    return max(arrival, work)
+    return max(max(trips, default=0.0), work, _pair_bound(table, goals, rows))
+
+
+def _pair_bound(table: CostTable, goals: Goals, rows: list[Row]) -> float:
+    """(3) of :func:`makespan_bound`: the largest, over every n + 1 rooms entered exactly once,
+    of the least round trip through two of them (in either order) of a robot that may serve
+    both; 0 where there are no more such rooms than robots or more than
+    :data:`MAX_PAIR_SUBSETS` choices of n + 1 of them."""
+    once = [x for r, x in rows if r is None]
+    n = len(table.robots)
+    if len(once) <= n or math.comb(len(once), n + 1) > MAX_PAIR_SUBSETS:
+        return 0.0
+    pair: dict[tuple[str, str], float] = {}
+    for x, y in itertools.combinations(once, 2):
+        both = [r for r in table.robots if goals.may_visit(r, x) and goals.may_visit(r, y)]
+        pair[(x, y)] = min((_through(table, goals, r, p) for r in both for p in ((x, y), (y, x))), default=math.inf)
+    best = 0.0
+    for rooms in itertools.combinations(once, n + 1):
+        least = min(pair[p] for p in itertools.combinations(rooms, 2))
+        if math.isfinite(least):  # infinite: no robot may serve two of them, and no plan exists
+            best = max(best, least)
+    return best
+
+
+def _least_trip(table: CostTable, goals: Goals, row: Row) -> float:
+    """The least :func:`round_trip` through ``row``'s room of a robot that may make the entry
+    (0 when the table has none: no bound from it)."""
+    robot, x = row
+    robots = (robot,) if robot is not None else tuple(r for r in table.robots if goals.may_visit(r, x))
+    trips = [round_trip(table, goals, r, x) for r in robots]
+    finite = [t for t in trips if math.isfinite(t)]
+    return min(finite, default=0.0)
+
+
+def round_trip(table: CostTable, goals: Goals, robot: str, room: str) -> float:
+    """The earliest ``robot`` can be done if it serves ``room``: its quickest move there from its
+    start, a wait for the room's window, the service, then its quickest move on to its end (and
+    the end's window and service), when it has an end elsewhere. ``table.duration`` ends each
+    move after its target's service; inf when the table has no move of the robot there."""
+    return _through(table, goals, robot, (room,))
+
+
+def _through(table: CostTable, goals: Goals, robot: str, rooms: tuple[str, ...]) -> float:
+    """:func:`round_trip` through ``rooms`` in their order (inf without a move of the table)."""
+    done, at = 0.0, table.start_location[robot]
+    for room in rooms:
+        done = _served(goals, room, done, table.duration.get((robot, at, room), math.inf))
+        at = room
+    end = goals.end_of(robot)
+    if end is None or end == at or not math.isfinite(done):
+        return done
+    back = table.duration.get((robot, at, end))
+    # without the move in the table (a floor of no path), the way on is not counted
+    return done if back is None else _served(goals, end, done, back)
+
+
+def _served(goals: Goals, room: str, leave: float, move: float) -> float:
+    """When a robot that leaves at ``leave`` on a move of ``move`` s into ``room`` (service
+    included) is done there: the service starts at its arrival, or when the window opens."""
+    service = goals.service(room)
+    arrival = leave + move - service
+    return arrival + goals.opens(room, arrival) + service

@@ -242,9 +242,9 @@ class AnytimeSearch:
         """OR-Tools' routes on the single moves, as a plan of single moves; its local search
         starts from ``start_from``'s routes when given (a replan's plan under way)."""
         opts = self.options
-        # guided local search stops after ROUTING_SOLUTIONS solutions (the same routes on every run),
-        # few rooms and robots after FEW_STAGNATION without improvement, or at its time limit on a
-        # very large or slow problem
+        # guided local search stops after ROUTING_SOLUTIONS solutions, few rooms and robots after FEW_STAGNATION
+        # without improvement, or at its own time limit (not what a cold oracle left of the budget: cut to
+        # 0.1 s, its first solution left robots of a shift at their docks, tests/test_team_objective.py)
         limit = opts.routing_time if opts.routing_time is not None else min(ROUTING_CAP, max(1.0, opts.budget / 4))
         few = len(self.goals.all_rooms) <= FEW_ROOMS and len(self.model.robots) <= 2
         with self.times.timed("planner"):

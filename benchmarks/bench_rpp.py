@@ -1,0 +1,80 @@
+"""The plan's clock against nav2's Regulated Pure Pursuit: each move's planned duration next to
+the one executed by ``tmpnav simulate --follower rpp`` (and by the waypoint follower that turns on
+the spot as the plan does), median over the sessions; seconds per metre of driving; the makespan.
+
+    .venv/bin/python benchmarks/bench_rpp.py [--sessions 20] [--only building-4robots ...]
+
+Writes ``rpp/NAME.csv`` (one row per move and follower) and prints one line per scenario and
+follower (benchmarks/README.md, "The plan's clock against nav2's RPP").
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from tmpnav.execution import execute
+from tmpnav.execution.localisers import Localisation
+from tmpnav.execution.moves import queues
+from tmpnav.pipeline import plan
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+SCENARIOS = ("building-4robots", "building-20", "depot-jobs", "office-ros")
+
+
+def measure(name: str, sessions: int) -> list[str]:
+    report = plan(ROOT / "configs" / f"{name}.yaml")
+    paths = {(m.robot, m.step): m for q in queues(report).values() for m in q}
+    planned = {(m.robot, m.step): m for m in report.schedule.moves}
+    rows, lines = [], []
+    for follower in ("waypoint", "rpp"):
+        result = execute(report, sessions, 0, None, Localisation(follower=follower))
+        config = min(result.schedules)
+        runs = result.schedules[config]
+        ratios, per_metre, planned_per_metre = [], [], []
+        for key, p in planned.items():
+            move = paths.get(key)
+            if move is None or len(move.points) < 2:
+                continue
+            length = float(np.sum(np.hypot(*np.diff(np.asarray(move.points), axis=0).T)))
+            done = [m.end - m.start for s in runs for m in s.moves if (m.robot, m.step) == key]
+            if not done or length <= 0.0 or p.end - p.start <= 0.0:
+                continue
+            executed = float(np.median(done))
+            ratios.append(executed / (p.end - p.start))
+            per_metre.append(executed / length)
+            planned_per_metre.append((p.end - p.start) / length)
+            rows.append(f"{follower},{key[0]},{key[1] + 1},{length:.2f},{p.end - p.start:.1f},{executed:.1f}")
+        makespan = float(np.mean([s.makespan for s in runs]))
+        planned_makespan = report.schedule.makespan
+        within = float(np.mean(np.abs(np.array(ratios) - 1.0) <= 0.10))
+        lines.append(
+            f"{name} {follower}: {len(ratios)} moves; executed/planned duration median {np.median(ratios):.2f} "
+            f"(within 10%: {within:.0%}); executed {np.median(per_metre):.2f} s/m against planned "
+            f"{np.median(planned_per_metre):.2f} s/m; "
+            f"makespan planned {planned_makespan:.1f} s, executed {makespan:.1f} s "
+            f"({makespan / planned_makespan - 1:+.1%})"
+        )
+    out = HERE / "rpp"
+    out.mkdir(exist_ok=True)
+    (out / f"{name}.csv").write_text(
+        "follower,robot,step,length_m,planned_s,executed_median_s\n" + "\n".join(rows) + "\n"
+    )
+    return lines
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sessions", type=int, default=20)
+    parser.add_argument("--only", nargs="*", default=None)
+    args = parser.parse_args()
+    for name in args.only or SCENARIOS:
+        for line in measure(name, args.sessions):
+            print(line, flush=True)
+
+
+if __name__ == "__main__":
+    main()
