@@ -70,3 +70,13 @@ def test_a_room_no_robot_can_enter_is_named() -> None:
     table = CostTable(table.robots, table.rooms, table.locations, table.start_location, single, {})
     with pytest.raises(PlannerError, match=r"no robot allowed there can enter R3$"):
         search(TableModel(table, 0.05), Goals(goals.visit, goals.per_robot), SearchOptions(parallel=1, budget=30))
+
+
+def test_a_room_entered_only_from_another_waits_for_it() -> None:
+    """R3 is entered from R5 only, at a price that puts it first: it is placed once R5 is."""
+    table, goals = building_instance(random.Random(5), 6, 2, max_pairs=0)
+    single = {m: (1e6 if m[2] == "R3" else c) for m, c in table.single.items() if m[2] != "R3" or m[1] == "R5"}
+    table = CostTable(table.robots, table.rooms, table.locations, table.start_location, single, {})
+    routes = insertion_routes(table, goals, "ROUTING_FAIL_TIMEOUT")
+    assert routes.found and any("R3" in rooms for rooms in routes.rooms.values())
+    assert plan_cost(table, goals, [(m,) for m in routes.moves(table)]) == pytest.approx(routes.cost)

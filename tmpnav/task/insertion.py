@@ -48,7 +48,8 @@ def insertion_routes(table: CostTable, goals: Goals, status: str, span_weight: f
     cheapest: dict[str, float] = {}
     for (_, _, x), c in table.single.items():
         cheapest[x] = min(cheapest.get(x, math.inf), c)
-    for robot, room in sorted(tasks, key=lambda row: (-cheapest.get(row[1], math.inf), row[1], row[0] or "")):
+    def place(robot: str | None, room: str) -> bool:
+        """``room`` where it adds least, if it has a place (the moves into and out of it exist)."""
         longest = max(seconds(r, routes[r]) for r in table.robots) if span_weight else 0.0
         best: tuple[float, str, int] | None = None
         for r in table.robots if robot is None else (robot,):
@@ -65,9 +66,19 @@ def insertion_routes(table: CostTable, goals: Goals, status: str, span_weight: f
                 if best is None or added < best[0]:
                     best = (added, r, k)
         if best is None:
-            return Routes({}, math.inf, status, "nothing", detail=_none_for(room), by="cheapest insertion")
+            return False
         _, r, k = best
         routes[r].insert(k, room)
+        return True
+
+    # a room with no place yet waits for the rooms placed after it: a room reached from few others
+    # (a sparse table of moves) has a place once one of those is in a route
+    pending = sorted(tasks, key=lambda row: (-cheapest.get(row[1], math.inf), row[1], row[0] or ""))
+    while pending:
+        left = [row for row in pending if not place(*row)]
+        if len(left) == len(pending):
+            return Routes({}, math.inf, status, "nothing", detail=_none_for(left[0][1]), by="cheapest insertion")
+        pending = left
     rooms = {}
     for r, xs in routes.items():
         end = ends.get(r)
