@@ -5,8 +5,8 @@
 For every size (kind, rooms, robots), the median seed by objective of the last families run
 (benchmarks/families/runs.csv, written by benchmarks/bench_families.py) is generated again
 (benchmarks/families.py) and planned twice as a fresh ``tmpnav plan``, a cold cache each: with
-its default budget (tmpnav.choices.time_budget: 0.25 s per goal room and robot) and with
-``--anytime-budget`` ten times that. The 10x run is the reference of the default objective
+its default budget (tmpnav.choices.work_budget: 2 sub-problems per goal room and robot) and with
+``--anytime-work`` ten times that. The 10x run is the reference of the default objective
 (the issue's "a 10x budget run as the reference for the default objective"). Writes
 benchmarks/budget/budget.txt and prints it.
 """
@@ -24,7 +24,7 @@ from pathlib import Path
 
 from families import KINDS, write  # benchmarks/ is the script's folder, first on sys.path
 
-from tmpnav.choices import time_budget
+from tmpnav.choices import work_budget
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "benchmarks" / "budget"
@@ -73,14 +73,14 @@ def main() -> None:
             kind, rooms, robots = field.split(":")[0], int(field.split(":")[1]), int(field.split(":")[2])
             seed = median_seed(kind, rooms, robots)
             scenario = write(KINDS[kind](rooms, robots, seed), Path(tmp) / f"{kind}-{rooms}-{robots}-{seed}.yaml")
-            budget = time_budget(rooms, robots, None)
+            budget = work_budget(rooms, robots, None)
             runs = {}
-            for label, extra in (("default", []), ("10x", ["--anytime-budget", f"{10 * budget:g}"])):
+            for label, extra in (("default", []), ("10x", ["--anytime-work", f"{10 * budget}"])):
                 runs[label] = plan(scenario, Path(tmp) / f"cache-{label}-{seed}", extra)
             (d, d_stop, d_s), (r, r_stop, r_s) = runs["default"], runs["10x"]
             lines.append(
-                f"{kind} {rooms} rooms / {robots} robots, median seed {seed}: default budget {budget:g} s "
-                f"{d:.3f} ({d_stop}, {d_s:.1f} s); 10x budget {10 * budget:g} s {r:.3f} ({r_stop}, {r_s:.1f} s); "
+                f"{kind} {rooms} rooms / {robots} robots, median seed {seed}: default budget {budget} sub-problems "
+                f"{d:.3f} ({d_stop}, {d_s:.1f} s); 10x budget {10 * budget} {r:.3f} ({r_stop}, {r_s:.1f} s); "
                 f"default {100 * (d - r) / r:+.2f}% against the 10x run"
             )
             print(lines[-1], flush=True)

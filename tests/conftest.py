@@ -36,6 +36,8 @@ HEAVY: dict[str, float] = {
     "tests/task/test_pddl_text.py": 33,
     "tests/test_depot_jobs.py": 30,
     "tests/test_cli_search.py": 26,
+    "tests/test_reproducible.py": 60,  # two fresh plans of the corridor, one beside two CPU-bound processes
+    "tests/test_time_limit.py": 30,
     "tests/planning/test_remember.py": 25,
     "tests/task/test_bound.py": 25,
     "tests/oracle/test_worker_lifetime.py": 19,

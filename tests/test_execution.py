@@ -422,3 +422,13 @@ def test_each_move_is_held_to_its_own_bound(corridor: PlanReport) -> None:
         int(r["contact_executions"]) == 4 and float(r["contact_ci_low"]) > 0.3 for r in rows if r["config"] == "1"
     )
     assert any(line.startswith("moves against their bounds") for line in error_summary(result, 4))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("workers", [1, 2])
+def test_past_the_time_limit_only_the_sessions_done_are_kept(waiting: PlanReport, workers: int) -> None:
+    """``tmpnav simulate --time-limit``: no time left after planning runs the first session only."""
+    result = execute(waiting, sessions=6, workers=workers, seconds=0.0)
+    assert all(len(errors) == 1 for errors in result.errors.values())
+    again = execute(waiting, sessions=1, workers=workers)
+    assert all(np.array_equal(result.errors[k], again.errors[k]) for k in again.errors)  # the same first session

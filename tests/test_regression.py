@@ -30,3 +30,11 @@ def test_odd_rooms_baselines_show_the_papers_extra_visit() -> None:
     entered = lambda doc: [m[2] for step in doc["steps"] for m in step]  # noqa: E731
     assert sorted(entered(mixed)) == sorted(mixed["goals"])
     assert len(entered(paper)) == len(paper["goals"]) + 1
+
+
+def test_a_plan_a_time_cap_cut_short_fails_instead_of_being_compared() -> None:
+    recorded = json.loads((BASELINE / "fig2-carried.json").read_text())
+    same = {**recorded, "capped": []}
+    assert compare(recorded, same) == []
+    (diff,) = compare(recorded, {**recorded, "capped": ["the search's time cap"]})
+    assert diff.startswith("not compared: the search's time cap cut the search short")

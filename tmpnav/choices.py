@@ -33,6 +33,7 @@ A scenario that names none gets :func:`default_objective`'s: ``makespan`` for a 
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal, get_args
 
@@ -44,15 +45,20 @@ Objective = Literal["weighted", "cost", "makespan"]
 Destinations = Literal["goals", "all-rooms"]
 #: how a search ended: the exact search "solved"; the anytime search "optimal" (proved by its
 #: bound or by one optimal search of the whole problem), "converged" (every neighbourhood tried
-#: without improvement), "time budget", or "nothing to do" (no move needed)
-StopReason = Literal["solved", "optimal", "converged", "time budget", "nothing to do"]
+#: without improvement), "work budget" (its sub-problems spent: the same plan on any machine),
+#: "time budget" (its time cap, or the run's time limit: a plan of the machine's speed), or
+#: "nothing to do" (no move needed)
+StopReason = Literal["solved", "optimal", "converged", "work budget", "time budget", "nothing to do"]
 
 #: each stop reason as the summary says it
 STOP_MEANINGS: dict[StopReason, str] = {
     "solved": "solved (one optimal search of the whole problem)",
     "optimal": "optimal (proved)",
     "converged": "converged (every neighbourhood tried without improvement: done)",
-    "time budget": "time budget (neighbourhoods left untried: more time may find a better plan)",
+    "work budget": "work budget (its sub-problems spent, neighbourhoods left untried: --anytime-work may find a "
+    "better plan)",
+    "time budget": "time cap (neighbourhoods left untried when the time ran out: the plan depends on the "
+    "machine's speed)",
     "nothing to do": "nothing to do",
 }
 
@@ -93,24 +99,26 @@ EXACT_ROOMS = 8
 #: belief space is unfolded context by context (5 rooms, 2 robots: about 2,500 contexts)
 EXACT_CARRIED = ((5, 2), (4, 3), (3, 4))
 
-#: the default time budget of the anytime search: this many seconds per goal room and robot,
-#: clamped (20 rooms and 2 robots: 10 s; 40 and 4: 40 s; 60 and 8: 120 s)
-BUDGET_PER_ROOM_ROBOT = 0.25
-BUDGET_RANGE = (10.0, 180.0)
+#: the default work budget of the anytime search: this many ENHSP sub-problems per goal room and
+#: robot, clamped (the corridor's 10 rooms and 2 robots: 50, converged after 24; 20 rooms and 2
+#: robots: 80, converged after 26; 40 rooms and 4 robots: 320, converged after 203). Counted in
+#: work, not seconds, so that the same scenario gives the same plan on any machine, however busy
+WORK_PER_ROOM_ROBOT = 2
+WORK_RANGE = (50, 1000)
 
 
-#: a replan's default budget (tmpnav.replan): this share of the first plan's, at least
-#: :data:`REPLAN_MIN_BUDGET` s. A team under way waits for its replan, and a replan starts from
-#: the plan being executed: on the shipped buildings' random events (benchmarks/bench_replan.py)
-#: the full budget found no better plan than a tenth of it
-REPLAN_BUDGET_SHARE = 0.1
-REPLAN_MIN_BUDGET = 1.0
+#: a replan's default work budget (tmpnav.replan): this share of the first plan's, at least
+#: :data:`REPLAN_MIN_WORK` sub-problems. A team under way waits for its replan, and a replan
+#: starts from the plan being executed: on the shipped buildings' random events
+#: (benchmarks/bench_replan.py) the full budget found no better plan than a tenth of it
+REPLAN_WORK_SHARE = 0.1
+REPLAN_MIN_WORK = 10
 
 
-def replan_budget(rooms: int, robots: int, given: float | None) -> float:
-    """A replan's budget: :data:`REPLAN_BUDGET_SHARE` of the budget a first plan of this size
-    has (``given``: the scenario's own), at least :data:`REPLAN_MIN_BUDGET`."""
-    return max(REPLAN_MIN_BUDGET, REPLAN_BUDGET_SHARE * time_budget(rooms, robots, given))
+def replan_work(rooms: int, robots: int, given: int | None) -> int:
+    """A replan's work budget: :data:`REPLAN_WORK_SHARE` of the budget a first plan of this size
+    has (``given``: the scenario's own), at least :data:`REPLAN_MIN_WORK` sub-problems."""
+    return max(REPLAN_MIN_WORK, math.ceil(REPLAN_WORK_SHARE * work_budget(rooms, robots, given)))
 
 
 def exact_fits(rooms: int, robots: int, costs: Costs) -> bool:
@@ -120,12 +128,18 @@ def exact_fits(rooms: int, robots: int, costs: Costs) -> bool:
     return rooms <= EXACT_ROOMS and rooms * robots <= 2 * EXACT_ROOMS
 
 
-def time_budget(rooms: int, robots: int, given: float | None) -> float:
-    """The anytime search's budget for a run: ``given``, or by the problem's size."""
+def work_budget(rooms: int, robots: int, given: int | None) -> int:
+    """The anytime search's work budget, in ENHSP sub-problems: ``given``, or by the problem's size."""
     if given is not None:
         return given
-    low, high = BUDGET_RANGE
-    return min(high, max(low, BUDGET_PER_ROOM_ROBOT * rooms * robots))
+    low, high = WORK_RANGE
+    return min(high, max(low, WORK_PER_ROOM_ROBOT * rooms * robots))
+
+
+def time_budget(given: float | None) -> float:
+    """The anytime search's time cap for a run: ``given`` (planner.time_budget), else none (inf):
+    its work budget bounds it, and ``--time-limit`` the whole run."""
+    return math.inf if given is None else given
 
 
 @dataclass(frozen=True)

@@ -77,6 +77,15 @@ class PlannerTimeoutError(PlannerError):
     exit_code = 5
 
 
+class TimeLimitError(PlannerTimeoutError):
+    """The run's time limit (--time-limit, planner.time_limit) passed before it had a plan; the
+    message names the stage that took the time."""
+
+    def __init__(self, message: str, limit: float):
+        super().__init__(message)
+        self.limit = limit
+
+
 class UnsolvableError(PlannerError):
     """The planner proved that no plan reaches the goals."""
 
@@ -137,7 +146,8 @@ EXIT_CODES: dict[int, str] = {
     InputError.exit_code: "bad input: scenario, map or command-line value (an output path that cannot be written too)",
     PlannerError.exit_code: "the planner failed for another reason",
     PlannerUnavailableError.exit_code: "no usable planner: Java 17+ missing, or unknown engine",
-    PlannerTimeoutError.exit_code: "the planner timed out",
+    PlannerTimeoutError.exit_code: "the planner timed out, or the run's --time-limit passed before it had a plan "
+    "(the message names the stage that took the time)",
     UnsolvableError.exit_code: "no plan exists for the goals (proved by the planner)",
     PlannerCrashError.exit_code: "the planner process crashed",
     CacheError.exit_code: "the cache directory is unusable",

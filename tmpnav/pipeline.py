@@ -14,7 +14,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
@@ -23,7 +24,16 @@ from tmpnav import scenario as scenario_stage
 from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
 from tmpnav.choices import Costs, Objective, Search, choose, paper_conflict
-from tmpnav.errors import ConflictError, InputError, Problem, RiskError, ScenarioError
+from tmpnav.deadline import Deadline
+from tmpnav.errors import (
+    ConflictError,
+    InputError,
+    PlannerTimeoutError,
+    Problem,
+    RiskError,
+    ScenarioError,
+    TimeLimitError,
+)
 from tmpnav.heap import long_lived_frozen
 from tmpnav.results import CacheUse, PlanReport, SearchProgress, StageTimes
 from tmpnav.types import DEFAULT_RISK_SOURCE, SAFE_MARGIN, Goals, Roadmap, RobotSpec, Scenario
@@ -49,6 +59,8 @@ class Overrides:
     goals: Goals | None = None
     search: Search | None = None
     time_budget: float | None = None
+    work_budget: int | None = None
+    time_limit: float | None = None
     costs: Costs | None = None
     objective: Objective | None = None
     max_risk: float | None = None
@@ -153,6 +165,8 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
         pair_min_gain=o.pair_min_gain if o.pair_min_gain is not None else planner.pair_min_gain,
         search=o.search or planner.search,
         time_budget=o.time_budget if o.time_budget is not None else planner.time_budget,
+        work_budget=o.work_budget if o.work_budget is not None else planner.work_budget,
+        time_limit=o.time_limit if o.time_limit is not None else planner.time_limit,
         costs=o.costs or planner.costs,
         objective=o.objective or planner.objective,
         max_risk=planner.max_risk if o.max_risk is None else None if o.max_risk == NO_THRESHOLD else o.max_risk,
@@ -302,11 +316,18 @@ def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
     from tmpnav.task.stage import TaskProblem
 
     times = StageTimes()
-    prep = prepare(path, options, times)
-    try:
-        table = full_table(prep.scenario, prep.world, prep.oracle, times)
-    finally:
-        prep.oracle.close()
+    deadline = Deadline(started=times.started)
+
+    def loaded_now(scenario: Scenario) -> None:
+        deadline.seconds = scenario.planner.time_limit
+
+    with _named_stage(times, deadline):
+        prep = prepare(path, options.but(progress=deadline.watch(options.reporters.oracle)), times, None, loaded_now)
+        try:
+            deadline.check()
+            table = full_table(prep.scenario, prep.world, prep.oracle, times)
+        finally:
+            prep.oracle.close()
     return TaskProblem.of(prep.scenario, table).encode()
 
 
@@ -370,15 +391,26 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
     from tmpnav.task.search import SearchRun
 
     times = StageTimes()
-    with long_lived_frozen():  # tmpnav.heap
-        prep = prepare(path, options, times, loaded, on_loaded=get_ready)  # ENHSP readied meanwhile
+    deadline = Deadline(started=times.started)
+
+    def loaded_now(scenario: Scenario) -> None:
+        deadline.seconds = scenario.planner.time_limit
+        get_ready(scenario)  # ENHSP readied while the roadmap and the first costs are computed
+
+    options = options.but(progress=deadline.watch(options.reporters.oracle))  # the limit, between blocks
+    with long_lived_frozen(), _named_stage(times, deadline):  # tmpnav.heap
+        prep = prepare(path, options, times, loaded, on_loaded=loaded_now)
         try:
+            deadline.check()
             store = prep.oracle.cache if options.execution.use_cache else None
-            watch = SearchRun(times, in_own_units(options.reporters.search, prep.scenario))
+            progress = in_own_units(options.reporters.search, prep.scenario)
+            watch = SearchRun(times, progress, deadline=deadline)
             origin = _origins(options.overrides, prep)
-            run = TaskRun.of(prep.scenario, prep.world, prep.oracle, store, options.execution.replan, watch, origin)
+            scenario = _within(prep.scenario, deadline)
+            run = TaskRun.of(scenario, prep.world, prep.oracle, store, options.execution.replan, watch, origin)
             run = replace(run, incumbent=options.overrides.incumbent)
             planned = plan_stage(run)
+            deadline.disarm()  # the plan is found: its re-simulation and report follow
             task, apart = planned.task, None
             with times.timed("resimulate"):
                 resim = resimulate(run.carried, task)
@@ -409,6 +441,38 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
         apart=apart,
     )
     return report
+
+
+@contextmanager
+def _named_stage(times: StageTimes, deadline: Deadline) -> Iterator[None]:
+    """TimeLimitError, and an exact search's ENHSP timeout cut short by the time limit, completed
+    with the stage that took the time: the stage of most seconds so far."""
+    try:
+        yield
+    except PlannerTimeoutError as err:
+        if not isinstance(err, TimeLimitError) and not deadline.passed():
+            raise
+        limit = deadline.seconds or 0.0
+        raise TimeLimitError(f"no plan within --time-limit {limit:g} s: {_took(times)}", limit) from None
+
+
+def _took(times: StageTimes) -> str:
+    spent = {k: v for k, v in times.seconds.items() if k != "total"}
+    if not spent:
+        return "the run took the time before its first stage ended"
+    stage = max(spent, key=lambda k: spent[k])
+    others = ", ".join(f"{k} {v:.1f} s" for k, v in spent.items() if k != stage)
+    return f"the {stage} stage took the time ({spent[stage]:.1f} s{'; ' + others if others else ''})"
+
+
+def _within(scenario: Scenario, deadline: Deadline) -> Scenario:
+    """The scenario as the task stage runs it: an exact search's ENHSP run (planner.timeout) ends
+    by the time limit at the latest."""
+    left = deadline.left()
+    if not math.isfinite(left):
+        return scenario
+    timeout = max(0.1, min(scenario.planner.timeout, left))
+    return replace(scenario, planner=replace(scenario.planner, timeout=timeout))
 
 
 def _origins(overrides: Overrides, prep: Prepared) -> dict[str, Origin]:

@@ -208,12 +208,16 @@ class SearchSummary:
 
     mode: SearchMode  # "exact": one optimal ENHSP search; "anytime": tmpnav.task.search
     costs: Costs  # "table" (canonical start states) | "carried" (the beliefs the robots carry)
-    stopped: StopReason  # exact: "solved"; anytime: "optimal" | "converged" | "time budget" | "nothing to do"
+    stopped: StopReason  # exact: "solved"; anytime: "optimal" | "converged" | "work budget" | "time budget" | ...
     start: str = ""  # anytime: how the first plan was found
     subproblems: int = 0  # anytime: sub-problems ENHSP solved
     improvements: int = 0  # anytime: plans kept because they were cheaper
     seconds: float = 0.0  # the search's own time
     history: tuple[tuple[float, float], ...] = ()  # (seconds, best cost) at each improvement
+    work: int | None = None  # anytime: its work budget, in sub-problems (tmpnav.task.budget)
+    #: anytime: the time caps that cut something short (the search's, OR-Tools', a sub-problem's):
+    #: empty when the plan is the same on any machine
+    capped: tuple[str, ...] = ()
 
     def to_json(self) -> dict[str, JSON]:
         """As plan.json's ``search`` (and the remembered plans) hold it."""
@@ -226,6 +230,8 @@ class SearchSummary:
             "improvements": self.improvements,
             "seconds": self.seconds,
             "history": [[t, c] for t, c in self.history],
+            "work_budget": self.work,
+            "capped": list(self.capped),
         }
 
     @staticmethod
@@ -243,6 +249,8 @@ class SearchSummary:
             int(_number(entry["improvements"])),
             _number(entry["seconds"]),
             tuple(_pair(h) for h in history),
+            None if entry.get("work_budget") is None else int(_number(entry["work_budget"])),
+            tuple(str(c) for c in _list(entry.get("capped", []))),
         )
 
 
@@ -424,3 +432,9 @@ def _pair(value: JSON) -> tuple[float, float]:
     if not isinstance(value, list) or len(value) != 2:
         raise TypeError(f"{value!r} is not a pair of numbers")
     return _number(value[0]), _number(value[1])
+
+
+def _list(value: JSON) -> list[JSON]:
+    if not isinstance(value, list):
+        raise TypeError(f"{value!r} is not a list")
+    return value

@@ -457,7 +457,9 @@ class PlannerOptions:
     timeout: float  # s
     pair_min_gain: float = 0.05  # mixed: minimum relative saving of a paired move
     search: Search = "auto"  # exact | anytime | auto (tmpnav.choices)
-    time_budget: float | None = None  # s, the anytime search's budget for the run; None: by size
+    time_budget: float | None = None  # s, the anytime search's time cap for the run; None: no cap
+    work_budget: int | None = None  # ENHSP sub-problems the anytime search may solve; None: by size
+    time_limit: float | None = None  # s, the whole run (plan, replan, simulate); None: unbounded
     costs: Costs = "carried"  # carried (the beliefs the robots carry; default) | table (canonical start states)
     objective: Objective = "weighted"  # weighted | cost | makespan (tmpnav.choices)
     #: the chance constraint: each move's bound on the probability of touching an obstacle,

@@ -39,19 +39,29 @@ def test_a_warm_run_reads_the_plan_and_a_damaged_entry_is_a_miss(search: str, tm
 
 
 @pytest.mark.slow
-def test_a_plan_cut_short_by_its_budget_is_read_again_only_with_no_larger_budget(tmp_path: Path) -> None:
-    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", search="anytime", time_budget=5.0)
+def test_a_plan_cut_short_by_its_work_budget_is_read_again_only_with_the_same_budget(tmp_path: Path) -> None:
+    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", search="anytime", work_budget=5)
     cold = plan(TWO_ROOMS, options)
     key = search_key(cold.scenario, context_digest(cold.scenario, cold.world, cold.roadmap))
     cache = DiskCache(tmp_path)
     try:
         entry = cache.get_many([key])[key]
-        assert entry["budget"] == 5.0
+        assert entry["work"] == 5
         # as if the search had been cut short: a plan that depends on the budget
-        cache.put_many({key: {**entry, "search": {**entry["search"], "stopped": "time budget"}}})
+        cache.put_many({key: {**entry, "search": {**entry["search"], "stopped": "work budget"}}})
     finally:
         cache.close()
     assert plan(TWO_ROOMS, options).task.plan_hit
-    assert plan(TWO_ROOMS, options.but(time_budget=4.0)).task.plan_hit
-    longer = plan(TWO_ROOMS, options.but(time_budget=50.0))
-    assert not longer.task.plan_hit and moves(longer) == moves(cold)
+    again = plan(TWO_ROOMS, options.but(work_budget=4))
+    assert not again.task.plan_hit and moves(again) == moves(cold)
+    # that search converged after fewer sub-problems than a larger budget allows: the same plan
+    assert again.task.search.stopped == "converged"
+    assert plan(TWO_ROOMS, options.but(work_budget=50)).task.plan_hit
+
+
+@pytest.mark.slow
+def test_a_plan_a_time_cap_cut_short_is_not_remembered(tmp_path: Path) -> None:
+    options = PlanOptions.of(cache_dir=tmp_path, executor="serial", search="anytime", time_budget=1e-3)
+    cold = plan(TWO_ROOMS, options)
+    assert "the search's time cap" in cold.task.search.capped
+    assert not plan(TWO_ROOMS, options).task.plan_hit

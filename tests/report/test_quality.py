@@ -14,7 +14,7 @@ from tmpnav.report.text import plan_summary
 from tmpnav.results import BoundSummary, PlanReport, SearchSummary
 
 
-def with_gap(report: PlanReport, gap: float, stopped: str = "time budget") -> PlanReport:
+def with_gap(report: PlanReport, gap: float, stopped: str = "work budget") -> PlanReport:
     cost = report.planner_cost
     bound = BoundSummary(cost * (1 - gap), "motion floors, flow", gap, False)
     search = SearchSummary("anytime", "carried", stopped)
@@ -50,7 +50,7 @@ def test_a_plan_far_from_its_bound_says_so_with_the_numbers_and_what_to_try(plan
     far = with_gap(plan_report, 0.87)
     (warning,) = plan_warnings(far)
     assert warning.kind == "gap" and warning.value == pytest.approx(0.87) and warning.limit == GAP_WARN
-    assert "87% below its cost" in warning.message and "try --anytime-budget" in warning.message
+    assert "87% below its cost" in warning.message and "try --anytime-work" in warning.message
     assert "motion floors" in warning.message
     converged = plan_warnings(with_gap(plan_report, 0.87, stopped="converged"))[0].message
     assert "stopped improving" in converged and "time budget" not in converged

@@ -203,8 +203,10 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
     A cost table and a task plan computed before for the same inputs come from the cache
     (--no-cache: compute everything; --replan: run the task planner again anyway).
 
-    Two time limits: --planner-timeout bounds one run of the task planner (past it, an error),
-    --anytime-budget the whole anytime search (past it, its best plan so far).
+    The anytime search's budget is work (--anytime-work), so the same plan on any machine.
+    Time limits: --planner-timeout bounds one run of the task planner (past it, an error),
+    --anytime-budget caps the anytime search and --time-limit the whole command (past them,
+    the best plan so far).
     """
     from tmpnav.pipeline import pddl_texts
     from tmpnav.pipeline import plan as run_plan

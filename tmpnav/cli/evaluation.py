@@ -7,6 +7,7 @@ runs against the number of rooms or robots (tmpnav/bench/). Registered on the gr
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -138,11 +139,18 @@ def simulate(
         _closed_loop(scenario, events_path, sessions or 5, seed, output, kw, localisation)
         return
     sessions = sessions or 25
+    started = time.perf_counter()
     report = run_plan(scenario, plan_options(kw))
     warn_scenario(report.scenario, bool(kw.get("no_range_sensor")))
     warn_conflicts(report)
-    result = execute(report, sessions, seed, kw["workers"], localisation)
-    lines = error_summary(result, sessions)
+    limit = report.scenario.planner.time_limit  # --time-limit: the plan and its executions
+    left = None if limit is None else limit - (time.perf_counter() - started)
+    result = execute(report, sessions, seed, kw["workers"], localisation, left)
+    ran = len(next(iter(result.errors.values()), ()))
+    lines = error_summary(result, ran)
+    if ran < sessions:
+        lines.insert(0, f"--time-limit {limit:g} s: {ran} of {sessions} sessions ran")
+        sessions = ran
     if output is not None:
         from tmpnav.report.outputs import write_execution_outputs
 
@@ -246,7 +254,7 @@ def _closed_loop(
     "time_budget",
     old=("--time-budget",),
     default_text="the scenario's planner.time_budget",
-    help="The anytime search's budget in every run.",
+    help="A time cap on the anytime search in every run (its budget is work: the scenario's planner.work_budget).",
 )
 @option("--seed", type=int, default=0, show_default=True, help="Seed of the goal draws.")
 @seconds_option(

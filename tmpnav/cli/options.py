@@ -259,16 +259,33 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             type=click.Choice(list(SEARCHES)),
             default_text=scenario_default("search"),
             help="How the task plan is searched: exact (one optimal search over all plans), anytime (a first "
-            "plan improved piece by piece until --anytime-budget, with a lower bound on the best cost) or auto "
+            "plan improved piece by piece until --anytime-work, with a lower bound on the best cost) or auto "
             "(exact where that finishes quickly).",
+        ),
+        option(
+            "--anytime-work",
+            "work_budget",
+            type=click.IntRange(min=1, max=10**6),
+            metavar="N",
+            default_text=scenario_default("work_budget", "2 per goal room and robot, from 50 to 1000"),
+            help="The anytime search's budget in work: the ENHSP sub-problems it may solve; then it returns its "
+            "best plan (not an error). Counted in work, not seconds, so the same scenario gives the same plan on "
+            "any machine. Ignored by the exact search.",
         ),
         seconds_option(
             "--anytime-budget",
             "time_budget",
             old=("--time-budget",),
-            default_text=scenario_default("time_budget", "0.25 s per goal room and robot, from 10 to 180 s"),
-            help="Seconds the anytime search may spend on the whole run; then it returns its best plan "
-            "(not an error). Ignored by the exact search.",
+            default_text=scenario_default("time_budget", "none"),
+            help="A time cap on the anytime search (seconds of the whole run); past it, its best plan, and the "
+            "summary and plan.json say that the time cap ended the search (a plan of the machine's speed).",
+        ),
+        seconds_option(
+            "--time-limit",
+            "time_limit",
+            default_text=scenario_default("time_limit", "none"),
+            help="Seconds the whole command may take: past it, the best plan found so far (simulate: the "
+            "executions done so far); with no plan yet, exit code 5 naming the stage that took the time.",
         ),
         option(
             "--costs",
@@ -395,6 +412,8 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
         range_sensor=False if kw.get("no_range_sensor") else None,
         search=kw["search"],
         time_budget=kw["time_budget"],
+        work_budget=kw["work_budget"],
+        time_limit=kw["time_limit"],
         costs=kw["costs"],
         objective=kw["objective"],
         max_risk=kw["max_risk"],

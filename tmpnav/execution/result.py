@@ -15,9 +15,11 @@ by session, so the comparison is paired (paper, Fig. 3(a)). What a session recor
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import os
 import signal
+import time
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 
@@ -215,10 +217,12 @@ def execute(
     seed: int = 0,
     workers: int | None = None,
     localisation: Localisation | None = None,
+    seconds: float | None = None,
 ) -> ExecutionResult:
     """Execute ``report``'s schedule ``sessions`` times in both configurations, on ``workers``
     local processes (one per core when None; the same results, session by session, as in one),
-    localised as ``localisation`` says (tmpnav's EKF by default)."""
+    localised as ``localisation`` says (tmpnav's EKF by default). With ``seconds`` (what the run's
+    time limit leaves), the sessions done when that time is up, in order, at least the first."""
     localisation = localisation or Localisation()
     scenario, world = report.scenario, report.world
     robots = [r.name for r in scenario.robots]
@@ -240,10 +244,15 @@ def execute(
     if sensor is not None:
         _ = world.signed_distance  # once, before the workers fork
     workers = min(workers or os.cpu_count() or 1, sessions)
+    until = math.inf if seconds is None else time.perf_counter() + seconds
     if workers <= 1 or "fork" not in multiprocessing.get_all_start_methods():
-        done = [shared.run(s) for s in range(sessions)]
+        done: list[tuple[dict[int, SessionTrace], bool]] = []
+        for s in range(sessions):
+            if done and time.perf_counter() >= until:
+                break
+            done.append(shared.run(s))
     else:
-        done = _in_workers(shared, sessions, workers)
+        done = _in_workers(shared, sessions, workers, until)
     traces: dict[int, list[SessionTrace]] = {c: [t[c] for t, _ in done] for c in shared.configs}
     truncated = sum(cut for _, cut in done)
     result = _result(report, robots, moves, traces, truncated)
@@ -251,22 +260,35 @@ def execute(
     return result
 
 
-def _in_workers(shared: _Sessions, sessions: int, workers: int) -> list[tuple[dict[int, SessionTrace], bool]]:
+def _in_workers(
+    shared: _Sessions, sessions: int, workers: int, until: float = math.inf
+) -> list[tuple[dict[int, SessionTrace], bool]]:
     """The sessions on local worker processes (forked: they end with this process, however it
-    ends), in order."""
+    ends), in order; those done by ``until`` (``time.perf_counter``), at least the first."""
     mp = multiprocessing.get_context("fork")
     pool = ProcessPoolExecutor(workers, mp_context=mp, initializer=_init_worker, initargs=(shared, os.getpid()))
     try:
         with signals_held():  # the first submissions fork the workers
             futures = [pool.submit(_run_session, s) for s in range(sessions)]
-        return list(gather(futures))
+        done: list[tuple[dict[int, SessionTrace], bool]] = []
+        for trace in gather(futures):
+            done.append(trace)
+            if time.perf_counter() >= until and len(done) < sessions:  # the time limit: the rest stopped
+                _stop(pool)
+                break
+        return done
     except BaseException:
-        for process in list(getattr(pool, "_processes", {}).values()):
-            process.terminate()
-        pool.shutdown(wait=False, cancel_futures=True)
+        _stop(pool)
         raise
     finally:
         pool.shutdown(wait=True)
+
+
+def _stop(pool: ProcessPoolExecutor) -> None:
+    """The pool's workers stopped now, the sessions not started cancelled."""
+    for process in list(getattr(pool, "_processes", {}).values()):
+        process.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _result(

@@ -79,12 +79,12 @@ def _planned(run: TaskRun, entry: PlannerEntry) -> Planned:
     model = run.carried if run.choice.costs == "carried" else run.canonical
     if run.store is not None and not run.replan:
         with run.times.timed("planner"):
-            found = recall(run.store, key, model, run.goals, run.budget, run.span_weight)
+            found = recall(run.store, key, model, run.goals, run.work, run.span_weight)
         if found is not None:
             return Planned(run.canonical.seen(), found)
     planned = entry.plan(run)
     if run.store is not None:
-        remember(run.store, key, planned.task, run.budget)
+        remember(run.store, key, planned.task, run.work)
     return planned
 
 

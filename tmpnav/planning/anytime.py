@@ -23,7 +23,7 @@ def anytime_table(run: TaskRun) -> Planned:
     anytime = AnytimeTask(run.canonical, run.goals, run.planner, run.span_weight)
     _warm_up(run, anytime)
     bound = _bound(run)
-    task = plan_anytime(anytime, run.search, _left(run), bound, _incumbent(run))
+    task = plan_anytime(anytime, run.search, _left(run), bound, _incumbent(run), run.work)
     return Planned(run.canonical.seen(), task)
 
 
@@ -70,7 +70,7 @@ def anytime_carried(
         exact = plan_task(TaskProblem.of(run.scenario, table), run.store, run.replan, run.times)
         seeds["the exact plan of the cost table"] = exact.steps
     bound = floor if floor is not None else _bound(run)
-    task = plan_anytime(anytime, run.search, _left(run), bound, seeds)
+    task = plan_anytime(anytime, run.search, _left(run), bound, seeds, run.work)
     return Planned(run.canonical.seen(), task)
 
 

@@ -1,13 +1,13 @@
 """Plans of the anytime and the unfolded search, remembered like the exact planner's.
 
 Both searches are deterministic: OR-Tools stops after a fixed number of solutions, the
-neighbourhoods come from a seeded generator, ENHSP and the oracle give the same answers to
-the same questions. So a run whose inputs are identical to an earlier one reads its plan
-instead of searching again. A plan is remembered with the run's time budget: unless it was
-proved optimal, it may depend on that budget (a search cut short by it, or a first phase
-cut short, depends on the machine's speed too), so it is read again only by a run whose
-budget is no larger -- the same run repeated gives the same plan at once, a larger budget
-searches again.
+neighbourhoods come from a seeded generator, the anytime search's budget is a count of
+sub-problems (tmpnav.task.budget), ENHSP and the oracle give the same answers to the same
+questions. So a run whose inputs are identical to an earlier one reads its plan instead of
+searching again. A plan is remembered with the search's work budget: unless it was proved
+optimal, or converged within fewer sub-problems than a run's budget, it is read again only
+by a run of the same work budget. A plan a time cap cut short (the search's, OR-Tools', a
+sub-problem's) depends on the machine's speed, and is not remembered.
 
 The key covers the oracle's context (its code, the world, the roadmap, the models and
 weights), the robots, the goals, the planner options that shape the search (engine,
@@ -31,7 +31,7 @@ from tmpnav.task.model import CostModel
 from tmpnav.task.plans import Rules
 from tmpnav.types import Goals, MoveKey, PlanStatus, Scenario
 
-VERSION = "search-plan/2"
+VERSION = "search-plan/3"
 #: a search that ended like this gives the same plan under any budget
 FINAL = ("optimal", "solved", "nothing to do")
 
@@ -51,13 +51,14 @@ def search_key(scenario: Scenario, context: str) -> str:
     return hashlib.sha256(repr((*parts, sp.search, sp.costs, *time)).encode()).hexdigest()
 
 
-def remember(store: EntryStore, key: str, task: TaskResult, budget: float) -> None:
-    """Store ``task``, found within ``budget`` seconds (the run's whole time budget)."""
+def remember(store: EntryStore, key: str, task: TaskResult, work: int) -> None:
+    """Store ``task``, found within a work budget of ``work`` sub-problems, unless a time cap
+    cut its search short."""
     s = task.search
-    if s is None:
+    if s is None or s.capped:
         return
     entry: JSON = {
-        "budget": budget,
+        "work": work,
         "status": task.status.value,
         "engine": task.engine,
         "steps": [[list(m) for m in step] for step in task.steps],
@@ -71,16 +72,18 @@ def remember(store: EntryStore, key: str, task: TaskResult, budget: float) -> No
 
 
 def recall(
-    store: EntryStore, key: str, model: CostModel, goals: Goals, budget: float, span_weight: float = 0.0
+    store: EntryStore, key: str, model: CostModel, goals: Goals, work: int, span_weight: float = 0.0
 ) -> TaskResult | None:
     """The remembered result, its costs and schedule from ``model`` (its gap on the objective of
     ``span_weight``); None on a miss, on an entry that is damaged or is not a plan of these
-    goals, or on a plan cut short by a smaller budget."""
+    goals, or on a plan that a run of ``work`` sub-problems may not find (see the module docstring)."""
     entry = store.get_many([key]).get(key)
     if not isinstance(entry, dict):
         return None
     try:
-        if entry["search"]["stopped"] not in FINAL and not budget <= float(entry["budget"]):
+        stopped, solved, given = entry["search"]["stopped"], entry["search"]["subproblems"], entry["work"]
+        converged = stopped == "converged" and work > int(solved)
+        if stopped not in FINAL and not converged and work != int(given):
             return None
         steps: tuple[tuple[MoveKey, ...], ...] = tuple(
             tuple((str(m[0]), str(m[1]), str(m[2])) for m in step) for step in entry["steps"]

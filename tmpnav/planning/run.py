@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 from tmpnav.attachment.canonical import CanonicalCosts
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.choices import TaskChoice, choose, time_budget
+from tmpnav.choices import TaskChoice, choose, time_budget, work_budget
 from tmpnav.results import StageTimes, TaskResult
 from tmpnav.task.memo import EntryStore
 from tmpnav.task.objectives import OBJECTIVES
@@ -74,12 +74,17 @@ class TaskRun:
 
     @property
     def budget(self) -> float:
-        """The run's time budget for the anytime search (the whole run counts against it)."""
-        return time_budget(len(self.goals.all_rooms), len(self.scenario.robots), self.planner.time_budget)
+        """The run's time cap for the anytime search (the whole run counts against it; inf: none)."""
+        return time_budget(self.planner.time_budget)
+
+    @property
+    def work(self) -> int:
+        """The anytime search's budget in work: the ENHSP sub-problems it may solve."""
+        return work_budget(len(self.goals.all_rooms), len(self.scenario.robots), self.planner.work_budget)
 
     def left(self) -> float:
-        """Seconds of the budget not yet spent by the run's stages."""
-        return self.budget - self.times.spent()
+        """Seconds of the time cap not yet spent by the run's stages, and of the run's time limit."""
+        return min(self.budget - self.times.spent(), self.search.deadline.left())
 
 
 @dataclass(frozen=True)

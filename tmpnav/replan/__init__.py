@@ -145,15 +145,15 @@ def _on_first_clock(err: WindowError, revision: Revision, scenario: Scenario) ->
 def _search_of(revised: Scenario, options: Options) -> dict[str, Any]:
     """A replan's search, unless the options name one: the anytime search from the plan being
     executed (``auto`` would plan a few rooms left exactly, which takes longer than the whole
-    replan: 5.5 s for 3 rooms and 4 robots), with :func:`tmpnav.choices.replan_budget`."""
-    from tmpnav.choices import replan_budget
+    replan: 5.5 s for 3 rooms and 4 robots), with :func:`tmpnav.choices.replan_work`."""
+    from tmpnav.choices import replan_work
 
     out: dict[str, Any] = {}
     sp = revised.planner
     if options.overrides.search is None and sp.search == "auto" and sp.encoding != "paper":
         out["search"] = "anytime"
-    if options.overrides.time_budget is None:
-        out["time_budget"] = replan_budget(len(revised.goals.all_rooms), len(revised.robots), sp.time_budget)
+    if options.overrides.work_budget is None:
+        out["work_budget"] = replan_work(len(revised.goals.all_rooms), len(revised.robots), sp.work_budget)
     return out
 
 

@@ -294,6 +294,8 @@ def _search(report: PlanReport) -> JSON:
         "improvements": s.improvements,
         "seconds": number(s.seconds, 6),
         "history": [[number(t, 6), number(c)] for t, c in s.history],
+        "work_budget": s.work,
+        "capped": list(s.capped),
     }
 
 

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tmpnav.belief.conflicts import Conflict
-from tmpnav.choices import time_budget
+from tmpnav.choices import time_budget, work_budget
 from tmpnav.numbers import length
 from tmpnav.planning.safety import conflicts_left, riskiest_point, what_would_help
 from tmpnav.report.schedule import bound_values, move_at, objective_values, searched_gap
@@ -110,8 +110,15 @@ def _gap(report: PlanReport) -> PlanWarning | None:
     )
     if search is not None and search.stopped == "time budget":
         sc = report.scenario
-        budget = time_budget(len(sc.goals.all_rooms), len(sc.robots), sc.planner.time_budget)
-        text += f" The search stopped at its time budget of {budget:g} s: try --anytime-budget {2 * budget:g}."
+        budget = time_budget(sc.planner.time_budget)
+        if math.isfinite(budget):
+            text += f" The search stopped at its time cap of {budget:g} s: try --anytime-budget {2 * budget:g}."
+        else:
+            text += " The search stopped at the run's time limit: try a larger --time-limit."
+    elif search is not None and search.stopped == "work budget":
+        sc = report.scenario
+        work = work_budget(len(sc.goals.all_rooms), len(sc.robots), sc.planner.work_budget)
+        text += f" The search stopped at its work budget of {work} sub-problems: try --anytime-work {2 * work}."
     elif search is not None and search.mode == "anytime":
         text += " The search stopped improving: try --anytime-budget with more time, or --search exact if small."
     if "floors" in bound.relaxation:

@@ -148,6 +148,11 @@ def _search(report: PlanReport) -> list[str]:
                 f"{_plural(search.improvements, 'improvement')}; stopped: {STOP_MEANINGS[search.stopped]}"
             )
         lines.append(line)
+        if search.capped:  # tmpnav.task.budget
+            lines.append(
+                f"time cap: {', '.join(search.capped)} cut the search short: another machine, or this one less "
+                "busy, may give another plan"
+            )
     own, verdict = bound_values(report), bound_verdict(report)
     if bound is not None and own is not None:
         if own.units == "s":

@@ -570,9 +570,19 @@ PLANNER = Section(
             "task-level search: exact (one optimal ENHSP search over the whole cost table), anytime (large-neighbourhood search with ENHSP on sub-problems and a certified lower bound), or auto (exact where it finishes quickly; a replan: anytime)",
             default="auto",
         ),
+        "work_budget": Field(
+            Number(None, minimum=1, maximum=10**6, integer=True),
+            "anytime search: its budget in work, the ENHSP sub-problems it may solve; it stops earlier when the plan is proved optimal or no neighbourhood improves it, and gives the same plan on any machine (default: 2 per goal room and robot, from 50 to 1000; a replan has a tenth of it, at least 10)",
+            default=None,
+        ),
         "time_budget": Field(
             Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
-            "anytime search: time budget for the whole run; it stops earlier when the plan is proved optimal or no neighbourhood improves it (default: 0.25 s per goal room and robot, from 10 s to 180 s; a replan has a tenth of it, at least 1 s)",
+            "anytime search: a time cap for the whole run; past it the search returns its best plan and says that the time cap ended it (a plan of the machine's speed; default: none, the work budget bounds the search)",
+            default=None,
+        ),
+        "time_limit": Field(
+            Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
+            "seconds a whole plan, replan, simulate or export-pddl may take: past it the best plan found so far (simulate: the executions done so far), else exit code 5 naming the stage that took the time (default: none)",
             default=None,
         ),
         "objective": Field(

@@ -60,6 +60,10 @@ from tmpnav.types import CostTable, Goals, MoveKey
 
 #: OR-Tools' time unit: a hundredth of a second
 TIME_UNIT = 0.01
+#: the status of routes that cannot exist: a goal room no allowed robot has a move into
+NO_ROBOT_CAN_ENTER = "NO_ROBOT_CAN_ENTER"
+#: OR-Tools' statuses that end a search it did not cut short by its time limit
+_NOT_TIMED = ("ROUTING_OPTIMAL", "ROUTING_INFEASIBLE", "ROUTING_INVALID", "ROUTING_FAIL")
 #: OR-Tools' first-solution strategies that tmpnav offers (names of its enum)
 FIRST_SOLUTION = ("PATH_CHEAPEST_ARC", "PARALLEL_CHEAPEST_INSERTION", "SAVINGS", "GLOBAL_CHEAPEST_ARC")
 
@@ -79,10 +83,20 @@ class Routes:
     solutions: int = 0
     last_improvement: int = 0
     plateau: int = 0
+    #: OR-Tools' time limit ended its search (not a count of solutions, nor nothing left to try):
+    #: the routes depend on the machine's speed
+    timed_out: bool = False
+    detail: str = ""  # why there are no routes, in words (the rooms no robot can enter)
+    by: str = "OR-Tools routing"  # what found them (tmpnav.task.insertion when OR-Tools found none)
 
     @property
     def found(self) -> bool:
         return math.isfinite(self.cost)
+
+    @property
+    def method(self) -> str:
+        """How the routes were found, with OR-Tools' status: ``OR-Tools routing (ROUTING_SUCCESS)``."""
+        return f"{self.by} ({self.status})"
 
     def moves(self, table: CostTable) -> list[MoveKey]:
         """The routes as single moves, robot after robot (a valid plan in this order)."""
@@ -130,7 +144,8 @@ def solve_routes(
         return Routes({r: () for r in robots}, 0.0, "NOTHING_TO_VISIT", "optimal")
     allowed = [_allowed(table, robot, room) for robot, room in tasks]
     if not all(allowed):
-        return Routes({}, math.inf, "NO_ROBOT_CAN_ENTER", "infeasible")
+        closed = ", ".join(dict.fromkeys(room for (_, room), able in zip(tasks, allowed, strict=True) if not able))
+        return Routes({}, math.inf, NO_ROBOT_CAN_ENTER, "infeasible", detail=closed)
     waypoints: list[tuple[str | None, str]] = [(None, x) for x in _waypoints(table, goals)]
     model = _Model(
         table, tasks + waypoints, allowed + [_allowed(table, None, x) for _, x in waypoints], arc_costs, goals
@@ -170,6 +185,7 @@ class _Trace:
         self.solutions, self.last_improvement, self.plateau, self.best = 0, 0, 0, math.inf
         self.failures = 0  # the solver's failures at the last solution
         self.stale = False  # ``stagnation`` solutions in a row without improvement
+        self.idle = False  # IDLE_FAILURES failures since the last solution
         self.asked = 0
 
     def at_solution(self) -> None:
@@ -190,7 +206,8 @@ class _Trace:
         self.asked += 1
         if self.asked % FAILURE_CHECK:
             return False
-        return self.solutions > 0 and self.solver.Failures() - self.failures >= IDLE_FAILURES
+        self.idle = self.solutions > 0 and self.solver.Failures() - self.failures >= IDLE_FAILURES
+        return self.idle
 
 
 def _waypoints(table: CostTable, goals: Goals) -> list[str]:
@@ -363,13 +380,16 @@ class _Model:
             solution = self.routing.SolveWithParameters(params)
         status = routing_enums_pb2.RoutingSearchStatus.Value.Name(self.routing.status())
         proved = {"ROUTING_OPTIMAL": "optimal", "ROUTING_INFEASIBLE": "infeasible"}.get(status, "nothing")
+        counted = solution_limit is not None and trace.solutions >= solution_limit
+        timed_out = status not in _NOT_TIMED and not (counted or trace.stale or trace.idle)
         if solution is None:
-            return Routes({}, math.inf, status, proved, *trace.counts())
+            why = "OR-Tools found no routes within its time limit" if timed_out else "OR-Tools found no routes"
+            return Routes({}, math.inf, status, proved, *trace.counts(), timed_out=timed_out, detail=why)
         rooms = {r: self._route(solution, v) for v, r in enumerate(self.table.robots)}
         cost = 0.0
         for r, here, room in Routes(rooms, 0.0, status, proved).moves(self.table):
             cost += self.table.single[(r, here, room)]
-        return Routes(rooms, cost, status, proved, *trace.counts())
+        return Routes(rooms, cost, status, proved, *trace.counts(), timed_out=timed_out)
 
     def _initial(self, routes: dict[str, tuple[str, ...]], params: object) -> object | None:
         """The assignment of ``routes`` (each robot's rooms in order, its end left out: the end

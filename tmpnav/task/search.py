@@ -23,7 +23,9 @@ optimal ENHSP search, but any part of it a few rooms and robots wide is small. T
    to one that finishes early is what it cannot do (the makespan stayed 11-13% above the
    optimum on 2 of 25 generated offices, benchmarks/references/).
 4. **Stop** when the lower bound proves the plan optimal, when neither the neighbourhoods nor
-   the routes' edits improve the plan (a local optimum of both), or at the time budget.
+   the routes' edits improve the plan (a local optimum of both), or when its budget is spent:
+   a count of sub-problems, so the same plan on any machine, with time as a cap
+   (:mod:`tmpnav.task.budget`, which also says when a cap bit).
 
 The plan returned is always one the model has costed in full, so its cost is the model's
 cost of that plan; the lower bound (:mod:`tmpnav.task.bound`, computed by the caller over
@@ -44,17 +46,21 @@ from dataclasses import dataclass, field, replace
 from typing import Literal, TypeVar
 
 from tmpnav.choices import StopReason
-from tmpnav.errors import PlannerError, PlannerTimeoutError, UnsolvableError
+from tmpnav.deadline import Deadline
+from tmpnav.errors import PlannerError, PlannerTimeoutError, TimeLimitError, UnsolvableError
 from tmpnav.lifetime import gather
 from tmpnav.results import SearchProgress, StageTimes
+from tmpnav.task import budget as caps
+from tmpnav.task.budget import SearchBudget
 from tmpnav.task.decode import canonical_order
+from tmpnav.task.insertion import insertion_routes
 from tmpnav.task.model import CostModel, PlanCost
 from tmpnav.task.model import entered as entered_by
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.pddl_text import Clocks, PddlTask, write_task
 from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_missing, with_origins
 from tmpnav.task.routes import route_edits
-from tmpnav.task.routing import solve_routes
+from tmpnav.task.routing import NO_ROBOT_CAN_ENTER, Routes, solve_routes
 from tmpnav.task.solve import Background
 from tmpnav.types import CostTable, Goals
 
@@ -95,6 +101,8 @@ class SearchRun:
     #: ENHSP's plans of the sub-problems solved so far, by their PDDL text (domain, problem)
     #: (``replace`` keeps the same dict), see :meth:`AnytimeSearch._known`
     solved: dict[tuple[str, str], list[Step] | None] = field(default_factory=dict, compare=False, hash=False)
+    #: the run's time limit (tmpnav.deadline): past it the search returns its best plan
+    deadline: Deadline = field(default_factory=Deadline, compare=False, hash=False)
 
     def bounded(self, bound: float | None) -> SearchRun:
         """The same run, telling ``bound`` with its events."""
@@ -113,7 +121,8 @@ class SearchOptions:
     planner: str = "enhsp-blind"  # the ENHSP engine of the sub-problems (optimal)
     encoding: str = "mixed"  # single | mixed
     min_gain: float = 0.05  # mixed: pairs must save this fraction
-    budget: float = 60.0  # seconds for the whole search
+    budget: float = 60.0  # seconds for the whole search: its time cap (inf: none)
+    work: int | None = None  # sub-problems ENHSP may solve (None: no limit), the budget of work
     #: rooms per neighbourhood, grown when a round brings nothing (on building-like tables of
     #: 10-12 rooms, (6, 8) reached the optimum as often as (4, 6, 8) with half the sub-problems)
     sizes: tuple[int, ...] = (6, 8)
@@ -151,9 +160,10 @@ class SearchStats:
 class SearchResult:
     plan: Plan
     cost: PlanCost
-    stopped: StopReason  # "optimal" | "converged" | "time budget" | "nothing to do"
+    stopped: StopReason  # "optimal" | "converged" | "work budget" | "time budget" | "nothing to do"
     stats: SearchStats
     start: str  # how the first plan was found
+    capped: tuple[str, ...] = ()  # the time caps that cut something short (tmpnav.task.budget)
 
 
 @dataclass(frozen=True)
@@ -203,6 +213,8 @@ class AnytimeSearch:
         self.rng = random.Random(options.seed)
         self.stats = SearchStats()
         self.t0 = time.perf_counter()
+        self.budget = SearchBudget(options.work, options.budget, self.t0)
+        self._timed_out: set[tuple[str, str]] = set()  # sub-problems whose ENHSP search hit its time limit
         self.near = Closeness(CostTable((), (), (), {}, {}, {}), model.start_location, model.robots)
         self.waypoints: tuple[str, ...] = ()
         self.singles = CostTable((), (), (), {}, {}, {})
@@ -214,7 +226,15 @@ class AnytimeSearch:
         return time.perf_counter() - self.t0
 
     def left(self) -> float:
-        return self.options.budget - self.elapsed()
+        """Seconds of the search's time cap left."""
+        return self.budget.left()
+
+    def _spent(self) -> Literal["work budget", "time budget"] | None:
+        """Why the search may start no more sub-problems, if it may not: its work budget is spent
+        (the sub-problems solved so far, the same count on every machine), or its time cap."""
+        if self.budget.out_of_work(self.stats.subproblems):
+            return "work budget"
+        return "time budget" if self.budget.out_of_time() else None
 
     # ------------------------------------------------------------------ start
 
@@ -231,18 +251,21 @@ class AnytimeSearch:
             routes = solve_routes(
                 singles,
                 self.goals,
-                time_limit=limit,
+                time_limit=max(0.001, min(limit, self.left())),
                 solution_limit=ROUTING_SOLUTIONS,
                 stagnation=FEW_STAGNATION if few else None,
                 span_weight=opts.span_weight,
                 initial=None if start_from is None else _routes_of(start_from, self.model.robots),
             )
+            if routes.timed_out:
+                self.budget.cap(caps.ROUTING_CAP)
+            if not routes.found and routes.status != NO_ROBOT_CAN_ENTER:
+                # OR-Tools ran out of time before its first solution: a plan all the same
+                routes = insertion_routes(singles, self.goals, routes.status, opts.span_weight)
         if not routes.found:
-            raise PlannerError(
-                f"no plan of single moves reaches the goals ({routes.status}): a goal room no robot can enter?"
-            )
+            raise PlannerError(_no_routes(routes))
         plan = with_origins([((m[0], m[2]),) for m in routes.moves(singles)], self.model.start_location)
-        return self.canonical(plan), f"OR-Tools routing ({routes.status})"
+        return self.canonical(plan), routes.method
 
     def canonical(self, plan: Plan) -> Plan:
         """The plan's steps in the canonical order of commuting steps (tmpnav.task.decode)."""
@@ -292,8 +315,20 @@ class AnytimeSearch:
         self.rules.check(best)
         self._note(self.value(cost), "first plan")
         if not best:
-            return SearchResult(best, cost, "nothing to do", self.stats, start)
+            return SearchResult(best, cost, "nothing to do", self.stats, start, tuple(self.budget.capped))
         self.best, self.best_cost = best, cost
+        # a plan: from here the search's time cap (the run's limit among its caps) ends it, between
+        # batches, and the oracle no longer cuts its work short
+        self.watch.deadline.disarm()
+        try:
+            return self._improve(start)
+        except TimeLimitError:  # the run's time limit passed in the oracle's work: the best plan so far
+            self.budget.cap(caps.SEARCH_CAP)
+            return self._result("time budget", start)
+
+    def _improve(self, start: str) -> SearchResult:
+        """The search from its first plan (``self.best``) on."""
+        best = self.best
         if self.options.whole_is_exact and self._fits_one_neighbourhood(best):
             # the whole problem is one sub-problem: ENHSP's optimal plan of it is the optimum
             whole = Neighbourhood(
@@ -303,9 +338,11 @@ class AnytimeSearch:
                 {},
             )
             if self._try_batch(best, [whole], keep_equal=True):
-                return SearchResult(self.best, self.best_cost, "optimal", self.stats, start)
-        stopped = self._improve_until_done(self.best, self.best_cost)
-        return SearchResult(self.best, self.best_cost, stopped, self.stats, start)
+                return self._result("optimal", start)
+        return self._result(self._improve_until_done(self.best, self.best_cost), start)
+
+    def _result(self, stopped: StopReason, start: str) -> SearchResult:
+        return SearchResult(self.best, self.best_cost, stopped, self.stats, start, tuple(self.budget.capped))
 
     def _fits_one_neighbourhood(self, plan: Plan) -> bool:
         rooms = {m[2] for step in plan for m in step}
@@ -321,7 +358,7 @@ class AnytimeSearch:
                 return "optimal"
             outcome = self._round(self.options.sizes[size_index])
             self.stats.rounds += 1
-            if outcome in ("time budget", "optimal"):
+            if outcome in ("work budget", "time budget", "optimal"):
                 return outcome
             if outcome == "improved":
                 size_index = 0
@@ -329,7 +366,7 @@ class AnytimeSearch:
                 size_index += 1
             elif self._between_routes():
                 size_index = 0
-            elif self.left() <= 0:
+            elif self.budget.out_of_time():
                 return "time budget"
             else:
                 return "converged"
@@ -342,7 +379,7 @@ class AnytimeSearch:
             edits = route_edits(self.best, self.singles, self.goals, self.rules, self.options.span_weight)
         costed: list[tuple[Plan, PlanCost, None]] = []
         for edit in edits[: self.options.route_candidates]:
-            if self.left() <= 0:
+            if self.budget.out_of_time():
                 break
             candidate = self.canonical(with_origins(edit, self.model.start_location))
             if not self.rules.valid(candidate):
@@ -360,10 +397,10 @@ class AnytimeSearch:
         self._note(new, "between routes")
         return True
 
-    def _round(self, size: int) -> Literal["improved", "unchanged", "time budget", "optimal"]:
+    def _round(self, size: int) -> Literal["improved", "unchanged", "work budget", "time budget", "optimal"]:
         """Neighbourhoods of ``size`` rooms around seeds until every room was in one
         ('improved' or 'unchanged'); the round starts again on each improved plan. Ends
-        early with 'time budget' or 'optimal'."""
+        early with 'work budget', 'time budget' or 'optimal'."""
         improved = False
         while True:
             outcome = self._sweep(self.best, size)
@@ -373,22 +410,24 @@ class AnytimeSearch:
             if self.proves_optimal(self.value(self.best_cost)):
                 return "optimal"
 
-    def _sweep(self, plan: Plan, size: int) -> Literal["improved", "unchanged", "time budget"]:
+    def _sweep(self, plan: Plan, size: int) -> Literal["improved", "unchanged", "work budget", "time budget"]:
         """Try the batches of neighbourhoods of one sweep of ``plan`` (:meth:`_batches`) until
-        one improves it ('improved'), every one was tried ('unchanged') or the time is up.
+        one improves it ('improved'), every one was tried ('unchanged') or the budget is spent.
 
         A batch's sub-problems are costed in the oracle while ENHSP plans the batch before
         (:class:`tmpnav.task.solve.Background`): on two cores the two overlap. The plan is
         the one the batches would give one after the other: a batch drawn ahead of an
         improvement is dropped, and the random generator is put back as it was when the
-        improving batch had been drawn (its next sweep draws the same neighbourhoods)."""
+        improving batch had been drawn (its next sweep draws the same neighbourhoods). The work
+        budget is looked at before a batch starts, on the sub-problems of the batches settled
+        before the one under way: the same count on every machine."""
         before: _Batch | None = None
         for hoods, state in self._batches(plan, size):
-            if self.left() <= 0:
+            if (spent := self._spent()) is not None:
                 if before is not None and self._settle(plan, before):
                     self.rng.setstate(before.state)
                     return "improved"
-                return "time budget"
+                return spent
             batch = self._launch(plan, hoods, state)
             if before is not None and self._settle(plan, before):
                 self._drop(batch)
@@ -440,6 +479,7 @@ class AnytimeSearch:
                 self._running[texts] = future
                 plans.append(future)
             else:  # no time left to solve it
+                self.budget.cap(caps.SEARCH_CAP)
                 plans.append(None)
         return _Batch(subs, plans, state)
 
@@ -466,6 +506,8 @@ class AnytimeSearch:
                     self.stats.subproblems += 1
                     if solved is not None:
                         self.watch.solved[sub.task.texts()] = solved
+                if solved is None and sub.task.texts() in self._timed_out:
+                    self.budget.cap(caps.SUBPROBLEM_CAP)
                 else:  # a search two batches asked for: counted once
                     self.stats.reused += 1
                 steps.append(solved)
@@ -532,7 +574,10 @@ class AnytimeSearch:
         search crashed (a bad TMPNAV_JAVA_OPTIONS) "converged" on OR-Tools' first plan."""
         try:
             return sub.task.decode(sub.task.solve(self.options.planner, timeout))
-        except (PlannerTimeoutError, UnsolvableError):
+        except PlannerTimeoutError:
+            self._timed_out.add(sub.task.texts())  # its plan depends on the machine's speed
+            return None
+        except UnsolvableError:
             return None
 
     def cost(self, plan: Plan) -> PlanCost:
@@ -628,6 +673,14 @@ def search(
     """Run the anytime search (see the module docstring); ``executed`` prices a plan as it will
     be executed (robots kept apart), from its cost as planned."""
     return AnytimeSearch(model, goals, options, run, proves_optimal, executed).run(seeds)
+
+
+def _no_routes(routes: Routes) -> str:
+    """Why there is no first plan, in words: a goal room no allowed robot can enter, or none
+    of the routes OR-Tools and cheapest insertion tried visits every goal."""
+    if routes.status == NO_ROBOT_CAN_ENTER:
+        return f"no plan of single moves reaches the goals: no robot allowed there can enter {routes.detail}"
+    return f"no plan of single moves reaches the goals ({routes.status}): {routes.detail}"
 
 
 def _routes_of(plan: Plan, robots: Sequence[str]) -> dict[str, tuple[str, ...]]:

@@ -221,8 +221,9 @@ class AnytimeTask:
     #: OR-Tools' routes as a first plan (SearchOptions.first_routes)
     first_routes: bool = True
 
-    def options(self, budget: float) -> SearchOptions:
-        """The search's options: with costs that depend on the context (carried beliefs), smaller
+    def options(self, budget: float, work: int | None = None) -> SearchOptions:
+        """The search's options (``budget``: its time cap in seconds; ``work``: its budget in
+        sub-problems): with costs that depend on the context (carried beliefs), smaller
         neighbourhoods, and no proof of optimality from one search of the whole problem."""
         p, context_free = self.planner, self.model.costs == "table"
         return SearchOptions(
@@ -230,6 +231,7 @@ class AnytimeTask:
             encoding=p.encoding,
             min_gain=p.pair_min_gain,
             budget=max(budget, 0.0),
+            work=work,
             sub_timeout=min(p.timeout, 60.0),
             whole_is_exact=context_free,
             sizes=SearchOptions.sizes if context_free else CARRIED_SIZES,
@@ -261,12 +263,15 @@ def plan_anytime(
     budget: float,
     bound: Bound | None = None,
     seeds: dict[str, Plan] | None = None,
+    work: int | None = None,
 ) -> TaskResult:
-    """The anytime search's plan (:mod:`tmpnav.task.search`) of ``task`` within ``budget``
-    seconds, from the cheapest of OR-Tools' routes and the ``seeds``; ``bound``, a certified
-    lower bound on every plan's cost, can prove a plan optimal and gives the gap."""
+    """The anytime search's plan (:mod:`tmpnav.task.search`) of ``task`` within ``work``
+    sub-problems and a time cap of ``budget`` seconds, from the cheapest of OR-Tools' routes and
+    the ``seeds``; ``bound``, a certified lower bound on every plan's cost, can prove a plan
+    optimal and gives the gap."""
     proves, told = (bound.proves_optimal, bound.value) if bound is not None else (None, None)
-    result = search(task.model, task.goals, task.options(budget), run.bounded(told), proves, seeds, task.executed)
+    options = task.options(budget, work)
+    result = search(task.model, task.goals, options, run.bounded(told), proves, seeds, task.executed)
     plan, cost = result.plan, result.cost
     proved = result.stopped == "optimal"
     stats = result.stats
@@ -287,6 +292,8 @@ def plan_anytime(
             improvements=stats.improvements,
             seconds=stats.history[-1][0] if stats.history else 0.0,
             history=tuple(stats.history),
+            work=options.work,
+            capped=result.capped,
         ),
         bound=_summary(bound, cost.value(task.span_weight), proved),
         schedule=cost.schedule,

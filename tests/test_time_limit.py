@@ -1,0 +1,74 @@
+"""``--time-limit S`` (``planner.time_limit``) bounds a whole run: the best plan so far, or exit 5.
+
+Each test is bounded by its limit, never timed: a run with no plan at its limit ends with exit
+code 5 and one line naming the stage that took the time, and writes nothing; a search whose
+time runs out after its first plan returns that plan.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import re
+import subprocess
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import pytest
+import yaml
+
+from tests.task.instances import building_instance
+from tmpnav.errors import TimeLimitError
+from tmpnav.task.budget import SEARCH_CAP
+from tmpnav.task.model import TableModel
+from tmpnav.task.plans import Plan
+from tmpnav.task.search import SearchOptions, search
+from tmpnav.types import CostTable, Goals
+
+ROOT = Path(__file__).resolve().parents[1]
+LINE = re.compile(r"error: no plan within --time-limit 0\.2 s: the \w+ stage took the time \(.*\)")
+
+
+def tmpnav(*args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([sys.executable, "-m", "tmpnav", *args], capture_output=True, text=True, env=env, cwd=ROOT)
+
+
+@pytest.mark.slow
+def test_no_plan_within_the_limit_is_exit_5_naming_the_stage_and_writes_nothing(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    proc = tmpnav("plan", "configs/building-20.yaml", "--no-cache", "--time-limit", "0.2", "-o", str(out))
+    assert proc.returncode == 5, proc.stderr
+    assert LINE.fullmatch(proc.stderr.strip()), proc.stderr
+    assert not out.exists() and proc.stdout == ""
+
+
+@pytest.mark.slow
+def test_the_scenario_key_bounds_the_run_too(tmp_path: Path) -> None:
+    scenario = yaml.safe_load((ROOT / "configs" / "building-20.yaml").read_text())
+    scenario.setdefault("planner", {})["time_limit"] = 0.2
+    path = tmp_path / "limited.yaml"
+    path.write_text(yaml.safe_dump(scenario))
+    proc = tmpnav("plan", str(path), "--no-cache")
+    assert proc.returncode == 5 and LINE.fullmatch(proc.stderr.strip()), proc.stderr
+
+
+def test_a_bad_time_limit_is_one_line_and_exit_2() -> None:
+    proc = tmpnav("plan", "configs/corridor.yaml", "--time-limit", "-3")
+    assert proc.returncode == 2 and "--time-limit" in proc.stderr and "Traceback" not in proc.stderr
+
+
+class OutOfTime(TableModel):
+    """A table whose sub-problems' costs are asked for past the run's time limit (the oracle
+    then raises TimeLimitError between its blocks of work, tmpnav.deadline)."""
+
+    def subtable(self, head: Plan, robots: Sequence[str], rooms: Sequence[str], goals: Goals) -> CostTable:
+        raise TimeLimitError("no plan within --time-limit 1 s", 1.0)
+
+
+def test_past_the_limit_the_search_returns_its_best_plan_so_far() -> None:
+    table, goals = building_instance(random.Random(4), 12, 2)
+    result = search(OutOfTime(table, 0.05), goals, SearchOptions(parallel=1, work=50))
+    assert result.plan and result.stopped == "time budget" and SEARCH_CAP in result.capped
+    assert result.cost.total == pytest.approx(TableModel(table, 0.05).plan_cost(result.plan).total)

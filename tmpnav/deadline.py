@@ -1,0 +1,63 @@
+"""The run's time limit (``--time-limit``, ``planner.time_limit``): one clock for the whole run.
+
+A :class:`Deadline` is made when a run starts and handed down with its clock (the search's
+:class:`tmpnav.task.search.SearchRun`). The stages look at it where they can stop cleanly:
+
+* the oracle between its blocks of work (its progress, :meth:`Deadline.watch`), so a stage
+  that computes costs for minutes ends within a block of the limit;
+* the pipeline between stages (:meth:`Deadline.check`);
+* the anytime search, whose time cap it lowers: past it the search returns its best plan.
+
+Once the run has a plan (the anytime search's first, or the task stage's) the deadline is
+disarmed (:meth:`Deadline.disarm`): the search's time cap, which the limit lowered, ends the
+search between its batches, and the plan's re-simulation, which its report needs, runs to
+its end. Before any plan, passing the
+limit raises :class:`tmpnav.errors.TimeLimitError` (exit code 5), which the pipeline completes
+with the stage that took the time.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from tmpnav.errors import TimeLimitError
+
+
+@dataclass
+class Deadline:
+    """``seconds`` from ``started`` (``time.perf_counter``; None: no limit)."""
+
+    seconds: float | None = None
+    started: float = field(default_factory=time.perf_counter)
+    armed: bool = True  # False once the run has a plan: the stages after it finish
+
+    def left(self) -> float:
+        """Seconds until the limit (inf without one)."""
+        if self.seconds is None:
+            return math.inf
+        return self.seconds - (time.perf_counter() - self.started)
+
+    def passed(self) -> bool:
+        return self.armed and self.left() <= 0
+
+    def check(self) -> None:
+        """Raise TimeLimitError when the limit has passed and the run has no plan yet."""
+        if self.passed():
+            raise TimeLimitError(f"no plan within --time-limit {self.seconds:g} s", self.seconds or 0.0)
+
+    def disarm(self) -> None:
+        """The run has its plan: what follows finishes past the limit."""
+        self.armed = False
+
+    def watch(self, progress: Callable[[int, int], None] | None) -> Callable[[int, int], None]:
+        """``progress`` (of the oracle: requests done, in all) that also looks at the limit."""
+
+        def told(done: int, total: int) -> None:
+            if progress is not None:
+                progress(done, total)
+            self.check()
+
+        return told
