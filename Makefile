@@ -68,7 +68,7 @@ demo: $(RUNTIME)
 test: $(STAMP) browser
 	@$(BIN)/python -m tmpnav plan configs/two-rooms.yaml -q --no-cache > /dev/null
 	@$(BIN)/python -m tmpnav plan configs/office-rooms.yaml -q --no-cache --anytime-budget 1 > /dev/null
-	$(BIN)/pytest -q -n 3 --dist loadfile; rc=$$?; if [ $$rc -eq 5 ]; then exit 0; fi; exit $$rc
+	$(BIN)/pytest -q -n 3 --dist loadfile --durations=25; rc=$$?; if [ $$rc -eq 5 ]; then exit 0; fi; exit $$rc
 
 # The live view's test (tests/serve/test_view.py) drives Debian's chromium through chromium-driver.
 # Installed here when missing and possible (as root, with apt-get; quietly, its log in .venv/apt.log;

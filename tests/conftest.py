@@ -14,6 +14,7 @@ import pytest
 
 #: test file (relative to the repository) -> rough seconds it takes
 HEAVY: dict[str, float] = {
+    "tests/test_team_objective.py": 300,  # shifts planned cold with both objectives
     "tests/oracle/test_ray.py": 170,  # a local Ray instance: seconds alone, minutes beside the suite
     "tests/test_cli_risk.py": 150,
     "tests/test_regression.py": 110,
@@ -43,6 +44,9 @@ HEAVY: dict[str, float] = {
     "tests/oracle/test_worker_lifetime.py": 19,
     "tests/rooms/test_segment.py": 18,
     "tests/test_closed_loop.py": 15,
+    "tests/replan/test_seeded.py": 90,  # seeded replans of a 9-station shift
+    "tests/replan/test_shift.py": 90,
+    "tests/execution/test_rpp.py": 40,  # one simulate of two-rooms
     "tests/serve/test_bad_input.py": 80,  # tests/serve: a real `tmpnav serve` per file, planning two-rooms
     "tests/serve/test_service.py": 60,
     "tests/serve/test_restart.py": 50,

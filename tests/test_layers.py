@@ -31,6 +31,7 @@ LAYERS: dict[str, int] = {
     "tmpnav.cachedir": 0,
     "tmpnav.java": 0,  # which Java runs ENHSP
     "tmpnav.numbers": 0,  # figures as the terminal prints them
+    "tmpnav.deadline": 0,  # the run's time limit, one clock every stage looks at
     "tmpnav.pddl": 0,  # the PDDL domains (data)
     "tmpnav.configs": 0,  # the shipped scenarios (data)
     # the pipeline's stages, in order

@@ -876,6 +876,7 @@ def sparse_warehouse() -> dict[str, bytes]:
                 [robot("r1", 10, 2, 1.5708), robot("r2", 25.5, 2, 1.5708), robot("r3", 40, 2, 1.5708)],
             )
         ],
+        models=["models: {}  # the paper's models: landmarks only, no range sensor (a lidar would see the pillars)"],
         roadmap=roadmap_lines("sparse-warehouse"),
         goals=[p[0] for p in SPARSE_PLACES],
         goals_comment="visit every place",

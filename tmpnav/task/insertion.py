@@ -48,6 +48,7 @@ def insertion_routes(table: CostTable, goals: Goals, status: str, span_weight: f
     cheapest: dict[str, float] = {}
     for (_, _, x), c in table.single.items():
         cheapest[x] = min(cheapest.get(x, math.inf), c)
+
     def place(robot: str | None, room: str) -> bool:
         """``room`` where it adds least, if it has a place (the moves into and out of it exist)."""
         longest = max(seconds(r, routes[r]) for r in table.robots) if span_weight else 0.0
@@ -79,10 +80,15 @@ def insertion_routes(table: CostTable, goals: Goals, status: str, span_weight: f
         if len(left) == len(pending):
             return Routes({}, math.inf, status, "nothing", detail=_none_for(left[0][1]), by="cheapest insertion")
         pending = left
+    return _finished(table, routes, ends, status)
+
+
+def _finished(table: CostTable, routes: dict[str, list[str]], ends: dict[str, str], status: str) -> Routes:
+    """Each robot's rooms with its end added (unless it is there already), as Routes at their cost."""
     rooms = {}
     for r, xs in routes.items():
         end = ends.get(r)
-        rooms[r] = (*xs, end) if end is not None and end != (xs[-1] if xs else start[r]) else tuple(xs)
+        rooms[r] = (*xs, end) if end is not None and end != (xs[-1] if xs else table.start_location[r]) else tuple(xs)
     total = sum(table.single.get(move, math.inf) for move in Routes(rooms, 0.0, status, "nothing").moves(table))
     if not math.isfinite(total):
         return Routes({}, math.inf, status, "nothing", detail=_none_for("a robot's end"), by="cheapest insertion")
