@@ -48,9 +48,15 @@ def browser() -> Iterator[object]:
 
 
 def robots(driver: object) -> dict[str, tuple[float, float]]:
-    items = driver.find_elements(By.CSS_SELECTOR, "#robots li")  # type: ignore[attr-defined]
-    return {i.get_attribute("data-robot"): (float(i.get_attribute("data-x")), float(i.get_attribute("data-y")))
-            for i in items if i.get_attribute("data-x") is not None}
+    """Each robot's drawn position, read in one script: the page redraws its list as the slider
+    and the revisions move it, so elements found in one call may be gone by the next."""
+    script = """
+        const out = {};
+        for (const li of document.querySelectorAll('#robots li'))
+            if (li.dataset.x !== undefined) out[li.dataset.robot] = [Number(li.dataset.x), Number(li.dataset.y)];
+        return out;"""
+    found = driver.execute_script(script)  # type: ignore[attr-defined]
+    return {name: (float(x), float(y)) for name, (x, y) in found.items()}
 
 
 def painted(driver: object, colour: tuple[int, int, int]) -> int:
