@@ -20,6 +20,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from tmpnav.report.plan_json import without_timings
+
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "benchmarks" / "reproducible"
 TMPNAV = [sys.executable, "-m", "tmpnav"]
@@ -61,16 +63,6 @@ def loaded(config: str) -> tuple[dict[str, Any] | None, float, str]:
         for hog in hogs:
             hog.kill()
             hog.wait()
-
-
-def without_timings(doc: dict[str, Any]) -> dict[str, Any]:
-    doc = dict(doc)
-    doc.pop("timings")
-    search = dict(doc["search"])
-    search.pop("seconds")
-    search["history"] = [cost for _, cost in search["history"]]
-    doc["search"] = search
-    return doc
 
 
 def describe(doc: dict[str, Any] | None, seconds: float, error: str) -> str:

@@ -18,6 +18,8 @@ from typing import Any
 
 import pytest
 
+from tmpnav.report.plan_json import without_timings
+
 ROOT = Path(__file__).resolve().parents[1]
 CORRIDOR = ROOT / "configs" / "corridor.yaml"
 
@@ -46,18 +48,6 @@ def plan_json(scenario: Path) -> dict[str, Any]:
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
     return json.loads(proc.stdout)
-
-
-def without_timings(doc: dict[str, Any]) -> dict[str, Any]:
-    """plan.json without what measures the machine: the stage times, the search's seconds and the
-    times of its improvements (their costs kept)."""
-    doc = dict(doc)
-    doc.pop("timings")
-    search = dict(doc["search"])
-    search.pop("seconds")
-    search["history"] = [cost for _, cost in search["history"]]
-    doc["search"] = search
-    return doc
 
 
 @pytest.mark.slow

@@ -362,3 +362,19 @@ def _numeric(value: JSON) -> bool:
         isinstance(v, int | float) or (isinstance(v, list) and all(isinstance(w, int | float) for w in v))
         for v in value
     )
+
+
+def without_timings(doc: dict[str, JSON]) -> dict[str, JSON]:
+    """plan.json without what measures the machine: the stage times, the search's seconds and the
+    times of its improvements (their costs kept). Two runs of one scenario and options agree on
+    the rest (docs/planning.md)."""
+    search = doc["search"]
+    assert isinstance(search, dict)
+    history = search["history"]
+    assert isinstance(history, list)
+    costs: list[JSON] = []
+    for step in history:
+        assert isinstance(step, list)
+        costs.append(step[1])
+    kept = {k: v for k, v in search.items() if k != "seconds"} | {"history": costs}
+    return {k: v for k, v in doc.items() if k != "timings"} | {"search": kept}
