@@ -32,6 +32,7 @@ LAYERS: dict[str, int] = {
     "tmpnav.java": 0,  # which Java runs ENHSP
     "tmpnav.numbers": 0,  # figures as the terminal prints them
     "tmpnav.deadline": 0,  # the run's time limit, one clock every stage looks at
+    "tmpnav.client": 0,  # a client of tmpnav serve (the standard library only): for any layer that calls it
     "tmpnav.pddl": 0,  # the PDDL domains (data)
     "tmpnav.configs": 0,  # the shipped scenarios (data)
     # the pipeline's stages, in order
@@ -62,7 +63,6 @@ LAYERS: dict[str, int] = {
     "tmpnav.api": 15,
     "tmpnav.cli": 15,
     "tmpnav.serve": 15,  # `tmpnav serve`: the pipeline and replan behind HTTP
-    "tmpnav.client": 15,  # a client of tmpnav serve (the standard library only)
     "tmpnav": 16,  # the package itself: ``import tmpnav`` is the Python API (tmpnav.api, on first use)
     "tmpnav.__main__": 16,
 }

@@ -122,9 +122,7 @@ class WindowError(PlannerError):
 
     exit_code = 11
 
-    def __init__(
-        self, message: str, room: str = "", latest: float = 0.0, arrival: float = 0.0, certain: bool = False
-    ):
+    def __init__(self, message: str, room: str = "", latest: float = 0.0, arrival: float = 0.0, certain: bool = False):
         super().__init__(message)
         self.room, self.latest, self.arrival, self.certain = room, latest, arrival, certain
 

@@ -26,7 +26,11 @@ class Server:
         env = dict(os.environ, PYTHONPATH=str(ROOT))
         self.process = subprocess.Popen(
             [sys.executable, "-m", "tmpnav", "serve", scenario, "--port", "0", "--cache-dir", str(cache), *args],
-            cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=self.log.open("w"), start_new_session=True,
+            cwd=ROOT,
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=self.log.open("w"),
+            start_new_session=True,
         )
         self.url = self._address(120.0)
 

@@ -23,18 +23,29 @@ from tmpnav.errors import EXIT_CODES
 
 #: the statuses docs/serve.md documents for a request body (a valid one: 201, or 202 at once)
 DOCUMENTED = {201, 202, 401, 404, 405, 409, 413, 422}
-SMOKE = settings(max_examples=8, derandomize=True, deadline=None, database=None,
-                 suppress_health_check=list(HealthCheck))
+SMOKE = settings(
+    max_examples=8, derandomize=True, deadline=None, database=None, suppress_health_check=list(HealthCheck)
+)
 STATE = {
     "time": 5.0,
-    "robots": {"r1": {"pose": [3.0, 5.0, 0.0], "covariance": [[0.02, 0, 0], [0, 0.02, 0], [0, 0, 0.004]]},
-               "r2": {"status": "down"}},
+    "robots": {
+        "r1": {"pose": [3.0, 5.0, 0.0], "covariance": [[0.02, 0, 0], [0, 0.02, 0], [0, 0, 0.004]]},
+        "r2": {"status": "down"},
+    },
     "visited": ["A"],
     "doors": {"door-A": "open"},
     "goals": {"add": ["C"], "remove": []},
 }
-STATE_KEYS = [("time",), ("robots", "r1", "pose"), ("robots", "r1", "covariance"), ("robots", "r2", "status"),
-              ("visited",), ("doors", "door-B"), ("goals", "add"), ("goals", "remove")]
+STATE_KEYS = [
+    ("time",),
+    ("robots", "r1", "pose"),
+    ("robots", "r1", "covariance"),
+    ("robots", "r2", "status"),
+    ("visited",),
+    ("doors", "door-B"),
+    ("goals", "add"),
+    ("goals", "remove"),
+]
 GOALS = {"visit": ["C"], "robots": {"r1": ["B"]}, "jobs": [{"name": "C", "service": 5}]}
 GOAL_KEYS = [k[1:] for k in SCENARIO_KEYS if k[0] == "goals" and len(k) > 1]
 
@@ -141,9 +152,24 @@ def test_with_a_token_every_request_carries_it(guarded: Server) -> None:
 
 def test_without_a_token_only_loopback(tmp_path: Path) -> None:
     run = subprocess.run(
-        [sys.executable, "-m", "tmpnav", "serve", "configs/two-rooms.yaml", "--host", "0.0.0.0", "--port", "0",
-         "--cache-dir", str(tmp_path)],
-        cwd=ROOT, capture_output=True, text=True, timeout=120, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+        [
+            sys.executable,
+            "-m",
+            "tmpnav",
+            "serve",
+            "configs/two-rooms.yaml",
+            "--host",
+            "0.0.0.0",
+            "--port",
+            "0",
+            "--cache-dir",
+            str(tmp_path),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
     )
     assert run.returncode == 2
     assert run.stderr.strip().splitlines() == [

@@ -77,8 +77,11 @@ def test_concurrent_updates_of_one_revision_are_applied_once(client: Client, fir
     ("body", "status", "message"),
     [
         ({"revision": 0, "state": {"time": "soon"}}, 422, "state: time: 'soon' is not a finite number"),
-        ({"revision": 0, "state": {"time": 1, "robots": {"r1": {"covariance": [[1, 2], [3, 4]]}}}}, 422,
-         "state: robots.r1.covariance: a matrix of shape (2, 2); expected 3x3, or AMCL's 6x6"),
+        (
+            {"revision": 0, "state": {"time": 1, "robots": {"r1": {"covariance": [[1, 2], [3, 4]]}}}},
+            422,
+            "state: robots.r1.covariance: a matrix of shape (2, 2); expected 3x3, or AMCL's 6x6",
+        ),
         ({"revision": 0, "state": {"time": 1, "robots": {"r9": {"status": "down"}}}}, 422, "r9"),
         ({"revision": -1, "state": {}}, 422, "body: revision:"),
         ({"state": {}}, 422, "body: revision: Field required"),
@@ -102,8 +105,9 @@ def test_goals_in_the_body_and_bad_goals(client: Client, first: dict) -> None:
     assert err.value.problem["detail"] == "body: goals.visit[0]: 'Z' is not a room; expected one of A, B, C"
     plan = client.plan(goals={"visit": ["C"], "jobs": [{"name": "C", "service": 5}]})
     doc = client.document(plan["id"])
-    assert (doc["goals"]["visit"] == ["C"] and [a["to"] for a in doc["actions"]] in (
-        [["C"]], [["C", "C"]])) or any("C" in a["to"] for a in doc["actions"])
+    assert (doc["goals"]["visit"] == ["C"] and [a["to"] for a in doc["actions"]] in ([["C"]], [["C", "C"]])) or any(
+        "C" in a["to"] for a in doc["actions"]
+    )
     with pytest.raises(ServiceError) as missing:
         client.document("p999")
     assert missing.value.status == 404
@@ -148,12 +152,25 @@ def test_a_revision_is_the_one_tmpnav_replan_plans(server: Server, client: Clien
     scenario = tmp_path / "shift.yaml"  # the site with the shift's goals, as a scenario file
     text = (ROOT / "configs" / "two-rooms.yaml").read_text().split("\ngoals:")[0]
     scenario.write_text(text + "\ngoals:\n  robots: {r1: [B, C], r2: [A]}\n")
-    command = [sys.executable, "-m", "tmpnav", "replan", str(scenario), "--plan", str(tmp_path / "plan.json"),
-               "--state", str(tmp_path / "state.json"), "-q", "--cache-dir", str(server.cache)]
+    command = [
+        sys.executable,
+        "-m",
+        "tmpnav",
+        "replan",
+        str(scenario),
+        "--plan",
+        str(tmp_path / "plan.json"),
+        "--state",
+        str(tmp_path / "state.json"),
+        "-q",
+        "--cache-dir",
+        str(server.cache),
+    ]
     command += ["-o", str(tmp_path / "out")]
     subprocess.run(command, cwd=ROOT, check=True, env=dict(os.environ, PYTHONPATH=str(ROOT)))
     cli = json.loads((tmp_path / "out" / "plan.json").read_text())
     assert [[(m["robot"], m["to"]) for m in a["moves"]] for a in served["actions"]] == [
-        [(m["robot"], m["to"]) for m in a["moves"]] for a in cli["actions"]]
+        [(m["robot"], m["to"]) for m in a["moves"]] for a in cli["actions"]
+    ]
     assert served["cost"]["resimulated"] == pytest.approx(cli["cost"]["resimulated"], rel=1e-9)
     assert served["revision"]["done"] == cli["revision"]["done"]

@@ -32,9 +32,7 @@ def test_a_route_is_improved_to_a_local_optimum(seed: int, n: int, fixed: bool) 
     value = rng.uniform(1.0, 10.0, size=(1, n + 1, n + 1))  # location 0: the start
     route = list(rng.permutation(np.arange(1, n + 1)))
     rooms = np.array(route, dtype=np.int64)
-    _improve_routes(
-        value, np.zeros(1, np.int64), np.zeros(1, np.int64), np.array([0, n]), rooms, np.array([fixed])
-    )
+    _improve_routes(value, np.zeros(1, np.int64), np.zeros(1, np.int64), np.array([0, n]), rooms, np.array([fixed]))
     got = [int(x) for x in rooms]
     assert sorted(got) == sorted(int(x) for x in route)
     if fixed:
@@ -51,7 +49,5 @@ def test_routes_side_by_side_are_improved_each_on_its_robots_moves() -> None:
     line = np.abs(np.subtract.outer(np.arange(5.0), np.arange(5.0)))  # 5 locations on a line, 1 m apart
     value = np.stack([line, 2.0 * line])
     rooms = np.array([4, 2, 3, 1, 1, 3, 0, 2], dtype=np.int64)  # robot 0 from location 0, robot 1 from 4
-    _improve_routes(
-        value, np.array([0, 1]), np.array([0, 4]), np.array([0, 4, 8]), rooms, np.array([False, False])
-    )
+    _improve_routes(value, np.array([0, 1]), np.array([0, 4]), np.array([0, 4, 8]), rooms, np.array([False, False]))
     assert rooms.tolist() == [1, 2, 3, 4, 3, 2, 1, 0]

@@ -78,6 +78,22 @@ def amcl_options(command: Any) -> Any:
     "down, doors closed, goals added; docs/replan.md). The team replans at each change and when a robot "
     "runs late; each session is also executed blind and with a plan that knew the events.",
 )
+@option(
+    "--server",
+    default=None,
+    metavar="URL",
+    default_text="plan in this process",
+    help="With --events: the closed loop's plan and revisions come from the tmpnav serve at URL, started on "
+    "the same scenario (each session plans a shift there and posts the team's state at each replan; "
+    "docs/serve.md).",
+)
+@option(
+    "--token",
+    envvar="TMPNAV_SERVE_TOKEN",
+    default=None,
+    default_text="none",
+    help="The token of the tmpnav serve of --server, when it was started with one.",
+)
 @output_option(
     True,
     "Directory for errors.csv, sessions.csv, errors.png, summary.md (with --events: loop.csv, replans.csv, "
@@ -135,7 +151,13 @@ def simulate(
 
     check_planner(scenario, kw["planner_name"])
     localisation = _localisation(kw.pop("localiser"), kw.pop("nav2_params"), kw.pop("site_text"), kw.pop("follower"))
+    server, token = kw.pop("server"), kw.pop("token")
+    if server is not None and events_path is None:
+        raise click.BadParameter(
+            "plans from a service are the closed loop's; expected --events EVENTS with it", param_hint="--server"
+        )
     if events_path is not None:
+        kw.update(server=server, token=token)
         _closed_loop(scenario, events_path, sessions or 5, seed, output, kw, localisation)
         return
     sessions = sessions or 25
@@ -192,15 +214,16 @@ def _closed_loop(
 
     from tmpnav.pipeline import load_world
     from tmpnav.replan.events import read_events
-    from tmpnav.replan.loop import closed_loop, document, replans_csv, runs_csv, summary
+    from tmpnav.replan.loop import closed_loop
+    from tmpnav.replan.loop_report import document, replans_csv, runs_csv, summary
 
+    server, token = kw.pop("server", None), kw.pop("token", None)
     options = plan_options(kw)
     loaded, _ = load_world(scenario, options.overrides)
     events = read_events(events_path, loaded)
     quiet = kw.get("quiet", False)
-    result = closed_loop(
-        scenario, events, sessions, seed, options, None if quiet else lambda m: click.echo(m, err=True), localisation
-    )
+    say = None if quiet else lambda m: click.echo(m, err=True)
+    result = closed_loop(scenario, events, sessions, seed, options, say, localisation, server, token)
     lines = summary(result)
     if output is not None:
         from tmpnav.atomic import write_files

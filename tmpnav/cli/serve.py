@@ -12,20 +12,42 @@ from tmpnav.cli.options import CACHE_DIR_OPTION, SCENARIO_ARG, option, report_er
 
 @cli.command()
 @SCENARIO_ARG
-@option("--host", default="127.0.0.1", show_default=True,
-        help="The address to listen on; without --token only a loopback address.")
-@option("--port", type=click.IntRange(0, 65535), default=8765, show_default=True,
-        help="The port to listen on (0: a free one, printed at start).")
-@option("--token", envvar="TMPNAV_SERVE_TOKEN", default=None, default_text="none: loopback only",
-        help="A secret every request must carry (Authorization: Bearer TOKEN); also $TMPNAV_SERVE_TOKEN.")
+@option(
+    "--host",
+    default="127.0.0.1",
+    show_default=True,
+    help="The address to listen on; without --token only a loopback address.",
+)
+@option(
+    "--port",
+    type=click.IntRange(0, 65535),
+    default=8765,
+    show_default=True,
+    help="The port to listen on (0: a free one, printed at start).",
+)
+@option(
+    "--token",
+    envvar="TMPNAV_SERVE_TOKEN",
+    default=None,
+    default_text="none: loopback only",
+    help="A secret every request must carry (Authorization: Bearer TOKEN); also $TMPNAV_SERVE_TOKEN.",
+)
 @CACHE_DIR_OPTION
-@seconds_option("--time-limit", default=300.0, show_default=True,
-                help="Seconds a search may run before the service cancels it.")
-@option("--max-body", type=click.IntRange(1024), default=1 << 20, show_default=True, metavar="BYTES",
-        help="The largest request body accepted.")
+@seconds_option(
+    "--time-limit", default=300.0, show_default=True, help="Seconds a search may run before the service cancels it."
+)
+@option(
+    "--max-body",
+    type=click.IntRange(1024),
+    default=1 << 20,
+    show_default=True,
+    metavar="BYTES",
+    help="The largest request body accepted.",
+)
 @report_errors
-def serve(scenario: Path, host: str, port: int, token: str | None, cache_dir: Path | None,
-          time_limit: float, max_body: int) -> None:
+def serve(
+    scenario: Path, host: str, port: int, token: str | None, cache_dir: Path | None, time_limit: float, max_body: int
+) -> None:
     """Serve a site over HTTP: plans, revisions, a live view.
 
     Plan shifts of SCENARIO's site, post the team's state and get each revision, and watch

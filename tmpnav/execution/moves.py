@@ -9,8 +9,9 @@ another robot) and when the plan expects the robot at each node of its path.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -82,6 +83,12 @@ def _queued(report: PlanReport, move: TimedMove, steps: Sequence[TrajectoryStep]
         raise ValueError(f"the schedule's move of {move.robot} in step {move.step} is not in the plan's step")
     nodes = tuple(int(n) for n in action.paths[robots.index(move.robot)])
     points = np.array([report.roadmap.nodes[n] for n in nodes], dtype=float).reshape(-1, 2)
+    return _move(move, nodes, points, steps, dt)
+
+
+def _move(
+    move: TimedMove, nodes: tuple[int, ...], points: np.ndarray, steps: Sequence[TrajectoryStep], dt: float
+) -> QueuedMove:
     return QueuedMove(
         step=move.step,
         robot=move.robot,
@@ -99,6 +106,35 @@ def _queued(report: PlanReport, move: TimedMove, steps: Sequence[TrajectoryStep]
         ),
         **_track(steps, move.start, move.end),
     )
+
+
+def queues_of_document(doc: Mapping[str, Any]) -> dict[str, tuple[QueuedMove, ...]]:
+    """:func:`queues` of a plan read from its plan.json (docs/plan-json.md): the schedule's moves,
+    the actions' paths and the trajectories are all there, so a plan made elsewhere (by
+    ``tmpnav serve``) is executed as one made in this process (tests/execution/test_moves.py
+    holds the two together)."""
+    dt = float(doc["dt"])
+    out: dict[str, tuple[QueuedMove, ...]] = {}
+    for robot, part in doc["schedule"]["robots"].items():
+        steps = [
+            TrajectoryStep(float(s["t"]), tuple(s["mean"]), tuple(tuple(row) for row in s["cov"]), s.get("node"))
+            for s in doc["trajectories"].get(robot, [])
+        ]
+        queue = []
+        for m in part["moves"]:
+            action = doc["actions"][int(m["step"]) - 1]
+            found = [x for x in action["moves"] if x["robot"] == robot]
+            if not found:
+                raise ValueError(f"the schedule's move of {robot} in step {m['step']} is not in the plan's step")
+            timed = TimedMove(
+                int(m["step"]) - 1, robot, m["from"], m["to"], m["partner"], float(m["ready"]), float(m["start"]),
+                float(m["end"]), float(m.get("service", 0.0)), float(m.get("opens", 0.0)),
+            )  # fmt: skip
+            nodes = tuple(int(n) for n in found[0]["path_nodes"])
+            points = np.array(found[0]["path_points"], dtype=float).reshape(-1, 2)
+            queue.append(_move(timed, nodes, points, steps, dt))
+        out[robot] = tuple(queue)
+    return out
 
 
 def _track(steps: Sequence[TrajectoryStep], start: float, end: float) -> dict[str, np.ndarray | None]:

@@ -36,14 +36,17 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tmpnav.errors import TmpnavError
 from tmpnav.execution import STEP_BUDGET, Draws, QueuedMove, Session, queues
 from tmpnav.execution.localisers import Localisation
+from tmpnav.execution.moves import queues_of_document
 from tmpnav.replan.events import Event, Events
+from tmpnav.replan.loop_report import MODES, LoopResult, Replan, Run
+from tmpnav.replan.remote import NothingLeftRemote, RemotePlans, at_start_of_document, unreachable_of_document
 from tmpnav.replan.revise import NothingLeft
 from tmpnav.replan.state import RobotState, TeamState
 from tmpnav.results import PlanReport
@@ -54,57 +57,10 @@ from tmpnav.world.visibility import LandmarkVisibility
 if TYPE_CHECKING:
     from tmpnav.pipeline import PlanOptions
 
-#: the three ways each session is executed
-MODES = ("closed loop", "blind", "knowing the events")
 #: replans one session may make at most (a robot stuck for ever would otherwise replan every ``late`` s)
 MAX_REPLANS = 20
 #: m: how far from its estimate a robot's start may be put to find free space for a replan
 NUDGE = 0.6
-
-
-@dataclass(frozen=True)
-class Replan:
-    """One replan of a session: when, why, how long it took, what came of it."""
-
-    session: int
-    time: float  # s on the team's clock
-    reason: str
-    latency: float  # s of wall-clock time
-    outcome: str  # "planned", "nothing left", or "failed: <why>"
-    unreachable: tuple[str, ...] = ()
-
-
-@dataclass
-class Run:
-    """One session executed one way (:data:`MODES`)."""
-
-    mode: str
-    session: int
-    goals: tuple[str, ...]  # the goal rooms to do: the scenario's, added, not removed
-    done: tuple[str, ...]  # goal rooms a move ended in, in order
-    twice: tuple[str, ...]  # goal rooms more than one move ended in
-    dropped: tuple[str, ...]  # goals the replans named as out of reach, or a down robot's end
-    makespan: float  # s: when the last robot was done
-    cost: float  # M_u c_u + M_G c_G + M_Sigma c_Sigma as executed (docs/models.md)
-    wall_hits: int  # control steps with a true pose in a wall (all robots)
-    contacts: int  # control steps with two robots touching
-    replans: list[Replan] = field(default_factory=list)
-
-    @property
-    def lost(self) -> tuple[str, ...]:
-        """Goals neither done nor dropped."""
-        return tuple(x for x in self.goals if x not in self.done and x not in self.dropped)
-
-
-@dataclass
-class LoopResult:
-    """Every session in the three modes, and the plans they started from."""
-
-    events: Events
-    planned: PlanReport  # the first plan
-    informed: PlanReport | None  # the plan knowing the events (None when it could not be made)
-    informed_error: str
-    runs: dict[str, list[Run]]
 
 
 @dataclass
@@ -118,6 +74,8 @@ class _Context:
     seed: int
     worlds: dict[tuple[tuple[str, bool], ...], tuple[World, LandmarkVisibility]] = field(default_factory=dict)
     localisation: Localisation | None = None  # who localises the robots (tmpnav's EKF when None)
+    server: str | None = None  # the closed loop's plans come from tmpnav serve at this URL
+    token: str | None = None  # the service's --token
 
     @property
     def scenario(self) -> Scenario:
@@ -162,14 +120,17 @@ def closed_loop(
     options: PlanOptions | None = None,
     progress: Callable[[str], None] | None = None,
     localisation: Localisation | None = None,
+    server: str | None = None,
+    token: str | None = None,
 ) -> LoopResult:
     """Plan ``path``, then execute it ``sessions`` times in the three :data:`MODES`, the robots
-    localised as ``localisation`` says (tmpnav's EKF when None)."""
+    localised as ``localisation`` says (tmpnav's EKF when None). With ``server``, the closed
+    loop's plans come from the ``tmpnav serve`` at that URL (:mod:`tmpnav.replan.remote`)."""
     from tmpnav import pipeline
 
     options = options or pipeline.PlanOptions()
     loaded = pipeline.load_world(path, options.overrides)
-    ctx = _Context(path, loaded, options, events, seed, localisation=localisation)
+    ctx = _Context(path, loaded, options, events, seed, localisation=localisation, server=server, token=token)
     planned = pipeline.plan(path, options, loaded=loaded)
     informed, why = _informed(ctx, planned)
     say = progress or (lambda _: None)
@@ -179,7 +140,7 @@ def closed_loop(
         runs["blind"].append(_execute(ctx, planned, s, replanning=False))
         if informed is not None:
             runs["knowing the events"].append(_execute(ctx, informed, s, replanning=False, known=True))
-    return LoopResult(events, planned, informed, why, runs)
+    return LoopResult(events, planned, informed, why, runs, server)
 
 
 def _informed(ctx: _Context, planned: PlanReport) -> tuple[PlanReport | None, str]:
@@ -262,8 +223,9 @@ def _execute(
     if known:  # the plan knew every change of the problem: the world is as the events leave it
         for e in ctx.events.events:
             _changes(e, doors, down, add, remove)
+    source = _Remote(ctx) if replanning and ctx.server else _Local(ctx, plan)
     session = Session(
-        scenario, ctx.loaded[1], queues(plan), ctx.draws(s, plan), ctx.world({})[1], True, ctx.localisation, s
+        scenario, ctx.loaded[1], source.first(plan), ctx.draws(s, plan), ctx.world({})[1], True, ctx.localisation, s
     )
     if doors:
         session.set_world(*ctx.world(doors))
@@ -271,10 +233,10 @@ def _execute(
         session.set_down(r)
     pending = [e for e in ctx.events.events if not (known and e.replans)]
     restore: list[tuple[int, int]] = []  # (step, robot index) at which a stop or slowdown ends
-    current, start, checked = plan, 0, 0
+    start, checked = 0, 0
     replans: list[Replan] = []
     dropped: list[str] = []
-    at_start = _at_start(plan)  # goals a robot visits by starting in them (revision by revision)
+    at_start = source.at_start  # goals a robot visits by starting in them (revision by revision)
     late_steps = max(1, round(ctx.events.late / dt))
 
     def due() -> bool:
@@ -323,19 +285,19 @@ def _execute(
         began = time.perf_counter()
         unreachable: tuple[str, ...] = ()
         try:
-            revised = _plan(ctx, current, team, _incumbent(session, down, set(team.visited or ()) | set(remove)))
-        except NothingLeft:
+            revised, unreachable, starts = source.revise(
+                team, _incumbent(session, down, set(team.visited or ()) | set(remove))
+            )
+        except (NothingLeft, NothingLeftRemote):
             session.adopt({})
             outcome = "nothing left"
         except TmpnavError as err:
             outcome = f"failed: {err}"
         else:
-            assert revised.revision is not None
-            unreachable = tuple(room for room, _why in revised.revision.unreachable)
             dropped += [x for x in unreachable if x not in dropped]
-            session.adopt(queues(revised))
-            at_start += [x for x in _at_start(revised) if x not in at_start]
-            current, start, outcome = revised, now, "planned"
+            session.adopt(revised)
+            at_start += [x for x in starts if x not in at_start]
+            start, outcome = now, "planned"
         latency = time.perf_counter() - began
         replans.append(Replan(s, now * dt, "; ".join(reasons), latency, outcome, unreachable))
         say(f"session {s + 1}: t = {now * dt:.1f} s, {'; '.join(reasons)}: replanned in {latency:.1f} s ({outcome})")
@@ -343,6 +305,51 @@ def _execute(
         dropped = [room for room, _ in plan.revision.unreachable]
     mode = MODES[0] if replanning else MODES[2] if known else MODES[1]
     return _run(ctx, session, s, mode, add, remove, down, dropped, replans, at_start)
+
+
+Queues = dict[str, tuple[QueuedMove, ...]]
+
+
+class _Local:
+    """The closed loop's revisions planned in this process, as ``tmpnav replan`` plans them."""
+
+    def __init__(self, ctx: _Context, plan: PlanReport):
+        self.ctx, self.current = ctx, plan
+        self.at_start = _at_start(plan)
+
+    def first(self, plan: PlanReport) -> Queues:
+        return queues(plan)
+
+    def revise(
+        self, team: TeamState, incumbent: tuple[tuple[tuple[str, str], ...], ...]
+    ) -> tuple[Queues, tuple[str, ...], list[str]]:
+        """The revision's queues, the rooms it names out of reach and those its robots start in."""
+        revised = _plan(self.ctx, self.current, team, incumbent)
+        assert revised.revision is not None
+        self.current = revised
+        return queues(revised), tuple(room for room, _why in revised.revision.unreachable), _at_start(revised)
+
+
+class _Remote:
+    """The closed loop's plan and revisions asked of ``tmpnav serve`` (:mod:`tmpnav.replan.remote`):
+    a plan of its own for each session, as the team's state changes."""
+
+    def __init__(self, ctx: _Context):
+        assert ctx.server is not None
+        self.ctx, self.plans = ctx, RemotePlans.at(ctx.server, ctx.token)
+        self.at_start: list[str] = []
+
+    def first(self, plan: PlanReport) -> Queues:
+        doc = self.plans.first(plan.roadmap.fingerprint, str(self.ctx.path))
+        self.at_start = at_start_of_document(doc)
+        return queues_of_document(doc)
+
+    def revise(
+        self, team: TeamState, incumbent: tuple[tuple[tuple[str, str], ...], ...]
+    ) -> tuple[Queues, tuple[str, ...], list[str]]:
+        """As :meth:`_Local.revise`; the service starts its search from its own plan, not ``incumbent``."""
+        doc = self.plans.revise(team)
+        return queues_of_document(doc), unreachable_of_document(doc), at_start_of_document(doc)
 
 
 def _lateness(session: Session, down: list[str]) -> int:
@@ -467,120 +474,3 @@ def _run(
         sum(trace.contacts.values()),
         replans,
     )
-
-
-def summary(result: LoopResult) -> list[str]:
-    """What ``tmpnav simulate --events`` prints: the replans, the goals, the makespan and cost of
-    the three modes."""
-    closed = result.runs["closed loop"]
-    n = len(closed)
-    events = result.events
-    lines = [
-        f"closed loop: {n} session(s) with {len(events.events)} event(s) from {events.source.name} "
-        f"(replanning at each change of the problem and when a robot is {events.late:g} s late)"
-    ]
-    replans = [p for r in closed for p in r.replans]
-    if replans:
-        latencies = np.array([p.latency for p in replans])
-        failed = sum(p.outcome.startswith("failed") for p in replans)
-        lines.append(
-            f"  replans: {len(replans)} ({len(replans) / n:.1f} per session), latency median "
-            f"{np.median(latencies):.2f} s, max {latencies.max():.2f} s" + (f"; {failed} failed" if failed else "")
-        )
-        reasons: dict[str, int] = {}
-        for p in replans:
-            for why in p.reason.split("; "):
-                key = "lateness" if why.startswith("late by") else why
-                reasons[key] = reasons.get(key, 0) + 1
-        lines.append("  reasons: " + ", ".join(f"{k} {v}" for k, v in reasons.items()))
-    else:
-        lines.append("  replans: none")
-    for mode in MODES:
-        runs = result.runs[mode]
-        if not runs:
-            lines.append(f"  {mode}: no plan ({result.informed_error})")
-            continue
-        lines.append("  " + _mode_line(mode, runs))
-    return lines
-
-
-def _mode_line(mode: str, runs: list[Run]) -> str:
-    goals = np.mean([len(r.goals) for r in runs])
-    done = np.mean([len(r.done) for r in runs])
-    dropped = np.mean([len(r.dropped) for r in runs])
-    lost = np.mean([len(r.lost) for r in runs])
-    twice = sum(len(r.twice) for r in runs)
-    spans = np.array([r.makespan for r in runs])
-    costs = np.array([r.cost for r in runs])
-    walls = sum(r.wall_hits > 0 for r in runs)
-    touch = sum(r.contacts > 0 for r in runs)
-    return (
-        f"{mode}: goals done {done:.1f} of {goals:.1f}, dropped {dropped:.1f}, lost {lost:.1f}, twice {twice}; "
-        f"makespan median {np.median(spans):.1f} s; cost median {np.median(costs):.1f}; "
-        f"executions with a wall hit {walls}/{len(runs)}, with a contact {touch}/{len(runs)}"
-    )
-
-
-def runs_csv(result: LoopResult) -> str:
-    """One row per session and mode (loop.csv)."""
-    rows = ["mode,session,goals,done,dropped,lost,twice,makespan_s,cost,wall_hit_steps,contact_steps,replans"]
-    for mode in MODES:
-        for r in result.runs[mode]:
-            rows.append(
-                f"{mode},{r.session + 1},{len(r.goals)},{len(r.done)},{len(r.dropped)},{len(r.lost)},{len(r.twice)},"
-                f"{r.makespan:.6g},{r.cost:.6g},{r.wall_hits},{r.contacts},{len(r.replans)}"
-            )
-    return "\n".join(rows) + "\n"
-
-
-def replans_csv(result: LoopResult) -> str:
-    """One row per replan of the closed loop (replans.csv)."""
-    rows = ["session,time_s,reason,latency_s,outcome,unreachable"]
-    for r in result.runs["closed loop"]:
-        for p in r.replans:
-            rows.append(
-                f"{p.session + 1},{p.time:.6g},{_quoted(p.reason)},{p.latency:.4f},{_quoted(p.outcome)},"
-                f"{' '.join(p.unreachable)}"
-            )
-    return "\n".join(rows) + "\n"
-
-
-def _quoted(text: str) -> str:
-    return '"' + text.replace('"', '""') + '"'
-
-
-def document(result: LoopResult) -> dict[str, Any]:
-    """The closed loop's results as JSON data (loop.json)."""
-    return {
-        "events": str(result.events.source),
-        "late_s": result.events.late,
-        "planned_makespan_s": result.planned.schedule.makespan,
-        "informed_makespan_s": result.informed.schedule.makespan if result.informed is not None else None,
-        "runs": [
-            {
-                "mode": r.mode,
-                "session": r.session + 1,
-                "goals": list(r.goals),
-                "done": list(r.done),
-                "twice": list(r.twice),
-                "dropped": list(r.dropped),
-                "lost": list(r.lost),
-                "makespan_s": r.makespan,
-                "cost": r.cost,
-                "wall_hit_steps": r.wall_hits,
-                "contact_steps": r.contacts,
-                "replans": [
-                    {
-                        "time_s": p.time,
-                        "reason": p.reason,
-                        "latency_s": p.latency,
-                        "outcome": p.outcome,
-                        "unreachable": list(p.unreachable),
-                    }
-                    for p in r.replans
-                ],
-            }
-            for mode in MODES
-            for r in result.runs[mode]
-        ],
-    }

@@ -54,6 +54,9 @@ TIME_TOL = 1e-6
 class NothingLeft(InputError):
     """The state leaves no goal to plan (every one done, removed or out of reach)."""
 
+    #: the RFC 9457 problem type of tmpnav serve's answer to such a state (docs/serve.md, "Errors")
+    problem_type = "tmpnav:nothing-left"
+
 
 def revise(
     scenario: Scenario, world_of: Any, plan_path: Path, doc: dict[str, Any], state: TeamState, within: bool = True

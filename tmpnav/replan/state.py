@@ -70,6 +70,49 @@ class TeamState:
         return tuple(r.name for r in self.robots.values() if r.down)
 
 
+def state_document(team: TeamState) -> dict[str, Any]:
+    """``team`` as a state file's mapping (the module docstring's format, JSON-ready): what
+    ``tmpnav simulate --events --server`` posts to ``tmpnav serve``. Reading it back gives
+    ``team`` (its ``source`` aside)."""
+    robots: dict[str, Any] = {}
+    for name, r in team.robots.items():
+        if r.down:
+            robots[name] = {"status": "down"}
+            continue
+        entry: dict[str, Any] = {}
+        if r.pose is not None:
+            entry["pose"] = [float(v) for v in r.pose]
+        if r.covariance is not None:
+            entry["covariance"] = [[float(v) for v in row] for row in r.covariance]
+        if r.interrupted:
+            entry["interrupted"] = True
+        robots[name] = entry
+    jobs = {j.room: j for j in team.jobs}
+    add: list[Any] = [name if name not in jobs else _job_entry(jobs[name]) for name in team.add]
+    doc: dict[str, Any] = {"time": float(team.time), "robots": robots}
+    if team.visited is not None:
+        doc["visited"] = list(team.visited)
+    if team.doors:
+        doc["doors"] = {name: "open" if is_open else "closed" for name, is_open in team.doors.items()}
+    if add or team.remove:
+        doc["goals"] = {"add": add, "remove": list(team.remove)}
+    return doc
+
+
+def _job_entry(job: Job) -> dict[str, Any]:
+    """A ``goals.add`` entry with the job's fields, in the scenario's units (s, m, rad)."""
+    entry: dict[str, Any] = {"name": job.room, "service": job.service}
+    if job.robots:
+        entry["robots"] = list(job.robots)
+    if job.pose is not None:
+        entry["pose"] = list(job.pose)
+    if job.window is not None:
+        entry["window"] = list(job.window)
+    if job.penalty is not None:
+        entry["penalty"] = job.penalty
+    return entry
+
+
 def read_state(path: Path) -> TeamState:
     """The team's state in ``path`` (YAML or JSON); InputError naming the file and key otherwise."""
     return _state(path, read_document(path, "state"))

@@ -51,8 +51,13 @@ def _describe_problems(app: FastAPI) -> None:
 
     def openapi() -> dict[str, Any]:
         if app.openapi_schema is None:
-            doc = get_openapi(title=app.title, version=app.version, summary=app.summary,
-                              description=app.description, routes=app.routes)
+            doc = get_openapi(
+                title=app.title,
+                version=app.version,
+                summary=app.summary,
+                description=app.description,
+                routes=app.routes,
+            )
             doc.setdefault("components", {}).setdefault("schemas", {})["Problem"] = models.Problem.model_json_schema()
             app.openapi_schema = doc
         return app.openapi_schema
@@ -117,8 +122,13 @@ async def _answer(request: Request, service: Service, job_id: str, wait: bool, c
 
 
 def _plans(app: FastAPI, service: Service) -> None:
-    @app.post("/plans", status_code=201, response_model=models.PlanInfo, tags=["plans"],
-              responses={202: {"model": models.Job, "description": "with wait: false, the job planning it"}})
+    @app.post(
+        "/plans",
+        status_code=201,
+        response_model=models.PlanInfo,
+        tags=["plans"],
+        responses={202: {"model": models.Job, "description": "with wait: false, the job planning it"}},
+    )
     async def plan(request: Request, body: models.PlanRequest) -> JSONResponse:
         """Plan a shift: the scenario's goals, or those of the body (its `goals` section)."""
         job = await asyncio.to_thread(service.plan, body.goals, body.time_budget)
@@ -199,8 +209,12 @@ def _view(app: FastAPI, service: Service) -> None:
     @app.get("/health", tags=["service"])
     def health() -> dict[str, Any]:
         """The service is up: its site, version and how many plans it holds."""
-        return {"status": "ok", "site": service.site.scenario.name, "version": __version__,
-                "plans": len(service.store.plans)}
+        return {
+            "status": "ok",
+            "site": service.site.scenario.name,
+            "version": __version__,
+            "plans": len(service.store.plans),
+        }
 
     @app.get("/site", tags=["service"])
     def site() -> dict[str, Any]:

@@ -28,8 +28,12 @@ class Guard:
             return
         public = scope["method"] == "GET" and (scope["path"] == "/" or scope["path"].startswith("/view/"))
         if self.token is not None and not public and not self._authorised(scope):
-            await _send(send, 401, "a token is required: send the header 'Authorization: Bearer <token>' "
-                        "(the view: ?token=<token>)", {"www-authenticate": 'Bearer realm="tmpnav"'})
+            await _send(
+                send,
+                401,
+                "a token is required: send the header 'Authorization: Bearer <token>' (the view: ?token=<token>)",
+                {"www-authenticate": 'Bearer realm="tmpnav"'},
+            )
             return
         declared = dict(scope.get("headers") or []).get(b"content-length")
         if declared is not None and (not declared.isdigit() or int(declared) > self.max_body):

@@ -1,6 +1,6 @@
 """The service's OpenAPI document, as shipped in docs/openapi.json (a test keeps it current):
 
-    python -m tmpnav.serve.openapi > docs/openapi.json
+python -m tmpnav.serve.openapi > docs/openapi.json
 """
 
 from __future__ import annotations

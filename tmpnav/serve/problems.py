@@ -22,6 +22,7 @@ from tmpnav.errors import (
     UnsolvableError,
     WindowError,
 )
+from tmpnav.replan.revise import NothingLeft
 from tmpnav.serve.site import Cancelled
 
 #: an error class -> the HTTP status of its answer; the first class the error is an instance of
@@ -60,7 +61,10 @@ def of_error(err: TmpnavError) -> dict[str, Any]:
     """The problem details of a library error: its one-line messages, its exit code."""
     status = next((code for kind, code in STATUS if isinstance(err, kind)), 500)
     lines = [str(p) for p in err.problems] if isinstance(err, ScenarioError) else [str(err)]
-    return problem(status, lines, err.exit_code)
+    doc = problem(status, lines, err.exit_code)
+    if isinstance(err, NothingLeft):  # a state with no goal left: a client's loop ends, it did not fail
+        doc["type"] = NothingLeft.problem_type
+    return doc
 
 
 def internal(err: BaseException) -> dict[str, Any]:

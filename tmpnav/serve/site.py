@@ -57,8 +57,15 @@ class Watch:
 
     def search(self, seconds: float, best: float, bound: float | None, what: str) -> None:
         self.check()
-        self.tell({"stage": "search", "seconds": round(seconds, 3), "best": _finite(best), "bound": _finite(bound),
-                   "what": what})
+        self.tell(
+            {
+                "stage": "search",
+                "seconds": round(seconds, 3),
+                "best": _finite(best),
+                "bound": _finite(bound),
+                "what": what,
+            }
+        )
 
 
 class Site:

@@ -101,9 +101,7 @@ class Store:
     def add_revision(self, plan: StoredPlan, state: Any, revision: dict[str, Any]) -> int:
         """Store the next revision of ``plan`` with the state it was planned from; its number."""
         number = plan.latest + 1
-        write_files(
-            plan.folder, {f"rev-{number:04d}.state.json": _json(state), revision_name(number): _json(revision)}
-        )
+        write_files(plan.folder, {f"rev-{number:04d}.state.json": _json(state), revision_name(number): _json(revision)})
         plan.latest, plan.current = number, revision
         return number
 
