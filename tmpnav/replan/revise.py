@@ -38,7 +38,7 @@ import numpy as np
 
 from tmpnav.errors import InputError
 from tmpnav.replan.state import TeamState
-from tmpnav.replan.stations import check_jobs, in_service, interrupted
+from tmpnav.replan.stations import check_jobs, in_service, interrupted, standing_service
 from tmpnav.results import Revision
 from tmpnav.roadmap.reach import free_space_joins
 from tmpnav.types import Goals, Pose, RobotSpec, Scenario
@@ -137,6 +137,7 @@ def revise(
             + (f" ({len(unreachable)} no robot can reach any more)" if unreachable else "")
             + "; expected goals not yet done"
         )
+    held = (*held, *standing_service(goals, robots, world, held))
     roadmap = replace(revised.roadmap, poses=_poses(goals))
     goals = replace(goals, held=tuple((r, s) for r, _, s in held))
     revised = replace(revised, goals=goals, roadmap=roadmap)

@@ -12,7 +12,7 @@ import numpy as np
 
 from tmpnav.errors import InputError
 from tmpnav.replan.state import TeamState
-from tmpnav.types import RobotSpec, Scenario
+from tmpnav.types import Goals, RobotSpec, Scenario
 from tmpnav.world import World
 
 #: seconds by which two times on the plan's clock may differ and still count as one
@@ -58,6 +58,32 @@ def in_service(
         serving = _serving(doc, spec.name, t, inside)
         if serving is not None:
             out.append((spec.name, serving[0], serving[1] - t))
+    return tuple(out)
+
+
+def standing_service(
+    goals: Goals, robots: tuple[RobotSpec, ...], world: World, held: tuple[tuple[str, str, float], ...]
+) -> tuple[tuple[str, str, float], ...]:
+    """(robot, room, s) for each robot that stands in a goal room left to do whose job asks a
+    service it may do (driving through it on the way elsewhere when the team replans), and that
+    is not held already: a room where a robot stands is done, so the robot does its job there
+    first, waiting for the window to open and then serving (``goals`` on the revision's clock;
+    none where the window has closed). Without this the station would count done with its
+    service never done."""
+    out = []
+    busy = {robot for robot, _, _ in held} | {room for _, room, _ in held}
+    for spec in robots:
+        room = world.room_of([spec.pose.x, spec.pose.y])  # type: ignore[arg-type]
+        job = goals.job(room) if room is not None else None
+        if room is None or job is None or job.service <= 0 or spec.name in busy or room in busy:
+            continue
+        if room not in goals.all_rooms or not goals.may_visit(spec.name, room):
+            continue
+        wait = 0.0 if job.window is None else max(0.0, job.window[0])
+        if job.window is not None and job.window[1] < -TIME_TOL:
+            continue
+        out.append((spec.name, room, wait + job.service))
+        busy |= {spec.name, room}
     return tuple(out)
 
 
