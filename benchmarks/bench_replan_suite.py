@@ -119,7 +119,8 @@ def check(first: PlanReport, state: TeamState, rev: PlanReport) -> dict[str, str
     r = rev.revision
     out = {"goals": "ok", "windows": "ok", "services": "ok"}
     goals = first.scenario.goals
-    wanted = [x for x in (*goals.all_rooms, *state.add) if x not in state.remove]
+    dropped_ends = {x for robot, x in goals.ends if robot in r.down}  # a robot down: its end is dropped
+    wanted = [x for x in (*goals.all_rooms, *state.add) if x not in state.remove and x not in dropped_ends]
     unreachable = {room for room, _ in r.unreachable}
     entered: dict[str, int] = {}
     for a in rev.actions:

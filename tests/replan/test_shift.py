@@ -190,3 +190,21 @@ def test_the_progress_line_says_how_much_of_the_budget_the_run_had_spent(hall: P
     assert proc.returncode == 0, proc.stderr
     lines = [line for line in proc.stderr.splitlines() if line.startswith("search ")]
     assert lines and all(re.search(r"; the run at \d+\.\d s of its budget of 3 s\)$", line) for line in lines), lines
+
+
+def test_a_robot_standing_in_a_station_left_to_do_serves_it_first(hall: Planned, tmp_path: Path) -> None:
+    """At 1 s r1 stands in A (a 10 s job) and r2 in E (12 s, its window opening at 20 s), neither
+    done: a room where a robot stands is done, so each does its job there first (it waits for E's
+    window), instead of counting the station done with its service never done."""
+    state = "time: 1\nrobots:\n  r1: {pose: [3.0, 10.0, 1.57]}\n  r2: {pose: [3.0, 2.0, -1.57]}\n"
+    proc = hall.replan(tmp_path, state)
+    assert proc.returncode == 0, proc.stderr
+    doc = read_revision(tmp_path)
+    held = doc["revision"]["held"]
+    assert held["r1"] == {"room": "A", "seconds": pytest.approx(10.0)}
+    assert held["r2"] == {"room": "E", "seconds": pytest.approx(19.0 + 12.0)}
+    for robot, seconds in (("r1", 10.0), ("r2", 31.0)):
+        ahead = moves_of(doc, robot)
+        assert not ahead or ahead[0]["start"] >= seconds - 1e-9
+    entered = [m["to"] for r in doc["schedule"]["robots"] for m in moves_of(doc, r)]
+    assert "A" not in entered and "E" not in entered
