@@ -51,6 +51,8 @@ HEAVY: dict[str, float] = {
     "tests/serve/test_service.py": 60,
     "tests/serve/test_restart.py": 50,
     "tests/serve/test_view.py": 45,
+    "tests/serve/test_closed_loop.py": 40,  # a real `tmpnav serve` and a closed-loop session against it
+    "tests/execution/test_moves.py": 25,  # one plan of the replan tests' world
 }
 
 
