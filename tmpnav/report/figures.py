@@ -215,10 +215,10 @@ def draw_stations(ax: Axes, scenario: Scenario) -> None:
         ax.annotate(
             station.name,
             (x, y),
-            xytext=(4, -4),
+            xytext=(-5, 5),  # above left: a plan's step badges take the lower right
             textcoords="offset points",
-            ha="left",
-            va="top",
+            ha="right",
+            va="bottom",
             fontsize=8,
             color="#7a5c00",
             zorder=3,
