@@ -119,3 +119,13 @@ def test_the_roadmap_holds_each_station_pose_as_its_node(tmp_path: Path) -> None
         assert np.allclose(roadmap.nodes[node], s["pose"][:2])
     # the places keep their sampled instantiations
     assert len(roadmap.instantiations["A"]) == 2
+
+
+def test_a_point_at_a_station_lies_in_its_place(tmp_path: Path) -> None:
+    """room_of gives the room or place (never a station, which shares its place's outline), and
+    place_of the place a goal lies in: what a replan compares a robot's pose with."""
+    scenario, _ = load_partial(write_yaml(tmp_path / "scenario.yaml", with_stations()))
+    assert scenario is not None
+    world = build(scenario)
+    assert world.room_of(np.array([4.0, 4.5])) == "A" == world.place_of("A-east")
+    assert world.place_of("A") == "A" and world.place_of("dock2") == "hall"
