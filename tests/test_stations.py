@@ -1,7 +1,7 @@
 """Stations end to end: a plan of two places holding five stations and a dock station (the
 fixture tests/fixtures/stations.yaml) names every station in plan.json, the schedule and the
-nav2 files, and reaches each at its own pose. The schema's and the roadmap's parts are tested
-in tests/scenario/test_stations.py."""
+nav2 files, and reaches each at its own pose; its replan holds a robot in service at a station.
+The schema's and the roadmap's parts are tested in tests/scenario/test_stations.py."""
 
 from __future__ import annotations
 
@@ -51,3 +51,22 @@ def test_a_plan_names_every_station_and_reaches_its_pose(tmp_path: Path) -> None
     schedule = yaml.safe_load((out / "nav2" / "schedule.yaml").read_text())
     assert sorted(m["to"] for m in schedule["moves"]) == sorted(poses)
     assert (out / "plan.png").stat().st_size > 0
+    # a replan with r1 down: r2, at B1 in its service then, finishes it; the stations left are planned
+    state = tmp_path / "state.yaml"
+    serving = next(m for m in doc["schedule"]["robots"]["r2"]["moves"] if m["to"] == "B1")
+    t = serving["end"] + serving["service"] - 1.0
+    state.write_text(f"time: {t}\nrobots:\n  r1: {{status: down}}\n")
+    revised = tmp_path / "rev"
+    replan = ("replan", str(FIXTURE), "--plan", str(out / "plan.json"), "--state", str(state))
+    proc = subprocess.run(
+        [sys.executable, "-m", "tmpnav", *replan, *cache, "-o", str(revised)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "r2 at B1 for 1.0 s" in proc.stdout
+    rev = json.loads((revised / "plan.json").read_text())
+    reached = {m["to"] for r in doc["schedule"]["robots"].values() for m in r["moves"] if m["end"] <= t}
+    assert {m["to"] for a in rev["actions"] for m in a["moves"]} == set(poses) - reached

@@ -63,7 +63,8 @@ def validate(scenario: Path) -> None:
         raise ScenarioError(problems)
     rows, cols = world.grid.shape
     click.echo(
-        f"{scenario}: ok: {len(sc.rooms)} rooms, {len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
+        f"{scenario}: ok: {len(sc.places)} rooms{f', {len(sc.stations)} stations' if sc.stations else ''}, "
+        f"{len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
         f"{len(sc.robots)} robots, map {cols}x{rows} cells of {world.grid.resolution:g} m"
     )
     warn_scenario(sc)
