@@ -42,11 +42,10 @@ def station(which: str, /, **values: Any) -> Callable[[dict[str, Any]], None]:
 
 
 def problems_of(tmp_path: Path, doc: dict[str, Any]) -> list[Problem]:
-    """The load stage's problems, then (when it loads) the world's checks."""
+    """The load stage's problems and the world's checks of what loaded, as `tmpnav validate`
+    reports them all: a bad station must not be reported twice."""
     scenario, problems = load_partial(write_yaml(tmp_path / "scenario.yaml", doc))
-    if problems or scenario is None:
-        return problems
-    return check(scenario, build(scenario))
+    return problems + ([] if scenario is None else check(scenario, build(scenario)))
 
 
 def only(problems: list[Problem], path: str) -> Problem:

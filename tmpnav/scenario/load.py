@@ -267,12 +267,17 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
     def sensor(s: dict[str, Any]) -> RangeBearingSensor:
         return RangeBearingSensor(s["range"], s["fov"], s["sigma_range"], s["sigma_bearing"])
 
+    rooms = _rooms(d)
+    stations = {r.name for r in rooms if r.place is not None}
+    # a station left out (its name, place or pose reported) takes its job along: no later check
+    # should read it as a room's job
+    jobs = [j for j in d["goals"]["jobs"] if j.get("place") is None or j["name"] in stations]
     return Scenario(
         name=d["name"] or doc.path.stem,
         source=doc.path.resolve(),
         description=d["description"],
         map=map_spec,
-        rooms=_rooms(d),
+        rooms=rooms,
         doors=tuple(
             Door(x["name"], x["segment"], x["state"] == "open", x["thickness"] or default_thickness) for x in d["doors"]
         ),
@@ -294,7 +299,7 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
         cost=CostWeights(d["cost"]["M_u"], d["cost"]["M_G"], d["cost"]["M_Sigma"], d["cost"]["M_T"]),
         roadmap=RoadmapParams(
             **d["roadmap"],
-            poses=tuple((j["name"], *j["pose"][:2]) for j in d["goals"]["jobs"] if j["pose"] is not None),
+            poses=tuple((j["name"], *j["pose"][:2]) for j in jobs if j["pose"] is not None),
         ),
         goals=Goals(
             visit=tuple(d["goals"]["visit"]),
@@ -308,7 +313,7 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
                     None if j["window"] is None else tuple(j["window"]),
                     j["penalty"],
                 )
-                for j in d["goals"]["jobs"]
+                for j in jobs
             ),
             ends=tuple(d["goals"]["ends"].items()),
         ),
