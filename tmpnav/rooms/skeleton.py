@@ -62,14 +62,15 @@ def scenario_yaml(proposal: Proposal, name: str, map_ref: str, map_shown: str) -
 
 def _stations_example(p: Proposal) -> list[str]:
     """Commented lines that show how to give a room or place several stations (docs/scenario.md)."""
-    place = p.goals[0] if p.goals else "R1"
+    place = p.goals[0] if p.goals else p.usable_rooms[0].name
+    x, y = next(r.spot for r in p.usable_rooms if r.name == place)
     return [
         "  # stations: a room or place may hold several named goal poses, each a goal of its own with its",
         "  # job (service, window, robots, penalty); name them in visit, goals.robots or goals.ends (a dock)",
         "  # in place of the room. Put x, y (inside the place, clear of walls) and the heading to stop at:",
         f"  # visit: [{place}-a, {place}-b]",
         "  # jobs:",
-        f"  #   - {{name: {place}-a, place: {place}, pose: [x, y, 0 deg], service: 20 s}}",
+        f"  #   - {{name: {place}-a, place: {place}, pose: [{x:.2f}, {y:.2f}, 0 deg], service: 20 s}}  # roomiest spot",
         f"  #   - {{name: {place}-b, place: {place}, pose: [x, y, 90 deg], window: [0 s, 300 s]}}",
     ]
 
