@@ -20,8 +20,8 @@ class Doc(Protocol):
 
 
 def cross_references(doc: Doc, data: dict[str, Any]) -> list[Problem]:
-    """Names must be unique across rooms and robots (both are PDDL objects); goals must
-    name defined rooms and robots."""
+    """Names must be unique across rooms, stations and robots (all are PDDL objects); goals
+    must name defined rooms, stations and robots."""
     problems = []
     # declared names, including those of items with other problems (reported already):
     # a goal naming a robot whose pose is bad should not also be told the robot does not exist
