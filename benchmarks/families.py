@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/families.py office --rooms 40 --robots 4 --seed 3 -o office.yaml
     .venv/bin/python benchmarks/families.py warehouse --rooms 30 --robots 4 --seed 1 -o hall.yaml
+    .venv/bin/python benchmarks/families.py warehouse --rooms 10 --stations 40 --robots 4 -o stations.yaml
 
 Two kinds, each a scenario file that ``tmpnav plan`` takes as it is (default roadmap settings):
 
@@ -12,7 +13,9 @@ Two kinds, each a scenario file that ``tmpnav plan`` takes as it is (default roa
   of the corridors.
 * ``warehouse``: a hall with rows of double racks (2.4 m deep, with gaps), aisles of 2.6-3.4 m
   between them, a main aisle along the south and north walls, docks along the south wall;
-  the goal places are stretches of aisle and the docks; landmarks on rack ends.
+  the goal places are stretches of aisle and the docks; landmarks on rack ends. With
+  ``--stations N``, N stations spread over the places (pick faces along the racks, charging
+  spots in the docks) are the goals instead.
 
 Both carry the shipped scenarios' lidar unless ``--no-lidar``; the goals are every room or
 place. :func:`office` and :func:`warehouse` return the scenario as a dict (benchmarks/bench_families.py
@@ -136,8 +139,31 @@ def office(
     return doc
 
 
-def warehouse(rooms: int, robots: int, seed: int, lidar: bool = True) -> dict[str, Any]:
-    """A rack hall with ``rooms`` goal places: stretches of aisle and docks (module docstring)."""
+def stations_in(place: dict[str, Any], k: int) -> list[dict[str, Any]]:
+    """``k`` stations (``goals.jobs`` with a place) evenly along the long axis of a box-shaped
+    place, alternately against either long side (0.6 m in, facing it: the rack's pick faces
+    of an aisle, a dock's charging spots), named ``<place>-<i>``."""
+    (x0, y0), _, (x1, y1), _ = place["polygon"]
+    along_x = x1 - x0 >= y1 - y0
+    length, across = (x1 - x0, y1 - y0) if along_x else (y1 - y0, x1 - x0)
+    offset = max(0.0, across / 2 - 0.6)
+    out = []
+    for i in range(k):
+        t = (i + 0.5) / k * length
+        side = 1 if i % 2 == 0 else -1
+        if along_x:
+            x, y, heading = x0 + t, (y0 + y1) / 2 + side * offset, 90 * side
+        else:
+            x, y, heading = (x0 + x1) / 2 + side * offset, y0 + t, 0 if side > 0 else 180
+        pose = [round(x, 3), round(y, 3), f"{heading} deg"]
+        out.append({"name": f"{place['name']}-{i + 1}", "place": place["name"], "pose": pose})
+    return out
+
+
+def warehouse(rooms: int, robots: int, seed: int, lidar: bool = True, stations: int = 0) -> dict[str, Any]:
+    """A rack hall with ``rooms`` goal places: stretches of aisle and docks (module docstring);
+    with ``stations``, that many stations spread over the places (:func:`stations_in`) are the
+    goals instead of the places."""
     rng = np.random.default_rng(seed)
     docks = max(2, rooms // 5)
     per_aisle = 2
@@ -192,9 +218,21 @@ def warehouse(rooms: int, robots: int, seed: int, lidar: bool = True) -> dict[st
         "robots": robot_list,
         "goals": {"visit": [p["name"] for p in places]},
     }
+    if stations:
+        jobs = [j for i, p in enumerate(places) for j in stations_in(p, _share(stations, len(places), i))]
+        doc["name"] = f"warehouse-{len(jobs)}stations-{len(places)}places-{robots}robots-seed{seed}"
+        doc["description"] = (
+            f"Generated rack hall: {len(jobs)} stations in {len(places)} places, {robots} robots, seed {seed}"
+        )
+        doc["goals"] = {"visit": [j["name"] for j in jobs], "jobs": jobs}
     if lidar:
         doc["models"] = {"range_sensor": dict(LIDAR)}
     return doc
+
+
+def _share(total: int, parts: int, i: int) -> int:
+    """Part ``i`` of ``total`` split as evenly as it goes into ``parts``."""
+    return total // parts + (1 if i < total % parts else 0)
 
 
 KINDS = {"office": office, "warehouse": warehouse}
@@ -212,9 +250,11 @@ def main() -> None:
     parser.add_argument("--robots", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--no-lidar", action="store_true")
+    parser.add_argument("--stations", type=int, default=0, help="warehouse: stations over the places, the goals")
     parser.add_argument("-o", "--output", type=Path, required=True)
     args = parser.parse_args()
-    doc = KINDS[args.kind](args.rooms, args.robots, args.seed, lidar=not args.no_lidar)
+    extra = {"stations": args.stations} if args.stations else {}
+    doc = KINDS[args.kind](args.rooms, args.robots, args.seed, lidar=not args.no_lidar, **extra)
     print(f"wrote {write(doc, args.output)}")
 
 

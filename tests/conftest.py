@@ -44,6 +44,7 @@ HEAVY: dict[str, float] = {
     "tests/oracle/test_worker_lifetime.py": 19,
     "tests/rooms/test_segment.py": 18,
     "tests/test_closed_loop.py": 15,
+    "tests/test_stations.py": 30,  # one plan of five stations and a dock, its nav2 files, one replan
     "tests/replan/test_seeded.py": 90,  # seeded replans of a 9-station shift
     "tests/replan/test_shift.py": 90,
     "tests/execution/test_rpp.py": 40,  # one simulate of two-rooms

@@ -81,8 +81,13 @@ MapSpec = PolygonMap | RosMap
 
 @dataclass(frozen=True)
 class Room:
+    """A room or place of the map; or, with ``place``, a station: a goal of its own at one pose
+    inside the room ``place`` (a job's ``place`` and ``pose``, ``goals.jobs``), whose polygon is
+    its place's and whose one pose instantiation is its job's pose."""
+
     name: str
     polygon: Polygon
+    place: str | None = None  # a station: the room or place it stands in
 
 
 @dataclass(frozen=True)
@@ -504,6 +509,16 @@ class Scenario:
 
     def room(self, name: str) -> Room:
         return next(r for r in self.rooms if r.name == name)
+
+    @property
+    def places(self) -> tuple[Room, ...]:
+        """The rooms and places of the map, without the stations (what the map is cut into)."""
+        return tuple(r for r in self.rooms if r.place is None)
+
+    @property
+    def stations(self) -> tuple[Room, ...]:
+        """The stations: goals at one pose each inside a place (``goals.jobs`` with ``place``)."""
+        return tuple(r for r in self.rooms if r.place is not None)
 
 
 # --------------------------------------------------------------------------- roadmap

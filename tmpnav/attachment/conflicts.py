@@ -423,7 +423,7 @@ def _sidestepped(clock: TeamClock, res: Resolution, sidings: int) -> Iterator[Pl
         if others:
             yield (*plan[: move.step], *others, (mine,), *plan[move.step + 1 :])
         robot, origin, target = mine
-        rooms = [r for r in clock.scenario.rooms if r.name not in goals | {origin, target}]
+        rooms = [r for r in clock.scenario.places if r.name not in goals | {origin, target}]
         rooms.sort(key=lambda r: _distance(_centroid(r.polygon), conflict.where))
         for room in rooms[:sidings]:
             split = ((robot, origin, room.name),), *others, ((robot, room.name, target),)

@@ -62,8 +62,10 @@ def validate(scenario: Path) -> None:
     if problems := planner_problems(sc):
         raise ScenarioError(problems)
     rows, cols = world.grid.shape
+    n = len(sc.stations)
+    stations = "" if not n else f", {n} station{'s' * (n > 1)}"
     click.echo(
-        f"{scenario}: ok: {len(sc.rooms)} rooms, {len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
+        f"{scenario}: ok: {len(sc.places)} rooms{stations}, {len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
         f"{len(sc.robots)} robots, map {cols}x{rows} cells of {world.grid.resolution:g} m"
     )
     warn_scenario(sc)

@@ -6,6 +6,7 @@ as its own ``goals.jobs`` are."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -19,19 +20,25 @@ from tmpnav.world import World
 TIME_TOL = 1e-6
 
 
-def _serving(doc: dict[str, Any], robot: str, t: float, inside: str | None = None) -> tuple[str, float] | None:
+def _serving(
+    doc: dict[str, Any],
+    robot: str,
+    t: float,
+    inside: str | None = None,
+    place_of: Callable[[str], str] = lambda name: name,
+) -> tuple[str, float] | None:
     """Where ``robot`` is at its station at ``t`` in the plan (waiting for the window, then
     serving), and when it is free: (room, free); None when it is not at a station then. A
-    robot whose move under way ends in ``inside``, the room it stands in, is there already: it
-    ends its move, then waits and serves. A revision's own hold counts as a service at its
-    start room."""
+    robot whose move under way ends in ``inside``, the room it stands in (or a station of that
+    place: ``place_of``), is there already: it ends its move, then waits and serves. A
+    revision's own hold counts as a service at its start room."""
     entry = doc["schedule"]["robots"].get(robot)
     if entry is None:
         return None
     moves = entry["moves"]
     ended = [m for m in moves if m["end"] <= t + TIME_TOL]
     under_way = [m for m in moves if m["start"] <= t + TIME_TOL < m["end"]]
-    if under_way and inside is not None and under_way[0]["to"] == inside:
+    if under_way and inside is not None and place_of(under_way[0]["to"]) == inside:
         ended = under_way
     if ended:
         m = ended[-1]
@@ -55,7 +62,7 @@ def in_service(
         if given is not None and given.interrupted:
             continue
         inside = world.room_of([spec.pose.x, spec.pose.y])  # type: ignore[arg-type]
-        serving = _serving(doc, spec.name, t, inside)
+        serving = _serving(doc, spec.name, t, inside, world.place_of)
         if serving is not None:
             out.append((spec.name, serving[0], serving[1] - t))
     return tuple(out)
@@ -92,12 +99,12 @@ def interrupted(
 ) -> set[str]:
     """The stations whose service the state says was cut short at ``t`` (``interrupted: true``)
     by a robot that has left them: they are to be served again. A station the robot still
-    stands in is done (a room where a robot stands is)."""
+    stands in (or in the place of) is done (a room where a robot stands is)."""
     out = set()
     for spec in robots:
         given = state.robots.get(spec.name)
         serving = _serving(doc, spec.name, t) if given is not None and given.interrupted else None
-        if serving is not None and world.room_of([spec.pose.x, spec.pose.y]) != serving[0]:  # type: ignore[arg-type]
+        if serving is not None and world.room_of([spec.pose.x, spec.pose.y]) != world.place_of(serving[0]):  # type: ignore[arg-type]
             out.add(serving[0])
     return out
 
@@ -114,10 +121,11 @@ def check_jobs(scenario: Scenario, world: World, state: TeamState) -> None:
         if job.pose is not None:
             x, y, _ = job.pose
             radius = max((r.radius for r in scenario.robots if not job.robots or r.name in job.robots), default=0.0)
-            if world.room_of([x, y]) != job.room:  # type: ignore[arg-type]
+            room = world.place_of(job.room)  # a station's pose lies in its place
+            if world.room_of([x, y]) != room:  # type: ignore[arg-type]
                 raise InputError(
-                    f"{where}.pose: [{x:g}, {y:g}] is not inside room {job.room!r}; expected a goal pose inside the "
-                    "job's room"
+                    f"{where}.pose: [{x:g}, {y:g}] is not inside room {room!r}; expected a goal pose inside the "
+                    "job's room (a station's: its place)"
                 )
             if not bool(world.is_free(np.array([[x, y]]), radius)[0]):
                 raise InputError(

@@ -177,8 +177,8 @@ def localisability_colorbar(fig: Figure, ax: Axes, image: AxesImage) -> None:
 def draw_rooms(ax: Axes, scenario: Scenario, view: tuple[float, float, float, float] | None = None) -> None:
     """Rooms, each named in the top-left corner of its part inside ``view`` (xmin, ymin, xmax, ymax;
     None: the whole room), away from robots and paths; :func:`keep_labels_inside` then hides a
-    name that still sticks out of the axes."""
-    for room in scenario.rooms:
+    name that still sticks out of the axes. Stations are drawn at their poses (:func:`draw_stations`)."""
+    for room in scenario.places:
         poly = np.array(room.polygon)
         ax.add_patch(Polygon(poly, closed=True, facecolor="#fdf6e3", edgecolor="#b58900", lw=0.8, alpha=0.55, zorder=1))
         x0, y0 = poly[:, 0].min(), poly[:, 1].min()
@@ -197,6 +197,31 @@ def draw_rooms(ax: Axes, scenario: Scenario, view: tuple[float, float, float, fl
             color="#7a5c00",
             weight="bold",
             zorder=2,
+            gid=ROOM_LABEL,
+        )
+    draw_stations(ax, scenario)
+
+
+def draw_stations(ax: Axes, scenario: Scenario) -> None:
+    """Each station (``goals.jobs`` with a place) as a small square at its pose, a tick along its
+    heading, and its name beside it."""
+    for station in scenario.stations:
+        job = scenario.goals.job(station.name)
+        if job is None or job.pose is None:
+            continue
+        x, y, theta = job.pose
+        ax.plot([x], [y], marker="s", ms=5, mfc="#fdf6e3", mec="#7a5c00", mew=1.0, ls="none", zorder=3)
+        ax.plot([x, x + 0.35 * np.cos(theta)], [y, y + 0.35 * np.sin(theta)], color="#7a5c00", lw=1.0, zorder=3)
+        ax.annotate(
+            station.name,
+            (x, y),
+            xytext=(-5, 5),  # above left: a plan's step badges take the lower right
+            textcoords="offset points",
+            ha="right",
+            va="bottom",
+            fontsize=8,
+            color="#7a5c00",
+            zorder=3,
             gid=ROOM_LABEL,
         )
 

@@ -160,6 +160,8 @@ def _goals(report: PlanReport) -> JSON:
         }
     if goals.optional:
         out["dropped"] = list(dropped_goals(report))
+    if report.scenario.stations:  # station -> the room or place it stands in
+        out["stations"] = {r.name: r.place for r in report.scenario.stations}
     return out
 
 

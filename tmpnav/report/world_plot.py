@@ -36,7 +36,9 @@ def _robots_and_rooms(scenario: Scenario, magnify: int) -> str:
     sizes += ", ..." if len(scenario.robots) > 4 else ""
     drawn = f", drawn {magnify}x" if magnify > 1 else ""
     return (
-        f"{scenario.name}: {len(scenario.rooms)} rooms, {len(scenario.landmarks)} landmarks "
+        f"{scenario.name}: {len(scenario.places)} rooms, "
+        + (f"{len(scenario.stations)} stations, " if scenario.stations else "")
+        + f"{len(scenario.landmarks)} landmarks "
         f"(dashed: landmark sensor range), {len(scenario.robots)} robots (2σ start ellipses: {sizes}{drawn})"
     )
 

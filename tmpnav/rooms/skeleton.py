@@ -56,7 +56,23 @@ def scenario_yaml(proposal: Proposal, name: str, map_ref: str, map_shown: str) -
     ]
     if proposal.halls:
         parts[-1] += " (more goals take longer to plan: see `tmpnav plan --help`, --search)"
+    parts += _stations_example(proposal)
     return "\n".join(parts) + "\n"
+
+
+def _stations_example(p: Proposal) -> list[str]:
+    """Commented lines that show how to give a room or place several stations (docs/scenario.md)."""
+    place = p.goals[0] if p.goals else p.usable_rooms[0].name
+    x, y = next(r.spot for r in p.usable_rooms if r.name == place)
+    return [
+        "  # stations: a room or place may hold several named goal poses, each a goal of its own with its",
+        "  # job (service, window, robots, penalty); name them in visit, goals.robots or goals.ends (a dock)",
+        "  # in place of the room. Put x, y (inside the place, clear of walls) and the heading to stop at:",
+        f"  # visit: [{place}-a, {place}-b]",
+        "  # jobs:",
+        f"  #   - {{name: {place}-a, place: {place}, pose: [{x:.2f}, {y:.2f}, 0 deg], service: 20 s}}  # roomiest spot",
+        f"  #   - {{name: {place}-b, place: {place}, pose: [x, y, 90 deg], window: [0 s, 300 s]}}",
+    ]
 
 
 def summary(p: Proposal) -> str:
@@ -97,7 +113,8 @@ Found {len(usable)} rooms, {len(p.doors)} doors, {len(p.landmarks)} landmark can
 4. robots: r1 is a placeholder (radius {ROBOT_RADIUS:g} m) at the roomiest spot of {p.robot_room}. Put your
    robots with their real start poses, radii and speeds.
 5. goals: pre-filled with the rooms nearest to r1 so that `tmpnav plan` runs as written.
-   Replace them with the rooms your robots must visit."""
+   Replace them with the rooms your robots must visit, or with stations: named poses inside
+   a room, several to a room (the comments under goals show how)."""
     return _comment(text)
 
 
@@ -125,7 +142,8 @@ Coordinates: metres, map frame. `tmpnav show THIS_FILE -o world.png` draws it. C
 4. robots: {robots} (radius {ROBOT_RADIUS:g} m) at the roomiest {spots} of {where}.
    Put your robots with their real start poses, radii and speeds; add more as r3, r4, ...
 5. goals: pre-filled with the {len(p.goals)} places nearest to the robots so that `tmpnav plan` runs as
-   written. Replace them with the places your robots must visit."""
+   written. Replace them with the places your robots must visit, or with stations: named poses
+   inside a place, several to a place (the comments under goals show how)."""
 
 
 def _comment(text: str) -> str:

@@ -491,8 +491,16 @@ JOB = Section(
     fields={
         "name": Field(
             Name(),
-            "the goal room (or place) of the job, named in goals.visit, goals.robots or goals.ends",
+            "the goal room (or place) of the job, or, with place, the name of a station: a goal of its own; "
+            "named in goals.visit, goals.robots or goals.ends",
             required=True,
+        ),
+        "place": Field(
+            Name(),
+            "makes the job a station: a named goal pose (pose, required) inside this room or place, which may "
+            "hold several; its name, unique among rooms, robots and stations, is then a goal as a room's is (the "
+            "roadmap holds its pose as a node; plans, schedules, plan.json, figures and nav2 files name it); "
+            "naming the place itself in the goals still means any pose in it",
         ),
         "service": Field(
             Number("time", minimum=0.0, maximum=MAX_SERVICE),
@@ -505,8 +513,8 @@ JOB = Section(
         ),
         "pose": Field(
             Vector(dimensions=("length", "length", "angle"), names="x, y, theta", max_abs=MAX_COORDINATE),
-            "the goal pose inside the room (a station): the robot ends its move there, turned to theta; "
-            "without it, the room's sampled pose instantiations",
+            "the goal pose inside the room (or the station's place): the robot ends its move there, turned to "
+            "theta; without it, the room's sampled pose instantiations",
         ),
         "penalty": Field(
             Number(None, minimum=0.0, maximum=1e9),
@@ -535,7 +543,8 @@ GOALS = Section(
         ),
         "jobs": Field(
             NamedList(item=JOB, what="job"),
-            "what a goal room asks of its visit: time at the station, the robots that may do it",
+            "what a goal room asks of its visit: time at the station, the robots that may do it; a job with a "
+            "place is a station of that place",
             default=[],
         ),
     },

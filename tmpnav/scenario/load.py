@@ -18,6 +18,7 @@ from tmpnav.choices import Objective, default_objective
 from tmpnav.errors import Problem, ScenarioError
 from tmpnav.scenario.format import ROS_MAP, SCENARIO, polygonal_cells
 from tmpnav.scenario.limits import MAP_CELLS, YAML_BYTES
+from tmpnav.scenario.references import cross_references, stations_of
 from tmpnav.scenario.schema import MISSING, Ctx, Issue, key_text
 from tmpnav.scenario.yamlio import YamlLimitError, YamlValueError, read_yaml
 from tmpnav.types import (
@@ -165,7 +166,7 @@ def load_partial(path: str | Path) -> tuple[Scenario | None, list[Problem]]:
         return None, problems
     ros, ros_problems = _ros_map(doc, data["map"])
     problems += ros_problems
-    problems += _cross_references(doc, data)
+    problems += cross_references(doc, data)
     if data["map"].get("ros") is not None and ros is None:
         return None, problems
     if ros is None and not _buildable(data["map"]):
@@ -250,172 +251,6 @@ def read_ros_map(map_path: Path) -> tuple[RosMap | None, list[Problem]]:
     )
 
 
-def _cross_references(doc: YamlDoc, data: dict[str, Any]) -> list[Problem]:
-    """Names must be unique across rooms and robots (both are PDDL objects); goals must
-    name defined rooms and robots."""
-    problems = []
-    # declared names, including those of items with other problems (reported already):
-    # a goal naming a robot whose pose is bad should not also be told the robot does not exist
-    rooms = set(_declared(doc, "rooms"))
-    robots = list(dict.fromkeys(_declared(doc, "robots")))
-    for i, robot in enumerate(doc.data.get("robots") or []):
-        name = robot.get("name") if isinstance(robot, dict) else None
-        if isinstance(name, str) and name in rooms:  # a list or mapping is unhashable (reported already)
-            problems.append(
-                Problem(
-                    doc.name,
-                    f"robots.{name}.name",
-                    f"{name!r} is also a room name; expected names unique among rooms and robots",
-                    doc.line(("robots", i, "name")),
-                )
-            )
-    for robot in robots:
-        if f"{robot}-start" in rooms:
-            problems.append(
-                Problem(
-                    doc.name,
-                    "rooms",
-                    f"room name '{robot}-start' is reserved for the start location of robot {robot!r}",
-                    doc.line(("rooms",)),
-                )
-            )
-    goals = data["goals"]
-    if goals is MISSING:
-        return problems
-    for i, room in enumerate(goals.get("visit") or ()):
-        if room not in rooms:
-            problems.append(
-                Problem(
-                    doc.name,
-                    f"goals.visit[{i}]",
-                    f"{room!r} is not a room{_hint(room, rooms)}; expected {_one_of('room', sorted(rooms))}",
-                    doc.line(("goals", "visit", i)),
-                )
-            )
-    for robot, targets in (goals.get("robots") or {}).items():
-        if robot not in robots:
-            problems.append(
-                Problem(
-                    doc.name,
-                    f"goals.robots.{robot}",
-                    f"{robot!r} is not a robot{_hint(robot, robots)}; expected {_one_of('robot', robots)}",
-                    doc.line(("goals", "robots", robot)),
-                )
-            )
-        for i, room in enumerate(targets):
-            if room not in rooms:
-                problems.append(
-                    Problem(
-                        doc.name,
-                        f"goals.robots.{robot}[{i}]",
-                        f"{room!r} is not a room{_hint(room, rooms)}; expected {_one_of('room', sorted(rooms))}",
-                        doc.line(("goals", "robots", robot, i)),
-                    )
-                )
-    return problems + _end_problems(doc, data, rooms, robots) + _job_problems(doc, goals, robots)
-
-
-def _end_problems(doc: YamlDoc, data: dict[str, Any], rooms: set[str], robots: list[str]) -> list[Problem]:
-    """A robot's end is a room of the map, no goal of another kind, nobody else's end; the
-    paper's encoding (both robots move in every action) has no ends."""
-    goals = data["goals"]
-    problems: list[Problem] = []
-    goal_rooms = set(goals.get("visit") or ()).union(*(set(xs) for xs in (goals.get("robots") or {}).values()))
-    taken: dict[str, str] = {}
-    for robot, room in (goals.get("ends") or {}).items():
-        where, path = ("goals", "ends", robot), f"goals.ends.{robot}"
-        why = None
-        if robot not in robots:
-            why = f"{robot!r} is not a robot{_hint(robot, robots)}; expected {_one_of('robot', robots)}"
-        elif room not in rooms:
-            why = f"{room!r} is not a room{_hint(room, rooms)}; expected {_one_of('room', sorted(rooms))}"
-        elif room in goal_rooms:
-            why = f"{room!r} is also a goal room (goals.visit or goals.robots); expected a room only {robot} ends in"
-        elif room in taken:
-            why = f"{taken[room]} ends in {room!r} too; expected one robot per end room"
-        elif isinstance(data.get("planner"), dict) and data["planner"].get("encoding") == "paper":
-            why = (
-                "the paper's encoding moves two robots in every action and has no end; "
-                "expected planner.encoding mixed or single"
-            )
-        if why is not None:
-            problems.append(Problem(doc.name, path, why, doc.line(where)))
-        taken.setdefault(room, robot)
-    return problems
-
-
-def _job_problems(doc: YamlDoc, goals: dict[str, Any], robots: list[str]) -> list[Problem]:
-    """A job names a goal room and robots of the team; a robot that goals.robots sends to a
-    room must be one its job allows."""
-    problems: list[Problem] = []
-    visit = set(goals.get("visit") or ())
-    per_robot = {r: set(xs) for r, xs in (goals.get("robots") or {}).items()}
-    goal_rooms = visit.union(*per_robot.values()) | set((goals.get("ends") or {}).values())
-    for i, job in enumerate(goals.get("jobs") or ()):
-        room, allowed = job["name"], list(job["robots"])
-        where = ("goals", "jobs", i)
-        if job.get("penalty") is not None and room in goal_rooms and room not in visit:
-            problems.append(
-                Problem(
-                    doc.name,
-                    f"goals.jobs.{room}.penalty",
-                    f"{room!r} is a robot's target or end, which every plan must reach; expected a penalty only for "
-                    "a room of goals.visit",
-                    doc.line((*where, "penalty")),
-                )
-            )
-        if room not in goal_rooms:
-            problems.append(
-                Problem(
-                    doc.name,
-                    f"goals.jobs.{room}",
-                    f"{room!r} is no goal room; expected a room named in goals.visit, goals.robots or goals.ends",
-                    doc.line(where),
-                )
-            )
-        for k, robot in enumerate(allowed):
-            if robot not in robots:
-                problems.append(
-                    Problem(
-                        doc.name,
-                        f"goals.jobs.{room}.robots[{k}]",
-                        f"{robot!r} is not a robot{_hint(robot, robots)}; expected {_one_of('robot', robots)}",
-                        doc.line((*where, "robots", k)),
-                    )
-                )
-        for robot, targets in per_robot.items():
-            if allowed and room in targets and robot not in allowed:
-                problems.append(
-                    Problem(
-                        doc.name,
-                        f"goals.jobs.{room}.robots",
-                        f"goals.robots sends {robot} to {room!r}, which its job allows only to "
-                        f"{', '.join(allowed)}; expected {robot} among them, or the room in goals.visit",
-                        doc.line((*where, "robots")),
-                    )
-                )
-    return problems
-
-
-def _declared(doc: YamlDoc, section: str) -> list[str]:
-    """The names given to the items of a named list (rooms, robots), valid or not."""
-    items = doc.data.get(section)
-    if not isinstance(items, list):
-        return []
-    return [str(x["name"]) for x in items if isinstance(x, dict) and isinstance(x.get("name"), (str, int, float))]
-
-
-def _one_of(what: str, names: list[str]) -> str:
-    return f"one of {', '.join(names)}" if names else f"a {what} defined in {what}s (there is none)"
-
-
-def _hint(word: str, options: Any) -> str:
-    import difflib
-
-    close = difflib.get_close_matches(word, list(options), n=1, cutoff=0.6)
-    return f" (did you mean '{close[0]}'?)" if close else ""
-
-
 def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
     m = d["map"]
     map_spec = ros or PolygonMap(
@@ -432,12 +267,17 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
     def sensor(s: dict[str, Any]) -> RangeBearingSensor:
         return RangeBearingSensor(s["range"], s["fov"], s["sigma_range"], s["sigma_bearing"])
 
+    rooms = _rooms(d)
+    stations = {r.name for r in rooms if r.place is not None}
+    # a station left out (its name, place or pose reported) takes its job along: no later check
+    # should read it as a room's job
+    jobs = [j for j in d["goals"]["jobs"] if j.get("place") is None or j["name"] in stations]
     return Scenario(
         name=d["name"] or doc.path.stem,
         source=doc.path.resolve(),
         description=d["description"],
         map=map_spec,
-        rooms=tuple(Room(r["name"], r["polygon"]) for r in d["rooms"]),
+        rooms=rooms,
         doors=tuple(
             Door(x["name"], x["segment"], x["state"] == "open", x["thickness"] or default_thickness) for x in d["doors"]
         ),
@@ -459,7 +299,7 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
         cost=CostWeights(d["cost"]["M_u"], d["cost"]["M_G"], d["cost"]["M_Sigma"], d["cost"]["M_T"]),
         roadmap=RoadmapParams(
             **d["roadmap"],
-            poses=tuple((j["name"], *j["pose"][:2]) for j in d["goals"]["jobs"] if j["pose"] is not None),
+            poses=tuple((j["name"], *j["pose"][:2]) for j in jobs if j["pose"] is not None),
         ),
         goals=Goals(
             visit=tuple(d["goals"]["visit"]),
@@ -473,12 +313,26 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
                     None if j["window"] is None else tuple(j["window"]),
                     j["penalty"],
                 )
-                for j in d["goals"]["jobs"]
+                for j in jobs
             ),
             ends=tuple(d["goals"]["ends"].items()),
         ),
         planner=_planner(d["planner"], d["models"]["range_sensor"] is not None, _objective(d)),
         key_lines={_display(raw, doc): line for raw, line in doc.lines.items()},
+    )
+
+
+def _rooms(d: dict[str, Any]) -> tuple[Room, ...]:
+    """The map's rooms and places, then the stations (goals.jobs with a place and a pose), each
+    with its place's polygon; a station whose place or pose is wrong (reported) is left out."""
+    polygons = {r["name"]: r["polygon"] for r in d["rooms"]}
+    rooms = tuple(Room(r["name"], r["polygon"]) for r in d["rooms"])
+    stations = stations_of(d["goals"])
+    poses = {j["name"]: j["pose"] for j in d["goals"]["jobs"]}
+    return rooms + tuple(
+        Room(name, polygons[place], place)
+        for name, place in stations.items()
+        if place in polygons and poses[name] is not None and name not in polygons
     )
 
 

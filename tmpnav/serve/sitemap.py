@@ -20,7 +20,7 @@ def site_geometry(site: Site) -> dict[str, Any]:
         "name": s.name,
         "description": s.description,
         "bounds": [x0, y0, x1, y1],
-        "rooms": [{"name": r.name, "polygon": [list(map(float, p)) for p in r.polygon]} for r in s.rooms],
+        "rooms": [{"name": r.name, "polygon": [list(map(float, p)) for p in r.polygon]} for r in s.places],
         "doors": [
             {"name": d.name, "segment": [list(map(float, p)) for p in d.segment], "open": d.open} for d in s.doors
         ],

@@ -93,9 +93,10 @@ class World:
         return np.array(next(r.polygon for r in self.rooms if r.name == name), dtype=float)
 
     def room_of(self, point: np.ndarray) -> str | None:
-        """The name of the first room containing ``point`` (2,), or None."""
+        """The name of the first room containing ``point`` (2,), or None; a room or place, never a
+        station (which shares its place's polygon: :meth:`place_of`)."""
         if not self._polygons:
-            for room in self.rooms:
+            for room in (r for r in self.rooms if r.place is None):
                 vertices = np.array(room.polygon, dtype=float)
                 self._polygons.append((room.name, vertices, np.r_[vertices.min(axis=0), vertices.max(axis=0)]))
         p = np.atleast_2d(np.asarray(point, dtype=float))
@@ -104,6 +105,11 @@ class World:
             if box[0] <= x <= box[2] and box[1] <= y <= box[3] and points_in_polygon(p, vertices)[0]:
                 return name
         return None
+
+    def place_of(self, name: str) -> str:
+        """The room or place a goal lies in: a station's place, else the room ``name`` itself (what
+        :meth:`room_of` gives for a point at the goal)."""
+        return next((r.place for r in self.rooms if r.name == name and r.place is not None), name)
 
     def free_cells_in_room(self, name: str, radius: float) -> np.ndarray:
         """Centres (m, 2) of the cells of a room where a robot of ``radius`` fits."""

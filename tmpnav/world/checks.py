@@ -74,17 +74,20 @@ def _jobs(scenario: Scenario, world: World, problem: Callable[[str, str], Proble
     """A job's goal pose lies in its room where the robots that may do it fit; a job's room is
     done by a robot that enters it, so no robot starts inside (it would count as having done
     it at time 0: a visit's rule is that where a robot starts is visited)."""
-    out = []
+    out = _stations_apart(scenario, problem)
+    place = {r.name: r.place for r in scenario.stations}
     for job in scenario.goals.jobs:
         if job.pose is not None:
             x, y, _ = job.pose
             robots = [r for r in scenario.robots if not job.robots or r.name in job.robots]
             radius = max((r.radius for r in robots), default=0.0)
-            if world.room_of([x, y]) != job.room:  # type: ignore[arg-type]
+            room = place.get(job.room) or job.room
+            if world.room_of([x, y]) != room:  # type: ignore[arg-type]
+                whose = "the job's room" if room == job.room else f"the station's place {room!r}"
                 out.append(
                     problem(
                         f"goals.jobs.{job.room}.pose",
-                        f"[{x:g}, {y:g}] is not inside room {job.room!r}; expected a goal pose inside the job's room",
+                        f"[{x:g}, {y:g}] is not inside room {room!r}; expected a goal pose inside {whose}",
                     )
                 )
             elif not world.is_free(np.array([[x, y]]), radius)[0]:
@@ -96,8 +99,10 @@ def _jobs(scenario: Scenario, world: World, problem: Callable[[str, str], Proble
                     )
                 )
         for robot in scenario.robots:
-            if scenario.goals.end_of(robot.name) == job.room:
-                continue  # a robot that starts at its end comes back to it: its job is done then
+            if scenario.goals.end_of(robot.name) == job.room or job.room in place:
+                # a robot that starts at its end comes back to it: its job is done then; a robot in
+                # a station's place is not at the station until it drives there
+                continue
             if world.room_of([robot.pose.x, robot.pose.y]) == job.room:  # type: ignore[arg-type]
                 out.append(
                     problem(
@@ -110,6 +115,26 @@ def _jobs(scenario: Scenario, world: World, problem: Callable[[str, str], Proble
     return out
 
 
+def _stations_apart(scenario: Scenario, problem: Callable[[str, str], Problem]) -> list[Problem]:
+    """Two stations at one point: the roadmap holds one node per station pose, and a robot at
+    one would count as at both."""
+    out: list[Problem] = []
+    seen: dict[tuple[float, float], str] = {}
+    for job in scenario.goals.jobs:
+        if job.pose is None or job.room not in {r.name for r in scenario.stations}:
+            continue
+        xy = (round(job.pose[0], 6), round(job.pose[1], 6))
+        if xy in seen:
+            out.append(
+                problem(
+                    f"goals.jobs.{job.room}.pose",
+                    f"[{xy[0]:g}, {xy[1]:g}] is station {seen[xy]!r}'s pose too; expected one station per pose",
+                )
+            )
+        seen.setdefault(xy, job.room)
+    return out
+
+
 def _range_sensor(scenario: Scenario, world: World, problem: Callable[[str, str], Problem]) -> list[Problem]:
     """A range sensor that reaches no wall from anywhere the robots must be (their starts, the
     rooms): it would never return a beam, and the map has no walls for it to see."""
@@ -117,7 +142,7 @@ def _range_sensor(scenario: Scenario, world: World, problem: Callable[[str, str]
     if sensor is None:
         return []
     points = [np.array([[r.pose.x, r.pose.y] for r in scenario.robots])]
-    points += [world.free_cells_in_room(room.name, 0.0) for room in scenario.rooms]
+    points += [world.free_cells_in_room(room.name, 0.0) for room in scenario.places]
     xy = np.concatenate(points)
     i, j, inside = world.grid.cells(xy)
     if not inside.any():
@@ -143,7 +168,7 @@ def _room_outlines(
 ) -> list[Problem]:
     """Room polygons outside the map, crossing themselves, or of (almost) zero area."""
     problems = []
-    for room in scenario.rooms:
+    for room in scenario.places:  # a station has its place's outline
         path = f"rooms.{room.name}.polygon"
         outside = [p for p in room.polygon if not inside(p)]
         crossing = _self_intersection(np.array(room.polygon, dtype=float))
@@ -258,14 +283,15 @@ def _reachability(scenario: Scenario, world: World, robots: list, problem) -> li
     its 8-connected components are what a robot can drive through.
     """
     problems: list[Problem] = []
-    reach: dict[str, set[str]] = {room.name: set() for room in scenario.rooms}
-    cramped: dict[str, list[str]] = {room.name: [] for room in scenario.rooms}
+    places = scenario.places  # a station's pose is checked with its job, and reached as the roadmap is built
+    reach: dict[str, set[str]] = {room.name: set() for room in places}
+    cramped: dict[str, list[str]] = {room.name: [] for room in places}
     by_radius: dict[float, list] = {}
     for robot in robots:
         by_radius.setdefault(robot.radius, []).append(robot)
     for radius, group in by_radius.items():
         labels = world.free_components(radius)
-        for room in scenario.rooms:
+        for room in places:
             cells = world.free_cells_in_room(room.name, radius)
             if cells.shape[0] == 0:
                 cramped[room.name] += [r.name for r in group]
@@ -278,7 +304,7 @@ def _reachability(scenario: Scenario, world: World, robots: list, problem) -> li
                     reach[room.name].add(robot.name)
     if not robots:
         return problems
-    for room in scenario.rooms:
+    for room in places:
         if reach[room.name]:
             continue
         if len(cramped[room.name]) == len(robots):
