@@ -10,10 +10,11 @@ Two parts, each in fresh interpreters (as a command runs):
   and drawing plan.png and schedule.png of the warm corridor plan;
 - the commands: ``tmpnav plan configs/corridor.yaml`` on a warm cache, and ``tmpnav replan``
   of the shift and of building-4robots (benchmarks/replan_time/) with ``--export nav2``,
-  each ``--runs`` times after a warm-up run; wall time and CPU time (the process and its
-  children: ENHSP's JVM). With ``--base DIR`` (another checkout of tmpnav, for example
-  ``git archive <commit> | tar -x -C DIR``) the same commands of DIR run alternately with
-  this checkout's, on one cache, so that both see the same load.
+  each ``--runs`` times after a warm-up run; wall time and CPU time (the process and the
+  children it waits for: ENHSP's JVM, ended at exit, is not counted). With ``--base DIR``
+  (another checkout of tmpnav, for example ``git archive <commit> | tar -x -C DIR``) the same
+  commands of DIR run alternately with this checkout's, on one cache, so that both see the
+  same load.
 
 The machine's load average is printed with the figures: on a shared machine the wall times
 wait for the others, so the CPU time is the better figure of what a command costs.
@@ -80,7 +81,8 @@ def children_cpu() -> float:
 
 
 def run(root: Path, args: list[str | Path], cwd: Path | None = None) -> tuple[float, float, str]:
-    """Run ``python ARGS`` with ``root``'s tmpnav first on the path: wall, CPU (with children), stdout."""
+    """Run ``python ARGS`` with ``root``'s tmpnav first on the path: wall, CPU (with the children
+    it waited for), stdout."""
     env = dict(os.environ, PYTHONPATH=str(root))
     cpu, began = children_cpu(), time.perf_counter()
     done = subprocess.run(
