@@ -7,6 +7,8 @@
     <cache>/oracle-v1.sqlite3-wal, -shm SQLite's journal files
     <cache>/roadmaps/<key>.npz          grown roadmaps (tmpnav.roadmap.store)
     <cache>/roadmaps/<key>.scans.npz    a range sensor's scan information of a map (the same)
+    <cache>/roadmaps/<key>.localisability.npz
+                                        a map's localisability as plan.png draws it (the same)
     <file>.corrupt-<date>-<pid>         a damaged file, set aside: never read again, kept for a
                                         bug report, removed by ``tmpnav cache clear``
     .<file>.tmpnav-<pid>-<hex>.tmp      a file being written (tmpnav.atomic); removed by the next
@@ -33,6 +35,7 @@ from tmpnav.errors import CacheError
 DATABASE = "oracle-v1.sqlite3"
 ROADMAPS = "roadmaps"
 SCANS = ".scans.npz"  # a scan information table beside the roadmaps
+LOCALISABILITY = ".localisability.npz"  # a localisability map beside them
 SET_ASIDE = ".corrupt-"
 
 
@@ -101,6 +104,9 @@ class CacheDir:
     def scans(self, key: str) -> Path:
         return self.roadmaps / f"{key}{SCANS}"
 
+    def localisability(self, key: str) -> Path:
+        return self.roadmaps / f"{key}{LOCALISABILITY}"
+
     def ensure(self, folder: Path | None = None) -> Path:
         """Create the directory (or its sub-folder ``folder``) if needed; a CacheError when it
         cannot be created or written, with what to do instead."""
@@ -130,7 +136,7 @@ class CacheDir:
         """Location, size and content of the cache (the database is opened read-only)."""
         files = self.database_files()
         stored = [p for p in self.roadmap_files() if p.suffix == ".npz"]  # with the scan tables
-        roadmaps = [p for p in stored if not p.name.endswith(SCANS)]
+        roadmaps = [p for p in stored if not p.name.endswith((SCANS, LOCALISABILITY))]
         entries, error = count_entries(self.database) if self.database.exists() else (0, None)
         return CacheInfo(
             directory=self.root,
@@ -161,7 +167,7 @@ class CacheDir:
             first, why = failed[0]
             more = f" ({len(failed)} files could not be removed)" if len(failed) > 1 else ""
             raise CacheError(f"cannot clear the cache {self.root}: {first}: {why.strerror}{more}")
-        return len(database), sum(p.suffix == ".npz" and not p.name.endswith(SCANS) for p in roadmaps)
+        return len(database), sum(p.suffix == ".npz" and not p.name.endswith((SCANS, LOCALISABILITY)) for p in roadmaps)
 
 
 def _size(path: Path) -> int:

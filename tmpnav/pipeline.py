@@ -247,6 +247,16 @@ def roadmap_for(
     return roadmap, False
 
 
+def _roadmap_stored(scenario: Scenario, world: World, store: RoadmapStore | None, base: Roadmap | None) -> bool:
+    """Whether :func:`roadmap_for` will find the roadmap rather than grow it (a guess for a
+    replan's: its starts are joined to ``base``)."""
+    from tmpnav.roadmap.store import roadmap_key
+
+    if base is not None:
+        return True
+    return store is not None and store.cache.roadmap(roadmap_key(world, scenario.robots, scenario.roadmap)).exists()
+
+
 def make_oracle(
     scenario: Scenario, world: World, roadmap: Roadmap, execution: Execution, progress: Reporters | None = None
 ) -> Oracle:
@@ -278,11 +288,12 @@ def prepare(
     options: PlanOptions,
     times: StageTimes,
     loaded: tuple[Scenario, World] | None = None,
-    on_loaded: Callable[[Scenario], None] | None = None,
+    on_loaded: Callable[[Scenario, bool], None] | None = None,
 ) -> Prepared:
-    """Load (or take ``loaded``, the overrides applied), tell ``on_loaded`` the scenario, grow
-    or read the roadmap, open the oracle. The caller must close ``prepared.oracle`` (executor
-    and cache)."""
+    """Load (or take ``loaded``, the overrides applied), tell ``on_loaded`` the scenario and
+    whether its roadmap is at hand (read from the cache or added to a replan's: the stages
+    up to the plan will be quick), grow or read the roadmap, open the oracle. The caller must
+    close ``prepared.oracle`` (executor and cache)."""
     from tmpnav.roadmap.reach import check_reachable
     from tmpnav.roadmap.store import RoadmapStore, ScanStore
 
@@ -292,12 +303,12 @@ def prepare(
             scenario, world = load_world(path, options.overrides)
         else:
             scenario, world = in_force(loaded[0], options.overrides), loaded[1]
-    if on_loaded is not None:
-        on_loaded(scenario)
     cache = CacheDir.at(run.cache_dir) if run.use_cache else None
     if cache is not None:
         cache.ensure()  # an unusable cache directory fails now, not after the roadmap
     store = RoadmapStore(cache) if cache is not None else None
+    if on_loaded is not None:
+        on_loaded(scenario, _roadmap_stored(scenario, world, store, options.overrides.roadmap_base))
     with times.timed("roadmap"):
         roadmap, roadmap_hit = roadmap_for(scenario, world, store, options.overrides.roadmap_base)
         check_reachable(scenario, world, roadmap)
@@ -318,7 +329,7 @@ def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
     times = StageTimes()
     deadline = Deadline(started=times.started)
 
-    def loaded_now(scenario: Scenario) -> None:
+    def loaded_now(scenario: Scenario, _roadmap_stored: bool) -> None:
         deadline.seconds = scenario.planner.time_limit
 
     with _named_stage(times, deadline):
@@ -393,9 +404,13 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
     times = StageTimes()
     deadline = Deadline(started=times.started)
 
-    def loaded_now(scenario: Scenario) -> None:
+    def loaded_now(scenario: Scenario, roadmap_stored: bool) -> None:
         deadline.seconds = scenario.planner.time_limit
-        get_ready(scenario)  # ENHSP readied while the roadmap and the first costs are computed
+        if not roadmap_stored:
+            # ENHSP readied while the roadmap and the first costs are computed. With the roadmap
+            # at hand the plan is often remembered too, and needs no JVM: the search, if it runs,
+            # readies ENHSP itself (tmpnav.planning.anytime) as it starts
+            get_ready(scenario)
 
     options = options.but(progress=deadline.watch(options.reporters.oracle))  # the limit, between blocks
     with long_lived_frozen(), _named_stage(times, deadline):  # tmpnav.heap

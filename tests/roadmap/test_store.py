@@ -123,3 +123,31 @@ def test_a_scan_table_is_kept_beside_the_roadmaps_and_read_back(tmp_path: Path) 
     with pytest.warns(RoadmapCacheWarning, match="scan table .* is unreadable"):
         assert ScanStore(cache, store).load(world_of(box()), sensor) == 0
     assert cache.info().set_aside == 1
+
+
+def test_a_localisability_map_is_computed_once_per_map_and_view(tmp_path: Path) -> None:
+    """plan.png's localisability map: the second figure of a map reads what the first computed
+    (the same numbers), a damaged file is computed again, and no cache means computed."""
+    import math
+
+    from tests.world.test_lidar import box, world_of
+    from tmpnav.roadmap.store import stored_localisability
+    from tmpnav.types import RangeSensor
+    from tmpnav.world.lidar import localisability
+
+    sensor = RangeSensor(8.0, 2 * math.pi, 30, 0.03, 0.1, math.radians(75))
+    world, cache, view = world_of(box()), CacheDir(tmp_path), (0.5, 0.5, 6.0, 4.0)
+    expected = localisability(world.grid, world.signed_distance, sensor, view, 200)
+    first = stored_localisability(cache, world, sensor, view, 200)
+    (path,) = list(cache.roadmaps.iterdir())
+    assert path.name.endswith(".localisability.npz") and cache.info().roadmaps == 0
+    again = stored_localisability(cache, world_of(box()), sensor, view, 200)
+    for found in (first, again, stored_localisability(None, world, sensor, view, 200)):
+        np.testing.assert_array_equal(found.xs, expected.xs)
+        np.testing.assert_array_equal(found.sigma, expected.sigma)
+    with open(path, "r+b") as fh:
+        fh.truncate(100)
+    np.testing.assert_array_equal(stored_localisability(cache, world, sensor, view, 200).sigma, expected.sigma)
+    assert cache.info().set_aside == 1
+    other = stored_localisability(cache, world, sensor, (0.5, 0.5, 5.0, 4.0), 200)
+    assert other.xs.size != expected.xs.size or other.xs[-1] != expected.xs[-1]

@@ -22,8 +22,7 @@ def bench_figure(medians: Medians, axis: str, title: str, timeout: float | None 
     Log scale on both experiments: the warm runs (a cache lookup), the default encoding and
     the paper's encoding differ by orders of magnitude. A point where every cold run timed
     out is drawn as an open marker at the time limit: the time is at least that."""
-    plt = fg.plt
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    fig, ax = fg.subplots((7.5, 4.8))
     encodings = sorted({k[0] for k in medians})
     for enc in encodings:
         color = ENCODING_COLORS.get(enc, "#7f7f7f")
@@ -62,8 +61,7 @@ def bench_figure(medians: Medians, axis: str, title: str, timeout: float | None 
 
 def errors_figure(result: ExecutionResult, title: str) -> Figure:
     """Average position error at each node of each robot's trajectory, both configurations."""
-    plt = fg.plt
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    fig, ax = fg.subplots((7.5, 4.8))
     for index, robot in enumerate(result.robots):
         color = fg.robot_color(index)
         for config, style in ((1, "-"), (2, "--")):

@@ -23,6 +23,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Ellipse
 from numpy.typing import NDArray
 
+from tmpnav.cachedir import CacheDir
 from tmpnav.numbers import probability
 from tmpnav.report import figures as fg
 from tmpnav.results import PlanReport
@@ -285,7 +286,9 @@ def plan_figure(report: PlanReport, crop: bool = True) -> Figure:
     fig, ax = fg.new_axes(world, width=width, extent=extent, max_height=9.0)
     fg.draw_map(ax, world)
     # where the range sensor pins the robots down, faintly (tmpnav show --localisability draws it in full)
-    fg.draw_localisability(ax, sc, world, (xmin, ymin, xmax, ymax), alpha=0.4, points=PLAN_LOCALISABILITY_POINTS)
+    cache = CacheDir(report.cache.directory) if report.cache.enabled and report.cache.directory else None
+    view = (xmin, ymin, xmax, ymax)
+    fg.draw_localisability(ax, sc, world, view, alpha=0.4, points=PLAN_LOCALISABILITY_POINTS, cache=cache)
     fg.draw_rooms(ax, sc, extent)
     fg.draw_doors(ax, sc)
     fg.draw_instantiations(ax, report.roadmap, label="pose instantiations")

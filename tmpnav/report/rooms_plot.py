@@ -30,12 +30,10 @@ HALL_COLOUR = "#6c3483"
 
 def plot_rooms(proposal: Proposal, path: Path, title: str) -> None:
     """Write the segmentation figure (PNG) to ``path``, atomically."""
-    import matplotlib.pyplot as plt
-
     xmin, ymin, xmax, ymax = fg.free_extent(proposal.grid)
     aspect = (ymax - ymin) / max(xmax - xmin, 1e-9)
     width = 12.0 if aspect < 1.2 else max(5.0, 9.0 / aspect)
-    fig, ax = plt.subplots(figsize=(width, max(3.5, width * aspect + 1.2)))
+    fig, ax = fg.subplots((width, max(3.5, width * aspect + 1.2)))
     _draw_segmentation(ax, proposal)
     _draw_halls(ax, proposal)
     robots = [r.pose[:2] for r in proposal.robots]
@@ -60,7 +58,7 @@ def plot_rooms(proposal: Proposal, path: Path, title: str) -> None:
 
 def _draw_segmentation(ax: Axes, proposal: Proposal) -> None:
     """The map in greys, each room's cells in a colour of its own over it."""
-    import matplotlib.pyplot as plt
+    import matplotlib
 
     gx0, gy0, gx1, gy1 = proposal.grid.extent
     extent = (gx0, gx1, gy0, gy1)
@@ -77,7 +75,7 @@ def _draw_segmentation(ax: Axes, proposal: Proposal) -> None:
     labels = proposal.segmentation.labels
     lx0, ly0, lx1, ly1 = proposal.segmentation.grid.extent  # the part of the map segmented
     n = max(int(labels.max()), 1)
-    palette = plt.get_cmap("tab20")(np.arange(n) % 20)
+    palette = matplotlib.colormaps["tab20"](np.arange(n) % 20)
     colours = ListedColormap(np.vstack([[0, 0, 0, 0], palette]))  # label k gets colour k, 0 none
     masked = np.ma.masked_equal(labels, 0)
     ax.imshow(

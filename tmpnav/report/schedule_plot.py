@@ -372,7 +372,7 @@ def schedule_figure(report: PlanReport) -> Figure:
     tight bounding box figures are saved with (:func:`tmpnav.report.figures.render`)."""
     schedule = report.schedule
     rows = max(len(report.scenario.robots), len(schedule.robots), 1)
-    fig, ax = fg.plt.subplots(figsize=(WIDTH, ROW_HEIGHT * (rows + TOP)))
+    fig, ax = fg.subplots((WIDTH, ROW_HEIGHT * (rows + TOP)))
     fig.subplots_adjust(left=0.0, right=1.0, bottom=0.0, top=1.0)
     horizon = 1.03 * max(schedule.makespan, report.task.makespan or 0.0, report.scenario.models.dt)
     lay = _layout(report, ax, horizon)
