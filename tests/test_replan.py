@@ -125,6 +125,28 @@ def test_a_closed_door_leaves_its_room_out_and_plans_the_rest(planned: tuple[Pat
 
 
 @pytest.mark.slow
+def test_a_revision_of_a_revision_keeps_the_doors_closed(planned: tuple[Path, Path, Path], tmp_path: Path) -> None:
+    """dB closed in the first revision stays closed in a revision of it whose state says nothing
+    of doors: B, asked for again, is still out of reach (it used to be planned through dB)."""
+    first = tmp_path / "first"
+    first.mkdir()
+    proc = replan(planned, first, "time: 5\ndoors: {dB: closed}\n", "-o", first / "out")
+    assert proc.returncode == 12, proc.stderr
+    assert revision(first)["revision"]["doors"] == {"dB": "closed"}
+    scenario, _, cache = planned
+    (tmp_path / "state.yaml").write_text("time: 2\ngoals: {add: [B]}\n")
+    proc = tmpnav(
+        "replan", scenario, "--plan", first / "out" / "plan.json", "--state", tmp_path / "state.yaml",
+        "--cache-dir", cache, "-o", tmp_path / "out",
+    )  # fmt: skip
+    assert proc.returncode == 12, proc.stderr
+    assert "error: goal B is left out" in proc.stderr
+    doc = revision(tmp_path)
+    assert doc["revision"]["number"] == 2 and doc["revision"]["doors"] == {"dB": "closed"}
+    assert "B" not in [to for _, to in entered(doc)]
+
+
+@pytest.mark.slow
 def test_goals_added_mid_run_and_a_belief_as_amcl_publishes_it(
     planned: tuple[Path, Path, Path], tmp_path: Path
 ) -> None:

@@ -350,6 +350,9 @@ class Revision:
     #: what decided the plan: "search" (the planner), or "repair" (the rest of the old plan with
     #: the goals of robots down inserted where they cost least, when the search found no plan)
     rule: str = "search"
+    #: (door, open) of every door whose state differs from the scenario's in this revision: the
+    #: state's and those an earlier revision changed, which a revision of it keeps
+    doors: tuple[tuple[str, bool], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -93,6 +93,11 @@ def revise(
                 f"{state.source}: doors.{name}: not a door of scenario {scenario.name!r}"
                 + (f"; expected one of {some}" if doors else "")
             )
+    # the doors as the plan being revised had them (a revision's), then as the state changes them
+    earlier = (doc.get("revision") or {}).get("doors") or {}
+    carried = {str(k): v == "open" for k, v in earlier.items() if str(k) in doors and str(k) not in state.doors}
+    if carried:
+        state = replace(state, doors={**carried, **state.doors})
     # robots down now, and those down before the plan being revised (not in its team)
     down = tuple(dict.fromkeys((*state.down, *(r for r in names if r not in doc["trajectories"]))))
     if len(down) == len(names):
@@ -143,7 +148,11 @@ def revise(
     revised = replace(revised, goals=goals, roadmap=roadmap)
     number = int((doc.get("revision") or {}).get("number", 0)) + 1
     incumbent = _rest(doc, t, set(done) | set(state.remove), set(down), goals)
-    revision = Revision(number, offset, str(plan_path), tuple(done), down, tuple(unreachable), incumbent, held)
+    changed = tuple((d.name, state.doors[d.name]) for d in scenario.doors if d.name in state.doors)
+    changed = tuple((name, is_open) for name, is_open in changed if is_open != doors[name].open)
+    revision = Revision(
+        number, offset, str(plan_path), tuple(done), down, tuple(unreachable), incumbent, held, doors=changed
+    )
     return revised, world, revision
 
 

@@ -279,6 +279,7 @@ def plan_document(report: PlanReport) -> dict[str, JSON]:
             "unreachable": [{"room": room, "why": why} for room, why in r.unreachable],
             "held": {robot: {"room": room, "seconds": number(sec, 9)} for robot, room, sec in r.held},
             "rule": r.rule,
+            "doors": {door: "open" if is_open else "closed" for door, is_open in r.doors},
         }
     return doc
 
