@@ -55,3 +55,21 @@ def test_a_plan_with_robots_in_each_others_way_says_so_on_stderr(tmp_path: Path)
     assert len(lines) == 1, proc.stderr
     assert lines[0].startswith("warning: the plan leaves robots in each other's way: r1 and r2 at ")
     assert "--keep-apart keeps robots apart" in lines[0]
+
+
+@pytest.mark.slow
+def test_a_revision_with_robots_in_each_others_way_says_so_on_stderr(tmp_path: Path) -> None:
+    """tmpnav replan warns as tmpnav plan does: the corridor's head-on plan revised at its start."""
+    corridor = str(ROOT / "configs" / "corridor.yaml")
+    options = ("--costs", "table", "--no-keep-apart", "-q", "--cache-dir", str(tmp_path / "cache"))
+    proc = tmpnav("plan", corridor, *options, "-o", str(tmp_path / "first"))
+    assert proc.returncode == 0, proc.stderr
+    (tmp_path / "state.yaml").write_text("time: 0\n")
+    proc = tmpnav(
+        "replan", corridor, "--plan", str(tmp_path / "first" / "plan.json"), "--state", str(tmp_path / "state.yaml"),
+        *options,
+    )  # fmt: skip
+    assert proc.returncode == 0, proc.stderr
+    warnings = [line for line in proc.stderr.splitlines() if line.startswith("warning: ")]
+    head_on = "warning: the plan leaves robots in each other's way: r1 and r2 at "
+    assert any(line.startswith(head_on) for line in warnings), proc.stderr

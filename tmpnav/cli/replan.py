@@ -8,7 +8,7 @@ from typing import Any
 
 import click
 
-from tmpnav.cli.commands import cli, wrote_into
+from tmpnav.cli.commands import cli, warn_conflicts, warn_scenario, wrote_into
 from tmpnav.cli.options import (
     SCENARIO_ARG,
     option,
@@ -94,6 +94,8 @@ def replan(
         raise click.UsageError("--export needs -o DIR: the waypoint files go to DIR/nav2/")
     check_planner(scenario, kw["planner_name"])
     report = run_replan(scenario, plan_path, state_path, plan_options(kw))
+    warn_scenario(report.scenario, bool(kw.get("no_range_sensor")))
+    warn_conflicts(report)
     written: list[Path] = []
     if output is not None:
         from tmpnav.replan import nav2_files
