@@ -72,3 +72,28 @@ def test_past_the_limit_the_search_returns_its_best_plan_so_far() -> None:
     result = search(OutOfTime(table, 0.05), goals, SearchOptions(parallel=1, work=50))
     assert result.plan and result.stopped == "time budget" and SEARCH_CAP in result.capped
     assert result.cost.total == pytest.approx(TableModel(table, 0.05).plan_cost(result.plan).total)
+
+
+def test_the_least_threshold_is_not_searched_for_past_the_time_limit(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A plan over its max_risk at the end of its --time-limit: the error says so at once. The
+    search for the least threshold that has a plan planned again with a fresh limit (a run of
+    twice its limit or more)."""
+    import time
+    from types import SimpleNamespace
+
+    from tmpnav import pipeline
+    from tmpnav.errors import RiskError
+
+    def never(*_: object) -> None:
+        raise AssertionError("planned again past the run's time limit")
+
+    monkeypatch.setattr(pipeline, "_planned", never)
+    monkeypatch.setattr(pipeline, "_worst_move", lambda _: "r1's move A -> B is at 0.3")
+    planner = SimpleNamespace(max_risk=0.05, time_limit=10.0, max_risk_from="--max-risk")
+    report = SimpleNamespace(
+        scenario=SimpleNamespace(planner=planner),
+        worst_risk=0.3,
+        times=SimpleNamespace(started=time.perf_counter() - 11.0),
+    )
+    with pytest.raises(RiskError, match=r"within max_risk 0\.05 .*: r1.s move A -> B is at 0\.3"):
+        pipeline.check_risk("x.yaml", pipeline.PlanOptions(), report)  # type: ignore[arg-type]

@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
@@ -526,11 +527,16 @@ def check_risk(path: str | Path, options: PlanOptions, report: PlanReport) -> No
     if delta is None or worst <= delta:
         return
     asked = delta
+    limit = report.scenario.planner.time_limit
     for _ in range(RISK_RETRIES):
         least = min(1.0, _round_up(worst))
-        if least >= 1.0:
+        left = None if limit is None else limit - (time.perf_counter() - report.times.started)
+        if least >= 1.0 or (left is not None and left <= 0.0):
+            break  # no least threshold found within the run's --time-limit: the plain error
+        try:
+            again = _planned(path, options.but(max_risk=least, replan=False, time_limit=left), None)
+        except TimeLimitError:
             break
-        again = _planned(path, options.but(max_risk=least, replan=False), None)
         worst = again.worst_risk
         if worst <= least:
             from tmpnav.planning.safety import conflicts_left
