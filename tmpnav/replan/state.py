@@ -115,7 +115,7 @@ def _job_entry(job: Job) -> dict[str, Any]:
 
 def read_state(path: Path) -> TeamState:
     """The team's state in ``path`` (YAML or JSON); InputError naming the file and key otherwise."""
-    return _state(path, read_document(path, "state"))
+    return state_of(path, read_document(path, "state"))
 
 
 def read_document(path: Path, what: str) -> Any:
@@ -132,7 +132,10 @@ def read_document(path: Path, what: str) -> Any:
         raise InputError(f"{path}: not a readable {what} file ({first}); expected YAML or JSON") from None
 
 
-def _state(path: Path, data: Any) -> TeamState:
+def state_of(path: Path, data: Any) -> TeamState:
+    """The team's state in ``data``, a state file's mapping read already (a service's request body),
+    its problems named as in the file ``path``; InputError otherwise."""
+
     def bad(key: str, what: str) -> InputError:
         return InputError(f"{path}: {key}: {what}")
 

@@ -133,9 +133,9 @@ class Site:
         """The revision of the plan in ``plan_json`` from the team's ``state`` (the data of a
         ``tmpnav replan`` state file), as ``tmpnav replan`` plans it."""
         from tmpnav.replan import replan
-        from tmpnav.replan.state import _state
+        from tmpnav.replan.state import state_of
 
-        team = _state(Path("state"), state)  # one-line messages naming "state: key"
+        team = state_of(Path("state"), state)  # one-line messages naming "state: key"
         loaded = self.loaded(goals)
         options = self._watched(watch, time_budget)
         with self.running:
