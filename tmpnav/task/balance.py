@@ -1,0 +1,157 @@
+"""Unloading: edits that move work from the robot that finishes last to the rest of the fleet.
+
+A relocation (tmpnav.task.routes) takes one room from one robot. On a fleet whose robots end
+close together, the robot that finishes last hands over a room and the next one is then last:
+no single relocation shortens the makespan by much, and the detour it adds costs more than
+the little it saves, so the search keeps robots idle that could help. An unloading chains
+relocations: the robot that finishes last hands one of its rooms to the robot and the place in
+its route where the room adds least (the moves' cost plus ``span_weight`` times the later end
+of the two robots), provided both then end before it did; then the robot that finishes last
+now does the same, up to ``depth`` times. Every prefix of the chain is an edit, screened with
+the other edits between routes (:func:`tmpnav.task.routes.route_edits`).
+
+Times and costs are those of the single moves' table: a route's time is its moves' durations
+plus the services of its rooms (waits left out), as the screen prices them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterator
+
+from tmpnav.types import CostTable, Goals
+
+#: steps as (robot, target) pairs, and the routes an edit changes with its steps
+Steps = list[tuple[tuple[str, str], ...]]
+Edit = tuple[dict[str, list[str]], Steps]
+#: a robot's route: (step index, room) of its steps, in order
+Route = list[tuple[int, str]]
+#: times closer than this (s) count as equal
+EPSILON = 1e-9
+
+
+class Moves:
+    """Cost and time of single moves and rooms on the table (inf where a move is missing)."""
+
+    def __init__(self, singles: CostTable, goals: Goals):
+        self.singles, self.goals = singles, goals
+
+    def start(self, robot: str) -> str:
+        return self.singles.start_location.get(robot, f"{robot}-start")
+
+    def move(self, robot: str, a: str, b: str) -> tuple[float, float]:
+        """The move a -> b's cost, and its duration plus b's service."""
+        key = (robot, a, b)
+        cost = self.singles.single.get(key, math.inf)
+        return cost, self.singles.duration.get(key, math.inf) + self.goals.service(b)
+
+    def route(self, robot: str, rooms: list[str]) -> tuple[float, float]:
+        """The route's cost and its time (from the robot's hold, ``goals.held``)."""
+        at, cost, time = self.start(robot), 0.0, self.goals.held_for(robot)
+        for x in rooms:
+            c, t = self.move(robot, at, x)
+            cost, time, at = cost + c, time + t, x
+        return cost, time
+
+    def insertion(self, robot: str, rooms: list[str], p: int, x: str) -> tuple[float, float]:
+        """What room ``x`` put at position ``p`` of the route adds to its cost and time."""
+        before = rooms[p - 1] if p else self.start(robot)
+        c1, t1 = self.move(robot, before, x)
+        if p == len(rooms):
+            return c1, t1
+        c2, t2 = self.move(robot, x, rooms[p])
+        c0, t0 = self.move(robot, before, rooms[p])
+        return c1 + c2 - c0, t1 + t2 - t0
+
+    def removal(self, robot: str, rooms: list[str], i: int) -> tuple[float, float]:
+        """What taking room i out of the route changes in its cost and time (negative: saves)."""
+        cost, time = self.insertion(robot, rooms[:i] + rooms[i + 1 :], i, rooms[i])
+        return -cost, -time
+
+
+def unloadings(
+    steps: Steps,
+    free: list[str],
+    movable: Callable[[str, str, str], bool],
+    moves: Moves,
+    span_weight: float,
+    depth: int,
+) -> Iterator[Edit]:
+    """The prefixes of the chain of unloadings from the plan's ``steps`` (module docstring):
+    each (the changed robots' rooms, the steps). Only robots of ``free`` give or take rooms;
+    ``movable(robot, room, to)`` says whether a room may leave a robot's route for ``to``'s."""
+    steps = list(steps)
+    routes = routes_of(steps)
+    rooms = {r: [x for _, x in route] for r, route in routes.items()}
+    for r in free:
+        rooms.setdefault(r, [])
+    times = {r: moves.route(r, xs)[1] for r, xs in rooms.items()}
+    changed: set[str] = set()
+    for _ in range(depth):
+        last = max(times, key=lambda r: times[r])
+        if last not in free:
+            return
+        best = _best_unloading(last, rooms, times, free, movable, moves, span_weight)
+        if best is None:
+            return
+        i, b, p = best
+        k, x = routes[last][i]
+        steps = relocated_steps(steps, routes, k, b, p, x)
+        routes = routes_of(steps)
+        rooms[last] = rooms[last][:i] + rooms[last][i + 1 :]
+        rooms[b] = [*rooms[b][:p], x, *rooms[b][p:]]
+        times[last], times[b] = moves.route(last, rooms[last])[1], moves.route(b, rooms[b])[1]
+        changed |= {last, b}
+        yield {r: list(rooms[r]) for r in changed}, list(steps)
+
+
+def _best_unloading(
+    last: str,
+    rooms: dict[str, list[str]],
+    times: dict[str, float],
+    free: list[str],
+    movable: Callable[[str, str, str], bool],
+    moves: Moves,
+    span_weight: float,
+) -> tuple[int, str, int] | None:
+    """(room index in ``last``'s route, robot that takes it, its position there) of the
+    relocation that adds least cost plus ``span_weight`` times the later end of the two robots,
+    of those after which both end before ``last`` did; None where none does."""
+    end = times[last]
+    best: tuple[float, int, str, int] | None = None
+    for i, x in enumerate(rooms[last]):
+        cost_out, time_out = moves.removal(last, rooms[last], i)
+        if not math.isfinite(cost_out + time_out):
+            continue
+        for b in free:
+            if b == last or not movable(last, x, b):
+                continue
+            for p in range(len(rooms[b]) + 1):
+                cost_in, time_in = moves.insertion(b, rooms[b], p, x)
+                later = max(end + time_out, times[b] + time_in)
+                if not later < end - EPSILON:  # inf too: a missing move
+                    continue
+                score = cost_out + cost_in + span_weight * later
+                if best is None or score < best[0]:
+                    best = (score, i, b, p)
+    return None if best is None else best[1:]
+
+
+def routes_of(steps: Steps) -> dict[str, Route]:
+    """Each robot's (step index, room) in the order of the steps."""
+    routes: dict[str, Route] = {}
+    for k, step in enumerate(steps):
+        for r, x in step:
+            routes.setdefault(r, []).append((k, x))
+    return routes
+
+
+def relocated_steps(steps: Steps, routes: dict[str, Route], k: int, b: str, p: int, x: str) -> Steps:
+    """The steps with step k (a single move into x) taken out and a single move of b into x put
+    where b's route has position p: right after b's step before it, or before b's first step."""
+    route = routes.get(b, [])
+    at = (route[0][0] if route else k) if p == 0 else route[p - 1][0] + 1
+    edited: Steps = list(steps)
+    edited.insert(at, ((b, x),))
+    del edited[k + 1 if at <= k else k]
+    return edited
