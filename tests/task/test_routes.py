@@ -137,3 +137,23 @@ def test_the_compiled_screen_adds_up_routes_as_the_plain_one() -> None:
         assert as_is == {r: plain.route(r, xs) for r, xs in changed.items()}
         assert reordered == {r: plain.route(r, xs) for r, xs in order.items()}
         assert {r: sorted(xs) for r, xs in order.items()} == {r: sorted(xs) for r, xs in changed.items()}
+
+
+def test_every_edit_changes_the_routes_it_says_it_changes() -> None:
+    """The routes read from an edit's steps are the routes it was screened as: a 2-opt* whose
+    head of r2's route comes after r1's tail in the plan (r1's L4 is step 1, r2's L2 step 2) gives
+    r2 its new rooms in the swapped order all the same."""
+    from tmpnav.task.routes import _edits
+
+    table, goals = line_table(), Goals(("L1", "L2", "L4", "L5"), ())
+    plan = plan_of(("r1", "L4"), ("r2", "L2"), ("r1", "L5"), ("r2", "L1"))
+    rules = Rules(table.start_location, goals)
+    steps = [tuple((r, x) for r, _, x in step) for step in plan]
+    by_robot: dict[str, list[tuple[int, str]]] = {"r1": [], "r2": []}
+    for k, step in enumerate(steps):
+        for r, x in step:
+            by_robot[r].append((k, x))
+    edits = list(_edits(steps, by_robot, set(), goals, rules))
+    assert edits
+    for changed, edited in edits:
+        assert {r: routes(edited)[r] for r in changed} == changed
