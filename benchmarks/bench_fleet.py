@@ -32,7 +32,10 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 from families import KINDS, write  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "fleet"
-COLUMNS = "kind,rooms,robots,seed,objective,work,value,makespan,bound,gap,stopped,subproblems,cpu_s,wall_s,load,rooms_per_robot"
+COLUMNS = (
+    "kind,rooms,robots,seed,objective,work,value,makespan,bound,gap,stopped,subproblems,"
+    "cpu_s,wall_s,load,rooms_per_robot"
+)
 
 
 def children_cpu() -> float:

@@ -89,7 +89,8 @@ def route_edits(
     seen: set[tuple[tuple[tuple[str, str], ...], ...]] = set()
     for _, key in scored:
         n, v = divmod(key, 2)
-        edited = edits[n][1] if v == 0 else _reordered(edits[n][1], screened[n][1])
+        # each changed route's steps take its rooms in order: after a 2-opt*, a's head may come after b's tail
+        edited = _reordered(edits[n][1], edits[n][0] if v == 0 else screened[n][1])
         if tuple(edited) not in seen and rules.valid(with_origins(edited, rules.start_location)):
             seen.add(tuple(edited))
             out.append(edited)
@@ -207,8 +208,7 @@ def _tail_swaps(plan: _Routes) -> Iterator[Edit]:
                         edited[k] = ((b, x),)
                     for k, y in tail_b:
                         edited[k] = ((a, y),)
-                    # a's head may come after b's tail in the plan: each route's steps take its rooms in order
-                    yield changed, _reordered(edited, changed)
+                    yield changed, edited
 
 
 def _relocated(rooms: dict[str, list[str]], a: str, i: int, b: str, p: int) -> dict[str, list[str]]:

@@ -373,7 +373,7 @@ class AnytimeSearch:
         if self.fleet:
             # a fleet: no neighbourhood holds every robot, and work moves between robots only by
             # the routes' edits, which ENHSP does not solve: those first, while they improve
-            while not self.budget.out_of_time() and self._between_routes():
+            while not self.budget.out_of_time() and self._between_routes(first=True):
                 pass
         while True:
             if self.proves_optimal(self.value(self.best_cost)):
@@ -393,13 +393,16 @@ class AnytimeSearch:
             else:
                 return "converged"
 
-    def _between_routes(self) -> bool:
+    def _between_routes(self, first: bool = False) -> bool:
         """The best plan's routes edited (:func:`tmpnav.task.routes.route_edits`): the edits the
         single moves say are best, up to ``route_candidates`` of them, costed by the model; the
-        cheapest kept if it beats the best plan. True when one did."""
+        cheapest kept if it beats the best plan. True when one did. With ``first``, the first
+        that beats it, best by the single moves first: a fleet's plan costs a second or more to
+        cost, and most passes keep the edit the screen put first."""
         with self.times.timed("planner"):
             edits = route_edits(self.best, self.singles, self.goals, self.rules, self.options.span_weight)
         costed: list[tuple[Plan, PlanCost, None]] = []
+        best: tuple[Plan, PlanCost, None] | None = None
         for edit in edits[: self.options.route_candidates]:
             if self.budget.out_of_time():
                 break
@@ -407,7 +410,10 @@ class AnytimeSearch:
             if not self.rules.valid(candidate):
                 continue
             costed.append((candidate, self.cost(candidate), None))
-        best = self._cheapest(costed)
+            best = self._cheapest(costed[-1:]) if first else None
+            if best is not None and self.value(best[1]) < self.value(self.best_cost) * (1 - EPSILON) - EPSILON:
+                break
+        best = best if first else self._cheapest(costed)
         if best is None:
             return False
         new, old = self.value(best[1]), self.value(self.best_cost)
