@@ -77,3 +77,26 @@ def test_route_edits_offer_an_unloading_where_the_makespan_counts() -> None:
     plan = with_origins(unbalanced(), START)
     best = route_edits(plan, table, goals, rules, span_weight=1.0)[0]
     assert max(times(best, legs).values()) <= 40.0 - 10.0
+
+
+def test_an_ejection_chain_passes_work_on_where_no_one_robot_can_take_it() -> None:
+    """a (20 s) has rooms only b can enter, and b ends at 19 s: any room of a's makes b end at
+    20 s or later. b takes X2 and hands Y2 on to c, which can enter only b's rooms: all three end
+    before 20 s."""
+    moves = {
+        "a": {("a0", "X1"): 10, ("X1", "X2"): 10, ("a0", "X2"): 15, ("X2", "X1"): 10},
+        "b": {("b0", "Y1"): 10, ("Y1", "Y2"): 9, ("b0", "Y2"): 12, ("Y2", "Y1"): 9, ("b0", "X1"): 14, ("b0", "X2"): 12},
+        "c": {("c0", "Y1"): 6, ("c0", "Y2"): 5, ("Y1", "Y2"): 9, ("Y2", "Y1"): 9},
+    }
+    for a, b, t in (("Y1", "X2", 5), ("Y2", "X2", 5), ("Y1", "X1", 8), ("Y2", "X1", 8), ("X1", "X2", 10)):
+        moves["b"].update({(a, b): t, (b, a): t})
+    single = {(r, o, t): float(v) for r, table in moves.items() for (o, t), v in table.items()}
+    start = {"a": "a0", "b": "b0", "c": "c0"}
+    rooms = ("X1", "X2", "Y1", "Y2")
+    table = CostTable(("a", "b", "c"), rooms, (*start.values(), *rooms), start, single, {}, dict(single))
+    goals = Goals(rooms, ())
+    plan = targets_only(with_origins([(("a", "X1"),), (("a", "X2"),), (("b", "Y1"),), (("b", "Y2"),)], start))
+    moves_ = Moves(table, goals)
+    (changed, steps), *_ = unloadings(plan, ["a", "b", "c"], lambda *_: True, moves_, 1.0, depth=1)
+    assert changed == {"a": ["X1"], "b": ["Y1", "X2"], "c": ["Y2"]}
+    assert Rules(start, goals).valid(with_origins(steps, start))

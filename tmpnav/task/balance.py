@@ -8,7 +8,11 @@ relocations: the robot that finishes last hands one of its rooms to the robot an
 its route where the room adds least (the moves' cost plus ``span_weight`` times the later end
 of the two robots), provided both then end before it did; then the robot that finishes last
 now does the same, up to ``depth`` times. Every prefix of the chain is an edit, screened with
-the other edits between routes (:func:`tmpnav.task.routes.route_edits`).
+the other edits between routes (:func:`tmpnav.task.routes.route_edits`). Where no one robot can
+take a room of the last one's and still end before it (its neighbours end about when it does,
+or only they have moves into its rooms), an ejection chain passes work on: a room to a robot
+that then ends later, a room of that robot's to another, up to four robots, all ending before
+the last one did.
 
 Times and costs are those of the single moves' table: a route's time is its moves' durations
 plus the services of its rooms (waits left out), as the screen prices them.
@@ -91,18 +95,26 @@ def unloadings(
         last = max(times, key=lambda r: times[r])
         if last not in free:
             return
-        best = _best_unloading(last, rooms, times, free, movable, moves, span_weight)
-        if best is None:
+        chain = _best_unloading(last, rooms, times, free, movable, moves, span_weight)
+        chain = chain or _best_ejection(last, rooms, times, free, movable, moves, span_weight)
+        if not chain:
             return
-        i, b, p = best
-        k, x = routes[last][i]
-        steps = relocated_steps(steps, routes, k, b, p, x)
-        routes = routes_of(steps)
-        rooms[last] = rooms[last][:i] + rooms[last][i + 1 :]
-        rooms[b] = [*rooms[b][:p], x, *rooms[b][p:]]
-        times[last], times[b] = moves.route(last, rooms[last])[1], moves.route(b, rooms[b])[1]
-        changed |= {last, b}
+        for giver, i, b, p in chain:
+            k, x = routes[giver][i]
+            steps = relocated_steps(steps, routes, k, b, p, x)
+            routes = routes_of(steps)
+            rooms[giver] = rooms[giver][:i] + rooms[giver][i + 1 :]
+            rooms[b] = [*rooms[b][:p], x, *rooms[b][p:]]
+            times[giver], times[b] = moves.route(giver, rooms[giver])[1], moves.route(b, rooms[b])[1]
+            changed |= {giver, b}
         yield {r: list(rooms[r]) for r in changed}, list(steps)
+
+
+#: a relocation: (the robot that gives the room, its index in that robot's route, the robot that
+#: takes it, its position there)
+Relocation = tuple[str, int, str, int]
+#: robots an ejection tries as the first taker, the cheapest first
+EJECTION_TAKERS = 3
 
 
 def _best_unloading(
@@ -113,11 +125,13 @@ def _best_unloading(
     movable: Callable[[str, str, str], bool],
     moves: Moves,
     span_weight: float,
-) -> tuple[int, str, int] | None:
-    """(room index in ``last``'s route, robot that takes it, its position there) of the
-    relocation that adds least cost plus ``span_weight`` times the later end of the two robots,
-    of those after which both end before ``last`` did; None where none does."""
+    before: float | None = None,
+) -> list[Relocation]:
+    """The relocation of a room of ``last``'s that adds least cost plus ``span_weight`` times the
+    later end of the two robots, of those after which both end before ``last`` did (or before
+    ``before``); [] where none does."""
     end = times[last]
+    limit = end if before is None else before
     best: tuple[float, int, str, int] | None = None
     for i, x in enumerate(rooms[last]):
         cost_out, time_out = moves.removal(last, rooms[last], i)
@@ -129,12 +143,94 @@ def _best_unloading(
             for p in range(len(rooms[b]) + 1):
                 cost_in, time_in = moves.insertion(b, rooms[b], p, x)
                 later = max(end + time_out, times[b] + time_in)
-                if not later < end - EPSILON:  # inf too: a missing move
+                if not later < limit - EPSILON:  # inf too: a missing move
                     continue
                 score = cost_out + cost_in + span_weight * later
                 if best is None or score < best[0]:
                     best = (score, i, b, p)
-    return None if best is None else best[1:]
+    return [] if best is None else [(last, *best[1:])]
+
+
+def _best_ejection(
+    last: str,
+    rooms: dict[str, list[str]],
+    times: dict[str, float],
+    free: list[str],
+    movable: Callable[[str, str, str], bool],
+    moves: Moves,
+    span_weight: float,
+) -> list[Relocation]:
+    """Relocations in a chain where no one will do (the robots near ``last`` end about when it
+    does): a room of ``last``'s to a robot b, which may then end later, a room of b's to a robot
+    c, and so on, up to :data:`EJECTION_DEPTH` robots, after which all end before ``last`` did.
+    Each robot passes a room to one of the :data:`EJECTION_TAKERS` that take one of its rooms
+    cheapest; of the chains, the one that adds least cost plus ``span_weight`` times the latest
+    end of its robots; [] where none does."""
+    chains = _ejections(last, rooms, times, times[last], free, movable, moves, span_weight, EJECTION_DEPTH, {last})
+    best: tuple[float, list[Relocation]] | None = None
+    for chain in chains:
+        after = _relocated_rooms(rooms, chain)
+        changed = {r for giver, _, taker, _ in chain for r in (giver, taker)}
+        legs = {r: moves.route(r, after[r]) for r in changed}
+        added = sum(c for c, _ in legs.values()) - sum(moves.route(r, rooms[r])[0] for r in changed)
+        score = added + span_weight * max(t for _, t in legs.values())
+        if best is None or score < best[0]:
+            best = (score, chain)
+    return [] if best is None else best[1]
+
+
+#: robots an ejection chain holds at most, the robot that finishes last included
+EJECTION_DEPTH = 4
+
+
+def _ejections(
+    giver: str,
+    rooms: dict[str, list[str]],
+    times: dict[str, float],
+    end: float,
+    free: list[str],
+    movable: Callable[[str, str, str], bool],
+    moves: Moves,
+    span_weight: float,
+    depth: int,
+    used: set[str],
+) -> Iterator[list[Relocation]]:
+    """The chains of relocations from ``giver`` on after which all their robots end before
+    ``end`` (:func:`_best_ejection`), at most ``depth`` robots long, none of ``used`` taking."""
+    direct = _best_unloading(giver, rooms, times, free, movable, moves, span_weight, before=end)
+    if direct:
+        yield direct
+        return
+    if depth <= 2:
+        return
+    firsts: dict[str, tuple[float, int, int]] = {}  # taker -> its cheapest (cost, i, p)
+    for i, x in enumerate(rooms[giver]):
+        cost_out, time_out = moves.removal(giver, rooms[giver], i)
+        if not times[giver] + time_out < end - EPSILON:
+            continue
+        for b in free:
+            if b in used or not movable(giver, x, b):
+                continue
+            for p in range(len(rooms[b]) + 1):
+                cost_in = moves.insertion(b, rooms[b], p, x)[0]
+                if math.isfinite(cost_in) and (b not in firsts or cost_out + cost_in < firsts[b][0]):
+                    firsts[b] = (cost_out + cost_in, i, p)
+    for b, (_, i, p) in sorted(firsts.items(), key=lambda item: item[1][0])[:EJECTION_TAKERS]:
+        first: Relocation = (giver, i, b, p)
+        after = _relocated_rooms(rooms, [first])
+        ends = {**times, giver: moves.route(giver, after[giver])[1], b: moves.route(b, after[b])[1]}
+        for rest in _ejections(b, after, ends, end, free, movable, moves, span_weight, depth - 1, used | {b}):
+            yield [first, *rest]
+
+
+def _relocated_rooms(rooms: dict[str, list[str]], chain: list[Relocation]) -> dict[str, list[str]]:
+    """The routes after the relocations of ``chain``, one after the other."""
+    out = dict(rooms)
+    for giver, i, taker, p in chain:
+        x = out[giver][i]
+        out[giver] = out[giver][:i] + out[giver][i + 1 :]
+        out[taker] = [*out[taker][:p], x, *out[taker][p:]]
+    return out
 
 
 def routes_of(steps: Steps) -> dict[str, Route]:
