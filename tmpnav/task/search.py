@@ -24,8 +24,8 @@ optimal ENHSP search, but any part of it a few rooms and robots wide is small. T
    optimum on 2 of 25 generated offices, benchmarks/references/). Where the makespan counts,
    the edits include unloadings (:mod:`tmpnav.task.balance`): relocations chained from the
    robot that finishes last. A fleet (more robots than a neighbourhood holds) starts with the
-   routes' edits, until they bring nothing, and its first routes insert every room where it
-   adds least into all routes at once (:data:`FLEET_FIRST_SOLUTION`).
+   routes' edits, until they bring nothing, and where time is priced its first routes insert
+   every room where it adds least into all routes at once (:data:`FLEET_FIRST_SOLUTION`).
 4. **Stop** when the lower bound proves the plan optimal, when neither the neighbourhoods nor
    the routes' edits improve the plan (a local optimum of both), or when its budget is spent:
    a count of sub-problems, so the same plan on any machine, with time as a cap
