@@ -137,3 +137,21 @@ def test_the_compiled_screen_adds_up_routes_as_the_plain_one() -> None:
         assert as_is == {r: plain.route(r, xs) for r, xs in changed.items()}
         assert reordered == {r: plain.route(r, xs) for r, xs in order.items()}
         assert {r: sorted(xs) for r, xs in order.items()} == {r: sorted(xs) for r, xs in changed.items()}
+
+
+def test_every_edit_offered_is_better_as_its_steps_read() -> None:
+    """The routes read from an edit's steps are the routes it was screened as, so each is better
+    than the plan by the screen, robots' steps interleaved in the plan (r1's L4 is step 1, r2's L2
+    step 2: after a 2-opt*, r2's head comes after its new tail's steps)."""
+    from tmpnav.task.routes import _Screen
+
+    table, goals = line_table(), Goals(("L1", "L2", "L4", "L5"), ())
+    plan = plan_of(("r1", "L4"), ("r2", "L2"), ("r1", "L5"), ("r2", "L1"))
+    rules = Rules(table.start_location, goals)
+    screen = _Screen(table, goals, 1.0)
+    value = lambda rooms: screen.value(screen.route(r, xs) for r, xs in rooms.items())  # noqa: E731
+    now = value(routes([tuple((r, x) for r, _, x in step) for step in plan]))
+    edits = route_edits(plan, table, goals, rules, span_weight=1.0, limit=50)
+    assert edits
+    for edit in edits:
+        assert value(routes(edit)) < now

@@ -1,11 +1,13 @@
 """Edits between the robots' routes, as vehicle routing's local searches make them.
 
-A plan's single steps, read robot by robot, are routes. Three kinds of edit change them:
+A plan's single steps, read robot by robot, are routes. Four kinds of edit change them:
 
 * **relocate**: one room leaves its robot's route and enters another robot's route (or the same
   route elsewhere), at any position;
 * **exchange**: two robots swap a room each;
-* **2-opt\\***: two robots swap the tails of their routes (every room from a point on).
+* **2-opt\\***: two robots swap the tails of their routes (every room from a point on);
+* **unloading**, where the makespan counts: relocations chained from the robot that finishes
+  last, each to the robot and place where its room adds least (:mod:`tmpnav.task.balance`).
 
 An edit keeps the plan's other steps where they were: a relocated room's step moves next to its
 new robot's neighbouring step, an exchanged or swapped step keeps its place and changes robot.
@@ -42,11 +44,14 @@ import numba as nb
 import numpy as np
 import numpy.typing as npt
 
+from tmpnav.task.balance import Moves, relocated_steps, unloadings
 from tmpnav.task.plans import Plan, Rules, targets_only, with_origins
 from tmpnav.types import CostTable, Goals
 
 #: steps as (robot, target) pairs: what :func:`tmpnav.task.plans.with_origins` takes
 Steps = list[tuple[tuple[str, str], ...]]
+#: relocations an unloading chains at most, per robot (tmpnav.task.balance)
+UNLOADING_DEPTH = 2
 #: screened values closer than this count as equal
 EPSILON = 1e-9
 
@@ -67,6 +72,10 @@ def route_edits(
     legs = {r: screen.route(r, [x for _, x in route]) for r, route in routes.items()}
     now = screen.value(legs.values())
     edits = list(_edits(steps, routes, pinned, goals, rules))
+    if span_weight:  # the makespan counts: chains of relocations from the robot that finishes last
+        free = [r for r in routes if r not in pinned]
+        movable = _Routes(steps, routes, free, goals, rules, frozenset(x for _, x in goals.ends)).movable
+        edits += unloadings(steps, free, movable, Moves(singles, goals), span_weight, UNLOADING_DEPTH * len(robots))
     in_routes = [x for route in routes.values() for _, x in route]
     screened = _Orders(singles, goals, span_weight, list(routes), in_routes).screen([changed for changed, _ in edits])
     scored: list[tuple[float, int]] = []  # (screened value, 2 n for edit n as it is, 2 n + 1 reordered)
@@ -80,7 +89,8 @@ def route_edits(
     seen: set[tuple[tuple[tuple[str, str], ...], ...]] = set()
     for _, key in scored:
         n, v = divmod(key, 2)
-        edited = edits[n][1] if v == 0 else _reordered(edits[n][1], screened[n][1])
+        # each changed route's steps take its rooms in order: after a 2-opt*, a's head may come after b's tail
+        edited = _reordered(edits[n][1], edits[n][0] if v == 0 else screened[n][1])
         if tuple(edited) not in seen and rules.valid(with_origins(edited, rules.start_location)):
             seen.add(tuple(edited))
             out.append(edited)
@@ -157,7 +167,7 @@ def _relocations(plan: _Routes) -> Iterator[Edit]:
                 for p in range(len(plan.routes[b]) + 1):
                     if b == a and p in (i, i + 1):
                         continue
-                    yield _relocated(rooms, a, i, b, p), _relocate_steps(plan.steps, plan.routes, k, b, p, x)
+                    yield _relocated(rooms, a, i, b, p), relocated_steps(plan.steps, plan.routes, k, b, p, x)
 
 
 def _exchanges(plan: _Routes) -> Iterator[Edit]:
@@ -211,17 +221,6 @@ def _relocated(rooms: dict[str, list[str]], a: str, i: int, b: str, p: int) -> d
         del route[i + 1 if p <= i else i]
         return {a: route}
     return {a: rooms[a][:i] + rooms[a][i + 1 :], b: [*rooms[b][:p], x, *rooms[b][p:]]}
-
-
-def _relocate_steps(steps: Steps, routes: dict[str, list[tuple[int, str]]], k: int, b: str, p: int, x: str) -> Steps:
-    """The steps with step k (a single move into x) taken out and a single move of b into x put
-    where b's route has position p: right after b's step before it, or before b's first step."""
-    route = routes[b]
-    at = (route[0][0] if route else k) if p == 0 else route[p - 1][0] + 1
-    edited: Steps = list(steps)
-    edited.insert(at, ((b, x),))
-    del edited[k + 1 if at <= k else k]
-    return edited
 
 
 def _reordered(steps: Steps, order: dict[str, list[str]]) -> Steps:

@@ -21,7 +21,11 @@ optimal ENHSP search, but any part of it a few rooms and robots wide is small. T
    model; a better plan starts the neighbourhoods again. A neighbourhood opens a stretch of
    each route whose ends stay where they were, so moving work from a robot that finishes last
    to one that finishes early is what it cannot do (the makespan stayed 11-13% above the
-   optimum on 2 of 25 generated offices, benchmarks/references/).
+   optimum on 2 of 25 generated offices, benchmarks/references/). Where the makespan counts,
+   the edits include unloadings (:mod:`tmpnav.task.balance`): relocations chained from the
+   robot that finishes last. A fleet (more robots than a neighbourhood holds) starts with the
+   routes' edits, until they bring nothing, and where time is priced its first routes insert
+   every room where it adds least into all routes at once (:data:`FLEET_FIRST_SOLUTION`).
 4. **Stop** when the lower bound proves the plan optimal, when neither the neighbourhoods nor
    the routes' edits improve the plan (a local optimum of both), or when its budget is spent:
    a count of sub-problems, so the same plan on any machine, with time as a cap
@@ -84,6 +88,12 @@ ROUTING_SOLUTIONS = 500
 #: plateaus are common (188-297 solutions on building-4robots, building-8robots and a 60-room
 #: office, whose first plans it made 0.3-5.6% dearer): those run all :data:`ROUTING_SOLUTIONS`.
 FEW_STAGNATION, FEW_ROOMS = 100, 20
+#: OR-Tools' first solution for a fleet (more robots than a neighbourhood holds) where time is
+#: priced. The cheapest arc out of each route's end, robot after robot, hands the first robots
+#: most rooms and leaves the last idle; the span cost's guided local search did not even them out
+#: (office, 40 rooms, 8 robots, weighted: makespan 216 s with one robot on 2 rooms; inserting
+#: every room where it adds least, into all routes at once: 194 s, every robot on 4-7 rooms)
+FLEET_FIRST_SOLUTION = "PARALLEL_CHEAPEST_INSERTION"
 #: OR-Tools' time limit at most (a quarter of the budget below it): its solutions, not the clock,
 #: should end it. At 60 rooms and 8 robots its 500 solutions took 9.8 s on a busy 2-core machine,
 #: and a cap of 10 s left the first plan to the machine's speed (962.0 or 1016.7 on one office)
@@ -254,6 +264,7 @@ class AnytimeSearch:
                 time_limit=max(0.001, min(limit, self.left())),
                 solution_limit=ROUTING_SOLUTIONS,
                 stagnation=FEW_STAGNATION if few else None,
+                first_solution=FLEET_FIRST_SOLUTION if self.fleet and opts.span_weight else "PATH_CHEAPEST_ARC",
                 span_weight=opts.span_weight,
                 initial=None if start_from is None else _routes_of(start_from, self.model.robots),
             )
@@ -266,6 +277,12 @@ class AnytimeSearch:
             raise PlannerError(_no_routes(routes))
         plan = with_origins([((m[0], m[2]),) for m in routes.moves(singles)], self.model.start_location)
         return self.canonical(plan), routes.method
+
+    @property
+    def fleet(self) -> bool:
+        """More robots than a neighbourhood holds: work moves between some of them only by the
+        routes' edits."""
+        return len(self.model.robots) > self.options.sub_robots
 
     def canonical(self, plan: Plan) -> Plan:
         """The plan's steps in the canonical order of commuting steps (tmpnav.task.decode)."""
@@ -353,6 +370,11 @@ class AnytimeSearch:
     def _improve_until_done(self, best: Plan, cost: PlanCost) -> StopReason:
         self.best, self.best_cost = best, cost
         size_index = 0
+        if self.fleet:
+            # a fleet: no neighbourhood holds every robot, and work moves between robots only by
+            # the routes' edits, which ENHSP does not solve: those first, while they improve
+            while not self.budget.out_of_time() and self._between_routes(first=True):
+                pass
         while True:
             if self.proves_optimal(self.value(self.best_cost)):
                 return "optimal"
@@ -371,13 +393,16 @@ class AnytimeSearch:
             else:
                 return "converged"
 
-    def _between_routes(self) -> bool:
+    def _between_routes(self, first: bool = False) -> bool:
         """The best plan's routes edited (:func:`tmpnav.task.routes.route_edits`): the edits the
         single moves say are best, up to ``route_candidates`` of them, costed by the model; the
-        cheapest kept if it beats the best plan. True when one did."""
+        cheapest kept if it beats the best plan. True when one did. With ``first``, the first
+        that beats it, best by the single moves first: a fleet's plan costs a second or more to
+        cost, and most passes keep the edit the screen put first."""
         with self.times.timed("planner"):
             edits = route_edits(self.best, self.singles, self.goals, self.rules, self.options.span_weight)
         costed: list[tuple[Plan, PlanCost, None]] = []
+        best: tuple[Plan, PlanCost, None] | None = None
         for edit in edits[: self.options.route_candidates]:
             if self.budget.out_of_time():
                 break
@@ -385,7 +410,10 @@ class AnytimeSearch:
             if not self.rules.valid(candidate):
                 continue
             costed.append((candidate, self.cost(candidate), None))
-        best = self._cheapest(costed)
+            best = self._cheapest(costed[-1:]) if first else None
+            if best is not None and self.value(best[1]) < self.value(self.best_cost) * (1 - EPSILON) - EPSILON:
+                break
+        best = best if first else self._cheapest(costed)
         if best is None:
             return False
         new, old = self.value(best[1]), self.value(self.best_cost)
