@@ -16,7 +16,12 @@ stage's wall time with one and two workers, S2 = T1 / T2, and Amdahl's law S(n) 
 / n) gives the serial fraction f = 2 / S2 - 1 of the stage; the same for the whole command. The
 extrapolations to 16 and 64 workers assume the parallel part keeps scaling and the serial part
 stays (one machine's cores, no network). Ray's own start is not counted (the cluster runs
-already). Writes ``<name>.txt``; the machine should be otherwise idle (the load is recorded).
+already), nor what a worker does once per site: its first task imports tmpnav and loads its
+compiled kernels (about 40 s here), and the first block of a site builds the site's motion
+library (the map's visibility and scan tables: seconds), which the worker keeps for the site's
+next runs. Each cluster plans the scenario once first, in a cache folder of its own, untimed:
+the timed runs are those of a cluster that has seen the site, as a fleet's cluster would.
+Writes ``<name>.txt``; the machine should be otherwise idle (the load is recorded).
 """
 
 from __future__ import annotations

@@ -54,9 +54,10 @@ def amcl(cov: list[list[float]]) -> list[float]:
     return out
 
 
-def state_of(doc: dict[str, Any], rng: random.Random) -> dict[str, Any]:
-    """The team at a random time of the plan's first half, the first robot's belief from AMCL."""
-    t = rng.uniform(0.0, 0.5 * doc["schedule"]["makespan"])
+def state_of(doc: dict[str, Any], rng: random.Random, within: tuple[float, float] = (0.0, 0.5)) -> dict[str, Any]:
+    """The team at a random time of the plan (by default its first half), the first robot's
+    belief from AMCL."""
+    t = rng.uniform(within[0] * doc["schedule"]["makespan"], within[1] * doc["schedule"]["makespan"])
     state: dict[str, Any] = {"time": round(t, 2)}
     robot, steps = next(iter(doc["trajectories"].items()))
     step = steps[min(len(steps) - 1, int(t / doc["dt"]))]
@@ -69,13 +70,18 @@ def percentile(values: list[float], q: float) -> float:
     return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))]
 
 
-def latency(client: Any, events: int, seed: int) -> list[dict[str, Any]]:
+def latency(client: Any, events: int, seed: int, shift: bool = False) -> list[dict[str, Any]]:
+    """Chained (default): each state revises the revision before it. ``shift``: each state revises
+    a new plan of the whole shift (remembered by the cache, so it is made at once) at a random
+    time in 5-85% of its makespan, as the first replan of a shift under way."""
     rng = random.Random(seed)
     plan = client.plan()
     rows = []
     for event in range(events):
+        if shift and event:
+            plan = client.plan()
         doc = client.document(plan["id"])
-        state = state_of(doc, rng)
+        state = state_of(doc, rng, (0.05, 0.85) if shift else (0.0, 0.5))
         start = time.perf_counter()
         try:
             info = client.post_state(plan["id"], plan["revision"], state)
@@ -173,12 +179,13 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--cache-dir", type=Path, default=None)
     parser.add_argument("--direct", action="store_true", help="latency: the service's calls in this process, no HTTP")
+    parser.add_argument("--shift", action="store_true", help="latency: each state revises a new plan of the shift")
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "benchmarks" / "serve")
     args = parser.parse_args()
     args.output.mkdir(parents=True, exist_ok=True)
     name = Path(args.scenario).stem
     if args.direct:
-        rows = latency(Direct(args.scenario, args.cache_dir or default_cache_dir()), args.events, args.seed)
+        rows = latency(Direct(args.scenario, args.cache_dir or default_cache_dir()), args.events, args.seed, args.shift)
         took = [r["seconds"] for r in rows if r["outcome"] == "revision"]
         text = (f"# {args.scenario}, in process (no HTTP): {len(took)} of {len(rows)} revisions: median "
                 f"{statistics.median(took):.3f} s, p90 {percentile(took, 0.9):.3f} s, max {max(took):.3f} s\n")
@@ -190,8 +197,9 @@ def main() -> None:
         client = Client(server.url)
         header = f"# {platform.node()} {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} {args.scenario}\n"
         if args.mode == "latency":
-            rows = latency(client, args.events, args.seed)
-            with (args.output / f"{name}-latency.csv").open("w", newline="") as out:
+            rows = latency(client, args.events, args.seed, args.shift)
+            suffix = "-shift" if args.shift else ""
+            with (args.output / f"{name}-latency{suffix}.csv").open("w", newline="") as out:
                 writer = csv.DictWriter(out, fieldnames=list(rows[0]))
                 writer.writeheader()
                 writer.writerows(rows)
@@ -200,7 +208,8 @@ def main() -> None:
                     f"{statistics.median(took):.3f} s, p90 {percentile(took, 0.9):.3f} s, max {max(took):.3f} s\n")
         else:
             text = header + load(client, args.clients, args.plans, args.seconds, args.seed)
-        (args.output / f"{name}-{args.mode}.txt").write_text(text)
+        suffix = "-shift" if args.mode == "latency" and args.shift else ""
+        (args.output / f"{name}-{args.mode}{suffix}.txt").write_text(text)
         print(text, end="")
     finally:
         server.stop()
