@@ -12,6 +12,7 @@ from types import FrameType
 
 import pytest
 
+from tests.children import sigint_default
 from tmpnav.lifetime import SIGNAL_POLL, gather
 
 
@@ -95,7 +96,13 @@ def test_the_signals_own_exception_where_python_cannot_raise_it_prints_no_traceb
     import subprocess
     import sys
 
-    proc = subprocess.run([sys.executable, "-c", UNRAISABLE], capture_output=True, text=True, timeout=60)
+    proc = subprocess.run(
+        [sys.executable, "-c", UNRAISABLE],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        preexec_fn=sigint_default,
+    )
     assert proc.returncode == 0 and proc.stdout == "went on\n", proc.stderr
     assert "KeyboardInterrupt" not in proc.stderr
     assert "ValueError: a real bug" in proc.stderr
@@ -126,6 +133,12 @@ try:
 except (KeyboardInterrupt, lifetime.Terminated) as err:
     print("raised", type(err).__name__, flush=True)
 """
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=30)
+    proc = subprocess.run(
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        timeout=30,
+        preexec_fn=sigint_default,
+    )
     expected = "KeyboardInterrupt" if sig == signal.SIGINT else "Terminated"
     assert proc.stdout.split("\n")[:2] == ["block done", f"raised {expected}"], proc.stdout + proc.stderr
