@@ -19,7 +19,6 @@ from typing import Any
 
 from tmpnav.client import Client, ServiceError
 from tmpnav.errors import InputError, TmpnavError
-from tmpnav.execution.moves import QueuedMove, queues_of_document
 from tmpnav.replan.revise import NothingLeft
 from tmpnav.replan.state import TeamState, state_document
 
@@ -69,9 +68,6 @@ class RemotePlans:
         info = self._call(lambda: self.client.post_state(self.plan, self.revision, state))
         self.revision = int(info["revision"])
         return self._call(lambda: self.client.document(self.plan, self.revision))
-
-    def queues(self, doc: dict[str, Any]) -> dict[str, tuple[QueuedMove, ...]]:
-        return queues_of_document(doc)
 
     def _call(self, call: Any) -> Any:
         try:

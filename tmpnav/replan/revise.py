@@ -148,8 +148,7 @@ def revise(
     revised = replace(revised, goals=goals, roadmap=roadmap)
     number = int((doc.get("revision") or {}).get("number", 0)) + 1
     incumbent = _rest(doc, t, set(done) | set(state.remove), set(down), goals)
-    changed = tuple((d.name, state.doors[d.name]) for d in scenario.doors if d.name in state.doors)
-    changed = tuple((name, is_open) for name, is_open in changed if is_open != doors[name].open)
+    changed = tuple((d.name, state.doors[d.name]) for d in scenario.doors if state.doors.get(d.name, d.open) != d.open)
     revision = Revision(
         number, offset, str(plan_path), tuple(done), down, tuple(unreachable), incumbent, held, doors=changed
     )

@@ -78,11 +78,12 @@ def standing_service(
     none where the window has closed). Without this the station would count done with its
     service never done."""
     out = []
-    busy = {robot for robot, _, _ in held} | {room for _, room, _ in held}
+    busy = {robot for robot, _, _ in held}
+    served = {room for _, room, _ in held}
     for spec in robots:
         room = world.room_of([spec.pose.x, spec.pose.y])  # type: ignore[arg-type]
         job = goals.job(room) if room is not None else None
-        if room is None or job is None or job.service <= 0 or spec.name in busy or room in busy:
+        if room is None or job is None or job.service <= 0 or spec.name in busy or room in served:
             continue
         if room not in goals.all_rooms or not goals.may_visit(spec.name, room):
             continue
@@ -90,7 +91,8 @@ def standing_service(
         if job.window is not None and job.window[1] < -TIME_TOL:
             continue
         out.append((spec.name, room, wait + job.service))
-        busy |= {spec.name, room}
+        busy.add(spec.name)
+        served.add(room)
     return tuple(out)
 
 

@@ -107,6 +107,11 @@ def serialize(roadmap: Roadmap) -> bytes:
         "starts": roadmap.starts,
         "fingerprint": roadmap.fingerprint,
     }
+    return _npz(arrays, header)
+
+
+def _npz(arrays: dict[str, np.ndarray], header: dict[str, object]) -> bytes:
+    """An .npz file of ``arrays`` and a JSON ``header`` that carries their checksum (``digest``)."""
     header["digest"] = _digest(arrays, header)
     buffer = io.BytesIO()
     contents = {"header": np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays}
@@ -187,11 +192,7 @@ def serialize_scans(keys: np.ndarray, factors: np.ndarray) -> bytes:
     """The .npz file of a scan table: its keys (K,) and factors (K, 3, 3), with their checksum."""
     arrays = {"keys": np.asarray(keys, dtype=np.int64), "factors": np.asarray(factors, dtype=float)}
     header: dict[str, object] = {"format": SCANS_FORMAT}
-    header["digest"] = _digest(arrays, header)
-    buffer = io.BytesIO()
-    contents = {"header": np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays}
-    np.savez(buffer, **contents)  # type: ignore[arg-type]  # numpy's stub mistakes ** for allow_pickle
-    return buffer.getvalue()
+    return _npz(arrays, header)
 
 
 def read_scans(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -255,11 +256,7 @@ def serialize_localisability(found: Localisability) -> bytes:
     """The .npz file of a localisability map: its points (xs, ys) and sigma, with their checksum."""
     arrays = {"xs": found.xs, "ys": found.ys, "sigma": found.sigma}
     header: dict[str, object] = {"format": LOCALISABILITY_FORMAT}
-    header["digest"] = _digest(arrays, header)
-    buffer = io.BytesIO()
-    contents = {"header": np.frombuffer(json.dumps(header).encode(), dtype=np.uint8), **arrays}
-    np.savez(buffer, **contents)  # type: ignore[arg-type]  # numpy's stub mistakes ** for allow_pickle
-    return buffer.getvalue()
+    return _npz(arrays, header)
 
 
 def read_localisability(path: Path) -> Localisability:
