@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from tests.task.test_routes import line_table, plan_of, routes
-from tmpnav.task.plans import Rules, targets_only, with_missing
+from tmpnav.task.plans import Rules, targets_only, with_missing, with_origins, without_revisits
 from tmpnav.types import Goals
 
 START = {"r1": "r1-start", "r2": "r2-start"}
@@ -40,3 +40,24 @@ def test_a_complete_plan_or_an_unreachable_room_is_left_as_it_is() -> None:
     cut = replace(table, single={m: c for m, c in table.single.items() if m[2] != "L3"})
     missing = Goals(("L1", "L3", "L5"), ())
     assert with_missing(plan, Rules(START, missing), cut) == plan  # no move reaches L3: nothing to put in
+
+
+def test_a_move_into_a_room_the_robot_stands_in_is_no_move() -> None:
+    """A replan whose robot has driven into its next goal room starts it there: the room is
+    visited, and the plan under way without that move is the search's seed (with it, the
+    rules refused the seed and OR-Tools started from nothing)."""
+    goals = Goals(("L1", "L2", "L3"), ())
+    rules = Rules({"r1": "L1", "r2": "r2-start"}, goals)
+    under_way = ((("r1", "L1"),), (("r1", "L2"),), (("r2", "L3"),))
+    assert not rules.valid(with_origins(under_way, rules.start_location))
+    kept = without_revisits(under_way, rules)
+    assert kept == ((("r1", "L2"),), (("r2", "L3"),))
+    assert rules.valid(with_origins(kept, rules.start_location))
+    # a room another robot has visited by then is dropped too; from a step the rules refuse for
+    # another reason (a robot not in the team), the steps as they are
+    assert without_revisits(((("r1", "L2"),), (("r2", "L2"), ("r1", "L3"))), rules) == (
+        (("r1", "L2"),),
+        (("r1", "L3"),),
+    )
+    stranger = ((("r9", "L3"),), (("r1", "L2"),))
+    assert without_revisits(stranger, rules) == stranger

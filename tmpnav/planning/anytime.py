@@ -9,7 +9,7 @@ from tmpnav.planning.bound import certified_bound
 from tmpnav.planning.run import Planned, TaskRun
 from tmpnav.planning.table import full_table
 from tmpnav.task.bound import Bound
-from tmpnav.task.plans import Plan, with_origins
+from tmpnav.task.plans import Plan, Rules, with_origins, without_revisits
 from tmpnav.task.search import UNDER_WAY
 from tmpnav.task.stage import AnytimeTask, TaskProblem, plan_anytime, plan_task, warm_up
 
@@ -32,7 +32,8 @@ def _incumbent(run: TaskRun) -> dict[str, Plan]:
     the search drops a seed its rules refuse)."""
     if not run.incumbent:
         return {}
-    return {UNDER_WAY: with_origins(run.incumbent, run.canonical.start_location)}
+    start = run.canonical.start_location
+    return {UNDER_WAY: with_origins(without_revisits(run.incumbent, Rules(start, run.goals)), start)}
 
 
 def anytime_carried(

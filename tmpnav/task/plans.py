@@ -110,6 +110,29 @@ class Rules:
         return True
 
 
+Pairs = tuple[tuple[str, str], ...]
+
+
+def without_revisits(steps: Iterable[Sequence[tuple[str, str]]], rules: Rules) -> tuple[Pairs, ...]:
+    """Steps given as (robot, target) pairs without the moves into rooms the rules count as
+    visited already when they come: what is left of a plan under way for a team that stands
+    where a replan starts it (a robot that has driven into a goal room has visited it, and its
+    move there is no move any more). From a step the rules refuse for another reason, the
+    steps as they are."""
+    state, out = rules.start(), list[Pairs]()
+    given: list[Pairs] = [tuple(step) for step in steps]
+    for k, step in enumerate(given):
+        kept = tuple((r, t) for r, t in step if rules.may_enter(state, r, t))
+        if not kept:
+            continue
+        try:
+            state = rules.apply(state, tuple((r, state.at[r], t) for r, t in kept))
+        except (PlanError, KeyError):
+            return (*out, *given[k:])
+        out.append(kept)
+    return tuple(out)
+
+
 def with_origins(steps: Iterable[Sequence[tuple[str, str]]], start_location: dict[str, str]) -> Plan:
     """Steps given as (robot, target) pairs, with each move's origin filled in: where its
     robot was after the steps before."""
