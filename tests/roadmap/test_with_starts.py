@@ -98,3 +98,49 @@ def test_a_start_on_a_node_is_that_node_and_one_in_a_wall_joins_nothing(ctx: Ora
     xmin, ymin, _, _ = ctx.world.grid.extent
     _, walled = moved(ctx, r1=(xmin + 0.01, ymin + 0.01, 0.0))  # the map's corner: no free space
     assert walled is None
+
+
+def test_graphs_of_one_grown_roadmap_share_its_trees(ctx: OracleContext, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A planning service's revisions each make a graph of the site's roadmap with other starts:
+    the trees from the grown roadmap's nodes, and what is derived from them, are computed once
+    in the process; a graph of other weights computes its own."""
+    from tmpnav.roadmap import graph as graph_module
+
+    monkeypatch.setattr(graph_module, "_SHARED", graph_module._Shared(graph_module.SHARED_BYTES))
+    calls: list[list[int]] = []
+    real = graph_module.dijkstra
+
+    def counted(matrix, **kw):  # type: ignore[no-untyped-def]
+        calls.append(list(kw["indices"]))
+        return real(matrix, **kw)
+
+    monkeypatch.setattr(graph_module, "dijkstra", counted)
+    room = ctx.scenario.rooms[0].name
+    sources = list(ctx.roadmap.instantiations[room])
+    first = RoadmapGraph(ctx.roadmap)
+    first.prepare(sources)
+    made = first.derived(sources[0], ("test",), lambda: np.arange(3.0))
+    _, added = moved(ctx, r1=a_free_pose(ctx, room))
+    second = RoadmapGraph(added)
+    second.prepare(sources)
+    assert calls == [sorted(sources)]  # the second graph found every tree
+    for s in sources:
+        assert np.array_equal(first.tree(s)[0], second.tree(s)[0][: ctx.roadmap.n_nodes])
+        assert np.isinf(second.tree(s)[0][ctx.roadmap.n_nodes :]).all()  # its start: unreached from there
+    # derived arrays are shared between graphs with as many nodes only
+    assert RoadmapGraph(ctx.roadmap).derived(sources[0], ("test",), lambda: np.zeros(3)) is made
+    assert second.derived(sources[0], ("test",), lambda: np.zeros(3)).sum() == 0.0
+    heavier = RoadmapGraph(ctx.roadmap, ctx.roadmap.weights * 2.0)
+    heavier.prepare(sources[:1])
+    assert calls[-1] == sources[:1]
+
+
+def test_the_shared_trees_keep_to_their_bytes() -> None:
+    from tmpnav.roadmap.graph import _Shared
+
+    shared = _Shared(limit=100)
+    shared.put(("a",), (np.zeros(5),))  # 40 bytes
+    shared.put(("b",), (np.zeros(5),))
+    assert shared.get(("a",)) is not None  # a used last: b goes first
+    shared.put(("c",), (np.zeros(5),))
+    assert shared.get(("b",)) is None and shared.get(("a",)) is not None and shared.size == 80

@@ -223,14 +223,15 @@ class _Walks:
     def __init__(self, paths: RoadmapGraph, spec: RobotSpec, dt: float):
         self.paths, self.spec, self.dt = paths, spec, dt
         self.xy = np.ascontiguousarray(paths.roadmap.nodes[:, :2], dtype=float)
-        self._memo: dict[int, np.ndarray] = {}
 
     def _of(self, source: int) -> np.ndarray:
-        if source not in self._memo:
+        s = self.spec
+
+        def walk() -> np.ndarray:
             dist, pred = self.paths.tree(source)
-            s = self.spec
-            self._memo[source] = _walk(pred, dist, self.xy, source, s.speed, s.turn_rate, self.dt, SLACK, LENGTH_EPS)
-        return self._memo[source]
+            return np.asarray(_walk(pred, dist, self.xy, source, s.speed, s.turn_rate, self.dt, SLACK, LENGTH_EPS))
+
+        return self.paths.derived(source, ("walk", s.speed, s.turn_rate, self.dt), walk)
 
     def floors(
         self, source: int, headings: tuple[float, ...] | None, targets: np.ndarray, m_drive: float, m_turn: float

@@ -6,6 +6,9 @@ they pass close to obstacles (:func:`safe_weights`), so that paths keep clear of
 
 from __future__ import annotations
 
+import hashlib
+from collections import OrderedDict
+from collections.abc import Callable
 from functools import cached_property
 
 import numba as nb
@@ -131,14 +134,76 @@ def _padded(dist: np.ndarray, pred: np.ndarray, shared: int, pad: int) -> tuple[
     )
 
 
+#: the most bytes of shortest-path trees (and what is derived from them) :class:`_Shared` keeps
+SHARED_BYTES = 128 * 2**20
+
+
+class _Shared:
+    """The shortest-path trees from the nodes of grown roadmaps, and arrays derived from them,
+    shared by every :class:`RoadmapGraph` of the same grown roadmap and weights in this process:
+    a planning service revises plan after plan of one site, each revision's roadmap the site's
+    with other sources (Roadmap.sources), and no path between the grown roadmap's nodes passes
+    through a source. Least recently used first out, past :data:`SHARED_BYTES`."""
+
+    def __init__(self, limit: int):
+        self.limit, self.size = limit, 0
+        self.items: OrderedDict[tuple[object, ...], tuple[np.ndarray, ...]] = OrderedDict()
+
+    def get(self, key: tuple[object, ...]) -> tuple[np.ndarray, ...] | None:
+        found = self.items.get(key)
+        if found is not None:
+            self.items.move_to_end(key)
+        return found
+
+    def put(self, key: tuple[object, ...], arrays: tuple[np.ndarray, ...]) -> None:
+        if key in self.items:
+            return
+        self.items[key] = arrays
+        self.size += sum(a.nbytes for a in arrays)
+        while self.size > self.limit and len(self.items) > 1:
+            _, gone = self.items.popitem(last=False)
+            self.size -= sum(a.nbytes for a in gone)
+
+
+_SHARED = _Shared(SHARED_BYTES)
+
+
 class RoadmapGraph:
-    """Shortest-path queries on a roadmap; one Dijkstra run per source node, memoised.
+    """Shortest-path queries on a roadmap; one Dijkstra run per source node, memoised (from
+    the grown roadmap's nodes, for every graph of that roadmap in this process: :class:`_Shared`).
     ``weights`` replace the roadmap's edge lengths (:func:`safe_weights`)."""
 
     def __init__(self, roadmap: Roadmap, weights: np.ndarray | None = None):
         self.roadmap = roadmap
         self.weights = roadmap.weights if weights is None else weights
         self._trees: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._derived: dict[tuple[object, ...], np.ndarray] = {}
+
+    @cached_property
+    def _key(self) -> tuple[str, str] | None:
+        """What decides the trees from the grown roadmap's nodes: its fingerprint and the weights
+        of its edges (None: a roadmap built by hand, which has no fingerprint)."""
+        rm = self.roadmap
+        if not rm.grown:
+            return None
+        base = np.ascontiguousarray(self.weights[: _base_edges(rm)], dtype=float)
+        return rm.grown, hashlib.blake2b(base.tobytes(), digest_size=16).hexdigest()
+
+    def derived(self, source: int, tag: tuple[object, ...], make: Callable[[], np.ndarray]) -> np.ndarray:
+        """What ``make`` computes from the tree of ``source`` (``tag`` names it and its
+        parameters), memoised with the tree: from a node of the grown roadmap, for every graph
+        of that roadmap with as many nodes in this process."""
+        key = (source, *tag)
+        if key in self._derived:
+            return self._derived[key]
+        shared = self._key is not None and source < self.roadmap.base_nodes
+        skey = ("derived", *self._key, self.roadmap.n_nodes, *key) if shared and self._key else None
+        hit = _SHARED.get(skey) if skey else None
+        value = hit[0] if hit is not None else make()
+        if skey and hit is None:
+            _SHARED.put(skey, (value,))
+        self._derived[key] = value
+        return value
 
     @cached_property
     def matrix(self) -> csr_matrix:
@@ -190,11 +255,21 @@ class RoadmapGraph:
             return
         rm = self.roadmap
         shared = rm.base_nodes
-        base = [s for s in todo if s < shared]
+        base = []
+        for s in todo:
+            if s >= shared:
+                continue
+            known = _SHARED.get(("tree", *self._key, s)) if self._key else None
+            if known is None:
+                base.append(s)
+            else:
+                self._trees[s] = _padded(known[0], known[1], shared, len(rm.sources))
         if base:
             matrix = self.base_matrix if rm.sources else self.matrix
             dist, pred = dijkstra(matrix, directed=False, indices=base, return_predecessors=True)
             for k, s in enumerate(base):
+                if self._key:
+                    _SHARED.put(("tree", *self._key, s), (dist[k, :shared].copy(), pred[k, :shared].copy()))
                 self._trees[s] = _padded(dist[k], pred[k], shared, len(rm.sources))
         added = [s for s in todo if s >= shared]
         if added:

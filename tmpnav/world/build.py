@@ -39,6 +39,7 @@ class World:
     _sdf: list[np.ndarray] = field(default_factory=list, repr=False)  # the signed distance field, once computed
     _components: dict[float, np.ndarray] = field(default_factory=dict, repr=False)  # radius -> free-space labels
     _polygons: list[tuple[str, np.ndarray, np.ndarray]] = field(default_factory=list, repr=False)  # name, vertices, box
+    _free_cells: dict[tuple[str, float], np.ndarray] = field(default_factory=dict, repr=False)  # by room, radius
 
     def is_free(self, points: np.ndarray, radius: float) -> np.ndarray:
         """Whether a disc of ``radius`` centred at each point (..., 2) is collision-free."""
@@ -112,7 +113,15 @@ class World:
         return next((r.place for r in self.rooms if r.name == name and r.place is not None), name)
 
     def free_cells_in_room(self, name: str, radius: float) -> np.ndarray:
-        """Centres (m, 2) of the cells of a room where a robot of ``radius`` fits."""
+        """Centres (m, 2) of the cells of a room where a robot of ``radius`` fits (kept: a
+        replan asks for every goal room again)."""
+        if (name, radius) not in self._free_cells:
+            cells = self._free_cells_in_room(name, radius)
+            cells.setflags(write=False)
+            self._free_cells[(name, radius)] = cells
+        return self._free_cells[(name, radius)]
+
+    def _free_cells_in_room(self, name: str, radius: float) -> np.ndarray:
         polygon = self.room_polygon(name)
         xs, ys = self.grid.cell_centers()
         cols = np.nonzero((xs >= polygon[:, 0].min()) & (xs <= polygon[:, 0].max()))[0]
