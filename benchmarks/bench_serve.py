@@ -88,8 +88,17 @@ def latency(client: Any, events: int, seed: int, shift: bool = False) -> list[di
             outcome, plan = "revision", info
         except ServiceError as err:  # the team at a time the plan cannot go on from (all done)
             outcome = f"{err.status} {err.problem['detail'][:80]}"
-        rows.append({"event": event, "time": state["time"], "seconds": round(time.perf_counter() - start, 3),
-                     "outcome": outcome, "revision": plan["revision"]})
+        rows.append(
+            {
+                "event": event,
+                "time": state["time"],
+                "seconds": round(time.perf_counter() - start, 3),
+                "outcome": outcome,
+                "revision": plan["revision"],
+                "cost": plan.get("cost", ""),
+                "makespan": plan.get("makespan", ""),
+            }
+        )
         print(rows[-1], flush=True)
     return rows
 
@@ -187,8 +196,10 @@ def main() -> None:
     if args.direct:
         rows = latency(Direct(args.scenario, args.cache_dir or default_cache_dir()), args.events, args.seed, args.shift)
         took = [r["seconds"] for r in rows if r["outcome"] == "revision"]
-        text = (f"# {args.scenario}, in process (no HTTP): {len(took)} of {len(rows)} revisions: median "
-                f"{statistics.median(took):.3f} s, p90 {percentile(took, 0.9):.3f} s, max {max(took):.3f} s\n")
+        text = (
+            f"# {args.scenario}, in process (no HTTP): {len(took)} of {len(rows)} revisions: median "
+            f"{statistics.median(took):.3f} s, p90 {percentile(took, 0.9):.3f} s, max {max(took):.3f} s\n"
+        )
         (args.output / f"{name}-direct.txt").write_text(text)
         print(text, end="")
         return
@@ -204,8 +215,10 @@ def main() -> None:
                 writer.writeheader()
                 writer.writerows(rows)
             took = [r["seconds"] for r in rows if r["outcome"] == "revision"]
-            text = (f"{header}{len(took)} of {len(rows)} revisions through HTTP: median "
-                    f"{statistics.median(took):.3f} s, p90 {percentile(took, 0.9):.3f} s, max {max(took):.3f} s\n")
+            text = (
+                f"{header}{len(took)} of {len(rows)} revisions through HTTP: median "
+                f"{statistics.median(took):.3f} s, p90 {percentile(took, 0.9):.3f} s, max {max(took):.3f} s\n"
+            )
         else:
             text = header + load(client, args.clients, args.plans, args.seconds, args.seed)
         suffix = "-shift" if args.mode == "latency" and args.shift else ""
