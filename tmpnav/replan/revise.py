@@ -114,7 +114,7 @@ def revise(
     if state.doors:
         _doors_clear(robots, world, state)
     held = in_service(doc, t, state, robots, as_it_is)
-    again = interrupted(doc, t, state, robots, as_it_is)
+    again = interrupted(doc, t, state, robots)
     now = state.visited if state.visited is not None else _arrived(doc, t, again)
     # a revision of a revision: the goals done before the plan being revised stay done
     before = [str(x) for x in (doc.get("revision") or {}).get("done", ())]

@@ -96,17 +96,16 @@ def standing_service(
     return tuple(out)
 
 
-def interrupted(
-    doc: dict[str, Any], t: float, state: TeamState, robots: tuple[RobotSpec, ...], world: World
-) -> set[str]:
-    """The stations whose service the state says was cut short at ``t`` (``interrupted: true``)
-    by a robot that has left them: they are to be served again. A station the robot still
-    stands in (or in the place of) is done (a room where a robot stands is)."""
+def interrupted(doc: dict[str, Any], t: float, state: TeamState, robots: tuple[RobotSpec, ...]) -> set[str]:
+    """The stations whose service the state says was cut short at ``t`` (``interrupted: true``):
+    they are to be served again, whether the robot has left them or still stands there (then
+    :func:`standing_service` has it serve its room's job again from the start, since a room
+    where a robot stands counts visited; a station of a place is planned again)."""
     out = set()
     for spec in robots:
         given = state.robots.get(spec.name)
         serving = _serving(doc, spec.name, t) if given is not None and given.interrupted else None
-        if serving is not None and world.room_of([spec.pose.x, spec.pose.y]) != world.place_of(serving[0]):  # type: ignore[arg-type]
+        if serving is not None:
             out.add(serving[0])
     return out
 
