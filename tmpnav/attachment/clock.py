@@ -344,9 +344,7 @@ class TeamClock:
         priced = self.scenario.planner.max_risk is not None or trace is not None
         windows = [self._window(state, i, a, until, priced) for i in range(n)]
         poses = [w[1] for w in windows]
-        visible = np.zeros((h + 1, n, n), dtype=bool)
-        for (i, j), sensing in self.sensing.items():
-            visible[:, i, j] = sensing.visible(self.lib.world, poses[i], poses[j])
+        visible = self._visible(poses, h)
         scans = self.lib.scans
         batch = SequenceBatch(
             n=n,
@@ -361,7 +359,9 @@ class TeamClock:
                 scans=None if scans is None else (scans.rows(np.concatenate([w[6] for w in windows])), scans.table),
             ),
             landmark_noise=np.stack([w[3] for w in windows]),
-            groups=StartGroups(state.team.mean[None], state.team.cov[None], self._mutual_noise(state, a, until)[None]),
+            groups=StartGroups(
+                state.team.mean[None], state.team.cov[None], self._mutual_noise(state, a, until, visible)[None]
+            ),
             sequences=Sequences.one(n, h),
             mutual_visible=visible,
             c_sigma_history=True,
@@ -461,12 +461,31 @@ class TeamClock:
     def _radius(self, i: int) -> float:
         return self.scenario.robot(self.start.names[i]).radius
 
-    def _mutual_noise(self, state: ClockState, a: int, b: int) -> np.ndarray:
-        """(h+1, n, n, 2) draws of every ordered pair's observations over the steps a..b."""
+    def _visible(self, poses: Sequence[np.ndarray], h: int) -> np.ndarray:
+        """(h+1, n, n): whether robot i sees robot j at each step, its nominal poses ``poses[i]``
+        (h+1, 3); the pairs of one sensing in one compiled call."""
+        n = len(self.start.names)
+        visible = np.zeros((h + 1, n, n), dtype=bool)
+        by_sensing: dict[MutualSensing, list[tuple[int, int]]] = {}
+        for pair, sensing in self.sensing.items():
+            by_sensing.setdefault(sensing, []).append(pair)
+        for sensing, pairs in by_sensing.items():
+            observer = np.concatenate([poses[i] for i, _ in pairs])
+            target = np.concatenate([poses[j] for _, j in pairs])
+            seen = sensing.visible(self.lib.world, observer, target).reshape(len(pairs), h + 1)
+            for (i, j), row in zip(pairs, seen, strict=True):
+                visible[:, i, j] = row
+        return visible
+
+    def _mutual_noise(self, state: ClockState, a: int, b: int, visible: np.ndarray) -> np.ndarray:
+        """(h+1, n, n, 2) draws of every ordered pair's observations over the steps a..b; zero
+        for a pair that never sees the other then (``visible``: the kernel draws only where it does)."""
         n, h = len(self.start.names), b - a
         out = np.zeros((h + 1, n, n, 2))
         first = a // MUTUAL_BLOCK
         for i, j in self.sensing:
+            if not visible[:, i, j].any():
+                continue
             blocks = [self._pair_block(i, j, k) for k in range(first, b // MUTUAL_BLOCK + 1)]
             out[:, i, j] = np.concatenate(blocks)[a - first * MUTUAL_BLOCK : b - first * MUTUAL_BLOCK + 1]
         for p in state.pairings:
