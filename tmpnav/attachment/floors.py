@@ -78,6 +78,7 @@ building's plan was 49.7% with it and is 32.0% with this one (docs/planning.md).
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numba as nb
 import numpy as np
@@ -128,11 +129,13 @@ def motion_floors(
                 origins[x] = tuple((g, arrivals[g]) for g in inst[x])
         home = goals.end_of(spec.name) == start  # it must come back to where it starts
         for o, nodes in origins.items():
-            cost, seconds = np.full(len(rooms), np.inf), np.full(len(rooms), np.inf)
-            for node, headings in nodes:  # the least over the origin's nodes and the target's instantiations
-                c, t_s = walks.floors(node, headings, targets, m_drive, w.M_u)
-                np.minimum.at(cost, room_of, c)
-                np.minimum.at(seconds, room_of, t_s)
+            # the same for every robot that shares its walks, and for every replan of the roadmap
+            tag = ("floors", spec.speed, spec.turn_rate, dt, m_drive, w.M_u, nodes, rooms)
+            cost, seconds = paths.memo(
+                tag,
+                tuple(n for n, _ in nodes),
+                partial(_row, walks, nodes, targets, room_of, len(rooms), m_drive, w.M_u),
+            )
             for k, t in enumerate(rooms):
                 if t == o or not np.isfinite(cost[k]):
                     continue
@@ -144,6 +147,28 @@ def motion_floors(
     locations = tuple(dict.fromkeys([*rooms, *start_location.values()]))
     names = tuple(r.name for r in scenario.robots)
     return CostTable(names, rooms, locations, dict(start_location), single, {}, duration)
+
+
+def _row(
+    walks: _Walks,
+    nodes: tuple[tuple[int, tuple[float, ...] | None], ...],
+    targets: np.ndarray,
+    room_of: np.ndarray,
+    rooms: int,
+    m_drive: float,
+    m_turn: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The cost and time floors from an origin's ``nodes`` (each with the headings a robot may
+    stand there with) to each room: the least over the origin's nodes and the room's
+    instantiations (``targets``, of room ``room_of``, one of ``rooms``)."""
+    cost, seconds = np.full(rooms, np.inf), np.full(rooms, np.inf)
+    for node, headings in nodes:
+        c, t_s = walks.floors(node, headings, targets, m_drive, m_turn)
+        np.minimum.at(cost, room_of, c)
+        np.minimum.at(seconds, room_of, t_s)
+    cost.setflags(write=False)
+    seconds.setflags(write=False)
+    return cost, seconds
 
 
 def bearing_information(models: Models, landmarks: int, partners: int) -> float:

@@ -189,6 +189,21 @@ class RoadmapGraph:
         base = np.ascontiguousarray(self.weights[: _base_edges(rm)], dtype=float)
         return rm.grown, hashlib.blake2b(base.tobytes(), digest_size=16).hexdigest()
 
+    def memo(
+        self, tag: tuple[object, ...], nodes: tuple[int, ...], make: Callable[[], tuple[np.ndarray, ...]]
+    ) -> tuple[np.ndarray, ...]:
+        """What ``make`` computes from the paths out of the grown roadmap's ``nodes`` alone
+        (``tag`` names it and everything else it depends on), for every graph of that roadmap
+        in this process; computed afresh where a node is a source."""
+        if self._key is None or max(nodes, default=0) >= self.roadmap.base_nodes:
+            return make()
+        key = ("memo", *self._key, nodes, *tag)
+        found = _SHARED.get(key)
+        if found is None:
+            found = make()
+            _SHARED.put(key, found)
+        return found
+
     def derived(self, source: int, tag: tuple[object, ...], make: Callable[[], np.ndarray]) -> np.ndarray:
         """What ``make`` computes from the tree of ``source`` (``tag`` names it and its
         parameters), memoised with the tree: from a node of the grown roadmap, for every graph
