@@ -258,6 +258,27 @@ def _roadmap_stored(scenario: Scenario, world: World, store: RoadmapStore | None
     return store is not None and store.cache.roadmap(roadmap_key(world, scenario.robots, scenario.roadmap)).exists()
 
 
+def warm_site(scenario: Scenario, world: World, options: PlanOptions) -> bool:
+    """Compute ahead what every plan and revision of a loaded site asks for first (``tmpnav
+    serve``): its roadmap, read from the cache (never grown here), and the shortest-path trees,
+    walks and motion floors from every room's pose instantiations, which
+    :mod:`tmpnav.roadmap.graph` keeps for the process. Whether the roadmap was there to warm."""
+    from tmpnav.attachment.floors import motion_floors
+    from tmpnav.oracle.executors import OracleContext, library
+    from tmpnav.roadmap.store import RoadmapStore
+    from tmpnav.types import Goals
+
+    run = options.execution
+    store = RoadmapStore(CacheDir.at(run.cache_dir)) if run.use_cache else None
+    if not _roadmap_stored(scenario, world, store, None):
+        return False
+    roadmap, _ = roadmap_for(scenario, world, store)
+    graph = library(OracleContext(scenario, world, roadmap)).graph
+    starts = {r.name: f"{r.name}@start" for r in scenario.robots}
+    motion_floors(scenario, graph, starts, Goals(tuple(roadmap.instantiations), ()))
+    return True
+
+
 def make_oracle(
     scenario: Scenario, world: World, roadmap: Roadmap, execution: Execution, progress: Reporters | None = None
 ) -> Oracle:

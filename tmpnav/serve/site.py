@@ -13,6 +13,7 @@ the cache directory.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import tempfile
 import threading
@@ -83,6 +84,17 @@ class Site:
         #: warm state (roadmaps, kernels) is not shared between threads
         self.running = threading.Lock()
         self._goals: dict[str, tuple[Scenario, World]] = {}
+        threading.Thread(target=self._warm, name="tmpnav-warm-site", daemon=True).start()
+
+    def _warm(self) -> None:
+        """The site's paths computed ahead (tmpnav.pipeline.warm_site), before the first request
+        that needs them, which waits for this as for any run. A site whose warming fails plans
+        all the same: each run computes what it needs."""
+        from tmpnav import pipeline
+
+        # only a head start: the run that needs the paths computes them if this failed
+        with self.running, contextlib.suppress(Exception):
+            pipeline.warm_site(self.scenario, self.world, self.options)
 
     def loaded(self, goals: dict[str, Any] | None) -> tuple[Scenario, World]:
         """The site's scenario with ``goals`` (the scenario file's ``goals`` section) in place of its
