@@ -34,9 +34,9 @@ from tmpnav.attachment.carried import CarriedCosts  # noqa: E402
 from tmpnav.pipeline import PlanOptions, prepare  # noqa: E402
 from tmpnav.planning.run import span_weight_of  # noqa: E402
 from tmpnav.results import StageTimes  # noqa: E402
+from tmpnav.task.first_routes import ROUTING_CAP  # noqa: E402
 from tmpnav.task.plans import with_origins  # noqa: E402
 from tmpnav.task.routing import solve_routes  # noqa: E402
-from tmpnav.task.search import ROUTING_CAP  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "routing"
 

@@ -4,7 +4,7 @@ At building scale (20-60 rooms, up to 8 robots) the exact problem is too big for
 optimal ENHSP search, but any part of it a few rooms and robots wide is small. The search:
 
 1. **Start.** OR-Tools routes the robots through the goal rooms on the single-move costs
-   (:mod:`tmpnav.task.routing`): a plan of single moves, usually good, within seconds.
+   (:mod:`tmpnav.task.first_routes`, :mod:`tmpnav.task.routing`): a plan of single moves, usually good, within seconds.
 2. **Improve.** Repeatedly open the plan around a seed room: up to ``sub_robots`` robots
    whose routes pass near it and a contiguous stretch of each route, ``size`` rooms in all.
    The sub-problem -- those robots, from where they are at that point of the plan, must
@@ -44,7 +44,7 @@ import math
 import os
 import random
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future
 from dataclasses import dataclass, field, replace
 from typing import Literal, TypeVar
@@ -57,14 +57,13 @@ from tmpnav.results import SearchProgress, StageTimes
 from tmpnav.task import budget as caps
 from tmpnav.task.budget import SearchBudget
 from tmpnav.task.decode import canonical_order
-from tmpnav.task.insertion import insertion_routes
+from tmpnav.task.first_routes import first_routes, no_routes
 from tmpnav.task.model import CostModel, PlanCost
 from tmpnav.task.model import entered as entered_by
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.pddl_text import Clocks, PddlTask, write_task
 from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_missing, with_origins
 from tmpnav.task.routes import route_edits
-from tmpnav.task.routing import NO_ROBOT_CAN_ENTER, Routes, solve_routes
 from tmpnav.task.solve import Background
 from tmpnav.types import CostTable, Goals
 
@@ -75,33 +74,6 @@ EPSILON = 1e-9
 #: (tmpnav.attachment.conflicts.ExecutedCost: robots kept apart)
 Executed = Callable[[Plan, PlanCost], PlanCost]
 _T = TypeVar("_T")
-
-#: OR-Tools' guided local search stops after this many solutions: on 20-60 rooms and 2-8
-#: robots it reaches in 0.1-1.2 s the routes it reaches in 10 s (within 0.02%)
-ROUTING_SOLUTIONS = 500
-#: ... and up to :data:`FEW_ROOMS` rooms and two robots, also after this many in a row that did
-#: not improve its objective. On the generated 20-room offices and warehouses with 2 robots
-#: (benchmarks/routing/first_routes.txt) it gave the same or cheaper first plans than the fixed
-#: 100 solutions it replaces on all 20 (cheaper on 4, by 2.3-10.9%), in 0.2-0.5 s more; against
-#: all 500 solutions, the same on 17, dearer on 2 warehouses (1.6%, 15.7%: improvements after 122
-#: and 400 solutions without one), in a quarter of the time. With more robots or rooms such long
-#: plateaus are common (188-297 solutions on building-4robots, building-8robots and a 60-room
-#: office, whose first plans it made 0.3-5.6% dearer): those run all :data:`ROUTING_SOLUTIONS`.
-FEW_STAGNATION, FEW_ROOMS = 100, 20
-#: ... and a replan's, which starts from the plan under way, after this many in a row that did
-#: not improve its objective, whatever the team's size: on 20 seeded states of building-20 and
-#: building-4robots each it gave the same revisions as 100 and as all 500 (in 0.3-0.4 s less)
-REPLAN_STAGNATION = 25
-#: OR-Tools' first solution for a fleet (more robots than a neighbourhood holds) where time is
-#: priced. The cheapest arc out of each route's end, robot after robot, hands the first robots
-#: most rooms and leaves the last idle; the span cost's guided local search did not even them out
-#: (office, 40 rooms, 8 robots, weighted: makespan 216 s with one robot on 2 rooms; inserting
-#: every room where it adds least, into all routes at once: 194 s, every robot on 4-7 rooms)
-FLEET_FIRST_SOLUTION = "PARALLEL_CHEAPEST_INSERTION"
-#: OR-Tools' time limit at most (a quarter of the budget below it): its solutions, not the clock,
-#: should end it. At 60 rooms and 8 robots its 500 solutions took 9.8 s on a busy 2-core machine,
-#: and a cap of 10 s left the first plan to the machine's speed (962.0 or 1016.7 on one office)
-ROUTING_CAP = 30.0
 
 
 @dataclass(frozen=True)
@@ -256,29 +228,22 @@ class AnytimeSearch:
         """OR-Tools' routes on the single moves, as a plan of single moves; its local search
         starts from ``start_from``'s routes when given (a replan's plan under way)."""
         opts = self.options
-        # guided local search stops after ROUTING_SOLUTIONS solutions, few rooms and robots after FEW_STAGNATION
-        # without improvement, or at its own time limit (not what a cold oracle left of the budget: cut to
-        # 0.1 s, its first solution left robots of a shift at their docks, tests/test_team_objective.py)
-        limit = opts.routing_time if opts.routing_time is not None else min(ROUTING_CAP, max(1.0, opts.budget / 4))
-        few = len(self.goals.all_rooms) <= FEW_ROOMS and len(self.model.robots) <= 2
         with self.times.timed("planner"):
-            routes = solve_routes(
+            routes, timed_out = first_routes(
                 singles,
                 self.goals,
-                time_limit=max(0.001, min(limit, self.left())),
-                solution_limit=ROUTING_SOLUTIONS,
-                stagnation=REPLAN_STAGNATION if start_from is not None else FEW_STAGNATION if few else None,
-                first_solution=FLEET_FIRST_SOLUTION if self.fleet and opts.span_weight else "PATH_CHEAPEST_ARC",
+                self.model.robots,
+                budget=opts.budget,
+                routing_time=opts.routing_time,
+                time_left=self.left(),
+                fleet=self.fleet,
                 span_weight=opts.span_weight,
-                initial=None if start_from is None else _routes_of(start_from, self.model.robots),
+                start_from=start_from,
             )
-            if routes.timed_out:
+            if timed_out:
                 self.budget.cap(caps.ROUTING_CAP)
-            if not routes.found and routes.status != NO_ROBOT_CAN_ENTER:
-                # OR-Tools ran out of time before its first solution: a plan all the same
-                routes = insertion_routes(singles, self.goals, routes.status, opts.span_weight)
         if not routes.found:
-            raise PlannerError(_no_routes(routes))
+            raise PlannerError(no_routes(routes))
         plan = with_origins([((m[0], m[2]),) for m in routes.moves(singles)], self.model.start_location)
         return self.canonical(plan), routes.method
 
@@ -705,20 +670,3 @@ def search(
     """Run the anytime search (see the module docstring); ``executed`` prices a plan as it will
     be executed (robots kept apart), from its cost as planned."""
     return AnytimeSearch(model, goals, options, run, proves_optimal, executed).run(seeds)
-
-
-def _no_routes(routes: Routes) -> str:
-    """Why there is no first plan, in words: a goal room no allowed robot can enter, or none
-    of the routes OR-Tools and cheapest insertion tried visits every goal."""
-    if routes.status == NO_ROBOT_CAN_ENTER:
-        return f"no plan of single moves reaches the goals: no robot allowed there can enter {routes.detail}"
-    return f"no plan of single moves reaches the goals ({routes.status}): {routes.detail}"
-
-
-def _routes_of(plan: Plan, robots: Sequence[str]) -> dict[str, tuple[str, ...]]:
-    """Each robot's rooms in the order the plan takes it there."""
-    out: dict[str, list[str]] = {r: [] for r in robots}
-    for step in plan:
-        for r, _, target in step:
-            out[r].append(target)
-    return {r: tuple(xs) for r, xs in out.items()}
