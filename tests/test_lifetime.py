@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import signal
-import subprocess
-import sys
 import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -12,7 +10,7 @@ from types import FrameType
 
 import pytest
 
-from tests.children import sigint_default
+from tests.children import run_python
 from tmpnav.lifetime import SIGNAL_POLL, gather
 
 
@@ -93,16 +91,7 @@ def test_the_signals_own_exception_where_python_cannot_raise_it_prints_no_traceb
     """Python prints an exception raised in a weakref callback as "Exception ignored in ...",
     traceback included: after a Ctrl-C, the fault-injection test saw one land in importlib's
     module-lock callback. The signal is remembered, so that one is silent; others are not."""
-    import subprocess
-    import sys
-
-    proc = subprocess.run(
-        [sys.executable, "-c", UNRAISABLE],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        preexec_fn=sigint_default,
-    )
+    proc = run_python(UNRAISABLE, timeout=60)
     assert proc.returncode == 0 and proc.stdout == "went on\n", proc.stderr
     assert "KeyboardInterrupt" not in proc.stderr
     assert "ValueError: a real bug" in proc.stderr
@@ -133,12 +122,6 @@ try:
 except (KeyboardInterrupt, lifetime.Terminated) as err:
     print("raised", type(err).__name__, flush=True)
 """
-    proc = subprocess.run(
-        [sys.executable, "-c", script],
-        capture_output=True,
-        text=True,
-        timeout=30,
-        preexec_fn=sigint_default,
-    )
+    proc = run_python(script, timeout=30)
     expected = "KeyboardInterrupt" if sig == signal.SIGINT else "Terminated"
     assert proc.stdout.split("\n")[:2] == ["block done", f"raised {expected}"], proc.stdout + proc.stderr

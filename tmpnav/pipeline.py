@@ -263,19 +263,16 @@ def warm_site(scenario: Scenario, world: World, options: PlanOptions) -> bool:
     serve``): its roadmap, read from the cache (never grown here), and the shortest-path trees,
     walks and motion floors from every room's pose instantiations, which
     :mod:`tmpnav.roadmap.graph` keeps for the process. Whether the roadmap was there to warm."""
-    from tmpnav.attachment.floors import motion_floors
+    from tmpnav.attachment.carried import room_floors
     from tmpnav.oracle.executors import OracleContext, library
     from tmpnav.roadmap.store import RoadmapStore
-    from tmpnav.types import Goals
 
     run = options.execution
     store = RoadmapStore(CacheDir.at(run.cache_dir)) if run.use_cache else None
     if not _roadmap_stored(scenario, world, store, None):
         return False
     roadmap, _ = roadmap_for(scenario, world, store)
-    graph = library(OracleContext(scenario, world, roadmap)).graph
-    starts = {r.name: f"{r.name}@start" for r in scenario.robots}
-    motion_floors(scenario, graph, starts, Goals(tuple(roadmap.instantiations), ()))
+    room_floors(scenario, library(OracleContext(scenario, world, roadmap)), [r.name for r in scenario.robots])
     return True
 
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.children import sigint_default
+from tests.children import start_python
 from tests.task.instances import small_instance
 from tests.task.test_pddl_text import validate_with_unified_planning
 from tmpnav.errors import PlannerTimeoutError
@@ -170,12 +170,7 @@ INTERRUPTED_RUN = guarded_run("solve_text", f"solve_text({SLOW_DOMAIN!r}, {SLOW_
 @pytest.mark.parametrize(("sig", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_a_signal_during_a_search_in_the_jvm_ends_the_run_at_once(sig: signal.Signals, code: int) -> None:
     """The JVM (-Xrs) leaves SIGINT and SIGTERM to tmpnav: the run ends as interrupted, now."""
-    proc = subprocess.Popen(
-        [sys.executable, "-c", INTERRUPTED_RUN],
-        stdout=subprocess.PIPE,
-        text=True,
-        preexec_fn=sigint_default,
-    )
+    proc = start_python(INTERRUPTED_RUN)
     try:
         assert proc.stdout is not None and proc.stdout.readline() == "solving\n"
         time.sleep(4.0)  # the server started, ENHSP searching
@@ -204,12 +199,7 @@ def test_a_signal_during_searches_side_by_side_ends_the_run_at_once(sig: signal.
     """The kernel may give the signal to a pool thread or a JVM thread: the main thread still
     handles it within a slice, and the searches under way are stopped, not waited for (their
     time limit is 120 s)."""
-    proc = subprocess.Popen(
-        [sys.executable, "-c", INTERRUPTED_PAIR],
-        stdout=subprocess.PIPE,
-        text=True,
-        preexec_fn=sigint_default,
-    )
+    proc = start_python(INTERRUPTED_PAIR)
     try:
         assert proc.stdout is not None and proc.stdout.readline() == "solving\n"
         time.sleep(4.0)  # the server started, both searches running
@@ -228,12 +218,7 @@ def test_a_signal_during_searches_side_by_side_ends_the_run_at_once(sig: signal.
 def test_a_killed_run_leaves_no_server_behind() -> None:
     """A run killed outright (no handler runs) still ends its server: the kernel closes the
     server's input, and the server ends when its input does."""
-    proc = subprocess.Popen(
-        [sys.executable, "-c", INTERRUPTED_RUN],
-        stdout=subprocess.PIPE,
-        text=True,
-        preexec_fn=sigint_default,
-    )
+    proc = start_python(INTERRUPTED_RUN)
     try:
         assert proc.stdout is not None and proc.stdout.readline() == "solving\n"
         time.sleep(3.0)

@@ -35,13 +35,14 @@ from tmpnav.attachment.team import Team
 from tmpnav.choices import Costs
 from tmpnav.oracle.bounds import cannot_save
 from tmpnav.oracle.executors import library
+from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import arrival_state
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.model import PlanCost, entered, robot_ends, sub_moves
 from tmpnav.task.plans import Plan
-from tmpnav.types import CostTable, Goals, MotionResult, MoveKey
+from tmpnav.types import CostTable, Goals, MotionResult, MoveKey, Scenario
 
 #: plan runs remembered (the least recently used dropped first)
 MAX_RUNS = 4096
@@ -214,13 +215,19 @@ class CarriedCosts:
         any heading (a robot may stand on a room's node turned to a job's heading), and from each
         robot's start pose (origin ``<robot>@start``; a robot that starts in a room and comes back
         stands on one of its instantiations)."""
-        rooms = tuple(self.lib.roadmap.instantiations)
-        starts = {r: _START.format(r) for r in self.robots}
-        return motion_floors(self.scenario, self.lib.graph, starts, Goals(rooms, ())).single
+        return room_floors(self.scenario, self.lib, self.robots)
 
 
-#: the origin of a robot's moves from its start pose in :attr:`CarriedCosts._floors`
+#: the origin of a robot's moves from its start pose in :func:`room_floors`
 _START = "{}@start"
+
+
+def room_floors(scenario: Scenario, lib: MotionLibrary, robots: Sequence[str]) -> dict[MoveKey, float]:
+    """The motion floor of every single move of ``robots`` between rooms of ``lib``'s roadmap,
+    goals or not, from any heading, and from each robot's start pose (origin ``<robot>@start``)."""
+    rooms = tuple(lib.roadmap.instantiations)
+    starts = {r: _START.format(r) for r in robots}
+    return motion_floors(scenario, lib.graph, starts, Goals(rooms, ())).single
 
 
 def _location(start: str, head: Plan, robot: str) -> str:

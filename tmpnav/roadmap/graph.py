@@ -177,7 +177,6 @@ class RoadmapGraph:
         self.roadmap = roadmap
         self.weights = roadmap.weights if weights is None else weights
         self._trees: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        self._derived: dict[tuple[object, ...], np.ndarray] = {}
 
     @cached_property
     def _key(self) -> tuple[str, str] | None:
@@ -195,30 +194,24 @@ class RoadmapGraph:
         """What ``make`` computes from the paths out of the grown roadmap's ``nodes`` alone
         (``tag`` names it and everything else it depends on), for every graph of that roadmap
         in this process; computed afresh where a node is a source."""
+        return self._kept("memo", tag, nodes, make)
+
+    def derived(self, source: int, tag: tuple[object, ...], make: Callable[[], np.ndarray]) -> np.ndarray:
+        """What ``make`` computes from the tree of ``source`` (``tag`` names it and its
+        parameters), as :meth:`memo` keeps it, for graphs with as many nodes."""
+        return self._kept("derived", (*tag, self.roadmap.n_nodes), (source,), lambda: (make(),))[0]
+
+    def _kept(
+        self, kind: str, tag: tuple[object, ...], nodes: tuple[int, ...], make: Callable[[], tuple[np.ndarray, ...]]
+    ) -> tuple[np.ndarray, ...]:
         if self._key is None or max(nodes, default=0) >= self.roadmap.base_nodes:
             return make()
-        key = ("memo", *self._key, nodes, *tag)
+        key = (kind, *self._key, nodes, *tag)
         found = _SHARED.get(key)
         if found is None:
             found = make()
             _SHARED.put(key, found)
         return found
-
-    def derived(self, source: int, tag: tuple[object, ...], make: Callable[[], np.ndarray]) -> np.ndarray:
-        """What ``make`` computes from the tree of ``source`` (``tag`` names it and its
-        parameters), memoised with the tree: from a node of the grown roadmap, for every graph
-        of that roadmap with as many nodes in this process."""
-        key = (source, *tag)
-        if key in self._derived:
-            return self._derived[key]
-        shared = self._key is not None and source < self.roadmap.base_nodes
-        skey = ("derived", *self._key, self.roadmap.n_nodes, *key) if shared and self._key else None
-        hit = _SHARED.get(skey) if skey else None
-        value = hit[0] if hit is not None else make()
-        if skey and hit is None:
-            _SHARED.put(skey, (value,))
-        self._derived[key] = value
-        return value
 
     @cached_property
     def matrix(self) -> csr_matrix:
