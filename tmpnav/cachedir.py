@@ -9,6 +9,8 @@
     <cache>/roadmaps/<key>.scans.npz    a range sensor's scan information of a map (the same)
     <cache>/roadmaps/<key>.localisability.npz
                                         a map's localisability as plan.png draws it (the same)
+    <cache>/roadmaps/<key>.safe.npz     a grown roadmap's safe edge weights for a robot radius
+                                        and a clearance (the same)
     <file>.corrupt-<date>-<pid>         a damaged file, set aside: never read again, kept for a
                                         bug report, removed by ``tmpnav cache clear``
     .<file>.tmpnav-<pid>-<hex>.tmp      a file being written (tmpnav.atomic); removed by the next
@@ -36,6 +38,9 @@ DATABASE = "oracle-v1.sqlite3"
 ROADMAPS = "roadmaps"
 SCANS = ".scans.npz"  # a scan information table beside the roadmaps
 LOCALISABILITY = ".localisability.npz"  # a localisability map beside them
+SAFE = ".safe.npz"  # a grown roadmap's safe edge weights beside them
+#: the files beside the roadmaps that are not roadmaps
+BESIDE = (SCANS, LOCALISABILITY, SAFE)
 SET_ASIDE = ".corrupt-"
 
 
@@ -107,6 +112,9 @@ class CacheDir:
     def localisability(self, key: str) -> Path:
         return self.roadmaps / f"{key}{LOCALISABILITY}"
 
+    def safe_weights(self, key: str) -> Path:
+        return self.roadmaps / f"{key}{SAFE}"
+
     def ensure(self, folder: Path | None = None) -> Path:
         """Create the directory (or its sub-folder ``folder``) if needed; a CacheError when it
         cannot be created or written, with what to do instead."""
@@ -136,7 +144,7 @@ class CacheDir:
         """Location, size and content of the cache (the database is opened read-only)."""
         files = self.database_files()
         stored = [p for p in self.roadmap_files() if p.suffix == ".npz"]  # with the scan tables
-        roadmaps = [p for p in stored if not p.name.endswith((SCANS, LOCALISABILITY))]
+        roadmaps = [p for p in stored if not p.name.endswith(BESIDE)]
         entries, error = count_entries(self.database) if self.database.exists() else (0, None)
         return CacheInfo(
             directory=self.root,
@@ -167,7 +175,7 @@ class CacheDir:
             first, why = failed[0]
             more = f" ({len(failed)} files could not be removed)" if len(failed) > 1 else ""
             raise CacheError(f"cannot clear the cache {self.root}: {first}: {why.strerror}{more}")
-        return len(database), sum(p.suffix == ".npz" and not p.name.endswith((SCANS, LOCALISABILITY)) for p in roadmaps)
+        return len(database), sum(p.suffix == ".npz" and not p.name.endswith(BESIDE) for p in roadmaps)
 
 
 def _size(path: Path) -> int:

@@ -314,7 +314,7 @@ def prepare(
     up to the plan will be quick), grow or read the roadmap, open the oracle. The caller must
     close ``prepared.oracle`` (executor and cache)."""
     from tmpnav.roadmap.reach import check_reachable
-    from tmpnav.roadmap.store import RoadmapStore, ScanStore
+    from tmpnav.roadmap.store import RoadmapStore, SafeWeightStore, ScanStore
 
     run = options.execution
     with times.timed("load"):
@@ -334,6 +334,9 @@ def prepare(
         if cache is not None and store is not None and scenario.models.range_sensor is not None:
             # before the oracle's workers fork: they start with the table too
             ScanStore(cache, store).load(world, scenario.models.range_sensor)
+        if cache is not None and store is not None and scenario.roadmap.clearance:
+            radius = max(r.radius for r in scenario.robots)  # the motions' (tmpnav.oracle.motions)
+            SafeWeightStore(cache, store).ensure(roadmap, world, radius, scenario.roadmap.clearance)
     with times.timed("oracle"):
         oracle = make_oracle(scenario, world, roadmap, run, options.reporters)
     warnings = tuple(store.warnings) if store is not None else ()

@@ -151,3 +151,46 @@ def test_a_localisability_map_is_computed_once_per_map_and_view(tmp_path: Path) 
     assert cache.info().set_aside == 1
     other = stored_localisability(cache, world, sensor, (0.5, 0.5, 5.0, 4.0), 200)
     assert other.xs.size != expected.xs.size or other.xs[-1] != expected.xs[-1]
+
+
+def test_a_grown_roadmaps_safe_weights_are_kept_beside_it_and_read_back(tmp_path: Path) -> None:
+    """A second process (here: the process's own memo emptied) reads the safe weights the first
+    stored, the same bits; a replan's sources add their own edges on top; a damaged file is set
+    aside with one warning and the weights computed again."""
+    from tests.world.test_lidar import box, world_of
+    from tmpnav.roadmap import graph
+    from tmpnav.roadmap.store import SafeWeightStore
+
+    world, cache = world_of(box()), CacheDir(tmp_path)
+    nodes = np.array([[0.5, 0.5], [4.0, 0.5], [4.0, 2.2], [9.0, 5.0], [2.0, 4.0]])
+    edges = np.array([[0, 1], [1, 2], [2, 3], [3, 4]], dtype=np.int64)
+    lengths = np.linalg.norm(nodes[edges[:, 0]] - nodes[edges[:, 1]], axis=1)
+    roadmap = Roadmap(nodes, edges, lengths, {"A": (3,)}, {"r1": 0}, "g" * 64)
+    expected = graph.safe_weights(roadmap, world, 0.3, 0.4)
+    assert np.any(expected > lengths)  # edges near the walls and the pillar weigh more
+    graph._GROWN_WEIGHTS.clear()
+    SafeWeightStore(cache, RoadmapStore(cache)).ensure(roadmap, world, 0.3, 0.4)
+    (path,) = list(cache.roadmaps.iterdir())
+    assert path.name.endswith(".safe.npz") and cache.info().roadmaps == 0
+    graph._GROWN_WEIGHTS.clear()
+    SafeWeightStore(cache, RoadmapStore(cache)).ensure(roadmap, world, 0.3, 0.4)
+    key = (roadmap.grown, world.fingerprint, 0.3, 0.4)
+    np.testing.assert_array_equal(graph._GROWN_WEIGHTS[key], expected)
+    replan = Roadmap(
+        np.vstack([nodes, [[6.0, 4.0]]]),
+        np.vstack([edges, [[5, 3]]]),
+        np.r_[lengths, np.hypot(3.0, 1.0)],
+        {"A": (3,)},
+        {"r1": 5},
+        "h" * 64,
+        sources=(5,),
+        base="g" * 64,
+    )
+    np.testing.assert_array_equal(graph.safe_weights(replan, world, 0.3, 0.4)[:4], expected)
+    with open(path, "r+b") as fh:
+        fh.truncate(100)
+    graph._GROWN_WEIGHTS.clear()
+    with pytest.warns(RoadmapCacheWarning, match="safe weights .* are unreadable"):
+        SafeWeightStore(cache, RoadmapStore(cache)).ensure(roadmap, world, 0.3, 0.4)
+    np.testing.assert_array_equal(graph._GROWN_WEIGHTS[key], expected)
+    assert cache.info().set_aside == 1

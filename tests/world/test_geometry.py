@@ -1,4 +1,4 @@
-"""The one angle-wrapping rule (world/geometry.py), in numpy and in compiled code."""
+"""Planar geometry (world/geometry.py): the angle-wrapping rule, in numpy and compiled, and the even-odd rule."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tmpnav.world.geometry import wrap_angle, wrap_angle_scalar
+from tmpnav.world.geometry import points_in_polygon, wrap_angle, wrap_angle_scalar
 
 EDGES = [
     math.pi,
@@ -48,3 +48,26 @@ def test_angles_in_range_pass_through_unchanged() -> None:
     inside = np.array([-math.pi, -1.0, 0.0, 1e-300, math.nextafter(math.pi, 0.0)])
     assert np.array_equal(wrap_angle(inside), inside)
     assert [wrap_angle_scalar(float(a)) for a in inside] == inside.tolist()
+
+
+def _even_odd_broadcast(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
+    """The even-odd rule in numpy's broadcast form: what the compiled loop must give, point for point."""
+    px, py = points[:, 0][:, None], points[:, 1][:, None]
+    x0, y0 = polygon[:, 0][None, :], polygon[:, 1][None, :]
+    x1, y1 = np.roll(polygon[:, 0], -1)[None, :], np.roll(polygon[:, 1], -1)[None, :]
+    straddles = (y0 > py) != (y1 > py)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x_cross = x0 + (py - y0) * (x1 - x0) / (y1 - y0)
+    return np.count_nonzero(straddles & (px < x_cross), axis=1) % 2 == 1
+
+
+def test_points_in_polygon_agree_with_the_broadcast_rule_on_vertices_and_edges() -> None:
+    """Random polygons on a 0.1 m lattice, probed at random points, at their vertices and at their
+    edges' midpoints: the points a grid's cell centres put on a room's outline."""
+    rng = np.random.default_rng(3)
+    for _ in range(500):
+        polygon = np.round(rng.uniform(0.0, 5.0, (int(rng.integers(3, 9)), 2)), 1)
+        points = np.concatenate(
+            [np.round(rng.uniform(-0.5, 5.5, (100, 2)), 2), polygon, (polygon + np.roll(polygon, -1, axis=0)) / 2]
+        )
+        assert (points_in_polygon(points, polygon) == _even_odd_broadcast(points, polygon)).all()

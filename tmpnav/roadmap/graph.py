@@ -32,18 +32,8 @@ def safe_weights(roadmap: Roadmap, world: World, radius: float, clearance: float
     collision bound is near 1 whatever the belief (docs/models.md, "Collision bound"), so the
     shortest path is the wrong one to bound; a detour of a few per cent through the free middle
     makes the bound useful."""
-    key = (roadmap.grown, world.fingerprint, radius, clearance)
-    grown = ~_touches(roadmap.edges, roadmap.sources)  # the edges of the grown roadmap
-    known = _GROWN_WEIGHTS.get(key)
-    if known is None or known.shape[0] != int(grown.sum()):
-        # the grown roadmap's edges on their own: their margins are sampled as without sources
-        e = roadmap.edges[grown]
-        margin = segment_margins(roadmap.nodes[e[:, 0]], roadmap.nodes[e[:, 1]], world, radius)
-        known = _safe(roadmap.weights[grown], margin, clearance)
-        if roadmap.grown:  # a roadmap built by hand has no fingerprint to know it by
-            _GROWN_WEIGHTS[key] = known
-            while len(_GROWN_WEIGHTS) > 4:
-                _GROWN_WEIGHTS.pop(next(iter(_GROWN_WEIGHTS)))
+    grown = grown_edges(roadmap)
+    known = grown_safe_weights(roadmap, world, radius, clearance)
     if not roadmap.sources:
         return known.copy()
     out = np.empty(roadmap.edges.shape[0])
@@ -54,6 +44,31 @@ def safe_weights(roadmap: Roadmap, world: World, radius: float, clearance: float
     return out
 
 
+def grown_safe_weights(roadmap: Roadmap, world: World, radius: float, clearance: float) -> np.ndarray:
+    """:func:`safe_weights` of the grown roadmap's edges alone (a replan's sources left out), in
+    the order of ``roadmap.edges``; kept in the process (and read from the cache by
+    tmpnav.roadmap.store.SafeWeightStore): a replan adds a few edges to a roadmap whose other
+    weights are known. Do not write to the array."""
+    grown = grown_edges(roadmap)
+    key = (roadmap.grown, world.fingerprint, radius, clearance)
+    known = _GROWN_WEIGHTS.get(key)
+    if known is None or known.shape[0] != int(grown.sum()):
+        # the grown roadmap's edges on their own: their margins are sampled as without sources
+        e = roadmap.edges[grown]
+        margin = segment_margins(roadmap.nodes[e[:, 0]], roadmap.nodes[e[:, 1]], world, radius)
+        known = _safe(roadmap.weights[grown], margin, clearance)
+        if roadmap.grown:  # a roadmap built by hand has no fingerprint to know it by
+            keep_safe_weights(roadmap, world, radius, clearance, known)
+    return known
+
+
+def keep_safe_weights(roadmap: Roadmap, world: World, radius: float, clearance: float, weights: np.ndarray) -> None:
+    """Keep ``weights`` as the grown roadmap's safe weights (:func:`grown_safe_weights`)."""
+    _GROWN_WEIGHTS[(roadmap.grown, world.fingerprint, radius, clearance)] = weights
+    while len(_GROWN_WEIGHTS) > 4:
+        _GROWN_WEIGHTS.pop(next(iter(_GROWN_WEIGHTS)))
+
+
 #: the safe weights of grown roadmaps' edges (:func:`safe_weights`), by roadmap, world, radius and
 #: clearance: a replan adds a few edges to a roadmap whose other weights are known
 _GROWN_WEIGHTS: dict[tuple[str, str, float, float], np.ndarray] = {}
@@ -62,6 +77,11 @@ _GROWN_WEIGHTS: dict[tuple[str, str, float, float], np.ndarray] = {}
 def _safe(weights: np.ndarray, margin: np.ndarray, clearance: float) -> np.ndarray:
     g = (np.clip(clearance - margin, 0.0, clearance) / clearance) ** 2
     return np.asarray(weights * (1.0 + SAFE_PENALTY * g), dtype=float)
+
+
+def grown_edges(roadmap: Roadmap) -> np.ndarray:
+    """Which of the roadmap's edges are the grown roadmap's (no end at a replan's source)."""
+    return ~_touches(roadmap.edges, roadmap.sources)
 
 
 def _touches(edges: np.ndarray, nodes: tuple[int, ...]) -> np.ndarray:

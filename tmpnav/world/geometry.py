@@ -19,14 +19,26 @@ def polygon_area(polygon: np.ndarray) -> float:
 
 def points_in_polygon(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     """Even-odd rule: which of ``points`` (m, 2) lie inside ``polygon`` (k, 2)? -> (m,) bool."""
-    px, py = points[:, 0][:, None], points[:, 1][:, None]
-    x0, y0 = polygon[:, 0][None, :], polygon[:, 1][None, :]
-    x1, y1 = np.roll(polygon[:, 0], -1)[None, :], np.roll(polygon[:, 1], -1)[None, :]
-    straddles = (y0 > py) != (y1 > py)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x_cross = x0 + (py - y0) * (x1 - x0) / (y1 - y0)
-    crossings = straddles & (px < x_cross)
-    return (np.count_nonzero(crossings, axis=1) % 2) == 1
+    return _even_odd(np.ascontiguousarray(points, dtype=float), np.ascontiguousarray(polygon, dtype=float))
+
+
+@nb.njit(cache=True)
+def _even_odd(points: np.ndarray, polygon: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """A ray from each point towards +x crosses the polygon's edges an odd number of times
+    inside it. The crossing's x is computed by the same operations, in the same order, as
+    numpy's broadcast form of the rule did, so the same points are inside."""
+    k = polygon.shape[0]
+    inside = np.zeros(points.shape[0], dtype=np.bool_)
+    for m in range(points.shape[0]):
+        px, py = points[m, 0], points[m, 1]
+        odd = False
+        for e in range(k):
+            x0, y0 = polygon[e, 0], polygon[e, 1]
+            x1, y1 = polygon[(e + 1) % k, 0], polygon[(e + 1) % k, 1]
+            if (y0 > py) != (y1 > py) and px < x0 + (py - y0) * (x1 - x0) / (y1 - y0):
+                odd = not odd
+        inside[m] = odd
+    return inside
 
 
 def distance_to_segment(points: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
