@@ -169,6 +169,18 @@ class ScanModel:
     #: ``amcl``: the robot's belief fuses its lidar alone, as nav2's AMCL does (no landmarks, no
     #: partners seen); False: the landmarks and mutual observations update it too
     lidar_only: bool = True
+    #: ``amcl``: what the collision bound prices. ``local``: the robot's position relative to the
+    #: walls its lidar sees, as nav2's costmaps place them from the live scans (a stationary
+    #: Gauss-Markov error of std ``local_std`` and correlation time ``local_time``); ``map``: its
+    #: belief against the map, as if it steered on its global estimate alone
+    walls: str = "local"
+    local_std: float = 0.05  # m
+    local_time: float = 2.0  # s
+
+    @property
+    def local_walls(self) -> bool:
+        """The collision bound prices the error relative to the walls the robot sees (``amcl``, ``walls: local``)."""
+        return self.kind is ScanModelKind.AMCL and self.walls == "local"
 
     @property
     def fuses_others(self) -> bool:

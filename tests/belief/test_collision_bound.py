@@ -10,6 +10,8 @@ the oracle picks the cheapest instantiation within max_risk.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -144,3 +146,27 @@ def test_a_move_over_the_threshold_costs_more_than_any_plan_within_it() -> None:
     assert risk_penalty(0.05, 0.05) == 0.0
     assert risk_penalty(0.051, 0.05) == pytest.approx(RISK_PENALTY * 0.001)
     assert risk_penalty(0.05 + 1e-6, 0.05) > 1e5
+
+
+@pytest.mark.parametrize("low", [0.3, 0.1, 0.0])
+def test_against_the_walls_a_robot_sees_the_kernel_prices_the_local_error(low: float) -> None:
+    """models.range_sensor.localiser.walls: local: the kernel's p_t and X_t are the reference's
+    for the stationary Gauss-Markov error of risk.local_errors, whatever the belief (the move's
+    beliefs are the same as without it), and the bound falls as local_std does."""
+    T, L = 12, 2
+    margins = np.linspace(0.6, low, T + 1)
+    motion = _motion(T, L, margins, turn=0.2)
+    batch = _batch(motion, [0], [0], T, L)
+    var, rho = 0.04**2, 0.8
+    local = propagate_sequences(replace(batch, ekf=batch.ekf._replace(local_var=var, local_rho=rho)))
+    belief = propagate_sequences(batch)
+    np.testing.assert_array_equal(local.last_covs, belief.last_covs)
+    covs, cross = risk.local_errors(T + 1, var, rho)
+    reach = _reach(margins)
+    p = risk.step_bound(covs, reach)
+    x = risk.crossing_bound(covs[:T], covs[1:], cross[1:], reach[:-1], reach[1:])
+    np.testing.assert_allclose(local.step_risk[:, 0, 0], p, rtol=1e-12, atol=1e-300)
+    np.testing.assert_allclose(local.step_risk[1:, 0, 1], x, rtol=1e-12, atol=1e-300)
+    assert local.risk[0, 0] == pytest.approx(min(p[1], p[0] + x[0]) + x[1:].sum(), rel=1e-12)
+    tighter = propagate_sequences(replace(batch, ekf=batch.ekf._replace(local_var=0.02**2, local_rho=rho)))
+    assert tighter.risk[0, 0] <= local.risk[0, 0]

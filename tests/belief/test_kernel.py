@@ -269,4 +269,6 @@ def test_the_kernel_unpacks_the_named_tuples_in_field_order() -> None:
         "scans",
         "scan_thresholds",
         "fuse_others",
+        "local_var",
+        "local_rho",
     )

@@ -114,6 +114,7 @@ def test_simulate_with_amcl_reports_the_plan_against_amcl(tmp_path: Path) -> Non
     assert run.returncode == 0, run.stderr
     text = run.stdout
     assert "localiser: nav2 AMCL" in text and "site: clutter" in text and "true motion noise" in text
+    assert "steering on what the lidar sees of the nearest wall" in text  # --steer auto: local with AMCL
     assert "median NEES" in text and "beyond 3 sigma" in text and "team" in text
     assert "nan" not in text and "mutual observations" not in text
     csv = (out / "consistency.csv").read_text().splitlines()
@@ -128,3 +129,14 @@ def test_simulate_with_amcl_refuses_a_bad_site_in_one_line(tmp_path: Path) -> No
     )  # fmt: skip
     assert run.returncode == 2 and "Traceback" not in run.stderr
     assert len(run.stderr.strip().splitlines()) == 1 and "clutter" in run.stderr
+
+
+def test_steering_on_what_the_lidar_sees_needs_a_lidar(tmp_path: Path) -> None:
+    """--steer local on a scenario whose robots carry no range sensor: one line saying what to add."""
+    run = subprocess.run(
+        [sys.executable, "-m", "tmpnav", "simulate", str(ROOT / "configs" / "two-rooms.yaml"), "--steer", "local",
+         "--sessions", "1", "--workers", "1", "-q", "--cache-dir", str(tmp_path / "cache")],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert run.returncode != 0 and "Traceback" not in run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1 and "models.range_sensor" in run.stderr

@@ -470,7 +470,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
     h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk, h_step = hist
     work, PHt, K, H, cols, y, g, Cx, masses, qs, support = scratch
     m_off, m_T, ctrl, pose, vis, stream, reach, reach_row, scan_row, scan_table = motions  # MotionArrays' fields
-    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds, others = ekf  # EKFConstants
+    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds, others, lvar, lrho = ekf  # EKFConstants
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
     priced = reach.shape[1] > 1
     for k in range(seqs.restart[c], seqs.horizon[c]):
@@ -533,10 +533,14 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
             trace = cov[3 * i, 3 * i] + cov[3 * i + 1, 3 * i + 1] + cov[3 * i + 2, 3 * i + 2]
             h_csig[t, i] = h_csig[k, i] + trace * dt if t <= m_T[m] else h_csig[k, i]
             if priced and t <= m_T[m]:
-                a, b, d = cov[3 * i, 3 * i], cov[3 * i, 3 * i + 1], cov[3 * i + 1, 3 * i + 1]
-                ap, bp, dp = h_cov[k, 3 * i, 3 * i], h_cov[k, 3 * i, 3 * i + 1], h_cov[k, 3 * i + 1, 3 * i + 1]
-                C00, C01 = Cx[3 * i, 2 * i], Cx[3 * i, 2 * i + 1]
-                C10, C11 = Cx[3 * i + 1, 2 * i], Cx[3 * i + 1, 2 * i + 1]
+                if lvar > 0.0:  # the error relative to the walls the robot sees (risk.local_errors)
+                    a, b, d, ap, bp, dp = lvar, 0.0, lvar, lvar, 0.0, lvar
+                    C00, C01, C10, C11 = lrho * lvar, 0.0, 0.0, lrho * lvar
+                else:
+                    a, b, d = cov[3 * i, 3 * i], cov[3 * i, 3 * i + 1], cov[3 * i + 1, 3 * i + 1]
+                    ap, bp, dp = h_cov[k, 3 * i, 3 * i], h_cov[k, 3 * i, 3 * i + 1], h_cov[k, 3 * i + 1, 3 * i + 1]
+                    C00, C01 = Cx[3 * i, 2 * i], Cx[3 * i, 2 * i + 1]
+                    C10, C11 = Cx[3 * i + 1, 2 * i], Cx[3 * i + 1, 2 * i + 1]
                 row = m_off[m] + m + t
                 prev, here = reach_row[row - 1], reach_row[row]  # their rows of the reach table
                 p, x = _step_risk(prev, ap, bp, dp, here, a, b, d, C00, C01, C10, C11, reach, masses, qs, support)
@@ -604,6 +608,8 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
                         groups.cov0[g, 3 * i, 3 * i + 1],
                         groups.cov0[g, 3 * i + 1, 3 * i + 1],
                     )
+                    if ekf.local_var > 0.0:
+                        a, b, d = ekf.local_var, 0.0, ekf.local_var
                     m = seqs.motions[c, i]
                     row = motions.reach_row[motions.offset[m] + m]
                     h_step[0, i, 0] = _step_bound(a, b, d, motions.reach, row, masses, qs)[0]

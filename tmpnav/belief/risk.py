@@ -360,6 +360,15 @@ def _first_passage(covs: np.ndarray, cross: np.ndarray, reach: np.ndarray) -> fl
     return float(min(1.0, min(p[1], p[0] + x[0]) + math.fsum(x[1:])))
 
 
+def local_errors(steps: int, var: float, rho: float) -> tuple[np.ndarray, np.ndarray]:
+    """The error the bound prices where a robot keeps clear of the walls its lidar sees
+    (ScanModel.local_walls): a stationary Gauss-Markov process e_t = rho e_{t-1} + w_t, isotropic,
+    of variance ``var`` per axis -> its covariances (steps, 2, 2), var I, and the cross-covariances
+    Cov(e_t, e_{t-1}) (steps, 2, 2), rho var I, as :func:`move_bound` takes them."""
+    eye = np.broadcast_to(np.eye(2), (steps, 2, 2))
+    return var * eye, rho * var * eye
+
+
 def running_bound(terms: np.ndarray, drove: np.ndarray) -> np.ndarray:
     """A robot's collision bound summed over the rows it drove into, as the kernel sums it:
     ``terms`` (h+1, 2) holds p_t and X_t of each row (the kernel's ``step_risk``), ``drove``

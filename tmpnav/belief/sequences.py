@@ -13,6 +13,7 @@ are, so their fields are its arguments.
 
 from __future__ import annotations
 
+import math
 from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -42,11 +43,17 @@ class EKFConstants(NamedTuple):
     #: landmarks and mutual observations update the beliefs (False: a localiser of the lidar alone,
     #: nav2's AMCL; ScanModel.fuses_others)
     fuse_others: bool
+    #: the collision bound's error relative to the walls the robot sees (ScanModel.local_walls): its
+    #: variance per axis (m²; 0: the bound prices the belief itself) and the correlation of two
+    #: consecutive steps' errors, exp(-dt / local_time)
+    local_var: float
+    local_rho: float
 
     @staticmethod
     def of(models: Models, landmarks: np.ndarray) -> EKFConstants:
         """The constants of a scenario's models, with the world's landmarks (L, 2)."""
         Q_lm, Q_mu = models.landmark_sensor.Q, models.mutual_sensor.Q
+        local_var, local_rho = local_walls(models)
         return EKFConstants(
             dt=models.dt,
             alphas=np.array(models.motion_noise, dtype=float),
@@ -59,7 +66,19 @@ class EKFConstants(NamedTuple):
             scans=models.range_sensor is not None,
             scan_thresholds=scan_thresholds(models),
             fuse_others=models.range_sensor is None or models.range_sensor.localiser.fuses_others,
+            local_var=local_var,
+            local_rho=local_rho,
         )
+
+
+def local_walls(models: Models) -> tuple[float, float]:
+    """(variance per axis, correlation of consecutive steps) of the error the collision bound prices
+    where the robots keep clear of the walls their lidar sees (ScanModel.local_walls); (0, 0) where
+    it prices their beliefs."""
+    sensor = models.range_sensor
+    if sensor is None or not sensor.localiser.local_walls:
+        return 0.0, 0.0
+    return sensor.localiser.local_std**2, math.exp(-models.dt / sensor.localiser.local_time)
 
 
 def scan_thresholds(models: Models) -> np.ndarray:

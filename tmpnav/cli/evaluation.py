@@ -33,6 +33,8 @@ if TYPE_CHECKING:
 LOCALISER_NAMES = ("ekf", "amcl")
 #: tmpnav.execution.localisers.FOLLOWERS' names
 FOLLOWER_NAMES = ("waypoint", "rpp")
+#: tmpnav.execution.localisers.STEERING's names
+STEERING_NAMES = ("auto", "local", "estimate")
 
 
 def amcl_options(command: Any) -> Any:
@@ -123,6 +125,15 @@ def amcl_options(command: Any) -> Any:
     "of the path as the plan does; rpp, nav2's Regulated Pure Pursuit with nav2's defaults (turns while "
     "it drives, slows at bends, near walls and on approach; docs/rpp.md).",
 )
+@option(
+    "--steer",
+    type=click.Choice(STEERING_NAMES),
+    default="auto",
+    show_default=True,
+    help="What the simulated robots steer on: local, their estimate moved to where their lidar sees the "
+    "nearest wall, as nav2's costmaps place it (docs/amcl.md); estimate, their localiser's estimate alone; "
+    "auto, local with --localiser amcl and estimate with ekf.",
+)
 @amcl_options
 @oracle_options(mutual=False)
 @report_errors
@@ -150,7 +161,9 @@ def simulate(
     from tmpnav.pipeline import plan as run_plan
 
     check_planner(scenario, kw["planner_name"])
-    localisation = _localisation(kw.pop("localiser"), kw.pop("nav2_params"), kw.pop("site_text"), kw.pop("follower"))
+    localisation = _localisation(
+        kw.pop("localiser"), kw.pop("nav2_params"), kw.pop("site_text"), kw.pop("follower"), kw.pop("steer")
+    )
     server, token = kw.pop("server"), kw.pop("token")
     if server is not None and events_path is None:
         raise click.BadParameter(
@@ -182,13 +195,15 @@ def simulate(
     click.echo("\n".join(lines))
 
 
-def _localisation(kind: str, nav2_params: Path | None, site_text: str, follower: str = "waypoint") -> Localisation:
-    """The simulation's localiser and follower from the command line: AMCL's parameters read and
-    the site parsed only for ``amcl`` (one error line for a bad file or value)."""
+def _localisation(
+    kind: str, nav2_params: Path | None, site_text: str, follower: str = "waypoint", steer: str = "auto"
+) -> Localisation:
+    """The simulation's localiser, follower and steering from the command line: AMCL's parameters
+    read and the site parsed only for ``amcl`` (one error line for a bad file or value)."""
     from tmpnav.execution.localisers import Localisation
 
     if kind != "amcl":
-        return Localisation(kind, follower=follower)
+        return Localisation(kind, follower=follower, steer=steer)
     from tmpnav.execution.site import SiteNoise
     from tmpnav.scenario.nav2_params import AmclParams, read_nav2_params
 
@@ -197,7 +212,7 @@ def _localisation(kind: str, nav2_params: Path | None, site_text: str, follower:
         site = SiteNoise.parse(site_text)
     except ValueError as e:
         raise click.BadParameter(str(e), param_hint="--site") from None
-    return Localisation(kind, params, site, follower)
+    return Localisation(kind, params, site, follower, steer=steer)
 
 
 def _closed_loop(

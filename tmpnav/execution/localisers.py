@@ -36,6 +36,12 @@ LOCALISERS = {
     "amcl": "nav2's AMCL (a particle filter per robot, its beam model) on scans of a site unlike the map",
 }
 
+#: what ``tmpnav simulate --steer`` lets the robots steer on, and what each is
+STEERING = {
+    "auto": "local with --localiser amcl, estimate with ekf",
+    "local": "the estimate moved to where the lidar sees the nearest wall (nav2's costmaps)",
+    "estimate": "the localiser's estimate alone, against the map",
+}
 #: the controllers ``tmpnav simulate --follower`` offers, and what each is
 FOLLOWERS = {
     "waypoint": "turns on the spot at each node of the path, then drives straight (the plan's own motions)",
@@ -106,6 +112,14 @@ class Localisation:
     #: ekf: the compiled joint EKF (tmpnav.execution.fast_ekf); False: its filterpy reference
     #: (tmpnav.execution.joint_ekf), the same figures to rounding, many times slower
     compiled: bool = True
+    #: what the robots steer on (a key of :data:`STEERING`; ``auto``: ``local`` with AMCL, as nav2
+    #: robots do, ``estimate`` with the EKF, as the plan's own model does)
+    steer: str = "auto"
+
+    @property
+    def steers_local(self) -> bool:
+        """The robots keep clear of the walls their lidar sees (tmpnav.execution.local_view)."""
+        return self.steer == "local" or (self.steer == "auto" and self.particle_filter)
 
     @property
     def particle_filter(self) -> bool:
@@ -122,6 +136,11 @@ class Localisation:
                 f"; follower: nav2 Regulated Pure Pursuit (lookahead {r.lookahead_dist:g} m, "
                 f"min radius {r.regulated_linear_scaling_min_radius:g} m, goal tolerance {r.xy_goal_tolerance:g} m)"
             )
+        noise += (
+            "; steering on what the lidar sees of the nearest wall (nav2's costmaps)"
+            if self.steers_local
+            else "; steering on the estimate alone"
+        )
         if not self.particle_filter:
             return f"localiser: ekf ({LOCALISERS['ekf']}); {noise}"
         where = self.site.text() if self.site is not None else "the map exactly"

@@ -15,6 +15,9 @@ Each control step, for the whole team together:
    a robot that reached its last one ends its move, and moves that may start now start;
 2. every driving robot gets the waypoint controller's command (:mod:`tmpnav.execution.control`),
    every other robot (waiting, idle, done) none: zero control, so its uncertainty does not grow;
+   with ``steers_local`` (AMCL's default) the controller steers on where its lidar sees the
+   nearest wall and drives only commands that keep clear of what it sees
+   (:mod:`tmpnav.execution.local_view`), as nav2's costmaps let a robot do;
 3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the
    team's localiser (:class:`~tmpnav.execution.localisers.TeamLocaliser`: the joint EKF of
    :mod:`.joint_ekf`, or every robot's AMCL) predicts with the commands;
@@ -37,6 +40,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -53,6 +57,9 @@ from tmpnav.results import TimedMove
 from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
+
+if TYPE_CHECKING:
+    from tmpnav.execution.local_view import LocalView
 
 #: a move may take this many times its planned steps (or 40 steps per waypoint) before it is cut
 STEP_BUDGET = 6
@@ -117,6 +124,8 @@ class Session:
         #: robots that are down: they stand where they are for the rest of the session
         self.down: set[int] = set()
         self.localiser = self._localiser(belief, queues, session)
+        self.session = session
+        self.view = self._local_view()
 
     def _localiser(self, belief: Belief, queues: Mapping[str, tuple[QueuedMove, ...]], session: int) -> TeamLocaliser:
         """Who localises the team, as ``localisation`` says (tmpnav.execution.localisers)."""
@@ -129,6 +138,30 @@ class Session:
 
             return CompiledJointEkf(self.scenario, self.world, self.vis, self.draws, belief, self.mutual)
         return JointEkf(self.scenario, self.world, self.vis, self.draws, belief, self.mutual)
+
+    def _local_view(self) -> LocalView | None:
+        """With ``steers_local``: what the robots' lidars show their controllers of the walls
+        (tmpnav.execution.local_view), on the site the localiser scans (the map when it scans none)."""
+        if not self.localisation.steers_local:
+            return None
+        from tmpnav.execution.local_view import LocalView
+        from tmpnav.execution.site import Site, SiteNoise
+
+        if self.scenario.models.range_sensor is None:
+            raise TmpnavError(
+                "--steer local: the scenario's robots carry no range sensor (models.range_sensor); "
+                "expected a scenario with a lidar (the robots steer on the walls it sees)"
+            )
+        site = getattr(self.localiser, "site", None) or Site(self.world, SiteNoise.none(), self.session)
+        return LocalView(site)
+
+    def steering(self, i: int) -> np.ndarray:
+        """The pose robot i's controller steers on: its estimate, moved to where its lidar sees the
+        nearest wall when the robots steer on what they see (:attr:`view`)."""
+        est = self.estimate(i)
+        if self.view is None:
+            return est
+        return self.view.steering_pose(est, self.truth[i])
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -179,12 +212,17 @@ class Session:
                 if r.waypoints:
                     if r.rpp is not None:  # the local costmap holds the walls where they truly are
                         cell = self.world.grid.cells(self.truth[i, :2][None])
-                        command = r.rpp.command(self.estimate(i), float(self.world.clearance[cell[0], cell[1]][0]))
+                        command = r.rpp.command(self.steering(i), float(self.world.clearance[cell[0], cell[1]][0]))
                     else:
                         spec = self.scenario.robots[i]
                         align = ALIGN if r.aligned else ALIGN_START
-                        command = control(self.estimate(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt, align)
+                        command = control(self.steering(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt, align)
                         r.aligned = r.aligned or bool(command[0] > 0.0)  # it drives: the turn at the node is done
+                    if self.view is not None:  # it keeps clear of what it sees, as nav2's controllers do
+                        spec = self.scenario.robots[i]
+                        command = self.view.safe_command(
+                            self.truth[i], command, spec.radius, (spec.speed, spec.turn_rate)
+                        )
                     u[i] = self.speed[i] * command
                     if self.speed[i] == 0.0:
                         r.since += 1  # a stopped robot's move does not use up its budget
@@ -228,6 +266,7 @@ class Session:
         rows, cols = np.nonzero(added)
         self.barriers = np.column_stack([xs[cols], ys[rows]]) if added.shape == self.base.grid.occupied.shape else None
         self.localiser.set_world(world, vis)
+        self.view = self._local_view()
 
     def _add_costs(self, u: np.ndarray) -> None:
         """The executed cost terms of this step (SessionTrace.c_u, c_sigma)."""
@@ -277,7 +316,7 @@ class Session:
         """Whether robot i has reached its next waypoint. With RPP, which cuts corners, a bend is
         reached once the robot is abreast of it, and the move's end within nav2's goal tolerance."""
         assert r.previous is not None
-        est = self.estimate(i)
+        est = self.steering(i)
         if r.rpp is None:
             return reached(est, r.previous, r.waypoints[0])
         if len(r.waypoints) == 1:

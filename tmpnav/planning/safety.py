@@ -16,7 +16,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
-from tmpnav.belief.risk import position_std, step_bound
+from tmpnav.belief.risk import local_errors, position_std, step_bound
+from tmpnav.belief.sequences import local_walls
 from tmpnav.numbers import length, probability
 from tmpnav.results import PlanReport
 
@@ -64,6 +65,9 @@ def riskiest_point(report: PlanReport) -> RiskyPoint | None:
         return None
     means = np.array([s.mean for s in window], dtype=float)
     covs = np.array([s.cov for s in window], dtype=float)[:, :2, :2]
+    var, rho = local_walls(report.scenario.models)
+    if var > 0.0:  # the bound prices the error relative to the walls the robot sees
+        covs = local_errors(len(window), var, rho)[0]
     spec = report.scenario.robot(robot)
     world = report.world
     reach = world.reach(spec.radius).at(means[:, :2])
@@ -108,7 +112,9 @@ def what_would_help(report: PlanReport, point: RiskyPoint) -> str:
     helps = []
     sensor = report.scenario.models.range_sensor
     if point.std > max(point.margin, 0.0) / 3.0:  # too uncertain for the room there
-        if sensor is None or sensor.localiser.fuses_others:  # AMCL alone sees neither
+        if sensor is not None and sensor.localiser.local_walls:  # the error relative to the walls it sees
+            helps.append("a smaller models.range_sensor.localiser.local_std (finer costmaps, tighter tracking)")
+        elif sensor is None or sensor.localiser.fuses_others:  # AMCL alone sees neither
             helps.append(f"a landmark or a partner near ({x:.1f}, {y:.1f})")
         else:
             helps.append("a localiser that takes more from the lidar (models.range_sensor.localiser)")

@@ -177,9 +177,21 @@ def _worst_door(report: PlanReport, robot: str, radius: float) -> PlanWarning | 
     text = (
         f"{robot} passes door {door.name} ({width:.2f} m wide, {length(room)} to spare each side) "
         f"at t {step.t:.1f} s,{way} with a {N_SIGMA:g}-sigma position spread of {length(spread)} across it: "
-        "as executed it may hit the frame. "
-        "Try landmarks near that door, a partner robot that sees it there, or less models.motion_noise."
     )
+    sensor = report.scenario.models.range_sensor
+    if sensor is not None and sensor.localiser.local_walls:
+        # the robot keeps clear of the frame its lidar sees; its estimate decides where the map's frame lies
+        text += (
+            "where its estimate is that far off, the frame its lidar sees and the frame of the map leave nav2's "
+            "planner too narrow a gap, and the robot may stop there to clear its costmaps and plan again (time "
+            "lost, not a wall hit: the collision bound counts the walls the lidar sees). A wider door, or features "
+            "near it that the lidar can localise on, would help."
+        )
+    else:
+        text += (
+            "as executed it may hit the frame. "
+            "Try landmarks near that door, a partner robot that sees it there, or less models.motion_noise."
+        )
     return PlanWarning("door", robot, spread, room, text)
 
 

@@ -312,6 +312,24 @@ LOCALISER = Section(
             "a robot sees do not update it); false: they do too",
             default=_NAV2.lidar_only,
         ),
+        "walls": Field(
+            Choice(choices=("local", "map")),
+            "amcl: what the collision bound prices. local: the position relative to the walls the lidar sees "
+            "(nav2's costmaps place obstacles from the live scans), an error of local_std; map: the belief "
+            "against the map, as if the robot steered on its global estimate alone",
+            default=_NAV2.walls,
+        ),
+        "local_std": Field(
+            Number("length", minimum=MIN_SIGMA, maximum=1.0, reason=PRECISE),
+            "amcl, walls local: std of the position relative to the walls the lidar sees (a costmap cell, the "
+            "map's walls a few centimetres off, the controller's tracking)",
+            default=_NAV2.local_std,
+        ),
+        "local_time": Field(
+            Number("time", minimum=0.0, exclusive_minimum=True, maximum=600.0),
+            "amcl, walls local: correlation time of that error (how long the controller takes to correct it)",
+            default=_NAV2.local_time,
+        ),
     }
 )
 

@@ -371,6 +371,9 @@ def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
         m["update_min_a"],
         m["information"],
         m["lidar_only"],
+        m["walls"],
+        m["local_std"],
+        m["local_time"],
     )
     return RangeSensor(
         s["range"],
