@@ -114,7 +114,7 @@ def test_simulate_with_amcl_reports_the_plan_against_amcl(tmp_path: Path) -> Non
     assert run.returncode == 0, run.stderr
     text = run.stdout
     assert "localiser: nav2 AMCL" in text and "site: clutter" in text and "true motion noise" in text
-    assert "steering on what the lidar sees of the nearest wall" in text  # --steer auto: local with AMCL
+    assert "steering on where the lidar places it among the walls" in text  # --steer auto: local with AMCL
     assert "median NEES" in text and "beyond 3 sigma" in text and "team" in text
     assert "nan" not in text and "mutual observations" not in text
     csv = (out / "consistency.csv").read_text().splitlines()

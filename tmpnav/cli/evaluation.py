@@ -130,8 +130,9 @@ def amcl_options(command: Any) -> Any:
     type=click.Choice(STEERING_NAMES),
     default="auto",
     show_default=True,
-    help="What the simulated robots steer on: local, their estimate moved to where their lidar sees the "
-    "nearest wall, as nav2's costmaps place it (docs/amcl.md); estimate, their localiser's estimate alone; "
+    help="What the simulated robots steer on: local, their estimate placed among the walls by their lidar's "
+    "nearby returns, as nav2's costmaps place obstacles, with every command checked against what they see "
+    "(docs/amcl.md); estimate, their localiser's estimate alone; "
     "auto, local with --localiser amcl and estimate with ekf.",
 )
 @amcl_options

@@ -8,16 +8,15 @@ steered on the global estimate alone (``--steer estimate``) would drive that err
 walls; the collision bound of ``models.range_sensor.localiser.walls: local`` prices the error
 that is left (docs/models.md, "The collision bound against the walls a robot sees").
 
-The model (``--steer local``): at each control step the robot reads from its local costmap its
-distance to the nearest surface it sees (the site's walls and clutter, from its true pose, to the
-costmap's cell), and moves its estimate along the normal of the mapped wall nearest to the
-estimate by the difference between that distance and the estimate's distance to the mapped
-wall. It steers on that pose; its localiser's estimate is left as it is. What remains is the
-site's difference from the map (walls a few centimetres off), the costmap's cells and the
-controller's lag. A surface whose distance differs from the map's by more than :data:`GATE` is
-something else (clutter, a person, another wall) and corrects nothing; walls farther than
-:data:`LOCAL_REACH` do not correct it either, as a wall that far does not constrain the path,
-and the correction fades in over :data:`FADE` so that the steering pose does not jump.
+The model (``--steer local``): at each control step the robot takes the returns of its lidar
+within :data:`LOCAL_REACH` (the site's walls, clutter and people, from its true pose: what its
+local costmap holds), places them from its estimate, and moves the estimate so that they lie on
+the map's walls (a few Gauss-Newton steps on their distances in the map's signed distance field,
+the returns far from every wall left out). It steers on that pose; its localiser's estimate is
+left as it is. What remains is the site's difference from the map (walls a few centimetres off),
+the lidar's noise and the controller's lag. Too few returns nearby, or no fit within
+:data:`MAX_SHIFT`, and the estimate steers alone. Each command is then checked against what the
+robot sees (:meth:`LocalView.safe_command`).
 
 Not modelled: the global planner failing where the map and the scan disagree by more than a
 door's slack (nav2 would clear its costmaps and plan again: time lost, not a wall hit), and
@@ -31,65 +30,95 @@ import math
 import numpy as np
 
 from tmpnav.execution.site import Site
+from tmpnav.types import RangeSensor
 
-LOCAL_REACH = 1.0  # m: a mapped wall farther from the estimate than this corrects nothing
-FADE = 0.4  # m: the correction fades in from LOCAL_REACH to LOCAL_REACH - FADE
-COSTMAP_RESOLUTION = 0.05  # m: nav2's local costmap cells (its default resolution)
-#: m: a surface seen nearer or farther than this from where the map puts the nearest wall is
-#: something else (clutter, a person, another wall): it does not correct the steering
-GATE = 0.5
+LOCAL_REACH = 2.0  # m: the returns nearer than this place the robot among the walls it sees
+#: m: at each Gauss-Newton step of the placement, a return this far from every mapped wall (as
+#: placed so far) is left out: coarse to fine, so that an estimate half a metre off is placed, and
+#: at the end what lies off every wall is something else (clutter, a person)
+GATES = (1.0, 0.6, 0.3, 0.3)
+MIN_POINTS = 6  # fewer nearby returns place nothing
+PRIOR = 0.05  # m⁻²-scaled weight that keeps the placement still along what the returns do not fix
+MAX_SHIFT = 1.5  # m: a placement farther than this is no fit: the estimate steers alone
 #: s: how far ahead the controller checks its command against what it sees (nav2's RPP checks 1.5 s)
 HORIZON = 1.5
 ROLLOUT_DT = 0.1  # s: the rollout's samples
 #: m: the room the controller keeps between its footprint and what it sees (a costmap cell)
 KEEP_CLEAR = 0.05
+TARGET_SLACK = 0.02  # m: how much nearer than its target's the way there may come to what the robot sees
 FAN = 6  # turn rates on each side of straight that the controller tries instead of a command
 
 
 class LocalView:
     """The steering pose of every robot of a session that keeps clear of the walls it sees."""
 
-    def __init__(self, site: Site):
-        self.site = site
+    def __init__(self, site: Site, sensor: RangeSensor):
+        self.site, self.sensor = site, sensor
+        self.angles = sensor.beam_angles()
         grid = site.world.grid
         self.sdf = site.world.signed_distance  # the map's: what the robot's estimate is placed in
         self.x0, self.y0 = (float(v) for v in grid.origin)
         self.res = float(grid.resolution)
 
-    def steering_pose(self, est: np.ndarray, truth: np.ndarray) -> np.ndarray:
-        """The pose (3,) the robot steers on: its estimate ``est`` moved along the nearest mapped
-        wall's normal by the difference between its distance to the nearest surface it sees from
-        its true pose ``truth`` and its estimate's distance to the nearest mapped wall."""
-        d_map, gx, gy = _bilinear(self.sdf, self.x0, self.y0, self.res, float(est[0]), float(est[1]))
-        norm = math.hypot(gx, gy)
-        if d_map >= LOCAL_REACH or norm < 1e-9:
+    def steering_pose(self, est: np.ndarray, truth: np.ndarray, t: float = 0.0) -> np.ndarray:
+        """The pose (3,) the robot steers on: its estimate ``est`` moved so that what its lidar sees
+        nearby from its true pose ``truth`` (at time ``t``, s) lies on the map's walls."""
+        near = self._near_endpoints(truth, t)
+        if near.shape[0] < MIN_POINTS:
             return est
-        seen = _bilinear(self.site.field, self.x0, self.y0, self.res, float(truth[0]), float(truth[1]))[0]
-        seen = (math.floor(seen / COSTMAP_RESOLUTION) + 0.5) * COSTMAP_RESOLUTION  # the costmap's cell
-        if abs(seen - d_map) > GATE:
-            return est  # what it sees nearest is not the mapped wall (clutter, another wall): no correction
-        weight = min(1.0, max(0.0, (LOCAL_REACH - min(d_map, seen)) / FADE))
-        shift = weight * (seen - d_map)
-        return np.array([est[0] + shift * gx / norm, est[1] + shift * gy / norm, est[2]])
+        c, s_ = math.cos(float(est[2])), math.sin(float(est[2]))
+        points = np.column_stack([est[0] + c * near[:, 0] - s_ * near[:, 1], est[1] + s_ * near[:, 0] + c * near[:, 1]])
+        shift = np.zeros(2)
+        for gate in GATES:  # Gauss-Newton on the points' distances to the mapped walls
+            d, g = _sample_gradient(self.sdf, self.x0, self.y0, self.res, points + shift)
+            keep = np.abs(d) < gate
+            if np.count_nonzero(keep) < MIN_POINTS:
+                return est
+            gk, dk = g[keep], d[keep]
+            H = gk.T @ gk + PRIOR * np.eye(2)  # no move along what the points do not constrain
+            shift -= np.linalg.solve(H, gk.T @ dk)
+            norm = float(np.hypot(*shift))
+            if norm > MAX_SHIFT:
+                return est  # no nearby fit: the estimate is too far off for the costmap to place it
+        return np.array([est[0] + shift[0], est[1] + shift[1], est[2]])
+
+    def _near_endpoints(self, truth: np.ndarray, t: float) -> np.ndarray:
+        """The endpoints (P, 2), in the robot's frame, of the lidar's returns within
+        :data:`LOCAL_REACH` of the robot: what its local costmap holds."""
+        ranges = self.site.ranges(truth, self.angles, self.sensor, t)
+        close = ~np.isnan(ranges) & (ranges < LOCAL_REACH)
+        r, a = ranges[close], self.angles[close]
+        return np.column_stack([r * np.cos(a), r * np.sin(a)])
 
     def safe_command(
-        self, truth: np.ndarray, command: np.ndarray, radius: float, limits: tuple[float, float]
+        self,
+        truth: np.ndarray,
+        command: np.ndarray,
+        radius: float,
+        limits: tuple[float, float],
+        ahead: float,
+        target: np.ndarray | None = None,
     ) -> np.ndarray:
         """The command (v, omega) the controller drives instead of ``command`` so that the robot's
-        footprint, rolled out :data:`HORIZON` ahead from its true pose ``truth``, keeps
-        :data:`KEEP_CLEAR` from every surface it sees (no nearer than it is now): ``command``
-        itself when it does, else the nearest of a fan of speeds and turn rates within ``limits``
-        (speed, turn rate) that does, as nav2's controllers score their trajectories against the
-        local costmap; standing and turning when none does."""
+        footprint, rolled out from its true pose ``truth`` for :data:`HORIZON` or until it has
+        driven ``ahead`` (m, to where it is going: it stops there), keeps :data:`KEEP_CLEAR` from
+        every surface it sees (no nearer than it is now): ``command`` itself when it does, else
+        the nearest of a fan of speeds and turn rates within ``limits`` (speed, turn rate) that
+        does, as nav2's controllers score their trajectories against the local costmap; standing
+        and turning when none does. A ``target`` (x, y) nearer than that to what the robot sees
+        (a goal pose beside a shelf) may be driven up to."""
         v, omega = float(command[0]), float(command[1])
         if v <= 0.0:
             return command  # turning on the spot moves no footprint
         speed, turn = limits
         now = _sample(self.site.field, self.x0, self.y0, self.res, truth[None, :2])[0] - radius
         need = min(KEEP_CLEAR, now)
+        if target is not None:  # it may go as near what it sees as where it is going is
+            at = _sample(self.site.field, self.x0, self.y0, self.res, np.asarray(target, dtype=float)[None, :2])[0]
+            need = min(need, at - radius - TARGET_SLACK)
         vs = np.array([v, 0.5 * v] * (2 * FAN + 2))
         omegas = np.repeat(np.r_[omega, np.linspace(-turn, turn, 2 * FAN + 1)], 2)
-        clear = _rollouts(self.site.field, self.x0, self.y0, self.res, truth, vs, omegas) - radius
+        clear = _rollouts(self.site.field, self.x0, self.y0, self.res, truth, vs, omegas, ahead) - radius
         ok = clear >= need
         if ok[0]:
             return command
@@ -101,10 +130,18 @@ class LocalView:
 
 
 def _rollouts(
-    field: np.ndarray, x0: float, y0: float, res: float, pose: np.ndarray, vs: np.ndarray, omegas: np.ndarray
+    field: np.ndarray,
+    x0: float,
+    y0: float,
+    res: float,
+    pose: np.ndarray,
+    vs: np.ndarray,
+    omegas: np.ndarray,
+    ahead: float = math.inf,
 ) -> np.ndarray:
     """The least value of ``field`` along each arc driven at (vs[k], omegas[k]) from ``pose`` for
-    :data:`HORIZON` seconds, sampled every :data:`ROLLOUT_DT` -> (K,)."""
+    :data:`HORIZON` seconds or ``ahead`` metres, whichever ends first, sampled every
+    :data:`ROLLOUT_DT` (the first sample always) -> (K,)."""
     t = np.arange(1, round(HORIZON / ROLLOUT_DT) + 1) * ROLLOUT_DT
     th = pose[2] + omegas[:, None] * t
     small = np.abs(omegas) < 1e-9
@@ -119,8 +156,9 @@ def _rollouts(
         pose[1] + vs[:, None] * t * np.sin(pose[2]),
         pose[1] - vs[:, None] / w * (np.cos(th) - np.cos(pose[2])),
     )
-    values = _sample(field, x0, y0, res, np.column_stack([x.ravel(), y.ravel()]))
-    return values.reshape(x.shape).min(axis=1)
+    values = _sample(field, x0, y0, res, np.column_stack([x.ravel(), y.ravel()])).reshape(x.shape)
+    beyond = (vs[:, None] * t[None, :] > ahead) & (t[None, :] > ROLLOUT_DT)
+    return np.where(beyond, np.inf, values).min(axis=1)
 
 
 def _sample(field: np.ndarray, x0: float, y0: float, res: float, xy: np.ndarray) -> np.ndarray:
@@ -140,20 +178,22 @@ def _sample(field: np.ndarray, x0: float, y0: float, res: float, xy: np.ndarray)
     return np.where(inside, a + (b - a) * fy, -0.5 * res)
 
 
-def _bilinear(field: np.ndarray, x0: float, y0: float, res: float, x: float, y: float) -> tuple[float, float, float]:
-    """A signed distance field (m) at (x, y), bilinear between cell centres, and its gradient
-    (off the grid: -res/2, as tmpnav.world.lidar reads it)."""
-    u = (x - x0) / res - 0.5
-    v = (y - y0) / res - 0.5
-    j, i = math.floor(u), math.floor(v)
+def _sample_gradient(
+    field: np.ndarray, x0: float, y0: float, res: float, xy: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``field`` at the points xy (P, 2), bilinear between cell centres, and its gradient (P, 2)
+    (off the grid: -res/2 and no gradient)."""
+    u = (xy[:, 0] - x0) / res - 0.5
+    v = (xy[:, 1] - y0) / res - 0.5
+    j, i = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
     fx, fy = u - j, v - i
     rows, cols = field.shape
-
-    def at(r: int, c: int) -> float:
-        return float(field[r, c]) if 0 <= r < rows and 0 <= c < cols else -0.5 * res
-
-    f00, f01, f10, f11 = at(i, j), at(i, j + 1), at(i + 1, j), at(i + 1, j + 1)
+    inside = (i >= 0) & (i < rows - 1) & (j >= 0) & (j < cols - 1)
+    i, j = np.clip(i, 0, rows - 2), np.clip(j, 0, cols - 2)
+    f00, f01, f10, f11 = field[i, j], field[i, j + 1], field[i + 1, j], field[i + 1, j + 1]
     a = f00 + (f01 - f00) * fx
     b = f10 + (f11 - f10) * fx
     gx = ((f01 - f00) * (1.0 - fy) + (f11 - f10) * fy) / res
-    return a + (b - a) * fy, gx, (b - a) / res
+    value = np.where(inside, a + (b - a) * fy, -0.5 * res)
+    gradient = np.where(inside[:, None], np.column_stack([gx, (b - a) / res]), 0.0)
+    return value, gradient

@@ -39,7 +39,7 @@ LOCALISERS = {
 #: what ``tmpnav simulate --steer`` lets the robots steer on, and what each is
 STEERING = {
     "auto": "local with --localiser amcl, estimate with ekf",
-    "local": "the estimate moved to where the lidar sees the nearest wall (nav2's costmaps)",
+    "local": "the estimate placed among the walls by the lidar's nearby returns (nav2's costmaps)",
     "estimate": "the localiser's estimate alone, against the map",
 }
 #: the controllers ``tmpnav simulate --follower`` offers, and what each is
@@ -137,7 +137,7 @@ class Localisation:
                 f"min radius {r.regulated_linear_scaling_min_radius:g} m, goal tolerance {r.xy_goal_tolerance:g} m)"
             )
         noise += (
-            "; steering on what the lidar sees of the nearest wall (nav2's costmaps)"
+            "; steering on where the lidar places it among the walls (nav2's costmaps)"
             if self.steers_local
             else "; steering on the estimate alone"
         )

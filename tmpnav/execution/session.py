@@ -15,8 +15,8 @@ Each control step, for the whole team together:
    a robot that reached its last one ends its move, and moves that may start now start;
 2. every driving robot gets the waypoint controller's command (:mod:`tmpnav.execution.control`),
    every other robot (waiting, idle, done) none: zero control, so its uncertainty does not grow;
-   with ``steers_local`` (AMCL's default) the controller steers on where its lidar sees the
-   nearest wall and drives only commands that keep clear of what it sees
+   with ``steers_local`` (AMCL's default) the controller steers on its estimate placed among the
+   walls by the lidar's nearby returns and drives only commands that keep clear of what it sees
    (:mod:`tmpnav.execution.local_view`), as nav2's costmaps let a robot do;
 3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the
    team's localiser (:class:`~tmpnav.execution.localisers.TeamLocaliser`: the joint EKF of
@@ -153,15 +153,15 @@ class Session:
                 "expected a scenario with a lidar (the robots steer on the walls it sees)"
             )
         site = getattr(self.localiser, "site", None) or Site(self.world, SiteNoise.none(), self.session)
-        return LocalView(site)
+        return LocalView(site, self.scenario.models.range_sensor)
 
     def steering(self, i: int) -> np.ndarray:
-        """The pose robot i's controller steers on: its estimate, moved to where its lidar sees the
-        nearest wall when the robots steer on what they see (:attr:`view`)."""
+        """The pose robot i's controller steers on: its estimate, placed among the walls by its lidar's
+        nearby returns when the robots steer on what they see (:attr:`view`)."""
         est = self.estimate(i)
         if self.view is None:
             return est
-        return self.view.steering_pose(est, self.truth[i])
+        return self.view.steering_pose(est, self.truth[i], self.step * self.dt)
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -220,8 +220,10 @@ class Session:
                         r.aligned = r.aligned or bool(command[0] > 0.0)  # it drives: the turn at the node is done
                     if self.view is not None:  # it keeps clear of what it sees, as nav2's controllers do
                         spec = self.scenario.robots[i]
+                        ahead = float(np.hypot(*(r.waypoints[0][:2] - self.steering(i)[:2])))  # where it stops
+                        limits = (spec.speed, spec.turn_rate)
                         command = self.view.safe_command(
-                            self.truth[i], command, spec.radius, (spec.speed, spec.turn_rate)
+                            self.truth[i], command, spec.radius, limits, ahead, r.waypoints[0]
                         )
                     u[i] = self.speed[i] * command
                     if self.speed[i] == 0.0:
