@@ -18,9 +18,10 @@ the lidar's noise and the controller's lag. Too few returns nearby, or no fit wi
 :data:`MAX_SHIFT`, and the estimate steers alone. Each command is then checked against what the
 robot sees (:meth:`LocalView.safe_command`).
 
-Not modelled: the global planner failing where the map and the scan disagree by more than a
-door's slack (nav2 would clear its costmaps and plan again: time lost, not a wall hit), and
-other robots in the costmap.
+Not modelled: nav2's recovery behaviours. Where the returns cannot place a robot whose estimate
+is half a metre or more off, the check refuses every command towards a waypoint that lies behind
+a wall in truth, and the robot stands and turns until its move's step budget runs out, where
+nav2 would clear its costmaps, spin and back up. Nor are other robots in the costmap.
 """
 
 from __future__ import annotations
@@ -38,7 +39,9 @@ LOCAL_REACH = 2.0  # m: the returns nearer than this place the robot among the w
 #: at the end what lies off every wall is something else (clutter, a person)
 GATES = (1.0, 0.6, 0.3, 0.3)
 MIN_POINTS = 6  # fewer nearby returns place nothing
-PRIOR = 0.05  # m⁻²-scaled weight that keeps the placement still along what the returns do not fix
+#: the weight of a prior that keeps the placement still along what the returns do not fix (a
+#: bare corridor's length), as much as a twentieth of one return's
+PRIOR = 0.05
 MAX_SHIFT = 1.5  # m: a placement farther than this is no fit: the estimate steers alone
 #: s: how far ahead the controller checks its command against what it sees (nav2's RPP checks 1.5 s)
 HORIZON = 1.5
