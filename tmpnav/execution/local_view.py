@@ -114,10 +114,12 @@ class LocalView:
         if v <= 0.0:
             return command  # turning on the spot moves no footprint
         speed, turn = limits
-        now = _sample(self.site.field, self.x0, self.y0, self.res, truth[None, :2])[0] - radius
+        now = _sample_gradient(self.site.field, self.x0, self.y0, self.res, truth[None, :2])[0][0] - radius
         need = min(KEEP_CLEAR, now)
         if target is not None:  # it may go as near what it sees as where it is going is
-            at = _sample(self.site.field, self.x0, self.y0, self.res, np.asarray(target, dtype=float)[None, :2])[0]
+            at = _sample_gradient(
+                self.site.field, self.x0, self.y0, self.res, np.asarray(target, dtype=float)[None, :2]
+            )[0][0]
             need = min(need, at - radius - TARGET_SLACK)
         vs = np.array([v, 0.5 * v] * (2 * FAN + 2))
         omegas = np.repeat(np.r_[omega, np.linspace(-turn, turn, 2 * FAN + 1)], 2)
@@ -159,26 +161,9 @@ def _rollouts(
         pose[1] + vs[:, None] * t * np.sin(pose[2]),
         pose[1] - vs[:, None] / w * (np.cos(th) - np.cos(pose[2])),
     )
-    values = _sample(field, x0, y0, res, np.column_stack([x.ravel(), y.ravel()])).reshape(x.shape)
+    values = _sample_gradient(field, x0, y0, res, np.column_stack([x.ravel(), y.ravel()]))[0].reshape(x.shape)
     beyond = (vs[:, None] * t[None, :] > ahead) & (t[None, :] > ROLLOUT_DT)
     return np.where(beyond, np.inf, values).min(axis=1)
-
-
-def _sample(field: np.ndarray, x0: float, y0: float, res: float, xy: np.ndarray) -> np.ndarray:
-    """``field`` at the points xy (P, 2), bilinear between cell centres (-res/2 off the grid)."""
-    u = (xy[:, 0] - x0) / res - 0.5
-    v = (xy[:, 1] - y0) / res - 0.5
-    j, i = np.floor(u).astype(np.int64), np.floor(v).astype(np.int64)
-    fx, fy = u - j, v - i
-    padded = np.pad(field, 1, constant_values=-0.5 * res)
-    rows, cols = padded.shape
-    i0, j0 = np.clip(i + 1, 0, rows - 2), np.clip(j + 1, 0, cols - 2)
-    inside = (i + 1 == i0) & (j + 1 == j0)
-    f00, f01 = padded[i0, j0], padded[i0, j0 + 1]
-    f10, f11 = padded[i0 + 1, j0], padded[i0 + 1, j0 + 1]
-    a = f00 + (f01 - f00) * fx
-    b = f10 + (f11 - f10) * fx
-    return np.where(inside, a + (b - a) * fy, -0.5 * res)
 
 
 def _sample_gradient(

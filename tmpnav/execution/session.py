@@ -126,6 +126,8 @@ class Session:
         self.localiser = self._localiser(belief, queues, session)
         self.session = session
         self.view = self._local_view()
+        self._steered: dict[int, np.ndarray] = {}  # the steering poses of step _steered_at, by robot
+        self._steered_at = -1
 
     def _localiser(self, belief: Belief, queues: Mapping[str, tuple[QueuedMove, ...]], session: int) -> TeamLocaliser:
         """Who localises the team, as ``localisation`` says (tmpnav.execution.localisers)."""
@@ -158,10 +160,13 @@ class Session:
     def steering(self, i: int) -> np.ndarray:
         """The pose robot i's controller steers on: its estimate, placed among the walls by its lidar's
         nearby returns when the robots steer on what they see (:attr:`view`)."""
-        est = self.estimate(i)
         if self.view is None:
-            return est
-        return self.view.steering_pose(est, self.truth[i], self.step * self.dt)
+            return self.estimate(i)
+        if self._steered_at != self.step:  # one lidar placement per robot and step: poses change only between steps
+            self._steered, self._steered_at = {}, self.step
+        if i not in self._steered:
+            self._steered[i] = self.view.steering_pose(self.estimate(i), self.truth[i], self.step * self.dt)
+        return self._steered[i]
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -269,6 +274,7 @@ class Session:
         self.barriers = np.column_stack([xs[cols], ys[rows]]) if added.shape == self.base.grid.occupied.shape else None
         self.localiser.set_world(world, vis)
         self.view = self._local_view()
+        self._steered_at = -1
 
     def _add_costs(self, u: np.ndarray) -> None:
         """The executed cost terms of this step (SessionTrace.c_u, c_sigma)."""
