@@ -65,13 +65,15 @@ def test_a_command_that_stays_clear_is_kept_and_one_into_a_wall_is_turned_away()
     assert straight < 0.0  # the command itself would have hit within the horizon
 
 
-def test_a_robot_boxed_in_stands_and_turns() -> None:
+def test_a_robot_boxed_in_gets_no_command() -> None:
     """Facing a wall 0.3 m ahead with both sides blocked within the horizon: no arc keeps clear, so
-    the robot stands (nav2 would stop and recover) rather than drive into it."""
+    the controller fails (None: nav2's recoveries take over) rather than drive into it; backing
+    away keeps clear, driving on does not."""
     v = view(width=0.8)
     pose = np.array([10.0, WALL + 0.4, math.pi / 2])  # across the narrow corridor, the wall ahead
-    safe = v.safe_command(pose, np.array([0.5, 0.0]), RADIUS, (0.5, 0.5), 5.0)
-    assert safe[0] == 0.0
+    assert v.safe_command(pose, np.array([0.5, 0.0]), RADIUS, (0.5, 0.5), 5.0) is None
+    assert v.clear_path(pose, -0.05, RADIUS, 2.0)
+    assert not v.clear_path(pose, 0.5, RADIUS, 2.0)
 
 
 def test_a_robot_stopping_short_of_a_wall_may_drive_up_to_it() -> None:

@@ -135,6 +135,14 @@ def amcl_options(command: Any) -> Any:
     "(docs/amcl.md); estimate, their localiser's estimate alone; "
     "auto, local with --localiser amcl and estimate with ekf.",
 )
+@option(
+    "--recoveries/--no-recoveries",
+    default=True,
+    show_default=True,
+    help="With --steer local: when a robot's controller finds no command that keeps clear of what it sees, "
+    "or it makes no progress, it runs nav2's recovery behaviours (clear, spin, wait, back up; 6 retries, "
+    "then the move is given up; docs/amcl.md). --no-recoveries: it stands until its move's step budget ends.",
+)
 @amcl_options
 @oracle_options(mutual=False)
 @report_errors
@@ -163,7 +171,12 @@ def simulate(
 
     check_planner(scenario, kw["planner_name"])
     localisation = _localisation(
-        kw.pop("localiser"), kw.pop("nav2_params"), kw.pop("site_text"), kw.pop("follower"), kw.pop("steer")
+        kw.pop("localiser"),
+        kw.pop("nav2_params"),
+        kw.pop("site_text"),
+        kw.pop("follower"),
+        kw.pop("steer"),
+        kw.pop("recoveries"),
     )
     server, token = kw.pop("server"), kw.pop("token")
     if server is not None and events_path is None:
@@ -197,14 +210,19 @@ def simulate(
 
 
 def _localisation(
-    kind: str, nav2_params: Path | None, site_text: str, follower: str = "waypoint", steer: str = "auto"
+    kind: str,
+    nav2_params: Path | None,
+    site_text: str,
+    follower: str = "waypoint",
+    steer: str = "auto",
+    recoveries: bool = True,
 ) -> Localisation:
     """The simulation's localiser, follower and steering from the command line: AMCL's parameters
     read and the site parsed only for ``amcl`` (one error line for a bad file or value)."""
     from tmpnav.execution.localisers import Localisation
 
     if kind != "amcl":
-        return Localisation(kind, follower=follower, steer=steer)
+        return Localisation(kind, follower=follower, steer=steer, recoveries=recoveries)
     from tmpnav.execution.site import SiteNoise
     from tmpnav.scenario.nav2_params import AmclParams, read_nav2_params
 
@@ -213,7 +231,7 @@ def _localisation(
         site = SiteNoise.parse(site_text)
     except ValueError as e:
         raise click.BadParameter(str(e), param_hint="--site") from None
-    return Localisation(kind, params, site, follower, steer=steer)
+    return Localisation(kind, params, site, follower, steer=steer, recoveries=recoveries)
 
 
 def _closed_loop(

@@ -18,10 +18,9 @@ the lidar's noise and the controller's lag. Too few returns nearby, or no fit wi
 :data:`MAX_SHIFT`, and the estimate steers alone. Each command is then checked against what the
 robot sees (:meth:`LocalView.safe_command`).
 
-Not modelled: nav2's recovery behaviours. Where the returns cannot place a robot whose estimate
-is half a metre or more off, the check refuses every command towards a waypoint that lies behind
-a wall in truth, and the robot stands and turns until its move's step budget runs out, where
-nav2 would clear its costmaps, spin and back up. Nor are other robots in the costmap.
+A robot whose estimate is half a metre or more off, where the returns cannot place it, may find
+every command towards its waypoint refused (the waypoint lies behind a wall in truth): nav2's
+recovery behaviours then take over (:mod:`.recovery`). Other robots are not in the costmap.
 """
 
 from __future__ import annotations
@@ -101,14 +100,14 @@ class LocalView:
         limits: tuple[float, float],
         ahead: float,
         target: np.ndarray | None = None,
-    ) -> np.ndarray:
+    ) -> np.ndarray | None:
         """The command (v, omega) the controller drives instead of ``command`` so that the robot's
         footprint, rolled out from its true pose ``truth`` for :data:`HORIZON` or until it has
         driven ``ahead`` (m, to where it is going: it stops there), keeps :data:`KEEP_CLEAR` from
         every surface it sees (no nearer than it is now): ``command`` itself when it does, else
         the nearest of a fan of speeds and turn rates within ``limits`` (speed, turn rate) that
         does, as nav2's controllers score their trajectories against the local costmap; standing
-        and turning when none does. A ``target`` (x, y) nearer than that to what the robot sees
+        and None when none does. A ``target`` (x, y) nearer than that to what the robot sees
         (a goal pose beside a shelf) may be driven up to."""
         v, omega = float(command[0]), float(command[1])
         if v <= 0.0:
@@ -128,10 +127,19 @@ class LocalView:
         if ok[0]:
             return command
         if not ok.any():
-            return np.array([0.0, omega])
+            return None
         cost = np.abs(omegas - omega) / max(turn, 1e-9) + np.abs(vs - v) / max(speed, 1e-9)
         k = int(np.argmin(np.where(ok, cost, np.inf)))
         return np.array([vs[k], omegas[k]])
+
+    def clear_path(self, truth: np.ndarray, v: float, radius: float, horizon: float) -> bool:
+        """Whether driving straight at ``v`` (m/s; negative: backwards) from the true pose ``truth``
+        for ``horizon`` seconds keeps the footprint clear of what the robot sees (no nearer than it
+        is now, nor than :data:`KEEP_CLEAR`), as nav2's behaviours check their motion."""
+        field = self.site.field
+        now = _sample_gradient(field, self.x0, self.y0, self.res, truth[None, :2])[0][0] - radius
+        clear = _rollouts(field, self.x0, self.y0, self.res, truth, np.array([v]), np.zeros(1), horizon=horizon)
+        return bool(clear[0] - radius >= min(KEEP_CLEAR, now))
 
 
 def _rollouts(
@@ -143,11 +151,12 @@ def _rollouts(
     vs: np.ndarray,
     omegas: np.ndarray,
     ahead: float = math.inf,
+    horizon: float = HORIZON,
 ) -> np.ndarray:
     """The least value of ``field`` along each arc driven at (vs[k], omegas[k]) from ``pose`` for
-    :data:`HORIZON` seconds or ``ahead`` metres, whichever ends first, sampled every
+    ``horizon`` seconds or ``ahead`` metres, whichever ends first, sampled every
     :data:`ROLLOUT_DT` (the first sample always) -> (K,)."""
-    t = np.arange(1, round(HORIZON / ROLLOUT_DT) + 1) * ROLLOUT_DT
+    t = np.arange(1, round(horizon / ROLLOUT_DT) + 1) * ROLLOUT_DT
     th = pose[2] + omegas[:, None] * t
     small = np.abs(omegas) < 1e-9
     w = np.where(small, 1.0, omegas)[:, None]
@@ -162,7 +171,7 @@ def _rollouts(
         pose[1] - vs[:, None] / w * (np.cos(th) - np.cos(pose[2])),
     )
     values = _sample_gradient(field, x0, y0, res, np.column_stack([x.ravel(), y.ravel()]))[0].reshape(x.shape)
-    beyond = (vs[:, None] * t[None, :] > ahead) & (t[None, :] > ROLLOUT_DT)
+    beyond = (np.abs(vs)[:, None] * t[None, :] > ahead) & (t[None, :] > ROLLOUT_DT)
     return np.where(beyond, np.inf, values).min(axis=1)
 
 

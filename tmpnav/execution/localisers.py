@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
+from tmpnav.execution.recovery import RecoveryParams
 from tmpnav.execution.rpp import RppParams
 from tmpnav.scenario.nav2_params import AmclParams
 
@@ -115,6 +116,10 @@ class Localisation:
     #: what the robots steer on (a key of :data:`STEERING`; ``auto``: ``local`` with AMCL, as nav2
     #: robots do, ``estimate`` with the EKF, as the plan's own model does)
     steer: str = "auto"
+    #: with ``steers_local``: nav2's recovery behaviours when the controller cannot go on, with
+    #: nav2's defaults (tmpnav.execution.recovery); False: the robot stands until its move's budget ends
+    recoveries: bool = True
+    recovery: RecoveryParams = field(default_factory=RecoveryParams)
 
     @property
     def steers_local(self) -> bool:
@@ -141,6 +146,12 @@ class Localisation:
             if self.steers_local
             else "; steering on the estimate alone"
         )
+        if self.steers_local:
+            noise += (
+                f", nav2's recoveries ({self.recovery.retries} retries)"
+                if self.recoveries
+                else ", no recoveries"
+            )
         if not self.particle_filter:
             return f"localiser: ekf ({LOCALISERS['ekf']}); {noise}"
         where = self.site.text() if self.site is not None else "the map exactly"

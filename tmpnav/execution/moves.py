@@ -10,11 +10,13 @@ another robot) and when the plan expects the robot at each node of its path.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from tmpnav.execution.recovery import Recovery
+from tmpnav.execution.rpp import RppFollower
 from tmpnav.results import PlanReport, TimedMove
 from tmpnav.types import TrajectoryStep
 
@@ -170,3 +172,27 @@ def _arrival_steps(steps: Sequence[TrajectoryStep], nodes: Sequence[int], start:
         if k is not None:
             j = k + 1
     return out
+
+
+@dataclass
+class RobotQueue:
+    """Where one robot is in its queue: the move under way, its waypoints left, when it was free."""
+
+    queue: tuple[QueuedMove, ...]
+    started: int = 0  # moves started so far
+    move: QueuedMove | None = None  # the move under way
+    waypoints: list[np.ndarray] = field(default_factory=list)  # of the move under way, not reached yet
+    previous: np.ndarray | None = None  # the last waypoint reached
+    ready: int = 0  # step at which it ended its latest move, its job's service included
+    since: int = 0  # step at which the move under way started
+    aligned: bool = False  # it has turned towards its next waypoint (the segment's start is behind it)
+    track: int = 0  # the step of the move's planned track it has come to (QueuedMove.planned_from)
+    rpp: RppFollower | None = None  # with --follower rpp: nav2's RPP along the move under way
+    recovery: Recovery | None = None  # with nav2's recoveries: the move's navigation (tmpnav.execution.recovery)
+
+    @property
+    def next(self) -> QueuedMove | None:
+        """The next move to start (None when under way or when its queue is done)."""
+        if self.move is not None or self.started >= len(self.queue):
+            return None
+        return self.queue[self.started]

@@ -30,6 +30,7 @@ from tmpnav.execution.consistency import Nees
 from tmpnav.execution.consistency import gather as gather_consistency
 from tmpnav.execution.localisers import Localisation
 from tmpnav.execution.moves import QueuedMove, queues
+from tmpnav.execution.recovery import BEHAVIOURS
 from tmpnav.execution.session import STEP_BUDGET, Session
 from tmpnav.execution.trace import Draws, SessionTrace
 from tmpnav.lifetime import gather, signals_held
@@ -93,6 +94,10 @@ class ExecutionResult:
     #: the configurations run: both (1 with mutual observations, 2 without) with the EKF; 1 only with
     #: AMCL, which localises each robot on its own
     configs: tuple[int, ...] = (1, 2)
+    #: nav2's recovery behaviours run in config 1, by name, summed over the sessions
+    #: (tmpnav.execution.recovery), and each session's moves nav2 gave up
+    recoveries: dict[str, int] = field(default_factory=dict)
+    given_up: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     def mean_errors(self, config: int, robot: str) -> np.ndarray:
         """(points,) m: the robot's position error at each point of its paths, averaged over the sessions."""
@@ -333,6 +338,8 @@ def _result(
         },
         consistency=gather_consistency([t.consistency for t in traces[configs[0]]]),
         configs=configs,
+        recoveries={name: sum(t.recoveries.get(name, 0) for t in traces[configs[0]]) for name in BEHAVIOURS},
+        given_up=np.array([len(t.given_up) for t in traces[configs[0]]], dtype=int),
     )
 
 

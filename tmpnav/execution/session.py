@@ -13,11 +13,11 @@ Each control step, for the whole team together:
 
 1. driving robots drop the waypoints they have reached (the position error recorded at each);
    a robot that reached its last one ends its move, and moves that may start now start;
-2. every driving robot gets the waypoint controller's command (:mod:`tmpnav.execution.control`),
+2. every driving robot gets its navigation's command (:mod:`tmpnav.execution.navigation`: the
+   waypoint controller or nav2's RPP; with ``steers_local``, AMCL's default, on its estimate
+   placed among the walls it sees, each command checked against them, and nav2's recovery
+   behaviours when the controller cannot go on, a move nav2 gives up cut where the robot stands),
    every other robot (waiting, idle, done) none: zero control, so its uncertainty does not grow;
-   with ``steers_local`` (AMCL's default) the controller steers on its estimate placed among the
-   walls by the lidar's nearby returns and drives only commands that keep clear of what it sees
-   (:mod:`tmpnav.execution.local_view`), as nav2's costmaps let a robot do;
 3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the
    team's localiser (:class:`~tmpnav.execution.localisers.TeamLocaliser`: the joint EKF of
    :mod:`.joint_ekf`, or every robot's AMCL) predicts with the commands;
@@ -39,18 +39,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, replace
-from typing import TYPE_CHECKING
+from dataclasses import replace
 
 import numpy as np
 
 from tmpnav.belief.models import motion, motion_noise_cov
 from tmpnav.errors import TmpnavError
 from tmpnav.execution.contact import walls_and_touches
-from tmpnav.execution.control import ALIGN, ALIGN_START, control, reached
+from tmpnav.execution.control import reached
 from tmpnav.execution.joint_ekf import JointEkf
 from tmpnav.execution.localisers import Localisation, TeamLocaliser
-from tmpnav.execution.moves import QueuedMove
+from tmpnav.execution.moves import QueuedMove, RobotQueue
+from tmpnav.execution.navigation import Navigator
+from tmpnav.execution.recovery import BEHAVIOURS
 from tmpnav.execution.rpp import RppFollower
 from tmpnav.execution.trace import Draws, SessionTrace, nees
 from tmpnav.results import TimedMove
@@ -58,34 +59,8 @@ from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
 
-if TYPE_CHECKING:
-    from tmpnav.execution.local_view import LocalView
-
 #: a move may take this many times its planned steps (or 40 steps per waypoint) before it is cut
 STEP_BUDGET = 6
-
-
-@dataclass
-class _Robot:
-    """Where one robot is in its queue: the move under way, its waypoints left, when it was free."""
-
-    queue: tuple[QueuedMove, ...]
-    started: int = 0  # moves started so far
-    move: QueuedMove | None = None  # the move under way
-    waypoints: list[np.ndarray] = field(default_factory=list)  # of the move under way, not reached yet
-    previous: np.ndarray | None = None  # the last waypoint reached
-    ready: int = 0  # step at which it ended its latest move, its job's service included
-    since: int = 0  # step at which the move under way started
-    aligned: bool = False  # it has turned towards its next waypoint (the segment's start is behind it)
-    track: int = 0  # the step of the move's planned track it has come to (QueuedMove.planned_from)
-    rpp: RppFollower | None = None  # with --follower rpp: nav2's RPP along the move under way
-
-    @property
-    def next(self) -> QueuedMove | None:
-        """The next move to start (None when under way or when its queue is done)."""
-        if self.move is not None or self.started >= len(self.queue):
-            return None
-        return self.queue[self.started]
 
 
 class Session:
@@ -107,7 +82,7 @@ class Session:
         self.base = world  # the world the session started in (a closed loop may close doors)
         self.barriers: np.ndarray | None = None  # (k, 2) m: the centres of the cells closed since
         self.names = tuple(r.name for r in scenario.robots)
-        self.robots = [_Robot(queues.get(r, ())) for r in self.names]
+        self.robots = [RobotQueue(queues.get(r, ())) for r in self.names]
         self.dt = scenario.models.dt
         self.step = 0  # control steps taken (indexes the draws)
         self.truth, belief, self.trace = self._initial()
@@ -125,9 +100,9 @@ class Session:
         self.down: set[int] = set()
         self.localiser = self._localiser(belief, queues, session)
         self.session = session
-        self.view = self._local_view()
-        self._steered: dict[int, np.ndarray] = {}  # the steering poses of step _steered_at, by robot
-        self._steered_at = -1
+        self.trace.recoveries = dict.fromkeys(BEHAVIOURS, 0)
+        self.navigator = Navigator(scenario, self.localisation, self.dt)
+        self.navigator.see(world, getattr(self.localiser, "site", None), session)
 
     def _localiser(self, belief: Belief, queues: Mapping[str, tuple[QueuedMove, ...]], session: int) -> TeamLocaliser:
         """Who localises the team, as ``localisation`` says (tmpnav.execution.localisers)."""
@@ -141,32 +116,9 @@ class Session:
             return CompiledJointEkf(self.scenario, self.world, self.vis, self.draws, belief, self.mutual)
         return JointEkf(self.scenario, self.world, self.vis, self.draws, belief, self.mutual)
 
-    def _local_view(self) -> LocalView | None:
-        """With ``steers_local``: what the robots' lidars show their controllers of the walls
-        (tmpnav.execution.local_view), on the site the localiser scans (the map when it scans none)."""
-        if not self.localisation.steers_local:
-            return None
-        from tmpnav.execution.local_view import LocalView
-        from tmpnav.execution.site import Site, SiteNoise
-
-        if self.scenario.models.range_sensor is None:
-            raise TmpnavError(
-                "--steer local: the scenario's robots carry no range sensor (models.range_sensor); "
-                "expected a scenario with a lidar (the robots steer on the walls it sees)"
-            )
-        site = getattr(self.localiser, "site", None) or Site(self.world, SiteNoise.none(), self.session)
-        return LocalView(site, self.scenario.models.range_sensor)
-
     def steering(self, i: int) -> np.ndarray:
-        """The pose robot i's controller steers on: its estimate, placed among the walls by its lidar's
-        nearby returns when the robots steer on what they see (:attr:`view`)."""
-        if self.view is None:
-            return self.estimate(i)
-        if self._steered_at != self.step:  # one lidar placement per robot and step: poses change only between steps
-            self._steered, self._steered_at = {}, self.step
-        if i not in self._steered:
-            self._steered[i] = self.view.steering_pose(self.estimate(i), self.truth[i], self.step * self.dt)
-        return self._steered[i]
+        """The pose robot i's controller steers on (tmpnav.execution.navigation)."""
+        return self.navigator.steering(i, self.estimate(i), self.truth[i], self.step)
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
         """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
@@ -214,25 +166,17 @@ class Session:
                     break
             u = np.zeros((len(self.names), 2))
             for i, r in enumerate(self.robots):
-                if r.waypoints:
-                    if r.rpp is not None:  # the local costmap holds the walls where they truly are
-                        cell = self.world.grid.cells(self.truth[i, :2][None])
-                        command = r.rpp.command(self.steering(i), float(self.world.clearance[cell[0], cell[1]][0]))
-                    else:
-                        spec = self.scenario.robots[i]
-                        align = ALIGN if r.aligned else ALIGN_START
-                        command = control(self.steering(i), r.waypoints[0], spec.speed, spec.turn_rate, self.dt, align)
-                        r.aligned = r.aligned or bool(command[0] > 0.0)  # it drives: the turn at the node is done
-                    if self.view is not None:  # it keeps clear of what it sees, as nav2's controllers do
-                        spec = self.scenario.robots[i]
-                        ahead = float(np.hypot(*(r.waypoints[0][:2] - self.steering(i)[:2])))  # where it stops
-                        limits = (spec.speed, spec.turn_rate)
-                        command = self.view.safe_command(
-                            self.truth[i], command, spec.radius, limits, ahead, r.waypoints[0]
-                        )
-                    u[i] = self.speed[i] * command
-                    if self.speed[i] == 0.0:
-                        r.since += 1  # a stopped robot's move does not use up its budget
+                if not r.waypoints:
+                    continue
+                command = self.navigator.command(i, r, self.estimate(i), self.truth[i], self.step, self.world)
+                if r.recovery is not None and r.recovery.given_up:  # nav2 failed the navigation
+                    self._give_up(i, r)
+                    continue
+                u[i] = self.speed[i] * command
+                if self.speed[i] == 0.0:
+                    r.since += 1  # a stopped robot's move does not use up its budget
+                    if r.recovery is not None:
+                        r.recovery.hold(self.step)  # nor its progress check
             self._move(u)
             self._observe()
             self._collide()
@@ -252,7 +196,7 @@ class Session:
         for i, (name, r) in enumerate(zip(self.names, self.robots, strict=True)):
             queue = () if i in self.down else moves.get(name, ())
             shifted = tuple(replace(m, start=m.start + self.step) for m in queue)
-            self.robots[i] = _Robot(shifted, ready=max(r.ready, self.step))
+            self.robots[i] = RobotQueue(shifted, ready=max(r.ready, self.step))
 
     def set_down(self, robot: str) -> None:
         """The robot is down from now: its move under way and its queue are dropped."""
@@ -261,7 +205,7 @@ class Session:
         r = self.robots[i]
         if r.move is not None:
             self._cut(robot, len(r.waypoints))
-        self.robots[i] = _Robot((), started=0, ready=self.step)
+        self.robots[i] = RobotQueue((), started=0, ready=self.step)
         self.speed[i] = 0.0
 
     def set_world(self, world: World, vis: LandmarkVisibility) -> None:
@@ -273,8 +217,7 @@ class Session:
         rows, cols = np.nonzero(added)
         self.barriers = np.column_stack([xs[cols], ys[rows]]) if added.shape == self.base.grid.occupied.shape else None
         self.localiser.set_world(world, vis)
-        self.view = self._local_view()
-        self._steered_at = -1
+        self.navigator.see(world, getattr(self.localiser, "site", None), self.session)
 
     def _add_costs(self, u: np.ndarray) -> None:
         """The executed cost terms of this step (SessionTrace.c_u, c_sigma)."""
@@ -299,7 +242,7 @@ class Session:
             if not self._start_moves():
                 return
 
-    def _advance(self, i: int, r: _Robot) -> None:
+    def _advance(self, i: int, r: RobotQueue) -> None:
         """Drop the waypoints robot i has reached, recording the error at each; end its move when
         none is left, or cut it when it has run out of its budget."""
         name = self.names[i]
@@ -314,13 +257,11 @@ class Session:
             planned = r.move.planned_covs[k] if k < len(r.move.planned_covs) else None
             self.trace.planned_nees[name].append(nees(error, planned))
         if r.waypoints and self.step - r.since >= STEP_BUDGET * max(r.move.steps, 40 * (len(r.move.nodes) - 1)):
-            self._cut(name, len(r.waypoints))
-            r.waypoints = []
-            self._end(r, cut=True)
+            self._cut_move(i, r)
         if not r.waypoints and r.move is not None:
             self._end(r)
 
-    def _reached(self, i: int, r: _Robot) -> bool:
+    def _reached(self, i: int, r: RobotQueue) -> bool:
         """Whether robot i has reached its next waypoint. With RPP, which cuts corners, a bend is
         reached once the robot is abreast of it, and the move's end within nav2's goal tolerance."""
         assert r.previous is not None
@@ -332,7 +273,19 @@ class Session:
         k = len(r.rpp.vertices) - len(r.waypoints)  # the path vertex of the next waypoint
         return r.rpp.passed(k) or reached(est, r.previous, r.waypoints[0])
 
-    def _end(self, r: _Robot, cut: bool = False) -> None:
+    def _cut_move(self, i: int, r: RobotQueue, given_up: bool = False) -> None:
+        """Robot i's move under way ends where it is, short of its room (``given_up``: by nav2,
+        else for want of steps)."""
+        self._cut(self.names[i], len(r.waypoints), given_up)
+        r.waypoints = []
+        self._end(r, cut=True)
+
+    def _give_up(self, i: int, r: RobotQueue) -> None:
+        """nav2 failed robot i's navigation after its last recovery: the move is given up where it stands."""
+        self._cut_move(i, r, given_up=True)
+        self.trace.given_up.append(self.trace.moves[-1])
+
+    def _end(self, r: RobotQueue, cut: bool = False) -> None:
         """Robot r ends its move now: record it as executed (``cut``: short of its room); the robot
         is ready for its next."""
         m = r.move
@@ -358,6 +311,10 @@ class Session:
         if cut:
             self.trace.cut.append(executed)
         r.move, r.ready = None, self.step + opens + stand
+        if r.recovery is not None:
+            for name, count in r.recovery.run.items():
+                self.trace.recoveries[name] += count
+            r.recovery = None
         if len(m.points):
             i = self.names.index(m.robot)
             self.trace.c_goal[m.robot] += float(np.hypot(*(self.estimate(i)[:2] - m.points[-1])))
@@ -379,18 +336,20 @@ class Session:
             started = True
         return started
 
-    def _start(self, r: _Robot, m: QueuedMove) -> None:
+    def _start(self, r: RobotQueue, m: QueuedMove) -> None:
         r.move, r.started, r.since, r.aligned, r.track = m, r.started + 1, self.step, False, 0
         r.waypoints, r.previous = m.waypoints, np.asarray(m.points[0], dtype=float)
+        r.recovery = self.navigator.recovery(self.truth[self.names.index(m.robot)], self.step)
         if self.localisation.follower == "rpp" and len(m.points) > 1:
             spec = self.scenario.robots[self.names.index(m.robot)]
             r.rpp = RppFollower(m.points, self.localisation.rpp, spec.speed, spec.turn_rate, self.dt)
         else:
             r.rpp = None
 
-    def _cut(self, name: str, points: int) -> None:
-        """Points of a path never reached: no error, no time."""
-        self.trace.truncated = True
+    def _cut(self, name: str, points: int, given_up: bool = False) -> None:
+        """Points of a path never reached: no error, no time. The session is truncated (out of its
+        step budget or draws) unless nav2 gave the move up."""
+        self.trace.truncated = self.trace.truncated or not given_up
         self.trace.errors[name].extend([math.nan] * points)
         self.trace.times[name].extend([math.nan] * points)
         self.trace.planned_nees[name].extend([math.nan] * points)
@@ -400,9 +359,7 @@ class Session:
         for i, r in enumerate(self.robots):
             name = self.names[i]
             if r.move is not None:
-                self._cut(name, len(r.waypoints))
-                r.waypoints = []
-                self._end(r, cut=True)
+                self._cut_move(i, r)
             for m in r.queue[r.started :]:
                 self._cut(name, len(m.waypoints))
             r.started = len(r.queue)
@@ -484,7 +441,7 @@ class Session:
                 self.trace.move_contacts[key] = self.trace.move_contacts.get(key, 0) + int(touch[i])
 
     @staticmethod
-    def _move_step(r: _Robot) -> int:
+    def _move_step(r: RobotQueue) -> int:
         """The plan step of robot r's move under way, or of its last one when it stands (-1 before its first)."""
         if r.move is not None:
             return r.move.step

@@ -55,9 +55,27 @@ def _rest(result: ExecutionResult, lines: list[str]) -> list[str]:
     lines += summary_lines(result.consistency, result.localiser) if result.localiser else []
     lines += collision_lines(result)
     lines += move_lines(result)
+    lines += recovery_lines(result)
     if result.truncated_sessions:
         lines.append(f"note: {result.truncated_sessions} session(s) did not reach every node within the step budget")
     return lines
+
+
+def recovery_lines(result: ExecutionResult) -> list[str]:
+    """nav2's recovery behaviours and the moves given up, when the robots ran any."""
+    runs = sum(result.recoveries.values())
+    if not runs:
+        return []
+    sessions = result.given_up.size
+    names = ", ".join(f"{name} {count}" for name, count in result.recoveries.items())
+    given_up = int(result.given_up.sum())
+    line = f"nav2's recovery behaviours: {runs} ({names})"
+    if given_up:
+        line += (
+            f"; {given_up} move(s) given up after the last retry, in {np.count_nonzero(result.given_up)} "
+            f"of {sessions} sessions (the robot stopped short of its room)"
+        )
+    return [line]
 
 
 def labels(result: ExecutionResult) -> list[tuple[int, str]]:

@@ -46,6 +46,10 @@ class SessionTrace:
     cut: list[TimedMove] = field(default_factory=list)
     #: every driving step's actual error, the localiser's covariance and the plan's (consistency.py)
     consistency: ConsistencyTrace = field(default_factory=ConsistencyTrace)
+    #: nav2's recovery behaviours run, by name (tmpnav.execution.recovery), and the moves of
+    #: ``cut`` whose navigation nav2 failed after its last retry
+    recoveries: dict[str, int] = field(default_factory=dict)
+    given_up: list[TimedMove] = field(default_factory=list)
 
     def reached(self) -> list[TimedMove]:
         """The moves that reached their room (not cut), in the order they ended."""
