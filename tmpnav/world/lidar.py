@@ -85,10 +85,10 @@ def cast(sdf, x0, y0, res, x, y, psi, r_max):
     phi, _, _ = _field(sdf, x0, y0, res, x, y)
     if phi <= 0.0:
         return math.nan, 0.0, 0.0
-    t_prev, t = 0.0, 0.0
+    t_prev, t, f_prev = 0.0, 0.0, phi
     floor = MIN_STEP * res
     while True:
-        t_prev = t
+        t_prev, f_prev = t, phi
         t += max(0.8 * phi, floor)
         if t > r_max + floor:
             return math.inf, 0.0, 0.0
@@ -96,8 +96,7 @@ def cast(sdf, x0, y0, res, x, y, psi, r_max):
         if phi < 0.0:
             break
     lo, hi = t_prev, t  # phi(lo) >= 0 > phi(hi)
-    f_lo, _, _ = _field(sdf, x0, y0, res, x + lo * dx, y + lo * dy)
-    f_hi = phi
+    f_lo, f_hi = f_prev, phi  # the field at lo as the march found it
     for _ in range(BISECTIONS):
         mid = 0.5 * (lo + hi)
         f_mid, _, _ = _field(sdf, x0, y0, res, x + mid * dx, y + mid * dy)
