@@ -20,12 +20,12 @@ import numpy as np
 
 from tmpnav.belief.kernel import _landmark_observation, _predict, _robot_observation, _update, _update_scalar
 from tmpnav.execution.joint_ekf import mutually_visible, sensing_pairs
-from tmpnav.execution.scans import CONVERGED, GATE, ITERATIONS
+from tmpnav.execution.scans import CONVERGED, GATE, ITERATIONS, RECAST
 from tmpnav.execution.trace import Draws
 from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
 from tmpnav.world.geometry import wrap_angle_scalar
-from tmpnav.world.lidar import scan, sensor_params
+from tmpnav.world.lidar import scan, scan_beams, sensor_params
 from tmpnav.world.visibility import LandmarkVisibility
 
 
@@ -51,6 +51,9 @@ class CompiledJointEkf:
         self.params = sensor_params(sensor) if sensor is not None else np.zeros(8)
         self.work = np.empty((3 * n, 3 * n))
         self.counts = np.zeros((n, 2), dtype=np.int64)
+        # each robot's last true scan: its pose (nan: none yet), ranges and variances (n, B)
+        self.last = np.full((n, 3), np.nan)
+        self.last_r, self.last_var = np.empty((n, self.angles.size)), np.empty((n, self.angles.size))
         self.set_world(world, vis)
 
     def estimate(self, i: int) -> np.ndarray:
@@ -79,7 +82,7 @@ class CompiledJointEkf:
             self.scanning, self.sdf, self.x0, self.y0, self.res, self.angles, self.params,
             np.ascontiguousarray(d.scan[:, step]),
             np.array(pairs, dtype=np.int64).reshape(-1, 2), np.ascontiguousarray(d.mutual[:, :, step]),
-            self.chol_mu, self.q_mu, self.counts,
+            self.chol_mu, self.q_mu, self.counts, self.last, self.last_r, self.last_var,
         )  # fmt: skip
         return [(a, b) for a, b in self.counts.tolist()]
 
@@ -91,17 +94,20 @@ class CompiledJointEkf:
         self.sdf = world.signed_distance if self.scanning else np.zeros((1, 1))
         self.x0, self.y0 = (float(world.grid.origin[0]), float(world.grid.origin[1]))
         self.res = float(world.grid.resolution)
+        self.last[:] = np.nan  # scans of the old world are not kept
 
 
 @nb.njit(cache=True)
 def _observe(
     mean, cov, n, truth, landmarks, seen, lm_draws, chol_lm, q_lm,
     scanning, sdf, x0, y0, res, angles, params, scan_draws, pairs, mu_draws, chol_mu, q_mu, counts,
+    last, last_r, last_var,
 ):  # fmt: skip
     """One control step's observations, in the reference's order: every robot's landmarks
     (``seen`` (n, L), draws (n, L, 2)), every robot's scan (draws (n, B)), then the ordered
     ``pairs`` (k, 2) of robots that see each other (draws (n, n, 2)); ``counts`` (n, 2) gets the
-    beams each robot's scan used and rejected."""
+    beams each robot's scan used and rejected; ``last``, ``last_r``, ``last_var`` keep each robot's
+    last true scan (:func:`_scan`)."""
     D = 3 * n
     work, PHt, K = np.empty((D, D)), np.empty((D, 2)), np.empty((D, 2))
     H, cols, y = np.zeros((2, D)), np.zeros(5, dtype=np.int64), np.empty(2)
@@ -118,7 +124,10 @@ def _observe(
     for i in range(n):
         counts[i, 0], counts[i, 1] = 0, 0
         if scanning:
-            _scan(mean, cov, n, i, truth[i], scan_draws[i], sdf, x0, y0, res, angles, params, work, PHt, K, counts)
+            _scan(
+                mean, cov, n, i, truth[i], scan_draws[i], sdf, x0, y0, res, angles, params, work, PHt, K, counts,
+                last, last_r, last_var,
+            )  # fmt: skip
     for p in range(pairs.shape[0]):
         i, j = pairs[p, 0], pairs[p, 1]
         H[:, :] = 0.0
@@ -129,34 +138,50 @@ def _observe(
 
 
 @nb.njit(cache=True)
-def _scan(mean, cov, n, i, truth, draws, sdf, x0, y0, res, angles, params, work, PHt, K, counts):
+def _scan(
+    mean, cov, n, i, truth, draws, sdf, x0, y0, res, angles, params, work, PHt, K, counts, last, last_r, last_var
+):
     """Robot i's scan from its true pose, as :meth:`tmpnav.execution.scans.ScanSimulator.update`:
     the beams that return in both the true and the predicted scan and pass the gate, the update
-    iterated on the robot's own block, then the joint update with their compressed form."""
+    iterated on the robot's own block (cast again where it has moved by RECAST of a beam's
+    standard deviation), then the joint update with their compressed form. Only the beams with a
+    true return are cast from the estimate, and the true scan of a robot that has not moved since
+    its last one is the one kept in ``last`` (n, 3) (its pose), ``last_r`` and ``last_var`` (n, B)."""
     B = angles.shape[0]
-    true_r, Hb, var = np.empty(B), np.empty((B, 3)), np.empty(B)
-    scan(sdf, x0, y0, res, truth, angles, params, true_r, Hb, var)
-    z = true_r + np.sqrt(var) * draws
+    Hb, var = np.empty((B, 3)), np.empty(B)
+    true_r, true_var = last_r[i], last_var[i]
+    if not (truth[0] == last[i, 0] and truth[1] == last[i, 1] and truth[2] == last[i, 2]):
+        scan(sdf, x0, y0, res, truth, angles, params, true_r, Hb, true_var)
+        last[i, :] = truth
+    z = true_r + np.sqrt(true_var) * draws
+    wanted = ~np.isnan(z)
     c = 3 * i
     prior = mean[c : c + 3].copy()
     P = cov[c : c + 3, c : c + 3].copy()
-    at, spread_cov = prior.copy(), P.copy()
-    G, y_G = np.zeros((3, 3)), np.zeros(3)
+    at, spread_cov, cast_at = prior.copy(), P.copy(), prior.copy()
+    predicted = np.empty(B)
+    scan_beams(sdf, x0, y0, res, prior, angles, params, wanted, predicted, Hb, var)
+    G, y_G, residual = np.zeros((3, 3)), np.zeros(3), np.empty(B)
     updated = False
     keep = np.zeros(B, dtype=np.bool_)
     for it in range(ITERATIONS):
-        scan(sdf, x0, y0, res, at, angles, params, true_r, Hb, var)
+        m0, m1, m2 = at[0] - cast_at[0], at[1] - cast_at[1], wrap_angle_scalar(at[2] - cast_at[2])
+        if it > 0 and _beam_shift(m0, m1, m2, z, predicted, Hb, var) >= RECAST:
+            scan_beams(sdf, x0, y0, res, at, angles, params, wanted, predicted, Hb, var)
+            cast_at[:] = at
+            m0 = m1 = m2 = 0.0
         both = kept = 0
         for b in range(B):
             keep[b] = False
-            if math.isnan(z[b]) or math.isnan(true_r[b]):
+            if math.isnan(z[b]) or math.isnan(predicted[b]):
                 continue
             both += 1
             h0, h1, h2 = Hb[b, 0], Hb[b, 1], Hb[b, 2]
+            residual[b] = (z[b] - predicted[b]) - (h0 * m0 + h1 * m1 + h2 * m2)
             quad = 0.0
             for r in range(3):
                 quad += (h0 * spread_cov[0, r] + h1 * spread_cov[1, r] + h2 * spread_cov[2, r]) * Hb[b, r]
-            if abs(z[b] - true_r[b]) <= GATE * math.sqrt(quad + var[b]):
+            if abs(residual[b]) <= GATE * math.sqrt(quad + var[b]):
                 keep[b] = True
                 kept += 1
         if it == 0:
@@ -170,7 +195,7 @@ def _scan(mean, cov, n, i, truth, draws, sdf, x0, y0, res, angles, params, work,
                 continue
             sd = math.sqrt(var[b])
             w = 1.0 / (sd * sd)
-            yb = (z[b] - true_r[b]) + (Hb[b, 0] * s0 + Hb[b, 1] * s1 + Hb[b, 2] * s2)
+            yb = residual[b] + (Hb[b, 0] * s0 + Hb[b, 1] * s1 + Hb[b, 2] * s2)
             for r in range(3):
                 rhs[r] += Hb[b, r] * (yb * w)
                 for q in range(3):
@@ -211,3 +236,15 @@ def _scan(mean, cov, n, i, truth, draws, sdf, x0, y0, res, angles, params, work,
             + g[2] * wrap_angle_scalar(prior[2] - mean[c + 2])
         )
         _update_scalar(mean, cov, g, c, y_G[k] + moved, n, work, PHt, K)
+
+
+@nb.njit(cache=True)
+def _beam_shift(m0, m1, m2, z, predicted, H, var):
+    """:func:`tmpnav.execution.scans.beam_shift` of the move (m0, m1, m2) over the beams that
+    return in both ``z`` and ``predicted``."""
+    out = 0.0
+    for b in range(z.shape[0]):
+        if math.isnan(z[b]) or math.isnan(predicted[b]):
+            continue
+        out = max(out, abs(H[b, 0] * m0 + H[b, 1] * m1 + H[b, 2] * m2) / math.sqrt(var[b]))
+    return out

@@ -10,6 +10,12 @@ rejects a return from another surface than the one it expects (an edge seen past
 frame missed): without the gate one such beam, metres off, would throw the estimate. The
 beams used update the joint belief at once, through their compressed 3-D form
 (:func:`tmpnav.belief.models.compressed_scan`, :func:`tmpnav.belief.ekf.update_scan`).
+
+The update is iterated (Gauss-Newton, relinearised at each new estimate, the gate applied
+again with the new spread). The scan is cast again only when the estimate has moved since the
+last cast by enough to change some beam's predicted range by :data:`RECAST` of its standard
+deviation; a smaller move is carried to the beams to first order (:func:`beam_shift`,
+docs/models.md, "Range sensor").
 """
 
 from __future__ import annotations
@@ -30,6 +36,9 @@ GATE = 3.0
 ITERATIONS = 6
 #: an iteration that moves the estimate less than this (m, rad) ends them
 CONVERGED = 1e-4
+#: the scan is cast again at the new estimate when the move since the last cast changes some used
+#: beam's predicted range, to first order, by this share of its standard deviation or more
+RECAST = 0.1
 
 
 @dataclass(frozen=True)
@@ -61,7 +70,8 @@ class ScanSimulator:
 
     def update(self, belief: Belief, i: int, truth: np.ndarray, draws: np.ndarray) -> tuple[Belief, ScanCount]:
         """Robot i scans from its true pose ``truth`` with the standard-normal ``draws`` (B,); the
-        joint belief updated with the beams that pass the gate, relinearised at each new estimate.
+        joint belief updated with the beams that pass the gate, relinearised at each new estimate
+        (cast again there when it has moved by :data:`RECAST` of a beam's standard deviation).
 
         The iterations move robot i's estimate only (its own block of the belief: the update of
         the robot's mean does not depend on the others'); the last one updates the joint belief
@@ -72,11 +82,19 @@ class ScanSimulator:
         prior, P = belief.mean[cols], belief.cov[cols, cols]
         at, spread_cov, count = prior, P, ScanCount(0, 0)
         update: tuple[np.ndarray, np.ndarray] | None = None
+        cast_at = prior
+        predicted, H, var = self.ranges(prior)
         for it in range(ITERATIONS):
-            predicted, H, var = self.ranges(at)
             both = ~np.isnan(z) & ~np.isnan(predicted)
-            H, var, residual = H[both], var[both], z[both] - predicted[both]
-            spread = np.sqrt(np.einsum("bi,ij,bj->b", H, spread_cov, H) + var)
+            moved = at - cast_at
+            moved[2] = wrap_angle(moved[2])
+            if it > 0 and beam_shift(moved, H[both], var[both]) >= RECAST:
+                predicted, H, var = self.ranges(at)
+                cast_at, moved = at, np.zeros(3)
+                both = ~np.isnan(z) & ~np.isnan(predicted)
+            Hb, vb = H[both], var[both]
+            residual = z[both] - predicted[both] - Hb @ moved  # at `at`: the last cast carried to first order
+            spread = np.sqrt(np.einsum("bi,ij,bj->b", Hb, spread_cov, Hb) + vb)
             keep = np.abs(residual) <= GATE * spread
             if it == 0:
                 count = ScanCount(int(both.sum()), int((~keep).sum()))
@@ -84,7 +102,7 @@ class ScanSimulator:
                 break
             shift = at - prior
             shift[2] = wrap_angle(shift[2])
-            G, y_G = compressed_scan(H[keep], residual[keep] + H[keep] @ shift, np.sqrt(var[keep]))
+            G, y_G = compressed_scan(Hb[keep], residual[keep] + Hb[keep] @ shift, np.sqrt(vb[keep]))
             update = (G, y_G)
             K = P @ G.T @ np.linalg.inv(G @ P @ G.T + np.eye(3))
             step = prior + K @ y_G - at
@@ -96,3 +114,12 @@ class ScanSimulator:
         if update is None:
             return belief, count
         return ekf.update_scan(belief, i, *update), count
+
+
+def beam_shift(moved: np.ndarray, H: np.ndarray, var: np.ndarray) -> float:
+    """How far a move of the pose by ``moved`` (3,) (m, m, rad) shifts the beams' predicted ranges,
+    to first order: max_b |H_b moved| / sqrt(var_b) over the beams (Jacobians H (B, 3), range
+    variances var (B,) m²), in standard deviations; 0 for no beam."""
+    if not len(var):
+        return 0.0
+    return float(np.max(np.abs(H @ moved) / np.sqrt(var)))

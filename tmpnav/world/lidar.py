@@ -182,6 +182,19 @@ def scan(sdf, x0, y0, res, pose, angles, params, ranges, H, var):
 
 
 @nb.njit(cache=True)
+def scan_beams(sdf, x0, y0, res, pose, angles, params, wanted, ranges, H, var):
+    """:func:`scan` of the beams ``wanted`` (B,) bool only, the others left as beams that do not
+    return (nan, zero rows, 0): the simulator casts the beams it can compare with a true return."""
+    for b in range(angles.shape[0]):
+        if not wanted[b]:
+            ranges[b], H[b, 0], H[b, 1], H[b, 2], var[b] = math.nan, 0.0, 0.0, 0.0, 0.0
+            continue
+        ok, r, h0, h1, h2, v = _beam(sdf, x0, y0, res, pose[0], pose[1], pose[2] + angles[b], params)
+        ranges[b] = r if ok else math.nan
+        H[b, 0], H[b, 1], H[b, 2], var[b] = h0, h1, h2, v
+
+
+@nb.njit(cache=True)
 def _information(sdf, x0, y0, res, x, y, theta, angles, params, J):
     """J (3, 3) = sum over the returning beams of H_i^T H_i / var_i: var_i the range's variance
     (``beams``), or for the likelihood field (params[5] = 1) the endpoint's variance params[6]
