@@ -223,8 +223,9 @@ class Session:
         """The executed cost terms of this step (SessionTrace.c_u, c_sigma)."""
         for i, (name, r) in enumerate(zip(self.names, self.robots, strict=True)):
             if r.waypoints:
-                self.trace.c_u[name] += float(u[i] @ u[i]) * self.dt
-                self.trace.c_sigma[name] += float(np.trace(self.estimate_cov(i))) * self.dt
+                cov = self.estimate_cov(i)
+                self.trace.c_u[name] += float(u[i, 0] * u[i, 0] + u[i, 1] * u[i, 1]) * self.dt
+                self.trace.c_sigma[name] += float(cov[0, 0] + cov[1, 1] + cov[2, 2]) * self.dt
 
     def _arrive(self) -> None:
         """The waypoints reached now, and the moves ended by them."""
@@ -413,22 +414,24 @@ class Session:
             self.trace.beams[name][0] += used
             self.trace.beams[name][1] += rejected
 
-    def _record_consistency(self) -> None:
-        """Each driving robot's actual error, its localiser's covariance and the plan's at this step of its move."""
-        for i, (name, r) in enumerate(zip(self.names, self.robots, strict=True)):
-            if r.move is None or not r.waypoints:
-                continue
-            own = self.estimate_cov(i)[:2, :2]
-            error = self.truth[i, :2] - self.estimate(i)[:2]
-            r.track = r.move.planned_from(r.track, self.truth[i, :2])
-            self.trace.consistency.record(name, r.move.step, error, own, r.move.planned_at(r.track))
+    def _record_consistency(self, i: int, error: np.ndarray, own: np.ndarray) -> None:
+        """Robot i's actual position error (2,), its localiser's covariance (2, 2) and the plan's at this
+        step of its move, when it drives."""
+        r = self.robots[i]
+        if r.move is None or not r.waypoints:
+            return
+        r.track = r.move.planned_from(r.track, self.truth[i, :2])
+        self.trace.consistency.record(self.names[i], r.move.step, error, own, r.move.planned_at(r.track))
 
     def _collide(self) -> None:
         """Count the true poses, after this control step, that hit a wall, and the robots that touch
-        (closer than their radii added): what the collision bound (docs/models.md) bounds."""
-        self._record_consistency()
+        (closer than their radii added): what the collision bound (docs/models.md) bounds. Each
+        robot's error against its localiser's covariance is recorded too (consistency, NEES)."""
         for i, name in enumerate(self.names):
-            value = nees(self.truth[i, :2] - self.estimate(i)[:2], self.estimate_cov(i)[:2, :2])
+            error = self.truth[i, :2] - self.estimate(i)[:2]
+            own = self.estimate_cov(i)[:2, :2]
+            self._record_consistency(i, error, own)
+            value = nees(error, own)
             if not math.isnan(value):
                 self.trace.own_nees[name].append(value)
         walls, touch = walls_and_touches(self.world, self.truth, self.radii)
