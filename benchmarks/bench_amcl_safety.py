@@ -7,7 +7,7 @@ lines on wall hits, contacts, the moves against their bounds and the beliefs aga
 printed (benchmarks/README.md, "Safety against AMCL").
 
     .venv/bin/python benchmarks/bench_amcl_safety.py [--scenario configs/building-4robots.yaml]
-        [--sessions 24] [--seed 100] [--steer local estimate] [--workers 1]
+        [--sessions 24] [--seed 100] [--steer local estimate] [--workers 1] [--no-recoveries]
 """
 
 from __future__ import annotations
@@ -26,7 +26,17 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 OUT = HERE / "amcl" / "safety"
 #: the summary's lines this benchmark reports
-KEPT = ("wall hits", "  with AMCL", "robot contacts", "moves against their bounds", "team ", "makespan", "localiser:")
+KEPT = (
+    "wall hits",
+    "  with AMCL",
+    "robot contacts",
+    "moves against their bounds",
+    "team ",
+    "makespan",
+    "localiser:",
+    "nav2's recovery",
+    "note:",
+)
 
 
 def main() -> None:
@@ -36,6 +46,9 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=100)
     parser.add_argument("--steer", nargs="+", default=["local", "estimate"], choices=["local", "estimate"])
     parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument(
+        "--no-recoveries", action="store_true", help="without nav2's recovery behaviours (files NAME.STEER.norec.*)"
+    )
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     name = args.scenario.stem
@@ -49,13 +62,15 @@ def main() -> None:
             run = subprocess.run(
                 [sys.executable, "-m", "tmpnav", "simulate", str(scenario), "--localiser", "amcl", "--steer", steer,
                  "--sessions", str(args.sessions), "--seed", str(args.seed), "--workers", str(args.workers), "-q",
+                 *(["--no-recoveries"] if args.no_recoveries else []),
                  "--cache-dir", str(tmp / "cache"), "-o", str(out)],
                 capture_output=True, text=True, cwd=ROOT,
             )  # fmt: skip
             if run.returncode != 0:
                 sys.exit(f"{name} --steer {steer}: exit {run.returncode}: {run.stderr.strip()}")
+            tag = f"{name}.{steer}.norec" if args.no_recoveries else f"{name}.{steer}"
             for part in ("summary.md", "moves.csv"):
-                shutil.copyfile(out / part, OUT / f"{name}.{steer}.{part}")
+                shutil.copyfile(out / part, OUT / f"{tag}.{part}")
             print(f"{name}, --steer {steer}, {args.sessions} sessions from seed {args.seed}, "
                   f"{time.perf_counter() - began:.0f} s:")  # fmt: skip
             for line in run.stdout.splitlines():

@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from tests.execution.test_site import LIDAR, WALL, corridor
+from tests.execution.test_site import LIDAR, WALL, _box_distance, corridor
 from tmpnav.execution.local_view import KEEP_CLEAR, LocalView, _rollouts
 from tmpnav.execution.site import Site, SiteNoise
 
@@ -58,10 +58,9 @@ def test_a_command_that_stays_clear_is_kept_and_one_into_a_wall_is_turned_away()
     towards = np.array([10.0, WALL + 0.6, -math.pi / 3])  # 0.35 m of room, heading for the wall
     safe = v.safe_command(towards, command, RADIUS, (0.5, 1.0), 5.0)
     assert safe[1] > 0.0  # it turns away from the lower wall
-    field = v.site.field
-    clear = _rollouts(field, v.x0, v.y0, v.res, towards, np.array([safe[0]]), np.array([safe[1]]))[0] - RADIUS
+    clear = _rollouts(v.clearance, towards, np.array([safe[0]]), np.array([safe[1]]))[0] - RADIUS
     assert clear >= KEEP_CLEAR
-    straight = _rollouts(field, v.x0, v.y0, v.res, towards, np.array([0.5]), np.array([0.0]))[0] - RADIUS
+    straight = _rollouts(v.clearance, towards, np.array([0.5]), np.array([0.0]))[0] - RADIUS
     assert straight < 0.0  # the command itself would have hit within the horizon
 
 
@@ -86,3 +85,23 @@ def test_a_robot_stopping_short_of_a_wall_may_drive_up_to_it() -> None:
     assert v.safe_command(pose, command, RADIUS, (0.5, 1.0), 2.0) is not command
     goal = pose[:2] + np.array([0.0, 0.65])  # a goal 0.1 m from the wall: the robot may drive up to it
     assert v.safe_command(pose, command, RADIUS, (0.5, 1.0), 0.65, goal) is command
+
+
+def test_the_room_beside_clutter_is_the_exact_distance_not_the_sites_lower_bound() -> None:
+    """The site's field, which its ray casts march on, is exact only near a box and a lower bound
+    (at least 0.3 m) beyond: a robot on a path kept 0.6 m from every box would read 0.3 m of it,
+    no more than a 0.25 m robot needs with 5 cm to spare, and see every command refused. The
+    local view measures the walls and the boxes exactly."""
+    world = corridor()
+    noise = SiteNoise(clutter=4, wall_offset=0, people=0)
+    path = np.column_stack([np.arange(1.0, 59.0, 0.2), np.full(290, WALL + 4.0)])
+    v = LocalView(Site(world, noise, 1, keep_clear=path), LIDAR)
+    x, y = path.T  # the free space is x in [WALL, 60 + WALL], y in [WALL, 8 + WALL]
+    walls = np.min([x - WALL, 60.0 + WALL - x, y - WALL, 8.0 + WALL - y], axis=0)
+    exact = np.minimum(walls, np.min([_box_distance(path, box, noise.clutter_size) for box in v.site.boxes], axis=0))
+    np.testing.assert_allclose(v.clearance(path), exact, atol=0.03)
+    rows, cols, _ = world.grid.cells(path)
+    lower = v.site.field[rows, cols]
+    assert (lower <= exact + 0.04).all() and (lower < exact - 0.1).any()  # the field is looser (at cell centres)
+    for pose in np.column_stack([path[::10], np.zeros(29)]):  # driving along the path is never refused
+        assert v.safe_command(pose, np.array([0.5, 0.0]), RADIUS, (0.5, 1.0), 5.0) is not None

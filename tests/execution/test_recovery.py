@@ -101,7 +101,6 @@ def test_a_robot_driven_at_a_wall_backs_away_and_gives_its_goal_up_without_touch
     away from the wall, and after the last retry the goal is given up, the footprint clear of
     the wall throughout."""
     v = view(width=2.0)
-    field = v.site.field
     truth = np.array([10.0, WALL + 1.6, math.pi / 2])  # the upper wall 0.15 m past its radius
     waypoint = truth[:2] + np.array([0.0, 1.5])  # beyond the wall
     p = RecoveryParams()
@@ -117,8 +116,7 @@ def test_a_robot_driven_at_a_wall_backs_away_and_gives_its_goal_up_without_touch
             rec.followed(safe is None, truth[:2], step)
             command = np.zeros(2) if safe is None else safe
         truth = motion(truth[None], command[None], DT)[0]
-        ix = v.site.world.grid.cells(truth[:2][None])
-        closest = min(closest, float(field[ix[0], ix[1]][0]) - RADIUS)
+        closest = min(closest, float(v.clearance(truth[None, :2])[0]) - RADIUS)
         if rec.given_up:
             break
     assert rec.given_up and step * DT < 60.0

@@ -26,6 +26,7 @@ recovery behaviours then take over (:mod:`.recovery`). Other robots are not in t
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -61,6 +62,7 @@ class LocalView:
         self.sdf = site.world.signed_distance  # the map's: what the robot's estimate is placed in
         self.x0, self.y0 = (float(v) for v in grid.origin)
         self.res = float(grid.resolution)
+        self._walls = site.walls()  # the site's walls, exact (its field is a lower bound away from the clutter)
 
     def steering_pose(self, est: np.ndarray, truth: np.ndarray, t: float = 0.0) -> np.ndarray:
         """The pose (3,) the robot steers on: its estimate ``est`` moved so that what its lidar sees
@@ -113,16 +115,14 @@ class LocalView:
         if v <= 0.0:
             return command  # turning on the spot moves no footprint
         speed, turn = limits
-        now = _sample_gradient(self.site.field, self.x0, self.y0, self.res, truth[None, :2])[0][0] - radius
+        now = self.clearance(truth[None, :2])[0] - radius
         need = min(KEEP_CLEAR, now)
         if target is not None:  # it may go as near what it sees as where it is going is
-            at = _sample_gradient(
-                self.site.field, self.x0, self.y0, self.res, np.asarray(target, dtype=float)[None, :2]
-            )[0][0]
+            at = self.clearance(np.asarray(target, dtype=float)[None, :2])[0]
             need = min(need, at - radius - TARGET_SLACK)
         vs = np.array([v, 0.5 * v] * (2 * FAN + 2))
         omegas = np.repeat(np.r_[omega, np.linspace(-turn, turn, 2 * FAN + 1)], 2)
-        clear = _rollouts(self.site.field, self.x0, self.y0, self.res, truth, vs, omegas, ahead) - radius
+        clear = _rollouts(self.clearance, truth, vs, omegas, ahead) - radius
         ok = clear >= need
         if ok[0]:
             return command
@@ -136,24 +136,43 @@ class LocalView:
         """Whether driving straight at ``v`` (m/s; negative: backwards) from the true pose ``truth``
         for ``horizon`` seconds keeps the footprint clear of what the robot sees (no nearer than it
         is now, nor than :data:`KEEP_CLEAR`), as nav2's behaviours check their motion."""
-        field = self.site.field
-        now = _sample_gradient(field, self.x0, self.y0, self.res, truth[None, :2])[0][0] - radius
-        clear = _rollouts(field, self.x0, self.y0, self.res, truth, np.array([v]), np.zeros(1), horizon=horizon)
+        now = self.clearance(truth[None, :2])[0] - radius
+        clear = _rollouts(self.clearance, truth, np.array([v]), np.zeros(1), horizon=horizon)
         return bool(clear[0] - radius >= min(KEEP_CLEAR, now))
+
+    def clearance(self, xy: np.ndarray) -> np.ndarray:
+        """The distance (P,) m from the points xy (P, 2) to the nearest surface of the site the
+        robot sees: its walls (bilinear in their field) and its clutter boxes (exact). The site's
+        own field is exact only near the boxes and a lower bound beyond (what its ray casts need),
+        too low to judge a footprint's room by."""
+        d = _sample_gradient(self._walls, self.x0, self.y0, self.res, xy)[0]
+        boxes = self.site.boxes
+        if len(boxes):
+            d = np.minimum(d, _box_distance(xy, boxes, self.site.noise.clutter_size))
+        return d
+
+
+def _box_distance(xy: np.ndarray, boxes: np.ndarray, size: float) -> np.ndarray:
+    """The signed distance (P,) m from the points xy (P, 2) to the nearest of the square boxes
+    (N, 3: centre x, y and heading) of side ``size``."""
+    gx = xy[:, 0, None] - boxes[None, :, 0]
+    gy = xy[:, 1, None] - boxes[None, :, 1]
+    c, s = np.cos(boxes[None, :, 2]), np.sin(boxes[None, :, 2])
+    lx = np.abs(c * gx + s * gy) - 0.5 * size
+    ly = np.abs(-s * gx + c * gy) - 0.5 * size
+    d = np.hypot(np.maximum(lx, 0.0), np.maximum(ly, 0.0)) + np.minimum(np.maximum(lx, ly), 0.0)
+    return d.min(axis=1)
 
 
 def _rollouts(
-    field: np.ndarray,
-    x0: float,
-    y0: float,
-    res: float,
+    clearance: Callable[[np.ndarray], np.ndarray],
     pose: np.ndarray,
     vs: np.ndarray,
     omegas: np.ndarray,
     ahead: float = math.inf,
     horizon: float = HORIZON,
 ) -> np.ndarray:
-    """The least value of ``field`` along each arc driven at (vs[k], omegas[k]) from ``pose`` for
+    """The least ``clearance`` along each arc driven at (vs[k], omegas[k]) from ``pose`` for
     ``horizon`` seconds or ``ahead`` metres, whichever ends first, sampled every
     :data:`ROLLOUT_DT` (the first sample always) -> (K,)."""
     t = np.arange(1, round(horizon / ROLLOUT_DT) + 1) * ROLLOUT_DT
@@ -170,7 +189,7 @@ def _rollouts(
         pose[1] + vs[:, None] * t * np.sin(pose[2]),
         pose[1] - vs[:, None] / w * (np.cos(th) - np.cos(pose[2])),
     )
-    values = _sample_gradient(field, x0, y0, res, np.column_stack([x.ravel(), y.ravel()]))[0].reshape(x.shape)
+    values = clearance(np.column_stack([x.ravel(), y.ravel()])).reshape(x.shape)
     beyond = (np.abs(vs)[:, None] * t[None, :] > ahead) & (t[None, :] > ROLLOUT_DT)
     return np.where(beyond, np.inf, values).min(axis=1)
 
