@@ -70,7 +70,9 @@ def recovery_lines(result: ExecutionResult) -> list[str]:
     names = ", ".join(f"{name} {count}" for name, count in result.recoveries.items())
     given_up = int(result.given_up.sum())
     line = f"nav2's recovery behaviours: {runs} ({names})"
-    if given_up:
+    if not given_up:
+        line += "; no move given up"
+    else:
         line += (
             f"; {given_up} move(s) given up after the last retry, in {np.count_nonzero(result.given_up)} "
             f"of {sessions} sessions (the robot stopped short of its room)"
