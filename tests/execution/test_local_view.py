@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from tests.execution.test_site import LIDAR, WALL, _box_distance, corridor
 from tmpnav.execution.local_view import KEEP_CLEAR, LocalView, _rollouts
@@ -105,3 +106,16 @@ def test_the_room_beside_clutter_is_the_exact_distance_not_the_sites_lower_bound
     assert (lower <= exact + 0.04).all() and (lower < exact - 0.1).any()  # the field is looser (at cell centres)
     for pose in np.column_stack([path[::10], np.zeros(29)]):  # driving along the path is never refused
         assert v.safe_command(pose, np.array([0.5, 0.0]), RADIUS, (0.5, 1.0), 5.0) is not None
+
+
+def test_another_robot_in_sight_is_kept_clear_of_like_a_wall() -> None:
+    """Another robot standing 0.6 m ahead in an open corridor: driving on is refused or turned
+    away from it; with nobody there the same command is kept."""
+    v = view(width=6.0)
+    pose = np.array([10.0, WALL + 3.0, 0.0])
+    command = np.array([0.5, 0.0])
+    assert v.safe_command(pose, command, RADIUS, (0.5, 1.0), 5.0) is command
+    v.robots = np.array([[10.6, WALL + 3.0, RADIUS]])
+    safe = v.safe_command(pose, command, RADIUS, (0.5, 1.0), 5.0)
+    assert safe is None or abs(safe[1]) > 0.0
+    assert float(v.clearance(pose[None, :2])[0]) == pytest.approx(0.6 - RADIUS)

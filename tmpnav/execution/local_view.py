@@ -20,7 +20,9 @@ robot sees (:meth:`LocalView.safe_command`).
 
 A robot whose estimate is half a metre or more off, where the returns cannot place it, may find
 every command towards its waypoint refused (the waypoint lies behind a wall in truth): nav2's
-recovery behaviours then take over (:mod:`.recovery`). Other robots are not in the costmap.
+recovery behaviours then take over (:mod:`.recovery`). The other robots within 2.5 m are in the
+costmap where they truly are, as nav2's obstacle layer marks what the lidar sees (a disc of
+their radius); the returns that place the robot are the site's alone.
 """
 
 from __future__ import annotations
@@ -63,6 +65,8 @@ class LocalView:
         self.x0, self.y0 = (float(v) for v in grid.origin)
         self.res = float(grid.resolution)
         self._walls = site.walls()  # the site's walls, exact (its field is a lower bound away from the clutter)
+        #: (k, 3) m: the other robots the lidar sees now, centre and radius (set by the navigator each step)
+        self.robots = np.zeros((0, 3))
 
     def steering_pose(self, est: np.ndarray, truth: np.ndarray, t: float = 0.0) -> np.ndarray:
         """The pose (3,) the robot steers on: its estimate ``est`` moved so that what its lidar sees
@@ -142,13 +146,17 @@ class LocalView:
 
     def clearance(self, xy: np.ndarray) -> np.ndarray:
         """The distance (P,) m from the points xy (P, 2) to the nearest surface of the site the
-        robot sees: its walls (bilinear in their field) and its clutter boxes (exact). The site's
+        robot sees: its walls (bilinear in their field), its clutter boxes (exact) and the other
+        robots in sight (:attr:`robots`, as nav2's obstacle layer marks them). The site's
         own field is exact only near the boxes and a lower bound beyond (what its ray casts need),
         too low to judge a footprint's room by."""
         d = _sample_gradient(self._walls, self.x0, self.y0, self.res, xy)[0]
         boxes = self.site.boxes
         if len(boxes):
             d = np.minimum(d, _box_distance(xy, boxes, self.site.noise.clutter_size))
+        if len(self.robots):  # the other robots, where the lidar sees them
+            gaps = np.hypot(xy[:, 0, None] - self.robots[None, :, 0], xy[:, 1, None] - self.robots[None, :, 1])
+            d = np.minimum(d, (gaps - self.robots[None, :, 2]).min(axis=1))
         return d
 
 

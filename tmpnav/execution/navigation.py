@@ -32,6 +32,10 @@ if TYPE_CHECKING:
     from tmpnav.execution.local_view import LocalView
 
 
+#: m: other robots nearer than this are in a robot's costmap (nav2's obstacle_max_range)
+OBSTACLE_RANGE = 2.5
+
+
 class Navigator:
     """The navigation stacks of a session's robots (see the module docstring)."""
 
@@ -78,11 +82,15 @@ class Navigator:
             self._steered[i] = self.view.steering_pose(est, truth, step * self.dt)
         return self._steered[i]
 
-    def command(self, i: int, r: RobotQueue, est: np.ndarray, truth: np.ndarray, step: int, world: World) -> np.ndarray:
-        """Robot i's command (v, omega) at ``step``, driving its move ``r``: a recovery
-        behaviour's, or the controller's kept clear of what it sees. A failure of the controller
-        is recorded in ``r.recovery`` (which may give the move up)."""
+    def command(self, i: int, r: RobotQueue, est: np.ndarray, team: np.ndarray, step: int, world: World) -> np.ndarray:
+        """Robot i's command (v, omega) at ``step``, driving its move ``r``, the team's true poses
+        ``team`` (n, 3): a recovery behaviour's, or the controller's kept clear of what it sees
+        (the walls, the clutter and the other robots within :data:`OBSTACLE_RANGE`). A failure of
+        the controller is recorded in ``r.recovery`` (which may give the move up)."""
         spec = self.scenario.robots[i]
+        truth = team[i]
+        if self.view is not None:
+            self.view.robots = self._others(i, team)
         rec = r.recovery
         if rec is not None:
             rec.ended(truth[:2], step)
@@ -106,6 +114,13 @@ class Navigator:
         if rec is not None:
             rec.followed(safe is None, truth[:2], step)
         return np.array([0.0, command[1]]) if safe is None else safe
+
+    def _others(self, i: int, team: np.ndarray) -> np.ndarray:
+        """(k, 3): the centre and radius of every other robot within :data:`OBSTACLE_RANGE` of robot i."""
+        radii = np.array([r.radius for r in self.scenario.robots])
+        near = np.hypot(*(team[:, :2] - team[i, :2]).T) <= OBSTACLE_RANGE
+        near[i] = False
+        return np.column_stack([team[near, :2], radii[near]])
 
     def _clear_behind(self, truth: np.ndarray, speed: float, radius: float) -> bool:
         """Whether a back-up at ``speed`` keeps clear of what the robot sees over nav2's

@@ -168,7 +168,7 @@ class Session:
             for i, r in enumerate(self.robots):
                 if not r.waypoints:
                     continue
-                command = self.navigator.command(i, r, self.estimate(i), self.truth[i], self.step, self.world)
+                command = self.navigator.command(i, r, self.estimate(i), self.truth, self.step, self.world)
                 if r.recovery is not None and r.recovery.given_up:  # nav2 failed the navigation
                     self._give_up(i, r)
                     continue
