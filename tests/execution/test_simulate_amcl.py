@@ -121,6 +121,27 @@ def test_simulate_with_amcl_reports_the_plan_against_amcl(tmp_path: Path) -> Non
     assert csv[0].startswith("robot,step,driving_steps") and len(csv) >= 3
 
 
+@pytest.mark.slow
+def test_amcl_sessions_are_the_same_however_they_are_spread_over_workers(tmp_path: Path) -> None:
+    """Each AMCL session runs in a process of its own: the bindings draw a filter's initial
+    particles from a counter of the process, so in one process the second and third sessions drew
+    other particles than in a pool of two, and the results depended on the workers."""
+    pytest.importorskip("amcl", reason="nav2's AMCL bindings (the optional extra tmpnav[amcl]) are not installed")
+    scenario = tmp_path / "two-rooms-lidar.yaml"
+    scenario.write_text((ROOT / "configs" / "two-rooms.yaml").read_text() + LIDAR)
+    outputs = {}
+    for workers in ("1", "2"):
+        out = tmp_path / f"out{workers}"
+        run = subprocess.run(
+            [sys.executable, "-m", "tmpnav", "simulate", str(scenario), "--localiser", "amcl", "--sessions", "3",
+             "--workers", workers, "-q", "--cache-dir", str(tmp_path / "cache"), "-o", str(out)],
+            capture_output=True, text=True, timeout=600,
+        )  # fmt: skip
+        assert run.returncode == 0, run.stderr
+        outputs[workers] = (out / "errors.csv").read_text(), (out / "consistency.csv").read_text()
+    assert outputs["1"] == outputs["2"]
+
+
 def test_simulate_with_amcl_refuses_a_bad_site_in_one_line(tmp_path: Path) -> None:
     run = subprocess.run(
         [sys.executable, "-m", "tmpnav", "simulate", str(ROOT / "configs" / "two-rooms.yaml"), "--localiser",

@@ -20,12 +20,15 @@ import multiprocessing
 import os
 import signal
 import time
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
 
 import numpy as np
 
 from tmpnav.belief.risk import clopper_pearson
+from tmpnav.errors import TmpnavError
 from tmpnav.execution.consistency import Nees
 from tmpnav.execution.consistency import gather as gather_consistency
 from tmpnav.execution.localisers import Localisation
@@ -189,7 +192,16 @@ class _Sessions:
         return {1: True} if self.localisation.particle_filter else CONFIGS
 
     def run(self, s: int) -> tuple[dict[int, SessionTrace], bool]:
-        """Session ``s`` in both configurations (the same draws), and whether it was cut short."""
+        """Session ``s`` in both configurations (the same draws), and whether it was cut short.
+        With AMCL in a process of its own, forked from this one: the bindings draw each filter's
+        initial particles from a counter of the process (docs/amcl.md, "Seeding"), so a session
+        run after others in the same process would draw other particles, and the results would
+        depend on how the sessions were spread over the workers."""
+        if self.localisation.particle_filter and "fork" in multiprocessing.get_all_start_methods():
+            return _forked(self._run, s)
+        return self._run(s)
+
+    def _run(self, s: int) -> tuple[dict[int, SessionTrace], bool]:
         scenario, world = self.scenario, self.world
         robots = len(scenario.robots)
         draws = Draws.draw(self.seed, s, robots, self.steps, world.landmark_xy.shape[0], self.beams)
@@ -198,6 +210,36 @@ class _Sessions:
             for c, mutual in self.configs.items()
         }
         return traces, any(t.truncated for t in traces.values())
+
+
+def _forked(run: Callable[[int], tuple[dict[int, SessionTrace], bool]], s: int) -> tuple[dict[int, SessionTrace], bool]:
+    """``run(s)`` in a child process forked for it (it ends with this one), its result sent back."""
+    mp = multiprocessing.get_context("fork")
+    reader, writer = mp.Pipe(duplex=False)
+    child = mp.Process(target=_child, args=(run, s, writer, os.getpid()), daemon=False)
+    child.start()
+    writer.close()
+    try:
+        ok, value = reader.recv()
+    except EOFError:
+        child.join()
+        code = child.exitcode
+        raise TmpnavError(f"simulated session {s} ended without a result (its process exited {code})") from None
+    finally:
+        child.join()
+    if not ok:
+        raise value
+    return value
+
+
+def _child(run: Callable[[int], object], s: int, writer: Connection, parent: int) -> None:
+    die_with_parent(parent)
+    try:
+        writer.send((True, run(s)))
+    except BaseException as e:  # the parent raises it
+        writer.send((False, e))
+    finally:
+        writer.close()
 
 
 _SHARED: _Sessions | None = None
