@@ -42,6 +42,7 @@ class Navigator:
     def __init__(self, scenario: Scenario, localisation: Localisation, dt: float):
         self.scenario, self.localisation, self.dt = scenario, localisation, dt
         self.view: LocalView | None = None
+        self.radii = np.array([r.radius for r in scenario.robots])
         self._steered: dict[int, np.ndarray] = {}  # the steering poses of step _steered_at, by robot
         self._steered_at = -1
 
@@ -117,10 +118,9 @@ class Navigator:
 
     def _others(self, i: int, team: np.ndarray) -> np.ndarray:
         """(k, 3): the centre and radius of every other robot within :data:`OBSTACLE_RANGE` of robot i."""
-        radii = np.array([r.radius for r in self.scenario.robots])
         near = np.hypot(*(team[:, :2] - team[i, :2]).T) <= OBSTACLE_RANGE
         near[i] = False
-        return np.column_stack([team[near, :2], radii[near]])
+        return np.column_stack([team[near, :2], self.radii[near]])
 
     def _clear_behind(self, truth: np.ndarray, speed: float, radius: float) -> bool:
         """Whether a back-up at ``speed`` keeps clear of what the robot sees over nav2's
