@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
+import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from tmpnav import atomic
+from tmpnav.errors import OutputError
 from tmpnav.report import figures, outputs
 from tmpnav.report.outputs import write_outputs
 from tmpnav.results import PlanReport
@@ -88,28 +93,103 @@ def test_figure_failure_leaves_the_earlier_run_untouched(
     assert contents(tmp_path) == old  # same files, same bytes, no temporary file
 
 
-def test_a_schedule_figure_that_fails_after_the_plan_figure_leaves_the_earlier_run_untouched(
+def test_a_schedule_figure_that_fails_leaves_the_earlier_run_untouched(
     plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """plan.json and plan.png are staged when drawing schedule.png fails: none of the new files
-    replaces an earlier one, and no half-written schedule.png is left."""
+    """schedule.png is drawn in a process forked for it while plan.png is drawn here: its failure,
+    half-way through its bytes, is raised here once plan.json and plan.png are staged, none of the
+    new files replaces an earlier one, and no half-written schedule.png is left."""
     old = earlier_run(tmp_path)
     real = figures.render
     drawn: list[str] = []
 
-    def render_then_fail_on_the_schedule(fig: object, path: Path, dpi: int = 110) -> None:
-        title = fig.axes[0].get_title()  # type: ignore[attr-defined]
+    def render_then_fail_on_the_schedule(fig: Any, out: Any, dpi: int = 110) -> None:
+        title = fig.axes[0].get_title()
         drawn.append(title)
         if "schedule of" in title:
-            path.write_bytes(b"\x89PNG half a schedule")
+            out.write(b"\x89PNG half a schedule")
             raise RuntimeError("the schedule fell over")
-        real(fig, path, dpi)  # type: ignore[arg-type]
+        real(fig, out, dpi)
 
     monkeypatch.setattr(figures, "render", render_then_fail_on_the_schedule)
     with pytest.raises(RuntimeError, match="schedule fell over"):
         write_outputs(plan_report, tmp_path, PDDL)
-    assert len(drawn) == 2 and "schedule of" not in drawn[0]  # plan.png was drawn first
+    assert len(drawn) == 1 and "schedule of" not in drawn[0]  # only plan.png was drawn in this process
     assert contents(tmp_path) == old
+    assert multiprocessing.active_children() == []
+
+
+def test_a_drawing_process_that_dies_fails_the_write(
+    plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The process drawing schedule.png ends without a word (killed, out of memory): the write
+    fails naming the file, and the earlier run stays."""
+    old = earlier_run(tmp_path)
+    real = figures.render
+
+    def die_on_the_schedule(fig: Any, out: Any, dpi: int = 110) -> None:
+        if "schedule of" in fig.axes[0].get_title():
+            os._exit(3)
+        real(fig, out, dpi)
+
+    monkeypatch.setattr(figures, "render", die_on_the_schedule)
+    with pytest.raises(OutputError, match=r"schedule\.png ended without it \(exit status 3\)"):
+        write_outputs(plan_report, tmp_path, PDDL)
+    assert contents(tmp_path) == old
+
+
+def test_a_failure_here_ends_the_drawing_process(
+    plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """plan.png fails while schedule.png is still being drawn: the drawing process is ended, not
+    waited for, and none is left."""
+    old = earlier_run(tmp_path)
+    real = figures.render
+
+    def slow_schedule_broken_plan(fig: Any, out: Any, dpi: int = 110) -> None:
+        if "schedule of" in fig.axes[0].get_title():
+            time.sleep(60)
+            real(fig, out, dpi)
+        raise RuntimeError("the plan fell over")
+
+    monkeypatch.setattr(figures, "render", slow_schedule_broken_plan)
+    began = time.perf_counter()
+    with pytest.raises(RuntimeError, match="plan fell over"):
+        write_outputs(plan_report, tmp_path, PDDL)
+    assert time.perf_counter() - began < 30
+    assert multiprocessing.active_children() == []
+    assert contents(tmp_path) == old
+
+
+def test_an_error_that_does_not_pickle_comes_back_as_its_text(
+    plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    class Unpicklable(Exception):
+        def __reduce__(self) -> Any:
+            raise TypeError("no pickling")
+
+    real = figures.render
+
+    def fail_oddly_on_the_schedule(fig: Any, out: Any, dpi: int = 110) -> None:
+        if "schedule of" in fig.axes[0].get_title():
+            raise Unpicklable("a font went missing")
+        real(fig, out, dpi)
+
+    monkeypatch.setattr(figures, "render", fail_oddly_on_the_schedule)
+    with pytest.raises(OutputError, match="Unpicklable: a font went missing"):
+        write_outputs(plan_report, tmp_path, PDDL)
+    assert os.listdir(tmp_path) == []
+
+
+def test_outside_the_main_thread_both_figures_are_drawn_here(plan_report: PlanReport, tmp_path: Path) -> None:
+    """A library caller's thread does not fork (its process's other threads may hold locks): the
+    same files, drawn in this process."""
+    with ThreadPoolExecutor(1) as pool:
+        pool.submit(write_outputs, plan_report, tmp_path / "thread", PDDL).result()
+    write_outputs(plan_report, tmp_path / "main", PDDL)
+    assert contents(tmp_path / "thread").keys() == set(NAMES)
+    for name in ("plan.png", "schedule.png"):
+        assert (tmp_path / "thread" / name).read_bytes() == (tmp_path / "main" / name).read_bytes()
 
 
 def test_failure_while_writing_a_file_leaves_no_partial_file(
