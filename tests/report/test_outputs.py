@@ -20,8 +20,15 @@ from tmpnav.results import PlanReport
 
 PDDL = ("(define (domain rooms))\n", "(define (problem three-rooms) (:domain rooms))\n")
 NAMES = ["plan.json", "plan.png", "schedule.png", "domain.pddl", "problem.pddl"]
+CORE_TO_SPARE = outputs.core_to_spare  # the real one: the tests replace it (a_core_to_spare)
 
 pytestmark = pytest.mark.slow  # every test writes the session's real plan
+
+
+@pytest.fixture(autouse=True)
+def a_core_to_spare(monkeypatch: pytest.MonkeyPatch) -> None:
+    """schedule.png drawn aside whatever else runs on the machine (the tests run in parallel)."""
+    monkeypatch.setattr(outputs, "core_to_spare", lambda: True)
 
 
 def earlier_run(out: Path) -> dict[str, bytes]:
@@ -179,6 +186,28 @@ def test_an_error_that_does_not_pickle_comes_back_as_its_text(
     with pytest.raises(OutputError, match="Unpicklable: a font went missing"):
         write_outputs(plan_report, tmp_path, PDDL)
     assert os.listdir(tmp_path) == []
+
+
+def test_with_no_core_to_spare_both_figures_are_drawn_here(
+    plan_report: PlanReport, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    real = figures.render
+    drawn: list[str] = []
+
+    def render(fig: Any, out: Any, dpi: int = 110) -> None:
+        drawn.append(fig.axes[0].get_title())
+        real(fig, out, dpi)
+
+    monkeypatch.setattr(figures, "render", render)
+    monkeypatch.setattr(outputs, "core_to_spare", lambda: False)
+    write_outputs(plan_report, tmp_path, PDDL)
+    assert len(drawn) == 2 and "schedule of" in drawn[1]
+    assert sorted(os.listdir(tmp_path)) == sorted(NAMES)
+
+
+def test_a_core_to_spare_needs_a_second_core(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0})
+    assert CORE_TO_SPARE() is False
 
 
 def test_outside_the_main_thread_both_figures_are_drawn_here(plan_report: PlanReport, tmp_path: Path) -> None:

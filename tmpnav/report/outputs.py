@@ -70,10 +70,10 @@ class DrawnAside:
     of the group, so a child that fails fails the group). On exit the child is ended and
     reaped, whatever happened, so none outlives the write.
 
-    Where fork is missing, or this is not the main thread (a library caller's: other threads of
-    its process may hold locks mid-way, which a fork would copy), :meth:`write` draws the
-    picture itself. The threads tmpnav runs beside a plan (ENHSP's answer reader) touch nothing
-    the child does."""
+    :meth:`write` draws the picture itself where fork is missing, where this is not the main
+    thread (a library caller's: other threads of its process may hold locks mid-way, which a
+    fork would copy), and where no core is idle (:func:`core_to_spare`). The threads tmpnav runs
+    beside a plan (ENHSP's answer reader) touch nothing the child does."""
 
     def __init__(self, name: str, draw: Callable[[BinaryIO], None]) -> None:
         self.name = name
@@ -85,6 +85,7 @@ class DrawnAside:
         if (
             "fork" not in multiprocessing.get_all_start_methods()
             or threading.current_thread() is not threading.main_thread()
+            or not core_to_spare()
         ):
             return self
         mp = multiprocessing.get_context("fork")
@@ -123,6 +124,20 @@ class DrawnAside:
         self.child.join()
         if self.reader is not None:
             self.reader.close()
+
+
+def core_to_spare() -> bool:
+    """Whether a core is idle now: fewer processes run than there are cores for this one, itself
+    among them (Linux's count of running processes, /proc/loadavg). On a busy machine a child
+    only queues behind the others, and the fork and the pages it copies cost more than it saves.
+    True where the count is missing."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    try:
+        with open("/proc/loadavg", encoding="ascii") as fh:
+            running = int(fh.read().split()[3].partition("/")[0])
+    except (OSError, ValueError, IndexError):
+        return cores > 1
+    return running < cores
 
 
 def _draw_child(draw: Callable[[BinaryIO], None], writer: Pipe, parent: int) -> None:
