@@ -1,0 +1,138 @@
+"""Regulated Pure Pursuit as the planner drives a path with it (models.controller: rpp), and the
+shortcut of a roadmap path before it is driven."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+
+from tmpnav.belief.controls import path_controls
+from tmpnav.belief.pursuit import RppParams, pursuit_controls, shortcut
+from tmpnav.execution.rpp import RppFollower
+
+DT = 0.5
+RES = 0.05
+
+
+def open_floor(size: float = 20.0) -> tuple[np.ndarray, tuple[float, float]]:
+    """A clearance grid of open floor (every cell 5 m from an obstacle), origin at (-size/2, -size/2)."""
+    n = int(size / RES)
+    return np.full((n, n), 5.0), (-size / 2, -size / 2)
+
+
+def walled(rows: slice, cols: slice, size: float = 20.0) -> tuple[np.ndarray, tuple[float, float]]:
+    """The clearance grid of open floor with a block of occupied cells."""
+    from scipy import ndimage
+
+    n = int(size / RES)
+    free = np.ones((n, n), dtype=bool)
+    free[rows, cols] = False
+    return ndimage.distance_transform_edt(free) * RES, (-size / 2, -size / 2)
+
+
+def drive(points: list[list[float]], theta: float = 0.0, speed: float = 0.5, turn_rate: float = 1.0):
+    clear, origin = open_floor()
+    pc = pursuit_controls(np.array(points, float), theta, speed, turn_rate, DT, RppParams(), clear, origin, RES)
+    assert pc is not None
+    return pc
+
+
+def test_a_straight_path_is_driven_at_speed_then_slowed_on_the_approach() -> None:
+    pc = drive([[0.0, 0.0], [5.0, 0.0]])
+    v = pc.controls[:, 0]
+    assert np.allclose(pc.controls[:, 1], 0.0)
+    assert np.isclose(v.max(), 0.5)
+    assert v[-1] < 0.5  # nav2's approach scaling
+    end = pc.poses[-1]
+    assert math.hypot(end[0] - 5.0, end[1]) <= RppParams().xy_goal_tolerance
+    # 4.75 m at 0.5 m/s is 9.5 s; the approach adds a little
+    assert 9.5 <= pc.n_steps * DT <= 11.0
+
+
+def test_a_corner_is_turned_while_driving_within_the_robot_limits() -> None:
+    pc = drive([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0]], turn_rate=1.0)
+    v, w = pc.controls[:, 0], pc.controls[:, 1]
+    assert np.any((v > 0.2) & (np.abs(w) > 0.1))  # v and omega together at the corner
+    assert v.max() <= 0.5 + 1e-12 and np.abs(w).max() <= 1.0 + 1e-12
+    # the curvature regulation slows the robot on the bend
+    assert v[np.abs(w) > 0.1].min() < 0.5
+    # it never turns on the spot: the start is aligned and the corner is cut
+    assert not np.any((v == 0.0) & (np.abs(w) > 0.0))
+    # turn-then-drive takes longer: it stops to turn at the corner
+    ttd = path_controls(np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0]]), 0.0, 0.5, 1.0, DT)
+    assert pc.n_steps < ttd.n_steps
+
+
+def test_the_poses_follow_the_motion_model_step_by_step() -> None:
+    pc = drive([[0.0, 0.0], [3.0, 1.0], [2.0, 4.0], [-1.0, 4.0]], theta=2.0)
+    x, u = pc.poses[:-1], pc.controls
+    expected = np.column_stack(
+        [x[:, 0] + u[:, 0] * DT * np.cos(x[:, 2]), x[:, 1] + u[:, 0] * DT * np.sin(x[:, 2]), x[:, 2] + u[:, 1] * DT]
+    )
+    wrapped = (expected[:, 2] + np.pi) % (2 * np.pi) - np.pi
+    assert np.allclose(pc.poses[1:, :2], expected[:, :2])
+    assert np.allclose(np.cos(pc.poses[1:, 2] - wrapped), 1.0)
+
+
+def test_a_start_facing_away_turns_on_the_spot_first() -> None:
+    pc = drive([[0.0, 0.0], [3.0, 0.0]], theta=math.pi)
+    first = pc.controls[0]
+    assert first[0] == 0.0 and abs(first[1]) > 0.0
+    assert np.all(np.diff(pc.node_steps) >= 0)
+
+
+def test_the_planner_rollout_is_the_follower_driven_without_noise() -> None:
+    """simulate --follower rpp steers with the same compiled law: driven on its own poses with the
+    same obstacle distances, it gives the planner's controls."""
+    points = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [1.0, 5.0]])
+    pc = drive(points.tolist(), theta=0.3)
+    f = RppFollower(points, RppParams(), 0.5, 1.0, DT)
+    pose = np.array([0.0, 0.0, 0.3])
+    for k in range(pc.n_steps):
+        assert np.allclose(pose, pc.poses[k])
+        u = f.command(pose, 5.0)
+        assert np.allclose(u, pc.controls[k])
+        pose = np.array(
+            [pose[0] + u[0] * DT * math.cos(pose[2]), pose[1] + u[0] * DT * math.sin(pose[2]), pose[2] + u[1] * DT]
+        )
+        pose[2] = (pose[2] + math.pi) % (2 * math.pi) - math.pi
+    assert f.at_goal(pose)
+
+
+def test_near_walls_the_robot_slows_as_nav2_does() -> None:
+    # a wall 0.3 m beside the path: cost regulation v * d / 0.6
+    clear, origin = walled(slice(200 - 8, 200 - 6), slice(0, 400))
+    pc = pursuit_controls(np.array([[-5.0, 0.0], [5.0, 0.0]]), 0.0, 0.5, 1.0, DT, RppParams(), clear, origin, RES)
+    assert pc is not None
+    cruising = pc.controls[5:-5, 0]
+    assert np.all(cruising < 0.5) and np.all(cruising >= RppParams().regulated_linear_scaling_min_speed)
+
+
+def test_a_zig_zag_in_the_open_is_cut_to_its_ends() -> None:
+    clear, origin = open_floor()
+    points = np.array([[0.0, 0.0], [1.0, 0.3], [2.0, -0.2], [3.0, 0.4], [4.0, 0.0]])
+    assert shortcut(points, 0.8, clear, origin, RES).tolist() == [0, 4]
+
+
+def test_a_shortcut_keeps_the_corner_round_a_wall() -> None:
+    # a wall along x in [-10, 0.5] at y in [0.9, 1.1]: the path goes round its end
+    clear, origin = walled(slice(218, 222), slice(0, 210))
+    points = np.array([[-2.0, 0.0], [0.0, 0.0], [1.5, 0.0], [1.5, 2.0], [0.0, 2.0], [-2.0, 2.0]])
+    keep = shortcut(points, 0.6, clear, origin, RES)
+    assert keep[0] == 0 and keep[-1] == 5
+    assert 2 in keep.tolist() or 3 in keep.tolist()  # it does not cut through the wall's end
+    for a, b in itertools.pairwise(keep):
+        n = 200
+        seg = points[a] + (points[b] - points[a]) * np.linspace(0, 1, n)[:, None]
+        i = np.floor((seg[:, 1] - origin[1]) / RES).astype(int)
+        j = np.floor((seg[:, 0] - origin[0]) / RES).astype(int)
+        assert clear[i, j].min() >= 0.6 - 1e-9
+
+
+@pytest.mark.parametrize("n", [0, 1, 2])
+def test_short_paths_are_kept_as_they_are(n: int) -> None:
+    clear, origin = open_floor()
+    assert shortcut(np.zeros((n, 2)) + np.arange(n)[:, None], 0.5, clear, origin, RES).tolist() == list(range(n))

@@ -1,0 +1,371 @@
+"""Regulated Pure Pursuit: a path driven as nav2's RPP controller drives it.
+
+The law is that of nav2's ``nav2_regulated_pure_pursuit_controller`` (Macenski et al.,
+"Regulated Pure Pursuit for Robot Path Tracking", Autonomous Robots 2023). At every control
+step, from the robot's pose:
+
+1. the path, densified to :data:`RESOLUTION` (a costmap's cells, as nav2's global plans are),
+   is pruned up to the point nearest the robot, searched within ``max_robot_pose_search_dist``
+   ahead of the last one;
+2. the carrot is the path's point at the lookahead distance L from the robot (interpolated
+   between the path's points), or the path's end when that is nearer;
+3. when the carrot lies more than ``rotate_to_heading_min_angle`` to the side, the robot turns on
+   the spot towards it at ``rotate_to_heading_angular_vel``, within ``max_angular_accel``,
+   slowing so as to stop at its heading (at the start of a move and after a sharp bend);
+4. otherwise it drives on the arc through the carrot, kappa = 2 y / (x² + y²) in its frame, with
+   omega = v kappa, v the robot's ``speed`` regulated down:
+   * on arcs of radius r below ``regulated_linear_scaling_min_radius``: times r / that radius;
+   * with its centre d from the nearest obstacle within the inflation radius: times
+     ``cost_scaling_gain`` d / ``cost_scaling_dist``;
+   * never below ``regulated_linear_scaling_min_speed`` by those two;
+   * within ``approach_velocity_scaling_dist`` of the path's end: times the distance left over
+     that distance, never below ``min_approach_linear_velocity``.
+   The robot's own limits clip the command: v at most its ``speed`` (RPP's
+   ``desired_linear_vel``), |omega| at most its ``turn_rate``, by slowing down on the arc.
+
+A move ends when the robot is within ``xy_goal_tolerance`` of the path's end (nav2's goal
+checker). :func:`command` is the law, compiled; ``tmpnav simulate --follower rpp`` steers with
+it on the robot's estimate (tmpnav.execution.rpp), and :func:`pursuit_controls` rolls it out
+on the nominal poses: the motions the planner prices with ``models.controller: rpp``.
+
+:func:`shortcut` shortens a roadmap path before it is driven: the path's nodes are skipped
+where the straight line between two of them keeps the clearance the path itself kept there
+(docs/models.md, "Controllers").
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import astuple, dataclass, fields
+
+import numba as nb
+import numpy as np
+
+from tmpnav.belief.controls import PathControls
+from tmpnav.world.geometry import wrap_angle_scalar
+
+#: m: the spacing of the densified path (nav2's global plans come one per costmap cell)
+RESOLUTION = 0.05
+
+
+@dataclass(frozen=True)
+class RppParams:
+    """RPP's parameters, with nav2's defaults (docs.nav2.org, "Regulated Pure Pursuit" in the
+    configuration guide; ``nav2_regulated_pure_pursuit_controller/src/parameter_handler.cpp``),
+    and the two of other nav2 components it works with: the goal checker's ``xy_goal_tolerance``
+    (``SimpleGoalChecker``, 0.25 m) and the costmap's ``inflation_radius`` (0.55 m in nav2's
+    default params). The order of the fields is that of the compiled law's parameter vector."""
+
+    lookahead_dist: float = 0.6
+    min_lookahead_dist: float = 0.3
+    max_lookahead_dist: float = 0.9
+    lookahead_time: float = 1.5
+    use_velocity_scaled_lookahead_dist: bool = False
+    rotate_to_heading_angular_vel: float = 1.8
+    use_rotate_to_heading: bool = True
+    rotate_to_heading_min_angle: float = 0.785
+    max_angular_accel: float = 3.2
+    use_regulated_linear_velocity_scaling: bool = True
+    regulated_linear_scaling_min_radius: float = 0.9
+    regulated_linear_scaling_min_speed: float = 0.25
+    use_cost_regulated_linear_velocity_scaling: bool = True
+    cost_scaling_dist: float = 0.6
+    cost_scaling_gain: float = 1.0
+    approach_velocity_scaling_dist: float = 0.6
+    min_approach_linear_velocity: float = 0.05
+    max_robot_pose_search_dist: float = 1.5
+    xy_goal_tolerance: float = 0.25
+    inflation_radius: float = 0.55
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls))
+
+    def vector(self) -> np.ndarray:
+        """The parameters as the compiled law takes them (booleans as 0 or 1)."""
+        return np.array([float(v) for v in astuple(self)])
+
+    @property
+    def reach(self) -> float:
+        """The longest lookahead the law can use (m)."""
+        return max(self.lookahead_dist, self.max_lookahead_dist if self.use_velocity_scaled_lookahead_dist else 0.0)
+
+
+# the parameter vector's entries (RppParams' order)
+(
+    _LOOKAHEAD,
+    _MIN_LOOKAHEAD,
+    _MAX_LOOKAHEAD,
+    _LOOKAHEAD_TIME,
+    _SCALED_LOOKAHEAD,
+    _ROTATE_VEL,
+    _USE_ROTATE,
+    _ROTATE_MIN_ANGLE,
+    _MAX_ANGULAR_ACCEL,
+    _USE_CURVATURE,
+    _MIN_RADIUS,
+    _MIN_SPEED,
+    _USE_COST,
+    _COST_DIST,
+    _COST_GAIN,
+    _APPROACH_DIST,
+    _MIN_APPROACH_V,
+    _SEARCH_DIST,
+    _GOAL_TOLERANCE,
+    _INFLATION,
+) = range(20)
+
+
+def densify(points: np.ndarray, spacing: float = RESOLUTION) -> tuple[np.ndarray, np.ndarray]:
+    """The polyline ``points`` (k, 2) resampled every ``spacing`` m or closer, every vertex kept;
+    and the index of each vertex in the result (k,)."""
+    points = np.asarray(points, dtype=float).reshape(-1, 2)
+    out, at = [points[:1]], [0]
+    for a, b in itertools.pairwise(points):
+        n = max(1, math.ceil(float(np.hypot(*(b - a))) / spacing))
+        out.append(a + (b - a) * (np.arange(1, n + 1)[:, None] / n))
+        at.append(at[-1] + n)
+    return np.ascontiguousarray(np.concatenate(out)), np.array(at, dtype=np.int64)
+
+
+def length_left(path: np.ndarray) -> np.ndarray:
+    """(n,) the length (m) of the polyline ``path`` (n, 2) from each of its points to its end."""
+    seg = np.hypot(*np.diff(path, axis=0).T)
+    return np.concatenate([np.cumsum(seg[::-1])[::-1], [0.0]])
+
+
+@nb.njit(cache=True)
+def command(path, left, index, x, y, th, last_v, last_w, obstacle, speed, turn_rate, dt, p):  # pragma: no cover
+    """The command (v, omega) RPP gives at the pose (x, y, th) on the densified ``path`` (n, 2)
+    with ``left`` (n,) its length to the end, the robot having come as far as its point ``index``
+    (returned moved on, the third value); ``last_v``, ``last_w`` the last command, ``obstacle`` the
+    distance (m) from the robot's centre to the nearest obstacle, ``p`` :meth:`RppParams.vector`.
+    The module docstring states the law."""
+    n = path.shape[0]
+    # 1. prune: the nearest point within the search distance ahead of the last one
+    best, best_d2 = index, np.inf
+    j = index
+    while j < n and left[index] - left[j] <= p[_SEARCH_DIST]:
+        d2 = (path[j, 0] - x) ** 2 + (path[j, 1] - y) ** 2
+        if d2 < best_d2:
+            best, best_d2 = j, d2
+        j += 1
+    index = best
+    # 2. the carrot, in the robot's frame
+    lookahead = p[_LOOKAHEAD]
+    if p[_SCALED_LOOKAHEAD] > 0.5:
+        lookahead = min(max(abs(last_v) * p[_LOOKAHEAD_TIME], p[_MIN_LOOKAHEAD]), p[_MAX_LOOKAHEAD])
+    c, s = math.cos(th), math.sin(th)
+    cx, cy = 0.0, 0.0
+    ax, ay = 0.0, 0.0
+    found = False
+    for j in range(index, n):
+        rx, ry = path[j, 0] - x, path[j, 1] - y
+        bx, by = c * rx + s * ry, -s * rx + c * ry
+        if math.hypot(bx, by) >= lookahead:
+            if j == index:
+                cx, cy = bx, by
+            else:  # the circle of radius lookahead crosses a -> b
+                dx, dy = bx - ax, by - ay
+                qa = dx * dx + dy * dy
+                qb = 2.0 * (ax * dx + ay * dy)
+                qc = ax * ax + ay * ay - lookahead * lookahead
+                t = (-qb + math.sqrt(max(qb * qb - 4.0 * qa * qc, 0.0))) / (2.0 * qa) if qa > 0.0 else 1.0
+                t = min(max(t, 0.0), 1.0)
+                cx, cy = ax + t * dx, ay + t * dy
+            found = True
+            break
+        ax, ay = bx, by
+    if not found:  # the end is nearer than the lookahead
+        rx, ry = path[n - 1, 0] - x, path[n - 1, 1] - y
+        cx, cy = c * rx + s * ry, -s * rx + c * ry
+    angle = math.atan2(cy, cx)
+    # 3. turn on the spot towards a carrot far to the side
+    if p[_USE_ROTATE] > 0.5 and abs(angle) > p[_ROTATE_MIN_ANGLE]:
+        sign = 1.0 if angle > 0 else -1.0
+        w = sign * min(p[_ROTATE_VEL], turn_rate)
+        w = min(max(w, last_w - p[_MAX_ANGULAR_ACCEL] * dt), last_w + p[_MAX_ANGULAR_ACCEL] * dt)
+        stop = math.sqrt(2.0 * p[_MAX_ANGULAR_ACCEL] * abs(angle))  # slow down so as not to overshoot
+        if abs(w) > stop:
+            w = sign * stop
+        return 0.0, w, index
+    # 4. the arc through the carrot, at the regulated speed
+    d2 = cx * cx + cy * cy
+    kappa = 2.0 * cy / d2 if d2 > 0.001 else 0.0
+    v = curvature_v = cost_v = speed
+    if p[_USE_CURVATURE] > 0.5 and kappa != 0.0:
+        radius = 1.0 / abs(kappa)
+        if radius < p[_MIN_RADIUS]:
+            curvature_v = v * radius / p[_MIN_RADIUS]
+    if p[_USE_COST] > 0.5 and obstacle < min(p[_INFLATION], p[_COST_DIST]):
+        cost_v = v * p[_COST_GAIN] * obstacle / p[_COST_DIST]
+    v = max(min(curvature_v, cost_v), p[_MIN_SPEED])
+    rest = left[index]
+    if rest < p[_APPROACH_DIST]:
+        v = min(v, max(v * rest / p[_APPROACH_DIST], p[_MIN_APPROACH_V]))
+    v = min(max(v, 0.0), speed)
+    w = v * kappa
+    if abs(w) > turn_rate:  # the robot's own limit: slow down to keep the arc
+        v, w = v * turn_rate / abs(w), math.copysign(turn_rate, w)
+    return v, w, index
+
+
+def pursuit_controls(
+    points: np.ndarray,
+    start_theta: float,
+    speed: float,
+    turn_rate: float,
+    dt: float,
+    params: RppParams,
+    clearance: np.ndarray,
+    origin: tuple[float, float],
+    resolution: float,
+) -> PathControls | None:
+    """The controls and nominal poses of a robot driving the polyline ``points`` (P, 2) from its
+    first point with heading ``start_theta`` under RPP (the module docstring), the obstacle
+    distance read off ``clearance`` (a grid of ``resolution`` m cells from ``origin``: the
+    distance from each cell's centre to the nearest occupied one, tmpnav.world.grid.clearance).
+    The poses follow the motion model, paper eq. (4), step by step, as turn-then-drive's do. The
+    motion ends within ``xy_goal_tolerance`` of the last point, and ``node_steps[k]`` is the step
+    at which the robot has come abreast of point k (its nearest path point at or beyond it).
+    None when the law has not arrived within a generous number of steps (a path it cannot drive)."""
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    if pts.shape[0] == 0:
+        raise ValueError("pursuit_controls needs at least one point")
+    if speed <= 0 or turn_rate <= 0 or dt <= 0:
+        raise ValueError("speed, turn_rate and dt must be positive")
+    path, vertices = densify(pts)
+    left = length_left(path)
+    slowest = min(params.min_approach_linear_velocity, params.regulated_linear_scaling_min_speed, speed)
+    # every metre at the slowest speed, a full turn at every vertex, and a margin
+    budget = int((left[0] + 1.0) / (slowest * dt) + pts.shape[0] * 2.0 * math.pi / (min(turn_rate, 0.5) * dt)) + 100
+    x0, y0 = origin
+    controls, poses, node_steps, arrived = _pursue(
+        path, left, vertices, float(start_theta), float(speed), float(turn_rate), float(dt), params.vector(),
+        clearance, float(x0), float(y0), float(resolution), budget,
+    )  # fmt: skip
+    if not arrived:
+        return None
+    return PathControls(controls=controls, poses=poses, node_steps=node_steps.astype(int), pursued=True)
+
+
+@nb.njit(cache=True)
+def _pursue(path, left, vertices, theta0, speed, turn_rate, dt, p, clear, x0, y0, res, budget):  # pragma: no cover
+    """The rollout of :func:`pursuit_controls` (which documents it): controls (T, 2), poses
+    (T+1, 3), the step each vertex is passed (P,), and whether the goal was reached."""
+    n = path.shape[0]
+    rows, cols = clear.shape
+    controls = np.zeros((budget, 2))
+    poses = np.zeros((budget + 1, 3))
+    P = vertices.shape[0]
+    node_steps = np.full(P, -1, dtype=np.int64)
+    node_steps[0] = 0
+    poses[0, 0], poses[0, 1], poses[0, 2] = path[0, 0], path[0, 1], wrap_angle_scalar(theta0)
+    index, v, w, t = 0, 0.0, 0.0, 0
+    arrived = False
+    while t < budget:
+        x, y, th = poses[t, 0], poses[t, 1], poses[t, 2]
+        if math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y) <= p[_GOAL_TOLERANCE]:
+            arrived = True
+            break
+        i = math.floor((y - y0) / res)
+        j = math.floor((x - x0) / res)
+        obstacle = clear[i, j] if 0 <= i < rows and 0 <= j < cols else 0.0
+        v, w, index = command(path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, dt, p)
+        for k in range(1, P):
+            if node_steps[k] < 0 and index >= vertices[k]:
+                node_steps[k] = t
+        controls[t, 0], controls[t, 1] = v, w
+        poses[t + 1, 0] = x + v * dt * math.cos(th)
+        poses[t + 1, 1] = y + v * dt * math.sin(th)
+        poses[t + 1, 2] = wrap_angle_scalar(th + w * dt)
+        t += 1
+    for k in range(P):
+        if node_steps[k] < 0:
+            node_steps[k] = t
+    return controls[:t].copy(), poses[: t + 1].copy(), node_steps, arrived
+
+
+def shortcut(
+    points: np.ndarray, required: float, clearance: np.ndarray, origin: tuple[float, float], resolution: float
+) -> np.ndarray:
+    """The indices of the points of the polyline ``points`` (P, 2) a shortened path keeps, first
+    and last included. From each kept point the path goes straight to the farthest later point
+    such that the straight line's least clearance (the cells of ``clearance`` along it, sampled a
+    cell apart) is at least ``required`` (m), or at least the polyline's own least clearance
+    between the two where that is less: a shortcut keeps the clearance ``required``, and where
+    the path it replaces came closer to an obstacle, it comes no closer than that path. Greedy (OMPL's
+    ``PathSimplifier::shortcutPath`` tries random pairs; the farthest first is deterministic)."""
+    pts = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
+    if pts.shape[0] <= 2:
+        return np.arange(pts.shape[0], dtype=np.int64)
+    x0, y0 = origin
+    return _shortcut(pts, float(required), clearance, float(x0), float(y0), float(resolution))
+
+
+def least_clearance(
+    points: np.ndarray, clearance: np.ndarray, origin: tuple[float, float], resolution: float, polyline: bool = True
+) -> float:
+    """The least clearance (m) of the cells of ``points`` (P, 2 or 3): along the polyline through
+    them, sampled a cell apart, or, with ``polyline`` False, at the points alone (a rollout's
+    poses). Off the grid: -inf."""
+    pts = np.ascontiguousarray(np.asarray(points, dtype=float)[:, :2])
+    x0, y0 = origin
+    return float(_least_along(pts, clearance, float(x0), float(y0), float(resolution), polyline))
+
+
+@nb.njit(cache=True)
+def _least_along(pts, clear, x0, y0, res, polyline):  # pragma: no cover
+    """:func:`least_clearance`, compiled."""
+    least = np.inf
+    if not polyline or pts.shape[0] == 1:
+        rows, cols = clear.shape
+        for k in range(pts.shape[0]):
+            i = math.floor((pts[k, 1] - y0) / res)
+            j = math.floor((pts[k, 0] - x0) / res)
+            c = clear[i, j] if 0 <= i < rows and 0 <= j < cols else -np.inf
+            least = min(least, c)
+        return least
+    for k in range(pts.shape[0] - 1):
+        least = min(least, _least(pts[k, 0], pts[k, 1], pts[k + 1, 0], pts[k + 1, 1], clear, x0, y0, res))
+    return least
+
+
+@nb.njit(cache=True)
+def _least(ax, ay, bx, by, clear, x0, y0, res):  # pragma: no cover
+    """The least clearance of the cells of the segment a -> b, sampled at most a cell apart."""
+    rows, cols = clear.shape
+    n = max(2, math.ceil(math.hypot(bx - ax, by - ay) / res) + 1)
+    least = np.inf
+    for k in range(n):
+        s = k / (n - 1)
+        i = math.floor((ay + s * (by - ay) - y0) / res)
+        j = math.floor((ax + s * (bx - ax) - x0) / res)
+        c = clear[i, j] if 0 <= i < rows and 0 <= j < cols else -np.inf
+        if c < least:
+            least = c
+    return least
+
+
+@nb.njit(cache=True)
+def _shortcut(pts, required, clear, x0, y0, res):  # pragma: no cover
+    """:func:`shortcut`'s greedy pass."""
+    P = pts.shape[0]
+    edge = np.empty(P - 1)
+    for k in range(P - 1):
+        edge[k] = _least(pts[k, 0], pts[k, 1], pts[k + 1, 0], pts[k + 1, 1], clear, x0, y0, res)
+    keep = np.empty(P, dtype=np.int64)
+    keep[0] = 0
+    m, i = 1, 0
+    while i < P - 1:
+        nxt = i + 1
+        kept = edge[i]
+        for j in range(i + 2, P):
+            kept = min(kept, edge[j - 1])  # the polyline's least clearance from i to j
+            if _least(pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1], clear, x0, y0, res) >= min(kept, required):
+                nxt = j
+        keep[m] = nxt
+        m += 1
+        i = nxt
+    return keep[:m].copy()
