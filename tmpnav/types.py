@@ -262,6 +262,17 @@ class Models:
     observations: ObservationMode
     seed: int  # seed of the simulated observation noise
     range_sensor: RangeSensor | None = None  # a lidar against the map; None: landmarks and partners only
+    #: how a robot drives a path: "turn-then-drive" (the paper: on the spot at every node, then
+    #: straight), "rpp" (nav2's Regulated Pure Pursuit on the shortened path, tmpnav.belief.pursuit)
+    #: or "auto" (rpp for robots with a range sensor, nav2's robots; else the paper's): :attr:`driving`
+    controller: str = "auto"
+
+    @property
+    def driving(self) -> str:
+        """The controller in force: ``rpp`` or ``turn-then-drive`` (``auto`` resolved)."""
+        if self.controller == "auto":
+            return "rpp" if self.range_sensor is not None else "turn-then-drive"
+        return self.controller
 
 
 CostValue = TypeVar("CostValue", float, np.ndarray)
@@ -706,3 +717,6 @@ class PlannedAction:
     goal_poses: tuple[tuple[float, float, float], ...]
     #: each move's bound on the probability that its robot touches an obstacle (docs/models.md)
     risk: tuple[float, ...] = ()
+    #: how each robot drives its path: "rpp" or "turn-then-drive" (models.controller; empty: all
+    #: turn-then-drive, as plans made before the controller was recorded)
+    controllers: tuple[str, ...] = ()

@@ -17,11 +17,16 @@ from tmpnav.types import Goals, Scenario
 from tmpnav.world import World
 
 
-def carried_problem(config: str, rooms: tuple[str, ...], robots: int) -> tuple[Scenario, World, CarriedCosts]:
+def carried_problem(
+    config: str, rooms: tuple[str, ...], robots: int, controller: str | None = None
+) -> tuple[Scenario, World, CarriedCosts]:
     """A shipped world with the first ``robots`` robots that must visit ``rooms``, costed with
-    carried beliefs (no disk cache, serial oracle)."""
+    carried beliefs (no disk cache, serial oracle); driven by ``controller`` (models.controller)
+    when given."""
     scenario, world = load_world(configs_dir() / config)
     scenario = replace(scenario, robots=scenario.robots[:robots], goals=Goals(rooms, ()))
+    if controller is not None:
+        scenario = replace(scenario, models=replace(scenario.models, controller=controller))
     roadmap = build_roadmap(world, scenario.robots, scenario.roadmap)
     oracle = Oracle(OracleContext(scenario, world, roadmap))
     canonical = CanonicalCosts(oracle, world, scenario.planner.pair_min_gain)

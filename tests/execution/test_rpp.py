@@ -92,3 +92,39 @@ def test_simulate_with_the_rpp_follower_names_it_and_executes_the_plan(tmp_path:
     assert out.returncode == 0, out.stderr
     assert "follower: nav2 Regulated Pure Pursuit (lookahead 0.6 m" in out.stdout
     assert "makespan" in out.stdout
+
+
+def two_rooms_with(tmp_path: Path, models: str) -> Path:
+    """configs/two-rooms.yaml with a ``models:`` section."""
+    text = (ROOT / "configs" / "two-rooms.yaml").read_text()
+    path = tmp_path / "two-rooms.yaml"
+    path.write_text(text + f"\nmodels: {models}\n")
+    return path
+
+
+def test_a_plan_driven_by_rpp_is_simulated_with_rpp_and_keeps_its_clock(tmp_path: Path) -> None:
+    """A scenario whose robots carry a lidar plans with RPP's motions (models.controller: auto);
+    simulate follows it with RPP by default, and the executed makespan is the planned one."""
+    scenario = two_rooms_with(tmp_path, "{range_sensor: {}}")
+    out = subprocess.run(
+        [sys.executable, "-m", "tmpnav", "simulate", str(scenario), "--sessions", "3", "--cache-dir",
+         str(tmp_path / "cache")],
+        capture_output=True, text=True, cwd=ROOT,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    assert "follower: nav2 Regulated Pure Pursuit" in out.stdout
+    (line,) = [x for x in out.stdout.splitlines() if x.startswith("makespan (until the last robot is done)")]
+    planned = float(line.split("planned ")[1].split(" s")[0])
+    executed = float(line.split("executed with mutual observations ")[1].split(" s")[0])
+    assert abs(executed - planned) <= 0.05 * planned, line
+
+
+def test_an_unknown_controller_is_one_error_line(tmp_path: Path) -> None:
+    scenario = two_rooms_with(tmp_path, "{controller: dwb}")
+    out = subprocess.run(
+        [sys.executable, "-m", "tmpnav", "validate", str(scenario)], capture_output=True, text=True, cwd=ROOT
+    )
+    assert out.returncode != 0
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "models.controller" in lines[0] and "rpp" in lines[0], out.stderr
+    assert "Traceback" not in out.stderr

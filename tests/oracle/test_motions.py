@@ -56,3 +56,45 @@ def test_a_motion_set_built_before_is_taken_with_the_new_start() -> None:
     assert again.start == b and again.motions == first.motions == fresh.motions
     assert again.by_goal == fresh.by_goal and np.array_equal(again.prefix, fresh.prefix)
     assert np.array_equal(again.steps, fresh.steps) and np.array_equal(again.c_u, fresh.c_u)
+
+
+def test_rpp_motions_drive_the_shortened_path_and_keep_half_the_roadmap_margin() -> None:
+    """models.controller: rpp on a map with narrow doors (the depot): a motion between two rooms'
+    instantiations is RPP's (turning while it drives) along the roadmap path or its shortcut, or
+    turn-then-drive where RPP would cut a corner into a door's frame, and says which; an RPP
+    motion comes no nearer to a wall than half the margin the roadmap path keeps at its tightest."""
+    from tmpnav.belief.pursuit import least_clearance
+    from tmpnav.pipeline import load_world
+    from tmpnav.roadmap import build_roadmap
+    from tmpnav.shipped import configs_dir
+
+    scenario, world = load_world(configs_dir() / "depot-jobs.yaml")
+    assert scenario.models.driving == "rpp"  # auto: the robots carry a lidar
+    roadmap = build_roadmap(world, scenario.robots, replace(scenario.roadmap, clearance=0.5))
+    scenario = replace(scenario, roadmap=replace(scenario.roadmap, clearance=0.5))
+    lib = MotionLibrary(scenario, world, roadmap)
+    grid = world.grid
+    origin, res = (float(grid.origin[0]), float(grid.origin[1])), float(grid.resolution)
+    nodes = sorted(g for goals in roadmap.instantiations.values() for g in goals[:1])
+    pursued = shortened = 0
+    robot = scenario.robots[0]
+    own = robot.radius + np.sqrt(2.0) * res
+    for a in nodes[:8]:
+        for b in nodes:
+            path = lib.graph.path(a, b)
+            m = lib.motion(robot.name, a, 0.0, b)
+            if path is None or m is None or a == b:
+                continue
+            turned = lib.controls(robot.name, lib.graph.points(m.path), 0.0, pursue=False)
+            same = np.array_equal(turned.controls, m.controls[: turned.n_steps])  # a job's final turn after it
+            assert (m.controller == "turn-then-drive") == same
+            pursued += m.controller == "rpp"
+            shortened += len(m.path) < len(path)
+            tightest = least_clearance(lib.graph.points(path), world.clearance, origin, res)
+            keep = min(own + 0.5 * max(min(lib.required(robot.name), tightest) - own, 0.0), tightest)
+            if m.controller == "rpp":
+                assert least_clearance(m.poses, world.clearance, origin, res, polyline=False) >= keep - res - 1e-9
+            assert set(m.path) <= set(path) and m.path[0] == a and m.path[-1] == b
+    total = 8 * (len(nodes) - 1)
+    # the depot's doors are barely wider than its robots: RPP drives 72% of these moves
+    assert pursued >= 0.6 * total and shortened >= 0.3 * total, (pursued, shortened, total)

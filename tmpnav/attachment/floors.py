@@ -84,6 +84,7 @@ import numba as nb
 import numpy as np
 
 from tmpnav.belief.controls import LENGTH_EPS
+from tmpnav.belief.pursuit import RppParams
 from tmpnav.roadmap.graph import RoadmapGraph
 from tmpnav.types import CostTable, Goals, Models, MoveKey, Roadmap, RobotSpec, Scenario
 
@@ -118,7 +119,7 @@ def motion_floors(
     arrivals = {g: _arrivals(roadmap, g) if arrived else None for x in rooms for g in inst[x]}
     walked: dict[tuple[float, float], _Walks] = {}
     for spec in scenario.robots:
-        walks = walked.setdefault((spec.speed, spec.turn_rate), _Walks(paths, spec, dt))
+        walks = walked.setdefault((spec.speed, spec.turn_rate), _Walks(paths, spec, dt, models.driving == "rpp"))
         m_drive = w.M_u + w.M_Sigma * sigma_rate(models, spec.speed, n, lms)
         start = start_location[spec.name]
         origins: dict[str, tuple[tuple[int, tuple[float, ...] | None], ...]] = {
@@ -130,7 +131,7 @@ def motion_floors(
         home = goals.end_of(spec.name) == start  # it must come back to where it starts
         for o, nodes in origins.items():
             # the same for every robot that shares its walks, and for every replan of the roadmap
-            tag = ("floors", spec.speed, spec.turn_rate, dt, m_drive, w.M_u, nodes, rooms)
+            tag = ("floors", models.driving, spec.speed, spec.turn_rate, dt, m_drive, w.M_u, nodes, rooms)
             cost, seconds = paths.memo(
                 tag,
                 tuple(n for n, _ in nodes),
@@ -206,6 +207,9 @@ def sigma_rate(models: Models, speed: float, robots: int, landmarks: int) -> flo
     return models.dt**2 * a3 / (1.0 + rho_max * information)
 
 
+#: the RPP parameters the planner's motions are driven with (tmpnav.oracle.motions.RPP)
+RPP_PARAMS = RppParams()
+
 #: the slack of the floors' step counts: a driven length or a turn is measured from the robot's
 #: nominal pose, which is a roadmap node up to rounding (1e-12 m); a step count of a length
 #: within this of a multiple of one step's reach is taken both ways, on the floor's side
@@ -245,8 +249,8 @@ class _Walks:
     its drives and its turns after the first (:func:`_walk`), and the heading of its first
     edge, so that the first turn is added for the heading the robot starts with."""
 
-    def __init__(self, paths: RoadmapGraph, spec: RobotSpec, dt: float):
-        self.paths, self.spec, self.dt = paths, spec, dt
+    def __init__(self, paths: RoadmapGraph, spec: RobotSpec, dt: float, rpp: bool = False):
+        self.paths, self.spec, self.dt, self.rpp = paths, spec, dt, rpp
         self.xy = np.ascontiguousarray(paths.roadmap.nodes[:, :2], dtype=float)
 
     def _of(self, source: int) -> np.ndarray:
@@ -263,6 +267,8 @@ class _Walks:
     ) -> tuple[np.ndarray, np.ndarray]:
         """The cost floor and the time floor of the path from ``source`` to each of ``targets``,
         starting with one of ``headings`` (None: any)."""
+        if self.rpp:
+            return self._pursued(source, targets, m_drive)
         walked = self._of(source)[:, targets]  # drive c_u, drive s, turn c_u, turn s, first heading
         first = walked[4]
         if headings is None:
@@ -274,6 +280,30 @@ class _Walks:
         cost = m_drive * walked[0] + m_turn * (walked[2] + _usage(angle, rate, self.dt))
         seconds = walked[1] + walked[3] + _seconds(angle, rate, self.dt)
         return cost, seconds
+
+    def _pursued(self, source: int, targets: np.ndarray, m_drive: float) -> tuple[np.ndarray, np.ndarray]:
+        """The floors of Regulated Pure Pursuit's motions (models.controller: rpp; docs/planning.md,
+        "Floors under RPP"). RPP drives a shortened path and cuts its corners, so the roadmap's
+        path length bounds nothing: the robot covers at least the straight distance D from the
+        source to the target less the goal tolerance, at most at its speed, which gives the time
+        floor. Its speed is at least v_lo = min(the regulated minimum speed, its speed, turn_rate
+        L / (2 sin(rotate_to_heading_min_angle))) (the last: omega = v 2 sin(a) / L on the arc
+        through a carrot at the lookahead L within the rotate angle a) but on the approach to
+        the end, within Z = the approach distance plus the longest lookahead of it (the robot is
+        within a lookahead of its path); so c_u = sum v^2 dt >= v_lo (D - Z). Turns on the spot
+        count 0."""
+        p = RPP_PARAMS
+        s = self.spec
+        d = np.hypot(*(self.xy[targets] - self.xy[source]).T)
+        driven = np.maximum(d - p.xy_goal_tolerance, 0.0)
+        shortest = p.min_lookahead_dist if p.use_velocity_scaled_lookahead_dist else p.lookahead_dist
+        v_lo = min(
+            p.regulated_linear_scaling_min_speed,
+            s.speed,
+            s.turn_rate * shortest / (2.0 * math.sin(min(p.rotate_to_heading_min_angle, math.pi / 2))),
+        )
+        steady = np.maximum(driven - (p.approach_velocity_scaling_dist + p.reach), 0.0)
+        return m_drive * v_lo * steady, _seconds(driven, s.speed, self.dt)
 
 
 @nb.njit(cache=True)

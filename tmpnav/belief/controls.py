@@ -33,6 +33,7 @@ class PathControls:
     controls: np.ndarray
     poses: np.ndarray
     node_steps: np.ndarray
+    pursued: bool = False  # by nav2's Regulated Pure Pursuit (tmpnav.belief.pursuit), not turn-then-drive
 
     @property
     def n_steps(self) -> int:
@@ -81,6 +82,18 @@ def turn_to(
         headings[k] = theta
     turned = np.column_stack([np.repeat(poses[-1:, :2], n, axis=0), headings])
     return np.vstack([controls.reshape(-1, 2), turn]), np.vstack([poses, turned])
+
+
+def drive_to(
+    controls: np.ndarray, poses: np.ndarray, point: np.ndarray, speed: float, turn_rate: float, dt: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Controls (T, 2) and poses (T+1, 3) of a motion followed by a turn-then-drive to ``point``
+    (2,) from its last pose (:func:`path_controls`): a robot that stopped within a controller's
+    goal tolerance closes in on a job's exact pose."""
+    more = path_controls(
+        np.vstack([poses[-1, :2], np.asarray(point, dtype=float)[:2]]), float(poses[-1, 2]), speed, turn_rate, dt
+    )
+    return np.vstack([controls.reshape(-1, 2), more.controls]), np.vstack([poses, more.poses[1:]])
 
 
 def pad(controls: np.ndarray, poses: np.ndarray, T_total: int) -> tuple[np.ndarray, np.ndarray]:

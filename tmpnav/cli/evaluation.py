@@ -32,7 +32,7 @@ if TYPE_CHECKING:
 #: tmpnav.execution.localisers.LOCALISERS' names (that module is imported only by the commands that run them)
 LOCALISER_NAMES = ("ekf", "amcl")
 #: tmpnav.execution.localisers.FOLLOWERS' names
-FOLLOWER_NAMES = ("waypoint", "rpp")
+FOLLOWER_NAMES = ("auto", "waypoint", "rpp")
 #: tmpnav.execution.localisers.STEERING's names
 STEERING_NAMES = ("auto", "local", "estimate")
 
@@ -119,11 +119,12 @@ def amcl_options(command: Any) -> Any:
 @option(
     "--follower",
     type=click.Choice(FOLLOWER_NAMES),
-    default="waypoint",
+    default="auto",
     show_default=True,
     help="Who steers the simulated robots along their moves: waypoint, turning on the spot at each node "
-    "of the path as the plan does; rpp, nav2's Regulated Pure Pursuit with nav2's defaults (turns while "
-    "it drives, slows at bends, near walls and on approach; docs/rpp.md).",
+    "of the path; rpp, nav2's Regulated Pure Pursuit with nav2's defaults (turns while it drives, slows at "
+    "bends, near walls and on approach; docs/rpp.md); auto, the plan's own controller (models.controller: "
+    "rpp for rpp, waypoint for turn-then-drive).",
 )
 @option(
     "--steer",
@@ -213,7 +214,7 @@ def _localisation(
     kind: str,
     nav2_params: Path | None,
     site_text: str,
-    follower: str = "waypoint",
+    follower: str = "auto",
     steer: str = "auto",
     recoveries: bool = True,
 ) -> Localisation:

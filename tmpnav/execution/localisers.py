@@ -17,7 +17,7 @@ keeps its localiser a plugin:
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
@@ -45,6 +45,7 @@ STEERING = {
 }
 #: the controllers ``tmpnav simulate --follower`` offers, and what each is
 FOLLOWERS = {
+    "auto": "the plan's own controller (models.controller): rpp for rpp, waypoint for turn-then-drive",
     "waypoint": "turns on the spot at each node of the path, then drives straight (the plan's own motions)",
     "rpp": "nav2's Regulated Pure Pursuit: turns while it drives, slows at bends and near walls",
 }
@@ -108,7 +109,7 @@ class Localisation:
     site: SiteNoise | None = None
     #: who steers each robot along its moves (a key of :data:`FOLLOWERS`) and, for ``rpp``, nav2's
     #: Regulated Pure Pursuit parameters: the controller belongs to the same navigation stack
-    follower: str = "waypoint"
+    follower: str = "auto"
     rpp: RppParams = field(default_factory=RppParams)
     #: ekf: the compiled joint EKF (tmpnav.execution.fast_ekf); False: its filterpy reference
     #: (tmpnav.execution.joint_ekf), the same figures to rounding, many times slower
@@ -120,6 +121,20 @@ class Localisation:
     #: nav2's defaults (tmpnav.execution.recovery); False: the robot stands until its move's budget ends
     recoveries: bool = True
     recovery: RecoveryParams = field(default_factory=RecoveryParams)
+
+    def following(self, controller: str) -> Localisation:
+        """This localisation with ``auto`` resolved for a plan driven by ``controller``
+        (models.controller): the waypoint follower for turn-then-drive plans; for RPP plans
+        ``auto`` stays, each move followed as the plan drives it (:meth:`steers_rpp`)."""
+        if self.follower != "auto" or controller == "rpp":
+            return self
+        return replace(self, follower="waypoint")
+
+    def steers_rpp(self, controller: str) -> bool:
+        """Whether a move the plan drives by ``controller`` is steered by RPP: always with
+        ``--follower rpp``, never with ``waypoint``, as planned with ``auto`` (a plan made for RPP
+        drives a move turn-then-drive where RPP would cut a corner into a door's frame)."""
+        return self.follower == "rpp" or (self.follower == "auto" and controller == "rpp")
 
     @property
     def steers_local(self) -> bool:
@@ -135,23 +150,21 @@ class Localisation:
         """One line for reports: the executing localiser, the site and the true motion noise."""
         a1, a2, a3, a4 = motion_noise
         noise = f"true motion noise alpha1-4 {a1:g}, {a2:g}, {a3:g}, {a4:g}"
-        if self.follower == "rpp":
+        if self.follower in ("rpp", "auto"):
             r = self.rpp
             noise += (
                 f"; follower: nav2 Regulated Pure Pursuit (lookahead {r.lookahead_dist:g} m, "
                 f"min radius {r.regulated_linear_scaling_min_radius:g} m, goal tolerance {r.xy_goal_tolerance:g} m)"
             )
+            if self.follower == "auto":
+                noise += ", the waypoint follower on the moves the plan drives turn-then-drive"
         noise += (
             "; steering on where the lidar places it among the walls (nav2's costmaps)"
             if self.steers_local
             else "; steering on the estimate alone"
         )
         if self.steers_local:
-            noise += (
-                f", nav2's recoveries ({self.recovery.retries} retries)"
-                if self.recoveries
-                else ", no recoveries"
-            )
+            noise += f", nav2's recoveries ({self.recovery.retries} retries)" if self.recoveries else ", no recoveries"
         if not self.particle_filter:
             return f"localiser: ekf ({LOCALISERS['ekf']}); {noise}"
         where = self.site.text() if self.site is not None else "the map exactly"

@@ -42,6 +42,8 @@ class QueuedMove:
     planned_track: np.ndarray | None = None
     #: (T + 1, 2) m: the planned mean position at those steps
     planned_means: np.ndarray | None = None
+    #: how the plan drives it (models.controller): "rpp" or "turn-then-drive"
+    controller: str = "turn-then-drive"
 
     def planned_from(self, k: int, xy: np.ndarray) -> int:
         """The step of the planned track a robot at ``xy`` has come to, from step ``k`` on: the next
@@ -85,13 +87,20 @@ def _queued(report: PlanReport, move: TimedMove, steps: Sequence[TrajectoryStep]
         raise ValueError(f"the schedule's move of {move.robot} in step {move.step} is not in the plan's step")
     nodes = tuple(int(n) for n in action.paths[robots.index(move.robot)])
     points = np.array([report.roadmap.nodes[n] for n in nodes], dtype=float).reshape(-1, 2)
-    return _move(move, nodes, points, steps, dt)
+    controller = action.controllers[robots.index(move.robot)] if action.controllers else "turn-then-drive"
+    return _move(move, nodes, points, steps, dt, controller)
 
 
 def _move(
-    move: TimedMove, nodes: tuple[int, ...], points: np.ndarray, steps: Sequence[TrajectoryStep], dt: float
+    move: TimedMove,
+    nodes: tuple[int, ...],
+    points: np.ndarray,
+    steps: Sequence[TrajectoryStep],
+    dt: float,
+    controller: str = "turn-then-drive",
 ) -> QueuedMove:
     return QueuedMove(
+        controller=controller,
         step=move.step,
         robot=move.robot,
         origin=move.origin,
@@ -134,7 +143,7 @@ def queues_of_document(doc: Mapping[str, Any]) -> dict[str, tuple[QueuedMove, ..
             )  # fmt: skip
             nodes = tuple(int(n) for n in found[0]["path_nodes"])
             points = np.array(found[0]["path_points"], dtype=float).reshape(-1, 2)
-            queue.append(_move(timed, nodes, points, steps, dt))
+            queue.append(_move(timed, nodes, points, steps, dt, found[0].get("controller", "turn-then-drive")))
         out[robot] = tuple(queue)
     return out
 

@@ -156,4 +156,3 @@ class Recovery:
     def backing_up(self) -> bool:
         """Whether the behaviour under way is the back-up (the session checks its path)."""
         return self.running == "backup"
-

@@ -270,7 +270,7 @@ def execute(
     local processes (one per core when None; the same results, session by session, as in one),
     localised as ``localisation`` says (tmpnav's EKF by default). With ``seconds`` (what the run's
     time limit leaves), the sessions done when that time is up, in order, at least the first."""
-    localisation = localisation or Localisation()
+    localisation = (localisation or Localisation()).following(report.scenario.models.driving)
     scenario, world = report.scenario, report.world
     robots = [r.name for r in scenario.robots]
     moves = queues(report)

@@ -78,7 +78,7 @@ class Session:
         session: int = 0,
     ):
         self.scenario, self.world, self.draws, self.vis, self.mutual = scenario, world, draws, vis, mutual
-        self.localisation = localisation or Localisation()
+        self.localisation = (localisation or Localisation()).following(scenario.models.driving)
         self.base = world  # the world the session started in (a closed loop may close doors)
         self.barriers: np.ndarray | None = None  # (k, 2) m: the centres of the cells closed since
         self.names = tuple(r.name for r in scenario.robots)
@@ -341,7 +341,7 @@ class Session:
         r.move, r.started, r.since, r.aligned, r.track = m, r.started + 1, self.step, False, 0
         r.waypoints, r.previous = m.waypoints, np.asarray(m.points[0], dtype=float)
         r.recovery = self.navigator.recovery(self.truth[self.names.index(m.robot)], self.step)
-        if self.localisation.follower == "rpp" and len(m.points) > 1:
+        if self.localisation.steers_rpp(m.controller) and len(m.points) > 1:
             spec = self.scenario.robots[self.names.index(m.robot)]
             r.rpp = RppFollower(m.points, self.localisation.rpp, spec.speed, spec.turn_rate, self.dt)
         else:

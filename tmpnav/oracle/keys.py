@@ -27,6 +27,7 @@ from tmpnav.world import World
 #: belief/reference.py) is not among them: it checks the compiled kernel, it does not run.
 CODE_FILES = (
     "belief/controls.py",
+    "belief/pursuit.py",
     "belief/kernel.py",
     "belief/risk.py",
     "belief/sequences.py",

@@ -18,11 +18,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tmpnav.belief.controls import path_controls, turn_to
+from tmpnav.belief.controls import PathControls, drive_to, path_controls, turn_to
+from tmpnav.belief.pursuit import RppParams, least_clearance, pursuit_controls, shortcut
 from tmpnav.belief.sequences import NoiseStreams
 from tmpnav.roadmap import RoadmapGraph
 from tmpnav.roadmap.graph import safe_weights
-from tmpnav.types import Roadmap, Scenario
+from tmpnav.types import SAFE_MARGIN, Roadmap, Scenario
 from tmpnav.world import World
 from tmpnav.world.lidar import ScanInformation
 from tmpnav.world.visibility import LandmarkVisibility
@@ -41,6 +42,8 @@ class NominalMotion:
     noise_seed: int
     cells: np.ndarray  # (T+1,) the sub-cell key of each pose (World.reach(radius).cells)
     scan_keys: np.ndarray | None = None  # (T+1,) each pose's scan (World.scans(sensor).keys); None: no scans
+    #: how the robot drives it: "rpp" (nav2's Regulated Pure Pursuit) or "turn-then-drive"
+    controller: str = "turn-then-drive"
     #: the poses' rows of a reach or scan table, by the table (MotionLibrary.reach_layout)
     rows: dict[object, np.ndarray] = field(default_factory=dict, repr=False)
 
@@ -119,6 +122,9 @@ def scan_seed(noise_seed: int) -> int:
     """The seed of the range scans' draws that go with the landmark-noise stream ``noise_seed``."""
     return stable_seed(noise_seed, "scans")
 
+
+#: the parameters of nav2's RPP the planner's motions are driven with (models.controller: rpp)
+RPP = RppParams()
 
 #: nominal motions kept in memory (least recently used dropped first): a motion of a few
 #: hundred steps with its landmark visibility takes 10-20 kB, and a building of 60 rooms and
@@ -255,7 +261,7 @@ class MotionLibrary:
         key = (robot, path, heading)
         found = self._along.get(key)
         if found is None:
-            found = self._along[key] = self._motion(robot, path, heading)
+            found = self._along[key] = self._driven(robot, path, heading, shorten=False)
             if len(self._along) > MAX_MOTIONS:
                 self._along.pop(next(iter(self._along)))
         return found
@@ -264,16 +270,85 @@ class MotionLibrary:
         path = self.graph.path(start, goal)
         if path is None:
             return None
-        return self._motion(robot, path, heading)
+        return self._driven(robot, path, heading, shorten=True)
 
-    def _motion(self, robot: str, path: tuple[int, ...], heading: float) -> NominalMotion:
+    def _driven(self, robot: str, path: tuple[int, ...], heading: float, shorten: bool) -> NominalMotion:
+        """The motion along the roadmap ``path`` by the scenario's controller (models.controller).
+        With RPP: along the path shortened (``shorten``; nav2's global plans are smoothed), else
+        along the path itself, whichever RPP drives first keeping half the margin the roadmap path
+        keeps at its tightest (or half the shortcut's margin, where the path keeps more), to a grid
+        cell (the clearance's own resolution); else
+        turn-then-drive along the path, which keeps the path's own margin. RPP cuts corners: at a
+        door the cut may take it near the frame, and the margin is the robot's footprint's free
+        distance, its clearance less its radius and a grid cell's diagonal."""
+        if self.scenario.models.driving != "rpp":
+            return self._motion(robot, path, heading, pursue=False)
+        grid = self.world.grid
+        origin, res = (float(grid.origin[0]), float(grid.origin[1])), float(grid.resolution)
+        own = self.scenario.robot(robot).radius + float(np.sqrt(2.0)) * res  # a margin's zero
+        tightest = least_clearance(self.graph.points(path), self.world.clearance, origin, res)
+        keep = min(own + 0.5 * max(min(self.required(robot), tightest) - own, 0.0), tightest)
+        candidates = (self.shortened(robot, path), path) if shorten and len(path) > 2 else (path,)
+        for candidate in dict.fromkeys(candidates):
+            motion = self._motion(robot, candidate, heading, pursue=True)
+            if least_clearance(motion.poses, self.world.clearance, origin, res, polyline=False) >= keep - res:
+                return motion
+        return self._motion(robot, path, heading, pursue=False)
+
+    def required(self, robot: str) -> float:
+        """The clearance (m, from the robot's centre to the nearest occupied cell's centre) a
+        shortened path keeps: the robot's radius, the roadmap's clearance and a cell's diagonal."""
+        margin = self.scenario.roadmap.clearance or SAFE_MARGIN
+        return self.scenario.robot(robot).radius + margin + float(np.sqrt(2.0)) * self.world.grid.resolution
+
+    def shortened(self, robot: str, path: tuple[int, ...]) -> tuple[int, ...]:
+        """The nodes of ``path`` that :func:`tmpnav.belief.pursuit.shortcut` keeps for ``robot``:
+        the straight lines between them keep :meth:`required` (or, where the path came nearer to
+        an obstacle, that path's own clearance)."""
+        grid = self.world.grid
+        origin = (float(grid.origin[0]), float(grid.origin[1]))
+        keep = shortcut(
+            self.graph.points(path), self.required(robot), self.world.clearance, origin, float(grid.resolution)
+        )
+        return tuple(path[int(k)] for k in keep)
+
+    def controls(self, robot: str, points: np.ndarray, heading: float, pursue: bool) -> PathControls:
+        """The controls and nominal poses of ``robot`` driving the polyline ``points`` from heading
+        ``heading``: by nav2's Regulated Pure Pursuit when ``pursue`` (tmpnav.belief.pursuit), or
+        by the paper's turn on the spot then drive straight (tmpnav.belief.controls), which is
+        also what a path RPP cannot finish is driven by."""
+        spec = self.scenario.robot(robot)
+        dt = self.scenario.models.dt
+        if pursue:
+            grid = self.world.grid
+            origin = (float(grid.origin[0]), float(grid.origin[1]))
+            pc = pursuit_controls(
+                points,
+                heading,
+                spec.speed,
+                spec.turn_rate,
+                dt,
+                RPP,
+                self.world.clearance,
+                origin,
+                float(grid.resolution),
+            )
+            if pc is not None:
+                return pc
+        return path_controls(points, heading, spec.speed, spec.turn_rate, dt)
+
+    def _motion(self, robot: str, path: tuple[int, ...], heading: float, pursue: bool) -> NominalMotion:
         start = path[0]
         spec = self.scenario.robot(robot)
         models = self.scenario.models
-        pc = path_controls(self.graph.points(path), heading, spec.speed, spec.turn_rate, models.dt)
+        pc = self.controls(robot, self.graph.points(path), heading, pursue)
         controls, poses = pc.controls, pc.poses
+        pursued = pursue and pc.pursued
         final = self.goal_headings.get(path[-1])
-        if final is not None and len(path) > 1:  # a job's goal pose: turn on the spot to its heading
+        if final is not None and len(path) > 1:  # a job's goal pose: on it, then turned to its heading
+            goal = self.roadmap.nodes[path[-1], :2]
+            if pursue:  # RPP stopped within its goal tolerance
+                controls, poses = drive_to(controls, poses, goal, spec.speed, spec.turn_rate, models.dt)
             controls, poses = turn_to(controls, poses, final, spec.turn_rate, models.dt)
         lm_visible = self.visibility.visible(poses, models.landmark_sensor.fov, min_range=spec.radius)
         return NominalMotion(
@@ -289,4 +364,5 @@ class MotionLibrary:
             # same simulated observations at step k alone or in a pair, whatever its goal,
             # so factorised pairs are exact and motions with a common prefix share it
             noise_seed=stable_seed(models.seed, "landmarks", robot, start),
+            controller="rpp" if pursued else "turn-then-drive",
         )

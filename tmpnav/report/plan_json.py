@@ -50,10 +50,17 @@ def _action(action: PlannedAction, roadmap: Roadmap, span: tuple[float, float] |
             "goal_pose": [number(v) for v in pose],
             "path_nodes": [int(n) for n in path],
             "path_points": _points(roadmap, path),
+            "controller": controller,
             "risk": None if risk is None else number(risk, 9),
         }
-        for (robot, origin, target), goal, pose, path, risk in zip(
-            parts, action.goal_nodes, action.goal_poses, action.paths, _risks(action), strict=True
+        for (robot, origin, target), goal, pose, path, risk, controller in zip(
+            parts,
+            action.goal_nodes,
+            action.goal_poses,
+            action.paths,
+            _risks(action),
+            action.controllers or ("turn-then-drive",) * len(parts),
+            strict=True,
         )
     ]
     return {

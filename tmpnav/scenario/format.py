@@ -445,6 +445,13 @@ MODELS = Section(
             "seed of the simulated observation noise",
             default=0,
         ),
+        "controller": Field(
+            Choice(choices=("auto", "turn-then-drive", "rpp")),
+            "how a robot drives a roadmap path: turn on the spot at every node, then straight (the paper), or "
+            "as nav2's Regulated Pure Pursuit drives the path shortened within its clearance (docs/models.md, "
+            "Controllers); auto: rpp when the robots carry a range sensor (models.range_sensor), else the paper's",
+            default="auto",
+        ),
     }
 )
 

@@ -295,6 +295,7 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
             observations=ObservationMode(models["observations"]),
             seed=models["seed"],
             range_sensor=_range_sensor(models["range_sensor"]),
+            controller=models["controller"],
         ),
         cost=CostWeights(d["cost"]["M_u"], d["cost"]["M_G"], d["cost"]["M_Sigma"], d["cost"]["M_T"]),
         roadmap=RoadmapParams(
