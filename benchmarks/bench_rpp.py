@@ -3,17 +3,21 @@ the one executed by ``tmpnav simulate --follower rpp`` (and by the waypoint foll
 the spot as the plan does), median over the sessions; seconds per metre of driving; the makespan.
 
     .venv/bin/python benchmarks/bench_rpp.py [--sessions 20] [--only building-4robots ...]
+        [--controller rpp|turn-then-drive]
 
-Writes ``rpp/NAME.csv`` (one row per move and follower) and prints one line per scenario and
-follower (benchmarks/README.md, "The plan's clock against nav2's RPP").
+Writes ``rpp/NAME.csv`` (one row per move and follower; ``rpp/NAME.CONTROLLER.csv`` with
+``--controller``, which plans a copy of the scenario with ``models.controller`` set) and prints
+one line per scenario and follower (benchmarks/README.md, "The plan's clock against nav2's RPP").
 """
 
 from __future__ import annotations
 
 import argparse
+import tempfile
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 from tmpnav.execution import execute
 from tmpnav.execution.localisers import Localisation
@@ -25,8 +29,22 @@ ROOT = HERE.parent
 SCENARIOS = ("building-4robots", "building-20", "depot-jobs", "office-ros")
 
 
-def measure(name: str, sessions: int) -> list[str]:
-    report = plan(ROOT / "configs" / f"{name}.yaml")
+def with_controller(source: Path, controller: str, folder: Path) -> Path:
+    """A copy of ``source`` in ``folder`` with ``models.controller`` set and its map paths absolute."""
+    doc = yaml.safe_load(source.read_text())
+    for key in ("ros", "image"):
+        found = doc.get("map", {}).get(key)
+        if isinstance(found, str) and not Path(found).is_absolute():
+            doc["map"][key] = str((source.parent / found).resolve())
+    doc.setdefault("models", {})["controller"] = controller
+    target = folder / source.name
+    target.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return target
+
+
+def measure(name: str, sessions: int, controller: str | None = None, folder: Path | None = None) -> list[str]:
+    source = ROOT / "configs" / f"{name}.yaml"
+    report = plan(with_controller(source, controller, folder) if controller and folder else source)
     paths = {(m.robot, m.step): m for q in queues(report).values() for m in q}
     planned = {(m.robot, m.step): m for m in report.schedule.moves}
     rows, lines = [], []
@@ -50,9 +68,10 @@ def measure(name: str, sessions: int) -> list[str]:
             rows.append(f"{follower},{key[0]},{key[1] + 1},{length:.2f},{p.end - p.start:.1f},{executed:.1f}")
         makespan = float(np.mean([s.makespan for s in runs]))
         planned_makespan = report.schedule.makespan
+        label = f" ({controller})" if controller else ""
         within = float(np.mean(np.abs(np.array(ratios) - 1.0) <= 0.10))
         lines.append(
-            f"{name} {follower}: {len(ratios)} moves; executed/planned duration median {np.median(ratios):.2f} "
+            f"{name}{label} {follower}: {len(ratios)} moves; executed/planned duration median {np.median(ratios):.2f} "
             f"(within 10%: {within:.0%}); executed {np.median(per_metre):.2f} s/m against planned "
             f"{np.median(planned_per_metre):.2f} s/m; "
             f"makespan planned {planned_makespan:.1f} s, executed {makespan:.1f} s "
@@ -60,7 +79,7 @@ def measure(name: str, sessions: int) -> list[str]:
         )
     out = HERE / "rpp"
     out.mkdir(exist_ok=True)
-    (out / f"{name}.csv").write_text(
+    (out / (f"{name}.{controller}.csv" if controller else f"{name}.csv")).write_text(
         "follower,robot,step,length_m,planned_s,executed_median_s\n" + "\n".join(rows) + "\n"
     )
     return lines
@@ -70,10 +89,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sessions", type=int, default=20)
     parser.add_argument("--only", nargs="*", default=None)
+    parser.add_argument("--controller", choices=("rpp", "turn-then-drive"), default=None)
     args = parser.parse_args()
-    for name in args.only or SCENARIOS:
-        for line in measure(name, args.sessions):
-            print(line, flush=True)
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in args.only or SCENARIOS:
+            for line in measure(name, args.sessions, args.controller, Path(tmp)):
+                print(line, flush=True)
 
 
 if __name__ == "__main__":
