@@ -1,6 +1,6 @@
 """Where a fresh, warm tmpnav command spends its fixed cost (issues 56 and 57).
 
-    python benchmarks/startup.py [--runs 3] [--base DIR] [-o benchmarks/startup]
+    python benchmarks/startup.py [--runs 3] [--base DIR] [--corridor] [-o benchmarks/startup]
 
 Two parts, each in fresh interpreters (as a command runs):
 
@@ -15,6 +15,9 @@ Two parts, each in fresh interpreters (as a command runs):
   (another checkout of tmpnav, for example ``git archive <commit> | tar -x -C DIR``) the same
   commands of DIR run alternately with this checkout's, on one cache, so that both see the
   same load.
+
+``--corridor`` times only ``tmpnav plan configs/corridor.yaml`` with ``-o DIR`` and without
+(corridor.txt), as issue 57 states its target.
 
 The machine's load average is printed with the figures: on a shared machine the wall times
 wait for the others, so the CPU time is the better figure of what a command costs.
@@ -114,7 +117,7 @@ def pieces(root: Path, runs: int, tmp: Path) -> list[str]:
     lines.append(f"  numba's first cached kernel        {statistics.median(first):5.2f}")
     cache = tmp / "pieces-cache"
     run(root, ["-m", "tmpnav", "plan", ROOT / "configs" / "corridor.yaml", "-q", "--cache-dir", cache, "-o", tmp / "p"])
-    figures = ["-c", FIGURES, ROOT / "configs" / "corridor.yaml", cache, tmp / "p"]
+    figures: list[str | Path] = ["-c", FIGURES, ROOT / "configs" / "corridor.yaml", cache, tmp / "p"]
     drawn = [run(root, figures)[2].split() for _ in range(runs)]
     for k, name in enumerate(("import the figure modules", "corridor plan.png", "corridor schedule.png")):
         lines.append(f"  {name:<33} {statistics.median(float(d[k]) for d in drawn):5.2f}")
@@ -171,11 +174,39 @@ def timed_commands(roots: dict[str, Path], runs: int, tmp: Path, cache: Path) ->
     return lines
 
 
+def corridor(roots: dict[str, Path], runs: int, tmp: Path, cache: Path) -> list[str]:
+    """``tmpnav plan configs/corridor.yaml -o DIR`` (plan.json, the two figures, the PDDL) and the
+    same without ``-o`` (no files) on a warm cache, as issue 57 times them: each warmed up once,
+    then ``runs`` times, the roots and the two commands alternating; the load average before each
+    run."""
+    scenario = ROOT / "configs" / "corridor.yaml"
+    variants: dict[str, list[str | Path]] = {"-o DIR": ["-o", tmp / "out"], "no files": []}
+    for root in roots.values():  # warm-ups
+        for extra in variants.values():
+            run(root, ["-m", "tmpnav", "plan", scenario, "--cache-dir", cache, *extra])
+    got: dict[tuple[str, str], list[tuple[float, float, float]]] = {}
+    for _ in range(runs):
+        for name, root in roots.items():
+            for label, extra in variants.items():
+                before = os.getloadavg()[0]
+                wall, cpu, _ = run(root, ["-m", "tmpnav", "plan", scenario, "--cache-dir", cache, *extra])
+                got.setdefault((name, label), []).append((wall, cpu, before))
+                print(f"{name}: plan corridor {label}: {wall:.2f} s (load {before:.2f})", flush=True)
+    lines = [f"the warm corridor plan ({runs} runs each, alternating; wall s (CPU s, 1-min load before the run))"]
+    for (name, label), times in got.items():
+        each = ", ".join(f"{w:.2f} ({c:.2f}, {b:.1f})" for w, c, b in times)
+        walls = [w for w, _, _ in times]
+        span = f"{min(walls):.2f}-{max(walls):.2f} s, median {statistics.median(walls):.2f} s"
+        lines.append(f"  {name:<6} {label:<9} {span}  ({each})")
+    return lines
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--base", type=Path, default=None, help="another checkout to compare with")
     parser.add_argument("--skip-pieces", action="store_true")
+    parser.add_argument("--corridor", action="store_true", help="only the warm corridor plan, with -o DIR and without")
     parser.add_argument("--cache-dir", type=Path, default=None, help="a cache to reuse (default: a new one)")
     parser.add_argument("-o", "--output", type=Path, default=None)
     args = parser.parse_args()
@@ -185,16 +216,24 @@ def main() -> None:
     lines = [f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} cores"]
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
+        if args.corridor:
+            lines += corridor(roots, args.runs, tmp, args.cache_dir or tmp / "cache")
+            return report(lines, args.output, "corridor.txt")
         if not args.skip_pieces:
             for name, root in roots.items():
                 lines += [f"[{name}] {line}" for line in pieces(root, args.runs, tmp / name)]
                 print("\n".join(lines), flush=True)
         lines += timed_commands(roots, args.runs, tmp, args.cache_dir or tmp / "cache")
+    report(lines, args.output, "startup.txt")
+
+
+def report(lines: list[str], folder: Path | None, name: str) -> None:
+    """Print the lines, and write them to ``folder/name`` when a folder is given."""
     text = "\n".join(lines)
     print(text)
-    if args.output is not None:
-        args.output.mkdir(parents=True, exist_ok=True)
-        (args.output / "startup.txt").write_text(text + "\n")
+    if folder is not None:
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / name).write_text(text + "\n")
 
 
 if __name__ == "__main__":
