@@ -3,7 +3,7 @@ the one executed by ``tmpnav simulate --follower rpp`` (and by the waypoint foll
 the spot as the plan does), median over the sessions; seconds per metre of driving; the makespan.
 
     .venv/bin/python benchmarks/bench_rpp.py [--sessions 20] [--only building-4robots ...]
-        [--controller rpp|turn-then-drive]
+        [--controller rpp|turn-then-drive] [--followers waypoint rpp auto]
 
 Writes ``rpp/NAME.csv`` (one row per move and follower; ``rpp/NAME.CONTROLLER.csv`` with
 ``--controller``, which plans a copy of the scenario with ``models.controller`` set) and prints
@@ -42,13 +42,19 @@ def with_controller(source: Path, controller: str, folder: Path) -> Path:
     return target
 
 
-def measure(name: str, sessions: int, controller: str | None = None, folder: Path | None = None) -> list[str]:
+def measure(
+    name: str,
+    sessions: int,
+    controller: str | None = None,
+    folder: Path | None = None,
+    followers: tuple[str, ...] = ("waypoint", "rpp"),
+) -> list[str]:
     source = ROOT / "configs" / f"{name}.yaml"
     report = plan(with_controller(source, controller, folder) if controller and folder else source)
     paths = {(m.robot, m.step): m for q in queues(report).values() for m in q}
     planned = {(m.robot, m.step): m for m in report.schedule.moves}
     rows, lines = [], []
-    for follower in ("waypoint", "rpp"):
+    for follower in followers:
         result = execute(report, sessions, 0, None, Localisation(follower=follower))
         config = min(result.schedules)
         runs = result.schedules[config]
@@ -67,6 +73,21 @@ def measure(name: str, sessions: int, controller: str | None = None, folder: Pat
             planned_per_metre.append((p.end - p.start) / length)
             rows.append(f"{follower},{key[0]},{key[1] + 1},{length:.2f},{p.end - p.start:.1f},{executed:.1f}")
         makespan = float(np.mean([s.makespan for s in runs]))
+        hit, touched = np.zeros(sessions, dtype=bool), np.zeros(sessions, dtype=bool)
+        for (c, _), v in result.wall_hits.items():
+            hit |= (np.asarray(v) > 0) if c == config else False
+        for (c, _), v in result.contacts.items():
+            touched |= (np.asarray(v) > 0) if c == config else False
+        hits = int(hit.sum())
+        over = [
+            (key, int(np.count_nonzero(v)), result.bounds.get((key[1], key[2]), 0.0))
+            for key, v in result.move_hits.items()
+            if key[0] == config and key[2] >= 0
+        ]
+        # a move over its bound: its hit rate's 95% lower Clopper-Pearson limit above the planned bound
+        from scipy.stats import beta
+
+        beyond = sum(1 for _, k, b in over if k > 0 and beta.ppf(0.025, k, sessions - k + 1) > b)
         planned_makespan = report.schedule.makespan
         label = f" ({controller})" if controller else ""
         within = float(np.mean(np.abs(np.array(ratios) - 1.0) <= 0.10))
@@ -75,7 +96,9 @@ def measure(name: str, sessions: int, controller: str | None = None, folder: Pat
             f"(within 10%: {within:.0%}); executed {np.median(per_metre):.2f} s/m against planned "
             f"{np.median(planned_per_metre):.2f} s/m; "
             f"makespan planned {planned_makespan:.1f} s, executed {makespan:.1f} s "
-            f"({makespan / planned_makespan - 1:+.1%})"
+            f"({makespan / planned_makespan - 1:+.1%}); sessions with a wall hit {hits}/{sessions}, "
+            f"with a contact {int(touched.sum())}/{sessions}; moves whose hit rate lies above their bound "
+            f"{beyond}/{len(over)}"
         )
     out = HERE / "rpp"
     out.mkdir(exist_ok=True)
@@ -90,10 +113,11 @@ def main() -> None:
     parser.add_argument("--sessions", type=int, default=20)
     parser.add_argument("--only", nargs="*", default=None)
     parser.add_argument("--controller", choices=("rpp", "turn-then-drive"), default=None)
+    parser.add_argument("--followers", nargs="+", choices=("waypoint", "rpp", "auto"), default=["waypoint", "rpp"])
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.only or SCENARIOS:
-            for line in measure(name, args.sessions, args.controller, Path(tmp)):
+            for line in measure(name, args.sessions, args.controller, Path(tmp), tuple(args.followers)):
                 print(line, flush=True)
 
 

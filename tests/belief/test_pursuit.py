@@ -136,3 +136,13 @@ def test_a_shortcut_keeps_the_corner_round_a_wall() -> None:
 def test_short_paths_are_kept_as_they_are(n: int) -> None:
     clear, origin = open_floor()
     assert shortcut(np.zeros((n, 2)) + np.arange(n)[:, None], 0.5, clear, origin, RES).tolist() == list(range(n))
+
+
+def test_a_shortcut_keeps_the_middle_of_a_door() -> None:
+    # a wall along y = 0 with a door at x in [-0.5, 0.5]: the path's node in the door stays
+    clear, origin = walled(slice(198, 202), slice(0, 190))
+    right = walled(slice(198, 202), slice(210, 400))[0]
+    clear = np.minimum(clear, right)
+    points = np.array([[-3.0, -3.0], [-1.5, -1.5], [0.0, 0.0], [1.5, 1.5], [3.0, 3.0]])
+    keep = shortcut(points, 1.0, clear, origin, RES).tolist()
+    assert 2 in keep and keep[0] == 0 and keep[-1] == 4

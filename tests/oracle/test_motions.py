@@ -92,9 +92,10 @@ def test_rpp_motions_drive_the_shortened_path_and_keep_half_the_roadmap_margin()
             shortened += len(m.path) < len(path)
             tightest = least_clearance(lib.graph.points(path), world.clearance, origin, res)
             keep = min(own + 0.5 * max(min(lib.required(robot.name), tightest) - own, 0.0), tightest)
+            keep = max(keep - res, min(own, tightest))
             if m.controller == "rpp":
-                assert least_clearance(m.poses, world.clearance, origin, res, polyline=False) >= keep - res - 1e-9
+                assert least_clearance(m.poses, world.clearance, origin, res, polyline=False) >= keep - 1e-9
             assert set(m.path) <= set(path) and m.path[0] == a and m.path[-1] == b
     total = 8 * (len(nodes) - 1)
-    # the depot's doors are barely wider than its robots: RPP drives 72% of these moves
-    assert pursued >= 0.6 * total and shortened >= 0.3 * total, (pursued, shortened, total)
+    # the depot's doors are about as wide as its robots: RPP drives half of these moves
+    assert pursued >= 0.4 * total and shortened >= 0.3 * total, (pursued, shortened, total)

@@ -295,7 +295,9 @@ def shortcut(
     such that the straight line's least clearance (the cells of ``clearance`` along it, sampled a
     cell apart) is at least ``required`` (m), or at least the polyline's own least clearance
     between the two where that is less: a shortcut keeps the clearance ``required``, and where
-    the path it replaces came closer to an obstacle, it comes no closer than that path. Greedy (OMPL's
+    the path it replaces came closer to an obstacle, it comes no closer than that path. A point
+    whose own clearance is below ``required`` (the middle of a door, or another narrow passage)
+    is never skipped: the path goes through the passage where the roadmap does. Greedy (OMPL's
     ``PathSimplifier::shortcutPath`` tries random pairs; the farthest first is deterministic)."""
     pts = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
     if pts.shape[0] <= 2:
@@ -362,6 +364,8 @@ def _shortcut(pts, required, clear, x0, y0, res):  # pragma: no cover
         nxt = i + 1
         kept = edge[i]
         for j in range(i + 2, P):
+            if _least(pts[j - 1, 0], pts[j - 1, 1], pts[j - 1, 0], pts[j - 1, 1], clear, x0, y0, res) < required:
+                break  # a node in a narrow passage (a door's middle) is kept: the path goes through it
             kept = min(kept, edge[j - 1])  # the polyline's least clearance from i to j
             if _least(pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1], clear, x0, y0, res) >= min(kept, required):
                 nxt = j

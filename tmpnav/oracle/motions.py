@@ -277,7 +277,8 @@ class MotionLibrary:
         With RPP: along the path shortened (``shorten``; nav2's global plans are smoothed), else
         along the path itself, whichever RPP drives first keeping half the margin the roadmap path
         keeps at its tightest (or half the shortcut's margin, where the path keeps more), to a grid
-        cell (the clearance's own resolution); else
+        cell (the clearance's own resolution), and never nearer to an obstacle than the path where
+        the path's footprint has no margin (a door as wide as the robot); else
         turn-then-drive along the path, which keeps the path's own margin. RPP cuts corners: at a
         door the cut may take it near the frame, and the margin is the robot's footprint's free
         distance, its clearance less its radius and a grid cell's diagonal."""
@@ -288,10 +289,12 @@ class MotionLibrary:
         own = self.scenario.robot(robot).radius + float(np.sqrt(2.0)) * res  # a margin's zero
         tightest = least_clearance(self.graph.points(path), self.world.clearance, origin, res)
         keep = min(own + 0.5 * max(min(self.required(robot), tightest) - own, 0.0), tightest)
+        # to a grid cell, but never nearer than the roadmap path where it leaves the footprint no room
+        keep = max(keep - res, min(own, tightest))
         candidates = (self.shortened(robot, path), path) if shorten and len(path) > 2 else (path,)
         for candidate in dict.fromkeys(candidates):
             motion = self._motion(robot, candidate, heading, pursue=True)
-            if least_clearance(motion.poses, self.world.clearance, origin, res, polyline=False) >= keep - res:
+            if least_clearance(motion.poses, self.world.clearance, origin, res, polyline=False) >= keep:
                 return motion
         return self._motion(robot, path, heading, pursue=False)
 
