@@ -35,9 +35,8 @@ where the straight line between two of them keeps the clearance the path itself 
 
 from __future__ import annotations
 
-import itertools
 import math
-from dataclasses import astuple, dataclass, fields
+from dataclasses import dataclass, fields
 
 import numba as nb
 import numpy as np
@@ -83,14 +82,21 @@ class RppParams:
         return tuple(f.name for f in fields(cls))
 
     def vector(self) -> np.ndarray:
-        """The parameters as the compiled law takes them (booleans as 0 or 1)."""
-        return np.array([float(v) for v in astuple(self)])
+        """The parameters as the compiled law takes them (booleans as 0 or 1); do not write to it."""
+        found = _VECTORS.get(self)
+        if found is None:
+            found = _VECTORS[self] = np.array([float(getattr(self, f.name)) for f in fields(self)])
+            found.setflags(write=False)
+        return found
 
     @property
     def reach(self) -> float:
         """The longest lookahead the law can use (m)."""
         return max(self.lookahead_dist, self.max_lookahead_dist if self.use_velocity_scaled_lookahead_dist else 0.0)
 
+
+#: the parameter vectors of the parameter sets used (RppParams.vector: the oracle drives thousands of paths)
+_VECTORS: dict[RppParams, np.ndarray] = {}
 
 # the parameter vector's entries (RppParams' order)
 (
@@ -120,13 +126,32 @@ class RppParams:
 def densify(points: np.ndarray, spacing: float = RESOLUTION) -> tuple[np.ndarray, np.ndarray]:
     """The polyline ``points`` (k, 2) resampled every ``spacing`` m or closer, every vertex kept;
     and the index of each vertex in the result (k,)."""
-    points = np.asarray(points, dtype=float).reshape(-1, 2)
-    out, at = [points[:1]], [0]
-    for a, b in itertools.pairwise(points):
-        n = max(1, math.ceil(float(np.hypot(*(b - a))) / spacing))
-        out.append(a + (b - a) * (np.arange(1, n + 1)[:, None] / n))
-        at.append(at[-1] + n)
-    return np.ascontiguousarray(np.concatenate(out)), np.array(at, dtype=np.int64)
+    points = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
+    if points.shape[0] == 0:
+        return np.zeros((0, 2)), np.zeros(0, dtype=np.int64)
+    return _densify(points, float(spacing))
+
+
+@nb.njit(cache=True)
+def _densify(points, spacing):  # pragma: no cover
+    """:func:`densify`, compiled: each segment a -> b cut into n = ceil(|b - a| / spacing) (at
+    least 1) equal steps, the points a + (b - a) k / n for k = 1..n."""
+    P = points.shape[0]
+    at = np.zeros(P, dtype=np.int64)
+    counts = np.zeros(P, dtype=np.int64)
+    for k in range(1, P):
+        d = math.hypot(points[k, 0] - points[k - 1, 0], points[k, 1] - points[k - 1, 1])
+        counts[k] = max(1, math.ceil(d / spacing))
+        at[k] = at[k - 1] + counts[k]
+    out = np.empty((at[P - 1] + 1, 2))
+    out[0, 0], out[0, 1] = points[0, 0], points[0, 1]
+    for k in range(1, P):
+        n = counts[k]
+        for i in range(1, n + 1):
+            f = i / n
+            out[at[k - 1] + i, 0] = points[k - 1, 0] + (points[k, 0] - points[k - 1, 0]) * f
+            out[at[k - 1] + i, 1] = points[k - 1, 1] + (points[k, 1] - points[k - 1, 1]) * f
+    return out, at
 
 
 def length_left(path: np.ndarray) -> np.ndarray:
