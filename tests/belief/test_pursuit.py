@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from tmpnav.belief.controls import path_controls
-from tmpnav.belief.pursuit import RppParams, pursuit_controls, shortcut
+from tmpnav.belief.pursuit import RppParams, pursuit_controls
 from tmpnav.execution.rpp import RppFollower
+from tmpnav.roadmap.shortcut import shortcut
 
 DT = 0.5
 RES = 0.05

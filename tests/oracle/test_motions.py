@@ -63,9 +63,9 @@ def test_rpp_motions_drive_the_shortened_path_and_keep_half_the_roadmap_margin()
     instantiations is RPP's (turning while it drives) along the roadmap path or its shortcut, or
     turn-then-drive where RPP would cut a corner into a door's frame, and says which; an RPP
     motion comes no nearer to a wall than half the margin the roadmap path keeps at its tightest."""
-    from tmpnav.belief.pursuit import least_clearance
     from tmpnav.pipeline import load_world
     from tmpnav.roadmap import build_roadmap
+    from tmpnav.roadmap.shortcut import least_clearance
     from tmpnav.shipped import configs_dir
 
     scenario, world = load_world(configs_dir() / "depot-jobs.yaml")

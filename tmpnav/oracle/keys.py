@@ -43,6 +43,7 @@ CODE_FILES = (
     "oracle/singles.py",
     "oracle/table.py",
     "roadmap/graph.py",
+    "roadmap/shortcut.py",
     "types.py",
     "world/geometry.py",
     "world/grid.py",

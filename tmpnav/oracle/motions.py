@@ -19,10 +19,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tmpnav.belief.controls import PathControls, drive_to, path_controls, turn_to
-from tmpnav.belief.pursuit import RppParams, least_clearance, pursuit_controls, shortcut
+from tmpnav.belief.pursuit import RppParams, pursuit_controls
 from tmpnav.belief.sequences import NoiseStreams
 from tmpnav.roadmap import RoadmapGraph
 from tmpnav.roadmap.graph import safe_weights
+from tmpnav.roadmap.shortcut import least_clearance, shortcut
 from tmpnav.types import SAFE_MARGIN, Roadmap, Scenario
 from tmpnav.world import World
 from tmpnav.world.lidar import ScanInformation
