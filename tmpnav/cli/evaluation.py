@@ -152,9 +152,10 @@ def simulate(
 ) -> None:
     """Simulate the plan, with and without mutual observations.
 
-    Each session samples the true initial poses from the initial beliefs; then every robot
-    follows its own moves at once (a waypoint follower, or nav2's Regulated Pure Pursuit
-    with --follower rpp, steering on the estimate, noisy controls), a paired move
+    Each session samples the true initial poses from the initial beliefs, free of the map;
+    then every robot follows its own moves at once (each move as the plan drives it: nav2's
+    Regulated Pure Pursuit, or a waypoint follower; steering on the estimate, noisy
+    controls), a paired move
     starting when both robots are there and no move before its planned start, with noisy
     observations of landmarks and of other robots, and the joint EKF with mutual
     observations (config 1) and without (config 2), on the same random

@@ -121,7 +121,8 @@ class Session:
         return self.navigator.steering(i, self.estimate(i), self.truth[i], self.step)
 
     def _initial(self) -> tuple[np.ndarray, Belief, SessionTrace]:
-        """True initial poses drawn from the initial beliefs; the filter starts at the beliefs."""
+        """True initial poses drawn from the initial beliefs, free of the map (:func:`free_start`);
+        the filter starts at the beliefs."""
         robots = self.scenario.robots
         n = len(robots)
         mean = np.concatenate([r.pose.as_array() for r in robots])
@@ -129,7 +130,7 @@ class Session:
         truth = np.empty((n, 3))
         for i, r in enumerate(robots):
             cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = r.cov
-            truth[i] = r.pose.as_array() + np.linalg.cholesky(r.cov) @ self.draws.initial[i]
+            truth[i] = free_start(r.pose.as_array(), r.cov, self.draws.initial[i], self.world, r.radius)
         errors = {r.name: [float(np.hypot(*(truth[i, :2] - mean[3 * i : 3 * i + 2])))] for i, r in enumerate(robots)}
         return truth, Belief(mean, cov), SessionTrace(errors, {r.name: [0.0] for r in robots})
 
@@ -449,3 +450,25 @@ class Session:
         if r.move is not None:
             return r.move.step
         return r.queue[r.started - 1].step if r.started else -1
+
+
+#: redraws of a true start that a robot's disc would find in collision with the map
+START_REDRAWS = 64
+
+
+def free_start(mean: np.ndarray, cov: np.ndarray, z: np.ndarray, world: World, radius: float) -> np.ndarray:
+    """A true start pose (3,) drawn from the belief N(mean, cov) with the standard normal draw
+    ``z`` (3,), conditioned on the robot's disc being free of the map: a robot cannot stand in a
+    wall, however wide its initial belief. Where mean + L z (L L^T = cov) is free, that pose;
+    else the first free one of up to :data:`START_REDRAWS` redraws from a stream seeded by the
+    bits of ``z`` (the same in every process), or the last of them."""
+    root = np.linalg.cholesky(cov)
+    pose = mean + root @ z
+    if world.is_free(pose[None, :2], radius)[0]:
+        return pose
+    rng = np.random.default_rng(np.frombuffer(np.ascontiguousarray(z, dtype=float).tobytes(), dtype=np.uint32))
+    for _ in range(START_REDRAWS):
+        pose = mean + root @ rng.standard_normal(3)
+        if world.is_free(pose[None, :2], radius)[0]:
+            break
+    return pose
