@@ -84,7 +84,7 @@ import numba as nb
 import numpy as np
 
 from tmpnav.belief.controls import LENGTH_EPS
-from tmpnav.belief.pursuit import RppParams
+from tmpnav.oracle.motions import RPP
 from tmpnav.roadmap.graph import RoadmapGraph
 from tmpnav.types import CostTable, Goals, Models, MoveKey, Roadmap, RobotSpec, Scenario
 
@@ -207,9 +207,6 @@ def sigma_rate(models: Models, speed: float, robots: int, landmarks: int) -> flo
     return models.dt**2 * a3 / (1.0 + rho_max * information)
 
 
-#: the RPP parameters the planner's motions are driven with (tmpnav.oracle.motions.RPP)
-RPP_PARAMS = RppParams()
-
 #: the slack of the floors' step counts: a driven length or a turn is measured from the robot's
 #: nominal pose, which is a roadmap node up to rounding (1e-12 m); a step count of a length
 #: within this of a multiple of one step's reach is taken both ways, on the floor's side
@@ -292,7 +289,7 @@ class _Walks:
         the end, within Z = the approach distance plus the longest lookahead of it (the robot is
         within a lookahead of its path); so c_u = sum v^2 dt >= v_lo (D - Z). Turns on the spot
         count 0."""
-        p = RPP_PARAMS
+        p = RPP  # the parameters the planner's motions are driven with
         s = self.spec
         d = np.hypot(*(self.xy[targets] - self.xy[source]).T)
         driven = np.maximum(d - p.xy_goal_tolerance, 0.0)

@@ -145,6 +145,9 @@ class MotionLibrary:
         clearance = scenario.roadmap.clearance or 0.0  # 0: the paper's shortest paths
         self.graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius, clearance) if clearance > 0 else None)
         self.visibility = visibility_of(world, scenario.models.landmark_sensor.range)
+        #: the map's clearance grid as RPP's motions read it: its origin (m) and cell size (m)
+        self.origin = (float(world.grid.origin[0]), float(world.grid.origin[1]))
+        self.resolution = float(world.grid.resolution)
         sensor = scenario.models.range_sensor
         # a range scan's information per cell and heading (tmpnav.world.lidar)
         self.scans: ScanInformation | None = world.scans(sensor) if sensor is not None else None
@@ -285,8 +288,7 @@ class MotionLibrary:
         distance, its clearance less its radius and a grid cell's diagonal."""
         if self.scenario.models.driving != "rpp":
             return self._motion(robot, path, heading, pursue=False)
-        grid = self.world.grid
-        origin, res = (float(grid.origin[0]), float(grid.origin[1])), float(grid.resolution)
+        origin, res = self.origin, self.resolution
         own = self.scenario.robot(robot).radius + float(np.sqrt(2.0)) * res  # a margin's zero
         tightest = least_clearance(self.graph.points(path), self.world.clearance, origin, res)
         keep = min(own + 0.5 * max(min(self.required(robot), tightest) - own, 0.0), tightest)
@@ -303,16 +305,14 @@ class MotionLibrary:
         """The clearance (m, from the robot's centre to the nearest occupied cell's centre) a
         shortened path keeps: the robot's radius, the roadmap's clearance and a cell's diagonal."""
         margin = self.scenario.roadmap.clearance or SAFE_MARGIN
-        return self.scenario.robot(robot).radius + margin + float(np.sqrt(2.0)) * self.world.grid.resolution
+        return self.scenario.robot(robot).radius + margin + float(np.sqrt(2.0)) * self.resolution
 
     def shortened(self, robot: str, path: tuple[int, ...]) -> tuple[int, ...]:
-        """The nodes of ``path`` that :func:`tmpnav.belief.pursuit.shortcut` keeps for ``robot``:
+        """The nodes of ``path`` that :func:`tmpnav.roadmap.shortcut.shortcut` keeps for ``robot``:
         the straight lines between them keep :meth:`required` (or, where the path came nearer to
         an obstacle, that path's own clearance)."""
-        grid = self.world.grid
-        origin = (float(grid.origin[0]), float(grid.origin[1]))
         keep = shortcut(
-            self.graph.points(path), self.required(robot), self.world.clearance, origin, float(grid.resolution)
+            self.graph.points(path), self.required(robot), self.world.clearance, self.origin, self.resolution
         )
         return tuple(path[int(k)] for k in keep)
 
@@ -324,18 +324,9 @@ class MotionLibrary:
         spec = self.scenario.robot(robot)
         dt = self.scenario.models.dt
         if pursue:
-            grid = self.world.grid
-            origin = (float(grid.origin[0]), float(grid.origin[1]))
+            clear = self.world.clearance
             pc = pursuit_controls(
-                points,
-                heading,
-                spec.speed,
-                spec.turn_rate,
-                dt,
-                RPP,
-                self.world.clearance,
-                origin,
-                float(grid.resolution),
+                points, heading, spec.speed, spec.turn_rate, dt, RPP, clear, self.origin, self.resolution
             )
             if pc is not None:
                 return pc
