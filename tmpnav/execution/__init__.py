@@ -5,7 +5,7 @@ Each session draws the robots' true initial poses from their initial beliefs, th
 team executes the schedule on one clock (:mod:`.session`): every robot follows its own queue
 of moves (:mod:`.moves`) with a waypoint follower steering on its own estimate
 (:mod:`.control`), a paired move starts when both robots are ready, and no move starts before
-its planned start. Observations are generated from the true poses (landmarks in range, field
+its planned start (:mod:`.schedule`). Observations are generated from the true poses (landmarks in range, field
 of view and line of sight; any two robots in range and line of sight) with sensor noise, and
 the team's joint EKF estimates the poses (:mod:`.fast_ekf`, compiled, held to the filterpy
 reference :mod:`.joint_ekf`), or with ``--localiser amcl`` every robot's AMCL (:mod:`.amcl_team`).
@@ -19,7 +19,8 @@ summary and the CSV files.
 from tmpnav.execution.control import ALIGN, ARRIVED, control, reached
 from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.result import ExecutionResult, Rate, execute
-from tmpnav.execution.session import STEP_BUDGET, Session
+from tmpnav.execution.schedule import STEP_BUDGET
+from tmpnav.execution.session import Session
 from tmpnav.execution.text import error_summary, errors_csv, moves_csv, sessions_csv
 from tmpnav.execution.trace import Draws, SessionTrace
 

@@ -34,7 +34,8 @@ from tmpnav.execution.consistency import gather as gather_consistency
 from tmpnav.execution.localisers import Localisation
 from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.recovery import BEHAVIOURS
-from tmpnav.execution.session import STEP_BUDGET, Session
+from tmpnav.execution.schedule import STEP_BUDGET
+from tmpnav.execution.session import Session
 from tmpnav.execution.trace import Draws, SessionTrace
 from tmpnav.lifetime import gather, signals_held
 from tmpnav.oracle.executors import die_with_parent

@@ -1,15 +1,10 @@
 """One session of ``tmpnav simulate``: the plan's schedule executed by the whole team at once.
 
-Every robot follows its own queue of moves (:mod:`tmpnav.execution.moves`) at the same time,
-on one clock of the models' ``dt``. A robot starts its next move when
-
-* it has reached the end of its previous move (its estimate at the path's last node),
-* for a paired move, its partner has reached the end of its own previous move (the one that
-  is there first waits), and
-* the plan's start time of the move has come (never earlier: the planner may hold a move back
-  to keep clear of another robot).
-
-Each control step, for the whole team together:
+Every robot follows its own queue of moves at the same time, on one clock of the models'
+``dt``; where each robot is in its queue, when it starts its next move (at the plan's start
+time, never earlier, and with its partner for a paired move) and when a move ends or is cut is
+the schedule's bookkeeping (:mod:`tmpnav.execution.schedule`). :class:`Session` runs the
+simulated world around it. Each control step, for the whole team together:
 
 1. driving robots drop the waypoints they have reached (the position error recorded at each);
    a robot that reached its last one ends its move, and moves that may start now start;
@@ -39,32 +34,29 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import replace
 
 import numpy as np
 
 from tmpnav.belief.models import motion, motion_noise_cov
-from tmpnav.errors import TmpnavError
 from tmpnav.execution.contact import walls_and_touches
 from tmpnav.execution.control import reached
 from tmpnav.execution.joint_ekf import JointEkf
 from tmpnav.execution.localisers import Localisation, TeamLocaliser
 from tmpnav.execution.moves import QueuedMove, RobotQueue
 from tmpnav.execution.navigation import Navigator
-from tmpnav.execution.recovery import BEHAVIOURS
+from tmpnav.execution.recovery import BEHAVIOURS, Recovery
 from tmpnav.execution.rpp import RppFollower
+from tmpnav.execution.schedule import TeamSchedule
 from tmpnav.execution.trace import Draws, SessionTrace, nees
-from tmpnav.results import TimedMove
 from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
 
-#: a move may take this many times its planned steps (or 40 steps per waypoint) before it is cut
-STEP_BUDGET = 6
-
 
 class Session:
-    """The state of one session in one configuration (see the module docstring)."""
+    """The state of one session in one configuration (see the module docstring): the simulated
+    world (true poses, commands, sensing, the localiser); where the robots are in their queues is
+    :attr:`schedule`'s, which asks this session what it needs to know of the robots."""
 
     def __init__(
         self,
@@ -82,7 +74,6 @@ class Session:
         self.base = world  # the world the session started in (a closed loop may close doors)
         self.barriers: np.ndarray | None = None  # (k, 2) m: the centres of the cells closed since
         self.names = tuple(r.name for r in scenario.robots)
-        self.robots = [RobotQueue(queues.get(r, ())) for r in self.names]
         self.dt = scenario.models.dt
         self.step = 0  # control steps taken (indexes the draws)
         self.truth, belief, self.trace = self._initial()
@@ -96,8 +87,7 @@ class Session:
             terms.update(dict.fromkeys(self.names, 0.0))
         #: the robots' speed now, as a share of their commands (0: stopped; set by a closed loop's events)
         self.speed = np.ones(len(self.names))
-        #: robots that are down: they stand where they are for the rest of the session
-        self.down: set[int] = set()
+        self.schedule = TeamSchedule(self.names, queues, self.trace, scenario.goals, self.dt, self)
         self.localiser = self._localiser(belief, queues, session)
         self.session = session
         self.trace.recoveries = dict.fromkeys(BEHAVIOURS, 0)
@@ -150,34 +140,23 @@ class Session:
         ``pause``, when given, is asked at each control step once the robots have reached their
         waypoints and before any move starts: True returns at once, and a later ``run`` goes on
         from there (a closed loop changes the team's speed, moves or world in between)."""
+        schedule = self.schedule
         while True:
             if pause is not None:
-                self._arrive()
+                schedule.arrive(self.step)
                 if pause():
                     return self.trace
-            self._arrive_and_start()
-            if all(r.move is None and r.next is None for r in self.robots):
+            schedule.arrive_and_start(self.step)
+            if schedule.finished:
                 break
             if self.step >= self.draws.steps:
-                self._cut_all()
+                schedule.cut_all(self.step)
                 break
-            if not any(r.move is not None for r in self.robots):
-                self._check_waiting()
-                if all(r.move is None and r.next is None for r in self.robots):
+            if not schedule.driving:
+                schedule.check_waiting(self.step)
+                if schedule.finished:
                     break
-            u = np.zeros((len(self.names), 2))
-            for i, r in enumerate(self.robots):
-                if not r.waypoints:
-                    continue
-                command = self.navigator.command(i, r, self.estimate(i), self.truth, self.step, self.world)
-                if r.recovery is not None and r.recovery.given_up:  # nav2 failed the navigation
-                    self._give_up(i, r)
-                    continue
-                u[i] = self.speed[i] * command
-                if self.speed[i] == 0.0:
-                    r.since += 1  # a stopped robot's move does not use up its budget
-                    if r.recovery is not None:
-                        r.recovery.hold(self.step)  # nor its progress check
+            u = self._commands()
             self._move(u)
             self._observe()
             self._collide()
@@ -185,28 +164,46 @@ class Session:
             self.step += 1
         return self.trace
 
+    def _commands(self) -> np.ndarray:
+        """The driving robots' commands (n, 2) this step, at their speed now; zero for the others."""
+        u = np.zeros((len(self.names), 2))
+        for i, r in enumerate(self.schedule.robots):
+            if not r.waypoints:
+                continue
+            command = self.navigator.command(i, r, self.estimate(i), self.truth, self.step, self.world)
+            if r.recovery is not None and r.recovery.given_up:  # nav2 failed the navigation
+                self.schedule.give_up(i, self.step)
+                continue
+            u[i] = self.speed[i] * command
+            if self.speed[i] == 0.0:
+                self.schedule.hold(i, self.step)
+        return u
+
+    @property
+    def robots(self) -> list[RobotQueue]:
+        """Where each robot is in its queue (:class:`~tmpnav.execution.schedule.TeamSchedule`)."""
+        return self.schedule.robots
+
+    @property
+    def down(self) -> set[int]:
+        """The robots that are down: they stand where they are for the rest of the session."""
+        return self.schedule.down
+
     @property
     def finished(self) -> bool:
         """Every robot has made all its moves (or was cut)."""
-        return all(r.move is None and r.next is None for r in self.robots)
+        return self.schedule.finished
 
     def adopt(self, moves: Mapping[str, tuple[QueuedMove, ...]]) -> None:
         """Go on with new queues (a revised plan, its clock starting now): a move under way is
         dropped where the robot is (the new plan starts there), a robot at a station ends its
         service first, a robot down gets none."""
-        for i, (name, r) in enumerate(zip(self.names, self.robots, strict=True)):
-            queue = () if i in self.down else moves.get(name, ())
-            shifted = tuple(replace(m, start=m.start + self.step) for m in queue)
-            self.robots[i] = RobotQueue(shifted, ready=max(r.ready, self.step))
+        self.schedule.adopt(moves, self.step)
 
     def set_down(self, robot: str) -> None:
-        """The robot is down from now: its move under way and its queue are dropped."""
+        """The robot is down from now: its move under way and its queue are dropped, and it stands."""
         i = self.names.index(robot)
-        self.down.add(i)
-        r = self.robots[i]
-        if r.move is not None:
-            self._cut(robot, len(r.waypoints))
-        self.robots[i] = RobotQueue((), started=0, ready=self.step)
+        self.schedule.set_down(i, self.step)
         self.speed[i] = 0.0
 
     def set_world(self, world: World, vis: LandmarkVisibility) -> None:
@@ -222,48 +219,15 @@ class Session:
 
     def _add_costs(self, u: np.ndarray) -> None:
         """The executed cost terms of this step (SessionTrace.c_u, c_sigma)."""
-        for i, (name, r) in enumerate(zip(self.names, self.robots, strict=True)):
+        for i, (name, r) in enumerate(zip(self.names, self.schedule.robots, strict=True)):
             if r.waypoints:
                 cov = self.estimate_cov(i)
                 self.trace.c_u[name] += float(u[i, 0] * u[i, 0] + u[i, 1] * u[i, 1]) * self.dt
                 self.trace.c_sigma[name] += float(cov[0, 0] + cov[1, 1] + cov[2, 2]) * self.dt
 
-    def _arrive(self) -> None:
-        """The waypoints reached now, and the moves ended by them."""
-        for i, r in enumerate(self.robots):
-            if r.move is not None:
-                self._advance(i, r)
+    # ------------------------------------------------------------------ what the schedule asks (schedule.Team)
 
-    def _arrive_and_start(self) -> None:
-        """Waypoints reached, moves ended, then moves started (a move that starts where it ends
-        ends at once, and the robot's next move may start too)."""
-        while True:
-            for i, r in enumerate(self.robots):
-                if r.move is not None:
-                    self._advance(i, r)
-            if not self._start_moves():
-                return
-
-    def _advance(self, i: int, r: RobotQueue) -> None:
-        """Drop the waypoints robot i has reached, recording the error at each; end its move when
-        none is left, or cut it when it has run out of its budget."""
-        name = self.names[i]
-        assert r.previous is not None and r.move is not None
-        while r.waypoints and self._reached(i, r):
-            k = len(r.move.waypoints) - len(r.waypoints)  # the path point reached, after its start
-            r.previous = r.waypoints.pop(0)
-            r.aligned = False  # a new segment: turn towards its end first
-            error = self.truth[i, :2] - self.estimate(i)[:2]
-            self.trace.errors[name].append(float(np.hypot(*error)))
-            self.trace.times[name].append(self.step * self.dt)
-            planned = r.move.planned_covs[k] if k < len(r.move.planned_covs) else None
-            self.trace.planned_nees[name].append(nees(error, planned))
-        if r.waypoints and self.step - r.since >= STEP_BUDGET * max(r.move.steps, 40 * (len(r.move.nodes) - 1)):
-            self._cut_move(i, r)
-        if not r.waypoints and r.move is not None:
-            self._end(r)
-
-    def _reached(self, i: int, r: RobotQueue) -> bool:
+    def at_waypoint(self, i: int, r: RobotQueue) -> bool:
         """Whether robot i has reached its next waypoint. With RPP, which cuts corners, a bend is
         reached once the robot is abreast of it, and the move's end within nav2's goal tolerance."""
         assert r.previous is not None
@@ -275,114 +239,18 @@ class Session:
         k = len(r.rpp.vertices) - len(r.waypoints)  # the path vertex of the next waypoint
         return r.rpp.passed(k) or reached(est, r.previous, r.waypoints[0])
 
-    def _cut_move(self, i: int, r: RobotQueue, given_up: bool = False) -> None:
-        """Robot i's move under way ends where it is, short of its room (``given_up``: by nav2,
-        else for want of steps)."""
-        self._cut(self.names[i], len(r.waypoints), given_up)
-        r.waypoints = []
-        self._end(r, cut=True)
+    def position_error(self, i: int) -> np.ndarray:
+        """Robot i's true position minus its estimated one (2,) m."""
+        return self.truth[i, :2] - self.estimate(i)[:2]
 
-    def _give_up(self, i: int, r: RobotQueue) -> None:
-        """nav2 failed robot i's navigation after its last recovery: the move is given up where it stands."""
-        self._cut_move(i, r, given_up=True)
-        self.trace.given_up.append(self.trace.moves[-1])
-
-    def _end(self, r: RobotQueue, cut: bool = False) -> None:
-        """Robot r ends its move now: record it as executed (``cut``: short of its room); the robot
-        is ready for its next."""
-        m = r.move
-        assert m is not None
-        dt = self.dt
-        goals = self.scenario.goals
-        # it waits at the station for the job's window to open, then stands there for the service
-        opens = goals.opens_steps(m.target, self.step, dt)
-        stand = goals.service_steps(m.target, dt)
-        executed = TimedMove(
-            m.step,
-            m.robot,
-            m.origin,
-            m.target,
-            m.partner,
-            r.ready * dt,
-            r.since * dt,
-            self.step * dt,
-            stand * dt,
-            opens * dt,
-        )
-        self.trace.moves.append(executed)
-        if cut:
-            self.trace.cut.append(executed)
-        r.move, r.ready = None, self.step + opens + stand
-        if r.recovery is not None:
-            for name, count in r.recovery.run.items():
-                self.trace.recoveries[name] += count
-            r.recovery = None
-        if len(m.points):
-            i = self.names.index(m.robot)
-            self.trace.c_goal[m.robot] += float(np.hypot(*(self.estimate(i)[:2] - m.points[-1])))
-
-    def _start_moves(self) -> bool:
-        """Start every move whose robots are free and whose planned start has come; whether any did."""
-        started = False
-        for r in self.robots:
-            m = r.next
-            if m is None or m.start > self.step or r.ready > self.step:
-                continue  # not yet planned to start, or still at a station
-            if m.partner is not None:
-                other = self.robots[self.names.index(m.partner)]
-                n = other.next
-                if n is None or n.step != m.step or n.start > self.step or other.ready > self.step:
-                    continue  # the partner is not there yet: wait for it
-                self._start(other, n)
-            self._start(r, m)
-            started = True
-        return started
-
-    def _start(self, r: RobotQueue, m: QueuedMove) -> None:
-        r.move, r.started, r.since, r.aligned, r.track = m, r.started + 1, self.step, False, 0
-        r.waypoints, r.previous = m.waypoints, np.asarray(m.points[0], dtype=float)
-        r.recovery = self.navigator.recovery(self.truth[self.names.index(m.robot)], self.step)
+    def navigation(self, i: int, m: QueuedMove) -> tuple[Recovery | None, RppFollower | None]:
+        """How robot i drives the move ``m`` it starts now: nav2's recoveries (with ``steers_local``)
+        and RPP (when the move's controller is RPP's)."""
+        recovery = self.navigator.recovery(self.truth[i], self.step)
         if self.localisation.steers_rpp(m.controller) and len(m.points) > 1:
-            spec = self.scenario.robots[self.names.index(m.robot)]
-            r.rpp = RppFollower(m.points, self.localisation.rpp, spec.speed, spec.turn_rate, self.dt)
-        else:
-            r.rpp = None
-
-    def _cut(self, name: str, points: int, given_up: bool = False) -> None:
-        """Points of a path never reached: no error, no time. The session is truncated (out of its
-        step budget or draws) unless nav2 gave the move up."""
-        self.trace.truncated = self.trace.truncated or not given_up
-        self.trace.errors[name].extend([math.nan] * points)
-        self.trace.times[name].extend([math.nan] * points)
-        self.trace.planned_nees[name].extend([math.nan] * points)
-
-    def _cut_all(self) -> None:
-        """The draws have run out: every move under way or not started is cut."""
-        for i, r in enumerate(self.robots):
-            name = self.names[i]
-            if r.move is not None:
-                self._cut_move(i, r)
-            for m in r.queue[r.started :]:
-                self._cut(name, len(m.waypoints))
-            r.started = len(r.queue)
-
-    def _check_waiting(self) -> None:
-        """Nobody drives: some robot must be waiting for a planned start still to come, or still at
-        a station (waiting for a window, in service), else the schedule cannot go on (a paired
-        move whose partner waits for another one)."""
-        if any(r.next is not None and max(r.next.start, r.ready) > self.step for r in self.robots):
-            return
-        if self.down:  # robots waiting for a partner that is down wait for ever: their moves are cut
-            for i, r in enumerate(self.robots):
-                if r.next is not None:
-                    for left in r.queue[r.started :]:
-                        self._cut(self.names[i], len(left.waypoints))
-                    r.started = len(r.queue)
-            return
-        stuck = ", ".join(
-            f"{m.robot} at step {m.step + 1} waits for {m.partner}" for r in self.robots if (m := r.next) is not None
-        )
-        raise TmpnavError(f"the plan's schedule cannot be executed: {stuck}")
+            spec = self.scenario.robots[i]
+            return recovery, RppFollower(m.points, self.localisation.rpp, spec.speed, spec.turn_rate, self.dt)
+        return recovery, None
 
     # ------------------------------------------------------------------ the team's motion and sensing
 
@@ -418,7 +286,7 @@ class Session:
     def _record_consistency(self, i: int, error: np.ndarray, own: np.ndarray) -> None:
         """Robot i's actual position error (2,), its localiser's covariance (2, 2) and the plan's at this
         step of its move, when it drives."""
-        r = self.robots[i]
+        r = self.schedule.robots[i]
         if r.move is None or not r.waypoints:
             return
         r.track = r.move.planned_from(r.track, self.truth[i, :2])
@@ -429,7 +297,7 @@ class Session:
         (closer than their radii added): what the collision bound (docs/models.md) bounds. Each
         robot's error against its localiser's covariance is recorded too (consistency, NEES)."""
         for i, name in enumerate(self.names):
-            error = self.truth[i, :2] - self.estimate(i)[:2]
+            error = self.position_error(i)
             own = self.estimate_cov(i)[:2, :2]
             self._record_consistency(i, error, own)
             value = nees(error, own)
@@ -440,16 +308,9 @@ class Session:
             if walls[i] or touch[i]:
                 self.trace.wall_hits[name] += int(walls[i])
                 self.trace.contacts[name] += int(touch[i])
-                key = (name, self._move_step(self.robots[i]))
+                key = (name, self.schedule.move_step(i))
                 self.trace.move_hits[key] = self.trace.move_hits.get(key, 0) + int(walls[i])
                 self.trace.move_contacts[key] = self.trace.move_contacts.get(key, 0) + int(touch[i])
-
-    @staticmethod
-    def _move_step(r: RobotQueue) -> int:
-        """The plan step of robot r's move under way, or of its last one when it stands (-1 before its first)."""
-        if r.move is not None:
-            return r.move.step
-        return r.queue[r.started - 1].step if r.started else -1
 
 
 #: redraws of a true start that a robot's disc would find in collision with the map
