@@ -147,3 +147,45 @@ def test_a_shortcut_keeps_the_middle_of_a_door() -> None:
     points = np.array([[-3.0, -3.0], [-1.5, -1.5], [0.0, 0.0], [1.5, 1.5], [3.0, 3.0]])
     keep = shortcut(points, 1.0, clear, origin, RES).tolist()
     assert 2 in keep and keep[0] == 0 and keep[-1] == 4
+
+
+def test_at_a_goal_pose_it_stops_within_the_tolerance_and_turns_to_the_heading() -> None:
+    """nav2 given a goal pose: RPP drives until within the goal checker's 0.25 m, then turns on
+    the spot to the pose's heading until within 0.25 rad of it; it does not close in on the pose."""
+    clear, origin = open_floor()
+    points, params = np.array([[0.0, 0.0], [5.0, 0.0]]), RppParams()
+    plain = pursuit_controls(points, 0.0, 0.5, 1.0, DT, params, clear, origin, RES)
+    posed = pursuit_controls(points, 0.0, 0.5, 1.0, DT, params, clear, origin, RES, goal_heading=math.pi / 2)
+    assert plain is not None and posed is not None
+    # the same drive, then the turn: about pi / 2 at 1 rad/s, no step driven
+    n = plain.n_steps
+    assert np.array_equal(posed.controls[:n], plain.controls)
+    turn = posed.controls[n:]
+    assert len(turn) and np.all(turn[:, 0] == 0.0) and np.all(turn[:, 1] > 0.0)
+    assert 1.0 <= len(turn) * DT <= 2.5
+    end = posed.poses[-1]
+    assert math.hypot(end[0] - 5.0, end[1]) > 0.05  # left where the goal checker stopped it
+    assert math.hypot(end[0] - 5.0, end[1]) <= params.xy_goal_tolerance
+    assert abs(end[2] - math.pi / 2) <= params.yaw_goal_tolerance
+    # a heading it already points within the tolerance of adds nothing
+    near = pursuit_controls(points, 0.0, 0.5, 1.0, DT, params, clear, origin, RES, goal_heading=0.2)
+    assert near is not None and near.n_steps == n
+
+
+def test_the_follower_turns_to_a_goal_pose_as_the_planner_rollout_does() -> None:
+    points = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]])
+    clear, origin = open_floor()
+    pc = pursuit_controls(points, 0.0, 0.5, 1.0, DT, RppParams(), clear, origin, RES, goal_heading=-2.5)
+    assert pc is not None
+    f = RppFollower(points, RppParams(), 0.5, 1.0, DT, goal_heading=-2.5)
+    pose = np.array([0.0, 0.0, 0.0])
+    for k in range(pc.n_steps):
+        assert np.allclose(pose, pc.poses[k])
+        assert not f.at_goal(pose)
+        u = f.command(pose, 5.0)
+        assert np.allclose(u, pc.controls[k])
+        pose = np.array(
+            [pose[0] + u[0] * DT * math.cos(pose[2]), pose[1] + u[0] * DT * math.sin(pose[2]), pose[2] + u[1] * DT]
+        )
+        pose[2] = (pose[2] + math.pi) % (2 * math.pi) - math.pi
+    assert f.at_goal(pose)

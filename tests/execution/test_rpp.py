@@ -128,3 +128,14 @@ def test_an_unknown_controller_is_one_error_line(tmp_path: Path) -> None:
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "models.controller" in lines[0] and "rpp" in lines[0], out.stderr
     assert "Traceback" not in out.stderr
+
+
+def test_nav2s_goal_checker_holds_the_position_once_reached_and_waits_for_the_heading() -> None:
+    f = RppFollower(np.array([[0.0, 0.0], [3.0, 0.0]]), RppParams(), 0.5, 1.0, DT, goal_heading=math.pi / 2)
+    assert not f.at_goal(np.array([2.8, 0.0, 0.0]))  # there, but facing away from the pose's heading
+    v, w = f.command(np.array([2.8, 0.0, 0.0]), FREE)
+    assert v == 0.0 and w > 0.0  # it turns on the spot, to the left
+    # stateful, as nav2's SimpleGoalChecker: a drift past the tolerance while turning keeps the position reached
+    assert f.at_goal(np.array([2.7, 0.0, math.pi / 2 - 0.2]))
+    plain = follower([[0.0, 0.0], [3.0, 0.0]])
+    assert plain.at_goal(np.array([2.8, 0.0, 0.0]))  # a goal without a heading: its position only

@@ -24,9 +24,13 @@ step, from the robot's pose:
    ``desired_linear_vel``), |omega| at most its ``turn_rate``, by slowing down on the arc.
 
 A move ends when the robot is within ``xy_goal_tolerance`` of the path's end (nav2's goal
-checker). :func:`command` is the law, compiled; ``tmpnav simulate --follower rpp`` steers with
-it on the robot's estimate (tmpnav.execution.rpp), and :func:`pursuit_controls` rolls it out
-on the nominal poses: the motions the planner prices with ``models.controller: rpp``.
+checker). A move to a goal pose (a job's station) ends as nav2 ends one: once within that
+distance the robot turns on the spot towards the pose's heading, as in 3, until it points within
+``yaw_goal_tolerance`` of it; it does not close in on the pose's position.
+
+:func:`command` is the law, compiled; ``tmpnav simulate --follower rpp`` steers with it on the
+robot's estimate (tmpnav.execution.rpp), and :func:`pursuit_controls` rolls it out on the
+nominal poses: the motions the planner prices with ``models.controller: rpp``.
 
 The path it drives is a roadmap path shortened first (tmpnav.roadmap.shortcut).
 """
@@ -51,8 +55,9 @@ class RppParams:
     """RPP's parameters, with nav2's defaults (docs.nav2.org, "Regulated Pure Pursuit" in the
     configuration guide; ``nav2_regulated_pure_pursuit_controller/src/parameter_handler.cpp``),
     and the two of other nav2 components it works with: the goal checker's ``xy_goal_tolerance``
-    (``SimpleGoalChecker``, 0.25 m) and the costmap's ``inflation_radius`` (0.55 m in nav2's
-    default params). The order of the fields is that of the compiled law's parameter vector."""
+    (``SimpleGoalChecker``, 0.25 m) and ``yaw_goal_tolerance`` (0.25 rad), and the costmap's
+    ``inflation_radius`` (0.55 m in nav2's default params). The order of the fields is that of the
+    compiled law's parameter vector."""
 
     lookahead_dist: float = 0.6
     min_lookahead_dist: float = 0.3
@@ -74,6 +79,7 @@ class RppParams:
     max_robot_pose_search_dist: float = 1.5
     xy_goal_tolerance: float = 0.25
     inflation_radius: float = 0.55
+    yaw_goal_tolerance: float = 0.25
 
     @classmethod
     def names(cls) -> tuple[str, ...]:
@@ -118,7 +124,8 @@ _VECTORS: dict[RppParams, np.ndarray] = {}
     _SEARCH_DIST,
     _GOAL_TOLERANCE,
     _INFLATION,
-) = range(20)
+    _YAW_TOLERANCE,
+) = range(21)
 
 
 def densify(points: np.ndarray, spacing: float = RESOLUTION) -> tuple[np.ndarray, np.ndarray]:
@@ -159,11 +166,33 @@ def length_left(path: np.ndarray) -> np.ndarray:
 
 
 @nb.njit(cache=True)
-def command(path, left, index, x, y, th, last_v, last_w, obstacle, speed, turn_rate, dt, p):  # pragma: no cover
+def rotate(angle, last_w, turn_rate, dt, p):  # pragma: no cover
+    """omega (rad/s) of RPP's turn on the spot towards a heading ``angle`` rad away (positive: to
+    the left), from ``last_w``: ``rotate_to_heading_angular_vel`` (at most ``turn_rate``) within
+    ``max_angular_accel``, slowed so as to stop at the heading (nav2's ``rotateToHeading``)."""
+    sign = 1.0 if angle > 0 else -1.0
+    w = sign * min(p[_ROTATE_VEL], turn_rate)
+    w = min(max(w, last_w - p[_MAX_ANGULAR_ACCEL] * dt), last_w + p[_MAX_ANGULAR_ACCEL] * dt)
+    stop = math.sqrt(2.0 * p[_MAX_ANGULAR_ACCEL] * abs(angle))  # slow down so as not to overshoot
+    if abs(w) > stop:
+        w = sign * stop
+    return w
+
+
+@nb.njit(cache=True)
+def heading_reached(th, goal_heading, p):  # pragma: no cover
+    """nav2's goal checker on the heading: ``th`` within ``yaw_goal_tolerance`` of ``goal_heading``
+    (rad; NaN: a goal without a heading, always reached)."""
+    return math.isnan(goal_heading) or abs(wrap_angle_scalar(goal_heading - th)) <= p[_YAW_TOLERANCE]
+
+
+@nb.njit(cache=True)
+def command(path, left, index, x, y, th, last_v, last_w, obstacle, speed, turn_rate, dt, p, goal):  # pragma: no cover
     """The command (v, omega) RPP gives at the pose (x, y, th) on the densified ``path`` (n, 2)
     with ``left`` (n,) its length to the end, the robot having come as far as its point ``index``
     (returned moved on, the third value); ``last_v``, ``last_w`` the last command, ``obstacle`` the
-    distance (m) from the robot's centre to the nearest obstacle, ``p`` :meth:`RppParams.vector`.
+    distance (m) from the robot's centre to the nearest obstacle, ``p`` :meth:`RppParams.vector`,
+    ``goal`` the heading (rad) of the goal pose at the path's end (NaN: none).
     The module docstring states the law."""
     n = path.shape[0]
     # 1. prune: the nearest point within the search distance ahead of the last one
@@ -204,15 +233,13 @@ def command(path, left, index, x, y, th, last_v, last_w, obstacle, speed, turn_r
         rx, ry = path[n - 1, 0] - x, path[n - 1, 1] - y
         cx, cy = c * rx + s * ry, -s * rx + c * ry
     angle = math.atan2(cy, cx)
+    # at a goal pose, within the goal checker's distance: turn on the spot to its heading
+    goal_x, goal_y = path[n - 1, 0] - x, path[n - 1, 1] - y
+    if p[_USE_ROTATE] > 0.5 and not math.isnan(goal) and math.hypot(goal_x, goal_y) < p[_GOAL_TOLERANCE]:
+        return 0.0, rotate(wrap_angle_scalar(goal - th), last_w, turn_rate, dt, p), index
     # 3. turn on the spot towards a carrot far to the side
     if p[_USE_ROTATE] > 0.5 and abs(angle) > p[_ROTATE_MIN_ANGLE]:
-        sign = 1.0 if angle > 0 else -1.0
-        w = sign * min(p[_ROTATE_VEL], turn_rate)
-        w = min(max(w, last_w - p[_MAX_ANGULAR_ACCEL] * dt), last_w + p[_MAX_ANGULAR_ACCEL] * dt)
-        stop = math.sqrt(2.0 * p[_MAX_ANGULAR_ACCEL] * abs(angle))  # slow down so as not to overshoot
-        if abs(w) > stop:
-            w = sign * stop
-        return 0.0, w, index
+        return 0.0, rotate(angle, last_w, turn_rate, dt, p), index
     # 4. the arc through the carrot, at the regulated speed
     d2 = cx * cx + cy * cy
     kappa = 2.0 * cy / d2 if d2 > 0.001 else 0.0
@@ -244,15 +271,18 @@ def pursuit_controls(
     clearance: np.ndarray,
     origin: tuple[float, float],
     resolution: float,
+    goal_heading: float | None = None,
 ) -> PathControls | None:
     """The controls and nominal poses of a robot driving the polyline ``points`` (P, 2) from its
     first point with heading ``start_theta`` under RPP (the module docstring), the obstacle
     distance read off ``clearance`` (a grid of ``resolution`` m cells from ``origin``: the
     distance from each cell's centre to the nearest occupied one, tmpnav.world.grid.clearance).
     The poses follow the motion model, paper eq. (4), step by step, as turn-then-drive's do. The
-    motion ends within ``xy_goal_tolerance`` of the last point, and ``node_steps[k]`` is the step
-    at which the robot has come abreast of point k (its nearest path point at or beyond it).
-    None when the law has not arrived within a generous number of steps (a path it cannot drive)."""
+    motion ends within ``xy_goal_tolerance`` of the last point, with a ``goal_heading`` (rad: a
+    goal pose's) turned on the spot to within ``yaw_goal_tolerance`` of it there, and
+    ``node_steps[k]`` is the step at which the robot has come abreast of point k (its nearest path
+    point at or beyond it). None when the law has not arrived within a generous number of steps
+    (a path it cannot drive)."""
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     if pts.shape[0] == 0:
         raise ValueError("pursuit_controls needs at least one point")
@@ -264,9 +294,10 @@ def pursuit_controls(
     # every metre at the slowest speed, a full turn at every vertex, and a margin
     budget = int((left[0] + 1.0) / (slowest * dt) + pts.shape[0] * 2.0 * math.pi / (min(turn_rate, 0.5) * dt)) + 100
     x0, y0 = origin
+    goal = math.nan if goal_heading is None else float(goal_heading)
     controls, poses, node_steps, arrived = _pursue(
         path, left, vertices, float(start_theta), float(speed), float(turn_rate), float(dt), params.vector(),
-        clearance, float(x0), float(y0), float(resolution), budget,
+        clearance, float(x0), float(y0), float(resolution), budget, goal,
     )  # fmt: skip
     if not arrived:
         return None
@@ -274,7 +305,9 @@ def pursuit_controls(
 
 
 @nb.njit(cache=True)
-def _pursue(path, left, vertices, theta0, speed, turn_rate, dt, p, clear, x0, y0, res, budget):  # pragma: no cover
+def _pursue(
+    path, left, vertices, theta0, speed, turn_rate, dt, p, clear, x0, y0, res, budget, goal
+):  # pragma: no cover
     """The rollout of :func:`pursuit_controls` (which documents it): controls (T, 2), poses
     (T+1, 3), the step each vertex is passed (P,), and whether the goal was reached."""
     n = path.shape[0]
@@ -286,16 +319,18 @@ def _pursue(path, left, vertices, theta0, speed, turn_rate, dt, p, clear, x0, y0
     node_steps[0] = 0
     poses[0, 0], poses[0, 1], poses[0, 2] = path[0, 0], path[0, 1], wrap_angle_scalar(theta0)
     index, v, w, t = 0, 0.0, 0.0, 0
-    arrived = False
+    arrived = within = False
     while t < budget:
         x, y, th = poses[t, 0], poses[t, 1], poses[t, 2]
-        if math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y) <= p[_GOAL_TOLERANCE]:
+        # nav2's goal checker: the position once within its tolerance stays reached (stateful)
+        within = within or math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y) <= p[_GOAL_TOLERANCE]
+        if within and heading_reached(th, goal, p):
             arrived = True
             break
         i = math.floor((y - y0) / res)
         j = math.floor((x - x0) / res)
         obstacle = clear[i, j] if 0 <= i < rows and 0 <= j < cols else 0.0
-        v, w, index = command(path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, dt, p)
+        v, w, index = command(path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, dt, p, goal)
         for k in range(1, P):
             if node_steps[k] < 0 and index >= vertices[k]:
                 node_steps[k] = t

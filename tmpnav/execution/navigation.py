@@ -7,7 +7,7 @@ Each control step, for every robot that drives:
    (:meth:`~tmpnav.execution.local_view.LocalView.steering_pose`), as nav2's costmaps place what
    the robot sees;
 2. the controller's command from that pose: the waypoint follower (:mod:`.control`) or nav2's
-   Regulated Pure Pursuit (:mod:`.rpp`);
+   Regulated Pure Pursuit (:mod:`.rpp`), which at a job's station turns to its goal pose's heading;
 3. with ``steers_local``, the command checked against what the robot sees
    (:meth:`~tmpnav.execution.local_view.LocalView.safe_command`), and nav2's recoveries when
    the controller cannot go on (:mod:`.recovery`): a recovery behaviour's command replaces the
@@ -23,7 +23,7 @@ import numpy as np
 from tmpnav.errors import TmpnavError
 from tmpnav.execution.control import ALIGN, ALIGN_START, control
 from tmpnav.execution.localisers import Localisation
-from tmpnav.execution.moves import RobotQueue
+from tmpnav.execution.moves import QueuedMove, RobotQueue
 from tmpnav.execution.recovery import Recovery
 from tmpnav.types import Scenario
 from tmpnav.world import World
@@ -34,6 +34,8 @@ if TYPE_CHECKING:
 
 #: m: other robots nearer than this are in a robot's costmap (nav2's obstacle_max_range)
 OBSTACLE_RANGE = 2.5
+#: m: a path that ends this near a station's pose ends on it (its roadmap node is the pose's position)
+STATION_MATCH = 1e-6
 
 
 class Navigator:
@@ -43,6 +45,8 @@ class Navigator:
         self.scenario, self.localisation, self.dt = scenario, localisation, dt
         self.view: LocalView | None = None
         self.radii = np.array([r.radius for r in scenario.robots])
+        #: the goal poses (x, y, heading) of the jobs' stations, by room (goals.jobs)
+        self.stations = {j.room: j.pose for j in scenario.goals.jobs if j.pose is not None}
         self._steered: dict[int, np.ndarray] = {}  # the steering poses of step _steered_at, by robot
         self._steered_at = -1
 
@@ -102,6 +106,8 @@ class Navigator:
         pose = self.steering(i, est, truth, step)
         assert r.waypoints
         if r.rpp is not None:  # the local costmap holds the walls where they truly are
+            if r.rpp.goal_heading is None and r.move is not None:
+                r.rpp.goal_heading = self.goal_heading(r.move)
             cell = world.grid.cells(truth[:2][None])
             command = r.rpp.command(pose, float(world.clearance[cell[0], cell[1]][0]))
         else:
@@ -115,6 +121,15 @@ class Navigator:
         if rec is not None:
             rec.followed(safe is None, truth[:2], step)
         return np.array([0.0, command[1]]) if safe is None else safe
+
+    def goal_heading(self, move: QueuedMove) -> float | None:
+        """The heading (rad) of the goal pose ``move`` ends at: its target's station when its path
+        ends on it (as the plan's motions turn there, tmpnav.oracle.motions), else None. nav2 is
+        given a goal pose and turns to its heading once within the goal checker's distance."""
+        pose = self.stations.get(move.target)
+        if pose is None or not len(move.points) or np.hypot(*(move.points[-1] - np.asarray(pose[:2]))) > STATION_MATCH:
+            return None
+        return float(pose[2])
 
     def _others(self, i: int, team: np.ndarray) -> np.ndarray:
         """(k, 3): the centre and radius of every other robot within :data:`OBSTACLE_RANGE` of robot i."""

@@ -28,12 +28,14 @@ step, on the robot's estimate:
 The law is compiled once, in :mod:`tmpnav.belief.pursuit`: the planner's motions under
 ``models.controller: rpp`` are its rollout on the nominal poses, and this follower steers with it
 on the robot's estimate. A move ends when the robot is within ``xy_goal_tolerance`` of its end
-(nav2's goal checker). A
-tmpnav goal is a position, not a pose: there is no final turn to a goal heading; the next move's
-first turn, step 3, is that turn. Two limits are the robot's own, not RPP's: the speed never
-exceeds the robot's ``speed`` and omega never exceeds its ``turn_rate`` (nav2's velocity
-smoother would clip them the same way). ``desired_linear_vel`` (0.5 m/s in nav2) is the robot's
-``speed``: the one the plan drives at.
+(nav2's goal checker). A move to a goal pose (a job's station, ``goals.jobs``) ends as nav2 ends
+one: within that distance the robot turns on the spot to the pose's heading (as in step 3) until
+it points within ``yaw_goal_tolerance`` of it, without closing in on the pose's position. Other
+goals are positions: there is no final turn, and the next move's first turn, step 3, is that
+turn. Two limits are the robot's own, not RPP's: the speed never exceeds the robot's ``speed``
+and omega never exceeds its ``turn_rate`` (nav2's velocity smoother would clip them the same
+way). ``desired_linear_vel`` (0.5 m/s in nav2) is the robot's ``speed``: the one the plan drives
+at.
 
 Not modelled: the collision check that stops the robot (``use_collision_detection``), nav2's
 recovery behaviours, and reversing.
@@ -41,9 +43,11 @@ recovery behaviours, and reversing.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from tmpnav.belief.pursuit import RESOLUTION, RppParams, command, densify, length_left
+from tmpnav.belief.pursuit import RESOLUTION, RppParams, command, densify, heading_reached, length_left
 
 __all__ = ["RESOLUTION", "RppFollower", "RppParams", "densify"]
 
@@ -51,7 +55,15 @@ __all__ = ["RESOLUTION", "RppFollower", "RppParams", "densify"]
 class RppFollower:
     """One robot's RPP along one move's path (:mod:`module docstring <tmpnav.execution.rpp>`)."""
 
-    def __init__(self, points: np.ndarray, params: RppParams, speed: float, turn_rate: float, dt: float):
+    def __init__(
+        self,
+        points: np.ndarray,
+        params: RppParams,
+        speed: float,
+        turn_rate: float,
+        dt: float,
+        goal_heading: float | None = None,
+    ):
         self.path, self.vertices = densify(points)
         #: m: the path's length from each point to its end
         self.left = length_left(self.path)
@@ -61,6 +73,9 @@ class RppFollower:
         self.turn_rate = turn_rate
         self.index = 0  # the path point nearest the robot, as far as it has come
         self.v, self.w = 0.0, 0.0  # the last command
+        #: rad: the heading of the goal pose the move ends at (a job's station); None: a position
+        self.goal_heading = goal_heading
+        self.within = False  # nav2's stateful goal checker: the goal's position, once reached, stays reached
 
     def passed(self, k: int) -> bool:
         """Whether the robot has come abreast of the path's vertex ``k`` (its nearest point is at
@@ -68,8 +83,15 @@ class RppFollower:
         return self.index >= self.vertices[k]
 
     def at_goal(self, est: np.ndarray) -> bool:
-        """nav2's goal checker: within ``xy_goal_tolerance`` of the path's end."""
-        return bool(np.hypot(*(self.path[-1] - est[:2])) <= self.p.xy_goal_tolerance)
+        """nav2's goal checker (``SimpleGoalChecker``, stateful): within ``xy_goal_tolerance`` of
+        the path's end, or once was, and with a goal heading, within ``yaw_goal_tolerance`` of it."""
+        self.within = self.within or bool(np.hypot(*(self.path[-1] - est[:2])) <= self.p.xy_goal_tolerance)
+        return self.within and bool(heading_reached(float(est[2]), self._goal, self._vector))
+
+    @property
+    def _goal(self) -> float:
+        """The goal heading as the compiled law takes it (NaN: none)."""
+        return math.nan if self.goal_heading is None else float(self.goal_heading)
 
     def command(self, est: np.ndarray, obstacle_distance: float) -> np.ndarray:
         """The command (v, omega) at the estimate ``est`` (3,), the robot's centre
@@ -77,7 +99,7 @@ class RppFollower:
         the planner's motions are driven with (tmpnav.belief.pursuit.command)."""
         v, w, self.index = command(
             self.path, self.left, self.index, float(est[0]), float(est[1]), float(est[2]), self.v, self.w,
-            float(obstacle_distance), self.speed, self.turn_rate, self.dt, self._vector,
+            float(obstacle_distance), self.speed, self.turn_rate, self.dt, self._vector, self._goal,
         )  # fmt: skip
         self.v, self.w = float(v), float(w)
         return np.array([self.v, self.w])
