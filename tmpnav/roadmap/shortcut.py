@@ -80,24 +80,48 @@ def _least(ax, ay, bx, by, clear, x0, y0, res):  # pragma: no cover
 
 
 @nb.njit(cache=True)
+def _keeps(ax, ay, bx, by, clear, x0, y0, res, floor):  # pragma: no cover
+    """Whether every cell of the segment a -> b (sampled as :func:`_least` samples it) has a
+    clearance of at least ``floor``: :func:`_least` >= floor, stopping at the first cell below."""
+    rows, cols = clear.shape
+    n = max(2, math.ceil(math.hypot(bx - ax, by - ay) / res) + 1)
+    for k in range(n):
+        s = k / (n - 1)
+        i = math.floor((ay + s * (by - ay) - y0) / res)
+        j = math.floor((ax + s * (bx - ax) - x0) / res)
+        c = clear[i, j] if 0 <= i < rows and 0 <= j < cols else -np.inf
+        if c < floor:
+            return False
+    return True
+
+
+@nb.njit(cache=True)
 def _shortcut(pts, required, clear, x0, y0, res):  # pragma: no cover
-    """:func:`shortcut`'s greedy pass."""
+    """:func:`shortcut`'s greedy pass: from each kept point i, the farthest j it may go straight
+    to, tried from the farthest down (the first that keeps its clearance is the farthest), among
+    the points before the first narrow one after i."""
     P = pts.shape[0]
     edge = np.empty(P - 1)
     for k in range(P - 1):
         edge[k] = _least(pts[k, 0], pts[k, 1], pts[k + 1, 0], pts[k + 1, 1], clear, x0, y0, res)
+    narrow = np.empty(P, dtype=np.bool_)
+    for k in range(P):
+        narrow[k] = _least(pts[k, 0], pts[k, 1], pts[k, 0], pts[k, 1], clear, x0, y0, res) < required
+    kept = np.empty(P)  # kept[j]: the polyline's least clearance from i to j
     keep = np.empty(P, dtype=np.int64)
     keep[0] = 0
     m, i = 1, 0
     while i < P - 1:
+        last = i + 1  # the farthest j: a narrow point is gone through, not skipped
+        kept[last] = edge[i]
+        while last < P - 1 and not narrow[last]:
+            last += 1
+            kept[last] = min(kept[last - 1], edge[last - 1])
         nxt = i + 1
-        kept = edge[i]
-        for j in range(i + 2, P):
-            if _least(pts[j - 1, 0], pts[j - 1, 1], pts[j - 1, 0], pts[j - 1, 1], clear, x0, y0, res) < required:
-                break  # a node in a narrow passage (a door's middle) is kept: the path goes through it
-            kept = min(kept, edge[j - 1])  # the polyline's least clearance from i to j
-            if _least(pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1], clear, x0, y0, res) >= min(kept, required):
+        for j in range(last, i + 1, -1):
+            if _keeps(pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1], clear, x0, y0, res, min(kept[j], required)):
                 nxt = j
+                break
         keep[m] = nxt
         m += 1
         i = nxt
