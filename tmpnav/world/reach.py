@@ -63,6 +63,7 @@ class SectorReach:
         self.key_rows = np.zeros(0, dtype=np.int64)  # and their rows of the table
         self.table = np.zeros((1, SECTORS))  # row 0: off the grid, reach 0
         self.rows = 1
+        self._offsets: tuple[np.ndarray, ...] | None = None  # _offsets(), when first needed
 
     def cells(self, points: np.ndarray) -> np.ndarray:
         """The key of each point's sub-cell (..., 2) -> (...,) int64, OFF_GRID off the grid.
@@ -102,7 +103,9 @@ class SectorReach:
     def _compute(self, keys: np.ndarray) -> None:
         s, cols = self.subdivisions, self.grid.shape[1] * self.subdivisions
         out = np.empty((keys.size, SECTORS))
-        _sector_reach(self.hit, self.boundary, self.grid.resolution, s, keys // cols, keys % cols, REACH, out)
+        if self._offsets is None:
+            self._offsets = _offsets(self.grid.resolution, s, REACH, SECTORS)
+        _sector_reach(self.hit, self.boundary, s, keys // cols, keys % cols, REACH, self._offsets, out)
         need = self.rows + keys.size
         if need > self.table.shape[0]:
             grown = np.zeros((max(need, 2 * self.table.shape[0]), SECTORS))
@@ -116,57 +119,89 @@ class SectorReach:
 
 
 @nb.njit(cache=True)
-def _sector_reach(hit, boundary, res, sub, si, sj, reach, out):
-    """Fill out (N, K) with the reach of sub-cells (si, sj) (the module docstring's construction;
-    ``sub`` sub-cells per cell and axis). ``hit`` and ``boundary`` carry one ring of cells around
-    the grid (grid cell (i, j) is their (i + 1, j + 1))."""
-    K = out.shape[1]
+def _offsets(res, sub, reach, K):
+    """The cells around a sub-cell that can bound its reach, for each of the ``sub`` x ``sub``
+    places of a sub-cell in its cell (index a * sub + b for row a, column b): the cell's offset
+    (di, dj) from the sub-cell's cell, its distance d (the module docstring's construction) and
+    the sectors k0..k1 it covers (taken modulo K; k0 = -1 for a neighbour d <= 0, which zeroes
+    every sector). Only the offsets, not the map, enter: computed once per table."""
     w = 2.0 * math.pi / K
     n = math.ceil(reach / res) + 2
     half = 0.5 * res * (1.0 + 1.0 / sub)  # half the side of the squares x - mu lies in
+    side = 2 * n + 1
+    di = np.empty((sub * sub, side * side), dtype=np.int64)
+    dj = np.empty_like(di)
+    dist = np.empty((sub * sub, side * side))
+    k0s = np.empty_like(di)
+    k1s = np.empty_like(di)
+    count = np.zeros(sub * sub, dtype=np.int64)
+    for a in range(sub):
+        oy = (a + 0.5) * res / sub - 0.5 * res  # the sub-cell's centre from its cell's
+        for b in range(sub):
+            ox = (b + 0.5) * res / sub - 0.5 * res
+            q = a * sub + b
+            for i in range(-n, n + 1):
+                dy = i * res - oy
+                for j in range(-n, n + 1):
+                    dx = j * res - ox
+                    ex = max(abs(dx) - half, 0.0)
+                    ey = max(abs(dy) - half, 0.0)
+                    d = math.sqrt(ex * ex + ey * ey)
+                    if d >= reach:
+                        continue
+                    c = count[q]
+                    di[q, c], dj[q, c], dist[q, c] = i, j, d
+                    count[q] = c + 1
+                    if d <= 0.0:  # a neighbour of c: mu may touch it however little it moves
+                        k0s[q, c], k1s[q, c] = -1, -1
+                        continue
+                    phi = math.atan2(dy, dx)
+                    lo, hi = 0.0, 0.0
+                    for sx in (-half, half):
+                        for sy in (-half, half):
+                            t = math.atan2(dy + sy, dx + sx) - phi
+                            if t > math.pi:
+                                t -= 2.0 * math.pi
+                            elif t < -math.pi:
+                                t += 2.0 * math.pi
+                            lo = min(lo, t)
+                            hi = max(hi, t)
+                    k0s[q, c] = math.floor((phi + lo) / w) % K
+                    k1s[q, c] = k0s[q, c] + (math.floor((phi + hi) / w) - math.floor((phi + lo) / w))
+    return di, dj, dist, k0s, k1s, count
+
+
+@nb.njit(cache=True)
+def _sector_reach(hit, boundary, sub, si, sj, reach, offsets, out):
+    """Fill out (N, K) with the reach of sub-cells (si, sj) (the module docstring's construction;
+    ``sub`` sub-cells per cell and axis): the least distance, per sector, of the boundary cells
+    among ``offsets`` (:func:`_offsets`) around each. ``hit`` and ``boundary`` carry one ring of
+    cells around the grid (grid cell (i, j) is their (i + 1, j + 1))."""
+    di, dj, dist, k0s, k1s, count = offsets
+    K = out.shape[1]
     R, C = hit.shape
     for p in range(si.shape[0]):
         i0, j0 = si[p] // sub + 1, sj[p] // sub + 1
-        oy = ((si[p] % sub) + 0.5) * res / sub - 0.5 * res  # the sub-cell's centre from its cell's
-        ox = ((sj[p] % sub) + 0.5) * res / sub - 0.5 * res
+        q = (si[p] % sub) * sub + (sj[p] % sub)
         for k in range(K):
             out[p, k] = reach
         if hit[i0, j0]:
             for k in range(K):
                 out[p, k] = 0.0
             continue
-        for i in range(max(0, i0 - n), min(R, i0 + n + 1)):
-            dy = (i - i0) * res - oy
-            for j in range(max(0, j0 - n), min(C, j0 + n + 1)):
-                if not boundary[i, j]:
-                    continue
-                dx = (j - j0) * res - ox
-                ex = max(abs(dx) - half, 0.0)
-                ey = max(abs(dy) - half, 0.0)
-                d = math.sqrt(ex * ex + ey * ey)
-                if d >= reach:
-                    continue
-                if d <= 0.0:  # a neighbour of c: mu may touch it however little it moves
-                    for k in range(K):
-                        out[p, k] = 0.0
-                    continue
-                phi = math.atan2(dy, dx)
-                lo, hi = 0.0, 0.0
-                for sx in (-half, half):
-                    for sy in (-half, half):
-                        a = math.atan2(dy + sy, dx + sx) - phi
-                        if a > math.pi:
-                            a -= 2.0 * math.pi
-                        elif a < -math.pi:
-                            a += 2.0 * math.pi
-                        lo = min(lo, a)
-                        hi = max(hi, a)
-                k0 = math.floor((phi + lo) / w)
-                k1 = math.floor((phi + hi) / w)
-                for k in range(k0, k1 + 1):
-                    kk = k % K
-                    if d < out[p, kk]:
-                        out[p, kk] = d
+        for c in range(count[q]):
+            i, j = i0 + di[q, c], j0 + dj[q, c]
+            if i < 0 or i >= R or j < 0 or j >= C or not boundary[i, j]:
+                continue
+            d = dist[q, c]
+            if k0s[q, c] < 0:
+                for k in range(K):
+                    out[p, k] = 0.0
+                continue
+            for k in range(k0s[q, c], k1s[q, c] + 1):
+                kk = k % K
+                if d < out[p, kk]:
+                    out[p, kk] = d
 
 
 @nb.njit(cache=True)
