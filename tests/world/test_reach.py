@@ -71,3 +71,44 @@ def test_a_points_key_is_its_sub_cell() -> None:
     inside = (row >= 0) & (row < rows) & (col >= 0) & (col < cols)
     np.testing.assert_array_equal(table.cells(pts), np.where(inside, row * cols + col, OFF_GRID))
     assert table.cells(pts[:4].reshape(2, 2, 2)).shape == (2, 2)
+
+
+def plain_reach(table: SectorReach, key: int) -> np.ndarray:
+    """The module docstring's construction written plainly for one sub-cell: every boundary hit
+    cell within the cap, its square's distance and the sectors between its corners' bearings."""
+    res, s = table.grid.resolution, table.subdivisions
+    cols = table.grid.shape[1] * s
+    si, sj = divmod(key, cols)
+    i0, j0 = si // s + 1, sj // s + 1
+    oy = ((si % s) + 0.5) * res / s - 0.5 * res
+    ox = ((sj % s) + 0.5) * res / s - 0.5 * res
+    half, w = 0.5 * res * (1.0 + 1.0 / s), 2.0 * math.pi / SECTORS
+    out = np.full(SECTORS, REACH)
+    if table.hit[i0, j0]:
+        return np.zeros(SECTORS)
+    for i, j in zip(*np.nonzero(table.boundary), strict=True):
+        dy, dx = (i - i0) * res - oy, (j - j0) * res - ox
+        d = math.hypot(max(abs(dx) - half, 0.0), max(abs(dy) - half, 0.0))
+        if d >= REACH:
+            continue
+        if d <= 0.0:
+            out[:] = 0.0
+            continue
+        phi = math.atan2(dy, dx)
+        turns = [math.atan2(dy + sy, dx + sx) - phi for sx in (-half, half) for sy in (-half, half)]
+        turns = [t - 2 * math.pi if t > math.pi else t + 2 * math.pi if t < -math.pi else t for t in turns]
+        for k in range(math.floor((phi + min(0.0, *turns)) / w), math.floor((phi + max(0.0, *turns)) / w) + 1):
+            out[k % SECTORS] = min(out[k % SECTORS], d)
+    return out
+
+
+@pytest.mark.parametrize("case", ["straight", "corner"])
+def test_the_table_is_the_construction_written_plainly(case: str) -> None:
+    grid, _ = PATHS[case]
+    table = SectorReach(grid, clearance(grid), RADIUS)
+    rng = np.random.default_rng(11)
+    keys = np.unique(table.cells(rng.uniform((0.0, 0.0), grid.extent[2:], (60, 2))))
+    keys = keys[keys != OFF_GRID]
+    computed = table.of_cells(keys)
+    for key, row in zip(keys, computed, strict=True):
+        assert np.allclose(row, plain_reach(table, int(key)), rtol=0.0, atol=1e-12)
