@@ -53,3 +53,29 @@ def test_blocks_keep_start_groups_together(two_rooms: OracleContext) -> None:
         for r in block:
             key = (r.robots, r.starts)
             assert seen.setdefault(key, k) == k
+
+
+def test_workers_hand_their_cells_to_the_parent(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Local workers send back the reach and scan cells they computed (World.take_new); the
+    parent's world then holds them, counted as computed in this run, and evaluating the same
+    requests in the parent computes none again and gives the workers' results."""
+    from dataclasses import replace
+
+    from tests.oracle.support import make_two_rooms
+    from tests.oracle.test_motions import LIDAR
+
+    base = make_two_rooms()
+    ctx = replace(base, scenario=replace(base.scenario, models=replace(base.scenario.models, range_sensor=LIDAR)))
+    requests = [replace(r, max_risk=0.05) for r in actions(ctx)]
+    monkeypatch.setattr(executors, "BLOCK", 4)
+    pool = ProcessExecutor(2)
+    try:
+        results, _ = pool.run(ctx, requests)
+    finally:
+        pool.close()
+    scans, reach = ctx.world.scans(LIDAR), ctx.world.reach(ctx.scenario.robots[0].radius)
+    learned_scans, learned_reach = scans.size, reach.rows
+    assert learned_scans > 1 and learned_reach > 1 and scans.computed == learned_scans - 1
+    again, _ = SerialExecutor().run(ctx, requests)
+    assert again == results
+    assert (scans.size, reach.rows) == (learned_scans, learned_reach)  # nothing computed twice

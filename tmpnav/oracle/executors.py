@@ -34,9 +34,12 @@ from tmpnav.oracle.evaluate import EvalStats, Request, evaluate
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.types import MotionResult, Roadmap, Scenario
 from tmpnav.world import World
+from tmpnav.world.build import Learned
 
 Progress = Callable[[int, int], None]
 Outcome = tuple[list[MotionResult | None], EvalStats]
+#: a worker's outcome and the cells its world computed for it (World.take_new)
+Work = tuple[Outcome, Learned]
 
 #: requests per block: large enough that per-task overhead (Ray: ~1 ms) is negligible
 BLOCK = 64
@@ -168,12 +171,16 @@ def _init_worker(ctx: OracleContext, parent: int) -> None:
     # Ctrl-C is the parent's business (it cancels the pool); workers stay quiet
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     die_with_parent(parent)
+    ctx.world.take_new()  # what the parent computed before the fork, the parent has
     _WORKER_CTX = ctx
 
 
-def _work(block: list[Request]) -> Outcome:
+def _work(block: list[Request]) -> Work:
+    """A block's outcome, and the reach and scan cells computed for it, which the parent takes
+    (World.learn) rather than compute them again for the requests it evaluates itself."""
     assert _WORKER_CTX is not None
-    return evaluate(library(_WORKER_CTX), block)
+    outcome = evaluate(library(_WORKER_CTX), block)
+    return outcome, _WORKER_CTX.world.take_new()
 
 
 class ProcessExecutor:
@@ -210,8 +217,9 @@ class ProcessExecutor:
             with signals_held():  # the first blocks fork the workers
                 futures = [pool.submit(_work, block) for block in todo]
             parts = []
-            for k, part in enumerate(gather(futures)):
+            for k, (part, learned) in enumerate(gather(futures)):
                 parts.append(part)
+                ctx.world.learn(learned)
                 if progress:
                     progress(k + 1, len(todo))
         except BaseException:

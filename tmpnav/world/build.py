@@ -24,6 +24,15 @@ from tmpnav.world.reach import SectorReach
 from tmpnav.world.rosmap import load_ros_map
 
 
+@dataclass(frozen=True)
+class Learned:
+    """Cells a copy of a :class:`World` computed: each reach table's sub-cells and their reach,
+    each scan table's keys and factors (:meth:`World.take_new`)."""
+
+    reach: dict[float, tuple[np.ndarray, np.ndarray]]
+    scans: dict[RangeSensor, tuple[np.ndarray, np.ndarray]]
+
+
 @dataclass(frozen=True, eq=False)
 class World:
     """Everything geometric the later stages need, as plain arrays."""
@@ -81,6 +90,23 @@ class World:
         if sensor not in self._scans:
             self._scans[sensor] = ScanInformation(self.grid, self.signed_distance, sensor)
         return self._scans[sensor]
+
+    def take_new(self) -> Learned:
+        """What the reach and scan tables computed since the last call (their ``take_new``):
+        a worker process's copy of the world hands it to the parent's (:meth:`learn`), so that
+        the parent does not compute again the cells its workers did."""
+        reach = {radius: table.take_new() for radius, table in self._reach.items()}
+        scans = {sensor: table.take_new() for sensor, table in self._scans.items()}
+        return Learned(reach, scans)
+
+    def learn(self, new: Learned) -> None:
+        """Take what another copy of this world computed (:meth:`take_new`)."""
+        for radius, (keys, values) in new.reach.items():
+            if keys.size:
+                self.reach(radius).learn(keys, values)
+        for sensor, (keys, values) in new.scans.items():
+            if keys.size:
+                self.scans(sensor).learn(keys, values)
 
     def line_of_sight(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether segments a[k]-b[k] cross no occupied cell (sphere tracing)."""

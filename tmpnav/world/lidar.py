@@ -275,6 +275,7 @@ class ScanInformation:
         self.table = np.zeros((1, 3, 3))
         self.size = 1
         self._preloaded = 0
+        self._new: list[np.ndarray] = []  # keys computed here since :meth:`take_new`
 
     def keys(self, poses: np.ndarray) -> np.ndarray:
         """The key (..., ) int64 of each pose (..., 3): its cell and its heading's bin; OFF_GRID off the grid.
@@ -317,7 +318,22 @@ class ScanInformation:
         self._add(keys[fresh], np.asarray(factors, dtype=float)[fresh])
         self._preloaded += int(fresh.sum())
 
+    def take_new(self) -> tuple[np.ndarray, np.ndarray]:
+        """The keys computed here since the last call, and their factors (K, 3, 3): what a
+        worker's copy of the table hands back to its parent's (:meth:`learn`)."""
+        keys = np.concatenate(self._new) if self._new else np.zeros(0, dtype=np.int64)
+        self._new = []
+        return keys, self.table[self.rows(keys)] if keys.size else np.zeros((0, 3, 3))
+
+    def learn(self, keys: np.ndarray, factors: np.ndarray) -> None:
+        """Take factors another copy of this table computed in this run (:meth:`take_new`) for
+        the keys not known yet; unlike :meth:`preload`, they count as :attr:`computed`."""
+        keys = np.asarray(keys, dtype=np.int64)
+        fresh = ~np.isin(keys, self._keys)
+        self._add(keys[fresh], np.asarray(factors, dtype=float)[fresh])
+
     def _compute(self, keys: np.ndarray) -> None:
+        self._new.append(keys)
         cols, res = self.grid.shape[1], self.grid.resolution
         cell, b = keys // self.bins, keys % self.bins
         x0, y0 = self.grid.origin

@@ -64,6 +64,7 @@ class SectorReach:
         self.table = np.zeros((1, SECTORS))  # row 0: off the grid, reach 0
         self.rows = 1
         self._offsets: tuple[np.ndarray, ...] | None = None  # _offsets(), when first needed
+        self._new: list[np.ndarray] = []  # keys computed here since :meth:`take_new`
 
     def cells(self, points: np.ndarray) -> np.ndarray:
         """The key of each point's sub-cell (..., 2) -> (...,) int64, OFF_GRID off the grid.
@@ -100,12 +101,35 @@ class SectorReach:
         """R (..., K) m at positions (..., 2)."""
         return self.of_cells(self.cells(points))
 
+    def take_new(self) -> tuple[np.ndarray, np.ndarray]:
+        """The sub-cells computed here since the last call, and their reach (N, K): what a
+        worker's copy of the table hands back to its parent's (:meth:`learn`)."""
+        keys = np.concatenate(self._new) if self._new else np.zeros(0, dtype=np.int64)
+        self._new = []
+        return keys, self.of_cells(keys)
+
+    def learn(self, keys: np.ndarray, reach: np.ndarray) -> None:
+        """Take the reach (N, K) of sub-cells ``keys`` (N,) another copy of this table computed
+        (:meth:`take_new`), for those not known yet."""
+        keys = np.asarray(keys, dtype=np.int64)
+        if self.keys.size:
+            at = np.minimum(np.searchsorted(self.keys, keys), self.keys.size - 1)
+            fresh = self.keys[at] != keys
+            keys, reach = keys[fresh], np.asarray(reach, dtype=float)[fresh]
+        if keys.size:
+            self._store(keys, reach)
+
     def _compute(self, keys: np.ndarray) -> None:
+        self._new.append(keys)
         s, cols = self.subdivisions, self.grid.shape[1] * self.subdivisions
         out = np.empty((keys.size, SECTORS))
         if self._offsets is None:
             self._offsets = _offsets(self.grid.resolution, s, REACH, SECTORS)
         _sector_reach(self.hit, self.boundary, s, keys // cols, keys % cols, REACH, self._offsets, out)
+        self._store(keys, out)
+
+    def _store(self, keys: np.ndarray, out: np.ndarray) -> None:
+        """Rows for sub-cells ``keys`` (none known yet, sorted or not) holding their reach ``out``."""
         need = self.rows + keys.size
         if need > self.table.shape[0]:
             grown = np.zeros((max(need, 2 * self.table.shape[0]), SECTORS))
