@@ -3,7 +3,7 @@ the one executed by ``tmpnav simulate --follower rpp`` (and by the waypoint foll
 the spot as the plan does), median over the sessions; seconds per metre of driving; the makespan.
 
     .venv/bin/python benchmarks/bench_rpp.py [--sessions 20] [--only building-4robots ...]
-        [--controller rpp|turn-then-drive] [--followers waypoint rpp auto]
+        [--controller rpp|turn-then-drive] [--followers waypoint rpp auto] [--workers 1]
 
 Writes ``rpp/NAME.csv`` (one row per move and follower; ``rpp/NAME.CONTROLLER.csv`` with
 ``--controller``, which plans a copy of the scenario with ``models.controller`` set) and prints
@@ -48,6 +48,7 @@ def measure(
     controller: str | None = None,
     folder: Path | None = None,
     followers: tuple[str, ...] = ("waypoint", "rpp"),
+    workers: int | None = None,
 ) -> list[str]:
     source = ROOT / "configs" / f"{name}.yaml"
     report = plan(with_controller(source, controller, folder) if controller and folder else source)
@@ -55,7 +56,7 @@ def measure(
     planned = {(m.robot, m.step): m for m in report.schedule.moves}
     rows, lines = [], []
     for follower in followers:
-        result = execute(report, sessions, 0, None, Localisation(follower=follower))
+        result = execute(report, sessions, 0, workers, Localisation(follower=follower))
         config = min(result.schedules)
         runs = result.schedules[config]
         ratios, per_metre, planned_per_metre = [], [], []
@@ -114,10 +115,11 @@ def main() -> None:
     parser.add_argument("--only", nargs="*", default=None)
     parser.add_argument("--controller", choices=("rpp", "turn-then-drive"), default=None)
     parser.add_argument("--followers", nargs="+", choices=("waypoint", "rpp", "auto"), default=["waypoint", "rpp"])
+    parser.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for name in args.only or SCENARIOS:
-            for line in measure(name, args.sessions, args.controller, Path(tmp), tuple(args.followers)):
+            for line in measure(name, args.sessions, args.controller, Path(tmp), tuple(args.followers), args.workers):
                 print(line, flush=True)
 
 
