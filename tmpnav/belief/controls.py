@@ -84,18 +84,6 @@ def turn_to(
     return np.vstack([controls.reshape(-1, 2), turn]), np.vstack([poses, turned])
 
 
-def drive_to(
-    controls: np.ndarray, poses: np.ndarray, point: np.ndarray, speed: float, turn_rate: float, dt: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Controls (T, 2) and poses (T+1, 3) of a motion followed by a turn-then-drive to ``point``
-    (2,) from its last pose (:func:`path_controls`): a robot that stopped within a controller's
-    goal tolerance closes in on a job's exact pose."""
-    more = path_controls(
-        np.vstack([poses[-1, :2], np.asarray(point, dtype=float)[:2]]), float(poses[-1, 2]), speed, turn_rate, dt
-    )
-    return np.vstack([controls.reshape(-1, 2), more.controls]), np.vstack([poses, more.poses[1:]])
-
-
 def pad(controls: np.ndarray, poses: np.ndarray, T_total: int) -> tuple[np.ndarray, np.ndarray]:
     """Extend a robot that arrived early to ``T_total`` steps.
 

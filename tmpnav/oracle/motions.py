@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tmpnav.belief.controls import PathControls, drive_to, path_controls, turn_to
+from tmpnav.belief.controls import PathControls, path_controls, turn_to
 from tmpnav.belief.pursuit import RppParams, pursuit_controls
 from tmpnav.belief.sequences import NoiseStreams
 from tmpnav.roadmap import RoadmapGraph
@@ -316,7 +316,9 @@ class MotionLibrary:
         )
         return tuple(path[int(k)] for k in keep)
 
-    def controls(self, robot: str, points: np.ndarray, heading: float, pursue: bool) -> PathControls:
+    def controls(
+        self, robot: str, points: np.ndarray, heading: float, pursue: bool, goal_heading: float | None = None
+    ) -> PathControls:
         """The controls and nominal poses of ``robot`` driving the polyline ``points`` from heading
         ``heading``: by nav2's Regulated Pure Pursuit when ``pursue`` (tmpnav.belief.pursuit), or
         by the paper's turn on the spot then drive straight (tmpnav.belief.controls), which is
@@ -326,7 +328,7 @@ class MotionLibrary:
         if pursue:
             clear = self.world.clearance
             pc = pursuit_controls(
-                points, heading, spec.speed, spec.turn_rate, dt, RPP, clear, self.origin, self.resolution
+                points, heading, spec.speed, spec.turn_rate, dt, RPP, clear, self.origin, self.resolution, goal_heading
             )
             if pc is not None:
                 return pc
@@ -336,14 +338,11 @@ class MotionLibrary:
         start = path[0]
         spec = self.scenario.robot(robot)
         models = self.scenario.models
-        pc = self.controls(robot, self.graph.points(path), heading, pursue)
+        final = self.goal_headings.get(path[-1]) if len(path) > 1 else None
+        pc = self.controls(robot, self.graph.points(path), heading, pursue, final)
         controls, poses = pc.controls, pc.poses
         pursued = pursue and pc.pursued
-        final = self.goal_headings.get(path[-1])
-        if final is not None and len(path) > 1:  # a job's goal pose: on it, then turned to its heading
-            goal = self.roadmap.nodes[path[-1], :2]
-            if pursue:  # RPP stopped within its goal tolerance
-                controls, poses = drive_to(controls, poses, goal, spec.speed, spec.turn_rate, models.dt)
+        if final is not None and not pursued:  # a job's goal pose: on it, then turned to its heading
             controls, poses = turn_to(controls, poses, final, spec.turn_rate, models.dt)
         lm_visible = self.visibility.visible(poses, models.landmark_sensor.fov, min_range=spec.radius)
         return NominalMotion(
