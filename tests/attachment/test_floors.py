@@ -116,3 +116,17 @@ def test_the_floor_is_reached_when_the_robot_knows_all_but_its_last_step() -> No
     run = propagate_rollout(belief, rollout, np.zeros((0, 2)), m)
     theta = float(run.covs[1][2, 2])
     assert theta == pytest.approx(float(heading_floor(m, np.array([v]), np.array([omega]), 0.0)[0]), rel=1e-12)
+
+
+def test_a_stop_ends_the_floors_and_the_bound_gives_way() -> None:
+    """Under a time limit the bound has a share of it (tmpnav.planning.bound): the floors stop
+    between their rows when it has passed, and the bound is then 0, said so, and cut short."""
+    from tmpnav.attachment.floors import FloorsStopped
+    from tmpnav.planning.bound import NO_FLOORS, _share
+
+    scenario, _, carried = carried_problem("corridor-2robots.yaml", ("L2", "L5", "L9"), 2, None)
+    with pytest.raises(FloorsStopped):
+        motion_floors(scenario, carried.lib.graph, carried.start_location, scenario.goals, True, lambda: True)
+    assert _share(float("inf")) is None  # without a limit the bound does all its work
+    assert _share(0.0)() and not _share(3600.0)()
+    assert NO_FLOORS.startswith("none")

@@ -152,3 +152,19 @@ def test_two_robots_entering_one_room_at_once_are_refused() -> None:
     table = CostTable(table.robots, table.rooms, table.locations, table.start_location, table.single, {(m1, m2): 1.0})
     with pytest.raises(ValueError, match="enters one room twice"):
         lower_bound(table, Goals(visit=table.rooms, per_robot=()))
+
+
+def test_a_stop_ends_the_rounds_of_cuts_with_a_bound_that_holds() -> None:
+    """The time share of --time-limit (tmpnav.planning.bound) stops the cuts after any LP: the
+    bound of the LPs solved so far, never above the full one, and said to be cut short."""
+    rnd = random.Random(3)
+    cases = [small_instance(rnd, 2, 4, 0.5) for _ in range(6)]
+    line_table = line(6)
+    cases.append((line_table, Goals(visit=line_table.rooms, per_robot=())))
+    for table, goals in cases:
+        full = lower_bound(table, goals)
+        asked: list[int] = []
+        stopped = lower_bound(table, goals, stop=lambda asked=asked: asked.append(1) is None)
+        assert stopped.stopped and not full.stopped and len(asked) == 1
+        assert stopped.cuts == 0 and stopped.value <= full.value + 1e-9
+        assert stopped.value <= exact_optimum(table, goals) + 1e-6

@@ -78,6 +78,7 @@ building's plan was 49.7% with it and is 32.0% with this one (docs/planning.md).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from functools import partial
 
 import numba as nb
@@ -89,12 +90,17 @@ from tmpnav.roadmap.graph import RoadmapGraph
 from tmpnav.types import CostTable, Goals, Models, MoveKey, Roadmap, RobotSpec, Scenario
 
 
+class FloorsStopped(Exception):
+    """:func:`motion_floors` stopped before every floor was computed (its ``stop``)."""
+
+
 def motion_floors(
     scenario: Scenario,
     paths: RoadmapGraph,
     start_location: dict[str, str],
     goals: Goals,
     arrived: bool = False,
+    stop: Callable[[], bool] | None = None,
 ) -> CostTable:
     """A cost table of the goal rooms whose every single move costs its motion floor (no pairs),
     and takes its time floor (``duration``): the least that driving the path tmpnav drives from a
@@ -103,7 +109,8 @@ def motion_floors(
     an edge into its node, as a robot that drove there has (carried beliefs); else with any
     heading (the canonical states of table costs). A robot whose end is its start also has the
     time floor (no cost) of each move back into its start: the makespan's bound counts the way
-    back to its dock."""
+    back to its dock. ``stop`` is asked between the origins' rows: when it says so,
+    :class:`FloorsStopped` is raised."""
     dt, w = scenario.models.dt, scenario.cost
     n, lms, models = len(scenario.robots), len(scenario.landmarks), scenario.models
     roadmap = paths.roadmap
@@ -130,6 +137,8 @@ def motion_floors(
                 origins[x] = tuple((g, arrivals[g]) for g in inst[x])
         home = goals.end_of(spec.name) == start  # it must come back to where it starts
         for o, nodes in origins.items():
+            if stop is not None and stop():
+                raise FloorsStopped(f"{len(single)} of the single moves' floors computed")
             # the same for every robot that shares its walks, and for every replan of the roadmap
             tag = ("floors", models.driving, spec.speed, spec.turn_rate, dt, m_drive, w.M_u, nodes, rooms)
             cost, seconds = paths.memo(

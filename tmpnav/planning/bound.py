@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
-from tmpnav.attachment.floors import motion_floors
+from tmpnav.attachment.floors import FloorsStopped, motion_floors
 from tmpnav.oracle.executors import library
 from tmpnav.planning.run import TaskRun
 from tmpnav.task.bound import CUT_ROUNDS, Bound, lower_bound, makespan_bound
@@ -14,6 +16,12 @@ from tmpnav.types import CostTable, Goals
 #: paired moves beyond which the bound of the table gives way to the motion floors: bounding
 #: each pair without joint simulation takes about 0.2 ms (20 rooms and 2 robots: 130,000 pairs)
 MAX_BOUND_PAIRS = 25_000
+#: under a time limit (--time-limit) the bound may take this share of the time left when it
+#: starts: its rounds of cuts, then its motion floors, give way past it (the search's first
+#: plan needs the rest)
+BOUND_SHARE = 0.25
+#: the relaxation named when the bound's share passed before its motion floors were computed
+NO_FLOORS = "none: its share of --time-limit passed before the moves' motion floors were computed"
 
 
 def certified_bound(run: TaskRun) -> Bound:
@@ -30,37 +38,73 @@ def certified_bound(run: TaskRun) -> Bound:
     :func:`_work_bound` where higher): both bounds hold for every plan at once, so their
     weighted sum bounds its objective."""
     sp, goals, canonical = run.planner, run.goals, run.canonical
+    stop = _share(run.search.deadline.left())
     # with carried beliefs a robot leaves a room with the heading it arrived with
     arrived = run.choice.costs == "carried"
     paths = library(canonical.oracle.ctx).graph
-    floors = motion_floors(run.scenario, paths, canonical.start_location, goals, arrived)
+    try:
+        floors = motion_floors(run.scenario, paths, canonical.start_location, goals, arrived, stop)
+    except FloorsStopped:  # every cost and time is at least 0
+        return Bound(0.0, NO_FLOORS, {"potentials": 0.0, "assignment": 0.0, "flow": 0.0}, stopped=True)
     bound = None
     if run.choice.costs == "table":
         table = canonical.bound_table(goals, MAX_BOUND_PAIRS)
         if table is not None:
             if sp.encoding != "mixed":
                 table = replace(table, pair={})
-            bound = lower_bound(table, goals, sp.pair_min_gain)
+            bound = lower_bound(table, goals, sp.pair_min_gain, stop=stop)
     # a replan (its incumbent the plan under way) has a short budget: the plain LP, no cuts
     rounds = 0 if run.incumbent else CUT_ROUNDS
     if bound is None:
-        bound = lower_bound(floors, goals, 0.0, rounds)
+        bound = lower_bound(floors, goals, 0.0, rounds, stop)
         bound = replace(bound, relaxation=f"motion floors, {bound.relaxation}")
     if not run.span_weight:
-        return bound
+        return _said(bound)
     timed = floors.with_service(goals)  # a move's time until its robot is free again
-    span = max(makespan_bound(timed, goals), _work_bound(timed, goals, rounds))
+    work = _work_bound(timed, goals, rounds, stop)
+    span = max(makespan_bound(timed, goals), work.value)
     value = bound.value + run.span_weight * span
     parts = {**bound.parts, "makespan": span}
-    return replace(bound, value=value, relaxation=f"{bound.relaxation} + makespan floor {span:.1f} s", parts=parts)
+    relaxation = f"{bound.relaxation} + makespan floor {span:.1f} s"
+    return _said(replace(bound, value=value, relaxation=relaxation, parts=parts, stopped=bound.stopped or work.stopped))
 
 
-def _work_bound(floors: CostTable, goals: Goals, rounds: int = CUT_ROUNDS) -> float:
+def _share(left: float) -> Callable[[], bool] | None:
+    """Whether the bound has spent its :data:`BOUND_SHARE` of the ``left`` seconds of the run's
+    time limit; None without a limit (the bound then does all its work, the same on every
+    machine)."""
+    if not math.isfinite(left):
+        return None
+    until = time.perf_counter() + BOUND_SHARE * max(left, 0.0)
+    return lambda: time.perf_counter() >= until
+
+
+def _said(bound: Bound) -> Bound:
+    """The bound, its relaxation saying when its share of the time limit cut its cuts short."""
+    if not bound.stopped:
+        return bound
+    return replace(
+        bound, relaxation=f"{bound.relaxation}; rounds of cuts cut short by the bound's share of --time-limit"
+    )
+
+
+def _work_bound(
+    floors: CostTable, goals: Goals, rounds: int = CUT_ROUNDS, stop: Callable[[], bool] | None = None
+) -> WorkBound:
     """A lower bound on every schedule's makespan: the relaxation of :func:`lower_bound` over
     the moves' time floors bounds the summed time of every plan's moves (the argument of
     tmpnav/task/bound.py holds for any non-negative move prices, and a paired move takes each
     of its robots at least its own floor), the robots share that driving and each is busy for
     at most the makespan, so the makespan is at least the sum over the number of robots."""
     durations = replace(floors, single={m: floors.duration[m] for m in floors.single if m in floors.duration})
-    work = lower_bound(durations, goals, 0.0, rounds).value
-    return max(0.0, work) / max(1, len(floors.robots)) if math.isfinite(work) else 0.0
+    work = lower_bound(durations, goals, 0.0, rounds, stop)
+    value = max(0.0, work.value) / max(1, len(floors.robots)) if math.isfinite(work.value) else 0.0
+    return WorkBound(value, work.stopped)
+
+
+@dataclass(frozen=True)
+class WorkBound:
+    """:func:`_work_bound`: the makespan's bound (s), and whether a stop cut its cuts short."""
+
+    value: float
+    stopped: bool

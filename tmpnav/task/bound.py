@@ -72,6 +72,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -105,6 +106,7 @@ class Bound:
     rounds: int = 0  # LPs solved by (c)
     cuts: int = 0  # connectivity cuts (c) added
     converged: bool = False  # (c) stopped because no cut was violated (not on its round limit)
+    stopped: bool = False  # (c) cut short by the ``stop`` of :func:`lower_bound`
 
     def gap(self, cost: float) -> float:
         """(cost - bound) / cost: how far a plan of this cost may be from the optimum."""
@@ -117,11 +119,19 @@ class Bound:
         return self.gap(cost) <= OPTIMAL_GAP
 
 
-def lower_bound(table: CostTable, goals: Goals, min_gain: float = 0.0, cut_rounds: int = CUT_ROUNDS) -> Bound:
+def lower_bound(
+    table: CostTable,
+    goals: Goals,
+    min_gain: float = 0.0,
+    cut_rounds: int = CUT_ROUNDS,
+    stop: Callable[[], bool] | None = None,
+) -> Bound:
     """A lower bound on the cost of every plan of the ``mixed`` encoding on ``table``.
 
     ``min_gain`` is the encoding's ``pair_min_gain``: only the pairs it offers take part.
-    ``cut_rounds`` bounds the rounds of cuts of (c) (0: the plain LP). The proof is the
+    ``cut_rounds`` bounds the rounds of cuts of (c) (0: the plain LP), and ``stop``, asked
+    after each of its LPs, may end them sooner (a time share: the bound then depends on the
+    machine's speed, and says so in ``stopped``). The proof is the
     module's docstring. Raises ValueError on a negative cost or on a pair that moves two
     robots into one room that neither targets (tmpnav's ``pair_filter`` never asks for one).
     """
@@ -135,14 +145,14 @@ def lower_bound(table: CostTable, goals: Goals, min_gain: float = 0.0, cut_round
     parts = {**_potentials(price, rows), **_assignment(table, goals, price, rows)}
     if math.isinf(parts["assignment"]):
         return Bound(math.inf, "infeasible", parts)
-    flow = flow_bound(table, goals, min_gain, rows, _able_to_enter(table, goals), cut_rounds)
+    flow = flow_bound(table, goals, min_gain, rows, _able_to_enter(table, goals), cut_rounds, stop)
     if flow is not None:
         parts["flow"] = flow.value
     best = max(("flow", "assignment", "potentials"), key=lambda name: parts.get(name, -math.inf))
     value = parts[best] - ROUNDING * max(1.0, abs(parts[best]))
     if flow is None:
         return Bound(value, best, parts)
-    return Bound(value, best, parts, flow.rounds, flow.cuts, flow.converged)
+    return Bound(value, best, parts, flow.rounds, flow.cuts, flow.converged, flow.stopped)
 
 
 def _check_pairs(table: CostTable, goals: Goals, min_gain: float) -> None:

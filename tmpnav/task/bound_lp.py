@@ -33,6 +33,7 @@ the bound weaker, never wrong.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -70,13 +71,21 @@ class FlowBound:
     cuts: int  # connectivity cuts added over all rounds
     rounds: int  # LPs solved
     converged: bool  # the last LP violated no cut and left out no column of negative reduced cost
+    stopped: bool = False  # its ``stop`` ended the rounds of cuts early
 
 
 def flow_bound(
-    table: CostTable, goals: Goals, min_gain: float, rows: list[Row], enter: dict[str, set[str]], rounds: int
+    table: CostTable,
+    goals: Goals,
+    min_gain: float,
+    rows: list[Row],
+    enter: dict[str, set[str]],
+    rounds: int,
+    stop: Callable[[], bool] | None = None,
 ) -> FlowBound | None:
-    """The dual bound of the LP after up to ``rounds`` rounds of cuts; None when the
-    solver returns no duals.
+    """The dual bound of the LP after up to ``rounds`` rounds of cuts, or fewer when ``stop``,
+    asked after each LP, says so (every LP's dual bound holds); None when the solver returns
+    no duals.
 
     The LP is solved over a subset of the columns (each robot's cheapest moves into each
     location, and the pairs of those), and a column joins when its reduced cost under
@@ -85,7 +94,7 @@ def flow_bound(
     """
     lp = _Program(table, goals, min_gain, rows, enter)
     active = lp.initial_columns()
-    last, total, solved, cut_rounds, converged = None, 0, 0, 0, False
+    last, total, solved, cut_rounds, converged, stopped = None, 0, 0, 0, False, False
     while True:
         a_ub, b_ub = lp.ub_matrix()
         res = _solve(lp, a_ub, b_ub, active)
@@ -102,6 +111,9 @@ def flow_bound(
         entering = ~active & (reduced < -PRICING_TOLERANCE)
         if cut_rounds == rounds:
             break
+        if stop is not None and stop():
+            stopped = True
+            break
         x = np.zeros(len(lp.cost))
         x[active] = res.x
         lp.drop_slack_cuts(x)
@@ -111,7 +123,7 @@ def flow_bound(
             converged = True
             break
         active |= entering
-    return None if last is None else FlowBound(last, total, solved, converged)
+    return None if last is None else FlowBound(last, total, solved, converged, stopped)
 
 
 def _solve(lp: _Program, a_ub: SparseMatrix, b_ub: Floats, active: Bools) -> LpSolution:

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 SEARCH_CAP = "the search's time cap"
 ROUTING_CAP = "OR-Tools' time limit (first routes)"
 SUBPROBLEM_CAP = "a sub-problem's ENHSP time limit"
+BOUND_CAP = "the lower bound's share of --time-limit"
 
 
 @dataclass

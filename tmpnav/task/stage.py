@@ -20,6 +20,7 @@ from tmpnav.errors import UnsolvableError
 from tmpnav.results import BoundSummary, Schedule, SearchSummary, StageTimes, TaskCounts, TaskResult
 from tmpnav.task import solve
 from tmpnav.task.bound import Bound
+from tmpnav.task.budget import BOUND_CAP
 from tmpnav.task.decode import canonical_order, step_cost
 from tmpnav.task.encode import EncodedTask, encode_task
 from tmpnav.task.export import pddl_texts
@@ -293,7 +294,8 @@ def plan_anytime(
             seconds=stats.history[-1][0] if stats.history else 0.0,
             history=tuple(stats.history),
             work=options.work,
-            capped=result.capped,
+            # a bound its time share cut short stops the search later, or not at all: the plan is the machine's
+            capped=(*result.capped, *((BOUND_CAP,) if bound is not None and bound.stopped else ())),
         ),
         bound=_summary(bound, cost.value(task.span_weight), proved),
         schedule=cost.schedule,
