@@ -34,6 +34,14 @@ def walled(rows: slice, cols: slice, size: float = 20.0) -> tuple[np.ndarray, tu
     return ndimage.distance_transform_edt(free) * RES, (-size / 2, -size / 2)
 
 
+def unicycle(pose: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """The pose after one control step of DT without noise, its heading wrapped."""
+    x, y, theta = pose
+    after = np.array([x + u[0] * DT * math.cos(theta), y + u[0] * DT * math.sin(theta), theta + u[1] * DT])
+    after[2] = (after[2] + math.pi) % (2 * math.pi) - math.pi
+    return after
+
+
 def drive(points: list[list[float]], theta: float = 0.0, speed: float = 0.5, turn_rate: float = 1.0):
     clear, origin = open_floor()
     pc = pursuit_controls(np.array(points, float), theta, speed, turn_rate, DT, RppParams(), clear, origin, RES)
@@ -96,10 +104,7 @@ def test_the_planner_rollout_is_the_follower_driven_without_noise() -> None:
         assert np.allclose(pose, pc.poses[k])
         u = f.command(pose, 5.0)
         assert np.allclose(u, pc.controls[k])
-        pose = np.array(
-            [pose[0] + u[0] * DT * math.cos(pose[2]), pose[1] + u[0] * DT * math.sin(pose[2]), pose[2] + u[1] * DT]
-        )
-        pose[2] = (pose[2] + math.pi) % (2 * math.pi) - math.pi
+        pose = unicycle(pose, u)
     assert f.at_goal(pose)
 
 
@@ -184,8 +189,5 @@ def test_the_follower_turns_to_a_goal_pose_as_the_planner_rollout_does() -> None
         assert not f.at_goal(pose)
         u = f.command(pose, 5.0)
         assert np.allclose(u, pc.controls[k])
-        pose = np.array(
-            [pose[0] + u[0] * DT * math.cos(pose[2]), pose[1] + u[0] * DT * math.sin(pose[2]), pose[2] + u[1] * DT]
-        )
-        pose[2] = (pose[2] + math.pi) % (2 * math.pi) - math.pi
+        pose = unicycle(pose, u)
     assert f.at_goal(pose)

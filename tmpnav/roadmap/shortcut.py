@@ -64,8 +64,10 @@ def _least_along(pts, clear, x0, y0, res, polyline):  # pragma: no cover
 
 
 @nb.njit(cache=True)
-def _least(ax, ay, bx, by, clear, x0, y0, res):  # pragma: no cover
-    """The least clearance of the cells of the segment a -> b, sampled at most a cell apart."""
+def _least(ax, ay, bx, by, clear, x0, y0, res, floor=-np.inf):  # pragma: no cover
+    """The least clearance of the cells of the segment a -> b, sampled at most a cell apart; with
+    a ``floor``, the first clearance found below it (the walk stops there): whether the segment
+    keeps ``floor`` is whether the result is at least it."""
     rows, cols = clear.shape
     n = max(2, math.ceil(math.hypot(bx - ax, by - ay) / res) + 1)
     least = np.inf
@@ -76,23 +78,9 @@ def _least(ax, ay, bx, by, clear, x0, y0, res):  # pragma: no cover
         c = clear[i, j] if 0 <= i < rows and 0 <= j < cols else -np.inf
         if c < least:
             least = c
+            if least < floor:
+                break
     return least
-
-
-@nb.njit(cache=True)
-def _keeps(ax, ay, bx, by, clear, x0, y0, res, floor):  # pragma: no cover
-    """Whether every cell of the segment a -> b (sampled as :func:`_least` samples it) has a
-    clearance of at least ``floor``: :func:`_least` >= floor, stopping at the first cell below."""
-    rows, cols = clear.shape
-    n = max(2, math.ceil(math.hypot(bx - ax, by - ay) / res) + 1)
-    for k in range(n):
-        s = k / (n - 1)
-        i = math.floor((ay + s * (by - ay) - y0) / res)
-        j = math.floor((ax + s * (bx - ax) - x0) / res)
-        c = clear[i, j] if 0 <= i < rows and 0 <= j < cols else -np.inf
-        if c < floor:
-            return False
-    return True
 
 
 @nb.njit(cache=True)
@@ -119,7 +107,8 @@ def _shortcut(pts, required, clear, x0, y0, res):  # pragma: no cover
             kept[last] = min(kept[last - 1], edge[last - 1])
         nxt = i + 1
         for j in range(last, i + 1, -1):
-            if _keeps(pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1], clear, x0, y0, res, min(kept[j], required)):
+            floor = min(kept[j], required)
+            if _least(pts[i, 0], pts[i, 1], pts[j, 0], pts[j, 1], clear, x0, y0, res, floor) >= floor:
                 nxt = j
                 break
         keep[m] = nxt
