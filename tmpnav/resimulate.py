@@ -16,8 +16,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from tmpnav.attachment.carried import CarriedCosts
+from tmpnav.oracle.motions import NominalMotion
 from tmpnav.results import Schedule, TaskResult
-from tmpnav.types import Belief, CostTerms, PlannedAction, TrajectoryStep, vec3
+from tmpnav.types import Belief, CostTerms, PlannedAction, TrajectoryStep
 
 
 @dataclass
@@ -65,7 +66,7 @@ def resimulate(
                 resimulated_cost=float(sum(m.cost(weights) for m in ran)),
                 goal_nodes=tuple(int(m.motion.path[-1]) for m in ran),
                 paths=tuple(m.motion.path for m in ran),
-                goal_poses=tuple(vec3(m.motion.poses[-1]) for m in ran),
+                goal_poses=tuple(_goal_pose(carried, m.motion) for m in ran),
                 risk=tuple(m.risk for m in ran),
                 controllers=tuple(m.motion.controller for m in ran),
             )
@@ -73,3 +74,14 @@ def resimulate(
     assert run.trajectories is not None
     team = run.end.team
     return Resimulation(actions, run.trajectories, run.schedule, terms, Belief(team.mean, team.cov))
+
+
+def _goal_pose(carried: CarriedCosts, motion: NominalMotion) -> tuple[float, float, float]:
+    """Where a move is sent: its goal node's position, with a job's station heading there or the
+    heading the motion ends with. A move driven turn-then-drive ends on it; one driven by RPP
+    stops within nav2's goal tolerance of it, as nav2 does of the goal it is given
+    (docs/models.md)."""
+    node = motion.path[-1]
+    x, y = (float(v) for v in carried.lib.roadmap.nodes[node, :2])
+    heading = carried.lib.goal_headings.get(node)
+    return (x, y, motion.final_heading if heading is None else float(heading))
