@@ -129,12 +129,7 @@ def motion_floors(
         walks = walked.setdefault((spec.speed, spec.turn_rate), _Walks(paths, spec, dt, models.driving == "rpp"))
         m_drive = w.M_u + w.M_Sigma * sigma_rate(models, spec.speed, n, lms)
         start = start_location[spec.name]
-        origins: dict[str, tuple[tuple[int, tuple[float, ...] | None], ...]] = {
-            start: ((roadmap.starts[spec.name], (spec.pose.theta,)),)
-        }
-        for x in rooms:
-            if x != start:
-                origins[x] = tuple((g, arrivals[g]) for g in inst[x])
+        origins = _origins(spec, start, roadmap, rooms, arrivals)
         home = goals.end_of(spec.name) == start  # it must come back to where it starts
         for o, nodes in origins.items():
             if stop is not None and stop():
@@ -157,6 +152,24 @@ def motion_floors(
     locations = tuple(dict.fromkeys([*rooms, *start_location.values()]))
     names = tuple(r.name for r in scenario.robots)
     return CostTable(names, rooms, locations, dict(start_location), single, {}, duration)
+
+
+def _origins(
+    spec: RobotSpec,
+    start: str,
+    roadmap: Roadmap,
+    rooms: tuple[str, ...],
+    arrivals: dict[int, tuple[float, ...] | None],
+) -> dict[str, tuple[tuple[int, tuple[float, ...] | None], ...]]:
+    """Where a robot's moves start, by location: its start node with its heading, and each goal
+    room's pose instantiations with the headings it can arrive with (``arrivals``)."""
+    origins: dict[str, tuple[tuple[int, tuple[float, ...] | None], ...]] = {
+        start: ((roadmap.starts[spec.name], (spec.pose.theta,)),)
+    }
+    for x in rooms:
+        if x != start:
+            origins[x] = tuple((g, arrivals[g]) for g in roadmap.instantiations[x])
+    return origins
 
 
 def _row(
