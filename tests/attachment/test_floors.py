@@ -122,11 +122,11 @@ def test_a_stop_ends_the_floors_and_the_bound_gives_way() -> None:
     """Under a time limit the bound has a share of it (tmpnav.planning.bound): the floors stop
     between their rows when it has passed, and the bound is then 0, said so, and cut short."""
     from tmpnav.attachment.floors import FloorsStopped
-    from tmpnav.planning.bound import NO_FLOORS, _share
+    from tmpnav.planning.bound import NO_FLOORS, stop_at_share
 
     scenario, _, carried = carried_problem("corridor-2robots.yaml", ("L2", "L5", "L9"), 2, None)
     with pytest.raises(FloorsStopped):
         motion_floors(scenario, carried.lib.graph, carried.start_location, scenario.goals, True, lambda: True)
-    assert _share(float("inf")) is None  # without a limit the bound does all its work
-    assert _share(0.0)() and not _share(3600.0)()
+    assert stop_at_share(float("inf")) is None  # without a limit the bound does all its work
+    assert stop_at_share(0.0)() and not stop_at_share(3600.0)()
     assert NO_FLOORS.startswith("none")

@@ -57,6 +57,23 @@ def test_cells_are_computed_once_and_remembered() -> None:
     assert np.array_equal(table.at(pts[::-1]), first[::-1]) and table.rows == rows
 
 
+def test_only_a_table_asked_once_for_its_new_cells_records_them() -> None:
+    """The planning process never asks (take_new): it keeps no record; a worker's copy asks when
+    it starts, then hands back what it computed since, and another copy learns it."""
+    grid, _ = PATHS["corner"]
+    table = SectorReach(grid, clearance(grid), RADIUS)
+    table.at(np.array([[0.5, 0.5]]))
+    assert table._new is None  # the planning process's table records nothing
+    assert table.take_new()[0].size == 0  # the record starts
+    pts = np.array([[2.9, 3.0], [1.5, 0.5]])
+    first = table.at(pts)
+    keys, reach = table.take_new()
+    assert keys.size == 2 and table.take_new()[0].size == 0
+    other = SectorReach(grid, clearance(grid), RADIUS)
+    other.learn(keys, reach)
+    assert np.array_equal(other.at(pts), first) and other.rows == 3 and other._new is None
+
+
 def test_a_points_key_is_its_sub_cell() -> None:
     """SectorReach.cells (compiled) against the sub-cell arithmetic written out, off the grid too."""
     grid, _ = PATHS["corner"]

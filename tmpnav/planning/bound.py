@@ -38,7 +38,7 @@ def certified_bound(run: TaskRun) -> Bound:
     :func:`_work_bound` where higher): both bounds hold for every plan at once, so their
     weighted sum bounds its objective."""
     sp, goals, canonical = run.planner, run.goals, run.canonical
-    stop = _share(run.search.deadline.left())
+    stop = stop_at_share(run.search.deadline.left())
     # with carried beliefs a robot leaves a room with the heading it arrived with
     arrived = run.choice.costs == "carried"
     paths = library(canonical.oracle.ctx).graph
@@ -69,7 +69,7 @@ def certified_bound(run: TaskRun) -> Bound:
     return _said(replace(bound, value=value, relaxation=relaxation, parts=parts, stopped=bound.stopped or work.stopped))
 
 
-def _share(left: float) -> Callable[[], bool] | None:
+def stop_at_share(left: float) -> Callable[[], bool] | None:
     """Whether the bound has spent its :data:`BOUND_SHARE` of the ``left`` seconds of the run's
     time limit; None without a limit (the bound then does all its work, the same on every
     machine)."""

@@ -49,6 +49,7 @@ class World:
     _components: dict[float, np.ndarray] = field(default_factory=dict, repr=False)  # radius -> free-space labels
     _polygons: list[tuple[str, np.ndarray, np.ndarray]] = field(default_factory=list, repr=False)  # name, vertices, box
     _free_cells: dict[tuple[str, float], np.ndarray] = field(default_factory=dict, repr=False)  # by room, radius
+    _recording: list[bool] = field(default_factory=list, repr=False)  # [True] once take_new was called
 
     def is_free(self, points: np.ndarray, radius: float) -> np.ndarray:
         """Whether a disc of ``radius`` centred at each point (..., 2) is collision-free."""
@@ -64,6 +65,8 @@ class World:
         when first asked for and remembered for the world's lifetime."""
         if radius not in self._reach:
             self._reach[radius] = SectorReach(self.grid, self.clearance, radius)
+            if self._recording:
+                self._reach[radius].take_new()
         return self._reach[radius]
 
     def free_components(self, radius: float) -> np.ndarray:
@@ -89,12 +92,16 @@ class World:
         asked for and remembered for the world's lifetime."""
         if sensor not in self._scans:
             self._scans[sensor] = ScanInformation(self.grid, self.signed_distance, sensor)
+            if self._recording:
+                self._scans[sensor].take_new()
         return self._scans[sensor]
 
     def take_new(self) -> Learned:
         """What the reach and scan tables computed since the last call (their ``take_new``):
         a worker process's copy of the world hands it to the parent's (:meth:`learn`), so that
-        the parent does not compute again the cells its workers did."""
+        the parent does not compute again the cells its workers did. The first call starts the
+        record (a worker's, when it starts) and returns none: the planning process keeps none."""
+        self._recording[:] = [True]
         reach = {radius: table.take_new() for radius, table in self._reach.items()}
         scans = {sensor: table.take_new() for sensor, table in self._scans.items()}
         return Learned(reach, scans)

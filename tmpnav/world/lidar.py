@@ -275,7 +275,7 @@ class ScanInformation:
         self.table = np.zeros((1, 3, 3))
         self.size = 1
         self._preloaded = 0
-        self._new: list[np.ndarray] = []  # keys computed here since :meth:`take_new`
+        self._new: list[np.ndarray] | None = None  # keys computed since :meth:`take_new`, once called
 
     def keys(self, poses: np.ndarray) -> np.ndarray:
         """The key (..., ) int64 of each pose (..., 3): its cell and its heading's bin; OFF_GRID off the grid.
@@ -313,27 +313,28 @@ class ScanInformation:
     def preload(self, keys: np.ndarray, factors: np.ndarray) -> None:
         """Take factors computed earlier (:meth:`contents`, read from the cache directory) for the
         keys not known yet."""
-        keys = np.asarray(keys, dtype=np.int64)
-        fresh = ~np.isin(keys, self._keys)
-        self._add(keys[fresh], np.asarray(factors, dtype=float)[fresh])
-        self._preloaded += int(fresh.sum())
+        self._preloaded += self.learn(keys, factors)
 
     def take_new(self) -> tuple[np.ndarray, np.ndarray]:
         """The keys computed here since the last call, and their factors (K, 3, 3): what a
-        worker's copy of the table hands back to its parent's (:meth:`learn`)."""
+        worker's copy of the table hands back to its parent's (:meth:`learn`). The first call
+        starts the record and returns none: only a worker's copy keeps one."""
         keys = np.concatenate(self._new) if self._new else np.zeros(0, dtype=np.int64)
         self._new = []
         return keys, self.table[self.rows(keys)] if keys.size else np.zeros((0, 3, 3))
 
-    def learn(self, keys: np.ndarray, factors: np.ndarray) -> None:
+    def learn(self, keys: np.ndarray, factors: np.ndarray) -> int:
         """Take factors another copy of this table computed in this run (:meth:`take_new`) for
-        the keys not known yet; unlike :meth:`preload`, they count as :attr:`computed`."""
+        the keys not known yet, and say how many; unlike :meth:`preload`, they count as
+        :attr:`computed`."""
         keys = np.asarray(keys, dtype=np.int64)
         fresh = ~np.isin(keys, self._keys)
         self._add(keys[fresh], np.asarray(factors, dtype=float)[fresh])
+        return int(fresh.sum())
 
     def _compute(self, keys: np.ndarray) -> None:
-        self._new.append(keys)
+        if self._new is not None:
+            self._new.append(keys)
         cols, res = self.grid.shape[1], self.grid.resolution
         cell, b = keys // self.bins, keys % self.bins
         x0, y0 = self.grid.origin

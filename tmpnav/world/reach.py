@@ -64,7 +64,7 @@ class SectorReach:
         self.table = np.zeros((1, SECTORS))  # row 0: off the grid, reach 0
         self.rows = 1
         self._offsets: tuple[np.ndarray, ...] | None = None  # _offsets(), when first needed
-        self._new: list[np.ndarray] = []  # keys computed here since :meth:`take_new`
+        self._new: list[np.ndarray] | None = None  # keys computed since :meth:`take_new`, once called
 
     def cells(self, points: np.ndarray) -> np.ndarray:
         """The key of each point's sub-cell (..., 2) -> (...,) int64, OFF_GRID off the grid.
@@ -103,7 +103,8 @@ class SectorReach:
 
     def take_new(self) -> tuple[np.ndarray, np.ndarray]:
         """The sub-cells computed here since the last call, and their reach (N, K): what a
-        worker's copy of the table hands back to its parent's (:meth:`learn`)."""
+        worker's copy of the table hands back to its parent's (:meth:`learn`). The first call
+        starts the record and returns none: only a worker's copy keeps one."""
         keys = np.concatenate(self._new) if self._new else np.zeros(0, dtype=np.int64)
         self._new = []
         return keys, self.of_cells(keys)
@@ -120,7 +121,8 @@ class SectorReach:
             self._store(keys, reach)
 
     def _compute(self, keys: np.ndarray) -> None:
-        self._new.append(keys)
+        if self._new is not None:
+            self._new.append(keys)
         s, cols = self.subdivisions, self.grid.shape[1] * self.subdivisions
         out = np.empty((keys.size, SECTORS))
         if self._offsets is None:
