@@ -4,7 +4,7 @@
 
 For every generated building (benchmarks/families.py) and seed, the default plan twice, in one
 process, a cold cache each: as ``tmpnav plan`` makes it (every plan the anytime search
-would take priced as executed, robots kept apart: tmpnav.attachment.conflicts.ExecutedCost) and
+would take priced as executed, robots kept apart: tmpnav.attachment.apart.ExecutedCost) and
 with the search judging plans as planned and the robots kept apart afterwards (what tmpnav did
 before). For each: the objective the search reported for its plan, the objective executed
 (re-simulated with its waits, detours and sidesteps), the conflicts as planned and left, the

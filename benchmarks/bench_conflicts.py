@@ -7,7 +7,7 @@ For every shipped scenario with two or more robots:
    reused) and counts the conflicts of its re-simulated trajectories with the independent
    checker (:mod:`tmpnav.belief.conflicts`);
 2. plans it with the defaults (robots kept apart: waits, detours, split pairs; at most 1.5
-   times the objective, tmpnav.attachment.conflicts.keep_apart) and counts again on the
+   times the objective, tmpnav.attachment.apart.keep_apart) and counts again on the
    report's trajectories, with what was done and the seconds of the ``resimulate`` stage
    that holds the search;
 3. resolves the plan as planned once more with siding rooms too (what ``--max-risk`` adds,

@@ -385,12 +385,14 @@ def plan(
 def check_conflicts(report: PlanReport) -> None:
     """Raise ConflictError when, under a chance constraint (planner.max_risk), robots asked to be
     kept apart (planner.keep_apart) are still in each other's way on the plan's trajectories (the
-    independent checker, tmpnav.belief.conflicts). Without a constraint (the paper's model) no
-    plan claims to be safe: its conflicts are reported, not refused."""
+    independent checker, tmpnav.belief.conflicts) at the same planned instant. Without a
+    constraint (the paper's model) no plan claims to be safe: its conflicts are reported, not
+    refused; nor are robots that keep apart on the plan's clock but not within the time
+    windows of planner.clock_drift: the plan's warnings name them."""
     from tmpnav.planning.safety import conflicts_left
 
     planner = report.scenario.planner
-    if planner.max_risk is None or not planner.keep_apart or not (left := conflicts_left(report)):
+    if planner.max_risk is None or not planner.keep_apart or not (left := conflicts_left(report, drift=0.0)):
         return
     first = left[0]
     more = f" (and {len(left) - 1} more)" if len(left) > 1 else ""
@@ -420,7 +422,7 @@ def in_own_units(progress: SearchProgress | None, scenario: Scenario) -> SearchP
 
 def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, World] | None) -> PlanReport:
     """The plan, whether or not it keeps within the chance constraint."""
-    from tmpnav.attachment.conflicts import keep_apart
+    from tmpnav.attachment.apart import keep_apart
     from tmpnav.planning import TaskRun, get_ready, plan_stage
     from tmpnav.resimulate import resimulate
     from tmpnav.task.search import SearchRun
@@ -564,7 +566,7 @@ def check_risk(path: str | Path, options: PlanOptions, report: PlanReport) -> No
         if worst <= least:
             from tmpnav.planning.safety import conflicts_left
 
-            apart = again.scenario.planner.keep_apart and conflicts_left(again)
+            apart = again.scenario.planner.keep_apart and conflicts_left(again, drift=0.0)
             raise RiskError(
                 f"no plan keeps every move's collision bound within max_risk {asked:g}: the least "
                 f"tmpnav found is {least:g} (rerun with --max-risk {least:g}, or set planner.max_risk"

@@ -175,7 +175,7 @@ class Schedule:
 @dataclass(frozen=True)
 class KeptApart:
     """How a plan under a chance constraint was kept clear of robots in each other's way
-    (tmpnav.attachment.conflicts.keep_apart): the conflicts of the plan as planned and left,
+    (tmpnav.attachment.apart.keep_apart): the conflicts of the plan as planned and left,
     the waits (plan step, 1-based, and seconds held back), the sidesteps (robot, origin,
     siding room, target), the plan as planned run on the clock (its executed cost and
     makespan), the clock runs the search made, and the detours (plan step, robot, metres

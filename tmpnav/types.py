@@ -497,8 +497,11 @@ class PlannerOptions:
     #: DEFAULT_RISK_SOURCE (a team with a range sensor), or "" (none is in force)
     max_risk_from: str = ""
     #: robots in each other's way on the clock kept apart after planning, by waits and detours
-    #: (and sidesteps under max_risk; tmpnav.attachment.conflicts.keep_apart)
+    #: (and sidesteps under max_risk; tmpnav.attachment.apart.keep_apart)
     keep_apart: bool = True
+    #: seconds a robot may fall behind the plan's clock per second it drives, which robots kept
+    #: apart allow for (None: by the localiser; tmpnav.attachment.drift.clock_drift)
+    clock_drift: float | None = None
 
 
 @dataclass(frozen=True)

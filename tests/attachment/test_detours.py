@@ -88,3 +88,27 @@ def test_a_robot_standing_on_the_goal_blocks_every_detour() -> None:
     mine = centre_line(roadmap, 0.0, 12.0)
     standing = Obstacle(0, roadmap.nodes[[mine[-1]]], np.array([1.0]))
     assert detour(roadmap, mine, 0.0, 0, Drive(SPEED, TURN, DT), [standing], 100) is None
+
+
+def crossing(roadmap: Roadmap, before: float, window: int) -> Obstacle:
+    """A robot crossing the corridor at x = 6 (from y = 3 to y = 0, then standing) ``before``
+    seconds before a robot driving the centre line from x = 0 gets there, with a time window
+    of ``window`` control steps (tmpnav.attachment.drift)."""
+    points = roadmap.nodes[[node_at(roadmap, 6.0, y) for y in np.arange(3.0, -0.01, -0.5)]]
+    poses = path_controls(points, -np.pi / 2, SPEED, TURN, DT).poses[:, :2]
+    t0 = round((6.0 / SPEED - before - 1.5 / SPEED) / DT)
+    return Obstacle(t0, poses, np.full(poses.shape[0], 0.8), np.full(poses.shape[0], window))
+
+
+def test_a_time_window_makes_the_detour_keep_clear_of_an_earlier_crossing() -> None:
+    roadmap = lattice()
+    mine = centre_line(roadmap, 0.0, 12.0)
+    original = path_controls(roadmap.nodes[list(mine)], 0.0, SPEED, TURN, DT)
+    steps, drive = np.arange(original.poses.shape[0]), Drive(SPEED, TURN, DT)
+    on_time, late = crossing(roadmap, 3.0, 0), crossing(roadmap, 3.0, 6)  # 3 s before; a 3 s window
+    assert on_time.clear(steps, original.poses[:, :2]) and not late.clear(steps, original.poses[:, :2])
+    assert detour(roadmap, mine, 0.0, 0, drive, [on_time], original.controls.shape[0]) == mine
+    path = detour(roadmap, mine, 0.0, 0, drive, [late], original.controls.shape[0])
+    assert path is not None and path != mine and (path[0], path[-1]) == (mine[0], mine[-1])
+    driven = path_controls(roadmap.nodes[list(path)], 0.0, SPEED, TURN, DT).poses
+    assert late.clear(np.arange(driven.shape[0]), driven[:, :2])  # what the checker asks, within the window

@@ -105,3 +105,20 @@ def test_true_contacts_have_no_margin() -> None:
     far = np.array([[0.55, 0.0, 0.0]] * 5)
     assert [c.robots for c in contacts({"a": a, "b": near}, RADII, DT)] == [("a", "b")]
     assert contacts({"a": a, "b": far}, RADII, DT) == []
+
+
+def test_robots_passing_two_seconds_apart_conflict_within_a_three_second_window() -> None:
+    a = line((-5, 0), (5, 0), 20)  # at the crossing at 5 s
+    first = line((0, -5), (0, 5), 20)
+    b = [TrajectoryStep(k * DT, first[0].mean, first[0].cov) for k in range(4)]  # it stands 2 s first
+    b += [TrajectoryStep(s.t + 2.0, s.mean, s.cov) for s in first]  # at the crossing at 7 s
+    assert find_conflicts({"a": a, "b": b}, RADII) == []
+    assert find_conflicts({"a": a, "b": b}, RADII, windows={("a", "b"): np.zeros(len(b))}) == []
+    found = find_conflicts({"a": a, "b": b}, RADII, windows={("a", "b"): np.full(len(b), 3.0)})
+    assert len(found) == 1
+    c = found[0]
+    assert c.robots == ("a", "b") and c.window == 3.0
+    assert c.closest_distance == pytest.approx(0.0, abs=1e-9) and c.where == pytest.approx((0.0, 0.0), abs=1e-9)
+    assert c.t_from < 5.0 < c.t_to  # a's clock
+    # half a second is too short a window for crossings 2 s apart
+    assert find_conflicts({"a": a, "b": b}, RADII, windows={("a", "b"): np.full(len(b), 0.5)}) == []

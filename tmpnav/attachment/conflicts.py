@@ -48,31 +48,28 @@ is left is returned in :attr:`Resolution.conflicts_left`, never hidden.
 Use: ``res = resolve_with_sidesteps(carried, task.steps)`` (or :func:`resolve_conflicts` for
 waits only), then run ``res.plan`` with ``res.delays`` and ``res.detours``
 (``CarriedCosts.replay``, ``resimulate``); ``res.run`` is that run already, recorded.
-:func:`keep_apart` applies it to a plan, as ``tmpnav plan`` does by default.
+:func:`tmpnav.attachment.apart.keep_apart` applies it to a plan, as ``tmpnav plan`` does by
+default. With a clock drift (:mod:`tmpnav.attachment.drift`) every check and every detour
+keeps the pairs' time windows clear, not only the same planned instant.
 """
 
 from __future__ import annotations
 
-import math
-from collections import OrderedDict
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from weakref import WeakKeyDictionary
 
 import numpy as np
 
 from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
 from tmpnav.attachment.detours import REACH, Drive, Obstacle, detour, near_nodes
+from tmpnav.attachment.drift import clock_drift, trajectory_windows
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, margin_factor, position_sigma
 from tmpnav.oracle.motions import MotionLibrary
-from tmpnav.results import KeptApart, Schedule, TaskResult, TimedMove
+from tmpnav.results import Schedule, TimedMove
 from tmpnav.roadmap.graph import segment_margins
-from tmpnav.task.model import PlanCost
 from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Step
-from tmpnav.task.stage import action_names
-from tmpnav.types import PlanStatus
 
 #: clock runs the search may make per plan (each is one run of the team's joint EKF)
 MAX_RUNS = 40
@@ -86,15 +83,6 @@ DETOUR_ROUNDS = 3
 #: robot's uncertainty as DETOUR_SIGMA times the largest it had on the move it replaces
 DETOUR_MARGIN = 0.05
 DETOUR_SIGMA = 1.1
-#: without a chance constraint, robots are kept apart only when that raises the plan's
-#: objective by at most this fraction: a wait or a detour changes what the robots observe,
-#: and in a landmark-poor hall it can cost them their localisation (7.5 times the cost on
-#: the five rooms of tests/attachment/test_unfold.py)
-MAX_RISE = 0.5
-#: without a chance constraint, the clock runs after which no more sidesteps are tried: the
-#: swaps of the shipped configs resolve in 14-15 runs (0.3-0.5 s), while the sidestep search
-#: of robots that have lost track of where they are runs 83-143 times (7-17 s) and clears nothing
-RUN_BUDGET = 20
 
 
 @dataclass(frozen=True)
@@ -132,22 +120,27 @@ def resolve_conflicts(
     delta: float | None = None,
     max_runs: int = MAX_RUNS,
     detours: Mapping[tuple[int, str], tuple[int, ...]] | None = None,
+    drift: float | None = None,
 ) -> Resolution:
     """Waits that keep the robots of ``plan`` out of each other's way (module docstring).
     ``radii``: robot -> radius (m), the scenario's by default; ``delta``: the risk threshold
     of the margin, the scenario's ``planner.max_risk`` when it has one, else 0.05;
-    ``detours``: moves driven along other paths (``TeamClock.run``), kept in every run.
+    ``detours``: moves driven along other paths (``TeamClock.run``), kept in every run;
+    ``drift``: how late a robot may run per second driven (the checker's time windows,
+    tmpnav.attachment.drift), the scenario's by default.
     Raises Unreachable when the plan itself cannot be run."""
     detours = dict(detours or {})
     clock = costs.clock if isinstance(costs, CarriedCosts) else costs
     steps: Plan = tuple(plan)
-    radii = dict(radii) if radii is not None else _radii(clock)
+    radii = dict(radii) if radii is not None else radii_of(clock)
     risk = delta if delta is not None else (clock.scenario.planner.max_risk or DEFAULT_DELTA)
+    rate = drift if drift is not None else clock_drift(clock.scenario)
 
     def check(delays: dict[int, float]) -> _Node:
         run = clock.run(steps, delays, record=True, detours=detours)
         assert run.trajectories is not None
-        return _Node(delays, run, find_conflicts(run.trajectories, radii, risk))
+        windows = trajectory_windows(run.trajectories, run.schedule, rate)
+        return _Node(delays, run, find_conflicts(run.trajectories, radii, risk, windows))
 
     root = check({})
     best, runs, longest = root, 1, root.run.makespan + clock.dt
@@ -169,7 +162,8 @@ def resolve_conflicts(
     return Resolution(best.delays, best.run, best.conflicts, runs, root.conflicts, steps, detours)
 
 
-def _radii(clock: TeamClock) -> dict[str, float]:
+def radii_of(clock: TeamClock) -> dict[str, float]:
+    """Robot -> radius (m), the scenario's."""
     return {r: clock.scenario.robot(r).radius for r in clock.start.names}
 
 
@@ -196,7 +190,7 @@ def _branches(node: _Node, dt: float, longest: float) -> Iterator[dict[int, floa
         other = b if robot == a else a
         if move is None or _pointless(schedule, move, other, conflict.t_from):
             continue
-        wait = node.delays.get(move.step, 0.0) + conflict.t_to + dt - move.start
+        wait = node.delays.get(move.step, 0.0) + conflict.t_to + conflict.window + dt - move.start
         if wait <= longest:
             yield {**node.delays, move.step: round(wait / dt) * dt}
 
@@ -229,6 +223,7 @@ def resolve_with_detours(
     delta: float | None = None,
     max_runs: int = MAX_RUNS,
     rounds: int = DETOUR_ROUNDS,
+    drift: float | None = None,
 ) -> Resolution:
     """``res`` (a plan's waits), and where they leave a conflict, **detours**: a robot of the
     first conflict left drives the move it makes then along another roadmap path, found by
@@ -237,17 +232,20 @@ def resolve_with_detours(
     it. The plan stays the same (the same moves, the same goal instantiations); the detour's
     motion, beliefs and cost are the clock's, as executed. Of the detoured resolutions the
     one with the fewest conflicts left and then the least objective is kept, and its first
-    conflict left gets the same treatment, up to ``rounds`` times."""
+    conflict left gets the same treatment, up to ``rounds`` times. The detours keep clear of
+    the other robots within the pairs' time windows of ``drift`` (the scenario's by default),
+    as the checker asks."""
     clock = costs.clock if isinstance(costs, CarriedCosts) else costs
-    radii = dict(radii) if radii is not None else _radii(clock)
+    radii = dict(radii) if radii is not None else radii_of(clock)
     risk = delta if delta is not None else (clock.scenario.planner.max_risk or DEFAULT_DELTA)
+    rate = drift if drift is not None else clock_drift(clock.scenario)
     rank = _ranker(clock)
     best, runs = res, res.iterations
     for _ in range(rounds):
         if not best.conflicts_left:
             break
-        tries = ((best.plan, detours) for detours in _detoured(clock, best, radii, risk))
-        better, spent = _next_best(costs, best, tries, rank, radii, delta, max_runs)
+        tries = ((best.plan, detours) for detours in _detoured(clock, best, radii, risk, rate))
+        better, spent = _next_best(costs, best, tries, rank, radii, delta, max_runs, drift=rate)
         runs += spent
         if better is None:
             break
@@ -264,6 +262,7 @@ def _next_best(
     delta: float | None,
     max_runs: int,
     budget: int | None = None,
+    drift: float | None = None,
 ) -> tuple[Resolution | None, int]:
     """Each (plan, detours) of ``tries`` with its waits searched; the best of them by ``rank`` if
     it leaves fewer conflicts than ``best`` (else None), and the clock runs made. No try starts
@@ -273,7 +272,7 @@ def _next_best(
         if budget is not None and runs >= budget:
             break
         try:
-            found.append(resolve_conflicts(costs, plan, radii, delta, max_runs, detours))
+            found.append(resolve_conflicts(costs, plan, radii, delta, max_runs, detours, drift))
         except Unreachable:  # a wait changed a belief so much that a goal cannot be reached
             continue
         runs += found[-1].iterations
@@ -284,17 +283,18 @@ def _next_best(
 
 
 def _detoured(
-    clock: TeamClock, res: Resolution, radii: Mapping[str, float], risk: float
+    clock: TeamClock, res: Resolution, radii: Mapping[str, float], risk: float, drift: float
 ) -> Iterator[dict[tuple[int, str], tuple[int, ...]]]:
     """The resolution's detours with one more: the move a robot of the first conflict left
     drives when it begins, around the other robots as they ran (their centres at every step,
     the separation the conflict rule asks with this robot's largest uncertainty on the move,
-    times DETOUR_SIGMA, plus DETOUR_MARGIN)."""
+    times DETOUR_SIGMA, plus DETOUR_MARGIN, within the pair's time window of ``drift``)."""
     conflict, run, names = res.conflicts_left[0], res.run, clock.start.names
     trajectories = run.trajectories
     assert trajectories is not None
     t = round(conflict.t_from / clock.dt)
     k = margin_factor(risk)
+    windows = trajectory_windows(trajectories, run.schedule, drift)
     driving = [m for m in run.moves if names[m.robot] in conflict.robots and m.start <= t < m.end]
     for move in sorted(driving, key=lambda m: (m.start, m.step), reverse=True):
         robot = names[move.robot]
@@ -304,11 +304,13 @@ def _detoured(
         for other in names:
             if other == robot or len(trajectories[other]) <= move.start:
                 continue
-            steps = trajectories[other][move.start :]
+            window = _steps(windows.get((min(robot, other), max(robot, other))), clock.dt)
+            t0 = max(0, move.start - int(window[move.start :].max(initial=0)))  # within its window before
+            steps = trajectories[other][t0:]
             xy = np.array([s.mean[:2] for s in steps], dtype=float)
             others = position_sigma(np.array([s.cov for s in steps]))
             need = radii[robot] + radii[other] + k * (sigma + others) + DETOUR_MARGIN
-            obstacles.append(Obstacle(move.start, xy, need))
+            obstacles.append(Obstacle(t0, xy, need, _rows(window, t0, len(steps))))
         spec = clock.scenario.robot(robot)
         path = detour(
             clock.lib.roadmap,
@@ -322,6 +324,19 @@ def _detoured(
         )
         if path is not None and path != tuple(move.motion.path):
             yield {**res.detours, (move.step, robot): path}
+
+
+def _steps(window: np.ndarray | None, dt: float) -> np.ndarray:
+    """A time window (s per step; None: 0) in whole control steps."""
+    if window is None:
+        return np.zeros(1, dtype=np.int64)
+    return np.floor(np.asarray(window) / dt + EPS).astype(np.int64)
+
+
+def _rows(window: np.ndarray, t0: int, rows: int) -> np.ndarray:
+    """The window (control steps) at each of ``rows`` steps from ``t0`` (the last held)."""
+    at = np.minimum(np.arange(t0, t0 + rows), window.shape[0] - 1)
+    return window[at]
 
 
 def _as_clear(lib: MotionLibrary, path: Sequence[int], radius: float) -> np.ndarray:
@@ -365,6 +380,7 @@ def resolve_with_sidesteps(
     sidings: int = SIDINGS,
     detours: bool = True,
     budget: int | None = None,
+    drift: float | None = None,
 ) -> Resolution:
     """:func:`resolve_conflicts`; where waits leave a conflict, :func:`resolve_with_detours`,
     and apart from it a **sidestep**: one robot
@@ -380,13 +396,14 @@ def resolve_with_sidesteps(
     resolution, the one with the fewer conflicts left and then the least objective is
     returned. ``detours=False``: waits and sidesteps only; ``sidings=0``: of the sidesteps,
     only paired moves split in two; ``budget``: no sidestep is tried once the search has made
-    that many clock runs in all."""
-    waits = resolve_conflicts(costs, plan, radii, delta, max_runs)
+    that many clock runs in all; ``drift``: the checker's time windows (the scenario's by
+    default, tmpnav.attachment.drift)."""
+    waits = resolve_conflicts(costs, plan, radii, delta, max_runs, drift=drift)
     if waits.resolved:
         return waits
     clock = costs.clock if isinstance(costs, CarriedCosts) else costs
     rank = _ranker(clock)
-    detoured = resolve_with_detours(costs, waits, radii, delta, max_runs) if detours else waits
+    detoured = resolve_with_detours(costs, waits, radii, delta, max_runs, drift=drift) if detours else waits
     best, runs = waits, detoured.iterations
     tried: set[Plan] = {best.plan}
 
@@ -398,7 +415,7 @@ def resolve_with_sidesteps(
 
     while best.conflicts_left:
         left = None if budget is None else budget - runs
-        better, spent = _next_best(costs, best, untried(best), rank, radii, delta, max_runs, left)
+        better, spent = _next_best(costs, best, untried(best), rank, radii, delta, max_runs, left, drift)
         runs += spent
         if better is None:
             break
@@ -441,182 +458,3 @@ def _centroid(polygon: Sequence[tuple[float, float]]) -> tuple[float, float]:
 
 def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
     return float(((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5)
-
-
-# ---------------------------------------------------------------------- applied to a plan
-
-
-@dataclass(frozen=True)
-class Kept:
-    """A plan kept apart (:func:`keep_apart`): the plan, how to run it (``delays``, ``detours``
-    for ``resimulate``) and what was done."""
-
-    task: TaskResult
-    delays: dict[int, float]
-    detours: dict[tuple[int, str], tuple[int, ...]]
-    apart: KeptApart
-
-
-def keep_apart(
-    carried: CarriedCosts, task: TaskResult, delta: float | None, cost_before: float, makespan_before: float
-) -> Kept | None:
-    """The task plan kept clear of robots in each other's way: waits, detours and split
-    pairs, and under a chance constraint ``delta`` sidesteps too
-    (:func:`resolve_with_sidesteps`), at the margin k(delta) (k(0.05) without one); the plan
-    they belong to as a TaskResult, the delays and detours to run it with, and what was done.
-    None when the plan has no conflict, or nothing found removes one (without a move over
-    ``delta``), or a move of the plan as planned is over ``delta``. The plan changed is no
-    longer the planner's proved optimum: its status becomes satisficing, and its bound's gap is
-    measured against it; its steps' costs are their executed costs, waits included (the anytime
-    search priced them so: :class:`ExecutedCost`).
-    ``cost_before`` and ``makespan_before`` are those of the plan as planned, run on the clock.
-
-    Without a threshold, a plan kept apart is returned only when its objective is at most
-    (1 + MAX_RISE) times the plan's as planned, and no sidestep is tried past RUN_BUDGET clock
-    runs (the search is long where nothing clears the robots: up to 17 s on the 4-robot building)."""
-    res = _kept(carried, task.steps, delta, cost_before, makespan_before)
-    if res is None:
-        return None
-    replanned = res.plan != task.steps  # sidesteps or a split pair: steps the planner never saw
-    step_costs = tuple(res.run.step_costs(len(res.plan), carried.scenario.cost, delta))
-    w, objective = carried.scenario.cost, OBJECTIVES[carried.scenario.planner.objective]
-    value = objective.value(sum(step_costs), res.run.makespan, w)
-    kept = replace(
-        task,
-        status=PlanStatus.SOLVED_SATISFICING,
-        steps=res.plan,
-        action_names=action_names(res.plan) if replanned else task.action_names,
-        step_costs=step_costs,
-        schedule=res.run.schedule,
-        pddl=None if replanned else task.pddl,
-        bound=None if task.bound is None else task.bound.against(value),
-    )
-    apart = KeptApart(
-        conflicts_before=len(res.conflicts_before),
-        conflicts_left=len(res.conflicts_left),
-        waits=tuple((k + 1, round(v, 6)) for k, v in sorted(res.delays.items()) if v > EPS),
-        sidesteps=_sidesteps(task.steps, res.plan),
-        cost_before=cost_before,
-        makespan_before=makespan_before,
-        runs=res.iterations,
-        detours=_detour_lengths(carried.clock.lib, res),
-    )
-    return Kept(kept, dict(res.delays), dict(res.detours), apart)
-
-
-#: resolutions remembered per cost model (the least recently used dropped first): the anytime
-#: search prices its best plans with them (:class:`ExecutedCost`), and ``tmpnav plan`` keeps the
-#: plan it returns apart with the same one (:func:`keep_apart`) instead of searching again
-MAX_RESOLVED = 64
-_RESOLVED: WeakKeyDictionary[CarriedCosts, OrderedDict[tuple[Plan, float | None], Resolution | None]] = (
-    WeakKeyDictionary()
-)
-
-
-def _kept(
-    carried: CarriedCosts, plan: Plan, delta: float | None, cost_before: float, makespan_before: float
-) -> Resolution | None:
-    """The resolution :func:`keep_apart` applies to ``plan``, or None (its docstring says when;
-    also for a plan with a move over ``delta`` as planned: its run fails the chance constraint
-    whatever is done). Remembered by plan and ``delta``: ``cost_before`` and ``makespan_before``
-    are the plan's own, as planned on the clock."""
-    memo = _RESOLVED.setdefault(carried, OrderedDict())
-    key = (tuple(plan), delta)
-    if key in memo:
-        memo.move_to_end(key)
-        return memo[key]
-    found = memo[key] = _resolve(carried, key[0], delta, cost_before, makespan_before)
-    if len(memo) > MAX_RESOLVED:
-        memo.popitem(last=False)
-    return found
-
-
-def _resolve(
-    carried: CarriedCosts, plan: Plan, delta: float | None, cost_before: float, makespan_before: float
-) -> Resolution | None:
-    planned = carried.run(plan)
-    if planned is None or (delta is not None and max((m.risk for m in planned.moves), default=0.0) > delta):
-        return None
-    res = resolve_with_sidesteps(carried, plan, delta=delta, budget=None if delta is not None else RUN_BUDGET)
-    if not res.conflicts_before or len(res.conflicts_left) >= len(res.conflicts_before):
-        return None
-    if delta is not None and max((m.risk for m in res.run.moves), default=0.0) > delta:
-        return None  # kept apart only by a move over the chance constraint: the conflicts stay reported
-    w, objective = carried.scenario.cost, OBJECTIVES[carried.scenario.planner.objective]
-    if delta is None:
-        value = objective.value(sum(res.run.step_costs(len(res.plan), w)), res.run.makespan, w)
-        if value > (1.0 + MAX_RISE) * objective.value(cost_before, makespan_before, w):
-            return None  # a wait or detour that costs the robots their localisation: reported, not applied
-    return res
-
-
-class ExecutedCost:
-    """A plan's cost as it will be executed, robots kept apart: what ``tmpnav plan`` does to the
-    plan the search returns (:func:`keep_apart`), done to every plan the anytime search would
-    take as its best, so that the plan it picks is the plan executed, waits, detours and
-    sidesteps priced. ``price(plan, cost)``, with ``cost`` the plan's as planned (run on the
-    clock, robots passing through each other), gives the executed cost; ``cost`` itself when
-    the plan has no conflict, when nothing removes one, or when a move is over ``delta`` (the
-    run then fails its chance constraint whatever is done). Remembered per plan.
-
-    The executed cost is never below the cost as planned on the cases measured (waits and
-    detours only add time and motion), so the search prices a candidate only where its cost
-    as planned beats its best plan's executed cost (tmpnav.task.search)."""
-
-    def __init__(self, carried: CarriedCosts, delta: float | None):
-        self.carried, self.delta = carried, delta
-        self._memo: dict[Plan, PlanCost] = {}
-        self.priced = 0  # plans checked for conflicts (runs recorded)
-
-    def __call__(self, plan: Plan, cost: PlanCost) -> PlanCost:
-        plan = tuple(plan)
-        if plan not in self._memo:
-            self._memo[plan] = self._price(plan, cost)
-        return self._memo[plan]
-
-    def _price(self, plan: Plan, cost: PlanCost) -> PlanCost:
-        if not math.isfinite(cost.total):
-            return cost
-        self.priced += 1
-        res = _kept(self.carried, plan, self.delta, cost.total, cost.makespan)
-        if res is None:
-            return cost
-        executed = tuple(res.run.step_costs(len(res.plan), self.carried.scenario.cost, self.delta))
-        same = len(res.plan) == len(plan)  # no sidestep split a move: the steps are the plan's
-        return PlanCost(
-            float(sum(executed)),
-            executed if same else cost.steps,
-            res.run.schedule if same else cost.schedule,
-            cost.dropped,
-            None if same else res.run.makespan,
-        )
-
-
-def _detour_lengths(lib: MotionLibrary, res: Resolution) -> tuple[tuple[int, str, float], ...]:
-    """(plan step, 1-based; robot; metres the detour is longer than the roadmap's shortest
-    path between its ends) of each detour the run drove."""
-    out = []
-    for (k, robot), path in sorted(res.detours.items()):
-        if not any(m.step == k and tuple(m.motion.path) == path for m in res.run.moves):
-            continue  # the move started or ended elsewhere: driven as planned
-        shortest = lib.graph.path(path[0], path[-1]) or path
-        out.append((k + 1, robot, round(_length(lib, path) - _length(lib, shortest), 6)))
-    return tuple(out)
-
-
-def _length(lib: MotionLibrary, path: Sequence[int]) -> float:
-    points = lib.roadmap.nodes[list(path)]
-    return float(np.sum(np.hypot(*np.diff(points, axis=0).T)))
-
-
-def _sidesteps(planned: Plan, kept: Plan) -> tuple[tuple[str, str, str, str], ...]:
-    """(robot, origin, siding, target) of each move of ``kept`` into a room that ``planned`` never
-    sends its robot to, with the room the robot goes on to."""
-    targets = {(m[0], m[2]) for step in planned for m in step}
-    moves = [m for step in kept for m in step]
-    out = []
-    for i, (robot, origin, siding) in enumerate(moves):
-        if (robot, siding) not in targets:
-            onward = next((m[2] for m in moves[i + 1 :] if m[0] == robot), siding)
-            out.append((robot, origin, siding, onward))
-    return tuple(out)

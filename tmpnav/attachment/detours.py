@@ -57,23 +57,38 @@ ANGLE_EPS = 1e-9
 @dataclass(frozen=True)
 class Obstacle:
     """Another robot as a detour must avoid it: its planned centre at each control step from
-    ``t0`` on (``xy``: (H, 2) m; after the last row it stands at the last) and the separation
-    its centre requires from the detouring robot's at each of those steps (``separation``: (H,) m)."""
+    ``t0`` on (``xy``: (H, 2) m; after the last row it stands at the last), the separation
+    its centre requires from the detouring robot's at each of those steps (``separation``: (H,)
+    m), and the pair's time window in control steps at each of them (``window``: (H,) int,
+    tmpnav.attachment.drift; None: 0): the detouring robot at step t keeps the separation from
+    every row within the window of t's row, as the independent checker asks."""
 
     t0: int
     xy: np.ndarray
     separation: np.ndarray
+    window: np.ndarray | None = None
 
     def clear(self, steps: np.ndarray, points: np.ndarray) -> bool:
         """Whether ``points`` (n, 2) at clock ``steps`` (n,) keep the separation (steps before
         ``t0`` are not constrained)."""
-        rows = steps - self.t0
-        live = rows >= 0
-        if not np.any(live):
-            return True
-        rows = np.minimum(rows[live], self.xy.shape[0] - 1)
-        gap = np.hypot(*(points[live] - self.xy[rows]).T)
-        return bool(np.all(gap >= self.separation[rows]))
+        window = self.steps_window()
+        for step, point in zip(steps, points, strict=True):
+            r = int(step) - self.t0
+            if r < 0:
+                continue
+            last = self.xy.shape[0] - 1
+            w = int(window[min(r, last)])
+            rows = np.arange(min(max(r - w, 0), last), min(r + w, last) + 1)
+            gap = np.hypot(*(point[None] - self.xy[rows]).T)
+            if np.any(gap < self.separation[rows]):
+                return False
+        return True
+
+    def steps_window(self) -> np.ndarray:
+        """The window at each row (control steps; zeros without one)."""
+        if self.window is None:
+            return np.zeros(self.xy.shape[0], dtype=np.int64)
+        return np.asarray(self.window, dtype=np.int64)
 
     @property
     def last_step(self) -> int:
@@ -120,9 +135,11 @@ def detour(
     rows = np.array([o.xy.shape[0] for o in obstacles], dtype=np.int64)
     xy = np.zeros((count, longest, 2))
     sep = np.zeros((count, longest))
+    win = np.zeros((count, longest), dtype=np.int64)
     for k, o in enumerate(obstacles):
         xy[k, : o.xy.shape[0]] = o.xy
         sep[k, : o.xy.shape[0]] = o.separation
+        win[k, : o.xy.shape[0]] = o.steps_window()
     found = _search(
         nodes,
         indptr,
@@ -138,6 +155,7 @@ def detour(
         rows,
         xy,
         sep,
+        win,
         horizon,
         max(end, t_start),
         max_expansions,
@@ -146,36 +164,38 @@ def detour(
 
 
 @nb.njit(cache=True)
-def _clear(t0, rows, xy, sep, step, x, y):
-    """Whether the point (x, y) at clock ``step`` keeps every obstacle's separation."""
+def _clear(t0, rows, xy, sep, win, step, x, y):
+    """Whether the point (x, y) at clock ``step`` keeps every obstacle's separation from each
+    of its rows within the window of ``step``'s row."""
     for k in range(t0.shape[0]):
         r = step - t0[k]
         if r < 0:
             continue
-        if r >= rows[k]:
-            r = rows[k] - 1
-        dx, dy = x - xy[k, r, 0], y - xy[k, r, 1]
-        if dx * dx + dy * dy < sep[k, r] * sep[k, r]:
-            return False
+        last = rows[k] - 1
+        w = win[k, min(r, last)]
+        for q in range(min(max(r - w, 0), last), min(r + w, last) + 1):
+            dx, dy = x - xy[k, q, 0], y - xy[k, q, 1]
+            if dx * dx + dy * dy < sep[k, q] * sep[k, q]:
+                return False
     return True
 
 
 @nb.njit(cache=True)
-def _drives(t0, rows, xy, sep, t, n_turn, n_drive, ax, ay, bx, by):
+def _drives(t0, rows, xy, sep, win, t, n_turn, n_drive, ax, ay, bx, by):
     """Whether turning at (ax, ay) for ``n_turn`` steps from step ``t``, then driving to (bx, by)
     in ``n_drive`` steps, keeps every obstacle's separation."""
     for k in range(1, n_turn + n_drive + 1):
         frac = 0.0 if k <= n_turn else (k - n_turn) / n_drive
-        if not _clear(t0, rows, xy, sep, t + k, ax + frac * (bx - ax), ay + frac * (by - ay)):
+        if not _clear(t0, rows, xy, sep, win, t + k, ax + frac * (bx - ax), ay + frac * (by - ay)):
             return False
     return True
 
 
 @nb.njit(cache=True)
-def _stands(t0, rows, xy, sep, first, last, x, y):
+def _stands(t0, rows, xy, sep, win, first, last, x, y):
     """Whether standing at (x, y) from step ``first`` to ``last`` keeps every separation."""
     for step in range(first, last + 1):  # noqa: SIM110 -- numba compiles no generator into all()
-        if not _clear(t0, rows, xy, sep, step, x, y):
+        if not _clear(t0, rows, xy, sep, win, step, x, y):
             return False
     return True
 
@@ -195,14 +215,15 @@ def _unwind(st_node, st_parent, s):
 
 @nb.njit(cache=True)
 def _search(
-    nodes, indptr, indices, start, goal, heading0, t_start, speed, turn_rate, dt, t0, rows, xy, sep, horizon, end, cap
-):
+    nodes, indptr, indices, start, goal, heading0, t_start, speed, turn_rate, dt, t0, rows, xy, sep, win, horizon, end,
+    cap,
+):  # fmt: skip
     """A* over (node, previous node, clock step) (the module docstring); the path's nodes, or
     an empty array."""
     per_step = speed * dt
     gx, gy = nodes[goal, 0], nodes[goal, 1]
     empty = np.empty(0, dtype=np.int64)
-    if not _clear(t0, rows, xy, sep, t_start, nodes[start, 0], nodes[start, 1]):
+    if not _clear(t0, rows, xy, sep, win, t_start, nodes[start, 0], nodes[start, 1]):
         return empty
     n = nodes.shape[0]
     st_node = [start]
@@ -223,7 +244,7 @@ def _search(
         seen[key] = True
         expanded += 1
         if node == goal:
-            if _stands(t0, rows, xy, sep, t, max(end, t), gx, gy):
+            if _stands(t0, rows, xy, sep, win, t, max(end, t), gx, gy):
                 return _unwind(st_node, st_parent, s)
             continue
         ax, ay = nodes[node, 0], nodes[node, 1]
@@ -244,7 +265,7 @@ def _search(
             h = math.ceil(math.hypot(bx - gx, by - gy) / per_step - 1e-9)
             if t_next + h > horizon:
                 continue
-            if _drives(t0, rows, xy, sep, t, n_turn, n_drive, ax, ay, bx, by):
+            if _drives(t0, rows, xy, sep, win, t, n_turn, n_drive, ax, ay, bx, by):
                 st_node.append(nxt)
                 st_parent.append(s)
                 st_heading.append(direction)

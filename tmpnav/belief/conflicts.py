@@ -17,12 +17,18 @@ The checker knows nothing of plans, clocks or the oracle: it reads trajectories 
 robot's :class:`~tmpnav.types.TrajectoryStep` list on one grid of the models' ``dt``, a
 robot's last step holding after its trajectory ends), so it can confirm what the planner or
 the resolver (:mod:`tmpnav.attachment.conflicts`) claims. Consecutive conflicting steps of
-one pair of robots are one :class:`Conflict`. :func:`contacts` checks sampled true
+one pair of robots are one :class:`Conflict`.
+
+Robots run off the plan's clock when executed. Given a pair's **time window** w(t) (s, at each
+step: how far apart their clocks may be; :mod:`tmpnav.attachment.drift` derives it from a
+schedule), robot i at t and robot j at any t' with |t - t'| <= w(t) must keep the separation
+(with sigma_j taken at t'); w = 0 is the rule above. :func:`contacts` checks sampled true
 trajectories (``tmpnav simulate``): there a contact is ||x_i - x_j|| < r_i + r_j, no margin.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -49,6 +55,8 @@ class Conflict:
     closest_distance: float
     required_separation: float
     where: tuple[float, float]
+    #: the largest time window (s) of the pair over the conflict's steps (0: the same instant)
+    window: float = 0.0
 
     @property
     def shortfall(self) -> float:
@@ -73,15 +81,24 @@ def position_sigma(covs: np.ndarray) -> np.ndarray:
 
 
 def find_conflicts(
-    trajectories: Mapping[str, Sequence[TrajectoryStep]], radii: Mapping[str, float], delta: float = DEFAULT_DELTA
+    trajectories: Mapping[str, Sequence[TrajectoryStep]],
+    radii: Mapping[str, float],
+    delta: float = DEFAULT_DELTA,
+    windows: Mapping[tuple[str, str], np.ndarray] | None = None,
 ) -> list[Conflict]:
     """Every conflict (module docstring) of the planned beliefs, by start time, then robots.
-    The trajectories must share one time grid from a common start; ValueError otherwise."""
+    The trajectories must share one time grid from a common start; ValueError otherwise.
+    ``windows``: (a, b) with a < b -> the pair's time window (s) at each step of the grid (a
+    pair without one: 0, the same instant only)."""
     names = sorted(trajectories)
     times = _grid([[s.t for s in trajectories[r]] for r in names])
     means = _held([np.array([s.mean[:2] for s in trajectories[r]], dtype=float) for r in names], len(times))
     sigmas = _held([position_sigma(np.array([s.cov for s in trajectories[r]])) for r in names], len(times))
     k = margin_factor(delta)
+    if windows:
+        dt = float(times[1] - times[0]) if len(times) > 1 else 1.0
+        shifts = {p: np.floor(np.asarray(w, dtype=float) / dt + GRID_TOLERANCE).astype(int) for p, w in windows.items()}
+        return _windowed(names, times, means, sigmas, radii, k, shifts)
     return _pairs(names, times, means, lambda i, j: radii[names[i]] + radii[names[j]] + k * (sigmas[i] + sigmas[j]))
 
 
@@ -126,6 +143,47 @@ def _pairs(
                 span = (float(times[lo]), float(times[hi - 1]))
                 where = (float(mid[0]), float(mid[1]))
                 found.append(Conflict((names[i], names[j]), *span, float(gap[c]), float(need[c]), where))
+    return sorted(found, key=lambda c: (c.t_from, c.robots))
+
+
+def _windowed(
+    names: Sequence[str],
+    times: np.ndarray,
+    means: Sequence[np.ndarray],
+    sigmas: Sequence[np.ndarray],
+    radii: Mapping[str, float],
+    k: float,
+    shifts: Mapping[tuple[str, str], np.ndarray],
+) -> list[Conflict]:
+    """The runs of steps t at which robot i comes within the separation of robot j at some
+    step t + d, |d| <= the pair's window in steps at t; each reported at its step and shift of
+    largest shortfall. A pair without a window is checked at the same instant (d = 0)."""
+    found, steps = [], len(times)
+    index = np.arange(steps)
+    dt = float(times[1] - times[0]) if steps > 1 else 0.0
+    for i, j in itertools.combinations(range(len(names)), 2):
+        window = shifts.get((names[i], names[j]), np.zeros(steps, dtype=int))
+        worst = np.full(steps, -np.inf)  # need - gap at the worst shift
+        gap_at, need_at, other = np.zeros(steps), np.zeros(steps), index.copy()
+        for d in range(-int(window.max(initial=0)), int(window.max(initial=0)) + 1):
+            at = np.clip(index + d, 0, steps - 1)
+            gap = np.hypot(*(means[i] - means[j][at]).T)
+            need = radii[names[i]] + radii[names[j]] + k * (sigmas[i] + sigmas[j][at])
+            shortfall = np.where(np.abs(d) <= window, need - gap, -np.inf)
+            better = shortfall > worst
+            worst[better], gap_at[better], need_at[better], other[better] = (
+                shortfall[better],
+                gap[better],
+                need[better],
+                at[better],
+            )
+        for lo, hi in _runs(worst > 0.0):
+            c = lo + int(np.argmax(worst[lo:hi]))
+            mid = 0.5 * (means[i][c] + means[j][other[c]])
+            span = (float(times[lo]), float(times[hi - 1]))
+            late = float(window[lo:hi].max()) * dt
+            where = (float(mid[0]), float(mid[1]))
+            found.append(Conflict((names[i], names[j]), *span, float(gap_at[c]), float(need_at[c]), where, late))
     return sorted(found, key=lambda c: (c.t_from, c.robots))
 
 

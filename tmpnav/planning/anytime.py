@@ -3,7 +3,7 @@ for them, or on carried costs."""
 
 from __future__ import annotations
 
-from tmpnav.attachment.conflicts import ExecutedCost
+from tmpnav.attachment.apart import ExecutedCost
 from tmpnav.choices import exact_fits
 from tmpnav.planning.bound import certified_bound
 from tmpnav.planning.run import Planned, TaskRun

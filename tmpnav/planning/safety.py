@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from tmpnav.attachment.drift import clock_drift, trajectory_windows
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
 from tmpnav.belief.risk import local_errors, position_std, step_bound
 from tmpnav.belief.sequences import local_walls
@@ -25,13 +26,16 @@ from tmpnav.results import PlanReport
 DOOR_NEAR = 1.5
 
 
-def conflicts_left(report: PlanReport) -> list[Conflict]:
-    """Robots closer than their radii plus the margin of their uncertainty at one instant, by the
-    independent checker over the re-simulated trajectories (the margin's threshold is
-    planner.max_risk, else 0.05)."""
+def conflicts_left(report: PlanReport, drift: float | None = None) -> list[Conflict]:
+    """Robots closer than their radii plus the margin of their uncertainty, by the independent
+    checker over the re-simulated trajectories (the margin's threshold is planner.max_risk, else
+    0.05), within the pairs' time windows of ``drift`` (tmpnav.attachment.drift; the
+    scenario's by default, 0: at the same planned instant only)."""
     radii = {r.name: r.radius for r in report.scenario.robots}
     delta = report.scenario.planner.max_risk or DEFAULT_DELTA
-    return find_conflicts(report.trajectories, radii, delta)
+    rate = clock_drift(report.scenario) if drift is None else drift
+    windows = trajectory_windows(report.trajectories, report.schedule, rate)
+    return find_conflicts(report.trajectories, radii, delta, windows)
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ priced as executed."""
 
 from __future__ import annotations
 
-from tmpnav.attachment.conflicts import ExecutedCost
+from tmpnav.attachment.apart import ExecutedCost
 from tmpnav.attachment.unfold import unfold
 from tmpnav.errors import InputError
 from tmpnav.planning.anytime import anytime_carried, executed_cost

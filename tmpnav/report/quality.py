@@ -78,8 +78,9 @@ def _in_the_way(report: PlanReport) -> PlanWarning | None:
     if planner.max_risk is None or not planner.keep_apart or not (left := plan_conflicts(report)):
         return None
     first = left[0]
+    late = f" if their clocks drift {first.window:.1f} s apart (planner.clock_drift)" if first.window > 0 else ""
     text = (
-        f"robots stay in each other's way: {' and '.join(first.robots)} at {first.t_from:.1f} s, "
+        f"robots stay in each other's way{late}: {' and '.join(first.robots)} at {first.t_from:.1f} s, "
         f"{length(first.closest_distance)} apart where {length(first.required_separation)} are needed"
         + (f" (and {len(left) - 1} more)." if len(left) > 1 else ".")
     )
@@ -210,8 +211,8 @@ def _crossings(means: NDArray[np.float64], a: NDArray[np.float64], b: NDArray[np
 
 
 def plan_conflicts(report: PlanReport) -> list[Conflict]:
-    """Robots closer than their radii plus the margin of their uncertainty at one instant
-    (tmpnav.planning.safety.conflicts_left: the independent checker over the re-simulated
-    trajectories). Robots asked to be kept apart were kept apart first where that helps
-    (tmpnav.attachment.conflicts.keep_apart): what is left."""
+    """Robots closer than their radii plus the margin of their uncertainty, within the time
+    windows of planner.clock_drift (tmpnav.planning.safety.conflicts_left: the independent
+    checker over the re-simulated trajectories). Robots asked to be kept apart were kept apart first where that helps
+    (tmpnav.attachment.apart.keep_apart): what is left."""
     return conflicts_left(report)

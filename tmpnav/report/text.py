@@ -48,6 +48,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tmpnav.attachment.drift import clock_drift
 from tmpnav.belief.risk import position_std
 from tmpnav.choices import STOP_MEANINGS
 from tmpnav.numbers import angle, length, probability
@@ -271,7 +272,9 @@ def _risk_lines(report: PlanReport) -> list[str]:
         within = f"{over} of {len(risks)} moves over max_risk {delta:g}"
     else:
         within = f"every move within max_risk {delta:g}"
-    bound = f"collision bound: plan {probability(report.risk)} ({within}); robots in each other's way: "
+    drift = clock_drift(report.scenario)
+    late = f" (their clocks drifting up to {drift:g} s per s driven)" if drift > 0 else ""
+    bound = f"collision bound: plan {probability(report.risk)} ({within}); robots in each other's way{late}: "
     conflicts = plan_conflicts(report)
     if not conflicts:
         return [bound + "none", *_apart_lines(report)]
@@ -282,8 +285,10 @@ def _risk_lines(report: PlanReport) -> list[str]:
         hint = "no wait or detour clears them" if delta is None else "no wait, detour or sidestep clears them"
     return [
         f"{bound}{len(conflicts)}, the first:",
-        f" {' and '.join(first.robots)} at {first.t_from:.1f} s, {length(first.closest_distance)} apart, "
-        f"{length(first.required_separation)} needed; {hint}: docs/planning.md",
+        f" {' and '.join(first.robots)} at {first.t_from:.1f} s"
+        + (f" (their clocks {first.window:.1f} s apart)" if first.window > 0 else "")
+        + f", {length(first.closest_distance)} apart, {length(first.required_separation)} needed; "
+        f"{hint}: docs/planning.md",
         *_apart_lines(report),
     ]
 

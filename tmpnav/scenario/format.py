@@ -634,6 +634,11 @@ PLANNER = Section(
             "robots in each other's way on the team's clock (closer than their radii plus a margin for their uncertainty) are kept apart, every plan the anytime search would take priced so (an exact plan that keeping apart makes dearer is searched on so): a move held back (a wait), driven along another roadmap path around the other robot (a detour) or made through a room no goal names (a sidestep), if that raises the plan's objective by at most half (under max_risk: if every move stays within it); false: the plan as planned, its conflicts reported (the paper's model)",
             default=True,
         ),
+        "clock_drift": Field(
+            Number(None, minimum=0.0, maximum=1.0),
+            "robots kept apart (keep_apart) allow for running late on the plan's clock: each may fall behind by this many seconds per second it drives (a planned wait absorbs it; partners of a paired move start it together), and two robots are in each other's way when they come within their separation within that much time of each other; 0: at the same planned instant only (the paper's model); omitted: 0.1 where models.range_sensor.localiser is amcl (nav2 executes the plan), else 0 (docs/models.md, \"Two robots off the plan's clock\")",
+            default=None,
+        ),
         "costs": Field(
             Choice(choices=COSTS_CHOICES),
             "what an action costs the planner: carried (from the beliefs the robots carry at that point of the plan, as executed) or table (every move from a canonical start state: faster, far off where landmarks are sparse)",

@@ -37,7 +37,7 @@ class PlanCost:
     schedule: Schedule | None = None
     dropped: float = 0.0  # the penalties of the optional goals it leaves undone (goals.jobs)
     #: the makespan when it is not the schedule's: a plan executed with a move split in two
-    #: (a sidestep, tmpnav.attachment.conflicts.ExecutedCost) keeps the plan's own schedule
+    #: (a sidestep, tmpnav.attachment.apart.ExecutedCost) keeps the plan's own schedule
     span: float | None = None
 
     @property

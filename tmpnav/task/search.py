@@ -71,7 +71,7 @@ from tmpnav.types import CostTable, Goals
 EPSILON = 1e-9
 
 #: a plan's cost as it will be executed, from the plan and its cost as planned
-#: (tmpnav.attachment.conflicts.ExecutedCost: robots kept apart)
+#: (tmpnav.attachment.apart.ExecutedCost: robots kept apart)
 Executed = Callable[[Plan, PlanCost], PlanCost]
 _T = TypeVar("_T")
 
