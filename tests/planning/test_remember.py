@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -10,6 +11,7 @@ from tmpnav.oracle.cache import DiskCache
 from tmpnav.oracle.keys import context_digest
 from tmpnav.pipeline import PlanOptions, plan
 from tmpnav.planning.remember import search_key
+from tmpnav.scenario.load import load
 
 ROOT = Path(__file__).resolve().parents[2]
 TWO_ROOMS = ROOT / "tests" / "fixtures" / "two_rooms.yaml"
@@ -65,3 +67,11 @@ def test_a_plan_a_time_cap_cut_short_is_not_remembered(tmp_path: Path) -> None:
     cold = plan(TWO_ROOMS, options)
     assert "the search's time cap" in cold.task.search.capped
     assert not plan(TWO_ROOMS, options).task.plan_hit
+
+
+def test_the_key_names_the_clock_drift_the_search_prices_plans_with() -> None:
+    scenario = load(TWO_ROOMS)
+    drifting = replace(scenario, planner=replace(scenario.planner, clock_drift=0.1))
+    assert search_key(scenario, "context") != search_key(drifting, "context")
+    on_time = replace(scenario, planner=replace(scenario.planner, clock_drift=0.0))
+    assert search_key(scenario, "context") == search_key(on_time, "context")  # no AMCL: 0 by default

@@ -12,7 +12,8 @@ sub-problem's) depends on the machine's speed, and is not remembered.
 The key covers the oracle's context (its code, the world, the roadmap, the models and
 weights), the robots, the goals, the planner options that shape the search (engine,
 encoding, pair_min_gain, search, costs), the objective (and its price of time, the chance
-constraint, whether robots are kept apart, which the search prices) and the code
+constraint, whether robots are kept apart and with what clock drift, which the search
+prices) and the code
 of the task stage (task/, attachment/, planning/). On
 a hit the plan's costs are computed again by the cost model (from the oracle's cache: the
 same numbers), so a remembered plan is reported exactly as a searched one.
@@ -24,6 +25,7 @@ import hashlib
 import math
 from functools import lru_cache
 
+from tmpnav.attachment.drift import clock_drift
 from tmpnav.digest import folders_digest
 from tmpnav.results import JSON, BoundSummary, SearchSummary, TaskCounts, TaskResult
 from tmpnav.task.memo import EntryStore
@@ -47,7 +49,7 @@ def search_key(scenario: Scenario, context: str) -> str:
     robots = [(r.name, r.pose, r.covariance, r.radius, r.speed, r.turn_rate) for r in scenario.robots]
     parts = (VERSION, _code_version(), context, robots, scenario.goals, sp.name, sp.encoding, repr(sp.pair_min_gain))
     # what the plan minimises, within what, and whether it is judged with its robots kept apart
-    time = (sp.objective, repr(scenario.cost.M_T), repr(sp.max_risk), sp.keep_apart)
+    time = (sp.objective, repr(scenario.cost.M_T), repr(sp.max_risk), sp.keep_apart, repr(clock_drift(scenario)))
     return hashlib.sha256(repr((*parts, sp.search, sp.costs, *time)).encode()).hexdigest()
 
 
