@@ -77,6 +77,7 @@ building's plan was 49.7% with it and is 32.0% with this one (docs/planning.md).
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Callable
 from functools import partial
@@ -272,14 +273,19 @@ class _Walks:
         self.paths, self.spec, self.dt, self.rpp = paths, spec, dt, rpp
         self.xy = np.ascontiguousarray(paths.roadmap.nodes[:, :2], dtype=float)
 
-    def _of(self, source: int) -> np.ndarray:
+    def _of(self, source: int, targets: np.ndarray) -> np.ndarray:
+        """The walk's (5, T) rows at ``targets`` (:func:`_walk`)."""
         s = self.spec
+        targets = np.ascontiguousarray(targets, dtype=np.int64)
 
         def walk() -> np.ndarray:
             dist, pred = self.paths.tree(source)
-            return np.asarray(_walk(pred, dist, self.xy, source, s.speed, s.turn_rate, self.dt, SLACK, LENGTH_EPS))
+            return np.asarray(
+                _walk(pred, dist, self.xy, source, targets, s.speed, s.turn_rate, self.dt, SLACK, LENGTH_EPS)
+            )
 
-        return self.paths.derived(source, ("walk", s.speed, s.turn_rate, self.dt), walk)
+        which = hashlib.blake2b(targets.tobytes(), digest_size=16).hexdigest()
+        return self.paths.derived(source, ("walk", s.speed, s.turn_rate, self.dt, which), walk)
 
     def floors(
         self, source: int, headings: tuple[float, ...] | None, targets: np.ndarray, m_drive: float, m_turn: float
@@ -288,7 +294,7 @@ class _Walks:
         starting with one of ``headings`` (None: any)."""
         if self.rpp:
             return self._pursued(source, targets, m_drive)
-        walked = self._of(source)[:, targets]  # drive c_u, drive s, turn c_u, turn s, first heading
+        walked = self._of(source, targets)  # drive c_u, drive s, turn c_u, turn s, first heading
         first = walked[4]
         if headings is None:
             angle = np.zeros_like(first)
@@ -326,11 +332,13 @@ class _Walks:
 
 
 @nb.njit(cache=True)
-def _walk(pred, dist, xy, root, speed, turn_rate, dt, slack, length_eps):
-    """Along the shortest-path tree ``pred`` from ``root``: for every node, (5, N) rows of the
-    drives' c_u and seconds, the turns' c_u and seconds after the first edge with a length,
-    and that edge's heading (NaN: none; unreachable nodes: inf). Each turn is the one
-    turn-then-drive makes: from the heading of the last edge with a length to the next's."""
+def _walk(pred, dist, xy, root, targets, speed, turn_rate, dt, slack, length_eps):
+    """Along the shortest-path tree ``pred`` from ``root``, at each of ``targets``: (5, T) rows
+    of the drives' c_u and seconds, the turns' c_u and seconds after the first edge with a
+    length, and that edge's heading (NaN: none; unreachable targets: inf). Each turn is the one
+    turn-then-drive makes: from the heading of the last edge with a length to the next's. Only
+    the tree's branches to the targets are walked (a few thousand of a large roadmap's nodes),
+    each node once, from the root down."""
     n = pred.shape[0]
     out = np.full((5, n), np.inf)
     last = np.full(n, np.nan)
@@ -338,9 +346,8 @@ def _walk(pred, dist, xy, root, speed, turn_rate, dt, slack, length_eps):
     out[0:4, root] = 0.0
     out[4, root] = np.nan
     done[root] = True
-    order = np.argsort(dist)
     chain = np.empty(n, dtype=np.int64)
-    for n0 in order:
+    for n0 in targets:
         if done[n0] or not np.isfinite(dist[n0]):
             continue
         k, m = 0, n0
@@ -368,7 +375,11 @@ def _walk(pred, dist, xy, root, speed, turn_rate, dt, slack, length_eps):
                 out[1, m] += _seconds_one(length, speed, dt, slack)
                 last[m] = heading
             done[m] = True
-    return out
+    result = np.empty((5, targets.shape[0]))
+    for i in range(targets.shape[0]):
+        for r in range(5):
+            result[r, i] = out[r, targets[i]]
+    return result
 
 
 @nb.njit(cache=True)
