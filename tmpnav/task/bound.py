@@ -85,8 +85,10 @@ from tmpnav.types import CostTable, Goals, MoveKey
 ROUNDING = 1e-9
 #: the relative gap below which a plan's cost counts as proved optimal
 OPTIMAL_GAP = 1e-6
-#: rounds of connectivity cuts in relaxation (c)
-CUT_ROUNDS = 50
+#: rounds of connectivity cuts in relaxation (c): the 200-room, 2-robot office converges in 18; a
+#: 100-room, 16-robot office gains 1% of its bound from round 25 to its convergence at 40-44,
+#: at 2.5 times the LPs' time
+CUT_ROUNDS = 25
 #: choices of n + 1 rooms (n robots) the makespan's pair bound tries at most (20 rooms, 4 robots: 15,504)
 MAX_PAIR_SUBSETS = 20_000
 

@@ -78,9 +78,9 @@ def flow_bound(
     rounds: int,
     stop: Callable[[], bool] | None = None,
 ) -> FlowBound | None:
-    """The dual bound of the LP after up to ``rounds`` rounds of cuts, or fewer when ``stop``,
-    asked after each LP, says so (every LP's dual bound holds); None when the solver returns
-    no duals.
+    """The best dual bound of the LPs over up to ``rounds`` rounds of cuts, or fewer when
+    ``stop``, asked after each LP, says so (every LP's dual bound holds); None when the solver
+    returns no duals.
 
     The LP is solved over a subset of the columns (each robot's cheapest moves into each
     location, and the pairs of those), and a column joins when its reduced cost under
@@ -103,7 +103,8 @@ def flow_bound(
         y_cuts = np.minimum(res.duals[n_fixed : n_fixed + n_cuts], 0.0)
         y_eq = res.duals[n_fixed + n_cuts :]
         reduced = lp.cost - lp.a_eq.T @ y_eq - lp.a_fixed.T @ y_fixed - lp.cuts.block().T @ y_cuts
-        last = float(lp.b_eq @ y_eq + lp.b_fixed @ y_fixed + np.minimum(reduced, 0.0).sum())
+        value = float(lp.b_eq @ y_eq + lp.b_fixed @ y_fixed + np.minimum(reduced, 0.0).sum())
+        last = value if last is None else max(last, value)  # each LP's dual bound holds: the best
         entering = ~active & (reduced < -PRICING_TOLERANCE)
         if cut_rounds == rounds:
             break
