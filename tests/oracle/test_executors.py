@@ -79,3 +79,24 @@ def test_workers_hand_their_cells_to_the_parent(monkeypatch: pytest.MonkeyPatch)
     again, _ = SerialExecutor().run(ctx, requests)
     assert again == results
     assert (scans.size, reach.rows) == (learned_scans, learned_reach)  # nothing computed twice
+
+
+def test_the_terminated_pools_manager_thread_prints_no_traceback() -> None:
+    """Only the thread quieted (the pool's manager, its workers terminated) is silenced; the
+    others still reach the hook that was there before."""
+    import threading
+
+    def fail() -> None:
+        raise OSError("a worker's pipe closed")
+
+    saved, reported = threading.excepthook, []
+    try:
+        threading.excepthook = lambda args: reported.append(args.thread)
+        quiet, loud = threading.Thread(target=fail), threading.Thread(target=fail)
+        executors._quiet(quiet)
+        for thread in (quiet, loud):
+            thread.start()
+            thread.join()
+        assert reported == [loud]
+    finally:
+        threading.excepthook = saved

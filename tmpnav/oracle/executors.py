@@ -234,6 +234,7 @@ class ProcessExecutor:
             return
         # ProcessPoolExecutor has no public way to stop running tasks before Python 3.14
         workers = list(getattr(pool, "_processes", {}).values())
+        _quiet(getattr(pool, "_executor_manager_thread", None))
         for process in workers:
             with contextlib.suppress(OSError, ValueError):
                 process.terminate()
@@ -248,6 +249,21 @@ class ProcessExecutor:
         if self._pool is not None:
             self._pool.shutdown()
             self._pool = None
+
+
+def _quiet(thread: threading.Thread | None) -> None:
+    """Print no exception of ``thread``: the pool's manager thread, whose workers are being
+    terminated, can trip over their pipes closing (seen once as a traceback on stderr after
+    Ctrl-C, tests/oracle/test_cache.py). The run is ending, and says why itself."""
+    if thread is None:
+        return
+    previous = threading.excepthook
+
+    def hook(args: threading.ExceptHookArgs) -> None:
+        if args.thread is not thread:
+            previous(args)
+
+    threading.excepthook = hook
 
 
 class RayExecutor:
