@@ -23,6 +23,7 @@ import signal
 import sys
 import threading
 import time
+import weakref
 from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -251,19 +252,27 @@ class ProcessExecutor:
             self._pool = None
 
 
+#: threads whose exceptions are not printed (:func:`_quiet`)
+_QUIET: weakref.WeakSet[threading.Thread] = weakref.WeakSet()
+
+
 def _quiet(thread: threading.Thread | None) -> None:
     """Print no exception of ``thread``: the pool's manager thread, whose workers are being
     terminated, can trip over their pipes closing (seen once as a traceback on stderr after
-    Ctrl-C, tests/oracle/test_cache.py). The run is ending, and says why itself."""
+    Ctrl-C, tests/oracle/test_cache.py). The run is ending, and says why itself. One hook reads
+    the set, put before the hook in place unless it is already there."""
     if thread is None:
         return
-    previous = threading.excepthook
+    if not getattr(threading.excepthook, "tmpnav_quiet", False):
+        previous = threading.excepthook
 
-    def hook(args: threading.ExceptHookArgs) -> None:
-        if args.thread is not thread:
-            previous(args)
+        def hook(args: threading.ExceptHookArgs) -> None:
+            if args.thread not in _QUIET:
+                previous(args)
 
-    threading.excepthook = hook
+        hook.tmpnav_quiet = True  # type: ignore[attr-defined]
+        threading.excepthook = hook
+    _QUIET.add(thread)
 
 
 class RayExecutor:

@@ -135,7 +135,7 @@ def _solve(lp: _Program, active: Bools) -> LpSolution:
     cols = np.flatnonzero(active)
     at = np.full(len(lp.cost), -1, dtype=np.int64)
     at[cols] = np.arange(len(cols))
-    parts = [Rows.of(lp.fixed_rows), lp.cuts.rows, Rows.of(lp.eq_rows)]
+    parts = [lp.fixed_rows, lp.cuts.rows, lp.eq_rows]
     rows = Rows.stack([part.restricted(at) for part in parts])
     n_ub = len(lp.b_fixed) + len(lp.cuts)
     return minimise(
@@ -165,7 +165,7 @@ class _Program:
         self._equalities(rows, loc)
         self._inequalities(table, goals, loc)
         self.cuts = Cuts(self.n_columns)  # cut (robot, k, W) -> its row, and the rounds it has stayed slack
-        self.fixed_rows, self.eq_rows = self.a_fixed.tocsr(), self.a_eq.tocsr()
+        self.fixed_rows, self.eq_rows = Rows.of(self.a_fixed.tocsr()), Rows.of(self.a_eq.tocsr())
         # each robot's incidences (column, origin, target), for its cuts' rows
         self._mine = [np.flatnonzero(self.rob == r) for r in range(len(self.robots))]
 

@@ -79,6 +79,7 @@ class Cuts:
         self.slack = np.zeros(0, dtype=np.int64)
         self.rows = Rows(np.zeros(1, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0))
         self._known: set[tuple[int, int, frozenset[int]]] = set()
+        self._block: SparseMatrix | None = None  # :meth:`block` of these rows, once made
 
     def __len__(self) -> int:
         return len(self.keys)
@@ -91,17 +92,20 @@ class Cuts:
         if not new:
             return
         parts = [self.rows] + [Rows(np.array([0, len(c)], dtype=np.int64), c, v) for _, c, v in new]
-        self.rows = Rows.stack(parts)
+        self.rows, self._block = Rows.stack(parts), None
         self.keys += [key for key, _, _ in new]
         self._known.update(key for key, _, _ in new)
         self.slack = np.concatenate([self.slack, np.zeros(len(new), dtype=np.int64)])
 
     def block(self) -> SparseMatrix:
-        """The cuts' rows over every column (CSR)."""
+        """The cuts' rows over every column (CSR), made once for a round's pricing and its
+        dropping of slack cuts."""
         from scipy.sparse import csr_array
 
-        r = self.rows
-        return csr_array((r.data, r.indices, r.indptr), shape=(len(self.keys), self.n_columns))
+        if self._block is None:
+            r = self.rows
+            self._block = csr_array((r.data, r.indices, r.indptr), shape=(len(self.keys), self.n_columns))
+        return self._block
 
     def drop_slack(self, x: Floats) -> None:
         """Forget the cuts that stayed slack for SLACK_ROUNDS rounds (they may come back)."""
@@ -113,7 +117,7 @@ class Cuts:
             return
         self._known.difference_update(k for k, kept in zip(self.keys, keep, strict=True) if not kept)
         self.keys = [k for k, kept in zip(self.keys, keep, strict=True) if kept]
-        self.rows, self.slack = self.rows.kept(keep), self.slack[keep]
+        self.rows, self.slack, self._block = self.rows.kept(keep), self.slack[keep], None
 
 
 def short_cuts(cap: NDArray[np.int64], source: int, k: int, need: float) -> list[frozenset[int]]:
