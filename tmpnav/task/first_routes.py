@@ -51,6 +51,7 @@ def first_routes(
     fleet: bool,
     span_weight: float,
     start_from: Plan | None = None,
+    second: bool = False,
 ) -> tuple[Routes, bool]:
     """The routes of the search's first plan, and whether OR-Tools stopped at its time limit
     (the plan then depends on the machine's speed). OR-Tools' guided local search stops after
@@ -60,7 +61,9 @@ def first_routes(
     quarter of the search's ``budget`` (not what a cold oracle left of the budget: cut to 0.1 s,
     its first solution left robots of a shift at their docks, tests/test_team_objective.py),
     within ``time_left``. A ``fleet`` (more robots than a neighbourhood holds) whose objective
-    prices time (``span_weight``) starts from :data:`FLEET_FIRST_SOLUTION`."""
+    prices time (``span_weight``) starts from :data:`FLEET_FIRST_SOLUTION`. A ``second`` routing
+    (the search's makespan-first candidate) stops after :data:`FEW_STAGNATION` solutions in a
+    row without improvement whatever the size."""
     limit = routing_time if routing_time is not None else min(ROUTING_CAP, max(1.0, budget / 4))
     few = len(goals.all_rooms) <= FEW_ROOMS and len(robots) <= 2
     routes = solve_routes(
@@ -68,7 +71,7 @@ def first_routes(
         goals,
         time_limit=max(0.001, min(limit, time_left)),
         solution_limit=ROUTING_SOLUTIONS,
-        stagnation=REPLAN_STAGNATION if start_from is not None else FEW_STAGNATION if few else None,
+        stagnation=REPLAN_STAGNATION if start_from is not None else FEW_STAGNATION if few or second else None,
         first_solution=FLEET_FIRST_SOLUTION if fleet and span_weight else "PATH_CHEAPEST_ARC",
         span_weight=span_weight,
         initial=None if start_from is None else routes_of(start_from, robots),

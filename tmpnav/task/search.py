@@ -5,13 +5,15 @@ optimal ENHSP search, but any part of it a few rooms and robots wide is small. T
 
 1. **Start.** OR-Tools routes the robots through the goal rooms on the single-move costs
    (:mod:`tmpnav.task.first_routes`, :mod:`tmpnav.task.routing`): a plan of single moves, usually good, within seconds.
+   Where the objective prices time, a second routing puts the longest route first, and the
+   better of the two by the objective is the start (:meth:`AnytimeSearch._makespan_first`).
 2. **Improve.** Repeatedly open the plan around a seed room: up to ``sub_robots`` robots
    whose routes pass near it and a contiguous stretch of each route, ``size`` rooms in all.
    The sub-problem -- those robots, from where they are at that point of the plan, must
    visit those rooms, each ending where its stretch ended when the robot has moves after
    it -- is costed by the cost model from the robots' states at that point (paired moves
    included) and solved optimally by ENHSP through unified-planning
-   (:mod:`tmpnav.task.pddl_text`). Its plan replaces the stretch; the whole plan is costed
+   (:mod:`tmpnav.task.subproblems`, :mod:`tmpnav.task.pddl_text`). Its plan replaces the stretch; the whole plan is costed
    again by the model, and kept if it is cheaper. ENHSP decides every step of the plan.
 3. **Between robots.** When a round of neighbourhoods of every size has covered every room
    without an improvement, the routes are edited as vehicle routing's local searches edit
@@ -59,12 +61,12 @@ from tmpnav.task.budget import SearchBudget
 from tmpnav.task.decode import canonical_order
 from tmpnav.task.first_routes import first_routes, no_routes
 from tmpnav.task.model import CostModel, PlanCost
-from tmpnav.task.model import entered as entered_by
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
-from tmpnav.task.pddl_text import Clocks, PddlTask, write_task
-from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, Step, cut, splice, with_missing, with_origins
+from tmpnav.task.objectives import MAKESPAN_WEIGHT
+from tmpnav.task.plans import Plan, Rules, Step, splice, with_missing, with_origins
 from tmpnav.task.routes import route_edits
 from tmpnav.task.solve import Background
+from tmpnav.task.subproblems import Encoding, Sub, SubProblems
 from tmpnav.types import CostTable, Goals
 
 #: relative improvement below which a new plan does not count as better
@@ -153,15 +155,6 @@ class SearchResult:
 
 
 @dataclass(frozen=True)
-class _Sub:
-    """A neighbourhood's sub-problem, ready for ENHSP."""
-
-    hood: Neighbourhood
-    opened: Cut
-    task: PddlTask
-
-
-@dataclass(frozen=True)
 class _Batch:
     """Sub-problems tried together, each with ENHSP's plan or the search that gives it.
 
@@ -173,7 +166,7 @@ class _Batch:
     clocks) is such a sub-problem. A search that found no plan in time is not remembered (a
     longer timeout might find one)."""
 
-    subs: list[_Sub]
+    subs: list[Sub]
     plans: list[Future[list[Step] | None] | list[Step] | None]  # None: no plan, or no time to search
     state: tuple[object, ...]  # the random generator's state after the batch was drawn (() if not drawn)
 
@@ -202,7 +195,8 @@ class AnytimeSearch:
         self.budget = SearchBudget(options.work, options.budget, self.t0)
         self._timed_out: set[tuple[str, str]] = set()  # sub-problems whose ENHSP search hit its time limit
         self.near = Closeness(CostTable((), (), (), {}, {}, {}), model.start_location, model.robots)
-        self.waypoints: tuple[str, ...] = ()
+        encoding = Encoding(options.encoding, options.min_gain, options.span_weight)
+        self.subs = SubProblems(model, goals, self.rules, encoding, self.times)
         self.singles = CostTable((), (), (), {}, {}, {})
         self._stack = contextlib.ExitStack()
         self._solver: Background | None = None
@@ -224,10 +218,15 @@ class AnytimeSearch:
 
     # ------------------------------------------------------------------ start
 
-    def first_plan(self, singles: CostTable, start_from: Plan | None = None) -> tuple[Plan, str]:
+    def first_plan(
+        self, singles: CostTable, start_from: Plan | None = None, span_weight: float | None = None
+    ) -> tuple[Plan, str]:
         """OR-Tools' routes on the single moves, as a plan of single moves; its local search
-        starts from ``start_from``'s routes when given (a replan's plan under way)."""
+        starts from ``start_from``'s routes when given (a replan's plan under way). The routes
+        minimise the sum of the moves' costs plus ``span_weight`` (default: the objective's) per
+        second of the longest route."""
         opts = self.options
+        weight = opts.span_weight if span_weight is None else span_weight
         with self.times.timed("planner"):
             routes, timed_out = first_routes(
                 singles,
@@ -237,8 +236,9 @@ class AnytimeSearch:
                 routing_time=opts.routing_time,
                 time_left=self.left(),
                 fleet=self.fleet,
-                span_weight=opts.span_weight,
+                span_weight=weight,
                 start_from=start_from,
+                second=span_weight is not None,
             )
             if timed_out:
                 self.budget.cap(caps.ROUTING_CAP)
@@ -246,6 +246,25 @@ class AnytimeSearch:
             raise PlannerError(no_routes(routes))
         plan = with_origins([((m[0], m[2]),) for m in routes.moves(singles)], self.model.start_location)
         return self.canonical(plan), routes.method
+
+    def _makespan_first(self, singles: CostTable, seeds: dict[str, Plan]) -> list[tuple[str, Plan]]:
+        """A second first plan where the objective prices time below the makespan objective's
+        price, for a team planned from scratch (no plan under way): OR-Tools' routes with the
+        longest route first (:data:`MAKESPAN_WEIGHT` per second). Routes that price time lightly
+        can leave a robot idle that a search from them does not put to work: building-4robots
+        with the AMCL model converged at 583.5 with r3 on 2 rooms from the weighted routes, and
+        at 562.3 with every robot on 4-6 rooms from these (tmpnav.task.objectives). Not where
+        the first routing ran out of its time limit (at 200 rooms it takes all of its 30 s)."""
+        weight = self.options.span_weight
+        if not weight or weight >= MAKESPAN_WEIGHT or len(self.model.robots) < 2 or UNDER_WAY in seeds:
+            return []
+        if caps.ROUTING_CAP in self.budget.capped:  # the first routing took all its time: no second
+            return []
+        try:
+            plan, routed = self.first_plan(singles, span_weight=MAKESPAN_WEIGHT)
+        except PlannerError:
+            return []
+        return [(f"{routed}, the makespan first", plan)]
 
     @property
     def fleet(self) -> bool:
@@ -277,7 +296,7 @@ class AnytimeSearch:
         self.singles = singles
         self.near = Closeness(singles, self.model.start_location, self.model.robots)
         taken = set(self.goals.all_rooms) | set(self.model.start_location.values())
-        self.waypoints = tuple(dict.fromkeys(t for _, _, t in singles.single if t not in taken))
+        self.subs.waypoints = tuple(dict.fromkeys(t for _, _, t in singles.single if t not in taken))
         # the seeds with a replan's new goals put in; OR-Tools' routes start from the plan under way
         valid = {
             name: p
@@ -293,6 +312,7 @@ class AnytimeSearch:
                     raise
             else:  # no routes found in time: the seeds (a replan's repaired plan) are the first plans
                 starts.insert(0, (routed, plan))
+            starts.extend(self._makespan_first(singles, valid))
         (start, best), cost = starts[0], self.priced(starts[0][1], self.cost(starts[0][1]))
         for name, seed in starts[1:]:
             seed_cost = self.priced(seed, self.cost(seed))
@@ -461,7 +481,7 @@ class AnytimeSearch:
 
     def _launch(self, plan: Plan, hoods: list[Neighbourhood], state: tuple[object, ...]) -> _Batch:
         """The sub-problems of ``hoods`` costed, and ENHSP started on those not solved before."""
-        subs = [sub for hood in hoods if (sub := self._sub_problem(plan, hood)) is not None]
+        subs = [sub for hood in hoods if (sub := self.subs.of(plan, hood, self.best_cost)) is not None]
         timeout = min(self.options.sub_timeout, self.left())
         plans: list[Future[list[Step] | None] | list[Step] | None] = []
         for sub in subs:
@@ -508,7 +528,7 @@ class AnytimeSearch:
                 else:  # a search two batches asked for: counted once
                     self.stats.reused += 1
                 steps.append(solved)
-        costed: list[tuple[Plan, PlanCost, _Sub]] = []
+        costed: list[tuple[Plan, PlanCost, Sub]] = []
         for sub, found in zip(batch.subs, steps, strict=True):  # in the neighbourhoods' order
             if found is None:
                 continue
@@ -528,43 +548,7 @@ class AnytimeSearch:
         self._note(self.value(cost), f"{len(sub.hood.robots)} robots, {len(sub.hood.rooms)} rooms")
         return True
 
-    def _sub_problem(self, plan: Plan, hood: Neighbourhood) -> _Sub | None:
-        """The sub-problem of ``hood``: the plan opened, its goals, its costs, its PDDL text."""
-        opened = cut(plan, set(hood.removed), set(hood.robots))
-        try:
-            head_state = self.rules.run(opened.head)
-        except PlanError:
-            return None
-        goals = self._sub_goals(plan, hood, head_state)
-        # rooms nobody has to enter may be passed through (a detour can be cheaper than a direct move)
-        entered = {m[2] for step in plan for m in step}
-        free = [x for x in self.waypoints if x not in entered or x in hood.rooms]
-        dropped = [x for x in goals.visit if x not in hood.rooms]  # optional goals left undone, to take up
-        with self.times.timed("oracle"):
-            table = self.model.subtable(opened.head, hood.robots, (*hood.rooms, *dropped, *free), goals)
-            clocks = self._clocks(opened, hood) if self.options.span_weight or self.goals.windows else None
-        opts = self.options
-        with self.times.timed("encode"):
-            task = write_task(table, goals, opts.encoding, "sub", opts.min_gain, hood.ends, opts.span_weight, clocks)
-        return _Sub(hood, opened, task)
-
-    def _clocks(self, opened: Cut, hood: Neighbourhood) -> Clocks:
-        """Where the team's clock stands for a sub-problem: each of its robots free when its moves
-        before the sub-problem end, plus the time its moves after it take (they follow what the
-        sub-problem gives it); the span, the end of the other robots' moves in the current plan."""
-        schedule = self.best_cost.schedule
-        if schedule is None:
-            return Clocks()
-        ends = self.model.ends(opened.head)
-        start = {}
-        for r in hood.robots:
-            timeline = schedule.timeline(r)
-            last = max((m.done for m in timeline if m.step in hood.removed), default=ends[r])
-            start[r] = ends[r] + max(0.0, max((m.done for m in timeline), default=0.0) - last)
-        others = [m.done for m in schedule.moves if m.robot not in hood.robots]
-        return Clocks(start, max(others, default=0.0))
-
-    def _solve(self, sub: _Sub, timeout: float) -> list[Step] | None:
+    def _solve(self, sub: Sub, timeout: float) -> list[Step] | None:
         """ENHSP's optimal plan of a sub-problem (None if it found none in time, or none at
         all). A planner that fails otherwise (it crashed, or cannot run) fails the search: it
         used to count as a sub-problem solved without improvement, so a run whose every ENHSP
@@ -614,30 +598,6 @@ class AnytimeSearch:
     def value(self, cost: PlanCost) -> float:
         """The objective of a plan of this cost (tmpnav.task.objectives)."""
         return cost.value(self.options.span_weight)
-
-    def _sub_goals(self, plan: Plan, hood: Neighbourhood, state: State) -> Goals:
-        """What the opened moves achieved that is still to do after the head."""
-        visit: list[str] = []
-        per_robot: dict[str, list[str]] = {}
-        ends: list[tuple[str, str]] = []
-        # the optional goals the plan leaves undone: each sub-problem may take one up again
-        visit += [x for x in self.goals.dropped(entered_by(plan, self.model.start_location)) if x not in state.visited]
-        for k in sorted(hood.removed):
-            for r, _, x in plan[k]:
-                if r not in hood.robots:
-                    continue
-                if x in self.goals.visit and x not in state.visited:
-                    visit.append(x)  # an optional goal too: the sub-problem may leave it undone
-                if (r, x) in self.rules.targets and (r, x) not in state.visited_by:
-                    per_robot.setdefault(r, []).append(x)
-                if self.goals.end_of(r) == x and r not in hood.ends:  # its end is among its opened moves
-                    ends.append((r, x))
-        return Goals(
-            tuple(dict.fromkeys(visit)),
-            tuple((r, tuple(xs)) for r, xs in per_robot.items()),
-            self.goals.jobs,
-            tuple(dict.fromkeys(ends)),
-        )
 
     # ------------------------------------------------------------------ progress
 
