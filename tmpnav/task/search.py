@@ -13,8 +13,9 @@ optimal ENHSP search, but any part of it a few rooms and robots wide is small. T
    visit those rooms, each ending where its stretch ended when the robot has moves after
    it -- is costed by the cost model from the robots' states at that point (paired moves
    included) and solved optimally by ENHSP through unified-planning
-   (:mod:`tmpnav.task.subproblems`, :mod:`tmpnav.task.pddl_text`). Its plan replaces the stretch; the whole plan is costed
-   again by the model, and kept if it is cheaper. ENHSP decides every step of the plan.
+   (:mod:`tmpnav.task.subproblems`, :mod:`tmpnav.task.pddl_text`). Its plan replaces the
+   stretch; the whole plan is costed again by the model, and kept if it is cheaper. ENHSP
+   decides every step of the plan.
 3. **Between robots.** When a round of neighbourhoods of every size has covered every room
    without an improvement, the routes are edited as vehicle routing's local searches edit
    them (:mod:`tmpnav.task.routes`): a room moved to another robot's route (relocate), two
