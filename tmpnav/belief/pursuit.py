@@ -32,7 +32,8 @@ distance the robot turns on the spot towards the pose's heading, as in 3, until 
 robot's estimate (tmpnav.execution.rpp), and :func:`pursuit_controls` rolls it out on the
 nominal poses: the motions the planner prices with ``models.controller: rpp``.
 
-The path it drives is a roadmap path shortened first (tmpnav.roadmap.shortcut).
+The path it drives is a roadmap path shortened first, its corners rounded to arcs RPP drives at
+full speed where the map leaves room (tmpnav.roadmap.shortcut).
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ import numba as nb
 import numpy as np
 
 from tmpnav.belief.controls import PathControls
+from tmpnav.roadmap.shortcut import round_corners
 from tmpnav.world.geometry import wrap_angle_scalar
 
 #: m: the spacing of the densified path (nav2's global plans come one per costmap cell)
@@ -159,6 +161,29 @@ def _densify(points, spacing):  # pragma: no cover
     return out, at
 
 
+@dataclass(frozen=True, eq=False)
+class Rounding:
+    """How a path's corners are rounded before RPP drives it (tmpnav.roadmap.shortcut.round_corners):
+    the clearance the arcs keep (m) and the map's clearance grid, its origin and resolution."""
+
+    required: float
+    clearance: np.ndarray
+    origin: tuple[float, float]
+    resolution: float
+
+
+def driven_path(points: np.ndarray, rounding: Rounding | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The densified path RPP drives along the polyline ``points`` (k, 2), and the index of each of
+    its points in it (k,): the polyline itself, or with ``rounding`` its corners rounded (a
+    rounded corner's index is its arc's middle)."""
+    if rounding is None:
+        return densify(points)
+    r = rounding
+    rounded, at = round_corners(points, r.required, r.clearance, r.origin, r.resolution)
+    path, dense_at = densify(rounded)
+    return path, dense_at[at]
+
+
 def length_left(path: np.ndarray) -> np.ndarray:
     """(n,) the length (m) of the polyline ``path`` (n, 2) from each of its points to its end."""
     seg = np.hypot(*np.diff(path, axis=0).T)
@@ -272,6 +297,7 @@ def pursuit_controls(
     origin: tuple[float, float],
     resolution: float,
     goal_heading: float | None = None,
+    required: float | None = None,
 ) -> PathControls | None:
     """The controls and nominal poses of a robot driving the polyline ``points`` (P, 2) from its
     first point with heading ``start_theta`` under RPP (the module docstring), the obstacle
@@ -281,19 +307,21 @@ def pursuit_controls(
     motion ends within ``xy_goal_tolerance`` of the last point, with a ``goal_heading`` (rad: a
     goal pose's) turned on the spot to within ``yaw_goal_tolerance`` of it there, and
     ``node_steps[k]`` is the step at which the robot has come abreast of point k (its nearest path
-    point at or beyond it). None when the law has not arrived within a generous number of steps
-    (a path it cannot drive)."""
+    point at or beyond it). With ``required`` (m) the polyline's corners are rounded first,
+    keeping that clearance (:func:`driven_path`). None when the law has not arrived within a
+    generous number of steps (a path it cannot drive)."""
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     if pts.shape[0] == 0:
         raise ValueError("pursuit_controls needs at least one point")
     if speed <= 0 or turn_rate <= 0 or dt <= 0:
         raise ValueError("speed, turn_rate and dt must be positive")
-    path, vertices = densify(pts)
+    x0, y0 = origin
+    rounding = None if required is None else Rounding(required, clearance, (x0, y0), resolution)
+    path, vertices = driven_path(pts, rounding)
     left = length_left(path)
     slowest = min(params.min_approach_linear_velocity, params.regulated_linear_scaling_min_speed, speed)
     # every metre at the slowest speed, a full turn at every vertex, and a margin
     budget = int((left[0] + 1.0) / (slowest * dt) + pts.shape[0] * 2.0 * math.pi / (min(turn_rate, 0.5) * dt)) + 100
-    x0, y0 = origin
     goal = math.nan if goal_heading is None else float(goal_heading)
     controls, poses, node_steps, arrived = _pursue(
         path, left, vertices, float(start_theta), float(speed), float(turn_rate), float(dt), params.vector(),

@@ -47,9 +47,18 @@ import math
 
 import numpy as np
 
-from tmpnav.belief.pursuit import RESOLUTION, RppParams, command, densify, heading_reached, length_left
+from tmpnav.belief.pursuit import (
+    RESOLUTION,
+    Rounding,
+    RppParams,
+    command,
+    densify,
+    driven_path,
+    heading_reached,
+    length_left,
+)
 
-__all__ = ["RESOLUTION", "RppFollower", "RppParams", "densify"]
+__all__ = ["RESOLUTION", "Rounding", "RppFollower", "RppParams", "densify"]
 
 
 class RppFollower:
@@ -63,8 +72,11 @@ class RppFollower:
         turn_rate: float,
         dt: float,
         goal_heading: float | None = None,
+        rounding: Rounding | None = None,
     ):
-        self.path, self.vertices = densify(points)
+        #: the densified path (its corners rounded with ``rounding``, as the plan's motion rounds
+        #: them: tmpnav.belief.pursuit.driven_path) and the index of each of ``points`` in it
+        self.path, self.vertices = driven_path(points, rounding)
         #: m: the path's length from each point to its end
         self.left = length_left(self.path)
         self.p, self.dt = params, dt

@@ -45,10 +45,11 @@ from tmpnav.execution.localisers import Localisation, TeamLocaliser
 from tmpnav.execution.moves import QueuedMove, RobotQueue
 from tmpnav.execution.navigation import Navigator
 from tmpnav.execution.recovery import BEHAVIOURS, Recovery
-from tmpnav.execution.rpp import RppFollower
+from tmpnav.execution.rpp import Rounding, RppFollower
 from tmpnav.execution.schedule import TeamSchedule
 from tmpnav.execution.trace import Draws, SessionTrace, nees
-from tmpnav.types import Belief, Scenario
+from tmpnav.roadmap.shortcut import required_clearance
+from tmpnav.types import SAFE_MARGIN, Belief, Scenario
 from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
 
@@ -249,8 +250,18 @@ class Session:
         recovery = self.navigator.recovery(self.truth[i], self.step)
         if self.localisation.steers_rpp(m.controller) and len(m.points) > 1:
             spec = self.scenario.robots[i]
-            return recovery, RppFollower(m.points, self.localisation.rpp, spec.speed, spec.turn_rate, self.dt)
+            rpp = self.localisation.rpp
+            return recovery, RppFollower(m.points, rpp, spec.speed, spec.turn_rate, self.dt, rounding=self._rounding(i))
         return recovery, None
+
+    def _rounding(self, i: int) -> Rounding:
+        """How robot i's RPP rounds a path's corners: as the plan's motions round them, on the map
+        the plan was made on (tmpnav.oracle.motions.MotionLibrary.required)."""
+        grid = self.world.grid
+        margin = self.scenario.roadmap.clearance or SAFE_MARGIN
+        required = required_clearance(self.scenario.robots[i].radius, margin, float(grid.resolution))
+        origin = (float(grid.origin[0]), float(grid.origin[1]))
+        return Rounding(required, self.world.clearance, origin, float(grid.resolution))
 
     # ------------------------------------------------------------------ the team's motion and sensing
 

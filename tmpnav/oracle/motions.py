@@ -23,7 +23,7 @@ from tmpnav.belief.pursuit import RppParams, pursuit_controls
 from tmpnav.belief.sequences import NoiseStreams
 from tmpnav.roadmap import RoadmapGraph
 from tmpnav.roadmap.graph import safe_weights
-from tmpnav.roadmap.shortcut import least_clearance, shortcut
+from tmpnav.roadmap.shortcut import least_clearance, required_clearance, shortcut
 from tmpnav.types import SAFE_MARGIN, Roadmap, Scenario
 from tmpnav.world import World
 from tmpnav.world.lidar import ScanInformation
@@ -305,7 +305,7 @@ class MotionLibrary:
         """The clearance (m, from the robot's centre to the nearest occupied cell's centre) a
         shortened path keeps: the robot's radius, the roadmap's clearance and a cell's diagonal."""
         margin = self.scenario.roadmap.clearance or SAFE_MARGIN
-        return self.scenario.robot(robot).radius + margin + float(np.sqrt(2.0)) * self.resolution
+        return required_clearance(self.scenario.robot(robot).radius, margin, self.resolution)
 
     def shortened(self, robot: str, path: tuple[int, ...]) -> tuple[int, ...]:
         """The nodes of ``path`` that :func:`tmpnav.roadmap.shortcut.shortcut` keeps for ``robot``:
@@ -328,8 +328,9 @@ class MotionLibrary:
         if pursue:
             clear = self.world.clearance
             pc = pursuit_controls(
-                points, heading, spec.speed, spec.turn_rate, dt, RPP, clear, self.origin, self.resolution, goal_heading
-            )
+                points, heading, spec.speed, spec.turn_rate, dt, RPP, clear, self.origin, self.resolution, goal_heading,
+                required=self.required(robot),
+            )  # fmt: skip
             if pc is not None:
                 return pc
         return path_controls(points, heading, spec.speed, spec.turn_rate, dt)

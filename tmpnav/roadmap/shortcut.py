@@ -1,10 +1,12 @@
-"""A roadmap path shortened within its clearance, and the clearance a path or a rollout keeps.
+"""A roadmap path shortened and smoothed within its clearance, and the clearance a path or a
+rollout keeps.
 
 nav2's global plans are smoothed before a controller drives them; tmpnav's RPP motions
 (``models.controller: rpp``, tmpnav.belief.pursuit) drive the roadmap's shortest path with its
 zig-zag between milestones cut: :func:`shortcut` skips a path's nodes where the straight line
-between two of them keeps the clearance required of it (docs/models.md, "Regulated Pure
-Pursuit"). Clearances are read off the map's distance grid (tmpnav.world.grid.clearance: from
+between two of them keeps the clearance required of it, and :func:`round_corners` rounds the
+corners left to arcs RPP drives without slowing (docs/models.md, "Regulated Pure Pursuit").
+Clearances are read off the map's distance grid (tmpnav.world.grid.clearance: from
 each cell's centre to the nearest occupied one), a cell apart.
 """
 
@@ -33,6 +35,12 @@ def shortcut(
         return np.arange(pts.shape[0], dtype=np.int64)
     x0, y0 = origin
     return _shortcut(pts, float(required), clearance, float(x0), float(y0), float(resolution))
+
+
+def required_clearance(radius: float, margin: float, resolution: float) -> float:
+    """The clearance (m, from a robot's centre to the nearest occupied cell's centre) a shortened
+    or rounded path keeps: the robot's ``radius``, the roadmap's ``margin`` and a cell's diagonal."""
+    return radius + margin + math.sqrt(2.0) * resolution
 
 
 def least_clearance(
@@ -115,3 +123,116 @@ def _shortcut(pts, required, clear, x0, y0, res):  # pragma: no cover
         m += 1
         i = nxt
     return keep[:m].copy()
+
+
+#: m: the radius a corner is rounded to at most, nav2 RPP's ``regulated_linear_scaling_min_radius``:
+#: on an arc that wide RPP does not slow down for the curvature
+CORNER_RADIUS = 0.9
+#: m: the spacing of a rounded corner's points (a costmap cell, as the densified path's)
+ARC_SPACING = 0.05
+
+
+def round_corners(
+    points: np.ndarray,
+    required: float,
+    clearance: np.ndarray,
+    origin: tuple[float, float],
+    resolution: float,
+    radius: float = CORNER_RADIUS,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The polyline ``points`` (P, 2) with its corners rounded, as nav2's smoothers round a global
+    plan, and the index of each of its points in the result (P,): a rounded corner's point is the
+    middle of its arc. Each corner becomes a circular arc tangent to its two segments, of radius
+    ``radius`` or less: the arc takes at most half of a segment it shares with another corner (all
+    of a first or last one), and keeps the clearance the corner it replaces keeps, or ``required``
+    where that is less (the rule of :func:`shortcut`); where the arc does not, half the radius is
+    tried, then a quarter, then the corner stays. Through a door or another narrow passage the
+    arc comes no nearer to the walls than the corner it replaces. On arcs of ``CORNER_RADIUS`` RPP drives at
+    full speed where a sharp corner slows it to its least regulated speed."""
+    pts = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
+    if pts.shape[0] <= 2:
+        return pts.copy(), np.arange(pts.shape[0], dtype=np.int64)
+    x0, y0 = origin
+    return _round_corners(pts, float(required), clearance, float(x0), float(y0), float(resolution), float(radius))
+
+
+@nb.njit(cache=True)
+def _arc(px, py, u1x, u1y, u2x, u2y, radius, half):  # pragma: no cover
+    """The points (n, 2) of the arc of ``radius`` that rounds the corner (px, py) between the unit
+    directions u1 (in) and u2 (out), whose deflection's half angle is ``half``, from its first
+    tangent point to its second."""
+    t = radius * math.tan(half)
+    ax, ay = px - u1x * t, py - u1y * t
+    side = 1.0 if u1x * u2y - u1y * u2x > 0.0 else -1.0  # left turn: the centre on the left
+    cx, cy = ax - side * u1y * radius, ay + side * u1x * radius
+    a0 = math.atan2(ay - cy, ax - cx)
+    sweep = side * 2.0 * half
+    n = max(2, math.ceil(radius * abs(sweep) / ARC_SPACING))
+    out = np.empty((n + 1, 2))
+    for i in range(n + 1):
+        a = a0 + sweep * i / n
+        out[i, 0], out[i, 1] = cx + radius * math.cos(a), cy + radius * math.sin(a)
+    return out
+
+
+@nb.njit(cache=True)
+def _corner(pts, k, seg, required, clear, x0, y0, res, radius):  # pragma: no cover
+    """The points that replace the corner k of the polyline ``pts`` (``seg`` its segments'
+    lengths): its arc (:func:`round_corners` states the rule), or the corner itself."""
+    P = pts.shape[0]
+    corner = np.empty((1, 2))
+    corner[0, 0], corner[0, 1] = pts[k, 0], pts[k, 1]
+    if seg[k - 1] <= 1e-9 or seg[k] <= 1e-9:
+        return corner
+    u1x, u1y = (pts[k, 0] - pts[k - 1, 0]) / seg[k - 1], (pts[k, 1] - pts[k - 1, 1]) / seg[k - 1]
+    u2x, u2y = (pts[k + 1, 0] - pts[k, 0]) / seg[k], (pts[k + 1, 1] - pts[k, 1]) / seg[k]
+    half = 0.5 * math.acos(min(1.0, max(-1.0, u1x * u2x + u1y * u2y)))
+    if not 1e-3 < half < 0.5 * math.pi - 1e-3:  # straight on, or turning back
+        return corner
+    room = min(seg[k - 1] * (1.0 if k == 1 else 0.5), seg[k] * (1.0 if k == P - 2 else 0.5))
+    r = min(radius, room / math.tan(half))
+    for _ in range(3):
+        t = r * math.tan(half)
+        ax, ay = pts[k, 0] - u1x * t, pts[k, 1] - u1y * t
+        bx, by = pts[k, 0] + u2x * t, pts[k, 1] + u2y * t
+        kept = min(
+            _least(ax, ay, pts[k, 0], pts[k, 1], clear, x0, y0, res),
+            _least(pts[k, 0], pts[k, 1], bx, by, clear, x0, y0, res),
+        )
+        floor = min(kept, required)
+        arc = _arc(pts[k, 0], pts[k, 1], u1x, u1y, u2x, u2y, r, half)
+        least = np.inf
+        for i in range(arc.shape[0] - 1):
+            least = min(least, _least(arc[i, 0], arc[i, 1], arc[i + 1, 0], arc[i + 1, 1], clear, x0, y0, res, floor))
+            if least < floor:
+                break
+        if least >= floor:
+            return arc
+        r *= 0.5
+    return corner
+
+
+@nb.njit(cache=True)
+def _round_corners(pts, required, clear, x0, y0, res, radius):  # pragma: no cover
+    """:func:`round_corners`, compiled."""
+    P = pts.shape[0]
+    seg = np.empty(P - 1)
+    for k in range(P - 1):
+        seg[k] = math.hypot(pts[k + 1, 0] - pts[k, 0], pts[k + 1, 1] - pts[k, 1])
+    pieces = [pts[:1].copy()]
+    at = np.zeros(P, dtype=np.int64)
+    count = 1
+    for k in range(1, P - 1):
+        piece = _corner(pts, k, seg, required, clear, x0, y0, res, radius)
+        pieces.append(piece)
+        at[k] = count + piece.shape[0] // 2  # a corner's own point, or its arc's middle
+        count += piece.shape[0]
+    pieces.append(pts[P - 1 :].copy())
+    at[P - 1] = count
+    out = np.empty((count + 1, 2))
+    i = 0
+    for piece in pieces:
+        for j in range(piece.shape[0]):
+            out[i, 0], out[i, 1] = piece[j, 0], piece[j, 1]
+            i += 1
+    return out, at
