@@ -7,7 +7,7 @@ lines on wall hits, contacts, the moves against their bounds and the beliefs aga
 printed (benchmarks/README.md, "Safety against AMCL").
 
     .venv/bin/python benchmarks/bench_amcl_safety.py [--scenario configs/building-4robots.yaml]
-        [--sessions 24] [--seed 100] [--steer local estimate] [--workers 1] [--no-recoveries]
+        [--sessions 24] [--seed 100] [--steer local estimate] [--workers 1] [--no-recoveries] [--tag LABEL]
 """
 
 from __future__ import annotations
@@ -49,6 +49,9 @@ def main() -> None:
     parser.add_argument(
         "--no-recoveries", action="store_true", help="without nav2's recovery behaviours (files NAME.STEER.norec.*)"
     )
+    parser.add_argument(
+        "--tag", default="", help="a label added to the files' names (NAME.STEER.TAG.*), so that a run keeps the others"
+    )
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     name = args.scenario.stem
@@ -69,6 +72,7 @@ def main() -> None:
             if run.returncode != 0:
                 sys.exit(f"{name} --steer {steer}: exit {run.returncode}: {run.stderr.strip()}")
             tag = f"{name}.{steer}.norec" if args.no_recoveries else f"{name}.{steer}"
+            tag += f".{args.tag}" if args.tag else ""
             for part in ("summary.md", "moves.csv"):
                 shutil.copyfile(out / part, OUT / f"{tag}.{part}")
             print(f"{name}, --steer {steer}, {args.sessions} sessions from seed {args.seed}, "
