@@ -42,6 +42,19 @@ def unicycle(pose: np.ndarray, u: np.ndarray) -> np.ndarray:
     return after
 
 
+def follow_without_noise(f: RppFollower, pc, start: np.ndarray) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """Drive the follower ``f`` from ``start`` on its own commands, without noise and with every
+    obstacle 5 m away, checking each pose and command against the planner's rollout ``pc``; the
+    pose it ends at."""
+    pose = start
+    for k in range(pc.n_steps):
+        assert np.allclose(pose, pc.poses[k])
+        u = f.command(pose, 5.0)
+        assert np.allclose(u, pc.controls[k])
+        pose = unicycle(pose, u)
+    return pose
+
+
 def drive(points: list[list[float]], theta: float = 0.0, speed: float = 0.5, turn_rate: float = 1.0):
     clear, origin = open_floor()
     pc = pursuit_controls(np.array(points, float), theta, speed, turn_rate, DT, RppParams(), clear, origin, RES)
@@ -99,12 +112,7 @@ def test_the_planner_rollout_is_the_follower_driven_without_noise() -> None:
     points = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [1.0, 5.0]])
     pc = drive(points.tolist(), theta=0.3)
     f = RppFollower(points, RppParams(), 0.5, 1.0, DT)
-    pose = np.array([0.0, 0.0, 0.3])
-    for k in range(pc.n_steps):
-        assert np.allclose(pose, pc.poses[k])
-        u = f.command(pose, 5.0)
-        assert np.allclose(u, pc.controls[k])
-        pose = unicycle(pose, u)
+    pose = follow_without_noise(f, pc, np.array([0.0, 0.0, 0.3]))
     assert f.at_goal(pose)
 
 

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from tests.belief.test_pursuit import DT, RES, open_floor, unicycle, walled
+from tests.belief.test_pursuit import DT, RES, follow_without_noise, open_floor, walled
 from tmpnav.belief.pursuit import Rounding, RppParams, pursuit_controls
 from tmpnav.execution.rpp import RppFollower
 from tmpnav.roadmap.shortcut import CORNER_RADIUS, least_clearance, round_corners
@@ -85,11 +85,6 @@ def test_the_follower_drives_the_rounded_path_the_plan_drove() -> None:
     pc = pursuit_controls(points, 0.3, 0.5, 1.0, DT, RppParams(), clear, origin, RES, required=0.8)
     assert pc is not None
     f = RppFollower(points, RppParams(), 0.5, 1.0, DT, rounding=Rounding(0.8, clear, origin, RES))
-    pose = np.array([0.0, 0.0, 0.3])
-    for k in range(pc.n_steps):
-        assert np.allclose(pose, pc.poses[k])
-        u = f.command(pose, 5.0)
-        assert np.allclose(u, pc.controls[k])
-        pose = unicycle(pose, u)
+    pose = follow_without_noise(f, pc, np.array([0.0, 0.0, 0.3]))
     assert f.at_goal(pose)
     assert math.hypot(*(pose[:2] - points[-1])) <= RppParams().xy_goal_tolerance

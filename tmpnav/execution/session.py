@@ -49,7 +49,7 @@ from tmpnav.execution.rpp import Rounding, RppFollower
 from tmpnav.execution.schedule import TeamSchedule
 from tmpnav.execution.trace import Draws, SessionTrace, nees
 from tmpnav.roadmap.shortcut import required_clearance
-from tmpnav.types import SAFE_MARGIN, Belief, Scenario
+from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
 from tmpnav.world.visibility import LandmarkVisibility
 
@@ -258,8 +258,7 @@ class Session:
         """How robot i's RPP rounds a path's corners: as the plan's motions round them, on the map
         the plan was made on (tmpnav.oracle.motions.MotionLibrary.required)."""
         grid = self.world.grid
-        margin = self.scenario.roadmap.clearance or SAFE_MARGIN
-        required = required_clearance(self.scenario.robots[i].radius, margin, float(grid.resolution))
+        required = required_clearance(self.scenario.robots[i].radius, self.scenario.roadmap, float(grid.resolution))
         origin = (float(grid.origin[0]), float(grid.origin[1]))
         return Rounding(required, self.world.clearance, origin, float(grid.resolution))
 

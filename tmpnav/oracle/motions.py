@@ -24,7 +24,7 @@ from tmpnav.belief.sequences import NoiseStreams
 from tmpnav.roadmap import RoadmapGraph
 from tmpnav.roadmap.graph import safe_weights
 from tmpnav.roadmap.shortcut import least_clearance, required_clearance, shortcut
-from tmpnav.types import SAFE_MARGIN, Roadmap, Scenario
+from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
 from tmpnav.world.lidar import ScanInformation
 from tmpnav.world.visibility import LandmarkVisibility
@@ -304,8 +304,7 @@ class MotionLibrary:
     def required(self, robot: str) -> float:
         """The clearance (m, from the robot's centre to the nearest occupied cell's centre) a
         shortened path keeps: the robot's radius, the roadmap's clearance and a cell's diagonal."""
-        margin = self.scenario.roadmap.clearance or SAFE_MARGIN
-        return required_clearance(self.scenario.robot(robot).radius, margin, self.resolution)
+        return required_clearance(self.scenario.robot(robot).radius, self.scenario.roadmap, self.resolution)
 
     def shortened(self, robot: str, path: tuple[int, ...]) -> tuple[int, ...]:
         """The nodes of ``path`` that :func:`tmpnav.roadmap.shortcut.shortcut` keeps for ``robot``:

@@ -17,6 +17,8 @@ import math
 import numba as nb
 import numpy as np
 
+from tmpnav.types import SAFE_MARGIN, RoadmapParams
+
 
 def shortcut(
     points: np.ndarray, required: float, clearance: np.ndarray, origin: tuple[float, float], resolution: float
@@ -37,10 +39,11 @@ def shortcut(
     return _shortcut(pts, float(required), clearance, float(x0), float(y0), float(resolution))
 
 
-def required_clearance(radius: float, margin: float, resolution: float) -> float:
+def required_clearance(radius: float, roadmap: RoadmapParams, resolution: float) -> float:
     """The clearance (m, from a robot's centre to the nearest occupied cell's centre) a shortened
-    or rounded path keeps: the robot's ``radius``, the roadmap's ``margin`` and a cell's diagonal."""
-    return radius + margin + math.sqrt(2.0) * resolution
+    or rounded path keeps: the robot's ``radius``, the roadmap's margin (``roadmap.clearance``, else
+    :data:`~tmpnav.types.SAFE_MARGIN`) and a cell's diagonal of the map's ``resolution``."""
+    return radius + (roadmap.clearance or SAFE_MARGIN) + math.sqrt(2.0) * resolution
 
 
 def least_clearance(
@@ -147,8 +150,8 @@ def round_corners(
     of a first or last one), and keeps the clearance the corner it replaces keeps, or ``required``
     where that is less (the rule of :func:`shortcut`); where the arc does not, half the radius is
     tried, then a quarter, then the corner stays. Through a door or another narrow passage the
-    arc comes no nearer to the walls than the corner it replaces. On arcs of ``CORNER_RADIUS`` RPP drives at
-    full speed where a sharp corner slows it to its least regulated speed."""
+    arc comes no nearer to the walls than the corner it replaces. On arcs of ``CORNER_RADIUS``
+    RPP drives at full speed where a sharp corner slows it to its least regulated speed."""
     pts = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
     if pts.shape[0] <= 2:
         return pts.copy(), np.arange(pts.shape[0], dtype=np.int64)

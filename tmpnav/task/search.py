@@ -255,8 +255,8 @@ class AnytimeSearch:
         can leave a robot idle that a search from them does not put to work: building-4robots
         with the AMCL model, on RPP's motions with sharp corners, converged at 583.5 with r3 on
         2 rooms from the weighted routes, and at 562.3 with every robot on 4-6 rooms from these
-        (tmpnav.task.objectives). Not where
-        the first routing ran out of its time limit (at 200 rooms it takes all of its 30 s)."""
+        (tmpnav.task.objectives). Not where the first routing ran out of its time limit (at 200
+        rooms it takes all of its 30 s)."""
         weight = self.options.span_weight
         if not weight or weight >= MAKESPAN_WEIGHT or len(self.model.robots) < 2 or UNDER_WAY in seeds:
             return []
