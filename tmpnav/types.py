@@ -274,6 +274,14 @@ class Models:
             return "rpp" if self.range_sensor is not None else "turn-then-drive"
         return self.controller
 
+    @property
+    def partners_fused(self) -> bool:
+        """Whether the robots' beliefs take in their mutual observations: switched on, and not
+        nav2's AMCL fusing its lidar alone (ScanModel.fuses_others). Without them a paired move
+        costs exactly its two single moves."""
+        sensor = self.range_sensor
+        return self.mutual_observations and (sensor is None or sensor.localiser.fuses_others)
+
 
 CostValue = TypeVar("CostValue", float, np.ndarray)
 

@@ -13,20 +13,24 @@ from tmpnav.roadmap import build_roadmap
 from tmpnav.shipped import configs_dir
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.plans import Plan, PlanError, Rules, State, Step
-from tmpnav.types import Goals, Scenario
+from tmpnav.types import Goals, ScanModelKind, Scenario
 from tmpnav.world import World
 
 
 def carried_problem(
-    config: str, rooms: tuple[str, ...], robots: int, controller: str | None = None
+    config: str, rooms: tuple[str, ...], robots: int, controller: str | None = None, amcl: bool = False
 ) -> tuple[Scenario, World, CarriedCosts]:
     """A shipped world with the first ``robots`` robots that must visit ``rooms``, costed with
     carried beliefs (no disk cache, serial oracle); driven by ``controller`` (models.controller)
-    when given."""
+    when given; ``amcl``: its range sensor's localiser is nav2's AMCL (lidar alone)."""
     scenario, world = load_world(configs_dir() / config)
     scenario = replace(scenario, robots=scenario.robots[:robots], goals=Goals(rooms, ()))
     if controller is not None:
         scenario = replace(scenario, models=replace(scenario.models, controller=controller))
+    sensor = scenario.models.range_sensor
+    if amcl and sensor is not None:
+        sensor = replace(sensor, localiser=replace(sensor.localiser, kind=ScanModelKind.AMCL, lidar_only=True))
+        scenario = replace(scenario, models=replace(scenario.models, range_sensor=sensor))
     roadmap = build_roadmap(world, scenario.robots, scenario.roadmap)
     oracle = Oracle(OracleContext(scenario, world, roadmap))
     canonical = CanonicalCosts(oracle, world, scenario.planner.pair_min_gain)

@@ -10,6 +10,7 @@ import pytest
 
 from tests.attachment.support import carried_problem
 from tmpnav.attachment.carried import CarriedCosts
+from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.plans import Plan
 
 #: three robots on the corridor: r1 and r2 move together, r3 alone, then r1 and r3 together
@@ -112,3 +113,23 @@ def test_pairs_below_their_floors_are_not_asked_for(
     assert fast.pair == every.pair and fast.pair_duration == every.pair_duration and fast.single == every.single
     if config.startswith("building"):  # with a range sensor the floors are most of a move's cost
         assert skipped[0] > 0
+
+
+def test_robots_whose_beliefs_ignore_each_other_are_never_paired(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With nav2's AMCL fusing its lidar alone, a paired move costs exactly its two single moves:
+    a sub-problem asks the oracle for no pair, and its table is the one with every pair the entry
+    rules allow asked for (none of which saves anything)."""
+    _, _, carried = carried_problem("building-20.yaml", ("S1", "S2", "N1", "N2"), 2, amcl=True)
+    goals, head = carried.scenario.goals, ((("r1", "r1-start", "S1"),),)
+    stats = carried.oracle.stats
+    before = stats.requests
+    fast = carried.subtable(head, ("r1", "r2"), ("S2", "N1", "N2"), goals)
+    singles = stats.requests - before
+    monkeypatch.setattr(
+        "tmpnav.attachment.carried.paired_moves", lambda _, g, at: ENCODINGS["mixed"].pair_filter(g, at)
+    )
+    before = stats.requests
+    every = carried.subtable(head, ("r1", "r2"), ("S2", "N1", "N2"), goals)
+    assert stats.requests - before > singles  # the pairs asked for
+    assert fast.pair == every.pair == {} and fast.single == every.single
+    assert stats.sims.joint_sims == 0  # they never see each other in their beliefs: factorised

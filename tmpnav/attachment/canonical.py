@@ -23,13 +23,13 @@ from collections.abc import Iterable, Mapping, Sequence
 from functools import cached_property
 
 from tmpnav.attachment.floors import motion_floors
+from tmpnav.attachment.team import paired_moves
 from tmpnav.choices import Costs
 from tmpnav.oracle.bounds import ControlFloors
 from tmpnav.oracle.executors import library
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import Origin, arrival_state, build_table, initial_state, start_locations
-from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.model import PlanCost, entered, head_locations, robot_ends, sub_moves
 from tmpnav.task.plans import Plan
 from tmpnav.task.timing import schedule
@@ -145,8 +145,7 @@ class CanonicalCosts:
         moves = sub_moves(at, rooms)
         self._ensure_singles(moves)
         single = {m: c for m in moves if (c := self.single.get(m)) is not None}
-        keep = ENCODINGS["mixed"].pair_filter(goals, at)
-        assert keep is not None
+        keep = paired_moves(self.scenario, goals, at)
         wanted = [
             _ordered(m1, m2, self.robots)
             for i, m1 in enumerate(single)
@@ -173,8 +172,7 @@ class CanonicalCosts:
     def pair_space(self, goals: Goals, max_pairs: int) -> list[Pair] | None:
         """Every pair of single moves of the goal table that the entry rules allow together;
         None when there are more than ``max_pairs``."""
-        keep = ENCODINGS["mixed"].pair_filter(goals, self.start_location)
-        assert keep is not None
+        keep = paired_moves(self.scenario, goals, self.start_location)
         by_robot: dict[str, list[MoveKey]] = {}
         for m, c in self.single.items():
             if c is not None:

@@ -31,7 +31,7 @@ from functools import cached_property
 from tmpnav.attachment.canonical import CanonicalCosts, _offered, _ordered
 from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
 from tmpnav.attachment.floors import motion_floors
-from tmpnav.attachment.team import Team
+from tmpnav.attachment.team import Team, paired_moves
 from tmpnav.choices import Costs
 from tmpnav.oracle.bounds import cannot_save
 from tmpnav.oracle.executors import library
@@ -39,7 +39,6 @@ from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.oracle.table import arrival_state
-from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.model import PlanCost, entered, robot_ends, sub_moves
 from tmpnav.task.plans import Plan
 from tmpnav.types import CostTable, Goals, MotionResult, MoveKey, Scenario
@@ -156,8 +155,7 @@ class CarriedCosts:
         """Paired moves of the sub-problem that save at least ``min_gain``, and their durations:
         from the robots' actual joint belief when both make their first move, else from their
         arrival states."""
-        keep = ENCODINGS["mixed"].pair_filter(goals, at)
-        assert keep is not None
+        keep = paired_moves(self.scenario, goals, at)
         moves = list(single)
         floor = {m: self._floor(m) for m in moves}
         wanted = [

@@ -199,7 +199,7 @@ def bearing_information(models: Models, landmarks: int, partners: int) -> float:
     """I: the most information on its heading a robot's own bearings can give in one step,
     with ``landmarks`` landmarks and ``partners`` other robots in view, and its range scan's
     beams (rad^-2)."""
-    mutual = partners / models.mutual_sensor.sigma_bearing**2 if models.mutual_observations else 0.0
+    mutual = partners / models.mutual_sensor.sigma_bearing**2 if models.partners_fused else 0.0
     return landmarks / models.landmark_sensor.sigma_bearing**2 + mutual + scan_heading_information(models)
 
 

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from tmpnav.attachment.canonical import _offered
 from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock import ClockState, TeamClock, Unreachable
+from tmpnav.attachment.team import paired_moves
 from tmpnav.oracle.requests import Request
-from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.plans import Rules, State, Step
 from tmpnav.task.unfolded import BeliefGraph, Edge
 from tmpnav.types import Goals
@@ -56,7 +56,7 @@ class _Unfolding:
         self.clock: TeamClock = carried.clock
         self.names = carried.start.names
         self.rules = Rules(carried.start_location, goals)
-        self.keep = ENCODINGS["mixed"].pair_filter(goals, carried.start_location)
+        self.keep = paired_moves(carried.scenario, goals, carried.start_location)
         self.rooms = tuple(dict.fromkeys(goals.all_rooms))
         self.min_gain, self.span_weight, self.limit = min_gain, span_weight, limit
         self.edges: list[Edge] = []
@@ -153,7 +153,7 @@ class _Unfolding:
                 for (m1,) in singles:
                     m2 = (partner, task.at[partner], x)
                     pair = (m1, m2) if r < s else (m2, m1)
-                    if x == m1[2] or not self.keep or not self.keep(*pair) or not self._allowed(task, pair):
+                    if x == m1[2] or not self.keep(*pair) or not self._allowed(task, pair):
                         continue
                     at = max(clock.free[s], clock.t)
                     if at == clock.t:

@@ -71,9 +71,8 @@ def propagate_reference(
         noise = ObservationNoise.draw(models.seed, n, T, landmarks.shape[0])
     Q_lm, Q_mu = models.landmark_sensor.Q, models.mutual_sensor.Q
     chol_lm, chol_mu = np.linalg.cholesky(Q_lm), np.linalg.cholesky(Q_mu)
-    mutual_visible = observed_mutually(rollout, models)
+    mutual_visible = observed_mutually(rollout, models)  # none for a localiser of the lidar alone (nav2's AMCL)
     if models.range_sensor is not None and not models.range_sensor.localiser.fuses_others:
-        mutual_visible = np.zeros_like(mutual_visible)  # a localiser of the lidar alone (nav2's AMCL)
         lm_visible = np.zeros_like(rollout.lm_visible)
     else:
         lm_visible = rollout.lm_visible

@@ -119,10 +119,10 @@ def stack_paths(paths: Sequence[PathControls]) -> tuple[np.ndarray, np.ndarray, 
 
 
 def observed_mutually(rollout: Rollout, models: Models) -> np.ndarray:
-    """The rollout's mutual visibility (n, n, T+1), all False when the models switch
-    mutual observations off; the diagonal is always False."""
+    """The rollout's mutual visibility (n, n, T+1), all False when the beliefs take in no
+    mutual observations (Models.partners_fused); the diagonal is always False."""
     n = rollout.mutual_visible.shape[0]
-    if not models.mutual_observations:
+    if not models.partners_fused:
         return np.zeros_like(rollout.mutual_visible, dtype=bool)
     return np.asarray(rollout.mutual_visible, dtype=bool) & ~np.eye(n, dtype=bool)[:, :, None]
 

@@ -112,9 +112,10 @@ class MutualSensing(NamedTuple):
 
     @staticmethod
     def between(scenario: Scenario, robot_a: str, robot_b: str) -> MutualSensing | None:
-        """The sensing between two robots of a scenario; None when its models switch
-        mutual observations off (the robots then never see each other)."""
-        if not scenario.models.mutual_observations:
+        """The sensing between two robots of a scenario; None when their beliefs take in no
+        mutual observations (switched off, or AMCL fusing its lidar alone: Models.partners_fused),
+        so that what they would see of each other changes nothing."""
+        if not scenario.models.partners_fused:
             return None
         return MutualSensing.of_sensor(scenario, robot_a, robot_b)
 
