@@ -4,14 +4,17 @@ passes, uncertainty widening the margin, robots standing where they ended, true 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tmpnav.belief.conflicts import contacts, find_conflicts, margin_factor, position_sigma
-from tmpnav.types import TrajectoryStep
+from tmpnav.belief.conflicts import contacts, find_conflicts, margin_factor, position_sigma, seen_std
+from tmpnav.scenario import load as load_scenario
+from tmpnav.shipped import configs_dir
+from tmpnav.types import ScanModelKind, TrajectoryStep
 
 DT = 0.5
 RADII = {"a": 0.25, "b": 0.25}
@@ -122,3 +125,27 @@ def test_robots_passing_two_seconds_apart_conflict_within_a_three_second_window(
     assert c.t_from < 5.0 < c.t_to  # a's clock
     # half a second is too short a window for crossings 2 s apart
     assert find_conflicts({"a": a, "b": b}, RADII, windows={("a", "b"): np.full(len(b), 0.5)}) == []
+
+
+def test_robots_that_see_each_other_are_kept_apart_by_their_local_error() -> None:
+    """Under nav2's AMCL with walls: local, another robot is where the lidar sees it: two robots
+    passing 1 m apart with 0.3 m global stds conflict by their beliefs (0.5 + 2.45 x 0.6 m
+    needed), not by their local errors (0.5 + 2.45 x 0.1 m)."""
+    a, b = line((-5, 0), (5, 0), 20, sigma=0.3), line((5, 1.0), (-5, 1.0), 20, sigma=0.3)
+    by_belief = find_conflicts({"a": a, "b": b}, RADII)
+    assert len(by_belief) == 1 and by_belief[0].required_separation == pytest.approx(0.5 + margin_factor(0.05) * 0.6)
+    assert find_conflicts({"a": a, "b": b}, RADII, seen=0.05) == []
+    near = line((5, 0.6), (-5, 0.6), 20, sigma=0.3)
+    found = find_conflicts({"a": a, "b": near}, RADII, seen=0.05)
+    assert len(found) == 1 and found[0].required_separation == pytest.approx(0.5 + margin_factor(0.05) * 0.1)
+
+
+def test_only_the_amcl_model_with_local_walls_separates_by_the_local_error() -> None:
+    scenario = load_scenario(configs_dir() / "building-4robots.yaml")
+    sensor = scenario.models.range_sensor
+    assert sensor is not None and seen_std(scenario.models) is None  # the sensor's bound: the beliefs
+    amcl = replace(sensor.localiser, kind=ScanModelKind.AMCL)
+    models = replace(scenario.models, range_sensor=replace(sensor, localiser=amcl))
+    assert seen_std(models) == amcl.local_std
+    on_map = replace(scenario.models, range_sensor=replace(sensor, localiser=replace(amcl, walls="map")))
+    assert seen_std(on_map) is None and seen_std(replace(scenario.models, range_sensor=None)) is None

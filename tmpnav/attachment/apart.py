@@ -21,7 +21,7 @@ from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock import ClockRun
 from tmpnav.attachment.conflicts import EPS, Resolution, radii_of, resolve_with_sidesteps
 from tmpnav.attachment.drift import clock_drift
-from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
+from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, seen_std
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.results import KeptApart, TaskResult
 from tmpnav.task.model import PlanCost
@@ -173,7 +173,8 @@ def _accepted(
 def _on_own_clock(carried: CarriedCosts, run: ClockRun, delta: float | None) -> list[Conflict]:
     """The conflicts of ``run`` (recorded) at the same planned instant (no time window)."""
     assert run.trajectories is not None
-    return find_conflicts(run.trajectories, radii_of(carried.clock), delta if delta is not None else DEFAULT_DELTA)
+    risk = delta if delta is not None else DEFAULT_DELTA
+    return find_conflicts(run.trajectories, radii_of(carried.clock), risk, seen=seen_std(carried.scenario.models))
 
 
 class ExecutedCost:

@@ -64,12 +64,13 @@ from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
 from tmpnav.attachment.detours import REACH, Drive, Obstacle, detour, near_nodes
 from tmpnav.attachment.drift import clock_drift, trajectory_windows
-from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, margin_factor, position_sigma
+from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, margin_factor, position_sigma, seen_std
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.results import Schedule, TimedMove
 from tmpnav.roadmap.graph import segment_margins
 from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Step
+from tmpnav.types import TrajectoryStep
 
 #: clock runs the search may make per plan (each is one run of the team's joint EKF)
 MAX_RUNS = 40
@@ -135,12 +136,13 @@ def resolve_conflicts(
     radii = dict(radii) if radii is not None else radii_of(clock)
     risk = delta if delta is not None else (clock.scenario.planner.max_risk or DEFAULT_DELTA)
     rate = drift if drift is not None else clock_drift(clock.scenario)
+    apart_std = seen_std(clock.scenario.models)
 
     def check(delays: dict[int, float]) -> _Node:
         run = clock.run(steps, delays, record=True, detours=detours)
         assert run.trajectories is not None
         windows = trajectory_windows(run.trajectories, run.schedule, rate)
-        return _Node(delays, run, find_conflicts(run.trajectories, radii, risk, windows))
+        return _Node(delays, run, find_conflicts(run.trajectories, radii, risk, windows, apart_std))
 
     root = check({})
     best, runs, longest = root, 1, root.run.makespan + clock.dt
@@ -292,6 +294,7 @@ def _detoured(
     conflict, run, names = res.conflicts_left[0], res.run, clock.start.names
     trajectories = run.trajectories
     assert trajectories is not None
+    seen = seen_std(clock.scenario.models)
     t = round(conflict.t_from / clock.dt)
     k = margin_factor(risk)
     windows = trajectory_windows(trajectories, run.schedule, drift)
@@ -299,7 +302,7 @@ def _detoured(
     for move in sorted(driving, key=lambda m: (m.start, m.step), reverse=True):
         robot = names[move.robot]
         own = trajectories[robot][move.start : move.end + 1]
-        sigma = DETOUR_SIGMA * float(position_sigma(np.array([s.cov for s in own])).max())
+        sigma = DETOUR_SIGMA * _sigmas(own, seen).max()
         obstacles = []
         for other in names:
             if other == robot or len(trajectories[other]) <= move.start:
@@ -308,7 +311,7 @@ def _detoured(
             t0 = max(0, move.start - int(window[move.start :].max(initial=0)))  # within its window before
             steps = trajectories[other][t0:]
             xy = np.array([s.mean[:2] for s in steps], dtype=float)
-            others = position_sigma(np.array([s.cov for s in steps]))
+            others = _sigmas(steps, seen)
             need = radii[robot] + radii[other] + k * (sigma + others) + DETOUR_MARGIN
             obstacles.append(Obstacle(t0, xy, need, _rows(window, t0, len(steps))))
         spec = clock.scenario.robot(robot)
@@ -458,3 +461,11 @@ def _centroid(polygon: Sequence[tuple[float, float]]) -> tuple[float, float]:
 
 def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
     return float(((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5)
+
+
+def _sigmas(steps: Sequence[TrajectoryStep], seen: float | None) -> np.ndarray:
+    """Each step's position std as the separation rule takes it: the belief's, or ``seen``
+    (tmpnav.belief.conflicts.seen_std)."""
+    if seen is not None:
+        return np.full(len(steps), seen)
+    return position_sigma(np.array([s.cov for s in steps]))

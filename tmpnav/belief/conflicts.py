@@ -24,6 +24,12 @@ step: how far apart their clocks may be; :mod:`tmpnav.attachment.drift` derives 
 schedule), robot i at t and robot j at any t' with |t - t'| <= w(t) must keep the separation
 (with sigma_j taken at t'); w = 0 is the rule above. :func:`contacts` checks sampled true
 trajectories (``tmpnav simulate``): there a contact is ||x_i - x_j|| < r_i + r_j, no margin.
+
+Where the robots keep clear of what their lidar sees (nav2's AMCL model with ``walls: local``,
+the collision bound's own convention), nav2's obstacle layer marks another robot where the scans
+see it: what separates two robots is then their positions as each other's costmaps place them,
+each off by the local error (``localiser.local_std``), not by their global estimates' spread
+(:func:`seen_std`; sigma_i = sigma_j = local_std in the rule above).
 """
 
 from __future__ import annotations
@@ -35,7 +41,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tmpnav.types import TrajectoryStep
+from tmpnav.types import Models, TrajectoryStep
 
 #: the plan's risk threshold when the scenario names none (``planner.max_risk``)
 DEFAULT_DELTA = 0.05
@@ -72,6 +78,16 @@ def margin_factor(delta: float) -> float:
     return math.sqrt(2.0 * math.log(1.0 / delta))
 
 
+def seen_std(models: Models) -> float | None:
+    """The std (m) of a robot's position as the other robots' costmaps place it, where the
+    robots keep clear of what their lidar sees (ScanModel.local_walls): the local error; None
+    where their beliefs' spread separates them (module docstring)."""
+    sensor = models.range_sensor
+    if sensor is None or not sensor.localiser.local_walls:
+        return None
+    return sensor.localiser.local_std
+
+
 def position_sigma(covs: np.ndarray) -> np.ndarray:
     """sqrt(lambda_max) of the 2x2 position blocks of covariances (..., 3, 3) -> (...,) in m."""
     xy = np.asarray(covs, dtype=float)[..., :2, :2]
@@ -85,15 +101,20 @@ def find_conflicts(
     radii: Mapping[str, float],
     delta: float = DEFAULT_DELTA,
     windows: Mapping[tuple[str, str], np.ndarray] | None = None,
+    seen: float | None = None,
 ) -> list[Conflict]:
     """Every conflict (module docstring) of the planned beliefs, by start time, then robots.
     The trajectories must share one time grid from a common start; ValueError otherwise.
     ``windows``: (a, b) with a < b -> the pair's time window (s) at each step of the grid (a
-    pair without one: 0, the same instant only)."""
+    pair without one: 0, the same instant only); ``seen``: each robot's std as the others see it
+    (:func:`seen_std`) in place of its belief's."""
     names = sorted(trajectories)
     times = _grid([[s.t for s in trajectories[r]] for r in names])
     means = _held([np.array([s.mean[:2] for s in trajectories[r]], dtype=float) for r in names], len(times))
-    sigmas = _held([position_sigma(np.array([s.cov for s in trajectories[r]])) for r in names], len(times))
+    if seen is None:
+        sigmas = _held([position_sigma(np.array([s.cov for s in trajectories[r]])) for r in names], len(times))
+    else:
+        sigmas = [np.full(len(times), seen) for _ in names]
     k = margin_factor(delta)
     if windows:
         dt = float(times[1] - times[0]) if len(times) > 1 else 1.0

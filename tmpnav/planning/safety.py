@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tmpnav.attachment.drift import clock_drift, trajectory_windows
-from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts
+from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, seen_std
 from tmpnav.belief.risk import local_errors, position_std, step_bound
 from tmpnav.belief.sequences import local_walls
 from tmpnav.numbers import length, probability
@@ -35,7 +35,7 @@ def conflicts_left(report: PlanReport, drift: float | None = None) -> list[Confl
     delta = report.scenario.planner.max_risk or DEFAULT_DELTA
     rate = clock_drift(report.scenario) if drift is None else drift
     windows = trajectory_windows(report.trajectories, report.schedule, rate)
-    return find_conflicts(report.trajectories, radii, delta, windows)
+    return find_conflicts(report.trajectories, radii, delta, windows, seen_std(report.scenario.models))
 
 
 @dataclass(frozen=True)
