@@ -19,6 +19,7 @@ import pytest
 import yaml
 
 from tests.task.instances import building_instance
+from tmpnav import deadline
 from tmpnav.errors import TimeLimitError
 from tmpnav.task.budget import SEARCH_CAP
 from tmpnav.task.model import TableModel
@@ -97,3 +98,21 @@ def test_the_least_threshold_is_not_searched_for_past_the_time_limit(monkeypatch
     )
     with pytest.raises(RiskError, match=r"within max_risk 0\.05 .*: r1.s move A -> B is at 0\.3"):
         pipeline.check_risk("x.yaml", pipeline.PlanOptions(), report)  # type: ignore[arg-type]
+
+
+def test_a_commands_limit_counts_from_the_commands_start_for_its_first_run_only(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The command's imports are within its limit; a closed loop's replans and the plans of
+    tmpnav serve each count from their own start."""
+    monkeypatch.setattr(deadline, "COMMAND_STARTED", 100.0)
+    assert deadline.run_started(102.5) == 100.0
+    assert deadline.run_started(130.0) == 130.0  # the next run of the same process
+    monkeypatch.setattr(deadline, "COMMAND_STARTED", 200.0)
+    assert deadline.run_started(150.0) == 150.0  # a clock from before the command: its own
+
+
+def test_the_search_leaves_a_share_of_the_limit_to_the_stages_after_it() -> None:
+    assert deadline.Deadline(None).after_search() == 0.0
+    assert deadline.Deadline(10.0).after_search() == deadline.AFTER_SEARCH_MIN
+    assert deadline.Deadline(600.0).after_search() == pytest.approx(deadline.AFTER_SEARCH_SHARE * 600.0)

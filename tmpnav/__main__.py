@@ -3,11 +3,16 @@
 import os
 import signal
 import sys
+import time
 
 
 def main() -> None:
     """The command line, loaded here so that a Ctrl-C while it loads is one line too, and
-    ended by :func:`_end`."""
+    ended by :func:`_end`. A time limit counts from here (tmpnav.deadline.COMMAND_STARTED)."""
+    started = time.perf_counter()
+    import tmpnav.deadline
+
+    tmpnav.deadline.COMMAND_STARTED = started
     try:
         from tmpnav.cli import main as run
     except KeyboardInterrupt:

@@ -25,7 +25,7 @@ from tmpnav import scenario as scenario_stage
 from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
 from tmpnav.choices import Costs, Objective, Search, choose, paper_conflict
-from tmpnav.deadline import Deadline
+from tmpnav.deadline import Deadline, run_started
 from tmpnav.errors import (
     ConflictError,
     InputError,
@@ -351,7 +351,7 @@ def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
     from tmpnav.task.stage import TaskProblem
 
     times = StageTimes()
-    deadline = Deadline(started=times.started)
+    deadline = Deadline(started=run_started(times.started))
 
     def loaded_now(scenario: Scenario, _roadmap_stored: bool) -> None:
         deadline.seconds = scenario.planner.time_limit
@@ -428,7 +428,7 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
     from tmpnav.task.search import SearchRun
 
     times = StageTimes()
-    deadline = Deadline(started=times.started)
+    deadline = Deadline(started=run_started(times.started))
 
     def loaded_now(scenario: Scenario, roadmap_stored: bool) -> None:
         deadline.seconds = scenario.planner.time_limit

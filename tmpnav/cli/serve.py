@@ -57,7 +57,10 @@ def serve(
     directory and reloaded at start. Without --token it listens on loopback only.
     End it with Ctrl-C. Needs the serve extra: pip install 'tmpnav[serve]'.
     """
+    import tmpnav.deadline
     from tmpnav.serve import serve as run
+
+    tmpnav.deadline.COMMAND_STARTED = None  # each plan served has its own clock (--time-limit here is the service's)
 
     def ready(bound_host: str, bound_port: int) -> None:
         shown = f"[{bound_host}]" if ":" in bound_host else bound_host

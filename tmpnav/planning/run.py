@@ -83,8 +83,10 @@ class TaskRun:
         return work_budget(len(self.goals.all_rooms), len(self.scenario.robots), self.planner.work_budget)
 
     def left(self) -> float:
-        """Seconds of the time cap not yet spent by the run's stages, and of the run's time limit."""
-        return min(self.budget - self.times.spent(), self.search.deadline.left())
+        """Seconds of the time cap not yet spent by the run's stages, and of the run's time limit
+        less what the stages after the search keep of it (Deadline.after_search)."""
+        deadline = self.search.deadline
+        return min(self.budget - self.times.spent(), deadline.left() - deadline.after_search())
 
 
 @dataclass(frozen=True)
