@@ -275,3 +275,16 @@ def test_a_window_too_dear_to_keep_keeps_the_robots_apart_on_the_plans_clock(
     assert again.trajectories is not None and find_conflicts(again.trajectories, radii(carried)) == []
     windows = trajectory_windows(again.trajectories, again.schedule, 1.0)
     assert find_conflicts(again.trajectories, radii(carried), 0.05, windows)
+
+
+def test_a_robot_parked_in_the_way_steps_aside_into_a_room_no_goal_names() -> None:
+    """office-ros with the AMCL model: r2 never moves and stands at its start in the corridor
+    that r1 drives (their centres 0.48 m apart); no wait or detour of r1 clears that, r2 first
+    stepping into a room no goal names does."""
+    _, _, carried = carried_problem("office-ros.yaml", ("O6", "O1"), 3, amcl=True)
+    plan: Plan = ((("r1", "r1-start", "O6"),), (("r1", "O6", "O1"),))
+    assert resolve_conflicts(carried, plan).conflicts_left  # r2 stands there for good
+    res = resolve_with_sidesteps(carried, plan)
+    assert res.conflicts_left == [] and res.plan[1:] == plan
+    (first,) = res.plan[0]
+    assert first[:2] == ("r2", "r2-start") and first[2] not in {"O6", "O1"}

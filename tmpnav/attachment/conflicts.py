@@ -66,6 +66,7 @@ from tmpnav.attachment.detours import REACH, Drive, Obstacle, detour, near_nodes
 from tmpnav.attachment.drift import clock_drift, trajectory_windows
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, margin_factor, position_sigma, seen_std
 from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.oracle.table import start_location
 from tmpnav.results import Schedule, TimedMove
 from tmpnav.roadmap.graph import segment_margins
 from tmpnav.task.objectives import OBJECTIVES
@@ -434,6 +435,8 @@ def _sidestepped(clock: TeamClock, res: Resolution, sidings: int) -> Iterator[Pl
     conflict, schedule, plan = res.conflicts_left[0], res.run.schedule, res.plan
     moves = [_holds(schedule, r, conflict.t_from) or _first(schedule, r) for r in conflict.robots]
     goals = set(clock.scenario.goals.all_rooms)
+    idle = [r for r, m in zip(conflict.robots, moves, strict=True) if m is None]
+    yield from _parked_aside(clock, plan, conflict, idle, sidings)
     for move in sorted((m for m in moves if m is not None), key=lambda m: (m.start, m.step), reverse=True):
         step = plan[move.step]
         # a paired move is made as two single moves (so that one may wait for the other), or
@@ -448,6 +451,26 @@ def _sidestepped(clock: TeamClock, res: Resolution, sidings: int) -> Iterator[Pl
         for room in rooms[:sidings]:
             split = ((robot, origin, room.name),), *others, ((robot, room.name, target),)
             yield (*plan[: move.step], *split, *plan[move.step + 1 :])
+
+
+def _parked_aside(
+    clock: TeamClock, plan: Plan, conflict: Conflict, idle: Sequence[str], sidings: int
+) -> Iterator[Plan]:
+    """Plans whose first step takes a robot of the conflict that makes no move at all (it stands
+    at its start, in the other's way for good) into a siding room near where they met, that no
+    goal names, before anything else: the push of push-and-swap for a parked robot (office-ros
+    with the AMCL model: r2, idle at its start in the corridor, clears r1's way in O7). A robot
+    that must end somewhere (goals.ends) stays where it stands."""
+    goals = clock.scenario.goals
+    named = set(goals.all_rooms)
+    for robot in idle:
+        if goals.end_of(robot) is not None:
+            continue
+        start = start_location(clock.scenario.robot(robot), clock.lib.world)
+        rooms = [r for r in clock.scenario.places if r.name not in named | {start}]
+        rooms.sort(key=lambda r: _distance(_centroid(r.polygon), conflict.where))
+        for room in rooms[:sidings]:
+            yield (((robot, start, room.name),), *plan)
 
 
 def _first(schedule: Schedule, robot: str) -> TimedMove | None:

@@ -305,7 +305,10 @@ def _apart_lines(report: PlanReport) -> list[str]:
     done += [f"a detour: {r} in step {k} (+{m:.1f} m)" for k, r, m in apart.detours[:2]]
     if len(apart.detours) > 2:
         done.append(f"{len(apart.detours) - 2} more detours")
-    done += [f"a sidestep: {r} {o} -> {via} -> {t}" for r, o, via, t in apart.sidesteps[:2]]
+    done += [
+        f"a sidestep: {r} {o} -> {via} -> {t}" if t != via else f"a sidestep: {r} {o} -> {via}, out of the way"
+        for r, o, via, t in apart.sidesteps[:2]
+    ]
     if len(apart.sidesteps) > 2:
         done.append(f"{len(apart.sidesteps) - 2} more sidesteps")
     what = f"kept apart: {apart.conflicts_before} -> {apart.conflicts_left} conflicts by {'; '.join(done)}"
