@@ -61,7 +61,8 @@ def certified_bound(run: TaskRun) -> Bound:
     if not run.span_weight:
         return _said(bound)
     timed = floors.with_service(goals)  # a move's time until its robot is free again
-    work = _work_bound(timed, goals, rounds, stop)
+    spent = stop is not None and stop()  # its share spent: no LP more (each holds the first plan back)
+    work = WorkBound(0.0, True) if spent else _work_bound(timed, goals, rounds, stop)
     span = max(makespan_bound(timed, goals), work.value)
     value = bound.value + run.span_weight * span
     parts = {**bound.parts, "makespan": span}
