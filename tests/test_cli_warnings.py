@@ -40,6 +40,21 @@ def test_a_ros_map_with_a_range_sensor_validates_without_warning() -> None:
     assert proc.returncode == 0 and proc.stderr == "", proc.stderr
 
 
+def test_validate_warns_of_a_robot_that_starts_nearer_the_walls_than_its_std(tmp_path: Path) -> None:
+    """office-ros' r2 stood 5 cm from clutter in the corridor: under the AMCL model every move
+    from there was over the chance constraint, and the plan left r2 idle in r1's way."""
+    shutil.copytree(ROOT / "configs" / "office", tmp_path / "office")
+    text = (ROOT / "configs" / "office-ros.yaml").read_text()
+    near = text.replace("{name: r2, pose: [12.0, 6.8, 0.0]}", "{name: r2, pose: [12.0, 7.2, 0.0]}")
+    assert near != text
+    (tmp_path / "near.yaml").write_text(near)
+    proc = tmpnav("validate", "near.yaml", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    (line,) = proc.stderr.strip().splitlines()
+    assert line.startswith("warning: near.yaml:24: robots.r2.pose: r2 starts 0.05 m from the map's walls")
+    assert "less than 1 std of its initial position (0.10 m)" in line and "0.05 m further clear" in line
+
+
 @pytest.mark.slow
 def test_a_plan_with_robots_in_each_others_way_says_so_on_stderr(tmp_path: Path) -> None:
     """The paper's corridor plan sends r1 and r2 head-on through each other; without a chance

@@ -26,6 +26,7 @@ from tmpnav.version import __version__
 if TYPE_CHECKING:
     from tmpnav.results import PlanReport
     from tmpnav.types import Scenario
+    from tmpnav.world import World
 
 EPILOG = "Exit codes: " + "; ".join(f"{code} {meaning}" for code, meaning in EXIT_CODES.items())
 
@@ -68,15 +69,17 @@ def validate(scenario: Path) -> None:
         f"{scenario}: ok: {len(sc.places)} rooms{stations}, {len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
         f"{len(sc.robots)} robots, map {cols}x{rows} cells of {world.grid.resolution:g} m"
     )
-    warn_scenario(sc)
+    warn_scenario(sc, world=world)
 
 
-def warn_scenario(scenario: Scenario, asked_without_sensor: bool = False) -> None:
-    """The scenario's warnings (tmpnav.scenario.advice), one line each on stderr; none about the
-    range sensor when the command line asked to plan without it (--no-range-sensor)."""
+def warn_scenario(scenario: Scenario, asked_without_sensor: bool = False, world: World | None = None) -> None:
+    """The scenario's warnings (tmpnav.scenario.advice; with its ``world``, starts near the walls:
+    tmpnav.world.checks.start_advice), one line each on stderr; none about the range sensor when
+    the command line asked to plan without it (--no-range-sensor)."""
     from tmpnav.scenario.advice import warnings
+    from tmpnav.world.checks import start_advice
 
-    for line in warnings(scenario):
+    for line in [*warnings(scenario), *(start_advice(scenario, world) if world is not None else [])]:
         if not (asked_without_sensor and "models.range_sensor" in line):
             click.echo(f"warning: {line}", err=True)
 
@@ -219,7 +222,7 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
         raise click.UsageError("--export needs -o DIR: the waypoint files go to DIR/nav2/")
     check_planner(scenario, kw["planner_name"])
     report = run_plan(scenario, plan_options(kw))
-    warn_scenario(report.scenario, bool(kw.get("no_range_sensor")))
+    warn_scenario(report.scenario, bool(kw.get("no_range_sensor")), report.world)
     warn_conflicts(report)
     written: list[Path] = []
     if output is not None:
