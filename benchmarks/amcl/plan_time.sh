@@ -1,6 +1,12 @@
 #!/bin/bash
 # cold tmpnav plan, the codes taking turns (benchmarks/README.md, "The localiser's model against the plan time"): base55 = 879ecd6 (a worktree at /tmp/w55: git worktree add /tmp/w55 879ecd6), main = this code as shipped (the beam model), main_amcl = this code with localiser: {model: amcl}
 out=/work/main/benchmarks/amcl/plan_time.txt
+(cd /work/main && .venv/bin/python -c "
+import sys; sys.path.insert(0, 'benchmarks')
+from pathlib import Path
+from bench_amcl_scenarios import amcl_copy
+amcl_copy(Path('configs/building-20.yaml'), Path('/tmp/b20amcl.yaml'))
+amcl_copy(Path('configs/building-4robots.yaml'), Path('/tmp/b4amcl.yaml'))")
 echo "# cold tmpnav plan (a fresh --cache-dir each run), the codes taking turns; $(date -u '+%Y-%m-%d %H:%M') UTC, $(nproc) cores" > $out
 echo "# base55: 879ecd6 (when issue 55 was filed); main: $(cd /work/main && git rev-parse --short HEAD), the shipped configs (the beam model); main_amcl: the same code, localiser: {model: amcl}" >> $out
 echo "# label wall_s | tmpnav's total | 1-minute load before the run" >> $out
