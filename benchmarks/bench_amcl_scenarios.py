@@ -17,7 +17,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-import yaml
+from bench_models import with_model
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -28,12 +28,7 @@ GENERATED = {"office-20rooms-4robots": ("office", 20, 4), "rack-hall-20places-4r
 
 def amcl_copy(source: Path, target: Path) -> None:
     """``source`` with the AMCL model under its range sensor and its ROS map path made absolute."""
-    doc = yaml.safe_load(source.read_text())
-    ros = doc.get("map", {}).get("ros")
-    if ros and not Path(ros).is_absolute():
-        doc["map"]["ros"] = str((source.parent / ros).resolve())
-    doc["models"]["range_sensor"]["localiser"] = {"model": "amcl"}
-    target.write_text(yaml.safe_dump(doc, sort_keys=False))
+    with_model(source, target, "amcl")
 
 
 def scenarios(tmp: Path) -> dict[str, Path]:

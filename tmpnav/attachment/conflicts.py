@@ -64,14 +64,13 @@ from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
 from tmpnav.attachment.detours import REACH, Drive, Obstacle, detour, near_nodes
 from tmpnav.attachment.drift import clock_drift, trajectory_windows
-from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, margin_factor, position_sigma, seen_std
+from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, margin_factor, seen_std, separation_std
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.oracle.table import start_location
 from tmpnav.results import Schedule, TimedMove
 from tmpnav.roadmap.graph import segment_margins
 from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.plans import Plan, Step
-from tmpnav.types import TrajectoryStep
 
 #: clock runs the search may make per plan (each is one run of the team's joint EKF)
 MAX_RUNS = 40
@@ -303,7 +302,7 @@ def _detoured(
     for move in sorted(driving, key=lambda m: (m.start, m.step), reverse=True):
         robot = names[move.robot]
         own = trajectories[robot][move.start : move.end + 1]
-        sigma = DETOUR_SIGMA * _sigmas(own, seen).max()
+        sigma = DETOUR_SIGMA * separation_std(own, seen).max()
         obstacles = []
         for other in names:
             if other == robot or len(trajectories[other]) <= move.start:
@@ -312,7 +311,7 @@ def _detoured(
             t0 = max(0, move.start - int(window[move.start :].max(initial=0)))  # within its window before
             steps = trajectories[other][t0:]
             xy = np.array([s.mean[:2] for s in steps], dtype=float)
-            others = _sigmas(steps, seen)
+            others = separation_std(steps, seen)
             need = radii[robot] + radii[other] + k * (sigma + others) + DETOUR_MARGIN
             obstacles.append(Obstacle(t0, xy, need, _rows(window, t0, len(steps))))
         spec = clock.scenario.robot(robot)
@@ -434,7 +433,6 @@ def _sidestepped(clock: TeamClock, res: Resolution, sidings: int) -> Iterator[Pl
     two single moves, the other robot's first (its robot of lower priority then waits)."""
     conflict, schedule, plan = res.conflicts_left[0], res.run.schedule, res.plan
     moves = [_holds(schedule, r, conflict.t_from) or _first(schedule, r) for r in conflict.robots]
-    goals = set(clock.scenario.goals.all_rooms)
     idle = [r for r, m in zip(conflict.robots, moves, strict=True) if m is None]
     yield from _parked_aside(clock, plan, conflict, idle, sidings)
     for move in sorted((m for m in moves if m is not None), key=lambda m: (m.start, m.step), reverse=True):
@@ -446,10 +444,8 @@ def _sidestepped(clock: TeamClock, res: Resolution, sidings: int) -> Iterator[Pl
         if others:
             yield (*plan[: move.step], *others, (mine,), *plan[move.step + 1 :])
         robot, origin, target = mine
-        rooms = [r for r in clock.scenario.places if r.name not in goals | {origin, target}]
-        rooms.sort(key=lambda r: _distance(_centroid(r.polygon), conflict.where))
-        for room in rooms[:sidings]:
-            split = ((robot, origin, room.name),), *others, ((robot, room.name, target),)
+        for room in _sidings(clock, conflict, {origin, target}, sidings):
+            split = ((robot, origin, room),), *others, ((robot, room, target),)
             yield (*plan[: move.step], *split, *plan[move.step + 1 :])
 
 
@@ -461,16 +457,21 @@ def _parked_aside(
     goal names, before anything else: the push of push-and-swap for a parked robot (office-ros
     with the AMCL model: r2, idle at its start in the corridor, clears r1's way in O7). A robot
     that must end somewhere (goals.ends) stays where it stands."""
-    goals = clock.scenario.goals
-    named = set(goals.all_rooms)
     for robot in idle:
-        if goals.end_of(robot) is not None:
+        if clock.scenario.goals.end_of(robot) is not None:
             continue
         start = start_location(clock.scenario.robot(robot), clock.lib.world)
-        rooms = [r for r in clock.scenario.places if r.name not in named | {start}]
-        rooms.sort(key=lambda r: _distance(_centroid(r.polygon), conflict.where))
-        for room in rooms[:sidings]:
-            yield (((robot, start, room.name),), *plan)
+        for room in _sidings(clock, conflict, {start}, sidings):
+            yield (((robot, start, room),), *plan)
+
+
+def _sidings(clock: TeamClock, conflict: Conflict, besides: set[str], sidings: int) -> list[str]:
+    """Up to ``sidings`` rooms that no goal names, nor ``besides``, nearest to where the
+    conflict's robots met."""
+    named = set(clock.scenario.goals.all_rooms) | besides
+    rooms = [r for r in clock.scenario.places if r.name not in named]
+    rooms.sort(key=lambda r: _distance(_centroid(r.polygon), conflict.where))
+    return [r.name for r in rooms[:sidings]]
 
 
 def _first(schedule: Schedule, robot: str) -> TimedMove | None:
@@ -484,11 +485,3 @@ def _centroid(polygon: Sequence[tuple[float, float]]) -> tuple[float, float]:
 
 def _distance(a: tuple[float, float], b: tuple[float, float]) -> float:
     return float(((a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2) ** 0.5)
-
-
-def _sigmas(steps: Sequence[TrajectoryStep], seen: float | None) -> np.ndarray:
-    """Each step's position std as the separation rule takes it: the belief's, or ``seen``
-    (tmpnav.belief.conflicts.seen_std)."""
-    if seen is not None:
-        return np.full(len(steps), seen)
-    return position_sigma(np.array([s.cov for s in steps]))

@@ -95,9 +95,7 @@ def paired_moves(scenario: Scenario, goals: Goals, start_location: dict[str, str
     the AMCL model: 69,808 joint simulations that could not save anything)."""
     keep = ENCODINGS["mixed"].pair_filter(goals, start_location)
     assert keep is not None
-    names = [r.name for r in scenario.robots]
-    observe = {(a, b): MutualSensing.between(scenario, a, b) is not None for a in names for b in names}
-    return lambda m1, m2: observe[(m1[0], m2[0])] and keep(m1, m2)
+    return keep if scenario.models.partners_fused else lambda m1, m2: False
 
 
 def mutual_sensing(

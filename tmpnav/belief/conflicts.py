@@ -88,6 +88,14 @@ def seen_std(models: Models) -> float | None:
     return sensor.localiser.local_std
 
 
+def separation_std(steps: Sequence[TrajectoryStep], seen: float | None = None) -> np.ndarray:
+    """Each step's position std as the separation rule takes it (m): its belief's
+    (:func:`position_sigma`), or ``seen`` where the others see the robot (:func:`seen_std`)."""
+    if seen is not None:
+        return np.full(len(steps), seen)
+    return position_sigma(np.array([s.cov for s in steps]))
+
+
 def position_sigma(covs: np.ndarray) -> np.ndarray:
     """sqrt(lambda_max) of the 2x2 position blocks of covariances (..., 3, 3) -> (...,) in m."""
     xy = np.asarray(covs, dtype=float)[..., :2, :2]
@@ -111,10 +119,7 @@ def find_conflicts(
     names = sorted(trajectories)
     times = _grid([[s.t for s in trajectories[r]] for r in names])
     means = _held([np.array([s.mean[:2] for s in trajectories[r]], dtype=float) for r in names], len(times))
-    if seen is None:
-        sigmas = _held([position_sigma(np.array([s.cov for s in trajectories[r]])) for r in names], len(times))
-    else:
-        sigmas = [np.full(len(times), seen) for _ in names]
+    sigmas = _held([separation_std(trajectories[r], seen) for r in names], len(times))
     k = margin_factor(delta)
     if windows:
         dt = float(times[1] - times[0]) if len(times) > 1 else 1.0
