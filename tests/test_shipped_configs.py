@@ -48,7 +48,9 @@ EXPECTED = {
     "warehouse-4robots.yaml": "45 rooms, 0 doors, 27 landmarks, 4 robots, map 1320x840 cells of 0.05 m",
     "warehouse-8robots.yaml": "45 rooms, 0 doors, 27 landmarks, 8 robots, map 1320x840 cells of 0.05 m",
     "sparse-warehouse.yaml": "8 rooms, 0 doors, 8 landmarks, 3 robots, map 1040x1040 cells of 0.05 m",
-    "depot-jobs.yaml": "15 rooms, 28 doors, 9 landmarks, 4 robots, map 640x420 cells of 0.05 m",
+    "depot-jobs.yaml": (
+        "15 rooms, 28 doors, 9 landmarks, 4 robots, map 640x420 cells of 0.05 m, specks up to 0.1 m cleared"
+    ),
 }
 GENERATED = [
     "building-20.yaml",

@@ -92,7 +92,7 @@ def test_the_least_threshold_is_not_searched_for_past_the_time_limit(monkeypatch
     monkeypatch.setattr(pipeline, "_worst_move", lambda _: "r1's move A -> B is at 0.3")
     planner = SimpleNamespace(max_risk=0.05, time_limit=10.0, max_risk_from="--max-risk")
     report = SimpleNamespace(
-        scenario=SimpleNamespace(planner=planner),
+        scenario=SimpleNamespace(planner=planner, map=None),
         worst_risk=0.3,
         times=SimpleNamespace(started=time.perf_counter() - 11.0),
     )

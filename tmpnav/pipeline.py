@@ -564,19 +564,22 @@ def check_risk(path: str | Path, options: PlanOptions, report: PlanReport) -> No
             break
         worst = again.worst_risk
         if worst <= least:
-            from tmpnav.planning.safety import conflicts_left
+            from tmpnav.planning.safety import conflicts_left, speck_hint
 
             apart = again.scenario.planner.keep_apart and conflicts_left(again, drift=0.0)
             raise RiskError(
                 f"no plan keeps every move's collision bound within max_risk {asked:g}: the least "
                 f"tmpnav found is {least:g} (rerun with --max-risk {least:g}, or set planner.max_risk"
-                + ("; its plan leaves robots in each other's way: add --accept-risk to take it)" if apart else ")"),
+                + ("; its plan leaves robots in each other's way: add --accept-risk to take it)" if apart else ")")
+                + speck_hint(report),
                 least,
             )
+    from tmpnav.planning.safety import speck_hint
+
     raise RiskError(
         f"no plan keeps every move's collision bound within max_risk {asked:g} "
         f"({report.scenario.planner.max_risk_from or 'planner.max_risk'}): {_worst_move(report)} "
-        "(--accept-risk takes the plan as it is)",
+        "(--accept-risk takes the plan as it is)" + speck_hint(report),
         1.0,
     )
 

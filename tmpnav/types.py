@@ -74,6 +74,8 @@ class RosMap:
     occupied_thresh: float
     free_thresh: float
     mode: str  # trinary | scale | raw
+    #: occupied specks no wider than this (m), free all around, are cleared as map noise (0: none)
+    despeckle: float = 0.0
 
 
 MapSpec = PolygonMap | RosMap

@@ -18,18 +18,19 @@ from tmpnav.world import World
 
 
 def carried_problem(
-    config: str, rooms: tuple[str, ...], robots: int, controller: str | None = None, amcl: bool = False
+    config: str, rooms: tuple[str, ...], robots: int, controller: str | None = None, beams: bool = False
 ) -> tuple[Scenario, World, CarriedCosts]:
     """A shipped world with the first ``robots`` robots that must visit ``rooms``, costed with
     carried beliefs (no disk cache, serial oracle); driven by ``controller`` (models.controller)
-    when given; ``amcl``: its range sensor's localiser is nav2's AMCL (lidar alone)."""
+    when given; ``beams``: its range sensor's localiser is the sensor's bound (every beam
+    independent, the landmarks and partners fused too) instead of the shipped nav2 AMCL."""
     scenario, world = load_world(configs_dir() / config)
     scenario = replace(scenario, robots=scenario.robots[:robots], goals=Goals(rooms, ()))
     if controller is not None:
         scenario = replace(scenario, models=replace(scenario.models, controller=controller))
     sensor = scenario.models.range_sensor
-    if amcl and sensor is not None:
-        sensor = replace(sensor, localiser=replace(sensor.localiser, kind=ScanModelKind.AMCL, lidar_only=True))
+    if beams and sensor is not None:
+        sensor = replace(sensor, localiser=replace(sensor.localiser, kind=ScanModelKind.BEAMS))
         scenario = replace(scenario, models=replace(scenario.models, range_sensor=sensor))
     roadmap = build_roadmap(world, scenario.robots, scenario.roadmap)
     oracle = Oracle(OracleContext(scenario, world, roadmap))

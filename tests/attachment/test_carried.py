@@ -96,7 +96,7 @@ def test_pairs_below_their_floors_are_not_asked_for(
     """A sub-problem's pairs whose motion floors cannot save pair_min_gain are not asked of the
     oracle, and its table is the one with every pair asked for. The building's robots turn, then
     drive: under RPP the floors are the straight line's and cut few pairs."""
-    _, _, carried = carried_problem(config, rooms, 2, "turn-then-drive")
+    _, _, carried = carried_problem(config, rooms, 2, "turn-then-drive", beams=True)
     goals = carried.scenario.goals
     skipped = [0]
     hopeless = CarriedCosts._hopeless
@@ -119,7 +119,7 @@ def test_robots_whose_beliefs_ignore_each_other_are_never_paired(monkeypatch: py
     """With nav2's AMCL fusing its lidar alone, a paired move costs exactly its two single moves:
     a sub-problem asks the oracle for no pair, and its table is the one with every pair the entry
     rules allow asked for (none of which saves anything)."""
-    _, _, carried = carried_problem("building-20.yaml", ("S1", "S2", "N1", "N2"), 2, amcl=True)
+    _, _, carried = carried_problem("building-20.yaml", ("S1", "S2", "N1", "N2"), 2)
     goals, head = carried.scenario.goals, ((("r1", "r1-start", "S1"),),)
     stats = carried.oracle.stats
     before = stats.requests

@@ -281,7 +281,7 @@ def test_a_robot_parked_in_the_way_steps_aside_into_a_room_no_goal_names() -> No
     """office-ros with the AMCL model: r2 never moves and stands at its start in the corridor
     that r1 drives (their centres 0.48 m apart); no wait or detour of r1 clears that, r2 first
     stepping into a room no goal names does."""
-    _, _, carried = carried_problem("office-ros.yaml", ("O6", "O1"), 3, amcl=True)
+    _, _, carried = carried_problem("office-ros.yaml", ("O6", "O1"), 3)
     plan: Plan = ((("r1", "r1-start", "O6"),), (("r1", "O6", "O1"),))
     assert resolve_conflicts(carried, plan).conflicts_left  # r2 stands there for good
     res = resolve_with_sidesteps(carried, plan)

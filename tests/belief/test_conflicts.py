@@ -143,9 +143,10 @@ def test_robots_that_see_each_other_are_kept_apart_by_their_local_error() -> Non
 def test_only_the_amcl_model_with_local_walls_separates_by_the_local_error() -> None:
     scenario = load_scenario(configs_dir() / "building-4robots.yaml")
     sensor = scenario.models.range_sensor
-    assert sensor is not None and seen_std(scenario.models) is None  # the sensor's bound: the beliefs
-    amcl = replace(sensor.localiser, kind=ScanModelKind.AMCL)
-    models = replace(scenario.models, range_sensor=replace(sensor, localiser=amcl))
-    assert seen_std(models) == amcl.local_std
+    assert sensor is not None and sensor.localiser.kind is ScanModelKind.AMCL  # the shipped default
+    amcl = sensor.localiser
+    assert seen_std(scenario.models) == amcl.local_std
+    beams = replace(scenario.models, range_sensor=replace(sensor, localiser=replace(amcl, kind=ScanModelKind.BEAMS)))
+    assert seen_std(beams) is None  # the sensor's bound: the beliefs
     on_map = replace(scenario.models, range_sensor=replace(sensor, localiser=replace(amcl, walls="map")))
     assert seen_std(on_map) is None and seen_std(replace(scenario.models, range_sensor=None)) is None

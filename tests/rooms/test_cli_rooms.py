@@ -105,6 +105,27 @@ def test_the_skeleton_of_a_generated_map_plans_as_written(corridor: tuple[Genera
     assert sorted({to for a in doc["actions"] for to in a["to"]}) == sorted(doc["goals"]["visit"])
 
 
+def test_a_map_with_specks_kept_as_obstacles_says_what_clears_them(
+    corridor: tuple[GeneratedMap, Path], tmp_path: Path
+) -> None:
+    """The generated map has specks, as SLAM leaves them: the skeleton clears them (map.despeckle)
+    and says how many. Kept as obstacles, the paths pass them closer than AMCL's local error allows,
+    and the chance constraint's error says what would clear them."""
+    _, map_yaml = corridor
+    out = tmp_path / "depot.yaml"
+    assert tmpnav("rooms", map_yaml, "-o", out).returncode == 0
+    text = out.read_text()
+    line = next(x for x in text.splitlines() if x.strip().startswith("despeckle:"))
+    assert line.startswith("  despeckle: 0.1  # ") and " specks of occupied cells alone in free space" in line
+    out.write_text(text.replace(line, "  despeckle: 0"))
+    proc = tmpnav("plan", out, "--cache-dir", tmp_path / "cache", "-q")
+    assert proc.returncode == 9, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in proc.stderr, proc.stderr
+    assert "specks of occupied cells up to 0.1 m wide alone in free space" in lines[0]
+    assert lines[0].endswith("if they are map noise, map.despeckle: 0.1 clears them")
+
+
 @pytest.mark.slow
 def test_the_skeleton_of_a_depot_plans_with_two_robots(tmp_path: Path) -> None:
     """Issue 22: an open hall with racks is split into places; the skeleton, with two robots and

@@ -182,7 +182,7 @@ CASES = [
     Case("unknown-key-in-sensor", nested("models.landmark_sensor.sigma_rnge", 0.2),
          "models.landmark_sensor.sigma_rnge", "unknown key (did you mean 'sigma_range'?)"),
     Case("unknown-key-no-hint", nested("map.colour", "red"), "map.colour",
-         "unknown key; expected one of ros, bounds, resolution, wall_thickness, walls, obstacles"),
+         "unknown key; expected one of ros, despeckle, bounds, resolution, wall_thickness, walls, obstacles"),
     Case("missing-goals", top(goals=...), "goals", "is missing; expected a mapping with keys visit, robots"),
     Case("missing-rooms", top(rooms=...), "rooms", "is missing; expected a list of rooms"),
     Case("missing-robot-pose", delete("robots", "r2", "pose"), "robots.r2.pose",

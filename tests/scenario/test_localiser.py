@@ -24,8 +24,14 @@ def with_lidar(tmp_path: Path, localiser: dict | None = None) -> Path:
     return write_yaml(tmp_path / "s.yaml", doc)
 
 
-def test_a_lidar_without_a_localiser_keeps_the_sensor_bound(tmp_path: Path) -> None:
+def test_a_lidar_without_a_localiser_is_localised_by_nav2_amcl_at_its_defaults(tmp_path: Path) -> None:
     sensor = load(with_lidar(tmp_path)).models.range_sensor
+    assert sensor is not None and sensor.localiser == NAV2_AMCL
+    assert not sensor.localiser.fuses_others
+
+
+def test_the_sensor_bound_is_asked_for_by_name(tmp_path: Path) -> None:
+    sensor = load(with_lidar(tmp_path, {"model": "beams"})).models.range_sensor
     assert sensor is not None and sensor.localiser.kind is ScanModelKind.BEAMS
     assert sensor.localiser.fuses_others
 

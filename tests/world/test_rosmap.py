@@ -20,7 +20,7 @@ from tests.scenario.helpers import base_as_ros_map, base_scenario, build_world, 
 from tmpnav.cli import cli
 from tmpnav.scenario import load
 from tmpnav.types import RosMap
-from tmpnav.world.rosmap import MapImageError, load_ros_map
+from tmpnav.world.rosmap import MapImageError, load_ros_map, speck_count, specks
 
 FREE, OCCUPIED, UNKNOWN = 254, 0, 205
 
@@ -255,3 +255,46 @@ def test_the_map_cells_cap_can_be_lifted_and_lowered(tmp_path: Path, monkeypatch
         load_ros_map(spec)
     monkeypatch.setenv("TMPNAV_MAX_MAP_CELLS", "24")
     assert load_ros_map(spec).shape == PIXELS.shape
+
+
+# ------------------------------------------------------------------- specks
+
+
+def test_specks_are_small_groups_of_occupied_cells_free_all_around() -> None:
+    occupied = np.zeros((12, 12), dtype=bool)
+    occupied[0, :] = True  # a wall along the edge
+    occupied[3, 3] = True  # one cell
+    occupied[6, 6:8] = occupied[7, 7] = True  # three cells, two wide: one speck (8-connected)
+    occupied[9, 2:5] = True  # three wide: past 0.1 m at 0.05 m
+    occupied[2, 9] = occupied[1, 9] = True  # touches the wall: part of it
+    occupied[11, 11] = True  # on the image's edge: kept (what lies beyond is unknown)
+    found = specks(occupied, 0.1, 0.05)
+    assert set(zip(*np.nonzero(found), strict=True)) == {(3, 3), (6, 6), (6, 7), (7, 7)}
+    assert speck_count(occupied, 0.1, 0.05) == 2
+    assert not specks(occupied, 0.04, 0.05).any()  # narrower than a cell: none
+
+
+def test_despeckle_clears_the_specks_of_the_world(tmp_path: Path) -> None:
+    doc = base_scenario()
+    base_as_ros_map(doc, tmp_path)
+    pixels = np.asarray(Image.open(tmp_path / "map.pgm")).copy()
+    row, col = next(
+        (r, c)
+        for r, c in np.argwhere(pixels[2:-2, 2:-2] == 254) + 2
+        if (pixels[r - 2 : r + 3, c - 2 : c + 3] == 254).all()
+    )
+    pixels[row, col] = 0  # a speck in the middle of free space
+    write_pgm(tmp_path / "map.pgm", pixels)
+    kept = build_world(tmp_path, doc)[1].grid.occupied
+    doc["map"]["despeckle"] = 0.1
+    cleared = build_world(tmp_path, doc)[1].grid.occupied
+    assert kept.sum() == cleared.sum() + 1 and kept[::-1][row, col] and not cleared[::-1][row, col]
+
+
+def test_despeckle_on_a_polygonal_map_is_one_line(tmp_path: Path) -> None:
+    doc = base_scenario()
+    doc["map"]["despeckle"] = 0.1
+    write_yaml(tmp_path / "scenario.yaml", doc)
+    result = CliRunner().invoke(cli, ["validate", str(tmp_path / "scenario.yaml")])
+    assert result.exit_code == 2 and len(result.stderr.strip().splitlines()) == 1
+    assert "map.despeckle: belongs to ROS maps" in result.stderr

@@ -21,6 +21,7 @@ from tmpnav.cli.options import (
 from tmpnav.cli.planners import check_planner
 from tmpnav.errors import EXIT_CODES
 from tmpnav.numbers import length
+from tmpnav.types import RosMap
 from tmpnav.version import __version__
 
 if TYPE_CHECKING:
@@ -68,6 +69,7 @@ def validate(scenario: Path) -> None:
     click.echo(
         f"{scenario}: ok: {len(sc.places)} rooms{stations}, {len(sc.doors)} doors, {len(sc.landmarks)} landmarks, "
         f"{len(sc.robots)} robots, map {cols}x{rows} cells of {world.grid.resolution:g} m"
+        + (f", specks up to {sc.map.despeckle:g} m cleared" if isinstance(sc.map, RosMap) and sc.map.despeckle else "")
     )
     warn_scenario(sc, world=world)
 

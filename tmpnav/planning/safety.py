@@ -128,3 +128,22 @@ def what_would_help(report: PlanReport, point: RiskyPoint) -> str:
     if point.margin < 0.3:  # the walls leave little room
         helps.append(f"a wider {point.door}" if point.door else "more room there (a path clear of the walls)")
     return f"{said}; what would help there: {', '.join(helps)}"
+
+
+def speck_hint(report: PlanReport) -> str:
+    """What the error of a plan over the chance constraint adds where the map's specks are kept as
+    obstacles (tmpnav.world.rosmap.specks): on a map made by SLAM most are noise, and paths must
+    pass them close enough for a robot's local error to reach them; "" where there are none."""
+    from tmpnav.types import RosMap
+    from tmpnav.world.rosmap import SPECK_WIDTH, speck_count
+
+    spec = report.scenario.map
+    if not isinstance(spec, RosMap) or spec.despeckle > 0:
+        return ""
+    n = speck_count(report.world.grid.occupied, SPECK_WIDTH, report.world.grid.resolution)
+    if not n:
+        return ""
+    return (
+        f"; the map has {n} speck{'s' * (n > 1)} of occupied cells up to {SPECK_WIDTH:g} m wide alone in free "
+        f"space, obstacles the paths pass: if they are map noise, map.despeckle: {SPECK_WIDTH:g} clears them"
+    )

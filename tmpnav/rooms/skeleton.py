@@ -13,15 +13,17 @@ import numpy as np
 from tmpnav.atomic import write_file
 from tmpnav.rooms.proposal import DEEP_DOOR, ROBOT_RADIUS, Proposal, RoomProposal
 from tmpnav.version import __version__
+from tmpnav.world.rosmap import SPECK_WIDTH, speck_count
 
 WIDTH = 100  # characters per line of a wrapped polygon
 
 #: the robots' sensors: a typical 2D lidar against the map (docs/scenario.md, models.range_sensor)
 MODELS = (
     "models:",
-    "  # a typical 2D lidar: put your robots' (range, field of view, range noise, spot divergence);",
-    "  # beams is the number treated as independent per scan (nav2's AMCL uses 60). Delete it for",
-    "  # the paper's model: landmarks and other robots only",
+    "  # a typical 2D lidar: put your robots' (range, field of view, range noise, spot divergence).",
+    "  # The robots localise as nav2's AMCL does at its defaults (localiser: docs/models.md); give",
+    "  # localiser its parameters, or `tmpnav calibrate` them. Delete the line for the paper's model:",
+    "  # landmarks and other robots only",
     "  range_sensor: {range: 12, fov: 360 deg, beams: 60, sigma_range: 0.03, divergence: 0.01}",
 )
 
@@ -35,6 +37,7 @@ def scenario_yaml(proposal: Proposal, name: str, map_ref: str, map_shown: str) -
         f"description: {json.dumps(f'Rooms segmented from {map_shown} by tmpnav rooms; check them (see above)')}",
         "map:",
         f"  ros: {json.dumps(map_ref)}",
+        *_despeckle(proposal),
         "",
         *_rooms(proposal),
         "",
@@ -58,6 +61,17 @@ def scenario_yaml(proposal: Proposal, name: str, map_ref: str, map_shown: str) -
         parts[-1] += " (more goals take longer to plan: see `tmpnav plan --help`, --search)"
     parts += _stations_example(proposal)
     return "\n".join(parts) + "\n"
+
+
+def _despeckle(p: Proposal) -> list[str]:
+    """map.despeckle where the map has specks (tmpnav.world.rosmap.specks), with how many."""
+    n = speck_count(p.grid.occupied, SPECK_WIDTH, p.grid.resolution)
+    if not n:
+        return []
+    return [
+        f"  despeckle: {SPECK_WIDTH:g}  # {n} speck{'s' * (n > 1)} of occupied cells alone in free space: map noise,"
+        " cleared (0 if they are real obstacles)"
+    ]
 
 
 def _stations_example(p: Proposal) -> list[str]:

@@ -77,6 +77,10 @@ def _one_map_kind(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple[Any, 
         ctx.add(path, raw, "must have exactly one of 'ros' (a ROS map_server YAML file) or 'bounds' (a polygonal map)")
     if has_ros and (section.get("walls") or section.get("obstacles")):
         ctx.add(path, raw, "'walls' and 'obstacles' belong to polygonal maps; a ROS map takes its walls from the image")
+    if has_bounds and section.get("despeckle"):
+        ctx.add(
+            f"{path}.despeckle", (*raw, "despeckle"), "belongs to ROS maps (map.ros); a polygonal map has no specks"
+        )
     bounds = section.get("bounds")
     if bounds is not None and (bounds[2] <= bounds[0] or bounds[3] <= bounds[1]):
         ctx.add(
@@ -106,6 +110,13 @@ MAP = Section(
         "ros": Field(
             Text(),
             "ROS map_server YAML file (image, resolution, origin, negate, occupied_thresh, free_thresh, mode), relative to the scenario file",
+        ),
+        "despeckle": Field(
+            Number("length", minimum=0.0, maximum=1.0, reason="past 1 m a speck may be a pillar or a rack"),
+            "ROS map: specks of occupied cells no wider than this, free all around, are map noise (a reflection, "
+            "a person mapped in passing) and are cleared, for planning and simulation alike (`tmpnav rooms` writes "
+            "0.1 where the map has such specks); 0: every occupied cell is an obstacle",
+            default=0.0,
         ),
         "bounds": Field(
             Vector(dimensions=("length",) * 4, names="xmin, ymin, xmax, ymax", max_abs=MAX_COORDINATE),
@@ -268,7 +279,7 @@ LOCALISER = Section(
             "amcl: nav2's AMCL (likelihood field), the information a particle filter takes from a scan; "
             "beams: every beam an independent measurement of the sensor's own noise (the sensor's bound, "
             "which no localiser reaches)",
-            default=ScanModelKind.BEAMS.value,
+            default=ScanModelKind.AMCL.value,
         ),
         "sigma_hit": Field(
             Number("length", minimum=MIN_SIGMA, maximum=5.0, reason=PRECISE),
@@ -382,7 +393,8 @@ RANGE_SENSOR = Section(
         "localiser": Field(
             LOCALISER,
             'what the robots\' localiser makes of a scan (docs/models.md, "What a localiser achieves"); '
-            "omitted: the sensor's own bound (model beams); model amcl: nav2's AMCL at its defaults, calibrated",
+            "omitted: nav2's AMCL at its defaults, calibrated (model amcl); model beams: the sensor's own bound, "
+            "which no localiser reaches",
         ),
     },
     post=_range_sensor_reach,

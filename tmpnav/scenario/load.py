@@ -9,6 +9,7 @@ and bounds on size, nesting and alias expansion checked before anything is built
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -196,7 +197,8 @@ def _ros_map(doc: YamlDoc, section: dict[str, Any]) -> tuple[RosMap | None, list
                 doc.line(("map", "ros")),
             )
         ]
-    return read_ros_map(map_path)
+    ros, problems = read_ros_map(map_path)
+    return (replace(ros, despeckle=section["despeckle"]) if ros is not None else None), problems
 
 
 def _missing(path: Path) -> str:

@@ -14,11 +14,13 @@ are refused with the reason, never misread.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
+from scipy import ndimage
 
 from tmpnav.errors import Problem
 from tmpnav.scenario import display_path
@@ -127,10 +129,42 @@ def occupancy_from_image(grey: np.ndarray, spec: RosMap) -> np.ndarray:
 
 
 def load_ros_map(spec: RosMap) -> OccupancyGrid:
-    """The ROS map as an :class:`OccupancyGrid` (row 0 = lowest y, as the grid expects)."""
+    """The ROS map as an :class:`OccupancyGrid` (row 0 = lowest y, as the grid expects), its
+    specks up to ``spec.despeckle`` wide cleared (:func:`specks`)."""
     occupied = occupancy_from_image(read_image(spec), spec)
+    if spec.despeckle > 0:
+        occupied &= ~specks(occupied, spec.despeckle, spec.resolution)
     return OccupancyGrid(
         occupied=np.ascontiguousarray(occupied[::-1]),
         origin=(spec.origin[0], spec.origin[1]),
         resolution=spec.resolution,
     )
+
+
+#: the width (m) of the specks ``tmpnav rooms`` clears and the chance constraint's error counts
+SPECK_WIDTH = 0.1
+
+
+def speck_count(occupied: np.ndarray, width: float, resolution: float) -> int:
+    """How many specks (:func:`specks`) the map has."""
+    return int(ndimage.label(specks(occupied, width, resolution), structure=np.ones((3, 3), dtype=bool))[1])
+
+
+def specks(occupied: np.ndarray, width: float, resolution: float) -> np.ndarray:
+    """The cells of the map's specks: groups of occupied cells (8-connected) whose extent along
+    each axis is at most ``width`` (m), with free cells all around them (not on the image's edge).
+    On a map made by SLAM these are noise (a reflection, a person mapped in passing): no wall or
+    object the robots could touch is that small and alone, and every path must pass them."""
+    cells = math.floor(width / resolution + 1e-9)
+    if cells < 1:
+        return np.zeros_like(occupied)
+    labels, _ = ndimage.label(occupied, structure=np.ones((3, 3), dtype=bool))
+    out = np.zeros_like(occupied)
+    rows, cols = occupied.shape
+    for k, box in enumerate(ndimage.find_objects(labels), start=1):
+        r, c = box
+        small = r.stop - r.start <= cells and c.stop - c.start <= cells
+        inside = r.start > 0 and c.start > 0 and r.stop < rows and c.stop < cols
+        if small and inside:
+            out[box] |= labels[box] == k
+    return out
