@@ -139,9 +139,10 @@ class Spec:
 
 #: the robots' 2D lidar (docs/scenario.md, models.range_sensor), the same in every scenario that has one
 LIDAR = [
-    "# a typical 2D lidar: 12 m, all round, 60 beams treated as independent (as nav2's AMCL uses 60",
-    "# of a scan), 3 cm of range noise, a spot that widens by 10 mrad; plan with --no-range-sensor",
-    "# for the paper's model (landmarks and partners only)",
+    "# a typical 2D lidar: 12 m, all round, 60 beams, 3 cm of range noise, a spot that widens by",
+    "# 10 mrad. The robots localise as nav2's AMCL does at its defaults (no localiser given:",
+    "# docs/models.md, \"What a localiser achieves\"); plan with --no-range-sensor for the paper's",
+    "# model (landmarks and partners only)",
     "models:",
     "  range_sensor: {range: 12, fov: 360 deg, beams: 60, sigma_range: 0.03, divergence: 0.01}",
 ]
