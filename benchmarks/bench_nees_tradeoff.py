@@ -59,13 +59,48 @@ def both_met(rows: list[tuple[float, float, float]]) -> str:
     return f"k {min(ok):.2f}-{max(ok):.2f}" if ok else "none"
 
 
+def plot() -> Path:
+    """amcl/tradeoff/tradeoff.png: each scenario's median NEES and share beyond 3 sigma against k."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8))
+    for csv in sorted(OUT.glob("*.csv")):
+        k, median, beyond = np.loadtxt(csv, delimiter=",", skiprows=1, unpack=True)
+        left.plot(k, median, label=csv.stem)
+        right.plot(k, 100 * beyond, label=csv.stem)
+    left.axhspan(1.0, 4.0, color="g", alpha=0.12, label="target: 1-4")
+    right.axhspan(0.0, 5.0, color="g", alpha=0.12, label="target: at most 5%")
+    for ax, what in ((left, "median NEES against k² P"), (right, "driving steps beyond 3 sigma [%]")):
+        ax.axvline(1.0, color="k", lw=0.8, ls=":")
+        ax.set_xscale("log")
+        ax.set_xticks([0.25, 0.5, 1.0, 2.0, 4.0], ["0.25", "0.5", "1", "2", "4"], minor=False)
+        ax.set_xticks([], minor=True)
+        ax.set_xlabel("k: the plan's predicted std scaled by (1: the shipped AMCL model)")
+        ax.set_ylabel(what)
+        ax.grid(True, which="both", alpha=0.3)
+    left.set_yscale("log")
+    right.legend(fontsize=8)
+    fig.suptitle("nav2's AMCL against the plan's beliefs scaled by k: no k meets both targets on any scenario")
+    fig.tight_layout()
+    out = OUT / "tradeoff.png"
+    fig.savefig(out, dpi=100)
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sessions", type=int, default=4)
     parser.add_argument("--seed", type=int, default=300)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--only", nargs="*", default=None)
+    parser.add_argument("--plot-only", action="store_true", help="draw tradeoff.png from the CSVs written before")
     args = parser.parse_args()
+    if args.plot_only:
+        print(f"wrote {plot()}")
+        return
     OUT.mkdir(parents=True, exist_ok=True)
     table = []
     with tempfile.TemporaryDirectory() as tmpdir:
@@ -90,6 +125,7 @@ def main() -> None:
         "most k with median >=1  both met  time"
     )
     print("\n".join(table))
+    print(f"wrote {plot()}")
 
 
 if __name__ == "__main__":
