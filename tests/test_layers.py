@@ -50,6 +50,7 @@ LAYERS: dict[str, int] = {
     "tmpnav.attachment.conflicts": 9,  # waits that keep robots out of each other's way, on the clock
     "tmpnav.planning": 10,  # stage 6 for a run: the registry of task planners
     "tmpnav.resimulate": 11,
+    "tmpnav.options": 11,  # what a run is asked for, and the scenario that puts in force
     "tmpnav.pipeline": 12,
     # what uses a plan or a run
     "tmpnav.rooms_check": 13,

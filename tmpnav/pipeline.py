@@ -3,7 +3,7 @@
 ::
 
     scenario -> world      load_world        scenario/, world/ (the command line's overrides
-                                             applied, everything checked once)
+                                             applied, tmpnav.options; everything checked once)
     -> roadmap             roadmap_for       roadmap/ (grown, or read from the cache directory)
     -> task plan           plan_stage        planning/: the search and costs of tmpnav.choices,
                                              task/ on attachment/'s cost models (oracle/ inside)
@@ -17,27 +17,32 @@ import math
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING
 
 from tmpnav import scenario as scenario_stage
 from tmpnav import world as world_stage
 from tmpnav.cachedir import CacheDir
-from tmpnav.choices import Costs, Objective, Search, choose, paper_conflict
 from tmpnav.deadline import Deadline, run_started
 from tmpnav.errors import (
     ConflictError,
-    InputError,
     PlannerTimeoutError,
-    Problem,
     RiskError,
     ScenarioError,
     TimeLimitError,
 )
 from tmpnav.heap import long_lived_frozen
+from tmpnav.options import NO_THRESHOLD as NO_THRESHOLD
+from tmpnav.options import Execution as Execution
+from tmpnav.options import Overrides as Overrides
+from tmpnav.options import PlanOptions as PlanOptions
+from tmpnav.options import Reporters as Reporters
+from tmpnav.options import apply_options as apply_options
+from tmpnav.options import in_force as in_force
+from tmpnav.options import size_problems
 from tmpnav.results import CacheUse, PlanReport, SearchProgress, StageTimes
-from tmpnav.types import DEFAULT_RISK_SOURCE, SAFE_MARGIN, Goals, Roadmap, RobotSpec, Scenario
+from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import MapImageError, World
 
 if TYPE_CHECKING:
@@ -45,97 +50,6 @@ if TYPE_CHECKING:
     from tmpnav.oracle.table import Origin
     from tmpnav.roadmap.store import RoadmapStore
     from tmpnav.task.encode import EncodedTask
-
-
-@dataclass(frozen=True)
-class Overrides:
-    """Command-line choices that override the scenario's (None: the scenario's own)."""
-
-    encoding: str | None = None
-    planner: str | None = None
-    timeout: float | None = None
-    pair_min_gain: float | None = None
-    mutual_observations: bool | None = None
-    range_sensor: bool | None = None  # False: plan without the scenario's range sensor (the paper's model)
-    goals: Goals | None = None
-    search: Search | None = None
-    time_budget: float | None = None
-    work_budget: int | None = None
-    time_limit: float | None = None
-    costs: Costs | None = None
-    objective: Objective | None = None
-    max_risk: float | None = None
-    keep_apart: bool | None = None
-    clearance: float | None = None  # m: roadmap.clearance
-    accept_risk: bool = False  # hand out a plan that breaks the chance constraint or leaves robots in the way
-    #: a plan to start the anytime search from, as steps of (robot, target room): the rest of the
-    #: plan being executed, when ``tmpnav replan`` revises it (tmpnav.replan)
-    incumbent: tuple[tuple[tuple[str, str], ...], ...] = ()
-    #: the roadmap of the plan being revised, when the world is unchanged: the revision's starts
-    #: are added to it (tmpnav.roadmap.with_starts) instead of growing a roadmap of its own
-    roadmap_base: Roadmap | None = None
-    #: the robots as the plan being revised started, with ``roadmap_base``: the revision's cost
-    #: table reaches the rooms' canonical states from there, as that plan's table did, and reads
-    #: its moves between rooms from the cache (tmpnav.oracle.table.Origin)
-    origins: tuple[RobotSpec, ...] = ()
-
-
-#: ``Overrides.max_risk`` that lifts the chance constraint (``--max-risk none``)
-NO_THRESHOLD = -1.0
-
-
-@dataclass(frozen=True)
-class Execution:
-    """Where a run keeps and computes its costs: the cache directory, the oracle's executor."""
-
-    cache_dir: Path | None = None  # None: the default cache directory (tmpnav.cachedir)
-    use_cache: bool = True
-    replan: bool = False  # run the task planner even when the cache remembers its plan
-    executor: str = "processes"
-    workers: int | None = None
-    ray_address: str | None = None
-
-
-@dataclass(frozen=True)
-class Reporters:
-    """Who is told how a run goes."""
-
-    oracle: Callable[[int, int], None] | None = None  # (requests done, requests in all)
-    search: SearchProgress | None = None  # the anytime search's progress
-
-
-@dataclass(frozen=True)
-class PlanOptions:
-    """How to plan: the scenario's overrides, where costs are kept and computed, who is told."""
-
-    overrides: Overrides = Overrides()
-    execution: Execution = Execution()
-    reporters: Reporters = Reporters()
-
-    @classmethod
-    def of(cls, **keywords: object) -> PlanOptions:
-        """The options from flat keywords, each the name of a field of :class:`Overrides`,
-        :class:`Execution` or :class:`Reporters` (``progress`` and ``search_progress`` name the
-        reporters): ``PlanOptions.of(costs="table", use_cache=False)``."""
-        return cls().but(**keywords)
-
-    def but(self, **keywords: object) -> PlanOptions:
-        """These options with the fields that ``keywords`` name (as in :meth:`of`) changed."""
-        # the reporters by their own names first: "search" also names an override
-        reporters = self.reporters
-        if "progress" in keywords:
-            reporters = replace(reporters, oracle=cast("Callable[[int, int], None] | None", keywords.pop("progress")))
-        if "search_progress" in keywords:
-            reporters = replace(reporters, search=cast("SearchProgress | None", keywords.pop("search_progress")))
-        parts = {}
-        for name in ("overrides", "execution"):
-            part = getattr(self, name)
-            names = {f.name for f in fields(part)}
-            parts[name] = replace(part, **{k: keywords.pop(k) for k in list(keywords) if k in names})
-        parts["reporters"] = reporters
-        if keywords:
-            raise TypeError(f"unknown plan options: {', '.join(sorted(keywords))}")
-        return PlanOptions(**parts)
 
 
 def load_world(path: str | Path, overrides: Overrides | None = None) -> tuple[Scenario, World]:
@@ -149,83 +63,10 @@ def load_world(path: str | Path, overrides: Overrides | None = None) -> tuple[Sc
         world = world_stage.build(scenario)
     except MapImageError as err:
         raise ScenarioError([*problems, err.problem]) from None
-    problems += world_stage.check(scenario, world) + _size_problems(scenario)
+    problems += world_stage.check(scenario, world) + size_problems(scenario)
     if problems:
         raise ScenarioError(problems)
     return scenario, world
-
-
-def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
-    """The scenario with the command line's overrides (InputError for choices that conflict)."""
-    o, planner = overrides, scenario.planner
-    planner = replace(
-        planner,
-        encoding=o.encoding or planner.encoding,
-        name=o.planner or planner.name,
-        timeout=o.timeout if o.timeout is not None else planner.timeout,
-        pair_min_gain=o.pair_min_gain if o.pair_min_gain is not None else planner.pair_min_gain,
-        search=o.search or planner.search,
-        time_budget=o.time_budget if o.time_budget is not None else planner.time_budget,
-        work_budget=o.work_budget if o.work_budget is not None else planner.work_budget,
-        time_limit=o.time_limit if o.time_limit is not None else planner.time_limit,
-        costs=o.costs or planner.costs,
-        objective=o.objective or planner.objective,
-        max_risk=planner.max_risk if o.max_risk is None else None if o.max_risk == NO_THRESHOLD else o.max_risk,
-        max_risk_from=planner.max_risk_from
-        if o.max_risk is None
-        else ""
-        if o.max_risk == NO_THRESHOLD
-        else "--max-risk",
-        keep_apart=o.keep_apart if o.keep_apart is not None else planner.keep_apart,
-    )
-    if (why := paper_conflict(planner.encoding, o.search, o.costs, o.objective)) is not None:
-        raise InputError(why)
-    if planner.encoding == "paper":  # the paper's model, as tmpnav.choices.choose plans it
-        choice = choose(planner.encoding, planner.search, planner.costs, 0, 0)
-        planner = replace(
-            planner,
-            costs=choice.costs,
-            search=choice.mode,
-            objective="cost",
-            max_risk=None,
-            max_risk_from="",
-            keep_apart=False,
-        )
-    models = scenario.models
-    if planner.encoding == "paper" and models.controller == "auto":  # the paper's robots turn, then drive
-        models = replace(models, controller="turn-then-drive")
-    if o.mutual_observations is not None:
-        models = replace(models, mutual_observations=o.mutual_observations)
-    if o.range_sensor is False:
-        models = replace(models, range_sensor=None)
-        if planner.max_risk_from == DEFAULT_RISK_SOURCE:  # the paper's model: no threshold by default
-            planner = replace(planner, max_risk=None, max_risk_from="")
-    if o.goals is not None and (unknown := [g for g in o.goals.all_rooms if g not in {r.name for r in scenario.rooms}]):
-        raise InputError(f"goal rooms {', '.join(unknown)} are not rooms of scenario {scenario.name!r}")
-    clearance = o.clearance if o.clearance is not None else scenario.roadmap.clearance
-    if planner.encoding == "paper":
-        clearance = 0.0
-    elif clearance is None:  # robots that see the walls, or plan within a threshold, keep clear of walls
-        clearance = SAFE_MARGIN if models.range_sensor is not None or planner.max_risk is not None else 0.0
-    roadmap = replace(scenario.roadmap, clearance=clearance)
-    return replace(scenario, planner=planner, models=models, goals=o.goals or scenario.goals, roadmap=roadmap)
-
-
-def in_force(scenario: Scenario, overrides: Overrides) -> Scenario:
-    """A scenario loaded earlier, with ``overrides`` applied and its plan sizes checked."""
-    scenario = apply_options(scenario, overrides)
-    if problems := _size_problems(scenario):
-        raise ScenarioError(problems)
-    return scenario
-
-
-def _size_problems(scenario: Scenario) -> list[Problem]:
-    """Goal rooms x robots and the cost table's estimated entries against their caps
-    (tmpnav.scenario.limits)."""
-    from tmpnav.scenario.extent import plan_sizes
-
-    file = scenario_stage.display_path(scenario.source)
-    return [Problem(file, p, message, scenario.line_of(p)) for p, message in plan_sizes(scenario)]
 
 
 def roadmap_for(
