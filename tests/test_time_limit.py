@@ -116,3 +116,6 @@ def test_the_search_leaves_a_share_of_the_limit_to_the_stages_after_it() -> None
     assert deadline.Deadline(None).after_search() == 0.0
     assert deadline.Deadline(10.0).after_search() == deadline.AFTER_SEARCH_MIN
     assert deadline.Deadline(600.0).after_search() == pytest.approx(deadline.AFTER_SEARCH_SHARE * 600.0)
+    # a long plan's files and figures take longer: 200 goals keep 15 s of a 120 s limit
+    assert deadline.Deadline(120.0).after_search(200) == pytest.approx(deadline.AFTER_SEARCH_PER_GOAL * 200)
+    assert deadline.Deadline(120.0).after_search(20) == pytest.approx(deadline.AFTER_SEARCH_SHARE * 120.0)

@@ -34,9 +34,12 @@ from tmpnav.errors import TimeLimitError
 #: it loads the command line; None in a program that uses tmpnav's API
 COMMAND_STARTED: float | None = None
 #: the share of a time limit the search leaves to the stages after it, at least AFTER_SEARCH_MIN
-#: seconds (the figures and the exit take 2-3 s on 40 rooms and 8 robots, 5 s on 100 rooms and 16)
+#: seconds and AFTER_SEARCH_PER_GOAL seconds a goal: the re-simulation, the plan's files and
+#: figures grow with the plan (2-3 s on 40 rooms and 8 robots, 5 s on 100 rooms and 16, about
+#: 15 s on 200 rooms and 2 robots, whose plan is 5,500 s long)
 AFTER_SEARCH_SHARE = 0.08
 AFTER_SEARCH_MIN = 2.5
+AFTER_SEARCH_PER_GOAL = 0.075
 
 
 def run_started(own: float) -> float:
@@ -62,11 +65,12 @@ class Deadline:
             return math.inf
         return self.seconds - (time.perf_counter() - self.started)
 
-    def after_search(self) -> float:
-        """Seconds of the limit kept for the stages after the search (0 without a limit)."""
+    def after_search(self, goals: int = 0) -> float:
+        """Seconds of the limit kept for the stages after the search of a plan of ``goals`` goals
+        (0 without a limit)."""
         if self.seconds is None:
             return 0.0
-        return max(AFTER_SEARCH_MIN, AFTER_SEARCH_SHARE * self.seconds)
+        return max(AFTER_SEARCH_MIN, AFTER_SEARCH_SHARE * self.seconds, AFTER_SEARCH_PER_GOAL * goals)
 
     def passed(self) -> bool:
         return self.armed and self.left() <= 0

@@ -86,7 +86,8 @@ class TaskRun:
         """Seconds of the time cap not yet spent by the run's stages, and of the run's time limit
         less what the stages after the search keep of it (Deadline.after_search)."""
         deadline = self.search.deadline
-        return min(self.budget - self.times.spent(), deadline.left() - deadline.after_search())
+        kept = deadline.after_search(len(self.goals.all_rooms))
+        return min(self.budget - self.times.spent(), deadline.left() - kept)
 
 
 @dataclass(frozen=True)
