@@ -99,6 +99,12 @@ def main() -> None:
         "--sizes", default=SIZES, help="kind:rooms:robots[:seeds], comma-separated (seeds: --seeds unless given)"
     )
     parser.add_argument("-o", "--output", type=Path, default=OUT, help="folder of the results (default: %(default)s)")
+    parser.add_argument(
+        "--localiser",
+        choices=("beams", "amcl"),
+        default=None,
+        help="the lidar's localiser model (models.range_sensor.localiser.model; default: the scenario default)",
+    )
     args = parser.parse_args()
     out = args.output
     out.mkdir(parents=True, exist_ok=True)
@@ -109,7 +115,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for kind, rooms, robots in sizes:
             for seed in range(seeds[(kind, rooms, robots)]):
-                path = write(KINDS[kind](rooms, robots, seed), Path(tmp) / f"{kind}-{rooms}-{robots}-{seed}.yaml")
+                doc = KINDS[kind](rooms, robots, seed)
+                if args.localiser and "range_sensor" in doc.get("models", {}):
+                    doc["models"]["range_sensor"]["localiser"] = {"model": args.localiser}
+                path = write(doc, Path(tmp) / f"{kind}-{rooms}-{robots}-{seed}.yaml")
                 result = run(path, Path(tmp) / f"cache-{kind}-{rooms}-{robots}-{seed}")
                 rows.append({"kind": kind, "rooms": rooms, "robots": robots, "seed": seed, **result})
                 print(rows[-1], flush=True)
@@ -118,7 +127,9 @@ def main() -> None:
         writer.writeheader()
         writer.writerows(rows)
     lines = [
-        f"# `python benchmarks/bench_families.py --seeds {args.seeds} --sizes {args.sizes}`, "
+        f"# `python benchmarks/bench_families.py --seeds {args.seeds} --sizes {args.sizes}"
+        + (f" --localiser {args.localiser}" if args.localiser else "")
+        + "`, "
         f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}",
         "",
         "| kind | rooms | robots | planned | time median [s] | time p90 [s] | converged | objective median | "

@@ -141,7 +141,7 @@ class Spec:
 LIDAR = [
     "# a typical 2D lidar: 12 m, all round, 60 beams, 3 cm of range noise, a spot that widens by",
     "# 10 mrad. The robots localise as nav2's AMCL does at its defaults (no localiser given:",
-    "# docs/models.md, \"What a localiser achieves\"); plan with --no-range-sensor for the paper's",
+    '# docs/models.md, "What a localiser achieves"); plan with --no-range-sensor for the paper\'s',
     "# model (landmarks and partners only)",
     "models:",
     "  range_sensor: {range: 12, fov: 360 deg, beams: 60, sigma_range: 0.03, divergence: 0.01}",
