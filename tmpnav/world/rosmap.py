@@ -153,8 +153,9 @@ def speck_count(occupied: np.ndarray, width: float, resolution: float) -> int:
 def specks(occupied: np.ndarray, width: float, resolution: float) -> np.ndarray:
     """The cells of the map's specks: groups of occupied cells (8-connected) whose extent along
     each axis is at most ``width`` (m), with free cells all around them (not on the image's edge).
-    On a map made by SLAM these are noise (a reflection, a person mapped in passing): no wall or
-    object the robots could touch is that small and alone, and every path must pass them."""
+    On a map made by SLAM most are noise (a reflection, a person mapped in passing), and every path
+    must pass them; a thin pole is one too, which is why clearing them is the scenario's choice
+    (``map.despeckle``; 0 keeps them)."""
     cells = math.floor(width / resolution + 1e-9)
     if cells < 1:
         return np.zeros_like(occupied)
