@@ -147,7 +147,7 @@ SPECK_WIDTH = 0.1
 
 def speck_count(occupied: np.ndarray, width: float, resolution: float) -> int:
     """How many specks (:func:`specks`) the map has."""
-    return int(ndimage.label(specks(occupied, width, resolution), structure=np.ones((3, 3), dtype=bool))[1])
+    return _specks(occupied, width, resolution)[1]
 
 
 def specks(occupied: np.ndarray, width: float, resolution: float) -> np.ndarray:
@@ -156,11 +156,16 @@ def specks(occupied: np.ndarray, width: float, resolution: float) -> np.ndarray:
     On a map made by SLAM most are noise (a reflection, a person mapped in passing), and every path
     must pass them; a thin pole is one too, which is why clearing them is the scenario's choice
     (``map.despeckle``; 0 keeps them)."""
+    return _specks(occupied, width, resolution)[0]
+
+
+def _specks(occupied: np.ndarray, width: float, resolution: float) -> tuple[np.ndarray, int]:
+    """:func:`specks`' cells and how many specks they are."""
+    out, found = np.zeros_like(occupied), 0
     cells = math.floor(width / resolution + 1e-9)
     if cells < 1:
-        return np.zeros_like(occupied)
+        return out, found
     labels, _ = ndimage.label(occupied, structure=np.ones((3, 3), dtype=bool))
-    out = np.zeros_like(occupied)
     rows, cols = occupied.shape
     for k, box in enumerate(ndimage.find_objects(labels), start=1):
         r, c = box
@@ -168,4 +173,5 @@ def specks(occupied: np.ndarray, width: float, resolution: float) -> np.ndarray:
         inside = r.start > 0 and c.start > 0 and r.stop < rows and c.stop < cols
         if small and inside:
             out[box] |= labels[box] == k
-    return out
+            found += 1
+    return out, found
