@@ -119,7 +119,8 @@ def test_a_room_the_table_does_not_know_is_screened_not_reordered() -> None:
 def test_the_compiled_screen_adds_up_routes_as_the_plain_one() -> None:
     """Every route's (cost, time) from the vectorised sums equals _Screen.route's, for routes
     empty, whole, and through a move the table lacks (inf)."""
-    from tmpnav.task.routes import _Orders, _Screen
+    from tmpnav.task.route_orders import Orders
+    from tmpnav.task.routes import _Screen
 
     full = line_table()
     single = {m: c for m, c in full.single.items() if m != ("r2", "L1", "L3")}
@@ -132,7 +133,7 @@ def test_the_compiled_screen_adds_up_routes_as_the_plain_one() -> None:
         {"r1": list(ROOMS), "r2": ["L4"]},
         {"r1": [], "r2": []},
     ]
-    screened = _Orders(table, goals, 0.5, ["r1", "r2"], list(ROOMS)).screen(changes)
+    screened = Orders(table, goals, 0.5, ["r1", "r2"], list(ROOMS)).screen(changes)
     for changed, (as_is, order, reordered) in zip(changes, screened, strict=True):
         assert as_is == {r: plain.route(r, xs) for r, xs in changed.items()}
         assert reordered == {r: plain.route(r, xs) for r, xs in order.items()}
@@ -155,3 +156,67 @@ def test_every_edit_offered_is_better_as_its_steps_read() -> None:
     assert edits
     for edit in edits:
         assert value(routes(edit)) < now
+
+
+def three_homes_table() -> tuple[CostTable, dict[str, tuple[str, ...]]]:
+    """Three robots, each with a home of two rooms: a move into its own home costs 1, into the
+    next robot's home (r1 -> r2's, r2 -> r3's, r3 -> r1's) 10, into the third home 100."""
+    homes = {"r1": ("X1", "X2"), "r2": ("Y1", "Y2"), "r3": ("Z1", "Z2")}
+    robots = tuple(homes)
+    rooms = tuple(x for xs in homes.values() for x in xs)
+    start = {r: f"{r}-start" for r in robots}
+    single, duration = {}, {}
+    for k, r in enumerate(robots):
+        price = {robots[k]: 1.0, robots[(k + 1) % 3]: 10.0, robots[(k + 2) % 3]: 100.0}
+        for a, b in itertools.product((start[r], *rooms), rooms):
+            if a != b:
+                single[(r, a, b)] = next(p for owner, p in price.items() if b in homes[owner])
+                duration[(r, a, b)] = 1.0
+    return CostTable(robots, rooms, (*start.values(), *rooms), start, single, {}, duration), homes
+
+
+def test_three_robots_pass_their_tails_round_where_no_two_can_swap() -> None:
+    """Each robot does the next robot's home (60 in all). Every edit between two robots makes it
+    dearer or saves little (a room relocated home saves 9; two robots' tails swapped put one
+    robot in the third home, at 100 a room); the three tails passed round bring every robot home
+    (6): the screen offers that edit first."""
+    table, homes = three_homes_table()
+    goals = Goals(table.rooms, ())
+    plan = with_origins(
+        [((r, x),) for r, owner in (("r1", "r2"), ("r2", "r3"), ("r3", "r1")) for x in homes[owner]],
+        table.start_location,
+    )
+    rules = Rules(table.start_location, goals)
+    edits = route_edits(plan, table, goals, rules, span_weight=0.0)
+    assert {r: sorted(xs) for r, xs in _routes_of(edits[0]).items()} == {r: list(xs) for r, xs in homes.items()}
+
+
+def _routes_of(steps: list) -> dict[str, list[str]]:
+    out: dict[str, list[str]] = {}
+    for step in steps:
+        for r, x in step:
+            out.setdefault(r, []).append(x)
+    return out
+
+
+def test_robots_kept_apart_are_freed_of_the_price_by_an_edit_of_their_routes() -> None:
+    """r1 does L1-L3 and r2 L5, L4: the best routes by the screen, so no edit is offered. Kept
+    apart, the plan pays 20 more (a wait of r2's for r1): an edit of r1's or r2's route may free
+    it of that, so edits up to 20 dearer by the screen are offered, none of them the plan's own
+    routes again; robots kept apart that no edit can change leave nothing to offer."""
+    from tmpnav.task.routes import KeptApartPrice
+
+    table, goals = line_table(), Goals(ROOMS, ())
+    plan = plan_of(("r1", "L1"), ("r1", "L2"), ("r1", "L3"), ("r2", "L5"), ("r2", "L4"))
+    rules = Rules(table.start_location, goals)
+    assert route_edits(plan, table, goals, rules, span_weight=0.0) == []
+    now = routes(plan_steps(plan))
+    edits = route_edits(plan, table, goals, rules, span_weight=0.0, apart=KeptApartPrice(20.0, frozenset({"r2"})))
+    assert edits
+    for edit in edits:
+        assert routes(edit)["r2"] != now["r2"]
+    assert route_edits(plan, table, goals, rules, span_weight=0.0, apart=KeptApartPrice(20.0, frozenset({"r9"}))) == []
+
+
+def plan_steps(plan: tuple) -> list:
+    return [tuple((r, x) for r, _, x in step) for step in plan]

@@ -193,6 +193,7 @@ class ExecutedCost:
     def __init__(self, carried: CarriedCosts, delta: float | None):
         self.carried, self.delta = carried, delta
         self._memo: dict[Plan, PlanCost] = {}
+        self._apart: dict[Plan, frozenset[str]] = {}
         self.priced = 0  # plans checked for conflicts (runs recorded)
 
     def __call__(self, plan: Plan, cost: PlanCost) -> PlanCost:
@@ -201,6 +202,10 @@ class ExecutedCost:
             self._memo[plan] = self._price(plan, cost)
         return self._memo[plan]
 
+    def robots_apart(self, plan: Plan) -> frozenset[str]:
+        """The robots whose conflicts keeping ``plan`` apart resolved (a plan priced before)."""
+        return self._apart.get(tuple(plan), frozenset())
+
     def _price(self, plan: Plan, cost: PlanCost) -> PlanCost:
         if not math.isfinite(cost.total):
             return cost
@@ -208,6 +213,7 @@ class ExecutedCost:
         res = _kept(self.carried, plan, self.delta, cost.total, cost.makespan)
         if res is None:
             return cost
+        self._apart[plan] = frozenset(r for c in res.conflicts_before for r in c.robots)
         executed = tuple(res.run.step_costs(len(res.plan), self.carried.scenario.cost, self.delta))
         same = len(res.plan) == len(plan)  # no sidestep split a move: the steps are the plan's
         return PlanCost(

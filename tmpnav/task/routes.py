@@ -1,11 +1,13 @@
 """Edits between the robots' routes, as vehicle routing's local searches make them.
 
-A plan's single steps, read robot by robot, are routes. Four kinds of edit change them:
+A plan's single steps, read robot by robot, are routes. Five kinds of edit change them:
 
 * **relocate**: one room leaves its robot's route and enters another robot's route (or the same
   route elsewhere), at any position;
 * **exchange**: two robots swap a room each;
 * **2-opt\\***: two robots swap the tails of their routes (every room from a point on);
+* **tails passed round**: three robots' tails, each to the next robot (a cyclic 2-opt\\*: where
+  work should move round a ring of robots, every edit between two of them is dearer);
 * **unloading**, where the makespan counts: relocations chained from the robot that finishes
   last, each to the robot and place where its room adds least (:mod:`tmpnav.task.balance`).
 
@@ -16,7 +18,11 @@ the rooms that only one robot may have (its own targets, its end, a job for some
 
 Every edit is screened on the single moves' table, the cheapest first: the routes' costs added,
 plus ``span_weight`` times the longest route's driving and service time (what the objective
-prices when the team moves at once, waits left out). :func:`route_edits` returns the edits whose
+prices when the team moves at once, waits left out). Where the plan keeps robots apart, the price of
+that (:class:`KeptApartPrice`) is added to the screen of every edit that changes none of their
+routes, and left out for one that changes one: such an edit may free the plan of its waits, so
+it is worth the model's costing when it is dearer than the plan as planned yet cheaper than the
+plan as executed. :func:`route_edits` returns the edits whose
 screened value is below the plan's and that the plan rules accept; the caller costs them with
 its model (tmpnav.task.search).
 
@@ -27,25 +33,23 @@ tails *and* turning them round, and the screen of the swap alone prices it deare
 plan. So every changed route is also reordered by the local search of the travelling salesman's
 solvers (Or-opt: a string of up to three rooms moved elsewhere in the route; 2-opt: a stretch
 reversed; first improvement, until neither improves), each route on its own cost plus
-``span_weight`` times its own time, a robot's end kept last; the edit is screened both as it
-is and reordered. The routes' moves are asymmetric (a move's cost depends on its direction
-through the headings), so every trial route is priced in full. On a generated 14-room office
+``span_weight`` times its own time, a robot's end kept last (:mod:`tmpnav.task.route_orders`);
+the edit is screened both as it is and reordered. On a generated 14-room office
 whose two robots crossed each other's halves, the makespan's exact optimum (Held-Karp) was
 reached this way, and by no edit alone (benchmarks/references/).
 """
 
 from __future__ import annotations
 
+import functools
+import itertools
 import math
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
-
-import numba as nb
-import numpy as np
-import numpy.typing as npt
 
 from tmpnav.task.balance import Moves, relocated_steps, unloadings
 from tmpnav.task.plans import Plan, Rules, targets_only, with_origins
+from tmpnav.task.route_orders import Legs, Orders
 from tmpnav.types import CostTable, Goals
 
 #: steps as (robot, target) pairs: what :func:`tmpnav.task.plans.with_origins` takes
@@ -57,7 +61,13 @@ EPSILON = 1e-9
 
 
 def route_edits(
-    plan: Plan, singles: CostTable, goals: Goals, rules: Rules, span_weight: float, limit: int = 6
+    plan: Plan,
+    singles: CostTable,
+    goals: Goals,
+    rules: Rules,
+    span_weight: float,
+    limit: int = 6,
+    apart: KeptApartPrice | None = None,
 ) -> list[Steps]:
     """Up to ``limit`` edits of ``plan`` that the single moves say are better, best first, each one
     the rules accept (module docstring)."""
@@ -70,33 +80,54 @@ def route_edits(
     pinned = {r for step in steps if len(step) > 1 for r, _ in step}
     screen = _Screen(singles, goals, span_weight)
     legs = {r: screen.route(r, [x for _, x in route]) for r, route in routes.items()}
-    now = screen.value(legs.values())
     edits = list(_edits(steps, routes, pinned, goals, rules))
     if span_weight:  # the makespan counts: chains of relocations from the robot that finishes last
         free = [r for r in routes if r not in pinned]
         movable = _Routes(steps, routes, free, goals, rules, frozenset(x for _, x in goals.ends)).movable
         edits += unloadings(steps, free, movable, Moves(singles, goals), span_weight, UNLOADING_DEPTH * len(robots))
     in_routes = [x for route in routes.values() for _, x in route]
-    screened = _Orders(singles, goals, span_weight, list(routes), in_routes).screen([changed for changed, _ in edits])
-    scored: list[tuple[float, int]] = []  # (screened value, 2 n for edit n as it is, 2 n + 1 reordered)
-    for n, (changed, (as_is, order, reordered)) in enumerate(zip((c for c, _ in edits), screened, strict=True)):
-        for v, changed_legs in enumerate((as_is, reordered) if order != changed else (as_is,)):
-            value = screen.value({**legs, **changed_legs}.values())
-            if value < now - EPSILON * max(1.0, abs(now)):
-                scored.append((value, 2 * n + v))
-    scored.sort()
+    screened = Orders(singles, goals, span_weight, list(routes), in_routes).screen([changed for changed, _ in edits])
+    current = {r: [x for _, x in route] for r, route in routes.items()}
+    scored = _scored(edits, screened, current, screen, legs, apart or KeptApartPrice())
     out: list[Steps] = []
     seen: set[tuple[tuple[tuple[str, str], ...], ...]] = set()
     for _, key in scored:
         n, v = divmod(key, 2)
         # each changed route's steps take its rooms in order: after a 2-opt*, a's head may come after b's tail
-        edited = _reordered(edits[n][1], edits[n][0] if v == 0 else screened[n][1])
+        made = edits[n][1]
+        edited = _reordered(made() if callable(made) else made, edits[n][0] if v == 0 else screened[n][1])
         if tuple(edited) not in seen and rules.valid(with_origins(edited, rules.start_location)):
             seen.add(tuple(edited))
             out.append(edited)
             if len(out) >= limit:
                 break
     return out
+
+
+def _scored(
+    edits: list[Edit],
+    screened: list[tuple[Legs, dict[str, list[str]], Legs]],
+    current: dict[str, list[str]],
+    screen: _Screen,
+    legs: Legs,
+    price: KeptApartPrice,
+) -> list[tuple[float, int]]:
+    """(screened value, 2 n for edit n as it is, 2 n + 1 reordered) of the edits better than the
+    plan, the plan's routes ``current`` and ``legs``; an edit that only gives the plan's own
+    routes back (reordered) is none."""
+    now = screen.value(legs.values()) + price.slack
+    scored: list[tuple[float, int]] = []
+    for n, (changed, (as_is, order, reordered)) in enumerate(zip((c for c, _ in edits), screened, strict=True)):
+        for v, (rooms, changed_legs) in enumerate(
+            ((changed, as_is), (order, reordered)) if order != changed else ((changed, as_is),)
+        ):
+            differ = {r for r, xs in rooms.items() if current[r] != xs}
+            if not differ:
+                continue
+            value = screen.value({**legs, **changed_legs}.values()) + price.after(differ)
+            if value < now - EPSILON * max(1.0, abs(now)):
+                scored.append((value, 2 * n + v))
+    return sorted(scored)
 
 
 class _Screen:
@@ -122,7 +153,8 @@ class _Screen:
         return cost + self.span_weight * span if self.span_weight else cost
 
 
-Edit = tuple[dict[str, list[str]], Steps]  # the routes an edit changes (robot -> its rooms), the steps
+#: the routes an edit changes (robot -> its rooms), and its steps (or what makes them)
+Edit = tuple[dict[str, list[str]], Steps | Callable[[], Steps]]
 
 
 @dataclass(frozen=True)
@@ -154,6 +186,7 @@ def _edits(
     yield from _relocations(plan)
     yield from _exchanges(plan)
     yield from _tail_swaps(plan)
+    yield from _tail_cycles(plan)
 
 
 def _relocations(plan: _Routes) -> Iterator[Edit]:
@@ -211,6 +244,70 @@ def _tail_swaps(plan: _Routes) -> Iterator[Edit]:
                     yield changed, edited
 
 
+@dataclass(frozen=True)
+class KeptApartPrice:
+    """What keeping the plan's robots apart adds to its objective (``slack``: waits and detours,
+    the plan as executed less the plan as planned) and the robots whose conflicts it pays for:
+    an edit that changes one of their routes may free the plan of that price, any other keeps it."""
+
+    slack: float = 0.0
+    robots: frozenset[str] = frozenset()
+
+    def after(self, changed: set[str]) -> float:
+        """The price an edit that changes the routes of the robots ``changed`` is screened with."""
+        return 0.0 if self.robots & changed else self.slack
+
+
+#: cyclic tail swaps screened at most per pass: three routes' cut points multiply (16 robots of 6
+#: rooms would make some 380,000), so past this many the cycles are left out
+MAX_CYCLES = 20_000
+
+
+def _tail_cycles(plan: _Routes) -> Iterator[Edit]:
+    """Three robots' tails passed round: a takes b's tail from j, b takes c's from m, c takes a's
+    from i (at most one of them empty: with two, it is a 2-opt*). They are many, so their steps
+    are made only for the edits offered."""
+    free = plan.free
+    rooms = {r: plan.rooms(r) for r in free}
+    cycles = [(a, b, c) for ia, a in enumerate(free) for b in free[ia + 1 :] for c in free[ia + 1 :] if b != c]
+    if sum((len(rooms[a]) + 1) * (len(rooms[b]) + 1) * (len(rooms[c]) + 1) for a, b, c in cycles) > MAX_CYCLES:
+        return
+    tails = {(r, t): _movable_tails(plan, r, t) for r in free for t in free if r != t}
+    for a, b, c in cycles:
+        ends = (len(rooms[a]), len(rooms[b]), len(rooms[c]))
+        cuts_a, cuts_b, cuts_c = tails[(a, c)], tails[(b, a)], tails[(c, b)]  # a's tail goes to c, ...
+        for i, j, m in itertools.product(cuts_a, cuts_b, cuts_c):
+            if (i == ends[0]) + (j == ends[1]) + (m == ends[2]) > 1:
+                continue
+            changed = {
+                a: rooms[a][:i] + rooms[b][j:],
+                b: rooms[b][:j] + rooms[c][m:],
+                c: rooms[c][:m] + rooms[a][i:],
+            }
+            yield changed, functools.partial(_cycled_steps, plan, (a, b, c), (i, j, m))
+
+
+def _movable_tails(plan: _Routes, robot: str, to: str) -> list[int]:
+    """The points from which ``robot``'s tail may go to ``to``'s route: every room of it movable."""
+    rooms = plan.rooms(robot)
+    cuts = [len(rooms)]
+    for i in range(len(rooms) - 1, -1, -1):
+        if not plan.movable(robot, rooms[i], to):
+            break
+        cuts.append(i)
+    return cuts[::-1]
+
+
+def _cycled_steps(plan: _Routes, robots: tuple[str, str, str], cuts: tuple[int, int, int]) -> Steps:
+    """The plan's steps with the tails of ``robots`` from ``cuts`` passed round (:func:`_tail_cycles`)."""
+    edited = list(plan.steps)
+    for n, (r, i) in enumerate(zip(robots, cuts, strict=True)):
+        taker = robots[n - 1]  # a's tail to c, b's to a, c's to b
+        for k, x in plan.routes[r][i:]:
+            edited[k] = ((taker, x),)
+    return edited
+
+
 def _relocated(rooms: dict[str, list[str]], a: str, i: int, b: str, p: int) -> dict[str, list[str]]:
     """The routes of a and b after a's room i moved to position p of b's route (p of b's route
     before the move)."""
@@ -232,203 +329,3 @@ def _reordered(steps: Steps, order: dict[str, list[str]]) -> Steps:
         for k, x in zip(at, rooms, strict=True):
             out[k] = ((r, x),)
     return out
-
-
-#: a route's screened (cost, time) by robot
-Legs = dict[str, tuple[float, float]]
-
-
-class _Orders:
-    """Routes reordered and screened on the single moves (module docstring, "Each edit also
-    reordered"), as :class:`_Screen` screens them: per robot, matrices of a move's cost and of
-    its duration plus its target's service (inf where the table has no move: a route with such a
-    move is never reordered, its value stays inf), and of the cost plus ``span_weight`` times
-    that time, which the reordering minimises. ``robots`` and ``rooms``: every robot and room of
-    the plan's routes."""
-
-    def __init__(
-        self, singles: CostTable, goals: Goals, span_weight: float, robots: Sequence[str], rooms: Sequence[str]
-    ):
-        self.goals = goals
-        self.robots = {r: i for i, r in enumerate(robots)}
-        self.start = {r: singles.start_location.get(r, f"{r}-start") for r in robots}
-        names = list(dict.fromkeys([*self.start.values(), *singles.locations, *singles.rooms, *rooms]))
-        self.index = {x: i for i, x in enumerate(names)}
-        self.cost = np.full((len(robots), len(names), len(names)), np.inf)
-        self.time = np.full_like(self.cost, np.inf)
-        for matrix, known, service in ((self.cost, singles.single, False), (self.time, singles.duration, True)):
-            for (r, a, b), amount in known.items():
-                if r in self.robots and a in self.index and b in self.index:
-                    matrix[self.robots[r], self.index[a], self.index[b]] = amount + (
-                        goals.service(b) if service else 0.0
-                    )
-        self.value = self.cost + span_weight * self.time if span_weight else self.cost
-
-    def screen(self, changes: list[dict[str, list[str]]]) -> list[tuple[Legs, dict[str, list[str]], Legs]]:
-        """For each edit's changed routes: their legs as they are, the routes reordered (the same
-        lists where no order is better), and their legs reordered; all in one compiled call."""
-        flat: list[int] = []
-        offsets, robot_of, starts, fixed = [0], [], [], []
-        for changed in changes:
-            for r, rooms in changed.items():
-                flat += [self.index[x] for x in rooms]
-                offsets.append(len(flat))
-                robot_of.append(self.robots[r])
-                starts.append(self.index[self.start[r]])
-                fixed.append(bool(rooms) and self.goals.end_of(r) == rooms[-1])
-        if not changes:
-            return []
-        order = np.array(flat, dtype=np.int64)
-        bounds = np.array(offsets, dtype=np.int64)
-        whose, first = np.array(robot_of, dtype=np.int64), np.array(starts, dtype=np.int64)
-        before = self._legs(order, bounds, whose, first)
-        _improve_routes(self.value, whose, first, bounds, order, np.array(fixed, dtype=np.bool_))
-        after = self._legs(order, bounds, whose, first)
-        names = list(self.index)
-        out, k = [], 0
-        for changed in changes:
-            routes: dict[str, list[str]] = {}
-            as_is: Legs = {}
-            reordered: Legs = {}
-            for r in changed:
-                routes[r] = [names[i] for i in order[offsets[k] : offsets[k + 1]]]
-                as_is[r], reordered[r] = before[k], after[k]
-                k += 1
-            out.append((as_is, routes, reordered))
-        return out
-
-    def _legs(
-        self,
-        order: npt.NDArray[np.int64],
-        bounds: npt.NDArray[np.int64],
-        whose: npt.NDArray[np.int64],
-        first: npt.NDArray[np.int64],
-    ) -> list[tuple[float, float]]:
-        """(cost, time) of each route ``order[bounds[k]:bounds[k + 1]]`` of robot ``whose[k]`` from
-        ``first[k]``, as :meth:`_Screen.route` adds them up (inf where a move is missing)."""
-        lengths = np.diff(bounds)
-        robot = np.repeat(whose, lengths)
-        prev = np.empty_like(order)
-        prev[1:] = order[:-1]
-        starts_at = bounds[:-1][lengths > 0]
-        prev[starts_at] = first[lengths > 0]
-        costs, times = _sums(self.cost[robot, prev, order], bounds), _sums(self.time[robot, prev, order], bounds)
-        return list(zip(costs, times, strict=True))
-
-
-def _sums(values: npt.NDArray[np.float64], bounds: npt.NDArray[np.int64]) -> list[float]:
-    """The sum of each stretch ``values[bounds[k]:bounds[k + 1]]`` (0 when empty, inf when it holds inf)."""
-    missing = np.isinf(values)
-    total = np.concatenate(([0.0], np.cumsum(np.where(missing, 0.0, values))))
-    count = np.concatenate(([0], np.cumsum(missing)))
-    sums = total[bounds[1:]] - total[bounds[:-1]]
-    return [math.inf if c else float(s) for s, c in zip(sums, count[bounds[1:]] - count[bounds[:-1]], strict=True)]
-
-
-#: passes of the route improvement at most (each pass ends at its first improvement)
-MAX_PASSES = 200
-#: the longest string of rooms Or-opt moves
-OR_OPT = 3
-
-
-@nb.njit(cache=True)
-def _route_value(value: npt.NDArray[np.float64], start: int, route: npt.NDArray[np.int64]) -> float:
-    total, at = 0.0, start
-    for x in route:
-        total += value[at, x]
-        at = x
-    return total
-
-
-@nb.njit(cache=True)
-def _improve_routes(
-    value: npt.NDArray[np.float64],
-    robot_of: npt.NDArray[np.int64],
-    starts: npt.NDArray[np.int64],
-    offsets: npt.NDArray[np.int64],
-    rooms: npt.NDArray[np.int64],
-    fixed_last: npt.NDArray[np.bool_],
-) -> None:
-    """Each route ``rooms[offsets[k]:offsets[k + 1]]`` of robot ``robot_of[k]`` from ``starts[k]``
-    improved in place by Or-opt and 2-opt moves, first improvement, on ``value[robot]``; its last
-    room stays last where ``fixed_last[k]``."""
-    for k in range(len(offsets) - 1):
-        a, b = offsets[k], offsets[k + 1]
-        m = b - a - 1 if fixed_last[k] else b - a  # rooms 0..m-1 may move
-        if m < 2:
-            continue
-        matrix, start = value[robot_of[k]], starts[k]
-        route = rooms[a:b].copy()
-        trial = np.empty(b - a, dtype=np.int64)
-        best = _route_value(matrix, start, route)
-        for _ in range(MAX_PASSES):
-            better = _or_opt(matrix, start, route, m, trial, best)
-            if better == best:
-                better = _two_opt(matrix, start, route, m, trial, best)
-            if better == best:
-                break
-            best = better
-        rooms[a:b] = route
-
-
-@nb.njit(cache=True)
-def _improves(value: float, best: float) -> bool:
-    return value < best - 1e-9 * max(1.0, abs(best))
-
-
-@nb.njit(cache=True)
-def _or_opt(
-    matrix: npt.NDArray[np.float64],
-    start: int,
-    route: npt.NDArray[np.int64],
-    m: int,
-    trial: npt.NDArray[np.int64],
-    best: float,
-) -> float:
-    """The first Or-opt move that improves ``route`` (rooms i..i+s-1 taken out and put back
-    before the room at position j of the rest, among its first ``m`` rooms), made in place; the
-    route's new value, or ``best`` where none improves."""
-    n = len(route)
-    for s in range(1, min(OR_OPT, m - 1) + 1):
-        for i in range(m - s + 1):
-            for j in range(m - s + 1):
-                if j == i:
-                    continue
-                w = 0
-                for p in range(m + 1):  # the rest, with the string put in at position j
-                    if w == j:
-                        for q in range(s):
-                            trial[w] = route[i + q]
-                            w += 1
-                    if p < m and not i <= p < i + s:
-                        trial[w] = route[p]
-                        w += 1
-                trial[m:n] = route[m:n]
-                v = _route_value(matrix, start, trial)
-                if _improves(v, best):
-                    route[:] = trial
-                    return v
-    return best
-
-
-@nb.njit(cache=True)
-def _two_opt(
-    matrix: npt.NDArray[np.float64],
-    start: int,
-    route: npt.NDArray[np.int64],
-    m: int,
-    trial: npt.NDArray[np.int64],
-    best: float,
-) -> float:
-    """The first 2-opt move that improves ``route`` (rooms i..j reversed, j < ``m``), made in
-    place; the route's new value, or ``best`` where none improves."""
-    for i in range(m - 1):
-        for j in range(i + 1, m):
-            trial[:] = route
-            for q in range(j - i + 1):
-                trial[i + q] = route[j - q]
-            v = _route_value(matrix, start, trial)
-            if _improves(v, best):
-                route[:] = trial
-                return v
-    return best

@@ -19,12 +19,14 @@ optimal ENHSP search, but any part of it a few rooms and robots wide is small. T
 3. **Between robots.** When a round of neighbourhoods of every size has covered every room
    without an improvement, the routes are edited as vehicle routing's local searches edit
    them (:mod:`tmpnav.task.routes`): a room moved to another robot's route (relocate), two
-   robots' rooms swapped (exchange), two robots' route tails swapped (2-opt*). Every edit is
-   screened on the single moves' costs and durations, and the few best are costed by the
-   model; a better plan starts the neighbourhoods again. A neighbourhood opens a stretch of
-   each route whose ends stay where they were, so moving work from a robot that finishes last
-   to one that finishes early is what it cannot do (the makespan stayed 11-13% above the
-   optimum on 2 of 25 generated offices, benchmarks/references/). Where the makespan counts,
+   robots' rooms swapped (exchange), two or three robots' route tails swapped or passed round
+   (2-opt*). Every edit is screened on the single moves' costs and durations, the price of
+   keeping the best plan's robots apart counted for the edits that leave their routes as they
+   are, and the few best are costed by the model; a better plan starts the neighbourhoods
+   again. A neighbourhood opens a stretch of each route whose ends stay where they were, so
+   moving work from a robot that finishes last to one that finishes early is what it cannot
+   do (the makespan stayed 11-13% above the optimum on 2 of 25 generated offices,
+   benchmarks/references/). Where the makespan counts,
    the edits include unloadings (:mod:`tmpnav.task.balance`): relocations chained from the
    robot that finishes last. A fleet (more robots than a neighbourhood holds) starts with the
    routes' edits, until they bring nothing, and where time is priced its first routes insert
@@ -50,7 +52,7 @@ import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
 from dataclasses import dataclass, field, replace
-from typing import Literal, TypeVar
+from typing import Literal, Protocol, TypeVar, runtime_checkable
 
 from tmpnav.choices import StopReason
 from tmpnav.deadline import Deadline
@@ -65,7 +67,7 @@ from tmpnav.task.model import CostModel, PlanCost
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.objectives import MAKESPAN_WEIGHT
 from tmpnav.task.plans import Plan, Rules, Step, splice, with_missing, with_origins
-from tmpnav.task.routes import route_edits
+from tmpnav.task.routes import KeptApartPrice, route_edits
 from tmpnav.task.solve import Background
 from tmpnav.task.subproblems import Encoding, Sub, SubProblems
 from tmpnav.types import CostTable, Goals
@@ -76,6 +78,15 @@ EPSILON = 1e-9
 #: a plan's cost as it will be executed, from the plan and its cost as planned
 #: (tmpnav.attachment.apart.ExecutedCost: robots kept apart)
 Executed = Callable[[Plan, PlanCost], PlanCost]
+
+
+@runtime_checkable
+class KeepsApart(Protocol):
+    """An ``Executed`` that says which robots it kept apart in a plan it priced."""
+
+    def robots_apart(self, plan: Plan) -> frozenset[str]: ...
+
+
 _T = TypeVar("_T")
 
 
@@ -391,7 +402,9 @@ class AnytimeSearch:
         that beats it, best by the single moves first: a fleet's plan costs a second or more to
         cost, and most passes keep the edit the screen put first."""
         with self.times.timed("planner"):
-            edits = route_edits(self.best, self.singles, self.goals, self.rules, self.options.span_weight)
+            edits = route_edits(
+                self.best, self.singles, self.goals, self.rules, self.options.span_weight, apart=self._apart_price()
+            )
         costed: list[tuple[Plan, PlanCost, None]] = []
         best: tuple[Plan, PlanCost, None] | None = None
         for edit in edits[: self.options.route_candidates]:
@@ -415,6 +428,15 @@ class AnytimeSearch:
         self.stats.route_improvements += 1
         self._note(new, "between routes")
         return True
+
+    def _apart_price(self) -> KeptApartPrice:
+        """What keeping the best plan's robots apart adds to its objective, and the robots kept
+        apart (:class:`tmpnav.task.routes.KeptApartPrice`)."""
+        if not isinstance(self.executed, KeepsApart):
+            return KeptApartPrice()
+        slack = self.value(self.best_cost) - self.value(self.cost(self.best))
+        robots = self.executed.robots_apart(self.best)
+        return KeptApartPrice(slack, robots) if slack > 0 and robots else KeptApartPrice()
 
     def _round(self, size: int) -> Literal["improved", "unchanged", "work budget", "time budget", "optimal"]:
         """Neighbourhoods of ``size`` rooms around seeds until every room was in one
