@@ -124,7 +124,7 @@ def _scored(
             differ = {r for r, xs in rooms.items() if current[r] != xs}
             if not differ:
                 continue
-            value = screen.value({**legs, **changed_legs}.values()) + price.after(differ)
+            value = screen.value_with(legs, changed_legs) + price.after(differ)
             if value < now - EPSILON * max(1.0, abs(now)):
                 scored.append((value, 2 * n + v))
     return sorted(scored)
@@ -150,6 +150,16 @@ class _Screen:
         pairs = list(legs)
         cost = sum(c for c, _ in pairs)
         span = max((t for _, t in pairs), default=0.0)
+        return cost + self.span_weight * span if self.span_weight else cost
+
+    def value_with(self, legs: Legs, changed: Legs) -> float:
+        """:meth:`value` of ``legs`` with those of ``changed`` in their place (the same sums, in
+        the same order, without a merged dict: the screen asks this of every edit)."""
+        cost, span = 0.0, 0.0
+        for r, leg in legs.items():
+            c, t = changed.get(r, leg)
+            cost += c
+            span = t if t > span else span
         return cost + self.span_weight * span if self.span_weight else cost
 
 
