@@ -45,7 +45,8 @@ def corridor() -> str:
     from tmpnav.belief.rollout import Rollout, propagate_rollout
     from tmpnav.types import Belief, Models, ObservationMode, RangeBearingSensor, RangeSensor
     from tmpnav.world.grid import OccupancyGrid
-    from tmpnav.world.lidar import ScanInformation, signed_distance
+    from tmpnav.world.lidar import signed_distance
+    from tmpnav.world.scan_information import ScanInformation
 
     res, length, width, dt, speed = 0.05, 64.0, 2.0, 0.5, 0.5
     rows, cols = round((width + 0.3) / res), round((length + 0.3) / res)

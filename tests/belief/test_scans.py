@@ -15,7 +15,8 @@ from tmpnav.belief.reference import propagate_reference
 from tmpnav.belief.rollout import ObservationNoise, Rollout, propagate_rollout
 from tmpnav.types import NAV2_AMCL, Belief, ScanModel
 from tmpnav.world.grid import OccupancyGrid
-from tmpnav.world.lidar import ScanInformation, signed_distance
+from tmpnav.world.lidar import signed_distance
+from tmpnav.world.scan_information import ScanInformation
 
 
 def _with_scans(rng: np.random.Generator, rollout: Rollout) -> Rollout:

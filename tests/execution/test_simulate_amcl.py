@@ -14,7 +14,8 @@ import pytest
 from tmpnav.execution.consistency import Agreement
 from tmpnav.types import NAV2_AMCL, RangeSensor, ScanModel
 from tmpnav.world.grid import OccupancyGrid
-from tmpnav.world.lidar import information_matrices, signed_distance
+from tmpnav.world.lidar import signed_distance
+from tmpnav.world.scan_information import information_matrices
 
 ROOT = Path(__file__).resolve().parents[2]
 LIDAR = "models:\n  range_sensor: {range: 12, beams: 60, sigma_range: 0.03, divergence: 0.01}\n"

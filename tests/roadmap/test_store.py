@@ -133,7 +133,7 @@ def test_a_localisability_map_is_computed_once_per_map_and_view(tmp_path: Path) 
     from tests.world.test_lidar import box, world_of
     from tmpnav.roadmap.store import stored_localisability
     from tmpnav.types import RangeSensor
-    from tmpnav.world.lidar import localisability
+    from tmpnav.world.scan_information import localisability
 
     sensor = RangeSensor(8.0, 2 * math.pi, 30, 0.03, 0.1, math.radians(75))
     world, cache, view = world_of(box()), CacheDir(tmp_path), (0.5, 0.5, 6.0, 4.0)

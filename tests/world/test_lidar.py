@@ -13,7 +13,8 @@ from tmpnav.shipped import configs_dir
 from tmpnav.types import RangeSensor
 from tmpnav.world import World
 from tmpnav.world.grid import OccupancyGrid
-from tmpnav.world.lidar import ScanInformation, cast, information_matrices, scan, sensor_params, signed_distance
+from tmpnav.world.lidar import cast, scan, sensor_params, signed_distance
+from tmpnav.world.scan_information import ScanInformation, information_matrices
 
 LIDAR = RangeSensor(
     range=12.0,

@@ -138,7 +138,7 @@ def update_scan(belief: Belief, i: int, G: np.ndarray, y: np.ndarray) -> Belief:
 
     A scan of B beams with Jacobians H (B, 3) and noise sigma informs the pose by
     J = Hᵀ H / sigma² and the innovation by Hᵀ y_beams / sigma²; the posterior depends on the
-    beams only through these. With J = Gᵀ G (G (3, 3), :func:`tmpnav.world.lidar.information_matrices`'s
+    beams only through these. With J = Gᵀ G (G (3, 3), :func:`tmpnav.world.scan_information.information_matrices`'s
     factor) the same update is the 3-D pseudo-measurement z = G x of unit noise, with innovation
     ``y`` (3,) such that Gᵀ y = Hᵀ y_beams / sigma². G fills robot i's three columns.
     """

@@ -186,8 +186,17 @@ def driven_path(points: np.ndarray, rounding: Rounding | None = None) -> tuple[n
 
 def length_left(path: np.ndarray) -> np.ndarray:
     """(n,) the length (m) of the polyline ``path`` (n, 2) from each of its points to its end."""
-    seg = np.hypot(*np.diff(path, axis=0).T)
-    return np.concatenate([np.cumsum(seg[::-1])[::-1], [0.0]])
+    return _length_left(np.ascontiguousarray(path, dtype=float))
+
+
+@nb.njit(cache=True)
+def _length_left(path):  # pragma: no cover
+    """:func:`length_left`, summed from the end as a cumulative sum of the reversed segments is
+    (compiled: every rollout takes it of a path densified to a few centimetres)."""
+    left = np.zeros(path.shape[0])
+    for k in range(path.shape[0] - 2, -1, -1):
+        left[k] = left[k + 1] + math.hypot(path[k + 1, 0] - path[k, 0], path[k + 1, 1] - path[k, 1])
+    return left
 
 
 @nb.njit(cache=True)

@@ -49,6 +49,7 @@ CODE_FILES = (
     "world/grid.py",
     "world/lidar.py",
     "world/reach.py",
+    "world/scan_information.py",
     "world/visibility.py",
 )
 #: the modules whose results are cached: their imports, followed through CODE_FILES, are

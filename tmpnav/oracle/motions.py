@@ -26,7 +26,7 @@ from tmpnav.roadmap.graph import safe_weights
 from tmpnav.roadmap.shortcut import least_clearance, required_clearance, shortcut
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
-from tmpnav.world.lidar import ScanInformation
+from tmpnav.world.scan_information import ScanInformation
 from tmpnav.world.visibility import LandmarkVisibility
 
 
@@ -149,7 +149,7 @@ class MotionLibrary:
         self.origin = (float(world.grid.origin[0]), float(world.grid.origin[1]))
         self.resolution = float(world.grid.resolution)
         sensor = scenario.models.range_sensor
-        # a range scan's information per cell and heading (tmpnav.world.lidar)
+        # a range scan's information per cell and heading (tmpnav.world.scan_information)
         self.scans: ScanInformation | None = world.scans(sensor) if sensor is not None else None
         self.noise = NoiseStreams()  # the simulated observations' draws, by stream
         self._motions: OrderedDict[tuple[str, int, float, int], NominalMotion | None] = OrderedDict()

@@ -30,7 +30,7 @@ from tmpnav.roadmap.store import stored_localisability
 from tmpnav.types import Roadmap, RosMap, Scenario
 from tmpnav.world import World
 from tmpnav.world.grid import OccupancyGrid
-from tmpnav.world.lidar import LOCALISABILITY_POINTS
+from tmpnav.world.scan_information import LOCALISABILITY_POINTS
 
 ROBOT_COLORS = ("#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 LANDMARK_MARKERS = ("*", "P", "X", "D", "p", "h", "s", "^")
@@ -156,7 +156,7 @@ def draw_localisability(
     points: int = LOCALISABILITY_POINTS,
     cache: CacheDir | None = None,
 ) -> AxesImage | None:
-    """Where a robot can localise with its range sensor (tmpnav.world.lidar.localisability): each
+    """Where a robot can localise with its range sensor (tmpnav.world.scan_information.localisability): each
     point coloured by the position std one scan leaves along its worst direction, on a log scale
     from 1 cm (white) to 1 m or unseen (dark red); walls left clear. None without a range sensor.
     With ``cache``, the map is read from it when an earlier figure computed it."""

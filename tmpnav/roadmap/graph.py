@@ -326,4 +326,5 @@ class RoadmapGraph:
         return tuple(reversed(nodes))
 
     def points(self, path: tuple[int, ...]) -> np.ndarray:
-        return self.roadmap.nodes[list(path)]
+        """The positions (len(path), 2) of the nodes of ``path``."""
+        return self.roadmap.nodes.take(path, axis=0)

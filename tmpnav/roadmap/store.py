@@ -27,7 +27,7 @@ from tmpnav.errors import CacheError
 from tmpnav.roadmap.graph import grown_edges, grown_safe_weights, keep_safe_weights
 from tmpnav.types import RangeSensor, Roadmap, RoadmapParams, RobotSpec
 from tmpnav.world import World
-from tmpnav.world.lidar import Localisability, localisability
+from tmpnav.world.scan_information import Localisability, localisability
 
 CODE = Path(__file__).with_name("prm.py")
 FORMAT = "roadmap-file/2"  # the checksum covers the header too; part of the key, so older files are not read
@@ -143,18 +143,27 @@ def read(path: Path) -> Roadmap:
 
 
 SCANS_FORMAT = "scans-file/1"
-LIDAR_CODE = Path(__file__).resolve().parents[1] / "world" / "lidar.py"
+#: the code that computes scan information: the ray casting and the table
+LIDAR_CODE = tuple(Path(__file__).resolve().parents[1] / "world" / name for name in ("lidar.py", "scan_information.py"))
+
+
+def _lidar_code() -> str:
+    """The digest of :data:`LIDAR_CODE`."""
+    digest = hashlib.sha256()
+    for path in LIDAR_CODE:
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
 
 
 def scans_key(world: World, sensor: RangeSensor) -> str:
     """The content address of a range sensor's scan information in a world (the map and the sensor,
     and the code that computes it)."""
-    parts = (SCANS_FORMAT, world.fingerprint, repr(sensor), hashlib.sha256(LIDAR_CODE.read_bytes()).hexdigest())
+    parts = (SCANS_FORMAT, world.fingerprint, repr(sensor), _lidar_code())
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 
 
 class ScanStore:
-    """A range sensor's scan information (tmpnav.world.lidar.ScanInformation) kept beside the
+    """A range sensor's scan information (tmpnav.world.scan_information.ScanInformation) kept beside the
     roadmaps, keyed by the map and the sensor: what one run computed, the next reads. Like a
     roadmap, a damaged file is set aside with one warning and computed again."""
 
@@ -217,10 +226,10 @@ LOCALISABILITY_FORMAT = "localisability-file/1"
 def localisability_key(
     world: World, sensor: RangeSensor, view: tuple[float, float, float, float] | None, points: int
 ) -> str:
-    """The content address of a localisability map (tmpnav.world.lidar.localisability): the map,
+    """The content address of a localisability map (tmpnav.world.scan_information.localisability): the map,
     the sensor, the view, the points and the code that computes it."""
     view_text = None if view is None else tuple(repr(float(v)) for v in view)
-    code = hashlib.sha256(LIDAR_CODE.read_bytes()).hexdigest()
+    code = _lidar_code()
     parts = (LOCALISABILITY_FORMAT, world.fingerprint, repr(sensor), view_text, points, code)
     return hashlib.sha256(repr(parts).encode()).hexdigest()
 

@@ -19,9 +19,10 @@ from tmpnav.world.grid import (
     line_of_sight,
     line_of_sight_traced,
 )
-from tmpnav.world.lidar import ScanInformation, signed_distance
+from tmpnav.world.lidar import signed_distance
 from tmpnav.world.reach import SectorReach
 from tmpnav.world.rosmap import load_ros_map
+from tmpnav.world.scan_information import ScanInformation
 
 
 @dataclass(frozen=True)
@@ -88,8 +89,8 @@ class World:
         return self._sdf[0]
 
     def scans(self, sensor: RangeSensor) -> ScanInformation:
-        """The scan information of ``sensor`` (tmpnav.world.lidar), its cells computed when first
-        asked for and remembered for the world's lifetime."""
+        """The scan information of ``sensor`` (tmpnav.world.scan_information), its cells computed
+        when first asked for and remembered for the world's lifetime."""
         if sensor not in self._scans:
             self._scans[sensor] = ScanInformation(self.grid, self.signed_distance, sensor)
             if self._recording:

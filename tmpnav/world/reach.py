@@ -64,6 +64,7 @@ class SectorReach:
         self.table = np.zeros((1, SECTORS))  # row 0: off the grid, reach 0
         self.rows = 1
         self._offsets: tuple[np.ndarray, ...] | None = None  # _offsets(), when first needed
+        self._lookup: tuple[np.ndarray, ...] | None = None  # _offset_index() and _boundary_rows(), with them
         self._new: list[np.ndarray] | None = None  # keys computed since :meth:`take_new`, once called
 
     def cells(self, points: np.ndarray) -> np.ndarray:
@@ -125,9 +126,11 @@ class SectorReach:
             self._new.append(keys)
         s, cols = self.subdivisions, self.grid.shape[1] * self.subdivisions
         out = np.empty((keys.size, SECTORS))
-        if self._offsets is None:
+        if self._offsets is None or self._lookup is None:
             self._offsets = _offsets(self.grid.resolution, s, REACH, SECTORS)
-        _sector_reach(self.hit, self.boundary, s, keys // cols, keys % cols, REACH, self._offsets, out)
+            self._lookup = (_offset_index(self._offsets), *_boundary_rows(self.boundary))
+        index, starts, columns = self._lookup
+        _sector_reach(self.hit, starts, columns, s, keys // cols, keys % cols, REACH, self._offsets, index, out)
         self._store(keys, out)
 
     def _store(self, keys: np.ndarray, out: np.ndarray) -> None:
@@ -198,14 +201,40 @@ def _offsets(res, sub, reach, K):
 
 
 @nb.njit(cache=True)
-def _sector_reach(hit, boundary, sub, si, sj, reach, offsets, out):
+def _offset_index(offsets):
+    """index[q, di + n, dj + n]: which of the ``offsets`` (:func:`_offsets`) around place q is the
+    cell (di, dj) away, -1 for a cell beyond the reach; n the offsets' largest |di|, |dj|."""
+    di, dj, _, _, _, count = offsets
+    n = 0
+    for q in range(count.shape[0]):
+        for c in range(count[q]):
+            n = max(n, abs(di[q, c]), abs(dj[q, c]))
+    index = np.full((count.shape[0], 2 * n + 1, 2 * n + 1), -1, dtype=np.int64)
+    for q in range(count.shape[0]):
+        for c in range(count[q]):
+            index[q, di[q, c] + n, dj[q, c] + n] = c
+    return index
+
+
+def _boundary_rows(boundary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The boundary cells row by row: ``columns[starts[i]:starts[i + 1]]`` (sorted) are row i's."""
+    rows, columns = np.nonzero(boundary)
+    starts = np.searchsorted(rows, np.arange(boundary.shape[0] + 1))
+    return starts.astype(np.int64), columns.astype(np.int64)
+
+
+@nb.njit(cache=True)
+def _sector_reach(hit, starts, columns, sub, si, sj, reach, offsets, index, out):
     """Fill out (N, K) with the reach of sub-cells (si, sj) (the module docstring's construction;
     ``sub`` sub-cells per cell and axis): the least distance, per sector, of the boundary cells
-    among ``offsets`` (:func:`_offsets`) around each. ``hit`` and ``boundary`` carry one ring of
-    cells around the grid (grid cell (i, j) is their (i + 1, j + 1))."""
-    di, dj, dist, k0s, k1s, count = offsets
+    among ``offsets`` (:func:`_offsets`, found by ``index``, :func:`_offset_index`) around each.
+    ``hit`` and the boundary cells (``starts``, ``columns``: :func:`_boundary_rows`) carry one
+    ring of cells around the grid (grid cell (i, j) is their (i + 1, j + 1)). The boundary is
+    read row by row from its list: a sub-cell meets the few hundred boundary cells within reach
+    rather than testing the thousands of offsets, in the offsets' order."""
+    _, _, dist, k0s, k1s, _ = offsets
     K = out.shape[1]
-    R, C = hit.shape
+    n = (index.shape[1] - 1) // 2
     for p in range(si.shape[0]):
         i0, j0 = si[p] // sub + 1, sj[p] // sub + 1
         q = (si[p] % sub) * sub + (sj[p] % sub)
@@ -215,19 +244,34 @@ def _sector_reach(hit, boundary, sub, si, sj, reach, offsets, out):
             for k in range(K):
                 out[p, k] = 0.0
             continue
-        for c in range(count[q]):
-            i, j = i0 + di[q, c], j0 + dj[q, c]
-            if i < 0 or i >= R or j < 0 or j >= C or not boundary[i, j]:
-                continue
-            d = dist[q, c]
-            if k0s[q, c] < 0:
-                for k in range(K):
-                    out[p, k] = 0.0
-                continue
-            for k in range(k0s[q, c], k1s[q, c] + 1):
-                kk = k % K
-                if d < out[p, kk]:
-                    out[p, kk] = d
+        for i in range(max(i0 - n, 0), min(i0 + n + 1, hit.shape[0])):
+            e = _first_at_least(columns, starts[i], starts[i + 1], j0 - n)
+            while e < starts[i + 1] and columns[e] <= j0 + n:
+                c = index[q, i - i0 + n, columns[e] - j0 + n]
+                e += 1
+                if c < 0:
+                    continue
+                d = dist[q, c]
+                if k0s[q, c] < 0:
+                    for k in range(K):
+                        out[p, k] = 0.0
+                    continue
+                for k in range(k0s[q, c], k1s[q, c] + 1):
+                    kk = k % K
+                    if d < out[p, kk]:
+                        out[p, kk] = d
+
+
+@nb.njit(cache=True, inline="always")
+def _first_at_least(values, lo, hi, v):
+    """The first index in [lo, hi) of the sorted ``values`` holding at least v (hi if none)."""
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if values[mid] < v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 @nb.njit(cache=True)
