@@ -150,3 +150,39 @@ def test_only_the_amcl_model_with_local_walls_separates_by_the_local_error() -> 
     assert seen_std(beams) is None  # the sensor's bound: the beliefs
     on_map = replace(scenario.models, range_sensor=replace(sensor, localiser=replace(amcl, walls="map")))
     assert seen_std(on_map) is None and seen_std(replace(scenario.models, range_sensor=None)) is None
+
+
+def _shortfalls_broadcast(mi, mj, si, sj, rr, k, window):  # type: ignore[no-untyped-def]
+    """The shortfalls by numpy's broadcasting over every shift at once: an independent reference."""
+    steps = len(mi)
+    index = np.arange(steps)
+    worst = np.full(steps, -np.inf)
+    gap_at, need_at, other = np.zeros(steps), np.zeros(steps), index.copy()
+    for d in range(-int(window.max(initial=0)), int(window.max(initial=0)) + 1):
+        at = np.clip(index + d, 0, steps - 1)
+        gap = np.hypot(*(mi - mj[at]).T)
+        need = rr + k * (si + sj[at])
+        shortfall = np.where(np.abs(d) <= window, need - gap, -np.inf)
+        better = shortfall > worst
+        worst[better], gap_at[better], need_at[better], other[better] = (
+            shortfall[better],
+            gap[better],
+            need[better],
+            at[better],
+        )
+    return worst, gap_at, need_at, other
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**31 - 1), st.integers(1, 120))
+def test_the_compiled_shortfalls_are_the_broadcast_ones_to_the_bit(seed: int, steps: int) -> None:
+    from tmpnav.belief.conflicts import _shortfalls
+
+    rng = np.random.default_rng(seed)
+    mi, mj = rng.uniform(0, 3, (steps, 2)), rng.uniform(0, 3, (steps, 2))
+    si, sj = rng.uniform(0, 0.3, steps), rng.uniform(0, 0.3, steps)
+    window = np.minimum(np.arange(steps) // 7, rng.integers(0, 9)).astype(np.int64)  # grows as a clock drifts
+    ours = _shortfalls(mi, mj, si, sj, 0.5, 1.96, window)
+    theirs = _shortfalls_broadcast(mi, mj, si, sj, 0.5, 1.96, window)
+    for a, b in zip(ours, theirs, strict=True):
+        assert np.array_equal(a, b)

@@ -18,7 +18,7 @@ from weakref import WeakKeyDictionary
 import numpy as np
 
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.attachment.clock import ClockRun
+from tmpnav.attachment.clock_state import ClockRun
 from tmpnav.attachment.conflicts import EPS, Resolution, radii_of, resolve_with_sidesteps
 from tmpnav.attachment.drift import clock_drift
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, seen_std

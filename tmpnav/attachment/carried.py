@@ -29,7 +29,8 @@ from collections.abc import Mapping, Sequence
 from functools import cached_property
 
 from tmpnav.attachment.canonical import CanonicalCosts, _offered, _ordered
-from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
+from tmpnav.attachment.clock import TeamClock
+from tmpnav.attachment.clock_state import ClockRun, Unreachable
 from tmpnav.attachment.floors import motion_floors
 from tmpnav.attachment.team import Team, paired_moves
 from tmpnav.choices import Costs

@@ -33,7 +33,7 @@ two robots of a paired move share the pair's mutual draws for its duration (so a
 paired moves only, the paper's, runs exactly as the oracle costed it); other mutual
 observations use a stream per ordered pair of robots, by the clock's step.
 
-The clock's state (:class:`ClockState`) is an immutable value: :meth:`TeamClock.dispatch`
+The clock's state (:class:`tmpnav.attachment.clock_state.ClockState`) is an immutable value: :meth:`TeamClock.dispatch`
 and :meth:`TeamClock.advance` return new ones, so the exact search can branch from a state
 (:mod:`tmpnav.attachment.unfold`).
 """
@@ -43,10 +43,12 @@ from __future__ import annotations
 import heapq
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
+from tmpnav.attachment.clock_state import ClockRun, ClockState, Leg, MoveRun, Pairing, Unreachable
+from tmpnav.attachment.resume import Checkpoint, Made, Resume, Resumes
 from tmpnav.attachment.team import Team
 from tmpnav.belief.risk import running_bound
 from tmpnav.belief.sequences import (
@@ -57,119 +59,17 @@ from tmpnav.belief.sequences import (
     StartGroups,
     propagate_sequences,
 )
-from tmpnav.errors import TmpnavError
 from tmpnav.oracle.motions import MotionLibrary, NominalMotion, scan_seed, stable_seed
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState, mutual_seed
 from tmpnav.results import Schedule, TimedMove
 from tmpnav.task.plans import Plan, Step
-from tmpnav.types import CostTerms, CostWeights, MotionResult, TrajectoryStep, cov3, risk_penalty, vec3
+from tmpnav.types import CostTerms, MotionResult, TrajectoryStep, cov3, vec3
 from tmpnav.world.reach import SECTORS
 from tmpnav.world.visibility import MutualSensing
 
 #: steps of one block of the mutual-noise stream of a pair of robots outside paired moves
 MUTUAL_BLOCK = 512
-
-
-class Unreachable(TmpnavError):
-    """A plan step whose robots cannot reach their rooms from where they are."""
-
-
-@dataclass(frozen=True, eq=False)
-class Leg:
-    """What a robot does from step ``start`` until its next leg: drive ``motion`` (then stand
-    at its end), or stand at ``node`` (``motion`` None) before its first move."""
-
-    start: int
-    motion: NominalMotion | None
-    node: int
-    heading: float
-    pose: np.ndarray  # (3,) where it stands when not driving
-    noise_seed: int  # its landmark-noise stream, indexed from ``start``
-
-
-@dataclass(frozen=True)
-class Pairing:
-    """Two robots of a paired move: their mutual draws from ``start`` for ``steps`` steps."""
-
-    robots: tuple[int, int]  # team indices, in the order of the oracle's request
-    start: int
-    steps: int
-    seed: int
-
-
-@dataclass(frozen=True, eq=False)
-class MoveRun:
-    """One robot's move on the clock: its plan step, when it could start, started and ends
-    (control steps), its motion, and its cost terms once it has ended."""
-
-    step: int
-    robot: int  # team index
-    ready: int
-    start: int
-    end: int
-    motion: NominalMotion
-    csig_start: float  # the robot's running c_Sigma when the move started
-    risk_start: float = 0.0  # and its running collision bound
-    terms: CostTerms | None = None  # set when the move has ended
-    risk: float = 0.0  # its collision bound (docs/models.md), set when the move has ended
-
-    def cost(self, weights: CostWeights, max_risk: float | None = None) -> float:
-        """Its weighted terms, and the penalty of a collision bound over ``max_risk``
-        (tmpnav.types.risk_penalty: 0 within it)."""
-        assert self.terms is not None, "the move has not ended"
-        return self.terms.total(weights) + risk_penalty(self.risk, max_risk)
-
-
-@dataclass(frozen=True, eq=False)
-class ClockState:
-    """The clock at step ``t``: the team's joint belief, each robot's legs and when it is free,
-    the paired moves' draws, the moves under way and those ended (with their cost)."""
-
-    t: int
-    team: Team
-    legs: tuple[tuple[Leg, ...], ...]
-    free: tuple[int, ...]  # the step at which each robot ends its latest move
-    csig: tuple[float, ...]  # each robot's running c_Sigma over all its steps
-    risk: tuple[float, ...] = ()  # each robot's collision bound summed over its driving steps
-    pairings: tuple[Pairing, ...] = ()
-    open: tuple[MoveRun, ...] = ()  # moves under way
-    closed: tuple[MoveRun, ...] = ()  # moves ended, in the order they ended
-    closed_cost: float = 0.0  # the sum of their costs
-    late: bool = False  # a move started so far arrives after its target's window closes (goals.jobs)
-
-    def where(self, i: int) -> tuple[int, float]:
-        """Robot i's node and heading at the end of its latest leg (where its next move starts)."""
-        leg = self.legs[i][-1]
-        return leg.node, leg.heading
-
-
-@dataclass
-class ClockRun:
-    """A plan run on the team's clock: its moves (in plan order), the schedule, the state at the
-    end, and (when recorded) each robot's belief at every control step."""
-
-    moves: list[MoveRun]
-    schedule: Schedule
-    end: ClockState
-    trajectories: dict[str, list[TrajectoryStep]] | None = None
-
-    @property
-    def makespan(self) -> float:
-        return self.schedule.makespan
-
-    def step_costs(self, steps: int, weights: CostWeights, max_risk: float | None = None) -> list[float]:
-        """Each plan step's cost: the weighted terms of its robots' moves (with the penalty of
-        a collision bound over ``max_risk``), summed."""
-        costs = [0.0] * steps
-        for move in self.moves:
-            costs[move.step] += move.cost(weights, max_risk)
-        return costs
-
-    @property
-    def risk(self) -> float:
-        """The plan's collision bound: its moves' bounds summed (Boole's inequality), at most 1."""
-        return min(1.0, sum(m.risk for m in self.moves))
 
 
 class TeamClock:
@@ -187,6 +87,8 @@ class TeamClock:
             if i != j and (s := MutualSensing.between(self.scenario, start.names[i], start.names[j])) is not None
         }
         self.ekf = EKFConstants.of(self.scenario.models, lib.world.landmark_xy)
+        #: the runs made, to resume the next runs of their plans from
+        self.resumes: Resumes[ClockState, ClockRun] = Resumes()
 
     # ------------------------------------------------------------------ a whole plan
 
@@ -201,27 +103,24 @@ class TeamClock:
         many seconds after they could start; ``detours`` drive (plan step, robot)'s move along
         that roadmap path instead of the shortest one (tmpnav.attachment.detours), when it
         starts and ends where the path does. Raises Unreachable for a step whose robots cannot
-        reach their rooms."""
-        names = self.start.names
-        order = [[k for k, step in enumerate(plan) if any(m[0] == r for m in step)] for r in names]
-        done = [0] * len(names)  # each robot's steps dispatched so far
-        held = {k: round(s / self.dt) for k, s in (delays or {}).items()}
-        state = self.initial()
-        trace = _Trace(self, state) if record else None
-        events: list[tuple[int, int]] = []
-
-        def push(k: int, after: int) -> None:
-            heapq.heappush(events, (max(self.ready(state, plan[k]), after) + held.get(k, 0), k))
-
-        for k, step in enumerate(plan):
-            if all(order[names.index(m[0])][0] == k for m in step):
-                push(k, 0)
+        reach their rooms. A run of a plan run before resumes from the last event before the
+        first step whose wait or path differs (:mod:`tmpnav.attachment.resume`): the same result."""
+        plan = tuple(plan)
+        held = {k: v for k, s in (delays or {}).items() if (v := round(s / self.dt))}
+        ways = dict(detours or {})
+        resume = self.resumes.find(plan, held, ways, record)
+        if resume is not None and resume.at is None:
+            return resume.made.run  # the same waits and paths: the run already made
+        loop = self._begin(plan, held, record, resume)
+        names, order, events, done = self.start.names, loop.order, loop.events, loop.done
         while events:
+            loop.mark()
             t, batch = events[0][0], []
             while events and events[0][0] == t:
                 batch.append(heapq.heappop(events)[1])
-            state = self.advance(state, t, trace)
-            state = self.dispatch(state, [(k, plan[k]) for k in batch], detours=detours)
+            loop.dispatched.update((k, loop.event) for k in batch)
+            loop.state = self.advance(loop.state, t, loop.trace)
+            loop.state = self.dispatch(loop.state, [(k, plan[k]) for k in batch], detours=ways)
             for k in batch:
                 for m in plan[k]:
                     i = names.index(m[0])
@@ -229,9 +128,39 @@ class TeamClock:
                     if done[i] < len(order[i]):
                         nxt = order[i][done[i]]
                         if all(done[names.index(r)] == order[names.index(r)].index(nxt) for r, _, _ in plan[nxt]):
-                            push(nxt, t)
-        state = self.advance(state, max(state.free, default=0), trace)
-        return self._result(state, plan, trace)
+                            loop.push(nxt, t)
+            loop.event += 1
+        state = self.advance(loop.state, max(loop.state.free, default=0), loop.trace)
+        result = self._result(state, plan, loop.trace)
+        if loop.trace is not None:  # kept to resume from: the runs of a plan kept apart are recorded
+            made = Made(held, ways, tuple(loop.checkpoints), loop.pushed, loop.dispatched, loop.trace.steps, result)
+            self.resumes.keep(plan, made)
+        return result
+
+    def _begin(
+        self, plan: Plan, held: dict[int, int], record: bool, resume: Resume[ClockState, ClockRun] | None
+    ) -> _Loop:
+        """The event loop of a run of ``plan`` at its start, or at ``resume``'s checkpoint."""
+        names = self.start.names
+        order = [[k for k, step in enumerate(plan) if any(m[0] == r for m in step)] for r in names]
+        if resume is None or resume.at is None:
+            state = self.initial()
+            loop = _Loop(self, plan, held, order, state, [], [0] * len(names), _Trace(self, state) if record else None)
+            loop.event = -1  # the first steps of each robot are scheduled before the first event
+            for k, step in enumerate(plan):
+                if all(order[names.index(m[0])][0] == k for m in step):
+                    loop.push(k, 0)
+            loop.event = 0
+            return loop
+        made, at = resume.made, resume.at
+        point = made.checkpoints[at]
+        trace = _Trace.resumed(self, made.steps, point.traced) if record and made.steps is not None else None
+        loop = _Loop(self, plan, held, order, point.state, list(point.events), list(point.done), trace)
+        loop.checkpoints = list(made.checkpoints[:at])
+        loop.pushed = {k: j for k, j in made.pushed.items() if j < at}
+        loop.dispatched = {k: j for k, j in made.dispatched.items() if j < at}
+        loop.event = at
+        return loop
 
     def initial(self) -> ClockState:
         """Every robot at its start, with its initial belief, at step 0."""
@@ -524,6 +453,42 @@ class TeamClock:
         return ClockRun(moves, Schedule(names, tuple(timed)), state, trajectories)
 
 
+class _Loop:
+    """A run's event loop as it goes: the clock's state, the events to come (a heap of
+    (control step, plan step)), each robot's steps dispatched, the record, and for
+    :mod:`tmpnav.attachment.resume` the checkpoints and the event that scheduled and that
+    started each step."""
+
+    def __init__(
+        self,
+        clock: TeamClock,
+        plan: Plan,
+        held: Mapping[int, int],
+        order: list[list[int]],
+        state: ClockState,
+        events: list[tuple[int, int]],
+        done: list[int],
+        trace: _Trace | None,
+    ):
+        self.clock, self.plan, self.held, self.order = clock, plan, held, order
+        self.state, self.events, self.done, self.trace = state, events, done, trace
+        self.checkpoints: list[Checkpoint[ClockState]] = []
+        self.pushed: dict[int, int] = {}
+        self.dispatched: dict[int, int] = {}
+        self.event = 0
+
+    def push(self, k: int, after: int) -> None:
+        """Schedule step k when its robots are free, not before ``after``, held back its wait."""
+        start = max(self.clock.ready(self.state, self.plan[k]), after) + self.held.get(k, 0)
+        heapq.heappush(self.events, (start, k))
+        self.pushed[k] = self.event
+
+    def mark(self) -> None:
+        """A checkpoint at the top of the current event."""
+        traced = self.trace.lengths() if self.trace is not None else None
+        self.checkpoints.append(Checkpoint(self.state, tuple(self.events), tuple(self.done), traced))
+
+
 class _Trace:
     """Each robot's belief at every control step, as a run goes (the re-simulation's record)."""
 
@@ -533,10 +498,33 @@ class _Trace:
         self.steps = {i: [_belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i in range(len(team.names))}
 
     def extend(self, state: ClockState, a: int, means: np.ndarray, covs: np.ndarray) -> None:
+        """The steps (a, a + h] of every robot, from the team's means (h + 1, 3n) and covariances
+        (h + 1, 3n, 3n) over them: each robot's block as plain floats (``tolist`` converts each
+        number as ``float`` does, a whole block at once)."""
         dt, h = self.clock.dt, means.shape[0] - 1
+        times = [round(float((a + k) * dt), 9) for k in range(1, h + 1)]
         for i, steps in self.steps.items():
             nodes = _reached(state.legs[i], a, a + h)
-            steps.extend(_belief_step((a + k) * dt, means[k], covs[k], i, nodes.get(a + k)) for k in range(1, h + 1))
+            block = slice(3 * i, 3 * i + 3)
+            rows = zip(times, means[1:, block].tolist(), covs[1:, block, block].tolist(), strict=True)
+            steps.extend(
+                TrajectoryStep(t, (m[0], m[1], m[2]), (tuple(c[0]), tuple(c[1]), tuple(c[2])), nodes.get(a + k))
+                for k, (t, m, c) in enumerate(rows, start=1)
+            )
+
+    @classmethod
+    def resumed(
+        cls, clock: TeamClock, steps: Mapping[int, list[TrajectoryStep]], lengths: Sequence[int] | None
+    ) -> _Trace:
+        """The record of a run resumed from a checkpoint: ``steps``' first ``lengths``."""
+        trace = cls.__new__(cls)
+        trace.clock = clock
+        assert lengths is not None
+        trace.steps = {i: list(s[:n]) for (i, s), n in zip(steps.items(), lengths, strict=True)}
+        return trace
+
+    def lengths(self) -> tuple[int, ...]:
+        return tuple(len(s) for s in self.steps.values())
 
     def trajectories(self) -> dict[str, list[TrajectoryStep]]:
         return {self.clock.start.names[i]: steps for i, steps in self.steps.items()}

@@ -61,7 +61,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.attachment.clock import ClockRun, TeamClock, Unreachable
+from tmpnav.attachment.clock import TeamClock
+from tmpnav.attachment.clock_state import ClockRun, Unreachable
 from tmpnav.attachment.detours import REACH, Drive, Obstacle, detour, near_nodes
 from tmpnav.attachment.drift import clock_drift, trajectory_windows
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, margin_factor, seen_std, separation_std

@@ -28,7 +28,8 @@ from dataclasses import dataclass
 
 from tmpnav.attachment.canonical import _offered
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.attachment.clock import ClockState, TeamClock, Unreachable
+from tmpnav.attachment.clock import TeamClock
+from tmpnav.attachment.clock_state import ClockState, Unreachable
 from tmpnav.attachment.team import paired_moves
 from tmpnav.oracle.requests import Request
 from tmpnav.task.plans import Rules, State, Step

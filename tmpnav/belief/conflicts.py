@@ -39,6 +39,7 @@ import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from tmpnav.types import Models, TrajectoryStep
@@ -185,24 +186,12 @@ def _windowed(
     step t + d, |d| <= the pair's window in steps at t; each reported at its step and shift of
     largest shortfall. A pair without a window is checked at the same instant (d = 0)."""
     found, steps = [], len(times)
-    index = np.arange(steps)
     dt = float(times[1] - times[0]) if steps > 1 else 0.0
     for i, j in itertools.combinations(range(len(names)), 2):
         window = shifts.get((names[i], names[j]), np.zeros(steps, dtype=int))
-        worst = np.full(steps, -np.inf)  # need - gap at the worst shift
-        gap_at, need_at, other = np.zeros(steps), np.zeros(steps), index.copy()
-        for d in range(-int(window.max(initial=0)), int(window.max(initial=0)) + 1):
-            at = np.clip(index + d, 0, steps - 1)
-            gap = np.hypot(*(means[i] - means[j][at]).T)
-            need = radii[names[i]] + radii[names[j]] + k * (sigmas[i] + sigmas[j][at])
-            shortfall = np.where(np.abs(d) <= window, need - gap, -np.inf)
-            better = shortfall > worst
-            worst[better], gap_at[better], need_at[better], other[better] = (
-                shortfall[better],
-                gap[better],
-                need[better],
-                at[better],
-            )
+        worst, gap_at, need_at, other = _shortfalls(
+            means[i], means[j], sigmas[i], sigmas[j], radii[names[i]] + radii[names[j]], k, window.astype(np.int64)
+        )
         for lo, hi in _runs(worst > 0.0):
             c = lo + int(np.argmax(worst[lo:hi]))
             mid = 0.5 * (means[i][c] + means[j][other[c]])
@@ -211,6 +200,31 @@ def _windowed(
             where = (float(mid[0]), float(mid[1]))
             found.append(Conflict((names[i], names[j]), *span, float(gap_at[c]), float(need_at[c]), where, late))
     return sorted(found, key=lambda c: (c.t_from, c.robots))
+
+
+@nb.njit(cache=True)
+def _shortfalls(
+    mi: np.ndarray, mj: np.ndarray, si: np.ndarray, sj: np.ndarray, rr: float, k: float, window: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """At each step t of robots i and j (positions ``mi``, ``mj`` (T, 2); separation stds
+    ``si``, ``sj`` (T,); radii summed ``rr``; margin factor ``k``): the largest shortfall of the
+    gap below the separation, rr + k (si[t] + sj[t + d]) - |mi[t] - mj[t + d]|, over the shifts d
+    with |d| <= ``window[t]`` (t + d clipped to the grid), the first of equals by ascending d;
+    its gap, separation and step t + d. Compiled: over every shift of every pair, numpy's
+    broadcasting took two thirds of keeping 16 robots apart."""
+    steps = mi.shape[0]
+    worst = np.full(steps, -np.inf)
+    gap_at, need_at = np.zeros(steps), np.zeros(steps)
+    other = np.arange(steps)
+    for t in range(steps):
+        w = window[t]
+        for d in range(-w, w + 1):
+            a = min(max(t + d, 0), steps - 1)
+            gap = math.hypot(mi[t, 0] - mj[a, 0], mi[t, 1] - mj[a, 1])
+            need = rr + k * (si[t] + sj[a])
+            if need - gap > worst[t]:
+                worst[t], gap_at[t], need_at[t], other[t] = need - gap, gap, need, a
+    return worst, gap_at, need_at, other
 
 
 def _runs(flags: np.ndarray) -> list[tuple[int, int]]:
