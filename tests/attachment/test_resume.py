@@ -59,7 +59,7 @@ def test_runs_with_other_waits_resume_and_match_runs_from_the_start(team: tuple[
     clock.run(plan, record=True)
     resumed = []
     for delays in WAITS:
-        found = clock.resumes.find(plan, {k: round(v / clock.dt) for k, v in delays.items()}, {}, True)
+        found = clock.resumes.find(plan, {k: round(v / clock.dt) for k, v in delays.items()}, {})
         resumed.append(None if found is None else found.at)
         ours = clock.run(plan, delays, record=True)
         theirs = TeamClock(clock.oracle, clock.lib, clock.start).run(plan, delays, record=True)  # from the start
@@ -67,13 +67,13 @@ def test_runs_with_other_waits_resume_and_match_runs_from_the_start(team: tuple[
     # the event each run resumed from (None: from the start)
     assert resumed == [1, 3, 4, 0, 2, 3, None, 0, 0]
     # the same waits again: the run already made
-    again = clock.resumes.find(plan, {0: round(2.0 / clock.dt)}, {}, True)
+    again = clock.resumes.find(plan, {0: round(2.0 / clock.dt)}, {})
     assert again is not None and again.at is None
 
 
 def test_a_run_parts_from_another_where_a_changed_step_is_scheduled_or_started() -> None:
     made: Made[None, None] = Made(
-        {2: 4}, {(3, "r1"): (1, 2)}, (), {1: -1, 2: 0, 3: 1, 4: 3}, {1: 0, 2: 2, 3: 3, 4: 5}, None, None
+        {2: 4}, {(3, "r1"): (1, 2)}, (), {1: -1, 2: 0, 3: 1, 4: 3}, {1: 0, 2: 2, 3: 3, 4: 5}, {}, None
     )
     assert parting(made, {2: 4}, {(3, "r1"): (1, 2)}) is None  # the same run
     assert parting(made, {2: 4, 4: 1}, {(3, "r1"): (1, 2)}) == 3  # a wait on step 4: where it was scheduled

@@ -33,8 +33,9 @@ two robots of a paired move share the pair's mutual draws for its duration (so a
 paired moves only, the paper's, runs exactly as the oracle costed it); other mutual
 observations use a stream per ordered pair of robots, by the clock's step.
 
-The clock's state (:class:`tmpnav.attachment.clock_state.ClockState`) is an immutable value: :meth:`TeamClock.dispatch`
-and :meth:`TeamClock.advance` return new ones, so the exact search can branch from a state
+The clock's state (:class:`tmpnav.attachment.clock_state.ClockState`) is an immutable value:
+:meth:`TeamClock.dispatch` and :meth:`TeamClock.advance` return new ones, so the exact search
+can branch from a state
 (:mod:`tmpnav.attachment.unfold`).
 """
 
@@ -108,7 +109,7 @@ class TeamClock:
         plan = tuple(plan)
         held = {k: v for k, s in (delays or {}).items() if (v := round(s / self.dt))}
         ways = dict(detours or {})
-        resume = self.resumes.find(plan, held, ways, record)
+        resume = self.resumes.find(plan, held, ways)
         if resume is not None and resume.at is None:
             return resume.made.run  # the same waits and paths: the run already made
         loop = self._begin(plan, held, record, resume)
@@ -145,7 +146,8 @@ class TeamClock:
         order = [[k for k, step in enumerate(plan) if any(m[0] == r for m in step)] for r in names]
         if resume is None or resume.at is None:
             state = self.initial()
-            loop = _Loop(self, plan, held, order, state, [], [0] * len(names), _Trace(self, state) if record else None)
+            trace = _Trace.at_start(self, state) if record else None
+            loop = _Loop(self, plan, held, order, state, [], [0] * len(names), trace)
             loop.event = -1  # the first steps of each robot are scheduled before the first event
             for k, step in enumerate(plan):
                 if all(order[names.index(m[0])][0] == k for m in step):
@@ -154,7 +156,7 @@ class TeamClock:
             return loop
         made, at = resume.made, resume.at
         point = made.checkpoints[at]
-        trace = _Trace.resumed(self, made.steps, point.traced) if record and made.steps is not None else None
+        trace = _Trace.resumed(self, made.steps, point.traced) if record else None
         loop = _Loop(self, plan, held, order, point.state, list(point.events), list(point.done), trace)
         loop.checkpoints = list(made.checkpoints[:at])
         loop.pushed = {k: j for k, j in made.pushed.items() if j < at}
@@ -484,18 +486,24 @@ class _Loop:
         self.pushed[k] = self.event
 
     def mark(self) -> None:
-        """A checkpoint at the top of the current event."""
-        traced = self.trace.lengths() if self.trace is not None else None
-        self.checkpoints.append(Checkpoint(self.state, tuple(self.events), tuple(self.done), traced))
+        """A checkpoint at the top of the current event, where the run is recorded (only recorded
+        runs are kept to resume from)."""
+        if self.trace is not None:
+            self.checkpoints.append(Checkpoint(self.state, tuple(self.events), tuple(self.done), self.trace.lengths()))
 
 
 class _Trace:
     """Each robot's belief at every control step, as a run goes (the re-simulation's record)."""
 
-    def __init__(self, clock: TeamClock, state: ClockState):
-        self.clock = clock
+    def __init__(self, clock: TeamClock, steps: dict[int, list[TrajectoryStep]]):
+        self.clock, self.steps = clock, steps
+
+    @classmethod
+    def at_start(cls, clock: TeamClock, state: ClockState) -> _Trace:
+        """The record of a run from its start: each robot's belief at step 0."""
         team = state.team
-        self.steps = {i: [_belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i in range(len(team.names))}
+        steps = {i: [_belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i in range(len(team.names))}
+        return cls(clock, steps)
 
     def extend(self, state: ClockState, a: int, means: np.ndarray, covs: np.ndarray) -> None:
         """The steps (a, a + h] of every robot, from the team's means (h + 1, 3n) and covariances
@@ -513,15 +521,9 @@ class _Trace:
             )
 
     @classmethod
-    def resumed(
-        cls, clock: TeamClock, steps: Mapping[int, list[TrajectoryStep]], lengths: Sequence[int] | None
-    ) -> _Trace:
+    def resumed(cls, clock: TeamClock, steps: Mapping[int, list[TrajectoryStep]], lengths: Sequence[int]) -> _Trace:
         """The record of a run resumed from a checkpoint: ``steps``' first ``lengths``."""
-        trace = cls.__new__(cls)
-        trace.clock = clock
-        assert lengths is not None
-        trace.steps = {i: list(s[:n]) for (i, s), n in zip(steps.items(), lengths, strict=True)}
-        return trace
+        return cls(clock, {i: s[:n] for (i, s), n in zip(steps.items(), lengths, strict=True)})
 
     def lengths(self) -> tuple[int, ...]:
         return tuple(len(s) for s in self.steps.values())

@@ -9,7 +9,7 @@ the clock at the top of each of its events (:class:`Checkpoint`: the state, the 
 come, each robot's steps dispatched, how long its record is), and the next run of the same plan
 starts from the last checkpoint before the first step it changes.
 
-The clock's state is an immutable value (:class:`tmpnav.attachment.clock.ClockState`) and the
+The clock's state is an immutable value (:class:`tmpnav.attachment.clock_state.ClockState`) and the
 events are replayed from the same heap, so a resumed run makes exactly the calls a run from the
 start makes from there on: the same result, to the bit (tests/attachment/test_resume.py).
 """
@@ -42,13 +42,12 @@ MAX_RUNS_PER_PLAN = 3
 @dataclass(frozen=True)
 class Checkpoint(Generic[S]):
     """The clock at the top of one event of a run: its state, the events still to come (the
-    heap as it was), each robot's steps dispatched, and each robot's record's length (None:
-    not recorded)."""
+    heap as it was), each robot's steps dispatched, and each robot's record's length."""
 
     state: S
     events: tuple[tuple[int, int], ...]
     done: tuple[int, ...]
-    traced: tuple[int, ...] | None
+    traced: tuple[int, ...]
 
 
 @dataclass(frozen=True)
@@ -62,7 +61,7 @@ class Made(Generic[S, R]):
     checkpoints: tuple[Checkpoint[S], ...]
     pushed: Mapping[int, int]
     dispatched: Mapping[int, int]
-    steps: Mapping[int, list[TrajectoryStep]] | None
+    steps: Mapping[int, list[TrajectoryStep]]
     run: R
 
 
@@ -80,19 +79,16 @@ class Resumes(Generic[S, R]):
     def __init__(self) -> None:
         self._plans: OrderedDict[Plan, list[Made[S, R]]] = OrderedDict()
 
-    def find(self, plan: Plan, held: Mapping[int, int], detours: Detours, record: bool) -> Resume[S, R] | None:
-        """The kept run of ``plan`` that the run with ``held`` and ``detours`` parts from latest
-        (recorded, where ``record`` asks for it), and where; None when none is kept, or each
-        parts before its first event."""
+    def find(self, plan: Plan, held: Mapping[int, int], detours: Detours) -> Resume[S, R] | None:
+        """The kept run of ``plan`` that the run with ``held`` and ``detours`` parts from latest,
+        and where; None when none is kept, or each parts before its first event."""
         best: Resume[S, R] | None = None
         for made in self._plans.get(plan, ()):
-            if record and made.steps is None:
-                continue
             at = parting(made, held, detours)
             if at is None:
                 self._plans.move_to_end(plan)
                 return Resume(made, None)
-            if at >= 0 and (best is None or best.at is None or at > best.at):
+            if at >= 0 and (best is None or at > (best.at or 0)):
                 best = Resume(made, at)
         return best
 
