@@ -4,11 +4,15 @@ that no single Or-opt or 2-opt move improves."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from tmpnav.task.route_orders import OR_OPT, improve_routes, route_value
+from tmpnav.task.route_orders import OR_OPT, _sums, improve_routes, route_value
+from tmpnav.types import RISK_PENALTY
 
 
 def neighbours(route: list[int], movable: int) -> list[list[int]]:
@@ -51,3 +55,20 @@ def test_routes_side_by_side_are_improved_each_on_its_robots_moves() -> None:
     rooms = np.array([4, 2, 3, 1, 1, 3, 0, 2], dtype=np.int64)  # robot 0 from location 0, robot 1 from 4
     improve_routes(value, np.array([0, 1]), np.array([0, 4]), np.array([0, 4, 8]), rooms, np.array([False, False]))
     assert rooms.tolist() == [1, 2, 3, 4, 3, 2, 1, 0]
+
+
+def test_each_route_is_summed_on_its_own_beside_penalised_routes() -> None:
+    """A route of action costs beside routes holding moves over the chance constraint (some
+    1e11 each) keeps its cents: a running sum over all routes would round it to 0.125."""
+    rng = np.random.default_rng(3)
+    stretches = [rng.uniform(1.0, 20.0, 12) for _ in range(6)]
+    for k in (0, 2, 4):
+        stretches[k][3] = RISK_PENALTY * rng.uniform(0.05, 0.95)
+    stretches.insert(3, np.array([]))
+    values = np.concatenate(stretches)
+    bounds = np.cumsum([0, *(len(s) for s in stretches)])
+    got = _sums(values, bounds)
+    for g, s in zip(got, stretches, strict=True):
+        assert g == pytest.approx(math.fsum(s), rel=1e-15, abs=1e-9)
+    values[5] = math.inf  # a missing move: its route's sum is inf, the others unchanged
+    assert _sums(values, bounds)[0] == math.inf and _sums(values, bounds)[1:] == got[1:]
