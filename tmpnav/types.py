@@ -302,6 +302,9 @@ SAFE_MARGIN = 0.5
 #: than any plan within it (the planner keeps within it when it can, and otherwise finds the
 #: plan of least excess, which names the threshold it does meet)
 RISK_PENALTY = 1e12
+#: a cost at least this large holds a move over the chance constraint: a collision bound a
+#: millionth over it adds this, more than any sum of action costs tmpnav meets
+PENALISED = RISK_PENALTY * 1e-6
 
 
 def risk_penalty(risk: float, max_risk: float | None) -> float:

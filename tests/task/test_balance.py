@@ -8,7 +8,7 @@ import itertools
 from tmpnav.task.balance import Moves, routes_of, unloadings
 from tmpnav.task.plans import Rules, targets_only, with_origins
 from tmpnav.task.routes import route_edits
-from tmpnav.types import CostTable, Goals
+from tmpnav.types import RISK_PENALTY, CostTable, Goals
 
 #: eight rooms on a line, 10 m apart from 10 m on; four robots, at 0, 90, 35 and 55 m; a move
 #: costs a tenth of its length
@@ -98,5 +98,27 @@ def test_an_ejection_chain_passes_work_on_where_no_one_robot_can_take_it() -> No
     plan = targets_only(with_origins([(("a", "X1"),), (("a", "X2"),), (("b", "Y1"),), (("b", "Y2"),)], start))
     moves_ = Moves(table, goals)
     (changed, steps), *_ = unloadings(plan, ["a", "b", "c"], lambda *_: True, moves_, 1.0, depth=1)
+    assert changed == {"a": ["X1"], "b": ["Y1", "X2"], "c": ["Y2"]}
+    assert Rules(start, goals).valid(with_origins(steps, start))
+
+
+def test_work_passes_along_safe_robots_rather_than_over_the_chance_constraint() -> None:
+    """As above, but c may also take X2 directly, over the chance constraint (its move into X2
+    is penalised): the ejection chain, every move within it, is the unloading."""
+    moves = {
+        "a": {("a0", "X1"): 10, ("X1", "X2"): 10, ("a0", "X2"): 15, ("X2", "X1"): 10},
+        "b": {("b0", "Y1"): 10, ("Y1", "Y2"): 9, ("b0", "Y2"): 12, ("Y2", "Y1"): 9, ("b0", "X1"): 14, ("b0", "X2"): 12},
+        "c": {("c0", "Y1"): 6, ("c0", "Y2"): 5, ("Y1", "Y2"): 9, ("Y2", "Y1"): 9, ("c0", "X2"): 5},
+    }
+    for a, b, t in (("Y1", "X2", 5), ("Y2", "X2", 5), ("Y1", "X1", 8), ("Y2", "X1", 8), ("X1", "X2", 10)):
+        moves["b"].update({(a, b): t, (b, a): t})
+    duration = {(r, o, t): float(v) for r, table in moves.items() for (o, t), v in table.items()}
+    single = {**duration, ("c", "c0", "X2"): 5.0 + RISK_PENALTY * 0.2}  # a collision bound 0.2 over
+    start = {"a": "a0", "b": "b0", "c": "c0"}
+    rooms = ("X1", "X2", "Y1", "Y2")
+    table = CostTable(("a", "b", "c"), rooms, (*start.values(), *rooms), start, single, {}, duration)
+    goals = Goals(rooms, ())
+    plan = targets_only(with_origins([(("a", "X1"),), (("a", "X2"),), (("b", "Y1"),), (("b", "Y2"),)], start))
+    (changed, steps), *_ = unloadings(plan, ["a", "b", "c"], lambda *_: True, Moves(table, goals), 1.0, depth=1)
     assert changed == {"a": ["X1"], "b": ["Y1", "X2"], "c": ["Y2"]}
     assert Rules(start, goals).valid(with_origins(steps, start))

@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterator
 
-from tmpnav.types import CostTable, Goals
+from tmpnav.types import PENALISED, CostTable, Goals
 
 #: steps as (robot, target) pairs, and the routes an edit changes with its steps
 Steps = list[tuple[tuple[str, str], ...]]
@@ -95,8 +95,7 @@ def unloadings(
         last = max(times, key=lambda r: times[r])
         if last not in free:
             return
-        chain = _best_unloading(last, rooms, times, free, movable, moves, span_weight)
-        chain = chain or _best_ejection(last, rooms, times, free, movable, moves, span_weight)
+        chain = _next_unloading(last, rooms, times, free, movable, moves, span_weight)
         if not chain:
             return
         for giver, i, b, p in chain:
@@ -108,6 +107,44 @@ def unloadings(
             times[giver], times[b] = moves.route(giver, rooms[giver])[1], moves.route(b, rooms[b])[1]
             changed |= {giver, b}
         yield {r: list(rooms[r]) for r in changed}, list(steps)
+
+
+def _next_unloading(
+    last: str,
+    rooms: dict[str, list[str]],
+    times: dict[str, float],
+    free: list[str],
+    movable: Callable[[str, str, str], bool],
+    moves: Moves,
+    span_weight: float,
+) -> list[Relocation]:
+    """How ``last`` hands over work: its best relocation (:func:`_best_unloading`), unless it adds
+    a move over the chance constraint and an ejection chain (:func:`_best_ejection`) is cheaper;
+    the ejection chain where no relocation will do. Where the only robots that take ``last``'s
+    rooms safely end about when it does (a corridor that only their docks reach within the
+    constraint), every single relocation is penalised and the work has to pass along them."""
+    direct = _best_unloading(last, rooms, times, free, movable, moves, span_weight)
+    if direct and _added(rooms, direct, moves) < PENALISED:  # no move over the chance constraint
+        return direct
+    ejection = _best_ejection(last, rooms, times, free, movable, moves, span_weight)
+    if not direct or not ejection:
+        return direct or ejection
+    return min((direct, ejection), key=lambda chain: _score(rooms, chain, moves, span_weight))
+
+
+def _added(rooms: dict[str, list[str]], chain: list[Relocation], moves: Moves) -> float:
+    """The cost the relocations of ``chain`` add to the routes they change."""
+    after = _relocated_rooms(rooms, chain)
+    changed = {r for giver, _, taker, _ in chain for r in (giver, taker)}
+    return sum(moves.route(r, after[r])[0] - moves.route(r, rooms[r])[0] for r in changed)
+
+
+def _score(rooms: dict[str, list[str]], chain: list[Relocation], moves: Moves, span_weight: float) -> float:
+    """What the relocations of ``chain`` add in cost, plus ``span_weight`` times the latest end of
+    the robots they change."""
+    after = _relocated_rooms(rooms, chain)
+    changed = {r for giver, _, taker, _ in chain for r in (giver, taker)}
+    return _added(rooms, chain, moves) + span_weight * max(moves.route(r, after[r])[1] for r in changed)
 
 
 #: a relocation: (the robot that gives the room, its index in that robot's route, the robot that
@@ -167,16 +204,7 @@ def _best_ejection(
     cheapest; of the chains, the one that adds least cost plus ``span_weight`` times the latest
     end of its robots; [] where none does."""
     chains = _ejections(last, rooms, times, times[last], free, movable, moves, span_weight, EJECTION_DEPTH, {last})
-    best: tuple[float, list[Relocation]] | None = None
-    for chain in chains:
-        after = _relocated_rooms(rooms, chain)
-        changed = {r for giver, _, taker, _ in chain for r in (giver, taker)}
-        legs = {r: moves.route(r, after[r]) for r in changed}
-        added = sum(c for c, _ in legs.values()) - sum(moves.route(r, rooms[r])[0] for r in changed)
-        score = added + span_weight * max(t for _, t in legs.values())
-        if best is None or score < best[0]:
-            best = (score, chain)
-    return [] if best is None else best[1]
+    return min(chains, key=lambda chain: _score(rooms, chain, moves, span_weight), default=[])
 
 
 #: robots an ejection chain holds at most, the robot that finishes last included
@@ -200,7 +228,8 @@ def _ejections(
     direct = _best_unloading(giver, rooms, times, free, movable, moves, span_weight, before=end)
     if direct:
         yield direct
-        return
+        if _added(rooms, direct, moves) < PENALISED:
+            return
     if depth <= 2:
         return
     firsts: dict[str, tuple[float, int, int]] = {}  # taker -> its cheapest (cost, i, p)
