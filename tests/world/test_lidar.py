@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tmpnav.belief.models import beam_jacobian, beam_variance, compressed_scan, scan_information
 from tmpnav.pipeline import load_world
@@ -14,7 +16,7 @@ from tmpnav.types import RangeSensor
 from tmpnav.world import World
 from tmpnav.world.grid import OccupancyGrid
 from tmpnav.world.lidar import cast, scan, sensor_params, signed_distance
-from tmpnav.world.scan_information import ScanInformation, information_matrices
+from tmpnav.world.scan_information import ScanInformation, _among, information_matrices
 
 LIDAR = RangeSensor(
     range=12.0,
@@ -216,3 +218,11 @@ def test_a_poses_key_is_its_cell_and_nearest_heading_bin() -> None:
         expected = np.where(inside, (i * grid.shape[1] + j) * table.bins + b % table.bins, -1)
         np.testing.assert_array_equal(table.keys(poses), expected)
         assert table.keys(poses.reshape(2, -1, 3)).shape == (2, poses.shape[0] // 2)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.integers(0, 60), max_size=40), st.lists(st.integers(0, 60), max_size=40))
+def test_a_key_is_known_by_binary_search_as_isin_says(keys: list[int], known: list[int]) -> None:
+    table = np.unique(np.array(known, dtype=np.int64))
+    wanted = np.array(keys, dtype=np.int64)
+    assert _among(wanted, table).tolist() == np.isin(wanted, table).tolist()
