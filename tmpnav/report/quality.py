@@ -8,6 +8,10 @@ A plan can be poor in two ways the status line does not show:
   (motion floors), so part of a large gap is the bound's; a search stopped by its time budget says more time may help.
   With an objective that prices time, the bound and the gap are on the objective (cost plus a
   price per second of makespan), and the warning says so.
+- **A fleet the chance constraint splits.** Where the goal rooms fall into groups that different
+  robots reach without a move over the chance constraint, and robots outside the group of the
+  robot that ends the plan stand idle for more than :data:`tmpnav.report.reach.IDLE_SHARE` of the
+  makespan: no plan can give them its work (:mod:`tmpnav.report.reach`).
 - **More uncertain than a door allows.** Where a robot's belief mean passes an open door, the
   2-sigma spread of its position across the door (along the door's segment) is compared with
   the room it has there: half the door's width less the robot's radius. Past that, the robot
@@ -30,6 +34,7 @@ from tmpnav.belief.conflicts import Conflict
 from tmpnav.choices import time_budget, work_budget
 from tmpnav.numbers import length
 from tmpnav.planning.safety import conflicts_left, riskiest_point, what_would_help
+from tmpnav.report.reach import IDLE_SHARE, reach_groups, split_message
 from tmpnav.report.schedule import bound_values, move_at, objective_values, searched_gap
 from tmpnav.results import PlanReport
 from tmpnav.types import Door, TrajectoryStep
@@ -44,10 +49,10 @@ N_SIGMA = 2.0
 class PlanWarning:
     """One warning: what it is about, its numbers, and the message with what to try."""
 
-    kind: str  # "risk" | "conflict" | "gap" | "door"
-    robot: str | None  # the robot a "door" warning is about
-    value: float  # gap: the gap (fraction); door: the 2-sigma spread across the door (m)
-    limit: float  # gap: GAP_WARN; door: half the door's width less the robot's radius (m)
+    kind: str  # "risk" | "conflict" | "gap" | "split" | "door"
+    robot: str | None  # the robot a "door" warning is about; split: the robot that ends the plan
+    value: float  # gap: the gap (fraction); split: the groups; door: the 2-sigma spread across the door (m)
+    limit: float  # gap: GAP_WARN; split: IDLE_SHARE; door: half the door's width less the robot's radius (m)
     message: str
 
 
@@ -55,7 +60,7 @@ def plan_warnings(report: PlanReport) -> list[PlanWarning]:
     """The warnings of a plan: a move over the chance constraint and robots still in each other's
     way (a plan taken with --accept-risk), its gap, then each robot's worst door (at most one per
     robot)."""
-    found = [w for w in (_over_threshold(report), _in_the_way(report), _gap(report)) if w is not None]
+    found = [w for w in (_over_threshold(report), _in_the_way(report), _gap(report), _split(report)) if w is not None]
     for robot in report.scenario.robots:
         door = _worst_door(report, robot.name, robot.radius)
         if door is not None:
@@ -85,6 +90,25 @@ def _in_the_way(report: PlanReport) -> PlanWarning | None:
         + (f" (and {len(left) - 1} more)." if len(left) > 1 else ".")
     )
     return PlanWarning("conflict", first.robots[0], first.closest_distance, first.required_separation, text)
+
+
+def _split(report: PlanReport) -> PlanWarning | None:
+    """Robots idle for most of the plan because the chance constraint keeps them out of the group
+    of rooms of the robot that ends it (:mod:`tmpnav.report.reach`)."""
+    delta, schedule = report.scenario.planner.max_risk, report.schedule
+    if delta is None or not schedule.moves or len(schedule.robots) < 2:
+        return None
+    groups = reach_groups(report.table, report.scenario.goals.all_rooms)
+    if len([g for g in groups if g.robots]) < 2:
+        return None
+    makespan = schedule.makespan
+    last = max(schedule.moves, key=lambda m: m.done).robot
+    busiest = next((g for g in groups if last in g.robots), None)
+    idle = {r: schedule.idle(r) for r in schedule.robots if schedule.idle(r) > IDLE_SHARE * makespan}
+    if busiest is None or not any(r not in busiest.robots for r in idle):
+        return None
+    text = split_message(groups, idle, last, makespan, delta)
+    return PlanWarning("split", last, float(len(groups)), IDLE_SHARE, text)
 
 
 def warning_lines(report: PlanReport, width: int = 100) -> list[str]:
