@@ -3,7 +3,7 @@ robots that reach them without a move over it, on small synthetic tables (no ora
 
 from __future__ import annotations
 
-from tmpnav.report.reach import reach_groups, split_message
+from tmpnav.report.reach import reach_groups, reached_by, split_message
 from tmpnav.types import RISK_PENALTY, CostTable
 
 #: a move over the chance constraint: its collision bound 0.1 over max_risk
@@ -52,3 +52,17 @@ def test_the_message_names_the_groups_the_busiest_and_the_robots_idle_outside_it
     assert "6 rooms (A0, A1, A2, A3, ...) (a); B1 (b c)" in text
     assert "a ends the plan at 310.0 s in a group of 6 rooms for 1 robots" in text
     assert "stand idle (b 290 s, c 300 s)" in text
+
+
+def test_every_move_counts_where_the_constraint_is_not_asked_about() -> None:
+    """Over the constraint b reaches A1 too: that split is the constraint's. A2 only a has a
+    move into, and C no robot: nothing but the table keeps the others out."""
+    moves = {
+        ("a", "a-start", "A1"): 5.0,
+        ("a", "A1", "A2"): 5.0,
+        ("b", "b-start", "B1"): 5.0,
+        ("b", "b-start", "A1"): OVER,
+    }
+    anyway = reached_by(table(moves))
+    assert anyway["A1"] == {"a", "b"} and anyway["A2"] == {"a"} and anyway["B1"] == {"b"}
+    assert "C" not in anyway

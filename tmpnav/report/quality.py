@@ -34,7 +34,7 @@ from tmpnav.belief.conflicts import Conflict
 from tmpnav.choices import time_budget, work_budget
 from tmpnav.numbers import length
 from tmpnav.planning.safety import conflicts_left, riskiest_point, what_would_help
-from tmpnav.report.reach import IDLE_SHARE, reach_groups, split_message
+from tmpnav.report.reach import IDLE_SHARE, reach_groups, reached_by, split_message
 from tmpnav.report.schedule import bound_values, move_at, objective_values, searched_gap
 from tmpnav.results import PlanReport
 from tmpnav.types import Door, TrajectoryStep
@@ -107,6 +107,9 @@ def _split(report: PlanReport) -> PlanWarning | None:
     idle = {r: schedule.idle(r) for r in schedule.robots if schedule.idle(r) > IDLE_SHARE * makespan}
     if busiest is None or not any(r not in busiest.robots for r in idle):
         return None
+    anyway = reached_by(report.table)  # without the constraint: do the idle robots reach those rooms?
+    if not any(r in anyway.get(x, ()) for x in busiest.rooms for r in idle if r not in busiest.robots):
+        return None  # their jobs or the roadmap keep them out, not the chance constraint
     text = split_message(groups, idle, last, makespan, delta)
     return PlanWarning("split", last, float(len(groups)), IDLE_SHARE, text)
 

@@ -10,11 +10,15 @@ group, however many robots stand idle in the others, and an objective that price
 that end no sooner. The warning names the groups and the robots idle for most of the plan.
 
 The table is the one the planner saw (:attr:`tmpnav.results.PlanReport.table`): with the anytime
-search, the moves it asked for, so a group is what the search could reach.
+search, the moves it asked for, so a group is what the search could reach; a plan remembered from
+the cache directory comes with its own moves only, and then says nothing of the groups. Where the
+idle robots do not reach the busiest group's rooms even over the constraint (their jobs, or moves
+the table does not hold, keep them out), the constraint is not the cause, and no warning is given.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -38,9 +42,24 @@ def reach_groups(table: CostTable, rooms: Iterable[str]) -> list[Group]:
     """The goal ``rooms`` grouped by the robots that reach them from their starts along moves of
     ``table`` that carry no penalty, the group with most rooms first; rooms no robot reaches so
     form a group with no robots, last."""
+    reached = reached_by(table, PENALISED)
+    order = {r: k for k, r in enumerate(table.robots)}
+    groups: dict[tuple[str, ...], list[str]] = {}
+    for room in rooms:
+        whom = tuple(sorted(reached.get(room, ()), key=order.__getitem__))
+        groups.setdefault(whom, []).append(room)
+    return sorted(
+        (Group(tuple(xs), whom) for whom, xs in groups.items()), key=lambda g: (not g.robots, -len(g.rooms), g.robots)
+    )
+
+
+def reached_by(table: CostTable, below: float = math.inf) -> dict[str, set[str]]:
+    """Location -> the robots that reach it from their starts along moves of ``table`` that cost
+    less than ``below`` (every move by default: where the robots' jobs or missing moves, not
+    the chance constraint, keep them apart)."""
     steps: dict[tuple[str, str], list[str]] = {}
     for (robot, a, b), cost in table.single.items():
-        if cost < PENALISED:
+        if cost < below:
             steps.setdefault((robot, a), []).append(b)
     reached: dict[str, set[str]] = {}
     for robot in table.robots:
@@ -54,14 +73,7 @@ def reach_groups(table: CostTable, rooms: Iterable[str]) -> list[Group]:
                     frontier.append(b)
         for room in seen:
             reached.setdefault(room, set()).add(robot)
-    order = {r: k for k, r in enumerate(table.robots)}
-    groups: dict[tuple[str, ...], list[str]] = {}
-    for room in rooms:
-        whom = tuple(sorted(reached.get(room, ()), key=order.__getitem__))
-        groups.setdefault(whom, []).append(room)
-    return sorted(
-        (Group(tuple(xs), whom) for whom, xs in groups.items()), key=lambda g: (not g.robots, -len(g.rooms), g.robots)
-    )
+    return reached
 
 
 def split_message(groups: list[Group], idle: dict[str, float], last: str, makespan: float, max_risk: float) -> str:
