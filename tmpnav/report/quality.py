@@ -104,7 +104,7 @@ def _split(report: PlanReport) -> PlanWarning | None:
     makespan = schedule.makespan
     last = max(schedule.moves, key=lambda m: m.done).robot
     busiest = next((g for g in groups if last in g.robots), None)
-    idle = {r: schedule.idle(r) for r in schedule.robots if schedule.idle(r) > IDLE_SHARE * makespan}
+    idle = {r: t for r in schedule.robots if (t := schedule.idle(r)) > IDLE_SHARE * makespan}
     if busiest is None or not any(r not in busiest.robots for r in idle):
         return None
     anyway = reached_by(report.table)  # without the constraint: do the idle robots reach those rooms?

@@ -134,17 +134,24 @@ def _next_unloading(
 
 def _added(rooms: dict[str, list[str]], chain: list[Relocation], moves: Moves) -> float:
     """The cost the relocations of ``chain`` add to the routes they change."""
-    after = _relocated_rooms(rooms, chain)
-    changed = {r for giver, _, taker, _ in chain for r in (giver, taker)}
-    return sum(moves.route(r, after[r])[0] - moves.route(r, rooms[r])[0] for r in changed)
+    return _change(rooms, chain, moves)[0]
 
 
 def _score(rooms: dict[str, list[str]], chain: list[Relocation], moves: Moves, span_weight: float) -> float:
     """What the relocations of ``chain`` add in cost, plus ``span_weight`` times the latest end of
     the robots they change."""
+    added, end = _change(rooms, chain, moves)
+    return added + span_weight * end
+
+
+def _change(rooms: dict[str, list[str]], chain: list[Relocation], moves: Moves) -> tuple[float, float]:
+    """The cost the relocations of ``chain`` add to the routes they change, and the latest end of
+    those routes after them."""
     after = _relocated_rooms(rooms, chain)
     changed = {r for giver, _, taker, _ in chain for r in (giver, taker)}
-    return _added(rooms, chain, moves) + span_weight * max(moves.route(r, after[r])[1] for r in changed)
+    legs = {r: moves.route(r, after[r]) for r in changed}
+    added = sum(c for c, _ in legs.values()) - sum(moves.route(r, rooms[r])[0] for r in changed)
+    return added, max(t for _, t in legs.values())
 
 
 #: a relocation: (the robot that gives the room, its index in that robot's route, the robot that
