@@ -49,6 +49,7 @@ from dataclasses import replace
 import numpy as np
 
 from tmpnav.attachment.clock_state import ClockRun, ClockState, Leg, MoveRun, Pairing, Unreachable
+from tmpnav.attachment.own_legs import LegBelief, OwnLegs
 from tmpnav.attachment.resume import Checkpoint, Made, Resume, Resumes
 from tmpnav.attachment.team import Team
 from tmpnav.belief.risk import running_bound
@@ -88,6 +89,11 @@ class TeamClock:
             if i != j and (s := MutualSensing.between(self.scenario, start.names[i], start.names[j])) is not None
         }
         self.ekf = EKFConstants.of(self.scenario.models, lib.world.landmark_xy)
+        #: where no robot observes another and none starts correlated with another, each robot's
+        #: belief is its own legs' (tmpnav.attachment.own_legs), propagated once for every run
+        self.own: OwnLegs | None = None
+        if not self.sensing and _block_diagonal(start.cov):
+            self.own = OwnLegs(lib, self.ekf, tuple(self._radius(i) for i in range(n)))
         #: the runs made, to resume the next runs of their plans from
         self.resumes: Resumes[ClockState, ClockRun] = Resumes()
 
@@ -172,7 +178,9 @@ class TeamClock:
             node, heading = team.node[i], team.heading[i]
             x, y = self.lib.roadmap.nodes[node]
             seed = stable_seed(self.scenario.models.seed, "landmarks", r, node, "standing")
-            legs.append((Leg(0, None, node, heading, np.array([x, y, heading]), seed),))
+            pose = np.array([x, y, heading])
+            key = 0 if self.own is None else self.own.key(i, -1, 0, None, pose, seed)
+            legs.append((Leg(0, None, node, heading, pose, seed, key),))
         n = len(team.names)
         # a robot held where it starts (the rest of a service, Goals.held) is free after its hold
         goals = self.scenario.goals
@@ -214,7 +222,10 @@ class TeamClock:
                 else:
                     motion = self.lib.motion(r, start.node, start.heading, goal)
                 assert motion is not None  # the oracle just planned it
-                legs[i].append(Leg(t, motion, goal, motion.final_heading, motion.poses[-1], motion.noise_seed))
+                key = 0
+                if self.own is not None:
+                    key = self.own.key(i, legs[i][-1].key, t, motion, motion.poses[-1], motion.noise_seed)
+                legs[i].append(Leg(t, motion, goal, motion.final_heading, motion.poses[-1], motion.noise_seed, key))
                 opened.append(MoveRun(k, i, free[i], t, t + motion.n_steps, motion, state.csig[i], state.risk[i]))
                 free[i] = t + motion.n_steps
             if len(robots) == 2:
@@ -273,6 +284,8 @@ class TeamClock:
         n = len(self.start.names)
         # the collision bound prices moves only under a threshold; without one, only records need it
         priced = self.scenario.planner.max_risk is not None or trace is not None
+        if self.own is not None:
+            return self._advance_own(state, until, priced, trace)
         windows = [self._window(state, i, a, until, priced) for i in range(n)]
         poses = [w[1] for w in windows]
         visible = self._visible(poses, h)
@@ -314,6 +327,44 @@ class TeamClock:
         csig, bound = tuple(running[i][h] for i in range(n)), tuple(float(risk[i][h]) for i in range(n))
         state = replace(state, t=until, team=moved, csig=csig, risk=bound)
         return self._close(state, out.last_means, a, running, risk)
+
+    def _advance_own(self, state: ClockState, until: int, priced: bool, trace: _Trace | None) -> ClockState:
+        """:meth:`advance` of a team whose robots take in nothing of each other: each robot's belief
+        read from its own legs (tmpnav.attachment.own_legs), the team's block-diagonal."""
+        own, a, n = self.own, state.t, len(self.start.names)
+        assert own is not None
+        mean, cov = np.empty(3 * n), np.zeros((3 * n, 3 * n))
+        beliefs: list[LegBelief] = []
+        for i in range(n):
+            legs = state.legs[i]
+            r = until - legs[-1].start
+            b = own.belief(i, legs, priced, r, self._own_start(i))
+            beliefs.append(b)
+            mean[3 * i : 3 * i + 3], cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = b.means[b.row(r)], b.covs[b.row(r)]
+            if trace is not None:
+                trace.steps[i].extend(own.records(b, a - legs[-1].start + 1, r + 1))
+        nodes = tuple(state.where(i)[0] for i in range(n))
+        headings = tuple(state.where(i)[1] for i in range(n))
+        moved = Team(state.team.names, nodes, headings, mean, cov, until * self.dt)
+        state = replace(state, t=until, team=moved)
+        ended = [m for m in state.open if m.end <= state.t]
+        if not ended:
+            return state
+        w, closed = self.scenario.cost, list(state.closed)
+        for m in sorted(ended, key=lambda m: (m.end, m.step, m.robot)):
+            b, k = beliefs[m.robot], m.end - m.start
+            c_g = float(np.hypot(*(b.means[k, :2] - m.motion.poses[-1, :2])))
+            terms = CostTerms(m.motion.c_u(self.dt), c_g, float(b.csig[k]))
+            closed.append(replace(m, terms=terms, risk=min(1.0, float(b.risk[k]))))
+        delta = self.scenario.planner.max_risk
+        total = state.closed_cost + sum(m.cost(w, delta) for m in closed[len(state.closed) :])
+        still = tuple(m for m in state.open if m.end > state.t)
+        return replace(state, open=still, closed=tuple(closed), closed_cost=total)
+
+    def _own_start(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """Robot i's initial belief: mean (3,), covariance (3, 3)."""
+        s = slice(3 * i, 3 * i + 3)
+        return self.start.mean[s], self.start.cov[s, s]
 
     def _close(
         self,
@@ -530,6 +581,13 @@ class _Trace:
 
     def trajectories(self) -> dict[str, list[TrajectoryStep]]:
         return {self.clock.start.names[i]: steps for i, steps in self.steps.items()}
+
+
+def _block_diagonal(cov: np.ndarray) -> bool:
+    """Whether a team's covariance (3n, 3n) correlates no two robots."""
+    n = cov.shape[0] // 3
+    mask = np.kron(np.eye(n, dtype=bool), np.ones((3, 3), dtype=bool))
+    return not bool(np.any(cov[~mask] != 0.0))
 
 
 def _reached(legs: Sequence[Leg], a: int, b: int) -> dict[int, int]:

@@ -31,6 +31,9 @@ class Leg:
     heading: float
     pose: np.ndarray  # (3,) where it stands when not driving
     noise_seed: int  # its landmark-noise stream, indexed from ``start``
+    #: the robot's history of legs up to this one, as a number (tmpnav.attachment.own_legs;
+    #: 0 where the team runs in one joint EKF)
+    key: int = 0
 
 
 @dataclass(frozen=True)
