@@ -33,6 +33,10 @@ two robots of a paired move share the pair's mutual draws for its duration (so a
 paired moves only, the paper's, runs exactly as the oracle costed it); other mutual
 observations use a stream per ordered pair of robots, by the clock's step.
 
+Between two events the team runs in one joint EKF (:mod:`tmpnav.attachment.joint_window`); where no
+robot takes in another, each robot runs along its own moves, propagated once for every run
+(:mod:`tmpnav.attachment.own_legs`). The record of a run is :mod:`tmpnav.attachment.record`'s.
+
 The clock's state (:class:`tmpnav.attachment.clock_state.ClockState`) is an immutable value:
 :meth:`TeamClock.dispatch` and :meth:`TeamClock.advance` return new ones, so the exact search
 can branch from a state
@@ -49,29 +53,19 @@ from dataclasses import replace
 import numpy as np
 
 from tmpnav.attachment.clock_state import ClockRun, ClockState, Leg, MoveRun, Pairing, Unreachable
+from tmpnav.attachment.joint_window import JointWindow
 from tmpnav.attachment.own_legs import LegBelief, OwnLegs
+from tmpnav.attachment.record import Trace
 from tmpnav.attachment.resume import Checkpoint, Made, Resume, Resumes
 from tmpnav.attachment.team import Team
-from tmpnav.belief.risk import running_bound
-from tmpnav.belief.sequences import (
-    EKFConstants,
-    MotionArrays,
-    SequenceBatch,
-    Sequences,
-    StartGroups,
-    propagate_sequences,
-)
-from tmpnav.oracle.motions import MotionLibrary, NominalMotion, scan_seed, stable_seed
+from tmpnav.belief.sequences import EKFConstants
+from tmpnav.oracle.motions import MotionLibrary, NominalMotion, stable_seed
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState, mutual_seed
 from tmpnav.results import Schedule, TimedMove
 from tmpnav.task.plans import Plan, Step
-from tmpnav.types import CostTerms, MotionResult, TrajectoryStep, cov3, vec3
-from tmpnav.world.reach import SECTORS
+from tmpnav.types import CostTerms, MotionResult, cov3, vec3
 from tmpnav.world.visibility import MutualSensing
-
-#: steps of one block of the mutual-noise stream of a pair of robots outside paired moves
-MUTUAL_BLOCK = 512
 
 
 class TeamClock:
@@ -91,9 +85,11 @@ class TeamClock:
         self.ekf = EKFConstants.of(self.scenario.models, lib.world.landmark_xy)
         #: where no robot observes another and none starts correlated with another, each robot's
         #: belief is its own legs' (tmpnav.attachment.own_legs), propagated once for every run
+        radii = tuple(self._radius(i) for i in range(n))
         self.own: OwnLegs | None = None
         if not self.sensing and _block_diagonal(start.cov):
-            self.own = OwnLegs(lib, self.ekf, tuple(self._radius(i) for i in range(n)))
+            self.own = OwnLegs(lib, self.ekf, radii)
+        self.joint = JointWindow(lib, self.ekf, start.names, self.sensing, radii)
         #: the runs made, to resume the next runs of their plans from
         self.resumes: Resumes[ClockState, ClockRun] = Resumes()
 
@@ -152,7 +148,7 @@ class TeamClock:
         order = [[k for k, step in enumerate(plan) if any(m[0] == r for m in step)] for r in names]
         if resume is None or resume.at is None:
             state = self.initial()
-            trace = _Trace.at_start(self, state) if record else None
+            trace = Trace.at_start(self.dt, state) if record else None
             loop = _Loop(self, plan, held, order, state, [], [0] * len(names), trace)
             loop.event = -1  # the first steps of each robot are scheduled before the first event
             for k, step in enumerate(plan):
@@ -162,7 +158,7 @@ class TeamClock:
             return loop
         made, at = resume.made, resume.at
         point = made.checkpoints[at]
-        trace = _Trace.resumed(self, made.steps, point.traced) if record else None
+        trace = Trace.resumed(self.start.names, self.dt, made.steps, point.traced) if record else None
         loop = _Loop(self, plan, held, order, point.state, list(point.events), list(point.done), trace)
         loop.checkpoints = list(made.checkpoints[:at])
         loop.pushed = {k: j for k, j in made.pushed.items() if j < at}
@@ -273,62 +269,24 @@ class TeamClock:
         joint = tuple(tuple(float(v) for v in row) for row in sub) if correlated else None
         return Request(tuple(m[0] for m in step), tuple(starts), tuple(m[2] for m in step), joint)
 
-    # ------------------------------------------------------------------ the joint EKF
+    # ------------------------------------------------------------------ the beliefs
 
-    def advance(self, state: ClockState, until: int, trace: _Trace | None = None) -> ClockState:
-        """The whole team run from the clock's time to step ``until`` (one kernel call); the
-        moves that end on the way are closed with their cost terms."""
-        a, h = state.t, until - state.t
-        if h <= 0:
+    def advance(self, state: ClockState, until: int, trace: Trace | None = None) -> ClockState:
+        """The whole team run from the clock's time to step ``until``: in one joint EKF
+        (tmpnav.attachment.joint_window), or each robot along its own moves where none takes in
+        another (tmpnav.attachment.own_legs); the moves that end on the way are closed with their
+        cost terms."""
+        a = state.t
+        if until <= a:
             return state
-        n = len(self.start.names)
         # the collision bound prices moves only under a threshold; without one, only records need it
         priced = self.scenario.planner.max_risk is not None or trace is not None
         if self.own is not None:
             return self._advance_own(state, until, priced, trace)
-        windows = [self._window(state, i, a, until, priced) for i in range(n)]
-        poses = [w[1] for w in windows]
-        visible = self._visible(poses, h)
-        scans = self.lib.scans
-        batch = SequenceBatch(
-            n=n,
-            ekf=self.ekf,
-            motions=MotionArrays.of(
-                [w[0] for w in windows],
-                poses,
-                [w[2] for w in windows],
-                np.arange(n),
-                self.ekf.landmarks.shape[0],
-                [w[4] for w in windows],
-                scans=None if scans is None else (scans.rows(np.concatenate([w[6] for w in windows])), scans.table),
-            ),
-            landmark_noise=np.stack([w[3] for w in windows]),
-            groups=StartGroups(
-                state.team.mean[None], state.team.cov[None], self._mutual_noise(state, a, until, visible)[None]
-            ),
-            sequences=Sequences.one(n, h),
-            mutual_visible=visible,
-            c_sigma_history=True,
-            scan_noise=np.stack([w[7] for w in windows]),
-        )
-        out = propagate_sequences(batch)
-        assert out.c_sigma_history is not None
-        running = [[state.csig[i] + float(c) for c in out.c_sigma_history[0, :, i]] for i in range(n)]
-        zero = np.zeros(h + 1)
-        risk = [
-            state.risk[i] + (running_bound(out.step_risk[:, i], windows[i][5]) if priced else zero) for i in range(n)
-        ]
-        if trace is not None:
-            trace.extend(state, a, out.last_means, out.last_covs)
-        team = state.team
-        nodes = tuple(state.where(i)[0] for i in range(n))
-        headings = tuple(state.where(i)[1] for i in range(n))
-        moved = Team(team.names, nodes, headings, out.last_means[h].copy(), out.last_covs[h].copy(), until * self.dt)
-        csig, bound = tuple(running[i][h] for i in range(n)), tuple(float(risk[i][h]) for i in range(n))
-        state = replace(state, t=until, team=moved, csig=csig, risk=bound)
-        return self._close(state, out.last_means, a, running, risk)
+        moved, means, running, risk = self.joint.advance(state, until, priced, trace)
+        return self._close(moved, means, a, running, risk)
 
-    def _advance_own(self, state: ClockState, until: int, priced: bool, trace: _Trace | None) -> ClockState:
+    def _advance_own(self, state: ClockState, until: int, priced: bool, trace: Trace | None) -> ClockState:
         """:meth:`advance` of a team whose robots take in nothing of each other: each robot's belief
         read from its own legs (tmpnav.attachment.own_legs), the team's block-diagonal."""
         own, a, n = self.own, state.t, len(self.start.names)
@@ -393,101 +351,10 @@ class TeamClock:
         still = tuple(m for m in state.open if m.end > state.t)
         return replace(state, open=still, closed=tuple(closed), closed_cost=total)
 
-    def _window(self, state: ClockState, i: int, a: int, b: int, priced: bool) -> tuple[np.ndarray, ...]:
-        """Robot i's controls (h, 2), nominal poses (h+1, 3), landmark visibility (h+1, L),
-        landmark draws (h+1, L, 2), the sector reach of its footprint (h+1, K; infinite unless
-        ``priced``: the collision bound is wanted), whether it drove into each row (h+1; row 0:
-        from the step before the window), its
-        scans' keys (h+1,; -1: none) and their draws (h+1, 3) over the steps a..b."""
-        L = self.ekf.landmarks.shape[0]
-        controls, poses = np.zeros((b - a, 2)), np.empty((b - a + 1, 3))
-        reach, drove = np.full((b - a + 1, SECTORS if priced else 1), np.inf), np.zeros(b - a + 1, dtype=bool)
-        vis, noise = np.empty((b - a + 1, L), dtype=bool), np.empty((b - a + 1, L, 2))
-        scans, scan_noise = self.lib.scans, np.zeros((b - a + 1, 3))
-        keys = np.full(b - a + 1, -1, dtype=np.int64)
-        noisy = scans is not None and not self.ekf.max_likelihood
-        legs = state.legs[i]
-        for n, leg in enumerate(legs):
-            end = legs[n + 1].start if n + 1 < len(legs) else b + 1
-            lo, hi = max(leg.start, a), min(end, b + 1)
-            if lo >= hi:
-                continue
-            k = np.arange(lo, hi) - leg.start  # steps since the leg began
-            rows = slice(lo - a, hi - a)
-            if leg.motion is None:
-                poses[rows] = leg.pose
-                vis[rows] = self.lib.visibility.visible(
-                    leg.pose[None], self.scenario.models.landmark_sensor.fov, min_range=self._radius(i)
-                )[0]
-                if scans is not None:
-                    keys[rows] = scans.keys(leg.pose)
-            else:
-                m = leg.motion
-                last = np.minimum(k, m.n_steps)
-                poses[rows], vis[rows] = m.poses[last], m.lm_visible[last]
-                if m.scan_keys is not None:
-                    keys[rows] = m.scan_keys[last]
-                if priced:
-                    reach[rows] = self.lib.reach(m, last)
-                s = np.arange(lo, min(hi, b))  # the window's transitions s -> s + 1 in this leg
-                drive = s - leg.start < m.n_steps
-                controls[s[drive] - a] = m.controls[s[drive] - leg.start]
-                drove[s[drive] - a + 1] = True
-                if leg.start < a <= leg.start + m.n_steps:  # it drove into row 0 too: its move goes on
-                    drove[0] = True
-            noise[rows] = self.lib.noise.rows(leg.noise_seed, int(k[-1]) + 1, (L, 2))[k]
-            if noisy:
-                scan_noise[rows] = self.lib.noise.rows(scan_seed(leg.noise_seed), int(k[-1]) + 1, (3,))[k]
-        return controls, poses, vis, noise, reach, drove, keys, scan_noise
-
     def _radius(self, i: int) -> float:
         return self.scenario.robot(self.start.names[i]).radius
 
-    def _visible(self, poses: Sequence[np.ndarray], h: int) -> np.ndarray:
-        """(h+1, n, n): whether robot i sees robot j at each step, its nominal poses ``poses[i]``
-        (h+1, 3); the pairs of one sensing in one compiled call."""
-        n = len(self.start.names)
-        visible = np.zeros((h + 1, n, n), dtype=bool)
-        by_sensing: dict[MutualSensing, list[tuple[int, int]]] = {}
-        for pair, sensing in self.sensing.items():
-            by_sensing.setdefault(sensing, []).append(pair)
-        for sensing, pairs in by_sensing.items():
-            observer = np.concatenate([poses[i] for i, _ in pairs])
-            target = np.concatenate([poses[j] for _, j in pairs])
-            seen = sensing.visible(self.lib.world, observer, target).reshape(len(pairs), h + 1)
-            for (i, j), row in zip(pairs, seen, strict=True):
-                visible[:, i, j] = row
-        return visible
-
-    def _mutual_noise(self, state: ClockState, a: int, b: int, visible: np.ndarray) -> np.ndarray:
-        """(h+1, n, n, 2) draws of every ordered pair's observations over the steps a..b; zero
-        for a pair that never sees the other then (``visible``: the kernel draws only where it does)."""
-        n, h = len(self.start.names), b - a
-        out = np.zeros((h + 1, n, n, 2))
-        first = a // MUTUAL_BLOCK
-        for i, j in self.sensing:
-            if not visible[:, i, j].any():
-                continue
-            blocks = [self._pair_block(i, j, k) for k in range(first, b // MUTUAL_BLOCK + 1)]
-            out[:, i, j] = np.concatenate(blocks)[a - first * MUTUAL_BLOCK : b - first * MUTUAL_BLOCK + 1]
-        for p in state.pairings:
-            lo, hi = max(p.start, a), min(p.start + p.steps, b)
-            if lo > hi:
-                continue
-            draws = self.lib.noise.rows(p.seed, p.steps + 1, (2, 2, 2))
-            (x, y), rows, k = p.robots, slice(lo - a, hi - a + 1), slice(lo - p.start, hi - p.start + 1)
-            out[rows, x, y], out[rows, y, x] = draws[k, 0, 1], draws[k, 1, 0]
-        return out
-
-    def _pair_block(self, i: int, j: int, block: int) -> np.ndarray:
-        """Block ``block`` of the draws of robot i observing robot j outside paired moves."""
-        names = self.start.names
-        seed = stable_seed(self.scenario.models.seed, "mutual", names[i], names[j], "clock", block)
-        return self.lib.noise.rows(seed, MUTUAL_BLOCK, (2,))[:MUTUAL_BLOCK]
-
-    # ------------------------------------------------------------------ the result
-
-    def _result(self, state: ClockState, plan: Plan, trace: _Trace | None) -> ClockRun:
+    def _result(self, state: ClockState, plan: Plan, trace: Trace | None) -> ClockRun:
         names, dt = self.start.names, self.dt
         moves = sorted(state.closed, key=lambda m: (m.step, m.robot))
         timed = []
@@ -521,7 +388,7 @@ class _Loop:
         state: ClockState,
         events: list[tuple[int, int]],
         done: list[int],
-        trace: _Trace | None,
+        trace: Trace | None,
     ):
         self.clock, self.plan, self.held, self.order = clock, plan, held, order
         self.state, self.events, self.done, self.trace = state, events, done, trace
@@ -543,65 +410,8 @@ class _Loop:
             self.checkpoints.append(Checkpoint(self.state, tuple(self.events), tuple(self.done), self.trace.lengths()))
 
 
-class _Trace:
-    """Each robot's belief at every control step, as a run goes (the re-simulation's record)."""
-
-    def __init__(self, clock: TeamClock, steps: dict[int, list[TrajectoryStep]]):
-        self.clock, self.steps = clock, steps
-
-    @classmethod
-    def at_start(cls, clock: TeamClock, state: ClockState) -> _Trace:
-        """The record of a run from its start: each robot's belief at step 0."""
-        team = state.team
-        steps = {i: [_belief_step(0.0, team.mean, team.cov, i, team.node[i])] for i in range(len(team.names))}
-        return cls(clock, steps)
-
-    def extend(self, state: ClockState, a: int, means: np.ndarray, covs: np.ndarray) -> None:
-        """The steps (a, a + h] of every robot, from the team's means (h + 1, 3n) and covariances
-        (h + 1, 3n, 3n) over them: each robot's block as plain floats (``tolist`` converts each
-        number as ``float`` does, a whole block at once)."""
-        dt, h = self.clock.dt, means.shape[0] - 1
-        times = [round(float((a + k) * dt), 9) for k in range(1, h + 1)]
-        for i, steps in self.steps.items():
-            nodes = _reached(state.legs[i], a, a + h)
-            block = slice(3 * i, 3 * i + 3)
-            rows = zip(times, means[1:, block].tolist(), covs[1:, block, block].tolist(), strict=True)
-            steps.extend(
-                TrajectoryStep(t, (m[0], m[1], m[2]), (tuple(c[0]), tuple(c[1]), tuple(c[2])), nodes.get(a + k))
-                for k, (t, m, c) in enumerate(rows, start=1)
-            )
-
-    @classmethod
-    def resumed(cls, clock: TeamClock, steps: Mapping[int, list[TrajectoryStep]], lengths: Sequence[int]) -> _Trace:
-        """The record of a run resumed from a checkpoint: ``steps``' first ``lengths``."""
-        return cls(clock, {i: s[:n] for (i, s), n in zip(steps.items(), lengths, strict=True)})
-
-    def lengths(self) -> tuple[int, ...]:
-        return tuple(len(s) for s in self.steps.values())
-
-    def trajectories(self) -> dict[str, list[TrajectoryStep]]:
-        return {self.clock.start.names[i]: steps for i, steps in self.steps.items()}
-
-
 def _block_diagonal(cov: np.ndarray) -> bool:
     """Whether a team's covariance (3n, 3n) correlates no two robots."""
     n = cov.shape[0] // 3
     mask = np.kron(np.eye(n, dtype=bool), np.ones((3, 3), dtype=bool))
     return not bool(np.any(cov[~mask] != 0.0))
-
-
-def _reached(legs: Sequence[Leg], a: int, b: int) -> dict[int, int]:
-    """The roadmap nodes reached along ``legs`` at the steps in (a, b]."""
-    out = {}
-    for leg in legs:
-        if leg.motion is not None:
-            for node, k in zip(leg.motion.path, leg.motion.node_steps.tolist(), strict=False):
-                if a < leg.start + k <= b:
-                    out[leg.start + k] = int(node)
-    return out
-
-
-def _belief_step(t: float, mean: np.ndarray, cov: np.ndarray, i: int, node: int | None) -> TrajectoryStep:
-    m = mean[3 * i : 3 * i + 3]
-    c = cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
-    return TrajectoryStep(t=round(float(t), 9), mean=vec3(m), cov=cov3(c), node=None if node is None else int(node))
