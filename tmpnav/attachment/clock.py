@@ -1,4 +1,4 @@
-"""The team on one clock: a plan run with every robot moving at once, in one joint EKF.
+"""The team on one clock: a plan run with every robot moving at once.
 
 A task plan is a sequence of steps (one robot's move, or two robots' paired move), but the
 team does not take turns: each robot makes its own moves one after another, and all robots
