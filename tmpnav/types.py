@@ -277,12 +277,18 @@ class Models:
         return self.controller
 
     @property
+    def others_fused(self) -> bool:
+        """Whether the robots' beliefs take in anything besides their own range scans (landmarks,
+        partners): not where nav2's AMCL fuses its lidar alone (ScanModel.fuses_others)."""
+        sensor = self.range_sensor
+        return sensor is None or sensor.localiser.fuses_others
+
+    @property
     def partners_fused(self) -> bool:
         """Whether the robots' beliefs take in their mutual observations: switched on, and not
         nav2's AMCL fusing its lidar alone (ScanModel.fuses_others). Without them a paired move
         costs exactly its two single moves."""
-        sensor = self.range_sensor
-        return self.mutual_observations and (sensor is None or sensor.localiser.fuses_others)
+        return self.mutual_observations and self.others_fused
 
 
 CostValue = TypeVar("CostValue", float, np.ndarray)

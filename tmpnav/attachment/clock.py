@@ -47,7 +47,7 @@ from __future__ import annotations
 
 import heapq
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -304,20 +304,12 @@ class TeamClock:
         nodes = tuple(state.where(i)[0] for i in range(n))
         headings = tuple(state.where(i)[1] for i in range(n))
         moved = Team(state.team.names, nodes, headings, mean, cov, until * self.dt)
-        state = replace(state, t=until, team=moved)
-        ended = [m for m in state.open if m.end <= state.t]
-        if not ended:
-            return state
-        w, closed = self.scenario.cost, list(state.closed)
-        for m in sorted(ended, key=lambda m: (m.end, m.step, m.robot)):
+
+        def arrived(m: MoveRun) -> tuple[np.ndarray, float, float]:  # its leg's row at its end
             b, k = beliefs[m.robot], m.end - m.start
-            c_g = float(np.hypot(*(b.means[k, :2] - m.motion.poses[-1, :2])))
-            terms = CostTerms(m.motion.c_u(self.dt), c_g, float(b.csig[k]))
-            closed.append(replace(m, terms=terms, risk=min(1.0, float(b.risk[k]))))
-        delta = self.scenario.planner.max_risk
-        total = state.closed_cost + sum(m.cost(w, delta) for m in closed[len(state.closed) :])
-        still = tuple(m for m in state.open if m.end > state.t)
-        return replace(state, open=still, closed=tuple(closed), closed_cost=total)
+            return b.means[k, :2], float(b.csig[k]), float(b.risk[k])
+
+        return self._closed(replace(state, t=until, team=moved), arrived)
 
     def _own_start(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """Robot i's initial belief: mean (3,), covariance (3, 3)."""
@@ -335,17 +327,26 @@ class TeamClock:
         """Close the open moves that have ended by the clock's time: their c_Sigma and
         collision bound from the running sums, c_G from the mean on arrival (``means``,
         ``running``, ``risk``: from step ``a``)."""
+
+        def arrived(m: MoveRun) -> tuple[np.ndarray, float, float]:
+            k = m.end - a
+            arrival = means[k, 3 * m.robot : 3 * m.robot + 2]
+            return arrival, float(running[m.robot][k]) - m.csig_start, float(risk[m.robot][k]) - m.risk_start
+
+        return self._closed(state, arrived)
+
+    def _closed(self, state: ClockState, arrived: Callable[[MoveRun], tuple[np.ndarray, float, float]]) -> ClockState:
+        """``state`` with the open moves that have ended by its time closed, each with its cost
+        terms: ``arrived`` gives a move's mean position on arrival, its c_Sigma and its collision
+        bound (capped at 1 here)."""
         ended = [m for m in state.open if m.end <= state.t]
         if not ended:
             return state
         w, closed = self.scenario.cost, list(state.closed)
         for m in sorted(ended, key=lambda m: (m.end, m.step, m.robot)):
-            k = m.end - a
-            arrival = means[k, 3 * m.robot : 3 * m.robot + 2]
-            c_sigma = float(running[m.robot][k]) - m.csig_start
+            arrival, c_sigma, bound = arrived(m)
             c_g = float(np.hypot(*(arrival - m.motion.poses[-1, :2])))
-            bound = min(1.0, float(risk[m.robot][k]) - m.risk_start)
-            closed.append(replace(m, terms=CostTerms(m.motion.c_u(self.dt), c_g, c_sigma), risk=bound))
+            closed.append(replace(m, terms=CostTerms(m.motion.c_u(self.dt), c_g, c_sigma), risk=min(1.0, bound)))
         delta = self.scenario.planner.max_risk
         total = state.closed_cost + sum(m.cost(w, delta) for m in closed[len(state.closed) :])
         still = tuple(m for m in state.open if m.end > state.t)

@@ -8,7 +8,8 @@ uncorrelated, the joint covariance stays block-diagonal, and robot i's belief is
 its own legs alone: its initial belief, then each move it drives (from the step it starts)
 and the standing after it. The joint kernel's updates then touch only the observed robot's
 block, with the same operations as a simulation of that robot alone (tmpnav.belief.kernel), so
-a leg propagated on its own gives the joint run's beliefs to the bit.
+a leg propagated on its own gives the joint run's beliefs to rounding (the compiled loops of a
+3-state filter and of a 3n-state one round differently in the last bit).
 
 :class:`OwnLegs` propagates each leg once (:class:`LegBelief`, the same compiled kernel with
 n = 1) and keeps it by the robot's whole history of legs up to it (:meth:`OwnLegs.key`). Every
@@ -26,6 +27,7 @@ joint run sums them from the run's start and takes differences: the two agree to
 from __future__ import annotations
 
 import hashlib
+import itertools
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -89,8 +91,7 @@ class OwnLegs:
     def __init__(self, lib: MotionLibrary, ekf: EKFConstants, radii: tuple[float, ...]):
         self.lib, self.ekf, self.radii = lib, ekf, radii
         self.dt = lib.scenario.models.dt
-        fov = lib.scenario.models.landmark_sensor.fov
-        self._fov = fov
+        self._fov = lib.scenario.models.landmark_sensor.fov
         #: standing changes nothing: no landmark updates, and a scan counts by the share of the
         #: update thresholds a step drives (kernel.scan_weight: 0 standing); the prediction with
         #: u = 0 adds nothing
@@ -113,7 +114,7 @@ class OwnLegs:
         k = (robot, before, leg_start, seed, what)
         found = self._keys.get(k)
         if found is None:
-            found = self._keys[k] = _next_number()
+            found = self._keys[k] = next(_NUMBERS)
             if len(self._keys) > MAX_KEYS:
                 self._keys.popitem(last=False)
         else:
@@ -145,7 +146,7 @@ class OwnLegs:
             self._legs.move_to_end(key)
         if not found.static:
             while found.means.shape[0] <= rows:
-                self._stand(found, priced)
+                self._stand(found)
         return found
 
     def records(self, b: LegBelief, lo: int, hi: int) -> list[TrajectoryStep]:
@@ -167,13 +168,13 @@ class OwnLegs:
         self.computed += 1
         m = leg.motion
         if m is None:
-            b = LegBelief(robot, leg, 0, self.static, mean[None].copy(), cov[None].copy(), np.zeros(1), np.zeros(1), {})
-            return b
+            return LegBelief(
+                robot, leg, 0, self.static, mean[None].copy(), cov[None].copy(), np.zeros(1), np.zeros(1), {}
+            )
         T = m.n_steps
         k = np.arange(T + 1)
         reach = self.lib.reach(m, k) if priced else np.full((T + 1, 1), np.inf)
-        keys = m.scan_keys if m.scan_keys is not None else None
-        out = self._run(mean, cov, m.controls, m.poses, m.lm_visible, reach, keys, leg.noise_seed, 0)
+        out = self._run(mean, cov, m.controls, m.poses, m.lm_visible, reach, m.scan_keys, leg.noise_seed, 0)
         assert out.c_sigma_history is not None
         drove = np.ones(T + 1, dtype=bool)
         drove[0] = False  # a move starts standing (its first step adds min(p_1, p_0 + X_1))
@@ -194,7 +195,7 @@ class OwnLegs:
             nodes,
         )
 
-    def _stand(self, b: LegBelief, priced: bool) -> None:
+    def _stand(self, b: LegBelief) -> None:
         """The next :data:`TAIL` rows of ``b``'s standing (rows past its drive)."""
         s0 = b.means.shape[0] - 1
         leg, m = b.leg, b.leg.motion
@@ -271,9 +272,5 @@ def _digest(motion: NominalMotion) -> bytes:
     return found
 
 
-_counter = [0]
-
-
-def _next_number() -> int:
-    _counter[0] += 1
-    return _counter[0]
+#: the numbers of leg histories, never one twice in a process
+_NUMBERS = itertools.count(1)

@@ -65,7 +65,7 @@ class EKFConstants(NamedTuple):
             landmarks=np.ascontiguousarray(landmarks, dtype=float).reshape(-1, 2),
             scans=models.range_sensor is not None,
             scan_thresholds=scan_thresholds(models),
-            fuse_others=models.range_sensor is None or models.range_sensor.localiser.fuses_others,
+            fuse_others=models.others_fused,
             local_var=local_var,
             local_rho=local_rho,
         )

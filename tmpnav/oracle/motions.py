@@ -145,12 +145,10 @@ class MotionLibrary:
         clearance = scenario.roadmap.clearance or 0.0  # 0: the paper's shortest paths
         self.graph = RoadmapGraph(roadmap, safe_weights(roadmap, world, radius, clearance) if clearance > 0 else None)
         self.visibility = visibility_of(world, scenario.models.landmark_sensor.range)
-        sensor = scenario.models.range_sensor
-        #: the beliefs take in the landmarks (not nav2's AMCL, which fuses its lidar alone)
-        self.fuses_landmarks = sensor is None or sensor.localiser.fuses_others
         #: the map's clearance grid as RPP's motions read it: its origin (m) and cell size (m)
         self.origin = (float(world.grid.origin[0]), float(world.grid.origin[1]))
         self.resolution = float(world.grid.resolution)
+        sensor = scenario.models.range_sensor
         # a range scan's information per cell and heading (tmpnav.world.scan_information)
         self.scans: ScanInformation | None = world.scans(sensor) if sensor is not None else None
         self.noise = NoiseStreams()  # the simulated observations' draws, by stream
@@ -346,7 +344,7 @@ class MotionLibrary:
         pursued = pursue and pc.pursued
         if final is not None and not pursued:  # a job's goal pose: on it, then turned to its heading
             controls, poses = turn_to(controls, poses, final, spec.turn_rate, models.dt)
-        if self.fuses_landmarks:
+        if models.others_fused:
             lm_visible = self.visibility.visible(poses, models.landmark_sensor.fov, min_range=spec.radius)
         else:  # no belief takes them in (the EKF reads them only where it fuses them): none seen
             lm_visible = np.zeros((poses.shape[0], self.world.landmark_xy.shape[0]), dtype=bool)
