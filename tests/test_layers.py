@@ -32,6 +32,7 @@ LAYERS: dict[str, int] = {
     "tmpnav.java": 0,  # which Java runs ENHSP
     "tmpnav.numbers": 0,  # figures as the terminal prints them
     "tmpnav.deadline": 0,  # the run's time limit, one clock every stage looks at
+    "tmpnav.beside": 0,  # work in a thread beside the main one, its result where asked for
     "tmpnav.client": 0,  # a client of tmpnav serve (the standard library only): for any layer that calls it
     "tmpnav.pddl": 0,  # the PDDL domains (data)
     "tmpnav.configs": 0,  # the shipped scenarios (data)

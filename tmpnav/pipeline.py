@@ -266,7 +266,7 @@ def _planned(path: str | Path, options: PlanOptions, loaded: tuple[Scenario, Wor
     from tmpnav.attachment.apart import keep_apart
     from tmpnav.planning import TaskRun, get_ready, plan_stage
     from tmpnav.resimulate import resimulate
-    from tmpnav.task.search import SearchRun
+    from tmpnav.task.search_run import SearchRun
 
     times = StageTimes()
     deadline = Deadline(started=run_started(times.started))

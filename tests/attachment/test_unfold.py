@@ -16,7 +16,7 @@ from tests.attachment.support import carried_problem, every_plan, objective
 from tmpnav.attachment.unfold import unfold
 from tmpnav.pipeline import PlanOptions, plan
 from tmpnav.task.plans import Rules
-from tmpnav.task.search import SearchRun
+from tmpnav.task.search_run import SearchRun
 from tmpnav.task.stage import plan_unfolded
 
 CASES = [

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from tmpnav.attachment.apart import ExecutedCost
 from tmpnav.choices import exact_fits
-from tmpnav.planning.bound import certified_bound
+from tmpnav.planning.bound import LaterBound, certified_bound
 from tmpnav.planning.run import Planned, TaskRun
 from tmpnav.planning.table import full_table
 from tmpnav.task.bound import Bound
@@ -64,13 +64,14 @@ def anytime_carried(
     anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight, executed, routes)
     _warm_up(run, anytime)
     seeds = {**_incumbent(run), **(seeds or {})}
+    # the bound is computed beside the first costs and routes (its motion floors need no oracle)
+    bound = floor if floor is not None else LaterBound(run)
     # a replan starts from its incumbent: the exact search of the table is not budgeted (3-6 s
     # for 3 rooms and 4 robots, against a replan's 1-2 s)
     if not seeds and exact_fits(len(run.goals.all_rooms), len(run.scenario.robots), "table"):
         table = full_table(run.scenario, run.world, run.canonical.oracle, run.times, run.canonical.origin)
         exact = plan_task(TaskProblem.of(run.scenario, table), run.store, run.replan, run.times)
         seeds["the exact plan of the cost table"] = exact.steps
-    bound = floor if floor is not None else _bound(run)
     task = plan_anytime(anytime, run.search, _left(run), bound, seeds, run.work)
     return Planned(run.canonical.seen(), task)
 

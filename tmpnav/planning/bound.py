@@ -6,8 +6,10 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from functools import partial
 
 from tmpnav.attachment.floors import FloorsStopped, motion_floors
+from tmpnav.beside import Beside
 from tmpnav.oracle.executors import library
 from tmpnav.planning.run import TaskRun
 from tmpnav.task.bound import CUT_ROUNDS, Bound, lower_bound, makespan_bound
@@ -68,6 +70,26 @@ def certified_bound(run: TaskRun) -> Bound:
     parts = {**bound.parts, "makespan": span}
     relaxation = f"{bound.relaxation} + makespan floor {span:.1f} s"
     return _said(replace(bound, value=value, relaxation=relaxation, parts=parts, stopped=bound.stopped or work.stopped))
+
+
+class LaterBound:
+    """:func:`certified_bound` computed beside what the run does first (tmpnav.beside: the single
+    moves' costs, in the oracle's workers, and OR-Tools' first routes): with carried costs it
+    reads only the roadmap's shortest paths (the moves' motion floors), no oracle. The search
+    asks for it when it first tells of a plan (:meth:`__call__`), and the run's ``bound`` stage
+    is the time it then waits for it. Its value is the one computed in line, so is the plan."""
+
+    def __init__(self, run: TaskRun):
+        library(run.canonical.oracle.ctx)  # the process' motion library made here, not by two threads
+        self._times = run.times
+        self._bound = Beside(partial(certified_bound, run), "tmpnav-bound")
+
+    def __call__(self) -> Bound:
+        """The bound, once computed (the wait timed as the ``bound`` stage)."""
+        if not self._bound.done:
+            with self._times.timed("bound"):
+                return self._bound()
+        return self._bound()
 
 
 def stop_at_share(left: float) -> Callable[[], bool] | None:

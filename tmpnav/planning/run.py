@@ -12,7 +12,7 @@ from tmpnav.choices import TaskChoice, choose, time_budget, work_budget
 from tmpnav.results import StageTimes, TaskResult
 from tmpnav.task.memo import EntryStore
 from tmpnav.task.objectives import OBJECTIVES
-from tmpnav.task.search import SearchRun
+from tmpnav.task.search_run import SearchRun
 from tmpnav.types import CostTable, Goals, PlannerOptions, Scenario
 from tmpnav.world import World
 

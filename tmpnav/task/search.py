@@ -46,19 +46,17 @@ from __future__ import annotations
 import contextlib
 import functools
 import math
-import os
 import random
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
-from dataclasses import dataclass, field, replace
-from typing import Literal, Protocol, TypeVar, runtime_checkable
+from dataclasses import dataclass
+from typing import Literal, TypeVar
 
+from tmpnav.beside import Beside
 from tmpnav.choices import StopReason
-from tmpnav.deadline import Deadline
 from tmpnav.errors import PlannerError, PlannerTimeoutError, TimeLimitError, UnsolvableError
 from tmpnav.lifetime import gather
-from tmpnav.results import SearchProgress, StageTimes
 from tmpnav.task import budget as caps
 from tmpnav.task.budget import SearchBudget
 from tmpnav.task.decode import canonical_order
@@ -68,6 +66,8 @@ from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.objectives import MAKESPAN_WEIGHT
 from tmpnav.task.plans import Plan, Rules, Step, splice, with_missing, with_origins
 from tmpnav.task.routes import KeptApartPrice, route_edits
+from tmpnav.task.routing import Routes
+from tmpnav.task.search_run import Executed, KeepsApart, SearchOptions, SearchResult, SearchRun, SearchStats
 from tmpnav.task.solve import Background
 from tmpnav.task.subproblems import Encoding, Sub, SubProblems
 from tmpnav.types import CostTable, Goals
@@ -75,95 +75,7 @@ from tmpnav.types import CostTable, Goals
 #: relative improvement below which a new plan does not count as better
 EPSILON = 1e-9
 
-#: a plan's cost as it will be executed, from the plan and its cost as planned
-#: (tmpnav.attachment.apart.ExecutedCost: robots kept apart)
-Executed = Callable[[Plan, PlanCost], PlanCost]
-
-
-@runtime_checkable
-class KeepsApart(Protocol):
-    """An ``Executed`` that says which robots it kept apart in a plan it priced."""
-
-    def robots_apart(self, plan: Plan) -> frozenset[str]: ...
-
-
 _T = TypeVar("_T")
-
-
-@dataclass(frozen=True)
-class SearchRun:
-    """What a search runs with beside its problem: the run's stage times (and so its clock) and
-    who is told of its progress."""
-
-    times: StageTimes = field(default_factory=StageTimes)
-    progress: SearchProgress | None = None
-    bound: float | None = None  # the lower bound told with every event
-    #: ENHSP's plans of the sub-problems solved so far, by their PDDL text (domain, problem)
-    #: (``replace`` keeps the same dict), see :meth:`AnytimeSearch._known`
-    solved: dict[tuple[str, str], list[Step] | None] = field(default_factory=dict, compare=False, hash=False)
-    #: the run's time limit (tmpnav.deadline): past it the search returns its best plan
-    deadline: Deadline = field(default_factory=Deadline, compare=False, hash=False)
-
-    def bounded(self, bound: float | None) -> SearchRun:
-        """The same run, telling ``bound`` with its events."""
-        return replace(self, bound=bound)
-
-    def note(self, best: float, what: str) -> None:
-        """Tell of an event: the run's time (the run's one clock), the best cost, the bound."""
-        if self.progress is not None:
-            self.progress(self.times.elapsed(), best, self.bound, what)
-
-
-@dataclass(frozen=True)
-class SearchOptions:
-    """How the anytime search runs."""
-
-    planner: str = "enhsp-blind"  # the ENHSP engine of the sub-problems (optimal)
-    encoding: str = "mixed"  # single | mixed
-    min_gain: float = 0.05  # mixed: pairs must save this fraction
-    budget: float = 60.0  # seconds for the whole search: its time cap (inf: none)
-    work: int | None = None  # sub-problems ENHSP may solve (None: no limit), the budget of work
-    #: rooms per neighbourhood, grown when a round brings nothing (on building-like tables of
-    #: 10-12 rooms, (6, 8) reached the optimum as often as (4, 6, 8) with half the sub-problems)
-    sizes: tuple[int, ...] = (6, 8)
-    sub_robots: int = 3  # robots per neighbourhood, at most
-    sub_timeout: float = 30.0  # seconds for one sub-problem's ENHSP run
-    routing_time: float | None = None  # OR-Tools' time limit; None: a quarter of the budget, 1-30 s
-    seed: int = 0
-    parallel: int = min(2, os.cpu_count() or 1)  # sub-problems ENHSP solves at once
-    #: the model's costs are context-free (a cost table): a sub-problem that is the whole
-    #: problem, solved optimally by ENHSP, proves the plan optimal
-    whole_is_exact: bool = True
-    #: the objective's price of a second of makespan (tmpnav.task.objectives): plans are
-    #: compared by their cost plus this times their makespan, the team moving at once
-    span_weight: float = 0.0
-    #: edits between routes costed by the model per pass, the best by the single moves first
-    route_candidates: int = 6
-    #: OR-Tools' routes as a first plan; False: the seeds', where there are seeds (a search that
-    #: goes on from an exact plan, which OR-Tools' routes of single moves cannot beat as planned)
-    first_routes: bool = True
-
-
-@dataclass
-class SearchStats:
-    """What the search did (plan.json ``task.search``)."""
-
-    subproblems: int = 0  # sub-problems ENHSP solved
-    reused: int = 0  # sub-problems met again, whose plan ENHSP had already given (not solved again)
-    improvements: int = 0
-    route_improvements: int = 0  # of those, by edits between routes (tmpnav.task.routes)
-    rounds: int = 0
-    history: list[tuple[float, float]] = field(default_factory=list)  # (seconds, best cost)
-
-
-@dataclass(frozen=True)
-class SearchResult:
-    plan: Plan
-    cost: PlanCost
-    stopped: StopReason  # "optimal" | "converged" | "work budget" | "time budget" | "nothing to do"
-    stats: SearchStats
-    start: str  # how the first plan was found
-    capped: tuple[str, ...] = ()  # the time caps that cut something short (tmpnav.task.budget)
 
 
 @dataclass(frozen=True)
@@ -231,27 +143,18 @@ class AnytimeSearch:
     # ------------------------------------------------------------------ start
 
     def first_plan(
-        self, singles: CostTable, start_from: Plan | None = None, span_weight: float | None = None
+        self,
+        singles: CostTable,
+        start_from: Plan | None = None,
+        span_weight: float | None = None,
+        routed: Callable[[], tuple[Routes, bool]] | None = None,
     ) -> tuple[Plan, str]:
         """OR-Tools' routes on the single moves, as a plan of single moves; its local search
         starts from ``start_from``'s routes when given (a replan's plan under way). The routes
         minimise the sum of the moves' costs plus ``span_weight`` (default: the objective's) per
-        second of the longest route."""
-        opts = self.options
-        weight = opts.span_weight if span_weight is None else span_weight
+        second of the longest route. ``routed``: those routes, computed beside (:meth:`_routing`)."""
         with self.times.timed("planner"):
-            routes, timed_out = first_routes(
-                singles,
-                self.goals,
-                self.model.robots,
-                budget=opts.budget,
-                routing_time=opts.routing_time,
-                time_left=self.left(),
-                fleet=self.fleet,
-                span_weight=weight,
-                start_from=start_from,
-                second=span_weight is not None,
-            )
+            routes, timed_out = (routed or self._routing(singles, start_from, span_weight))()
             if timed_out:
                 self.budget.cap(caps.ROUTING_CAP)
         if not routes.found:
@@ -259,25 +162,52 @@ class AnytimeSearch:
         plan = with_origins([((m[0], m[2]),) for m in routes.moves(singles)], self.model.start_location)
         return self.canonical(plan), routes.method
 
-    def _makespan_first(self, singles: CostTable, seeds: dict[str, Plan]) -> list[tuple[str, Plan]]:
-        """A second first plan where the objective prices time below the makespan objective's
-        price, for a team planned from scratch (no plan under way): OR-Tools' routes with the
-        longest route first (:data:`MAKESPAN_WEIGHT` per second). Routes that price time lightly
-        can leave a robot idle that a search from them does not put to work: building-4robots
-        with the AMCL model, on RPP's motions with sharp corners, converged at 583.5 with r3 on
-        2 rooms from the weighted routes, and at 562.3 with every robot on 4-6 rooms from these
-        (tmpnav.task.objectives). Not where the first routing ran out of its time limit (at 200
-        rooms it takes all of its 30 s)."""
+    def _routing(
+        self, singles: CostTable, start_from: Plan | None, span_weight: float | None
+    ) -> Callable[[], tuple[Routes, bool]]:
+        """OR-Tools' first routes of :meth:`first_plan`, to compute in line or beside; their time
+        limit counts from now."""
+        opts = self.options
+        return functools.partial(
+            first_routes,
+            singles,
+            self.goals,
+            self.model.robots,
+            budget=opts.budget,
+            routing_time=opts.routing_time,
+            time_left=self.left(),
+            fleet=self.fleet,
+            span_weight=opts.span_weight if span_weight is None else span_weight,
+            start_from=start_from,
+            second=span_weight is not None,
+        )
+
+    def _makespan_routing(self, singles: CostTable, seeds: dict[str, Plan]) -> Beside[tuple[Routes, bool]] | None:
+        """The routes of a second first plan where the objective prices time below the makespan
+        objective's price, for a team planned from scratch (no plan under way): OR-Tools' routes
+        with the longest route first (:data:`MAKESPAN_WEIGHT` per second). Routes that price time
+        lightly can leave a robot idle that a search from them does not put to work:
+        building-4robots with the AMCL model, on RPP's motions with sharp corners, converged at
+        583.5 with r3 on 2 rooms from the weighted routes, and at 562.3 with every robot on 4-6
+        rooms from these (tmpnav.task.objectives). Computed beside the first routing (OR-Tools
+        searches without the interpreter's lock: office, 100 rooms, 16 robots, 7 s of the two
+        routings' 16 s), each routing's own solutions as in line; None where there is none."""
         weight = self.options.span_weight
         if not weight or weight >= MAKESPAN_WEIGHT or len(self.model.robots) < 2 or UNDER_WAY in seeds:
-            return []
-        if caps.ROUTING_CAP in self.budget.capped:  # the first routing took all its time: no second
+            return None
+        return Beside(self._routing(singles, None, MAKESPAN_WEIGHT), "tmpnav-makespan-routing")
+
+    def _makespan_first(self, singles: CostTable, routed: Beside[tuple[Routes, bool]] | None) -> list[tuple[str, Plan]]:
+        """The second first plan from its ``routed`` routes (:meth:`_makespan_routing`); none
+        where the first routing ran out of its time limit (at 200 rooms it takes all of its 30 s:
+        the first plan is then the machine's already)."""
+        if routed is None or caps.ROUTING_CAP in self.budget.capped:
             return []
         try:
-            plan, routed = self.first_plan(singles, span_weight=MAKESPAN_WEIGHT)
+            plan, method = self.first_plan(singles, span_weight=MAKESPAN_WEIGHT, routed=routed)
         except PlannerError:
             return []
-        return [(f"{routed}, the makespan first", plan)]
+        return [(f"{method}, the makespan first", plan)]
 
     @property
     def fleet(self) -> bool:
@@ -318,6 +248,7 @@ class AnytimeSearch:
         }
         starts = list(valid.items())
         if self.options.first_routes or not starts:
+            second = self._makespan_routing(singles, valid)  # beside the first
             try:
                 plan, routed = self.first_plan(singles, valid.get(UNDER_WAY))
             except PlannerError:
@@ -325,7 +256,7 @@ class AnytimeSearch:
                     raise
             else:  # no routes found in time: the seeds (a replan's repaired plan) are the first plans
                 starts.insert(0, (routed, plan))
-            starts.extend(self._makespan_first(singles, valid))
+            starts.extend(self._makespan_first(singles, second))
         (start, best), cost = starts[0], self.priced(starts[0][1], self.cost(starts[0][1]))
         for name, seed in starts[1:]:
             seed_cost = self.priced(seed, self.cost(seed))

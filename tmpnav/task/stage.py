@@ -14,6 +14,7 @@ for a run. A new PDDL engine plugs in behind :func:`~tmpnav.task.solve.solve` (r
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 from tmpnav.errors import UnsolvableError
@@ -30,7 +31,8 @@ from tmpnav.task.objectives import OBJECTIVES
 from tmpnav.task.pddl_text import DROP_PREFIX, TEXT_ENCODINGS, sample_task
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.schedules import exact_schedule
-from tmpnav.task.search import Executed, SearchOptions, SearchRun, search
+from tmpnav.task.search import search
+from tmpnav.task.search_run import Executed, SearchOptions, SearchRun
 from tmpnav.task.unfolded import BeliefGraph, write_unfolded
 from tmpnav.types import CostTable, Goals, PlannerOptions, PlanStatus, Scenario
 
@@ -262,17 +264,20 @@ def plan_anytime(
     task: AnytimeTask,
     run: SearchRun,
     budget: float,
-    bound: Bound | None = None,
+    bound: Bound | Callable[[], Bound] | None = None,
     seeds: dict[str, Plan] | None = None,
     work: int | None = None,
 ) -> TaskResult:
     """The anytime search's plan (:mod:`tmpnav.task.search`) of ``task`` within ``work``
     sub-problems and a time cap of ``budget`` seconds, from the cheapest of OR-Tools' routes and
-    the ``seeds``; ``bound``, a certified lower bound on every plan's cost, can prove a plan
-    optimal and gives the gap."""
-    proves, told = (bound.proves_optimal, bound.value) if bound is not None else (None, None)
+    the ``seeds``; ``bound``, a certified lower bound on every plan's cost (or what gives it when
+    first asked: one computed beside the search), can prove a plan optimal and gives the gap."""
+    later = _later(bound)
+    proves = None if later is None else (lambda cost: later().proves_optimal(cost))
+    told = None if later is None else (lambda: later().value)
     options = task.options(budget, work)
     result = search(task.model, task.goals, options, run.bounded(told), proves, seeds, task.executed)
+    found = None if later is None else later()
     plan, cost = result.plan, result.cost
     proved = result.stopped == "optimal"
     stats = result.stats
@@ -295,11 +300,18 @@ def plan_anytime(
             history=tuple(stats.history),
             work=options.work,
             # a bound its time share cut short stops the search later, or not at all: the plan is the machine's
-            capped=(*result.capped, *((BOUND_CAP,) if bound is not None and bound.stopped else ())),
+            capped=(*result.capped, *((BOUND_CAP,) if found is not None and found.stopped else ())),
         ),
-        bound=_summary(bound, cost.value(task.span_weight), proved),
+        bound=_summary(found, cost.value(task.span_weight), proved),
         schedule=cost.schedule,
     )
+
+
+def _later(bound: Bound | Callable[[], Bound] | None) -> Callable[[], Bound] | None:
+    """What gives the bound when asked: ``bound`` itself when computed already."""
+    if isinstance(bound, Bound):
+        return lambda: bound
+    return bound
 
 
 def action_names(plan: Plan) -> tuple[str, ...]:
