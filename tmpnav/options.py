@@ -30,6 +30,7 @@ class Overrides:
     search: Search | None = None
     time_budget: float | None = None
     work_budget: int | None = None
+    routing_time: float | None = None
     time_limit: float | None = None
     costs: Costs | None = None
     objective: Objective | None = None
@@ -119,6 +120,7 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
         search=o.search or planner.search,
         time_budget=o.time_budget if o.time_budget is not None else planner.time_budget,
         work_budget=o.work_budget if o.work_budget is not None else planner.work_budget,
+        routing_time=o.routing_time if o.routing_time is not None else planner.routing_time,
         time_limit=o.time_limit if o.time_limit is not None else planner.time_limit,
         costs=o.costs or planner.costs,
         objective=o.objective or planner.objective,

@@ -506,6 +506,9 @@ class PlannerOptions:
     search: Search = "auto"  # exact | anytime | auto (tmpnav.choices)
     time_budget: float | None = None  # s, the anytime search's time cap for the run; None: no cap
     work_budget: int | None = None  # ENHSP sub-problems the anytime search may solve; None: by size
+    #: s, OR-Tools' time limit on the anytime search's first routes; None: a quarter of the
+    #: search's time cap, at most 30 s (tmpnav.task.first_routes)
+    routing_time: float | None = None
     time_limit: float | None = None  # s, the whole run (plan, replan, simulate); None: unbounded
     costs: Costs = "carried"  # carried (the beliefs the robots carry; default) | table (canonical start states)
     objective: Objective = "weighted"  # weighted | cost | makespan (tmpnav.choices)

@@ -621,6 +621,11 @@ PLANNER = Section(
             "anytime search: its budget in work, the ENHSP sub-problems it may solve; it stops earlier when the plan is proved optimal or no neighbourhood improves it, and gives the same plan on any machine (default: 2 per goal room and robot, from 50 to 1000; a replan has a tenth of it, at least 10)",
             default=None,
         ),
+        "routing_time": Field(
+            Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
+            "anytime search: OR-Tools' time limit on its first routes, which its count of solutions (500) should end; where the limit ends them (200 places and 32 robots take about 2 minutes for 500) the plan is the machine's and plan.json says so (default: a quarter of the search's time cap, at most 30 s)",
+            default=None,
+        ),
         "time_budget": Field(
             Number("time", minimum=0.0, exclusive_minimum=True, maximum=MAX_TIMEOUT),
             "anytime search: a time cap for the whole run; past it the search returns its best plan and says that the time cap ended it (a plan of the machine's speed; default: none, the work budget bounds the search)",

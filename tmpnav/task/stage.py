@@ -240,6 +240,7 @@ class AnytimeTask:
             sizes=SearchOptions.sizes if context_free else CARRIED_SIZES,
             span_weight=self.span_weight,
             first_routes=self.first_routes,
+            routing_time=p.routing_time,
         )
 
 
