@@ -1,10 +1,11 @@
 """Work done in a thread beside the run's main thread, its result given where it is asked for.
 
-A run has stretches where its main thread waits or computes while other work could go on:
-the single moves' costs come from the oracle's worker processes while the certified bound
-(tmpnav.planning.bound) needs only the roadmap's shortest paths, and OR-Tools' guided local
-search releases the interpreter while it searches, so the search's two first routings can run
-at once (tmpnav.task.search). :class:`Beside` runs such work in a daemon thread: a run that
+A run has stretches where its main thread waits while other work could go on: OR-Tools' guided
+local search releases the interpreter's lock while it searches, so the search's two first
+routings run at once (tmpnav.task.search). Work that holds the lock (Python code) belongs in a
+process instead: beside a main thread that waits often and briefly, it takes the lock in 5 ms
+turns and each short wait waits a turn (tmpnav.planning.bound.LaterBound). :class:`Beside` runs
+such work in a daemon thread: a run that
 ends early (its time limit, an error, a signal) does not wait for it, and an error it raises
 is raised in the thread that asks for its result. The work must not touch the run's stage
 times (their clock is the main thread's) or anything else the main thread writes meanwhile."""

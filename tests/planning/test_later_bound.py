@@ -1,8 +1,9 @@
-"""The certified bound computed beside the search (tmpnav.planning.bound.LaterBound)."""
+"""The certified bound computed beside the search, in a process of its own
+(tmpnav.planning.bound.LaterBound)."""
 
 from __future__ import annotations
 
-import threading
+import os
 from types import SimpleNamespace
 
 import pytest
@@ -16,31 +17,42 @@ def _run() -> SimpleNamespace:
     return SimpleNamespace(canonical=SimpleNamespace(oracle=SimpleNamespace(ctx=None)), times=StageTimes())
 
 
-def test_the_bound_is_computed_in_a_thread_and_waited_for_as_the_bound_stage(monkeypatch):
-    release, threads = threading.Event(), []
-
-    def certified(run):
-        threads.append(threading.current_thread().name)
-        release.wait(5.0)
-        return Bound(12.5, "flow")
-
+@pytest.fixture
+def no_library(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(planning_bound, "library", lambda ctx: None)
-    monkeypatch.setattr(planning_bound, "certified_bound", certified)
+
+
+def test_the_bound_is_computed_in_a_forked_process_and_waited_for_as_the_bound_stage(monkeypatch, no_library):
+    here = os.getpid()
+    monkeypatch.setattr(planning_bound, "certified_bound", lambda run: Bound(float(os.getpid() != here), "flow"))
     run = _run()
     later = planning_bound.LaterBound(run)
-    threading.Timer(0.2, release.set).start()
-    assert later().value == 12.5
-    assert threads == ["tmpnav-bound"]
-    assert run.times.seconds["bound"] >= 0.1  # the wait
-    assert later() is later()  # computed once
+    later.start()
+    assert later().value == 1.0  # computed in another process
+    assert "bound" in run.times.seconds
+    assert later() is later()  # asked for once
 
 
-def test_an_error_of_the_bound_is_raised_where_it_is_asked_for(monkeypatch):
+def test_a_bound_never_started_is_computed_in_line(monkeypatch, no_library):
+    here = os.getpid()
+    monkeypatch.setattr(planning_bound, "certified_bound", lambda run: Bound(float(os.getpid() != here), "flow"))
+    assert planning_bound.LaterBound(_run())().value == 0.0
+
+
+def test_an_error_of_the_bound_is_raised_where_it_is_asked_for(monkeypatch, no_library):
     def certified(run):
         raise ValueError("no floors")
 
-    monkeypatch.setattr(planning_bound, "library", lambda ctx: None)
     monkeypatch.setattr(planning_bound, "certified_bound", certified)
     later = planning_bound.LaterBound(_run())
+    later.start()
     with pytest.raises(ValueError, match="no floors"):
+        later()
+
+
+def test_a_bound_process_that_dies_is_an_error_not_a_hang(monkeypatch, no_library):
+    monkeypatch.setattr(planning_bound, "certified_bound", lambda run: os._exit(3))
+    later = planning_bound.LaterBound(_run())
+    later.start()
+    with pytest.raises(RuntimeError, match="exit code 3"):
         later()

@@ -3,14 +3,20 @@
 from __future__ import annotations
 
 import math
+import multiprocessing
+import multiprocessing.process
+import os
+import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from functools import partial
+from multiprocessing.connection import Connection
+from typing import TypeAlias
 
 from tmpnav.attachment.floors import FloorsStopped, motion_floors
-from tmpnav.beside import Beside
-from tmpnav.oracle.executors import library
+from tmpnav.beside import WAIT_SLICE
+from tmpnav.lifetime import signals_held
+from tmpnav.oracle.executors import die_with_parent, library
 from tmpnav.planning.run import TaskRun
 from tmpnav.task.bound import CUT_ROUNDS, Bound, lower_bound, makespan_bound
 from tmpnav.types import CostTable, Goals
@@ -72,24 +78,84 @@ def certified_bound(run: TaskRun) -> Bound:
     return _said(replace(bound, value=value, relaxation=relaxation, parts=parts, stopped=bound.stopped or work.stopped))
 
 
+#: the bound's process's pipe: ("bound", Bound) or ("error", an exception or its words)
+_Pipe: TypeAlias = "Connection[tuple[str, object], tuple[str, object]]"
+
+
 class LaterBound:
-    """:func:`certified_bound` computed beside what the run does first (tmpnav.beside: the single
-    moves' costs, in the oracle's workers, and OR-Tools' first routes): with carried costs it
-    reads only the roadmap's shortest paths (the moves' motion floors), no oracle. The search
-    asks for it when it first tells of a plan (:meth:`__call__`), and the run's ``bound`` stage
-    is the time it then waits for it. Its value is the one computed in line, so is the plan."""
+    """:func:`certified_bound` computed in a process of its own, forked once the search has its
+    single moves' costs (:meth:`start`): with carried costs it reads only the roadmap's shortest
+    paths (the moves' motion floors), no oracle, and from then on the run works on one core
+    (OR-Tools' first routes, the first plans' pricing) while the other is idle. The search asks
+    for it when it first tells of a plan (:meth:`__call__`); the run's ``bound`` stage is the
+    time it then waits for it. Its value is the one computed in line, so is the plan.
+
+    A process, not a thread: the bound's Python work beside the main thread took the
+    interpreter's lock from it in 5 ms turns, and the main thread's many short waits (the
+    oracle's results, OR-Tools' callbacks) each waited a turn (office, 100 rooms, 16 robots: the
+    run 6 s slower, not 16 s faster). Where forking is not available it is computed in line."""
 
     def __init__(self, run: TaskRun):
-        library(run.canonical.oracle.ctx)  # the process' motion library made here, not by two threads
-        self._times = run.times
-        self._bound = Beside(partial(certified_bound, run), "tmpnav-bound")
+        self._run = run
+        self._value: Bound | None = None
+        self._process: multiprocessing.process.BaseProcess | None = None
+        self._reader: _Pipe | None = None
+
+    def start(self) -> None:
+        """Fork the bound's process (once; nothing where the platform cannot fork)."""
+        if self._process is not None or "fork" not in multiprocessing.get_all_start_methods():
+            return
+        library(self._run.canonical.oracle.ctx)  # the paths' library, made before the fork
+        fork = multiprocessing.get_context("fork")
+        self._reader, writer = fork.Pipe(duplex=False)
+        process = fork.Process(target=_forked, args=(self._run, writer, os.getpid()), name="tmpnav-bound", daemon=True)
+        with signals_held():
+            process.start()
+        writer.close()
+        self._process = process
 
     def __call__(self) -> Bound:
-        """The bound, once computed (the wait timed as the ``bound`` stage)."""
-        if not self._bound.done:
-            with self._times.timed("bound"):
-                return self._bound()
-        return self._bound()
+        """The bound (the wait for its process timed as the ``bound`` stage)."""
+        if self._value is None:
+            with self._run.times.timed("bound"):
+                self._value = self._wait() if self._process is not None else certified_bound(self._run)
+        return self._value
+
+    def _wait(self) -> Bound:
+        reader, process = self._reader, self._process
+        assert reader is not None and process is not None
+        try:
+            # in slices: a signal the kernel hands to another thread is run between them
+            while not reader.poll(WAIT_SLICE):
+                pass
+            kind, value = reader.recv()
+        except EOFError:  # its end of the pipe closed with nothing sent: the process died
+            process.join()
+            raise RuntimeError(f"the lower bound's process ended without one (exit code {process.exitcode})") from None
+        finally:
+            reader.close()
+            if process.is_alive():
+                process.kill()
+            process.join()
+        if kind == "error":
+            raise value if isinstance(value, BaseException) else RuntimeError(f"the lower bound failed: {value}")
+        assert isinstance(value, Bound)
+        return value
+
+
+def _forked(run: TaskRun, writer: _Pipe, parent: int) -> None:
+    """The bound's process: :func:`certified_bound`, sent to the run (or its error, in words)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the run's business; it ends this process
+    die_with_parent(parent)
+    try:
+        writer.send(("bound", certified_bound(run)))
+    except Exception as error:  # the run raises it where the bound is asked for
+        try:
+            writer.send(("error", error))
+        except Exception:  # an error that does not pickle: in words
+            writer.send(("error", f"{type(error).__name__}: {error}"))
+    finally:
+        writer.close()
 
 
 def stop_at_share(left: float) -> Callable[[], bool] | None:

@@ -236,6 +236,8 @@ class AnytimeSearch:
     def _run(self, seeds: dict[str, Plan] | None) -> SearchResult:
         with self.times.timed("oracle"):
             singles = self.model.singles(self.goals)
+        if self.watch.costed is not None:
+            self.watch.costed()
         self.singles = singles
         self.near = Closeness(singles, self.model.start_location, self.model.robots)
         taken = set(self.goals.all_rooms) | set(self.model.start_location.values())

@@ -36,15 +36,18 @@ class SearchRun:
     progress: SearchProgress | None = None
     #: the lower bound told with every event, asked for at the first (it may still be computing)
     bound: Callable[[], float] | None = None
+    #: called once the single moves are costed (the run starts computing its bound then)
+    costed: Callable[[], None] | None = None
     #: ENHSP's plans of the sub-problems solved so far, by their PDDL text (domain, problem)
     #: (``replace`` keeps the same dict), see :meth:`AnytimeSearch._known`
     solved: dict[tuple[str, str], list[Step] | None] = field(default_factory=dict, compare=False, hash=False)
     #: the run's time limit (tmpnav.deadline): past it the search returns its best plan
     deadline: Deadline = field(default_factory=Deadline, compare=False, hash=False)
 
-    def bounded(self, bound: Callable[[], float] | None) -> SearchRun:
-        """The same run, telling the value ``bound`` gives with its events."""
-        return replace(self, bound=bound)
+    def bounded(self, bound: Callable[[], float] | None, costed: Callable[[], None] | None = None) -> SearchRun:
+        """The same run, telling the value ``bound`` gives with its events, and calling
+        ``costed`` once the single moves are costed."""
+        return replace(self, bound=bound, costed=costed)
 
     def note(self, best: float, what: str) -> None:
         """Tell of an event: the run's time (the run's one clock), the best cost, the bound."""

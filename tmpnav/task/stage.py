@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 from tmpnav.errors import UnsolvableError
 from tmpnav.results import BoundSummary, Schedule, SearchSummary, StageTimes, TaskCounts, TaskResult
@@ -261,23 +262,33 @@ def warm_up_searches(planner: str, encoding: str, span_weight: float, min_gain: 
     solve.warm_up(planner, SearchOptions.parallel, sample.domain, sample.problem)
 
 
+class PendingBound(Protocol):
+    """A lower bound computed beside the search: started once the single moves are costed, and
+    given (waited for) when first asked (tmpnav.planning.bound.LaterBound)."""
+
+    def start(self) -> None: ...
+
+    def __call__(self) -> Bound: ...
+
+
 def plan_anytime(
     task: AnytimeTask,
     run: SearchRun,
     budget: float,
-    bound: Bound | Callable[[], Bound] | None = None,
+    bound: Bound | PendingBound | None = None,
     seeds: dict[str, Plan] | None = None,
     work: int | None = None,
 ) -> TaskResult:
     """The anytime search's plan (:mod:`tmpnav.task.search`) of ``task`` within ``work``
     sub-problems and a time cap of ``budget`` seconds, from the cheapest of OR-Tools' routes and
-    the ``seeds``; ``bound``, a certified lower bound on every plan's cost (or what gives it when
-    first asked: one computed beside the search), can prove a plan optimal and gives the gap."""
+    the ``seeds``; ``bound``, a certified lower bound on every plan's cost (or one computed beside
+    the search from when the single moves are costed), can prove a plan optimal and gives the gap."""
     later = _later(bound)
     proves = None if later is None else (lambda cost: later().proves_optimal(cost))
     told = None if later is None else (lambda: later().value)
+    costed = None if bound is None or isinstance(bound, Bound) else bound.start
     options = task.options(budget, work)
-    result = search(task.model, task.goals, options, run.bounded(told), proves, seeds, task.executed)
+    result = search(task.model, task.goals, options, run.bounded(told, costed), proves, seeds, task.executed)
     found = None if later is None else later()
     plan, cost = result.plan, result.cost
     proved = result.stopped == "optimal"
@@ -308,7 +319,7 @@ def plan_anytime(
     )
 
 
-def _later(bound: Bound | Callable[[], Bound] | None) -> Callable[[], Bound] | None:
+def _later(bound: Bound | PendingBound | None) -> Callable[[], Bound] | None:
     """What gives the bound when asked: ``bound`` itself when computed already."""
     if isinstance(bound, Bound):
         return lambda: bound
