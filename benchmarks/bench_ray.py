@@ -19,8 +19,12 @@ stays (one machine's cores, no network). Ray's own start is not counted (the clu
 already), nor what a worker does once per site: its first task imports tmpnav and loads its
 compiled kernels (about 40 s here), and the first block of a site builds the site's motion
 library (the map's visibility and scan tables: seconds), which the worker keeps for the site's
-next runs. Each cluster plans the scenario once first, in a cache folder of its own, untimed:
-the timed runs are those of a cluster that has seen the site, as a fleet's cluster would.
+next runs. Each cluster plans a scenario once first, in a cache folder of its own, untimed
+(``--warm-up``: the scenario itself by default, so that the timed runs are those of a cluster
+that has seen the site, as a fleet's cluster would; a small scenario where planning the site
+twice would take too long, so that only the workers' start is left out).
+``--plan-args`` are given to every ``tmpnav plan`` (a large site: ``--routing-time 600`` so that
+OR-Tools' count of solutions, not the machine's speed, ends its first routes).
 Writes ``<name>.txt``; the machine should be otherwise idle (the load is recorded).
 """
 
@@ -79,7 +83,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenario", default="configs/building-20.yaml")
     parser.add_argument("-o", "--output", type=Path, required=True)
+    parser.add_argument("--warm-up", help="the scenario each cluster plans first, untimed (default: --scenario)")
+    parser.add_argument("--plan-args", default="", help="more arguments of every tmpnav plan, one string")
     args = parser.parse_args()
+    more = args.plan_args.split()
+    warm = args.warm_up or args.scenario
     temp = tempfile.mkdtemp(prefix="tmpnav-ray-")
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -90,18 +98,17 @@ def main() -> None:
     docs: dict[str, dict[str, Any]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         try:
+            on_ray = ["--executor", "ray", "--ray-address", address, *more]
             ray("start", "--head", f"--port={port}", "--include-dashboard=false", f"--temp-dir={temp}", *common)
-            docs["ray, 1 worker"] = plan(
-                args.scenario, Path(tmp), "ray1", ["--executor", "ray", "--ray-address", address]
-            )
+            plan(warm, Path(tmp), "warm1", on_ray)
+            docs["ray, 1 worker"] = plan(args.scenario, Path(tmp), "ray1", on_ray)
             ray("start", f"--address={address}", *common)
-            docs["ray, 2 workers"] = plan(
-                args.scenario, Path(tmp), "ray2", ["--executor", "ray", "--ray-address", address]
-            )
+            plan(warm, Path(tmp), "warm2", on_ray)
+            docs["ray, 2 workers"] = plan(args.scenario, Path(tmp), "ray2", on_ray)
         finally:
             subprocess.run([str(RAY), "stop", "--force"], env=ENV, capture_output=True, timeout=300)
             shutil.rmtree(temp, ignore_errors=True)
-        docs["local processes, 2 workers"] = plan(args.scenario, Path(tmp), "local", ["--workers", "2"])
+        docs["local processes, 2 workers"] = plan(args.scenario, Path(tmp), "local", ["--workers", "2", *more])
     plans = []
     for doc in docs.values():
         plain = without_timings({k: v for k, v in doc.items() if k != "command_s"})
@@ -110,7 +117,8 @@ def main() -> None:
     same = all(p == plans[0] for p in plans)
     lines = [
         f"{args.scenario}: the oracle on a two-node Ray cluster ({platform.node()}, {os.cpu_count()} cores, "
-        f"load {load:.1f} at the start, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())})",
+        f"load {load:.1f} at the start, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
+        f"warm-up {warm}; plan arguments: {' '.join(more) or 'none'})",
         f"  the same plan.json (timings and cache folder aside) all three ways: {'yes' if same else 'NO'}",
         "  run | oracle stage s | tmpnav total s | whole command s | move costs computed",
     ]
