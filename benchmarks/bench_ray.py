@@ -94,7 +94,7 @@ def main() -> None:
         port = s.getsockname()[1]
     address = f"127.0.0.1:{port}"
     common = ("--node-ip-address=127.0.0.1", "--num-cpus=1", "--disable-usage-stats")
-    load = os.getloadavg()[0]
+    load, began = os.getloadavg()[0], time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     docs: dict[str, dict[str, Any]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         try:
@@ -117,7 +117,7 @@ def main() -> None:
     same = all(p == plans[0] for p in plans)
     lines = [
         f"{args.scenario}: the oracle on a two-node Ray cluster ({platform.node()}, {os.cpu_count()} cores, "
-        f"load {load:.1f} at the start, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
+        f"load {load:.1f} at the start, {began}; "
         f"warm-up {warm}; plan arguments: {' '.join(more) or 'none'})",
         f"  the same plan.json (timings and cache folder aside) all three ways: {'yes' if same else 'NO'}",
         "  run | oracle stage s | tmpnav total s | whole command s | move costs computed",
