@@ -5,10 +5,10 @@ local search releases the interpreter's lock while it searches, so the search's 
 routings run at once (tmpnav.task.search). Work that holds the lock (Python code) belongs in a
 process instead: beside a main thread that waits often and briefly, it takes the lock in 5 ms
 turns and each short wait waits a turn (tmpnav.planning.bound.LaterBound). :class:`Beside` runs
-such work in a daemon thread: a run that
-ends early (its time limit, an error, a signal) does not wait for it, and an error it raises
-is raised in the thread that asks for its result. The work must not touch the run's stage
-times (their clock is the main thread's) or anything else the main thread writes meanwhile."""
+such work in a daemon thread: a run that ends early (its time limit, an error, a signal) does
+not wait for it, and an error it raises is raised in the thread that asks for its result. The
+work must not touch the run's stage times (their clock is the main thread's) or anything else
+the main thread writes meanwhile."""
 
 from __future__ import annotations
 
@@ -39,10 +39,6 @@ class Beside(Generic[T]):
             self._error = error
         finally:
             self._done.set()
-
-    @property
-    def done(self) -> bool:
-        return self._done.is_set()
 
     def __call__(self) -> T:
         # in slices: a signal the kernel hands to another thread is run by the main thread

@@ -64,7 +64,7 @@ def anytime_carried(
     anytime = AnytimeTask(run.carried, run.goals, run.planner, run.span_weight, executed, routes)
     _warm_up(run, anytime)
     seeds = {**_incumbent(run), **(seeds or {})}
-    # the bound is computed beside the first costs and routes (its motion floors need no oracle)
+    # the bound: computed beside the first routes and plans (its motion floors need no oracle)
     bound = floor if floor is not None else LaterBound(run)
     # a replan starts from its incumbent: the exact search of the table is not budgeted (3-6 s
     # for 3 rooms and 4 robots, against a replan's 1-2 s)

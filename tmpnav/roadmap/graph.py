@@ -7,7 +7,6 @@ they pass close to obstacles (:func:`safe_weights`), so that paths keep clear of
 from __future__ import annotations
 
 import hashlib
-import threading
 from collections import OrderedDict
 from collections.abc import Callable
 from functools import cached_property
@@ -164,31 +163,26 @@ class _Shared:
     shared by every :class:`RoadmapGraph` of the same grown roadmap and weights in this process:
     a planning service revises plan after plan of one site, each revision's roadmap the site's
     with other sources (Roadmap.sources), and no path between the grown roadmap's nodes passes
-    through a source. Least recently used first out, past :data:`SHARED_BYTES`. Threads share it
-    (the run's bound is computed beside its search, tmpnav.planning.bound.LaterBound): a lock
-    keeps each reading and writing whole."""
+    through a source. Least recently used first out, past :data:`SHARED_BYTES`."""
 
     def __init__(self, limit: int):
         self.limit, self.size = limit, 0
         self.items: OrderedDict[tuple[object, ...], tuple[np.ndarray, ...]] = OrderedDict()
-        self._lock = threading.Lock()
 
     def get(self, key: tuple[object, ...]) -> tuple[np.ndarray, ...] | None:
-        with self._lock:
-            found = self.items.get(key)
-            if found is not None:
-                self.items.move_to_end(key)
-            return found
+        found = self.items.get(key)
+        if found is not None:
+            self.items.move_to_end(key)
+        return found
 
     def put(self, key: tuple[object, ...], arrays: tuple[np.ndarray, ...]) -> None:
-        with self._lock:
-            if key in self.items:
-                return
-            self.items[key] = arrays
-            self.size += sum(a.nbytes for a in arrays)
-            while self.size > self.limit and len(self.items) > 1:
-                _, gone = self.items.popitem(last=False)
-                self.size -= sum(a.nbytes for a in gone)
+        if key in self.items:
+            return
+        self.items[key] = arrays
+        self.size += sum(a.nbytes for a in arrays)
+        while self.size > self.limit and len(self.items) > 1:
+            _, gone = self.items.popitem(last=False)
+            self.size -= sum(a.nbytes for a in gone)
 
 
 _SHARED = _Shared(SHARED_BYTES)

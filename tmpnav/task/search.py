@@ -190,8 +190,8 @@ class AnytimeSearch:
         building-4robots with the AMCL model, on RPP's motions with sharp corners, converged at
         583.5 with r3 on 2 rooms from the weighted routes, and at 562.3 with every robot on 4-6
         rooms from these (tmpnav.task.objectives). Computed beside the first routing (OR-Tools
-        searches without the interpreter's lock: office, 100 rooms, 16 robots, 7 s of the two
-        routings' 16 s), each routing's own solutions as in line; None where there is none."""
+        searches without the interpreter's lock), each routing's own solutions as in line; None
+        where there is none."""
         weight = self.options.span_weight
         if not weight or weight >= MAKESPAN_WEIGHT or len(self.model.robots) < 2 or UNDER_WAY in seeds:
             return None
