@@ -170,3 +170,31 @@ def test_against_the_walls_a_robot_sees_the_kernel_prices_the_local_error(low: f
     assert local.risk[0, 0] == pytest.approx(min(p[1], p[0] + x[0]) + x[1:].sum(), rel=1e-12)
     tighter = propagate_sequences(replace(batch, ekf=batch.ekf._replace(local_var=0.02**2, local_rho=rho)))
     assert tighter.risk[0, 0] <= local.risk[0, 0]
+
+
+@pytest.mark.parametrize("local", [False, True])
+def test_the_localisers_failures_add_their_rate_along_the_path_driven(local: bool) -> None:
+    """localiser.failure_rate: each driving step's p_t and X_t grow by hazard times its length
+    (risk.failure_shares), so a move's bound by hazard times the path it drives; the kernel's
+    are the reference's, the beliefs are untouched."""
+    T, L, hazard = 12, 2, 2e-3
+    margins = np.linspace(0.6, 0.1, T + 1)
+    motion = _motion(T, L, margins, turn=0.2)
+    batch = _batch(motion, [0], [0], T, L)
+    if local:
+        batch = replace(batch, ekf=batch.ekf._replace(local_var=0.04**2, local_rho=0.8))
+    without = propagate_sequences(batch)
+    out = propagate_sequences(replace(batch, ekf=batch.ekf._replace(hazard=hazard)))
+    np.testing.assert_array_equal(out.last_covs, without.last_covs)
+    f = risk.failure_shares(motion.poses[:, :2], hazard)
+    np.testing.assert_allclose(f, hazard * 0.1)  # 0.1 m a step
+    np.testing.assert_allclose(out.step_risk[1:, 0, 0], np.minimum(1.0, without.step_risk[1:, 0, 0] + f), rtol=1e-12)
+    np.testing.assert_allclose(out.step_risk[1:, 0, 1], without.step_risk[1:, 0, 1] + f, rtol=1e-12)
+    assert out.risk[0, 0] == pytest.approx(without.risk[0, 0] + hazard * 0.1 * T, rel=1e-9)
+    drove = np.ones(T + 1, dtype=bool)
+    drove[0] = False
+    assert risk.running_bound(out.step_risk[:, 0], drove)[-1] == pytest.approx(out.risk[0, 0], rel=1e-12)
+    if not local:  # the reference move bound takes the same rate
+        p, x, _ = _expected(out.last_means, out.last_covs, motion.controls, _reach(margins))
+        p, x = np.concatenate([p[:1], np.minimum(1.0, p[1:] + f)]), x + f
+        assert out.risk[0, 0] == pytest.approx(min(p[1], p[0] + x[0]) + x[1:].sum(), rel=1e-12)

@@ -271,4 +271,5 @@ def test_the_kernel_unpacks_the_named_tuples_in_field_order() -> None:
         "fuse_others",
         "local_var",
         "local_rho",
+        "hazard",
     )

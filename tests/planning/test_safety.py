@@ -73,3 +73,19 @@ def test_the_riskiest_point_is_where_the_bound_is_made_and_what_would_help_there
     text = what_would_help(report, point)
     assert f"{point.robot}'s move {point.origin} -> {point.target}" in text
     assert "what would help there: a landmark or a partner near" in text and "a range sensor" in text
+
+
+def test_where_the_localisers_failures_make_the_bound_the_advice_says_so(tmp_path: Path) -> None:
+    """With a localiser that fails often along its paths (failure_rate), a move's bound is mostly
+    those failures: the advice says how much, and names shorter moves and the rate."""
+    path = tmp_path / "s.yaml"
+    doc = four_rooms(0)
+    doc["models"]["range_sensor"]["localiser"] = {"model": "amcl", "failure_rate": 0.01}
+    path.write_text(yaml.safe_dump(doc))
+    report = plan(path, PlanOptions.of(cache_dir=tmp_path / "c", max_risk=0.001, accept_risk=True))
+    point = riskiest_point(report)
+    assert point is not None and point.bound == pytest.approx(report.worst_risk)
+    assert 0.5 * point.bound <= point.failures <= point.bound * 1.2  # a path's metres at 1% each
+    text = what_would_help(report, point)
+    assert "of it the localiser's failures along its path" in text
+    assert "shorter moves, or a localiser that fails less often" in text and "failure_rate" in text

@@ -470,7 +470,8 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
     h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk, h_step = hist
     work, PHt, K, H, cols, y, g, Cx, masses, qs, support = scratch
     m_off, m_T, ctrl, pose, vis, stream, reach, reach_row, scan_row, scan_table = motions  # MotionArrays' fields
-    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds, others, lvar, lrho = ekf  # EKFConstants
+    # EKFConstants' fields
+    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds, others, lvar, lrho, hz = ekf
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
     priced = reach.shape[1] > 1
     for k in range(seqs.restart[c], seqs.horizon[c]):
@@ -544,6 +545,9 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
                 row = m_off[m] + m + t
                 prev, here = reach_row[row - 1], reach_row[row]  # their rows of the reach table
                 p, x = _step_risk(prev, ap, bp, dp, here, a, b, d, C00, C01, C10, C11, reach, masses, qs, support)
+                if hz > 0.0:  # the localiser's failures along the step driven (risk.move_bound's hazard)
+                    f = hz * math.hypot(pose[row, 0] - pose[row - 1, 0], pose[row, 1] - pose[row - 1, 1])
+                    p, x = min(1.0, p + f), x + f
                 h_step[t, i, 0] = p
                 h_step[t, i, 1] = x
                 h_risk[t, i] = h_risk[k, i] + (min(p, h_step[k, i, 0] + x) if t == 1 else x)

@@ -337,6 +337,7 @@ def move_bound(
     grid: OccupancyGrid,
     radius: float,
     clear: np.ndarray | None = None,
+    hazard: float = 0.0,
 ) -> float:
     """P_move = min(1, min(p_1, p_0 + X_1) + sum_{t=2..T} X_t): an upper bound on the probability
     that the robot hits a wall at any of the move's control steps (first passage: the first hit
@@ -344,19 +345,33 @@ def move_bound(
 
     positions: (T+1, 2) nominal positions, the start first (a (T+1, 3) pose array is cut to them);
     covs: (T+1, 3, 3) or (T+1, 2, 2) covariances at the same steps; cross: (T+1, 2, 2)
-    Cov(e_t, e_{t-1}) of the position errors (row 0 unused); radius: m.
+    Cov(e_t, e_{t-1}) of the position errors (row 0 unused); radius: m; ``hazard``: the
+    localiser's failures per metre driven, each step's share f_t = hazard |mu_t - mu_{t-1}|
+    added to its p_t and X_t (:func:`failure_shares`).
     """
     table = SectorReach(grid, clearance(grid) if clear is None else clear, radius)
-    reach = table.at(np.asarray(positions, dtype=float)[..., :2])
+    positions = np.asarray(positions, dtype=float)[..., :2]
+    reach = table.at(positions)
     covs = np.asarray(covs, dtype=float)[..., :2, :2]
-    return _first_passage(covs, np.asarray(cross, dtype=float), reach)
+    return _first_passage(covs, np.asarray(cross, dtype=float), reach, failure_shares(positions, hazard))
 
 
-def _first_passage(covs: np.ndarray, cross: np.ndarray, reach: np.ndarray) -> float:
+def failure_shares(positions: np.ndarray, hazard: float) -> np.ndarray:
+    """f_t = hazard |mu_t - mu_{t-1}| of each step t = 1..T (T,) along nominal positions (T+1, 2):
+    the chance that the localiser fails (a Poisson rate ``hazard`` per metre driven) on that
+    step, at most its length times the rate (docs/models.md, "Localisation failures")."""
+    positions = np.asarray(positions, dtype=float)[..., :2]
+    return hazard * np.hypot(*np.diff(positions, axis=0).T)
+
+
+def _first_passage(covs: np.ndarray, cross: np.ndarray, reach: np.ndarray, fail: np.ndarray | None = None) -> float:
     if covs.shape[0] < 2:
         return 0.0
     p = step_bound(covs, reach)
     x = crossing_bound(covs[:-1], covs[1:], cross[1:], reach[:-1], reach[1:])
+    if fail is not None:
+        p = np.concatenate([p[:1], np.minimum(1.0, p[1:] + fail)])
+        x = x + fail
     return float(min(1.0, min(p[1], p[0] + x[0]) + math.fsum(x[1:])))
 
 
@@ -458,6 +473,18 @@ def separation(delta: float, r_i: float, r_j: float, sigma_i: float, sigma_j: fl
     """s_ij = r_i + r_j + k(delta) (sigma_i + sigma_j) (m): planned means at least this far apart
     keep :func:`pair_bound` at most delta."""
     return r_i + r_j + k_of(delta) * (sigma_i + sigma_j)
+
+
+def rate_limits(events: int, exposure: float, level: float = 0.95) -> tuple[float, float]:
+    """The exact one-sided ``level`` limits (lower, upper) of a Poisson rate seen ``events`` times
+    in ``exposure`` (metres driven, say): chi²_{1-level}(2 events) / (2 exposure) and
+    chi²_{level}(2 (events + 1)) / (2 exposure); (0, inf) without exposure."""
+    from scipy import stats  # imported here, as in clopper_pearson
+
+    if exposure <= 0:
+        return 0.0, math.inf
+    lower = 0.0 if events <= 0 else float(stats.chi2.ppf(1.0 - level, 2 * events)) / (2.0 * exposure)
+    return lower, float(stats.chi2.ppf(level, 2 * (events + 1))) / (2.0 * exposure)
 
 
 def clopper_pearson(hits: int, n: int, level: float = 0.95) -> tuple[float, float]:

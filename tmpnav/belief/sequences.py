@@ -48,6 +48,9 @@ class EKFConstants(NamedTuple):
     #: consecutive steps' errors, exp(-dt / local_time)
     local_var: float
     local_rho: float
+    #: wall hits per metre driven that the collision bound adds to the Gaussian error's
+    #: (ScanModel.hazard, docs/models.md "Localisation failures"; 0: none)
+    hazard: float
 
     @staticmethod
     def of(models: Models, landmarks: np.ndarray) -> EKFConstants:
@@ -68,6 +71,7 @@ class EKFConstants(NamedTuple):
             fuse_others=models.others_fused,
             local_var=local_var,
             local_rho=local_rho,
+            hazard=hazard(models),
         )
 
 
@@ -79,6 +83,12 @@ def local_walls(models: Models) -> tuple[float, float]:
     if sensor is None or not sensor.localiser.local_walls:
         return 0.0, 0.0
     return sensor.localiser.local_std**2, math.exp(-models.dt / sensor.localiser.local_time)
+
+
+def hazard(models: Models) -> float:
+    """:attr:`EKFConstants.hazard` of a scenario's models: its localiser's failures per metre driven."""
+    sensor = models.range_sensor
+    return 0.0 if sensor is None else sensor.localiser.hazard
 
 
 def scan_thresholds(models: Models) -> np.ndarray:

@@ -20,6 +20,14 @@ finds it:
 3. repeat until the quantile is within :data:`TOLERANCE` of 9 or the rounds run out.
 
 The plan is re-made each round: the factor changes the beliefs, and with them the moves.
+
+The same executions count the wall hits the Gaussian error does not explain (AMCL converging
+off the robot's pose, a recovery behaviour backing it off its path): over every round, the
+executions of a move with a wall hit per metre of the moves' planned paths driven, a Poisson
+rate (docs/models.md, "Localisation failures"). The scenario's ``failure_rate`` stays where
+the count agrees with it (within the rate's 95% limits); where the count rejects it, either
+way, the fitted rate is the upper 95% limit. Without a hit it takes about 3 / failure_rate
+metres driven (25 km for the default) to bound the rate below the scenario's.
 """
 
 from __future__ import annotations
@@ -28,13 +36,20 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from tmpnav.belief.risk import rate_limits
 from tmpnav.errors import Problem, ScenarioError
 from tmpnav.execution.consistency import Agreement, overall, planned_nees
 from tmpnav.execution.localisers import Localisation
-from tmpnav.types import ScanModel, ScanModelKind, Scenario
+from tmpnav.execution.moves import queues
+from tmpnav.types import NAV2_AMCL, ScanModel, ScanModelKind, Scenario
+
+if TYPE_CHECKING:
+    from tmpnav.execution.result import ExecutionResult
+    from tmpnav.results import PlanReport
 
 #: the share of driving steps the fitted model keeps within 3 predicted sigma (at most 5% may lie
 #: out; AMCL's errors have long tails, so a higher share would inflate the median step's belief)
@@ -55,6 +70,31 @@ class Round:
     information: float
     agreement: Agreement
     quantile: float  # the NEES's QUANTILE quantile over the driving steps
+    hits: int = 0  # executions of a move with a wall hit
+    metres: float = 0.0  # the moves' planned paths times their executions
+
+
+@dataclass(frozen=True)
+class Failures:
+    """Wall hits per metre driven over the rounds' executions: the count, the exposure, the rate
+    and its upper 95% limit (the fitted ``failure_rate``)."""
+
+    hits: int
+    metres: float
+
+    @property
+    def rate(self) -> float:
+        return self.hits / self.metres if self.metres > 0 else math.nan
+
+    @property
+    def limits(self) -> tuple[float, float]:
+        """The rate's one-sided 95% limits, (lower, upper)."""
+        return rate_limits(self.hits, self.metres)
+
+    def fitted(self, current: float) -> float:
+        """The rate the model takes: ``current`` where the count agrees with it, else the upper limit."""
+        lower, upper = self.limits
+        return min(upper, 1.0) if upper < current or lower > current else current
 
 
 @dataclass(frozen=True)
@@ -64,6 +104,17 @@ class Calibration:
     model: ScanModel
     rounds: tuple[Round, ...]
     localiser: str  # the executing localiser, the site and the true motion noise, in words
+    rate_before: float = 0.0  # the scenario's failure_rate before the fit
+
+    @property
+    def kept_rate(self) -> bool:
+        """The executions' wall hits agree with the scenario's failure_rate, which the model keeps."""
+        return self.model.failure_rate == self.rate_before
+
+    @property
+    def failures(self) -> Failures:
+        """The wall hits per metre driven over every round's executions."""
+        return Failures(sum(r.hits for r in self.rounds), math.fsum(r.metres for r in self.rounds))
 
     def yaml(self, scenario: str) -> str:
         """The result as the scenario takes it (models.range_sensor.localiser), with the rounds as comments."""
@@ -79,11 +130,22 @@ class Calibration:
                 f"# {k:5d}  {r.information:11.4g}  {a.steps:5d}  {100 * a.rms_error:7.1f} cm  {100 * a.own_std:6.1f} cm"
                 f"  {100 * a.planned_std:8.1f} cm  {a.nees:11.2f}  {100 * a.beyond:12.1f}%"
             )
+        f = self.failures
+        lower, upper = f.limits
+        driven = f"{f.metres / 1000:.1f} km" if f.metres >= 1000 else f"{f.metres:.0f} m"
         lines += [
+            f"# wall hits: {f.hits} in {driven} of the moves' paths driven, {f.rate:.3g} per m "
+            f"(95% limits {lower:.3g} to {upper:.3g}); failure_rate "
+            + (
+                f"{m.failure_rate:.3g}: the count agrees with the scenario's (more sessions narrow the limits)"
+                if self.kept_rate
+                else f"{m.failure_rate:.3g}: the upper limit (the count rejects the scenario's {self.rate_before:.3g})"
+            ),
             "# put it under models.range_sensor of the scenario (docs/scenario.md):",
             f"localiser: {{model: amcl, sigma_hit: {m.sigma_hit:g}, z_hit: {m.z_hit:g}, z_rand: {m.z_rand:g}, "
             f"max_beams: {m.max_beams}, update_min_d: {m.update_min_d:g}, update_min_a: {m.update_min_a:g}, "
-            f"information: {m.information:.4g}, lidar_only: {'true' if m.lidar_only else 'false'}}}",
+            f"information: {m.information:.4g}, lidar_only: {'true' if m.lidar_only else 'false'}, "
+            f"failure_rate: {m.failure_rate:.3g}}}",
         ]
         return "\n".join(lines) + "\n"
 
@@ -144,7 +206,8 @@ def calibrate(
         result = execute(report, sessions, seed, workers, localisation)
         described = result.localiser
         rows = np.concatenate(list(result.consistency.values())) if result.consistency else np.zeros((0, 8))
-        r = Round(model.information, overall(result.consistency), nees_quantile(rows))
+        hits, metres = wall_hits_driven(report, result)
+        r = Round(model.information, overall(result.consistency), nees_quantile(rows), hits, metres)
         done.append(r)
         say(
             f"round {k + 1}: information {r.information:.4g}: median NEES {r.agreement.nees:.2f}, "
@@ -154,7 +217,33 @@ def calibrate(
             break
         model = replace(model, information=_next(done))
     best = min(done, key=lambda r: abs(math.log(r.quantile / 9.0)) if r.quantile > 0 else math.inf)
-    return Calibration(replace(model, information=best.information), tuple(done), described)
+    rounds_done = tuple(done)
+    before = sensor.localiser.failure_rate if sensor.localiser.kind is ScanModelKind.AMCL else NAV2_AMCL.failure_rate
+    rate = Calibration(model, rounds_done, described).failures.fitted(before)
+    fitted = replace(model, information=best.information, failure_rate=rate)
+    return Calibration(fitted, rounds_done, described, before)
+
+
+def path_lengths(report: PlanReport) -> dict[tuple[str, int], float]:
+    """(robot, plan step as the executions key it) -> metres of the move's planned path."""
+    return {
+        (robot, move.step): float(np.sum(np.hypot(*np.diff(move.planned_means, axis=0).T)))
+        for robot, moves in queues(report).items()
+        for move in moves
+        if move.planned_means is not None
+    }
+
+
+def wall_hits_driven(report: PlanReport, result: ExecutionResult) -> tuple[int, float]:
+    """The executions of a move with a wall hit, and the metres of the moves' planned paths times
+    their executions, in the first configuration run (the one AMCL runs)."""
+    lengths = path_lengths(report)
+    hits, metres = 0, 0.0
+    for robot, step, walls, _, _ in result.move_rates(result.configs[0]):
+        if (robot, step) in lengths:
+            hits += walls.events
+            metres += lengths[(robot, step)] * walls.sessions
+    return hits, metres
 
 
 def _next(done: list[Round]) -> float:

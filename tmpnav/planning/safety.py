@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from tmpnav.attachment.drift import clock_drift, trajectory_windows
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, seen_std
 from tmpnav.belief.risk import local_errors, position_std, step_bound
-from tmpnav.belief.sequences import local_walls
+from tmpnav.belief.sequences import hazard, local_walls
 from tmpnav.numbers import length, probability
 from tmpnav.results import PlanReport
 
@@ -54,6 +54,7 @@ class RiskyPoint:
     step_bound: float
     door: str | None
     room: str | None
+    failures: float = 0.0  # the part of the move's bound that is the localiser's failures along its path
 
 
 def riskiest_point(report: PlanReport) -> RiskyPoint | None:
@@ -90,6 +91,7 @@ def riskiest_point(report: PlanReport) -> RiskyPoint | None:
         float(per_step[k]),
         _door_near(report, np.array(xy)),
         world.room_of(np.array(xy)),
+        hazard(report.scenario.models) * float(np.sum(np.hypot(*np.diff(means[:, :2], axis=0).T))),
     )
 
 
@@ -127,6 +129,12 @@ def what_would_help(report: PlanReport, point: RiskyPoint) -> str:
         helps.append("less motion noise (models.motion_noise)")
     if point.margin < 0.3:  # the walls leave little room
         helps.append(f"a wider {point.door}" if point.door else "more room there (a path clear of the walls)")
+    if point.failures >= 0.5 * point.bound:  # most of it is the localiser's failures along the path
+        said += f"; {probability(point.failures)} of it the localiser's failures along its path"
+        helps.append(
+            "shorter moves, or a localiser that fails less often (models.range_sensor.localiser.failure_rate, "
+            "counted by tmpnav calibrate)"
+        )
     return f"{said}; what would help there: {', '.join(helps)}"
 
 

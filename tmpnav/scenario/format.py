@@ -341,6 +341,13 @@ LOCALISER = Section(
             "amcl, walls local: correlation time of that error (how long the controller takes to correct it)",
             default=_NAV2.local_time,
         ),
+        "failure_rate": Field(
+            Number(None, minimum=0.0, maximum=1.0, reason="a rate per metre driven"),
+            "amcl: wall hits per metre driven that the Gaussian error does not explain (AMCL off the robot's "
+            "pose, a recovery backing it off its path), added along each move's path to its collision bound; "
+            "fitted by tmpnav calibrate (the upper 95% limit of the rate it counts); 0: the Gaussian error alone",
+            default=_NAV2.failure_rate,
+        ),
     }
 )
 

@@ -377,6 +377,7 @@ def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
         m["walls"],
         m["local_std"],
         m["local_time"],
+        m["failure_rate"],
     )
     return RangeSensor(
         s["range"],
