@@ -176,6 +176,7 @@ def test_robots_with_a_lidar_plan_within_005_by_default_and_say_so(cache_dir: Pa
     doc = json.loads((out / "plan.json").read_text())
     assert doc["risk"]["max_risk"] == 0.05 and max(moves_risk(out)) <= 0.05 and doc["risk"]["plan"] <= 0.05
     assert "every move within max_risk 0.05" in default.stdout
+    assert "the localiser failing 0.000122 times per m driven (failure_rate)" in default.stdout  # nav2's AMCL
     lifted = tmpnav("plan", str(OFFICE), "-q", "--max-risk", "none", "--cache-dir", str(cache_dir))
     assert lifted.returncode == 0 and "chance constraint: none" in lifted.stdout
     paper = tmpnav("plan", str(OFFICE), "-q", "--no-range-sensor", "--cache-dir", str(cache_dir))

@@ -130,6 +130,8 @@ def _sensing_line(report: PlanReport) -> str:
         else f"a {lidar.range:g} m lidar of {lidar.beams} beams against the walls, as nav2's AMCL takes it "
         f"(information share {lidar.localiser.information:g}), alone"
     )
+    if lidar is not None and lidar.localiser.hazard > 0:
+        sensing += f"; the localiser failing {lidar.localiser.hazard:.3g} times per m driven (failure_rate)"
     delta, source = sc.planner.max_risk, sc.planner.max_risk_from
     constraint = "none" if delta is None else f"max_risk {delta:g} ({source})" if source else f"max_risk {delta:g}"
     return f"localisation: {sensing}; chance constraint: {constraint}"
