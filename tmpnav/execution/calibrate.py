@@ -76,11 +76,16 @@ class Round:
 
 @dataclass(frozen=True)
 class Failures:
-    """Wall hits per metre driven over the rounds' executions: the count, the exposure, the rate
-    and its upper 95% limit (the fitted ``failure_rate``)."""
+    """Wall hits per metre driven over the rounds' executions: the count, the exposure (the moves'
+    planned paths times their executions), the rate, its 95% limits and the rate it fits."""
 
     hits: int
     metres: float
+
+    @staticmethod
+    def of(rounds: tuple[Round, ...]) -> Failures:
+        """The count over every round."""
+        return Failures(sum(r.hits for r in rounds), math.fsum(r.metres for r in rounds))
 
     @property
     def rate(self) -> float:
@@ -114,7 +119,7 @@ class Calibration:
     @property
     def failures(self) -> Failures:
         """The wall hits per metre driven over every round's executions."""
-        return Failures(sum(r.hits for r in self.rounds), math.fsum(r.metres for r in self.rounds))
+        return Failures.of(self.rounds)
 
     def yaml(self, scenario: str) -> str:
         """The result as the scenario takes it (models.range_sensor.localiser), with the rounds as comments."""
@@ -219,7 +224,7 @@ def calibrate(
     best = min(done, key=lambda r: abs(math.log(r.quantile / 9.0)) if r.quantile > 0 else math.inf)
     rounds_done = tuple(done)
     before = sensor.localiser.failure_rate if sensor.localiser.kind is ScanModelKind.AMCL else NAV2_AMCL.failure_rate
-    rate = Calibration(model, rounds_done, described).failures.fitted(before)
+    rate = Failures.of(rounds_done).fitted(before)
     fitted = replace(model, information=best.information, failure_rate=rate)
     return Calibration(fitted, rounds_done, described, before)
 
