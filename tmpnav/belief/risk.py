@@ -356,12 +356,17 @@ def move_bound(
     return _first_passage(covs, np.asarray(cross, dtype=float), reach, failure_shares(positions, hazard))
 
 
+def step_lengths(positions: np.ndarray) -> np.ndarray:
+    """|mu_t - mu_{t-1}| (T,) m of each step t = 1..T along positions (T+1, 2) (a pose array is cut to them)."""
+    positions = np.asarray(positions, dtype=float)[..., :2]
+    return np.hypot(*np.diff(positions, axis=0).T)
+
+
 def failure_shares(positions: np.ndarray, hazard: float) -> np.ndarray:
     """f_t = hazard |mu_t - mu_{t-1}| of each step t = 1..T (T,) along nominal positions (T+1, 2):
     the chance that the localiser fails (a Poisson rate ``hazard`` per metre driven) on that
     step, at most its length times the rate (docs/models.md, "Localisation failures")."""
-    positions = np.asarray(positions, dtype=float)[..., :2]
-    return hazard * np.hypot(*np.diff(positions, axis=0).T)
+    return hazard * step_lengths(positions)
 
 
 def _first_passage(covs: np.ndarray, cross: np.ndarray, reach: np.ndarray, fail: np.ndarray | None = None) -> float:

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmpnav.belief.risk import rate_limits
+from tmpnav.belief.risk import rate_limits, step_lengths
 from tmpnav.errors import Problem, ScenarioError
 from tmpnav.execution.consistency import Agreement, overall, planned_nees
 from tmpnav.execution.localisers import Localisation
@@ -232,7 +232,7 @@ def calibrate(
 def path_lengths(report: PlanReport) -> dict[tuple[str, int], float]:
     """(robot, plan step as the executions key it) -> metres of the move's planned path."""
     return {
-        (robot, move.step): float(np.sum(np.hypot(*np.diff(move.planned_means, axis=0).T)))
+        (robot, move.step): float(step_lengths(move.planned_means).sum())
         for robot, moves in queues(report).items()
         for move in moves
         if move.planned_means is not None

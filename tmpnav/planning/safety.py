@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from tmpnav.attachment.drift import clock_drift, trajectory_windows
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, seen_std
-from tmpnav.belief.risk import local_errors, position_std, step_bound
+from tmpnav.belief.risk import local_errors, position_std, step_bound, step_lengths
 from tmpnav.belief.sequences import hazard, local_walls
 from tmpnav.numbers import length, probability
 from tmpnav.results import PlanReport
@@ -91,7 +91,7 @@ def riskiest_point(report: PlanReport) -> RiskyPoint | None:
         float(per_step[k]),
         _door_near(report, np.array(xy)),
         world.room_of(np.array(xy)),
-        hazard(report.scenario.models) * float(np.sum(np.hypot(*np.diff(means[:, :2], axis=0).T))),
+        hazard(report.scenario.models) * float(step_lengths(means).sum()),
     )
 
 
