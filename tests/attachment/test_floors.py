@@ -130,3 +130,23 @@ def test_a_stop_ends_the_floors_and_the_bound_gives_way() -> None:
     assert stop_at_share(float("inf")) is None  # without a limit the bound does all its work
     assert stop_at_share(0.0)() and not stop_at_share(3600.0)()
     assert NO_FLOORS.startswith("none")
+
+
+def test_the_floors_among_some_rooms_are_those_among_all() -> None:
+    """A move's floor does not depend on which other rooms are among the floors' rooms (each row
+    is a least over the origin's and the target's own pose instantiations), so the carried costs
+    compute them among the goal rooms and the robots' start rooms only, not every room of the
+    site: the same floors for those moves, and none for a move outside them (a floor of 0)."""
+    from tmpnav.attachment.carried import _START, room_floors
+
+    scenario, _, carried = carried_problem("building-20.yaml", ("S2", "N5", "S9"), 2)
+    robots = [r.name for r in scenario.robots]
+    every = room_floors(scenario, carried.lib, robots)
+    some = room_floors(scenario, carried.lib, robots, ("S2", "N5", "S9"))
+    assert some and set(some) < set(every)
+    assert all(every[m] == f for m, f in some.items())
+    assert {t for _, o, t in some} == {"S2", "N5", "S9"}
+    assert {o for _, o, _ in some} <= {"S2", "N5", "S9", *(_START.format(r) for r in robots)}
+    assert carried._floor((robots[0], "S2", "N5")) == some[(robots[0], "S2", "N5")] > 0.0
+    outside = next(x for x in carried.lib.roadmap.instantiations if x not in ("S2", "N5", "S9"))
+    assert carried._floor((robots[0], outside, "N5")) == 0.0
