@@ -7,7 +7,7 @@ Each ``--fit`` pairs a plan (its plan.json, as ``tmpnav plan -o`` writes it) wit
 of ``tmpnav simulate --localiser amcl`` executions of that plan: the executions of each move
 with a wall hit, counted against the metres of the move's planned path (the plan's trajectory
 while it drives the move) times its executions. Over all ``--fit`` pairs: k hits in D metres,
-the rate k / D and its exact one-sided 95% limits (tmpnav.belief.risk.rate_limits; the default
+the rate k / D and its exact one-sided 95% limits (tmpnav.belief.intervals.rate_limits; the default
 ``failure_rate`` is the upper one). ``--check`` takes held-out executions of a plan made with
 that rate, pooled over the moves.csv given (runs of the same plan on other seeds, so that runs
 of 200 add up to the 1,000 executions issue 55 asks for), with the sessions.csv beside each:
@@ -28,7 +28,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from tmpnav.belief.risk import clopper_pearson, rate_limits
+from tmpnav.belief.intervals import clopper_pearson, rate_limits
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT = ROOT / "benchmarks" / "amcl" / "failures"

@@ -9,7 +9,7 @@ docs/planning.md, "Chance constraint").
 ``paths``: the test paths of tests/belief/risk_paths.py at several noise levels; per case the
 bound (first passage, sub-cell reach), the bound before them (the union of the per-step bounds
 over the steps, Boole's inequality, with whole cells' reach; for the passing robots' contact,
-the union of the per-instant rule risk.pair_bound), the sampled rate of trajectories that hit
+the union of the per-instant rule pair_risk.pair_bound), the sampled rate of trajectories that hit
 a wall (touch) with its 95% Clopper-Pearson interval, and the two over the rate. ``kernel``: microseconds
 per control step of the compiled EKF along the door path (one robot) and the passing (two
 robots) with and without the bound, 500 simulations from scratch per call, the best of
@@ -33,7 +33,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # the test paths live with the tests
 
 from tests.belief import risk_paths  # noqa: E402
-from tmpnav.belief.risk import clopper_pearson  # noqa: E402
+from tmpnav.belief.intervals import clopper_pearson  # noqa: E402
 from tmpnav.belief.sequences import propagate_sequences  # noqa: E402
 from tmpnav.errors import RiskError  # noqa: E402
 from tmpnav.pipeline import PlanOptions, plan  # noqa: E402

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tmpnav.belief import risk
+from tmpnav.belief import pair_risk, risk
 from tmpnav.belief.controls import pad, path_controls
 from tmpnav.belief.models import (
     landmark_obs_jacobian,
@@ -299,7 +299,7 @@ class Measured:
     """A bound of a drive against trajectories sampled along it: ``what`` ("wall r0", "contact"),
     the bound (first passage), the bound before it (the union of the per-step bounds over the
     steps, Boole's inequality, with reach measured from whole cells; for a contact, of the
-    per-instant rule :func:`tmpnav.belief.risk.pair_bound`), and how many of the ``n`` sampled
+    per-instant rule :func:`tmpnav.belief.pair_risk.pair_bound`), and how many of the ``n`` sampled
     trajectories hit a wall (touch)."""
 
     what: str
@@ -329,9 +329,9 @@ def measure(d: Drive, n: int, how: str = "walk", seed: int = 0) -> list[Measured
         out.append(Measured(f"wall r{i}", bound, min(union, 1.0), hits, n))
     if d.poses.shape[0] == 2:
         rel, cross = d.relative()
-        bound = risk.passing_bound(d.poses[0, :, :2], d.poses[1, :, :2], rel, cross, r, r)
+        bound = pair_risk.passing_bound(d.poses[0, :, :2], d.poses[1, :, :2], rel, cross, r, r)
         union = float(
-            risk.pair_bound(d.poses[0, 1:], d.poses[1, 1:], d.covs[1:, :3, :3], d.covs[1:, 3:, 3:], r, r).sum()
+            pair_risk.pair_bound(d.poses[0, 1:], d.poses[1, 1:], d.covs[1:, :3, :3], d.covs[1:, 3:, 3:], r, r).sum()
         )
         hits = int((np.hypot(*(xs[:, 0] - xs[:, 1]).transpose(2, 0, 1)) < 2 * r).any(axis=1).sum())
         out.append(Measured("contact", bound, min(union, 1.0), hits, n))

@@ -18,7 +18,7 @@ from functools import cache
 import pytest
 
 from tests.belief import risk_paths
-from tmpnav.belief import risk
+from tmpnav.belief import intervals
 
 SAMPLES = {"passing": 100_000}
 #: a rate measured from this many hits is resolved well enough to hold the bound to 10 times it
@@ -57,7 +57,7 @@ def measured(name: str, noise: float, how: str) -> tuple[risk_paths.Measured, ..
 
 
 def _never_below(m: risk_paths.Measured) -> None:
-    lower, upper = risk.clopper_pearson(m.hits, m.n)
+    lower, upper = intervals.clopper_pearson(m.hits, m.n)
     assert m.rate <= m.bound, f"{m.what}: sampled {m.rate:.4g} [{lower:.4g}, {upper:.4g}] > bound {m.bound:.4g}"
 
 

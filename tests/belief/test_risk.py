@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from tests.belief import risk_paths
-from tmpnav.belief import risk
+from tmpnav.belief import intervals, pair_risk, risk
 from tmpnav.world.grid import clearance
 from tmpnav.world.reach import REACH, SECTORS, SectorReach
 
@@ -84,7 +84,7 @@ def test_with_the_same_reach_all_round_an_isotropic_step_is_the_chi_square_tail(
     bound = float(risk.step_bound(cov, reach))
     e = np.random.default_rng(4).multivariate_normal(np.zeros(2), cov, 200_000)
     outside = int((np.hypot(*e.T) >= 0.3).sum())
-    assert risk.clopper_pearson(outside, e.shape[0])[1] <= bound < math.exp(-0.09 / (2 * lam))
+    assert intervals.clopper_pearson(outside, e.shape[0])[1] <= bound < math.exp(-0.09 / (2 * lam))
 
 
 @pytest.mark.parametrize("sigma", [(0.1, 0.1), (0.05, 0.2), (0.2, 0.05)])
@@ -239,14 +239,14 @@ def test_robots_at_the_separation_touch_at_most_delta(delta: float, correlation:
     cov_i = np.array([[0.010, 0.004], [0.004, 0.006]])
     cov_j = np.array([[0.003, -0.001], [-0.001, 0.008]])
     si, sj = float(risk.position_std(cov_i)), float(risk.position_std(cov_j))
-    s = risk.separation(delta, 0.25, 0.3, si, sj)
+    s = pair_risk.separation(delta, 0.25, 0.3, si, sj)
     mu_i, mu_j = np.array([1.0, 2.0]), np.array([1.0, 2.0]) + s * np.array([0.6, 0.8])
     cross = correlation * _factor(cov_i) @ _factor(cov_j).T  # a valid joint covariance for |c| <= 1
     joint = np.block([[cov_i, cross], [cross.T, cov_j]])
     x = np.random.default_rng(2).multivariate_normal(np.concatenate([mu_i, mu_j]), joint, 100_000)
     touch = np.hypot(*(x[:, :2] - x[:, 2:]).T) < 0.25 + 0.3
-    _, upper = risk.clopper_pearson(int(touch.sum()), touch.size)
-    assert risk.pair_bound(mu_i, mu_j, cov_i, cov_j, 0.25, 0.3) == pytest.approx(delta)
+    _, upper = intervals.clopper_pearson(int(touch.sum()), touch.size)
+    assert pair_risk.pair_bound(mu_i, mu_j, cov_i, cov_j, 0.25, 0.3) == pytest.approx(delta)
     assert upper <= delta
 
 
@@ -263,13 +263,13 @@ def test_the_contact_bound_of_the_relative_error_against_sampling(gap: float, co
     joint = np.block([[cov_i, cross], [cross.T, cov_j]])
     x = np.random.default_rng(5).multivariate_normal(np.concatenate([mu_i, mu_j]), joint, 200_000)
     hits = int((np.hypot(*(x[:, :2] - x[:, 2:]).T) < 0.55).sum())
-    bound = float(risk.contact_bound(mu_i, mu_j, rel, 0.25, 0.3))
+    bound = float(pair_risk.contact_bound(mu_i, mu_j, rel, 0.25, 0.3))
     assert hits >= 20 and hits / x.shape[0] <= bound <= 3.0 * hits / x.shape[0]
-    assert bound < float(risk.pair_bound(mu_i, mu_j, cov_i, cov_j, 0.25, 0.3))
+    assert bound < float(pair_risk.pair_bound(mu_i, mu_j, cov_i, cov_j, 0.25, 0.3))
 
 
 def test_a_disc_s_reach_is_its_distance_in_every_sector_that_meets_it() -> None:
-    reach = risk.disc_reach(np.array([1.0, 0.0]), 0.5)  # the disc spans -30..30 degrees
+    reach = pair_risk.disc_reach(np.array([1.0, 0.0]), 0.5)  # the disc spans -30..30 degrees
     angles = (np.arange(SECTORS) + 0.5) * 2 * math.pi / SECTORS
     meets = np.abs(np.mod(angles + math.pi, 2 * math.pi) - math.pi) < math.pi / 6 - math.pi / SECTORS
     assert (
@@ -279,17 +279,17 @@ def test_a_disc_s_reach_is_its_distance_in_every_sector_that_meets_it() -> None:
     )
     ray = np.hypot(np.cos(angles[2]) - 1.0, np.sin(angles[2]))  # a point of the disc's edge lies beyond reach[2]
     assert (reach[2] <= 1.0 and ray <= 0.5 + 1e-9) or reach[2] == REACH
-    assert np.all(risk.disc_reach(np.array([0.1, 0.0]), 0.5) == 0.0)
+    assert np.all(pair_risk.disc_reach(np.array([0.1, 0.0]), 0.5) == 0.0)
 
 
 def test_robots_closer_than_their_radii_are_bounded_by_one_and_still_ones_never_touch() -> None:
     cov = np.diag([0.01, 0.01])
-    assert risk.pair_bound(np.zeros(2), np.array([0.4, 0.0]), cov, cov, 0.25, 0.25) == 1.0
-    assert risk.pair_bound(np.zeros(2), np.array([0.6, 0.0]), 0 * cov, 0 * cov, 0.25, 0.25) == 0.0
+    assert pair_risk.pair_bound(np.zeros(2), np.array([0.4, 0.0]), cov, cov, 0.25, 0.25) == 1.0
+    assert pair_risk.pair_bound(np.zeros(2), np.array([0.6, 0.0]), 0 * cov, 0 * cov, 0.25, 0.25) == 0.0
 
 
 def test_clopper_pearson() -> None:
-    assert risk.clopper_pearson(0, 25) == (0.0, pytest.approx(0.1372, abs=1e-4))
-    lo, hi = risk.clopper_pearson(5, 100)
+    assert intervals.clopper_pearson(0, 25) == (0.0, pytest.approx(0.1372, abs=1e-4))
+    lo, hi = intervals.clopper_pearson(5, 100)
     assert (round(lo, 4), round(hi, 4)) == (0.0164, 0.1128)
-    assert risk.clopper_pearson(3, 3)[1] == 1.0
+    assert intervals.clopper_pearson(3, 3)[1] == 1.0

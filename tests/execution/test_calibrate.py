@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 from tests.execution.test_amcl import NEEDS_AMCL
-from tmpnav.belief.risk import rate_limits
+from tmpnav.belief.intervals import rate_limits
 from tmpnav.execution.calibrate import Failures
 from tmpnav.scenario import load
 from tmpnav.types import NAV2_AMCL

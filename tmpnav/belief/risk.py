@@ -13,13 +13,11 @@ beliefs, and tests/belief/test_collision_bound.py holds the two together. In sho
   Gauss-Markov along a path), at most p_t;
 * :func:`move_bound`: P(a hit at any step of a move) <= min(p_1, p_0 + X_1) + sum_{t>=2} X_t
   (first passage), instead of Boole's sum of the p_t over steps that are strongly correlated;
-* :func:`contact_bound`, :func:`passing_bound`: the same for two robots touching, from the
-  covariance of their relative position; :func:`pair_bound` and :func:`separation`, the
-  per-instant rule from each robot's own covariance alone.
+* two robots touching: :mod:`tmpnav.belief.pair_risk`, on the same steps.
 
 Every bound assumes the true position errors are jointly Gaussian with the EKF's covariances
-and cross-covariances (a consistent filter). :func:`clopper_pearson` gives the confidence
-interval that the tests and ``tmpnav simulate`` report for a sampled rate.
+and cross-covariances (a consistent filter). :mod:`tmpnav.belief.intervals` gives the confidence
+intervals that the tests, ``tmpnav simulate`` and ``tmpnav calibrate`` report for sampled rates.
 """
 
 from __future__ import annotations
@@ -29,7 +27,7 @@ import math
 import numpy as np
 
 from tmpnav.world.grid import OccupancyGrid, clearance, footprint_margins
-from tmpnav.world.reach import REACH, SECTORS, SectorReach
+from tmpnav.world.reach import SECTORS, SectorReach
 
 SQRT2 = math.sqrt(2.0)
 #: below this the disc's bound is used as it is (the sectors would not change a sum that matters)
@@ -353,7 +351,7 @@ def move_bound(
     positions = np.asarray(positions, dtype=float)[..., :2]
     reach = table.at(positions)
     covs = np.asarray(covs, dtype=float)[..., :2, :2]
-    return _first_passage(covs, np.asarray(cross, dtype=float), reach, failure_shares(positions, hazard))
+    return first_passage(covs, np.asarray(cross, dtype=float), reach, failure_shares(positions, hazard))
 
 
 def step_lengths(positions: np.ndarray) -> np.ndarray:
@@ -369,7 +367,11 @@ def failure_shares(positions: np.ndarray, hazard: float) -> np.ndarray:
     return hazard * step_lengths(positions)
 
 
-def _first_passage(covs: np.ndarray, cross: np.ndarray, reach: np.ndarray, fail: np.ndarray | None = None) -> float:
+def first_passage(covs: np.ndarray, cross: np.ndarray, reach: np.ndarray, fail: np.ndarray | None = None) -> float:
+    """min(1, min(p_1, p_0 + X_1) + sum_{t>=2} X_t) of an error with covariances ``covs`` (T+1,
+    2, 2), cross-covariances ``cross`` (T+1, 2, 2; row 0 unused) and sector reach ``reach`` (T+1,
+    K) at each step; ``fail`` (T,): each step's localisation failure share, added to its p_t and
+    X_t. The first-passage sum of :func:`move_bound` (and of two robots' passing bound)."""
     if covs.shape[0] < 2:
         return 0.0
     p = step_bound(covs, reach)
@@ -404,102 +406,3 @@ def running_bound(terms: np.ndarray, drove: np.ndarray) -> np.ndarray:
 def plan_bound(moves: list[float]) -> float:
     """A plan's bound: min(1, sum of its moves' bounds) (Boole's inequality over the moves)."""
     return float(min(1.0, math.fsum(moves)))
-
-
-# ---------------------------------------------------------------- two robots
-
-
-def disc_reach(offset: np.ndarray, radius: float) -> np.ndarray:
-    """The sector reach (..., K) of a disc of ``radius`` centred at ``offset`` (..., 2) from the
-    origin: the least distance from the origin to the disc within each sector (capped at
-    :data:`tmpnav.world.reach.REACH`; 0 everywhere when the origin is inside)."""
-    off = np.asarray(offset, dtype=float)[..., None, :]
-    D = np.hypot(off[..., 0], off[..., 1])
-    psi = np.arctan2(off[..., 1], off[..., 0])
-    lo = np.mod(WIDTH * np.arange(SECTORS) - psi + math.pi, 2.0 * math.pi) - math.pi  # each sector's start, from psi
-    hi = lo + WIDTH
-    holds = (lo <= 0.0) & (hi >= 0.0)
-    angle = np.where(holds, 0.0, np.minimum(np.abs(lo), np.abs(hi)))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        side = D * np.sin(angle)
-        near = D * np.cos(angle) - np.sqrt(np.maximum(radius * radius - side * side, 0.0))
-        meets = (side < radius) & (np.cos(angle) > 0.0)
-    out = np.where(meets, np.minimum(near, REACH), REACH)
-    return np.where(radius >= D, 0.0, out)
-
-
-def contact_bound(mu_i: np.ndarray, mu_j: np.ndarray, cov_rel: np.ndarray, r_i: float, r_j: float) -> np.ndarray:
-    """Upper bound on P(robots i and j touch) at one instant, ||x_i - x_j|| < r_i + r_j, from the
-    covariance ``cov_rel`` (..., 2, 2) of the relative position error e_i - e_j (the joint
-    belief's Sigma_ii + Sigma_jj - Sigma_ij - Sigma_ji): :func:`step_bound` of that error against
-    the disc of radius r_i + r_j around mu_j - mu_i (:func:`disc_reach`). mu: (..., 2) m."""
-    gap = np.asarray(mu_j, dtype=float)[..., :2] - np.asarray(mu_i, dtype=float)[..., :2]
-    return step_bound(cov_rel, disc_reach(gap, r_i + r_j))
-
-
-def passing_bound(
-    mu_i: np.ndarray, mu_j: np.ndarray, cov_rel: np.ndarray, cross_rel: np.ndarray, r_i: float, r_j: float
-) -> float:
-    """Upper bound on P(robots i and j touch at any of the steps 1..T), first passage as in
-    :func:`move_bound`: mu (T+1, 2) m, ``cov_rel`` (T+1, 2, 2) the relative error's covariance,
-    ``cross_rel`` (T+1, 2, 2) its Cov(e_t, e_{t-1}) (row 0 unused)."""
-    gap = np.asarray(mu_j, dtype=float)[..., :2] - np.asarray(mu_i, dtype=float)[..., :2]
-    return _first_passage(
-        np.asarray(cov_rel, dtype=float), np.asarray(cross_rel, dtype=float), disc_reach(gap, r_i + r_j)
-    )
-
-
-def pair_bound(
-    mu_i: np.ndarray,
-    mu_j: np.ndarray,
-    cov_i: np.ndarray,
-    cov_j: np.ndarray,
-    r_i: float,
-    r_j: float,
-) -> np.ndarray:
-    """Upper bound on P(robots i and j touch) at one instant from each robot's own covariance.
-
-    m = ||mu_i - mu_j|| - r_i - r_j; P <= 1 if m <= 0, else exp(-m² / (2 (sigma_i + sigma_j)²)),
-    sigma = sqrt(lambda_max(Sigma_xy)). Touching needs ||e|| > m for the relative error
-    e = (x_i - x_j) - (mu_i - mu_j), whose largest standard deviation is at most
-    sigma_i + sigma_j whatever the cross-covariance (std(u·e_i - u·e_j) <= std(u·e_i) + std(u·e_j)).
-
-    mu: (..., 2) m; cov: (..., 3, 3) or (..., 2, 2) m²; radii m. Returns (...,).
-    """
-    gap = np.asarray(mu_i, dtype=float)[..., :2] - np.asarray(mu_j, dtype=float)[..., :2]
-    m = np.hypot(gap[..., 0], gap[..., 1]) - r_i - r_j
-    s = position_std(cov_i) + position_std(cov_j)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tail = np.where(s > 0.0, np.exp(-(m**2) / (2.0 * s**2)), 0.0)
-    return np.where(m <= 0.0, 1.0, tail)
-
-
-def separation(delta: float, r_i: float, r_j: float, sigma_i: float, sigma_j: float) -> float:
-    """s_ij = r_i + r_j + k(delta) (sigma_i + sigma_j) (m): planned means at least this far apart
-    keep :func:`pair_bound` at most delta."""
-    return r_i + r_j + k_of(delta) * (sigma_i + sigma_j)
-
-
-def rate_limits(events: int, exposure: float, level: float = 0.95) -> tuple[float, float]:
-    """The exact one-sided ``level`` limits (lower, upper) of a Poisson rate seen ``events`` times
-    in ``exposure`` (metres driven, say): chi²_{1-level}(2 events) / (2 exposure) and
-    chi²_{level}(2 (events + 1)) / (2 exposure); (0, inf) without exposure."""
-    from scipy import stats  # imported here, as in clopper_pearson
-
-    if exposure <= 0:
-        return 0.0, math.inf
-    lower = 0.0 if events <= 0 else float(stats.chi2.ppf(1.0 - level, 2 * events)) / (2.0 * exposure)
-    return lower, float(stats.chi2.ppf(level, 2 * (events + 1))) / (2.0 * exposure)
-
-
-def clopper_pearson(hits: int, n: int, level: float = 0.95) -> tuple[float, float]:
-    """The exact (Clopper-Pearson) confidence interval of a rate seen ``hits`` times in ``n``
-    trials: (lower, upper), from the beta distribution's quantiles; (0, 1) when n = 0."""
-    from scipy import stats  # imported here: the clock imports this module, and scipy.stats is slow to load
-
-    if n <= 0:
-        return 0.0, 1.0
-    a = 0.5 * (1.0 - level)
-    lo = 0.0 if hits <= 0 else float(stats.beta.ppf(a, hits, n - hits + 1))
-    hi = 1.0 if hits >= n else float(stats.beta.ppf(1.0 - a, hits + 1, n - hits))
-    return lo, hi

@@ -40,7 +40,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from tmpnav.belief.risk import rate_limits, step_lengths
+from tmpnav.belief.intervals import rate_limits
+from tmpnav.belief.risk import step_lengths
 from tmpnav.errors import Problem, ScenarioError
 from tmpnav.execution.consistency import Agreement, overall, planned_nees
 from tmpnav.execution.localisers import Localisation

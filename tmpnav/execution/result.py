@@ -27,7 +27,7 @@ from multiprocessing.connection import Connection
 
 import numpy as np
 
-from tmpnav.belief.risk import clopper_pearson
+from tmpnav.belief.intervals import clopper_pearson
 from tmpnav.errors import TmpnavError
 from tmpnav.execution.consistency import Nees
 from tmpnav.execution.consistency import gather as gather_consistency
