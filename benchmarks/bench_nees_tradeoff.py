@@ -13,7 +13,7 @@ is the default) is planned with --accept-risk and executed ``--sessions`` times 
 on the typical site. Results: ``amcl/tradeoff/NAME.csv`` (k, median NEES, share beyond 3 sigma)
 and the table printed at the end (benchmarks/README.md, "The two consistency targets").
 
-    .venv/bin/python benchmarks/bench_nees_tradeoff.py [--sessions 4] [--only NAME ...]
+    .venv/bin/python benchmarks/bench_nees_tradeoff.py [--sessions 4] [--only NAME ...] [--prediction-noise]
 """
 
 from __future__ import annotations
@@ -48,6 +48,15 @@ def step_nees(path: Path, sessions: int, seed: int, workers: int) -> np.ndarray:
     return nees[np.isfinite(nees)]
 
 
+def with_prediction_noise(path: Path) -> None:
+    """The scenario at ``path`` with its localiser predicting with AMCL's motion model at nav2's defaults."""
+    import yaml
+
+    doc = yaml.safe_load(path.read_text())
+    doc["models"]["range_sensor"]["localiser"]["prediction_noise"] = {}
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+
+
 def curve(nees: np.ndarray) -> list[tuple[float, float, float]]:
     """(k, median NEES, share beyond 3 sigma) with the predicted std scaled by k."""
     return [(float(k), float(np.median(nees) / k**2), float(np.mean(nees / k**2 > 9.0))) for k in SCALES]
@@ -59,15 +68,15 @@ def both_met(rows: list[tuple[float, float, float]]) -> str:
     return f"k {min(ok):.2f}-{max(ok):.2f}" if ok else "none"
 
 
-def plot() -> Path:
-    """amcl/tradeoff/tradeoff.png: each scenario's median NEES and share beyond 3 sigma against k."""
+def plot(folder: Path = OUT) -> Path:
+    """``folder``/tradeoff.png: each scenario's median NEES and share beyond 3 sigma against k."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8))
-    for csv in sorted(OUT.glob("*.csv")):
+    for csv in sorted(folder.glob("*.csv")):
         k, median, beyond = np.loadtxt(csv, delimiter=",", skiprows=1, unpack=True)
         left.plot(k, median, label=csv.stem)
         right.plot(k, 100 * beyond, label=csv.stem)
@@ -85,7 +94,7 @@ def plot() -> Path:
     right.legend(fontsize=8)
     fig.suptitle("nav2's AMCL against the plan's beliefs scaled by k: no k meets both targets on any scenario")
     fig.tight_layout()
-    out = OUT / "tradeoff.png"
+    out = folder / "tradeoff.png"
     fig.savefig(out, dpi=100)
     return out
 
@@ -97,21 +106,30 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--only", nargs="*", default=None)
     parser.add_argument("--plot-only", action="store_true", help="draw tradeoff.png from the CSVs written before")
+    parser.add_argument(
+        "--prediction-noise",
+        action="store_true",
+        help="plan with AMCL's own motion model in the beliefs (localiser.prediction_noise: {}, nav2's defaults); "
+        "results in amcl/tradeoff/prediction-noise/",
+    )
     args = parser.parse_args()
+    folder = OUT / "prediction-noise" if args.prediction_noise else OUT
     if args.plot_only:
-        print(f"wrote {plot()}")
+        print(f"wrote {plot(folder)}")
         return
-    OUT.mkdir(parents=True, exist_ok=True)
+    folder.mkdir(parents=True, exist_ok=True)
     table = []
     with tempfile.TemporaryDirectory() as tmpdir:
         for name, path in scenarios(Path(tmpdir)).items():
             if args.only and name not in args.only:
                 continue
+            if args.prediction_noise:
+                with_prediction_noise(path)
             started = time.perf_counter()
             nees = step_nees(path, args.sessions, args.seed, args.workers)
             rows = curve(nees)
             lines = ["k,median_nees,beyond_3_sigma"] + [f"{k:.4f},{m:.4f},{b:.4f}" for k, m, b in rows]
-            (OUT / f"{name}.csv").write_text("\n".join(lines) + "\n")
+            (folder / f"{name}.csv").write_text("\n".join(lines) + "\n")
             at1 = rows[len(SCALES) // 2]  # k = 1: the model as it plans
             least = next((k for k, _, b in rows if b <= 0.05), float("nan"))
             most = max((k for k, m, _ in rows if m >= 1.0), default=float("nan"))
@@ -125,7 +143,7 @@ def main() -> None:
         "most k with median >=1  both met  time"
     )
     print("\n".join(table))
-    print(f"wrote {plot()}")
+    print(f"wrote {plot(folder)}")
 
 
 if __name__ == "__main__":

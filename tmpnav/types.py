@@ -183,6 +183,22 @@ class ScanModel:
     #: path that the collision bound adds (docs/models.md, "Localisation failures"); fitted by
     #: ``tmpnav calibrate`` as the upper 95% limit of the rate it counts; 0: the Gaussian error alone
     failure_rate: float = 0.0  # 1/m
+    #: ``amcl``: nav2's alpha1..alpha4 (odom_model_type diff), the motion model AMCL spreads its
+    #: particles with; the planned belief then predicts with it (:meth:`belief_noise`) instead of the
+    #: robot's own motion noise. None: the robot's own (models.motion_noise)
+    prediction_noise: tuple[float, float, float, float] | None = None
+
+    def belief_noise(self, own: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+        """alpha1..alpha4 of W(u) (docs/models.md, "Motion noise") that the planned belief of a robot
+        localised this way predicts with: ``own``, the robot's, unless an ``amcl`` localiser names its
+        ``prediction_noise``. nav2's odometry model draws a step's translation with variance alpha3
+        d_trans² + alpha4 d_rot² and its rotation with alpha1 d_rot² + alpha2 d_trans², so per
+        control step (d_trans = v dt, d_rot = omega dt) W(u) = diag(alpha3 v² + alpha4 omega², alpha2
+        v² + alpha1 omega²)."""
+        if self.kind is not ScanModelKind.AMCL or self.prediction_noise is None:
+            return own
+        a1, a2, a3, a4 = self.prediction_noise
+        return (a3, a4, a2, a1)
 
     @property
     def hazard(self) -> float:
@@ -287,6 +303,14 @@ class Models:
         if self.controller == "auto":
             return "rpp" if self.range_sensor is not None else "turn-then-drive"
         return self.controller
+
+    @property
+    def belief_noise(self) -> tuple[float, float, float, float]:
+        """alpha1..alpha4 of W(u) that the planned beliefs predict with: the robots' own
+        ``motion_noise``, or the motion model of the localiser that keeps them
+        (ScanModel.belief_noise). Simulated robots move with ``motion_noise`` either way."""
+        sensor = self.range_sensor
+        return self.motion_noise if sensor is None else sensor.localiser.belief_noise(self.motion_noise)
 
     @property
     def others_fused(self) -> bool:

@@ -216,7 +216,7 @@ def scan_heading_information(models: Models) -> float:
 def heading_floor(models: Models, v: np.ndarray, omega: np.ndarray, information: float) -> np.ndarray:
     """The least heading variance after a step of controls (v, omega), whatever came before
     (the module docstring): rho / (1 + rho I), rho the step's own heading noise (rad^2)."""
-    _, _, a3, a4 = models.motion_noise
+    _, _, a3, a4 = models.belief_noise
     rho = models.dt**2 * (a3 * np.square(v) + a4 * np.square(omega))
     return np.asarray(rho / (1.0 + rho * information))
 
@@ -224,7 +224,7 @@ def heading_floor(models: Models, v: np.ndarray, omega: np.ndarray, information:
 def sigma_rate(models: Models, speed: float, robots: int, landmarks: int) -> float:
     """kappa: c_Sigma >= kappa c_u,drive for every move of a robot driving at most ``speed``,
     among ``robots`` robots and ``landmarks`` landmarks (the module docstring)."""
-    _, _, a3, _ = models.motion_noise
+    _, _, a3, _ = models.belief_noise
     rho_max = models.dt**2 * a3 * speed**2
     information = bearing_information(models, landmarks, robots - 1)
     return models.dt**2 * a3 / (1.0 + rho_max * information)

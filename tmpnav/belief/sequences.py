@@ -59,7 +59,7 @@ class EKFConstants(NamedTuple):
         local_var, local_rho = local_walls(models)
         return EKFConstants(
             dt=models.dt,
-            alphas=np.array(models.motion_noise, dtype=float),
+            alphas=np.array(models.belief_noise, dtype=float),
             Q_landmark=Q_lm,
             chol_landmark=np.linalg.cholesky(Q_lm),
             Q_mutual=Q_mu,

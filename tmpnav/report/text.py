@@ -130,6 +130,9 @@ def _sensing_line(report: PlanReport) -> str:
         else f"a {lidar.range:g} m lidar of {lidar.beams} beams against the walls, as nav2's AMCL takes it "
         f"(information share {lidar.localiser.information:g}), alone"
     )
+    if lidar is not None and lidar.localiser.belief_noise(sc.models.motion_noise) != sc.models.motion_noise:
+        alphas = ", ".join(f"{a:g}" for a in lidar.localiser.prediction_noise or ())
+        sensing += f", predicting with AMCL's motion model (alpha1-4 {alphas}: prediction_noise)"
     if lidar is not None and lidar.localiser.hazard > 0:
         sensing += f"; the localiser failing {lidar.localiser.hazard:.3g} times per m driven (failure_rate)"
     delta, source = sc.planner.max_risk, sc.planner.max_risk_from

@@ -348,6 +348,27 @@ LOCALISER = Section(
             "fitted by tmpnav calibrate (the upper 95% limit of the rate it counts); 0: the Gaussian error alone",
             default=_NAV2.failure_rate,
         ),
+        "prediction_noise": Field(
+            Section(
+                fields={
+                    f"alpha{k}": Field(
+                        Number(None, minimum=0.0, maximum=1.0, reason=NOISE),
+                        f"nav2's alpha{k}: {what}",
+                        default=0.2,
+                    )
+                    for k, what in (
+                        (1, "rotation noise from rotation"),
+                        (2, "rotation noise from translation"),
+                        (3, "translation noise from translation"),
+                        (4, "translation noise from rotation"),
+                    )
+                },
+                absent_is_none=True,
+            ),
+            "amcl: the motion model AMCL spreads its particles with (nav2's alpha1-4, odom_model_type diff; "
+            "{} gives nav2's defaults, 0.2 each); the planned beliefs then predict with it in place of the "
+            "robots' own motion_noise (docs/models.md). Absent: the robots' own",
+        ),
     }
 )
 

@@ -378,6 +378,7 @@ def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
         m["local_std"],
         m["local_time"],
         m["failure_rate"],
+        _nav2_alphas(m["prediction_noise"]),
     )
     return RangeSensor(
         s["range"],
@@ -389,6 +390,12 @@ def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
         s["divergence"],
         localiser,
     )
+
+
+def _nav2_alphas(section: dict[str, Any] | None) -> tuple[float, float, float, float] | None:
+    if section is None:
+        return None
+    return (section["alpha1"], section["alpha2"], section["alpha3"], section["alpha4"])
 
 
 def _display(raw: tuple[Any, ...], doc: YamlDoc) -> str:
