@@ -82,3 +82,39 @@ def test_calibrate_writes_a_localiser_line_with_the_failure_rate(tmp_path: Path)
     scenario = load(scenario_file)
     sensor = scenario.models.range_sensor
     assert sensor is not None and sensor.localiser.hazard == pytest.approx(localiser["failure_rate"])
+
+
+def test_calibrate_keeps_the_prediction_with_amcls_motion_model_at_the_executing_alphas(tmp_path: Path) -> None:
+    """A scenario whose beliefs predict with AMCL's motion model (prediction_noise) is calibrated
+    with it: the fitted line keeps it, at the alphas of the AMCL that executed (--nav2-params)."""
+    pytest.importorskip("amcl", reason=NEEDS_AMCL)
+    doc = yaml.safe_load((ROOT / "configs" / "office-ros.yaml").read_text())
+    doc["map"]["ros"] = str(ROOT / "configs" / doc["map"]["ros"])
+    doc["models"]["range_sensor"]["localiser"] = {"model": "amcl", "prediction_noise": {"alpha1": 0.1}}
+    scenario_file, params, out = tmp_path / "s.yaml", tmp_path / "nav2.yaml", tmp_path / "fit.yaml"
+    scenario_file.write_text(yaml.safe_dump(doc))
+    alphas = {"alpha1": 0.3, "alpha2": 0.1, "alpha3": 0.25, "alpha4": 0.05}
+    params.write_text(yaml.safe_dump({"amcl": {"ros__parameters": alphas}}))
+    run = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "tmpnav",
+            "calibrate",
+            str(scenario_file),
+            *("--nav2-params", str(params), "--sessions", "1", "--rounds", "1"),
+            *("--workers", "1", "-q", "-o", str(out)),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert run.returncode == 0, run.stderr
+    line = next(line for line in out.read_text().splitlines() if line.startswith("localiser:"))
+    localiser = yaml.safe_load(line)["localiser"]
+    assert localiser["prediction_noise"] == alphas
+    doc["models"]["range_sensor"]["localiser"] = localiser
+    scenario_file.write_text(yaml.safe_dump(doc))
+    sensor = load(scenario_file).models.range_sensor
+    assert sensor is not None and sensor.localiser.prediction_noise == (0.3, 0.1, 0.25, 0.05)

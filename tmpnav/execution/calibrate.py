@@ -151,9 +151,17 @@ class Calibration:
             f"localiser: {{model: amcl, sigma_hit: {m.sigma_hit:g}, z_hit: {m.z_hit:g}, z_rand: {m.z_rand:g}, "
             f"max_beams: {m.max_beams}, update_min_d: {m.update_min_d:g}, update_min_a: {m.update_min_a:g}, "
             f"information: {m.information:.4g}, lidar_only: {'true' if m.lidar_only else 'false'}, "
-            f"failure_rate: {m.failure_rate:.3g}}}",
+            f"failure_rate: {m.failure_rate:.3g}{_prediction(m)}}}",
         ]
         return "\n".join(lines) + "\n"
+
+
+def _prediction(m: ScanModel) -> str:
+    """The localiser line's ``prediction_noise`` (nav2's alpha1-4) where the model predicts with AMCL's motion model."""
+    if m.prediction_noise is None:
+        return ""
+    alphas = ", ".join(f"alpha{k}: {a:g}" for k, a in enumerate(m.prediction_noise, 1))
+    return f", prediction_noise: {{{alphas}}}"
 
 
 def nees_quantile(rows: np.ndarray, q: float = QUANTILE) -> float:
@@ -199,10 +207,21 @@ def calibrate(
             ]
         )
     p = localisation.amcl
-    start = sensor.localiser.information if sensor.localiser.kind is ScanModelKind.AMCL else 1.0
-    alone = sensor.localiser.lidar_only
-    model = ScanModel(
-        ScanModelKind.AMCL, p.sigma_hit, p.z_hit, p.z_rand, p.max_beams, p.update_min_d, p.update_min_a, start, alone
+    own = sensor.localiser if sensor.localiser.kind is ScanModelKind.AMCL else None
+    # the executing AMCL's parameters; the scenario's own choices (walls, its prediction with AMCL's
+    # motion model: then the executing AMCL's alphas) carried over
+    model = replace(
+        own or ScanModel(ScanModelKind.AMCL, information=1.0),
+        sigma_hit=p.sigma_hit,
+        z_hit=p.z_hit,
+        z_rand=p.z_rand,
+        max_beams=p.max_beams,
+        update_min_d=p.update_min_d,
+        update_min_a=p.update_min_a,
+        lidar_only=sensor.localiser.lidar_only,
+        prediction_noise=None
+        if own is None or own.prediction_noise is None
+        else (p.alpha1, p.alpha2, p.alpha3, p.alpha4),
     )
     done: list[Round] = []
     described = ""
