@@ -13,7 +13,8 @@ is the default) is planned with --accept-risk and executed ``--sessions`` times 
 on the typical site. Results: ``amcl/tradeoff/NAME.csv`` (k, median NEES, share beyond 3 sigma)
 and the table printed at the end (benchmarks/README.md, "The two consistency targets").
 
-    .venv/bin/python benchmarks/bench_nees_tradeoff.py [--sessions 4] [--only NAME ...] [--prediction-noise]
+    .venv/bin/python benchmarks/bench_nees_tradeoff.py [--sessions 4] [--only NAME ...]
+        [--prediction-noise] [--information F]
 """
 
 from __future__ import annotations
@@ -48,12 +49,17 @@ def step_nees(path: Path, sessions: int, seed: int, workers: int) -> np.ndarray:
     return nees[np.isfinite(nees)]
 
 
-def with_prediction_noise(path: Path) -> None:
-    """The scenario at ``path`` with its localiser predicting with AMCL's motion model at nav2's defaults."""
+def with_localiser(path: Path, prediction_noise: bool, information: float | None) -> None:
+    """The scenario at ``path`` with its localiser predicting with AMCL's motion model at nav2's
+    defaults (``prediction_noise``) and with the information share ``information`` (if given)."""
     import yaml
 
     doc = yaml.safe_load(path.read_text())
-    doc["models"]["range_sensor"]["localiser"]["prediction_noise"] = {}
+    localiser = doc["models"]["range_sensor"]["localiser"]
+    if prediction_noise:
+        localiser["prediction_noise"] = {}
+    if information is not None:
+        localiser["information"] = information
     path.write_text(yaml.safe_dump(doc, sort_keys=False))
 
 
@@ -66,6 +72,11 @@ def both_met(rows: list[tuple[float, float, float]]) -> str:
     """The range of k meeting both targets, in words."""
     ok = [k for k, med, beyond in rows if 1.0 <= med <= 4.0 and beyond <= 0.05]
     return f"k {min(ok):.2f}-{max(ok):.2f}" if ok else "none"
+
+
+def _rows(csv: Path) -> list[tuple[float, float, float]]:
+    k, median, beyond = np.loadtxt(csv, delimiter=",", skiprows=1, unpack=True)
+    return list(zip(k.tolist(), median.tolist(), beyond.tolist(), strict=True))
 
 
 def plot(folder: Path = OUT) -> Path:
@@ -87,12 +98,14 @@ def plot(folder: Path = OUT) -> Path:
         ax.set_xscale("log")
         ax.set_xticks([0.25, 0.5, 1.0, 2.0, 4.0], ["0.25", "0.5", "1", "2", "4"], minor=False)
         ax.set_xticks([], minor=True)
-        ax.set_xlabel("k: the plan's predicted std scaled by (1: the shipped AMCL model)")
+        ax.set_xlabel("k: the plan's predicted std scaled by (1: the model as it plans)")
         ax.set_ylabel(what)
         ax.grid(True, which="both", alpha=0.3)
     left.set_yscale("log")
     right.legend(fontsize=8)
-    fig.suptitle("nav2's AMCL against the plan's beliefs scaled by k: no k meets both targets on any scenario")
+    met = [csv.stem for csv in sorted(folder.glob("*.csv")) if both_met(_rows(csv)) != "none"]
+    verdict = f"a k meets both targets on {', '.join(met)}" if met else "no k meets both targets on any scenario"
+    fig.suptitle(f"nav2's AMCL against the plan's beliefs scaled by k ({folder.name})\n{verdict}")
     fig.tight_layout()
     out = folder / "tradeoff.png"
     fig.savefig(out, dpi=100)
@@ -112,8 +125,16 @@ def main() -> None:
         help="plan with AMCL's own motion model in the beliefs (localiser.prediction_noise: {}, nav2's defaults); "
         "results in amcl/tradeoff/prediction-noise/",
     )
+    parser.add_argument(
+        "--information",
+        type=float,
+        default=None,
+        help="the localiser's information share in every copy (default: the shipped)",
+    )
     args = parser.parse_args()
     folder = OUT / "prediction-noise" if args.prediction_noise else OUT
+    if args.information is not None:
+        folder = folder.parent / f"{folder.name}-information-{args.information:g}"
     if args.plot_only:
         print(f"wrote {plot(folder)}")
         return
@@ -123,8 +144,8 @@ def main() -> None:
         for name, path in scenarios(Path(tmpdir)).items():
             if args.only and name not in args.only:
                 continue
-            if args.prediction_noise:
-                with_prediction_noise(path)
+            if args.prediction_noise or args.information is not None:
+                with_localiser(path, args.prediction_noise, args.information)
             started = time.perf_counter()
             nees = step_nees(path, args.sessions, args.seed, args.workers)
             rows = curve(nees)
