@@ -14,7 +14,7 @@ on the typical site. Results: ``amcl/tradeoff/NAME.csv`` (k, median NEES, share 
 and the table printed at the end (benchmarks/README.md, "The two consistency targets").
 
     .venv/bin/python benchmarks/bench_nees_tradeoff.py [--sessions 4] [--only NAME ...]
-        [--prediction-noise] [--information F]
+        [--prediction-noise] [--information F] [--heading-blur RAD]
 """
 
 from __future__ import annotations
@@ -49,9 +49,12 @@ def step_nees(path: Path, sessions: int, seed: int, workers: int) -> np.ndarray:
     return nees[np.isfinite(nees)]
 
 
-def with_localiser(path: Path, prediction_noise: bool, information: float | None) -> None:
+def with_localiser(
+    path: Path, prediction_noise: bool, information: float | None, heading_blur: float | None = None
+) -> None:
     """The scenario at ``path`` with its localiser predicting with AMCL's motion model at nav2's
-    defaults (``prediction_noise``) and with the information share ``information`` (if given)."""
+    defaults (``prediction_noise``), and with the information share ``information`` and the
+    ``heading_blur`` (rad) where given."""
     import yaml
 
     doc = yaml.safe_load(path.read_text())
@@ -60,6 +63,8 @@ def with_localiser(path: Path, prediction_noise: bool, information: float | None
         localiser["prediction_noise"] = {}
     if information is not None:
         localiser["information"] = information
+    if heading_blur is not None:
+        localiser["heading_blur"] = heading_blur
     path.write_text(yaml.safe_dump(doc, sort_keys=False))
 
 
@@ -131,10 +136,16 @@ def main() -> None:
         default=None,
         help="the localiser's information share in every copy (default: the shipped)",
     )
+    parser.add_argument(
+        "--heading-blur", type=float, default=None, help="the localiser's heading_blur (rad) in every copy"
+    )
     args = parser.parse_args()
-    folder = OUT / "prediction-noise" if args.prediction_noise else OUT
-    if args.information is not None:
-        folder = folder.parent / f"{folder.name}-information-{args.information:g}"
+    variant = [
+        *(["prediction-noise"] if args.prediction_noise else []),
+        *([f"information-{args.information:g}"] if args.information is not None else []),
+        *([f"heading-blur-{args.heading_blur:g}"] if args.heading_blur is not None else []),
+    ]
+    folder = OUT / "-".join(variant) if variant else OUT  # the shipped model's in OUT itself
     if args.plot_only:
         print(f"wrote {plot(folder)}")
         return
@@ -144,8 +155,8 @@ def main() -> None:
         for name, path in scenarios(Path(tmpdir)).items():
             if args.only and name not in args.only:
                 continue
-            if args.prediction_noise or args.information is not None:
-                with_localiser(path, args.prediction_noise, args.information)
+            if args.prediction_noise or args.information is not None or args.heading_blur is not None:
+                with_localiser(path, args.prediction_noise, args.information, args.heading_blur)
             started = time.perf_counter()
             nees = step_nees(path, args.sessions, args.seed, args.workers)
             rows = curve(nees)

@@ -187,6 +187,10 @@ class ScanModel:
     #: particles with; the planned belief then predicts with it (:meth:`belief_noise`) instead of the
     #: robot's own motion noise. None: the robot's own (models.motion_noise)
     prediction_noise: tuple[float, float, float, float] | None = None
+    #: ``amcl``: the heading spread (rad) of AMCL's particle cloud, which spreads a beam's endpoint
+    #: across the particles by its range times it: the likelihood field's endpoint variance becomes
+    #: sigma_lf² + (r heading_blur)², and far returns tell less than near ones; 0: none
+    heading_blur: float = 0.0
 
     def belief_noise(self, own: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
         """alpha1..alpha4 of W(u) (docs/models.md, "Motion noise") that the planned belief of a robot

@@ -348,6 +348,13 @@ LOCALISER = Section(
             "fitted by tmpnav calibrate (the upper 95% limit of the rate it counts); 0: the Gaussian error alone",
             default=_NAV2.failure_rate,
         ),
+        "heading_blur": Field(
+            Number("angle", minimum=0.0, maximum=1.0, reason="a particle cloud's heading spread of a few degrees"),
+            "amcl: the heading spread of AMCL's particle cloud, which spreads a beam's endpoint across the particles "
+            "by its range times it, so that far returns tell the localiser less than near ones (docs/models.md); "
+            "0: none",
+            default=_NAV2.heading_blur,
+        ),
         "prediction_noise": Field(
             Section(
                 fields={

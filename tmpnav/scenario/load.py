@@ -379,6 +379,7 @@ def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
         m["local_time"],
         m["failure_rate"],
         _nav2_alphas(m["prediction_noise"]),
+        m["heading_blur"],
     )
     return RangeSensor(
         s["range"],

@@ -152,8 +152,8 @@ def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
     """The sensor as the compiled functions take it: (min_range m, range m, cos of the largest
     incidence, sigma_range m, divergence rad), then its localiser's scan model on a map of
     ``resolution`` m: (1 for the likelihood field else 0, its endpoint variance
-    sigma_hit² + resolution²/12 m², the information share times the mixture factor eta;
-    docs/models.md, "What a localiser achieves")."""
+    sigma_hit² + resolution²/12 m², the information share times the mixture factor eta, the
+    cloud's heading spread squared rad²; docs/models.md, "What a localiser achieves")."""
     model = sensor.localiser
     field = model.kind is ScanModelKind.AMCL
     return np.array(
@@ -166,6 +166,7 @@ def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
             1.0 if field else 0.0,
             model.sigma_hit**2 + resolution**2 / 12.0,
             model.information * model.mixture_factor(sensor.range),
+            model.heading_blur**2 if field else 0.0,
         ]
     )
 

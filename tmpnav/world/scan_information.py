@@ -37,8 +37,9 @@ OFF_GRID = -1
 @nb.njit(cache=True)
 def _information(sdf, ring, x0, y0, res, x, y, theta, angles, params, J, beams):
     """J (3, 3) = sum over the returning beams of H_i^T H_i / var_i: var_i the range's variance
-    (``beams``), or for the likelihood field (params[5] = 1) the endpoint's variance params[6]
-    stretched along the beam by 1/cos beta (cos² beta = 1 / (h0² + h1²)) and divided by the
+    (``beams``), or for the likelihood field (params[5] = 1) the endpoint's variance params[6],
+    plus the particle cloud's heading spread params[8] times the range squared, stretched along
+    the beam by 1/cos beta (cos² beta = 1 / (h0² + h1²)) and divided by the
     information share params[7]: a_i a_iᵀ eta kappa / sigma², a_i = cos beta H_i the endpoint's
     distance to the wall (docs/models.md, "What a localiser achieves"). ``ring`` is ``sdf``
     inside its ring (tmpnav.world.lidar.ringed); ``beams`` (4, B) room for the beams'
@@ -55,7 +56,7 @@ def _information(sdf, ring, x0, y0, res, x, y, theta, angles, params, J, beams):
         ok, _, h0, h1, h2, v = returned(r[k], gx[k], gy[k], psis[k], params)
         if not ok:
             continue
-        w = params[7] / (params[6] * (h0 * h0 + h1 * h1)) if likelihood_field else 1.0 / v
+        w = params[7] / ((params[6] + r[k] * r[k] * params[8]) * (h0 * h0 + h1 * h1)) if likelihood_field else 1.0 / v
         J[0, 0] += h0 * h0 * w
         J[0, 1] += h0 * h1 * w
         J[0, 2] += h0 * h2 * w
