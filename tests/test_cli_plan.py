@@ -14,6 +14,7 @@ import sys
 from pathlib import Path
 
 import pytest
+import yaml
 
 from tmpnav.errors import (
     PlannerCrashError,
@@ -214,6 +215,21 @@ def test_bad_scenario_is_exit_code_2(tmp_path: Path) -> None:
     assert proc.returncode == 2
     assert all(line.startswith("error: ") for line in proc.stderr.strip().splitlines())
     assert "Traceback" not in proc.stderr
+
+
+def test_a_scenario_without_robots_whose_lidar_reaches_nothing_is_refused_in_words(tmp_path: Path) -> None:
+    """No robots and a lidar range out of bounds (found by tests/fuzz): the range sensor's check
+    of where the robots start met an empty list; validate lists the problems, exit 2."""
+    doc = yaml.safe_load(TWO_ROOMS.read_text())
+    doc["robots"] = []
+    doc.setdefault("models", {})["range_sensor"] = {"range": 0}
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(doc))
+    proc = tmpnav("validate", str(bad))
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert all(line.startswith("error: ") for line in lines) and "internal error" not in proc.stderr
+    assert any("robots: has 0 robots" in line for line in lines)
 
 
 @pytest.mark.parametrize("command", ["plan", "export-pddl", "simulate", "show", "roadmap"])

@@ -141,9 +141,11 @@ def _range_sensor(scenario: Scenario, world: World, problem: Callable[[str, str]
     sensor = scenario.models.range_sensor
     if sensor is None:
         return []
-    points = [np.array([[r.pose.x, r.pose.y] for r in scenario.robots])]
-    points += [world.free_cells_in_room(room.name, 0.0) for room in scenario.places]
-    xy = np.concatenate(points)
+    points = [np.array([[r.pose.x, r.pose.y] for r in scenario.robots], dtype=float).reshape(-1, 2)]
+    points += [
+        np.asarray(world.free_cells_in_room(room.name, 0.0), dtype=float).reshape(-1, 2) for room in scenario.places
+    ]
+    xy = np.concatenate(points)  # (a scenario without robots, already refused, still gets this check)
     i, j, inside = world.grid.cells(xy)
     if not inside.any():
         return []
