@@ -1,4 +1,5 @@
-"""The planned beliefs predicted with AMCL's own motion model (localiser.prediction_noise), end to end."""
+"""The planned beliefs predicted with AMCL's own motion model (localiser.prediction_noise), and far
+returns blurred by the cloud's heading spread (localiser.heading_blur), end to end."""
 
 from __future__ import annotations
 
@@ -43,6 +44,12 @@ def test_the_plan_predicts_with_amcls_motion_model_when_the_scenario_names_it(tm
     assert spread.returncode == 0, spread.stderr
     assert "predicting with AMCL's motion model (alpha1-4 0.2, 0.2, 0.2, 0.2: prediction_noise)" in spread.stdout
     assert widest_std(tmp_path / "b") > 1.2 * widest_std(tmp_path / "a")
+    blurred = copy.deepcopy(doc)
+    blurred["models"]["range_sensor"]["localiser"]["heading_blur"] = 0.1
+    (tmp_path / "blur.yaml").write_text(yaml.safe_dump(blurred))
+    blur = tmpnav("plan", str(tmp_path / "blur.yaml"), "-q", "--accept-risk", "--cache-dir", str(cache))
+    assert blur.returncode == 0, blur.stderr
+    assert "far returns blurred by a 0.1 rad heading spread (heading_blur)" in blur.stdout
     with_model["models"]["range_sensor"]["localiser"]["prediction_noise"] = {"alpha3": 3}
     bad = tmp_path / "bad.yaml"
     bad.write_text(yaml.safe_dump(with_model))

@@ -64,7 +64,7 @@ from tmpnav.report.schedule import (
 )
 from tmpnav.results import OTHER, STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
-from tmpnav.types import PlanStatus
+from tmpnav.types import PlanStatus, ScanModelKind
 
 
 def _display_path(path: Path) -> str:
@@ -133,6 +133,8 @@ def _sensing_line(report: PlanReport) -> str:
     if lidar is not None and lidar.localiser.belief_noise(sc.models.motion_noise) != sc.models.motion_noise:
         alphas = ", ".join(f"{a:g}" for a in lidar.localiser.prediction_noise or ())
         sensing += f", predicting with AMCL's motion model (alpha1-4 {alphas}: prediction_noise)"
+    if lidar is not None and lidar.localiser.kind is ScanModelKind.AMCL and lidar.localiser.heading_blur > 0:
+        sensing += f", far returns blurred by a {lidar.localiser.heading_blur:g} rad heading spread (heading_blur)"
     if lidar is not None and lidar.localiser.hazard > 0:
         sensing += f"; the localiser failing {lidar.localiser.hazard:.3g} times per m driven (failure_rate)"
     delta, source = sc.planner.max_risk, sc.planner.max_risk_from
