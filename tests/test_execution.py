@@ -25,6 +25,7 @@ from tmpnav.execution import (
     error_summary,
     errors_csv,
     execute,
+    hits_csv,
     moves_csv,
     reached,
     sessions_csv,
@@ -217,12 +218,34 @@ def test_robots_far_from_walls_and_each_other_hit_nothing(corridor_world: World3
     assert trace.wall_hits == {"r1": 0, "r2": 0} and trace.contacts == {"r1": 0, "r2": 0}
 
 
+def test_each_wall_hit_is_placed_where_it_began_and_lasts_its_steps(corridor_world: World3) -> None:
+    """Every contact is one HitEvent at its first step: the robot, the move under way, a true
+    position within the robot's radius of the wall, and as many steps as the counts have; a
+    contact that goes on is not recorded again."""
+    queues = {"r1": (move(0, "r1", R1_OUT), move(1, "r1", ALONG_THE_WALL))}
+    scenario, world, _ = corridor_world
+    radius = scenario.robots[0].radius
+    hits = 0
+    for seed in range(8):
+        t = run(corridor_world, queues, seed=seed, alphas=LARGE_NOISE)
+        walls = [e for e in t.hit_events if e.kind == "wall"]
+        assert sum(e.steps for e in walls) == t.wall_hits["r1"] and all(e.robot == "r1" for e in walls)
+        for e in walls:
+            i, j, inside = world.grid.cells(np.array([[e.x, e.y]]))
+            assert inside[0] and world.clearance[i[0], j[0]] <= radius  # the definition counted
+            assert e.step in (0, 1) and e.t > 0 and e.error >= 0 and e.own_std > 0
+        hits += len(walls)
+    assert hits >= 6
+
+
 def test_robots_that_come_closer_than_their_radii_touch(corridor_world: World3) -> None:
     """r2 drives up to 0.4 m from r1, which stands in L1: radii 0.25 m each."""
     r2_up = [(5.0, 6.5), (5.0, 8.0), (5.0, 9.5), (5.0, 11.0), (5.0, 12.1)]
     trace = run(corridor_world, {"r2": (move(0, "r2", r2_up),)})
     assert trace.contacts["r1"] == trace.contacts["r2"] > 0  # every step r2 stands there
     assert trace.wall_hits == {"r1": 0, "r2": 0}
+    touches = [e for e in trace.hit_events if e.kind == "robot"]
+    assert {e.robot for e in touches} == {"r1", "r2"} and all(e.steps == trace.contacts[e.robot] for e in touches)
 
 
 def test_a_rate_of_executions_has_its_clopper_pearson_interval() -> None:
@@ -422,6 +445,17 @@ def test_each_move_is_held_to_its_own_bound(corridor: PlanReport) -> None:
         int(r["contact_executions"]) == 4 and float(r["contact_ci_low"]) > 0.3 for r in rows if r["config"] == "1"
     )
     assert any(line.startswith("moves against their bounds") for line in error_summary(result, 4))
+    events = list(csv.DictReader(io.StringIO(hits_csv(result))))  # where each contact began, and when
+    assert events and all(r["step"] == "1" and r["kind"] in ("wall", "robot") for r in events)
+    for config in result.configs:
+        for robot in ("r1", "r2"):
+            mine = [r for r in events if r["config"] == str(config) and r["robot"] == robot]
+            touches = [r for r in mine if r["kind"] == "robot"]
+            if config == 1:  # every execution has its contact
+                assert {int(r["session"]) for r in touches} == set(range(1, 5))
+            assert sum(int(r["steps"]) for r in touches) == int(result.contacts[(config, robot)].sum())
+            walls = sum(int(r["steps"]) for r in mine if r["kind"] == "wall")
+            assert walls == int(result.wall_hits[(config, robot)].sum())
 
 
 @pytest.mark.slow

@@ -98,8 +98,8 @@ def amcl_options(command: Any) -> Any:
 )
 @output_option(
     True,
-    "Directory for errors.csv, sessions.csv, errors.png, summary.md (with --events: loop.csv, replans.csv, "
-    "loop.json, summary.md).",
+    "Directory for errors.csv, sessions.csv, moves.csv, hits.csv, consistency.csv, errors.png, summary.md "
+    "(with --events: loop.csv, replans.csv, loop.json, summary.md).",
     default_text="write no files",
 )
 @click.option(

@@ -21,7 +21,7 @@ from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.result import ExecutionResult, Rate, execute
 from tmpnav.execution.schedule import STEP_BUDGET
 from tmpnav.execution.session import Session
-from tmpnav.execution.text import error_summary, errors_csv, moves_csv, sessions_csv
+from tmpnav.execution.text import error_summary, errors_csv, hits_csv, moves_csv, sessions_csv
 from tmpnav.execution.trace import Draws, SessionTrace
 
 __all__ = [
@@ -38,6 +38,7 @@ __all__ = [
     "error_summary",
     "errors_csv",
     "execute",
+    "hits_csv",
     "moves_csv",
     "queues",
     "reached",

@@ -36,7 +36,7 @@ from tmpnav.execution.moves import QueuedMove, queues
 from tmpnav.execution.recovery import BEHAVIOURS
 from tmpnav.execution.schedule import STEP_BUDGET
 from tmpnav.execution.session import Session
-from tmpnav.execution.trace import Draws, SessionTrace
+from tmpnav.execution.trace import Draws, HitEvent, SessionTrace
 from tmpnav.lifetime import gather, signals_held
 from tmpnav.oracle.executors import die_with_parent
 from tmpnav.results import PlanReport, Schedule
@@ -102,6 +102,8 @@ class ExecutionResult:
     #: (tmpnav.execution.recovery), and each session's moves nav2 gave up
     recoveries: dict[str, int] = field(default_factory=dict)
     given_up: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    #: config -> every contact's first step (session, 0-based, and the event), in session order
+    hit_events: dict[int, list[tuple[int, HitEvent]]] = field(default_factory=dict)
 
     def mean_errors(self, config: int, robot: str) -> np.ndarray:
         """(points,) m: the robot's position error at each point of its paths, averaged over the sessions."""
@@ -383,6 +385,7 @@ def _result(
         configs=configs,
         recoveries={name: sum(t.recoveries.get(name, 0) for t in traces[configs[0]]) for name in BEHAVIOURS},
         given_up=np.array([len(t.given_up) for t in traces[configs[0]]], dtype=int),
+        hit_events={c: [(s, e) for s, t in enumerate(traces[c]) for e in t.hit_events] for c in configs},
     )
 
 

@@ -47,7 +47,7 @@ from tmpnav.execution.navigation import Navigator
 from tmpnav.execution.recovery import BEHAVIOURS, Recovery
 from tmpnav.execution.rpp import Rounding, RppFollower
 from tmpnav.execution.schedule import TeamSchedule
-from tmpnav.execution.trace import Draws, SessionTrace, nees
+from tmpnav.execution.trace import Draws, HitEvent, SessionTrace, nees
 from tmpnav.roadmap.shortcut import required_clearance
 from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
@@ -79,6 +79,7 @@ class Session:
         self.step = 0  # control steps taken (indexes the draws)
         self.truth, belief, self.trace = self._initial()
         self.radii = np.array([r.radius for r in scenario.robots], dtype=float)
+        self._contacts: dict[tuple[int, str], HitEvent] = {}  # (robot, kind) -> the contact going on
         self.trace.wall_hits = dict.fromkeys(self.names, 0)
         self.trace.contacts = dict.fromkeys(self.names, 0)
         self.trace.planned_nees = {r: [math.nan] for r in self.names}
@@ -321,6 +322,32 @@ class Session:
                 key = (name, self.schedule.move_step(i))
                 self.trace.move_hits[key] = self.trace.move_hits.get(key, 0) + int(walls[i])
                 self.trace.move_contacts[key] = self.trace.move_contacts.get(key, 0) + int(touch[i])
+            for kind, now in (("wall", bool(walls[i])), ("robot", bool(touch[i]))):
+                self._mark(i, kind, now)
+
+    def _mark(self, i: int, kind: str, now: bool) -> None:
+        """Record a contact of robot i of ``kind`` where it begins (a :class:`HitEvent`), and count
+        the steps it lasts."""
+        going = self._contacts.get((i, kind))
+        if not now:
+            self._contacts.pop((i, kind), None)
+        elif going is not None:
+            going.steps += 1
+        else:
+            error = self.position_error(i)
+            cov = self.estimate_cov(i)[:2, :2]
+            event = HitEvent(
+                self.names[i],
+                self.schedule.move_step(i),
+                kind,
+                (self.step + 1) * self.dt,
+                float(self.truth[i, 0]),
+                float(self.truth[i, 1]),
+                float(math.hypot(error[0], error[1])),
+                float(math.sqrt(max(np.trace(cov), 0.0) / 2.0)),
+            )
+            self._contacts[(i, kind)] = event
+            self.trace.hit_events.append(event)
 
 
 #: redraws of a true start that a robot's disc would find in collision with the map

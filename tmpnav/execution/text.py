@@ -1,5 +1,5 @@
-"""What ``tmpnav simulate`` prints and writes: the summary (terminal and summary.md), errors.csv
-and sessions.csv."""
+"""What ``tmpnav simulate`` prints and writes: the summary (terminal and summary.md), errors.csv,
+sessions.csv, moves.csv and hits.csv."""
 
 from __future__ import annotations
 
@@ -55,6 +55,7 @@ def _rest(result: ExecutionResult, lines: list[str]) -> list[str]:
     lines += summary_lines(result.consistency, result.localiser) if result.localiser else []
     lines += collision_lines(result)
     lines += move_lines(result)
+    lines += hit_lines(result)
     lines += recovery_lines(result)
     if result.truncated_sessions:
         lines.append(f"note: {result.truncated_sessions} session(s) did not reach every node within the step budget")
@@ -228,6 +229,39 @@ def moves_csv(result: ExecutionResult) -> str:
                 f"{bound:.6g}"
             )
     return "\n".join(rows) + "\n"
+
+
+def hits_csv(result: ExecutionResult) -> str:
+    """One row per contact: where and when a robot's true pose hit a wall (``wall``) or touched
+    another robot's (``robot``), in which session and plan step, the localiser's position error
+    and its own std there, and for how many control steps in a row."""
+    rows = ["config,mutual_observations,session,robot,step,kind,t_s,x,y,position_error_m,localiser_std_m,steps"]
+    for config in result.configs:
+        for s, e in result.hit_events.get(config, []):
+            rows.append(
+                f"{config},{'yes' if config == 1 else 'no'},{s + 1},{e.robot},{e.step + 1},{e.kind},{e.t:.6g},"
+                f"{e.x:.4f},{e.y:.4f},{e.error:.4f},{e.own_std:.4f},{e.steps}"
+            )
+    return "\n".join(rows) + "\n"
+
+
+#: wall hits placed by name in the summary (hits.csv has them all)
+HITS_SHOWN = 4
+
+
+def hit_lines(result: ExecutionResult) -> list[str]:
+    """Where the first configuration's walls were hit: the first few contacts, each with its robot,
+    plan step, true position and the localiser's error there."""
+    walls = [(s, e) for s, e in result.hit_events.get(result.configs[0], []) if e.kind == "wall"]
+    if not walls:
+        return []
+    shown = "; ".join(
+        f"{e.robot} step {e.step + 1} at ({e.x:.1f}, {e.y:.1f}) m, session {s + 1}, {e.steps} control "
+        f"{'step' if e.steps == 1 else 'steps'}, localiser {length(e.error)} off"
+        for s, e in walls[:HITS_SHOWN]
+    )
+    more = f" and {len(walls) - HITS_SHOWN} more" if len(walls) > HITS_SHOWN else ""
+    return [f"where walls were hit, {labels(result)[0][1]} (hits.csv has each): {shown}{more}"]
 
 
 def errors_csv(result: ExecutionResult, roadmap: Roadmap) -> str:

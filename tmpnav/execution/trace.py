@@ -13,6 +13,24 @@ from tmpnav.results import Schedule, TimedMove
 
 
 @dataclass
+class HitEvent:
+    """Where and when a robot's true pose hit a wall or touched another robot's: the first control
+    step of one contact (``kind`` ``wall`` or ``robot``), the plan step of the move under way, the
+    true position (m), the localiser's position error and its own std (m) there, and how many
+    control steps in a row the contact lasted."""
+
+    robot: str
+    step: int
+    kind: str
+    t: float  # s
+    x: float
+    y: float
+    error: float
+    own_std: float
+    steps: int = 1
+
+
+@dataclass
 class SessionTrace:
     """One session in one configuration: robot -> the position error (m) at each point of its
     paths and when it got there (s, nan for a point never reached), and the moves as executed;
@@ -36,6 +54,8 @@ class SessionTrace:
     #: first) -> control steps its true pose hit a wall / touched another robot's
     move_hits: dict[tuple[str, int], int] = field(default_factory=dict)
     move_contacts: dict[tuple[str, int], int] = field(default_factory=dict)
+    #: every contact's first step, in the order they began (:class:`HitEvent`)
+    hit_events: list[HitEvent] = field(default_factory=list)
     #: robot -> the cost terms as executed (docs/models.md): c_u = sum (v² + omega²) dt of the
     #: commands, c_Sigma = sum trace(Sigma) dt of the filter's covariance while it drives, c_G the
     #: distances between the estimate and the path's end at the end of each move

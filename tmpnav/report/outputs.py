@@ -161,12 +161,13 @@ def _draw_child(draw: Callable[[BinaryIO], None], writer: Pipe, parent: int) -> 
 
 def write_execution_outputs(report: PlanReport, result: ExecutionResult, sessions: int, out_dir: Path) -> list[Path]:
     """``tmpnav simulate -o DIR``: errors.csv, sessions.csv (each session's makespan and waits),
-        moves.csv (each move's wall hits and contacts against its bound), consistency.csv (each move's
+        moves.csv (each move's wall hits and contacts against its bound), hits.csv (where and when each
+        contact began), consistency.csv (each move's
     actual error against the localiser's and the plan's covariance), errors.png and summary.md,
         all or nothing."""
     from tmpnav.execution import error_summary, errors_csv
     from tmpnav.execution.consistency import csv_text
-    from tmpnav.execution.text import moves_csv, sessions_csv
+    from tmpnav.execution.text import hits_csv, moves_csv, sessions_csv
     from tmpnav.report.bench_plot import errors_figure
 
     title = f"{report.scenario.name}: average position error over {sessions} sessions"
@@ -174,6 +175,7 @@ def write_execution_outputs(report: PlanReport, result: ExecutionResult, session
         "errors.csv": errors_csv(result, report.roadmap),
         "sessions.csv": sessions_csv(result),
         "moves.csv": moves_csv(result),
+        "hits.csv": hits_csv(result),
         "errors.png": lambda tmp: fg.render(errors_figure(result, title), tmp),
         "consistency.csv": csv_text(result.consistency),
         "summary.md": "\n".join(error_summary(result, sessions)) + "\n",
