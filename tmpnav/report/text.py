@@ -130,11 +130,12 @@ def _sensing_line(report: PlanReport) -> str:
         else f"a {lidar.range:g} m lidar of {lidar.beams} beams against the walls, as nav2's AMCL takes it "
         f"(information share {lidar.localiser.information:g}), alone"
     )
-    if lidar is not None and lidar.localiser.belief_noise(sc.models.motion_noise) != sc.models.motion_noise:
-        alphas = ", ".join(f"{a:g}" for a in lidar.localiser.prediction_noise or ())
+    amcl = lidar.localiser if lidar is not None and lidar.localiser.kind is ScanModelKind.AMCL else None
+    if amcl is not None and amcl.prediction_noise is not None:
+        alphas = ", ".join(f"{a:g}" for a in amcl.prediction_noise)
         sensing += f", predicting with AMCL's motion model (alpha1-4 {alphas}: prediction_noise)"
-    if lidar is not None and lidar.localiser.kind is ScanModelKind.AMCL and lidar.localiser.heading_blur > 0:
-        sensing += f", far returns blurred by a {lidar.localiser.heading_blur:g} rad heading spread (heading_blur)"
+    if amcl is not None and amcl.heading_blur > 0:
+        sensing += f", far returns blurred by a {amcl.heading_blur:g} rad heading spread (heading_blur)"
     if lidar is not None and lidar.localiser.hazard > 0:
         sensing += f"; the localiser failing {lidar.localiser.hazard:.3g} times per m driven (failure_rate)"
     delta, source = sc.planner.max_risk, sc.planner.max_risk_from
