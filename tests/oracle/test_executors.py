@@ -100,3 +100,33 @@ def test_the_terminated_pools_manager_thread_prints_no_traceback() -> None:
         assert reported == [loud]
     finally:
         threading.excepthook = saved
+
+
+def test_an_idle_pool_is_let_go_and_the_next_wave_forks_workers_that_agree(
+    two_rooms: OracleContext, reference, monkeypatch: pytest.MonkeyPatch
+) -> None:  # type: ignore[no-untyped-def]
+    """Workers no wave used for idle_seconds end (their memory with them); a later wave starts
+    new ones and gets the same results. Waves closer together keep one pool."""
+    import time
+
+    monkeypatch.setattr(executors, "BLOCK", 4)
+    pool = ProcessExecutor(2, idle_seconds=0.2)
+    try:
+        first, _ = pool.run(two_rooms, actions(two_rooms))
+        workers = list(pool._pool._processes.values())  # type: ignore[union-attr]
+        deadline = time.monotonic() + 30
+        while pool._pool is not None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert pool._pool is None and not any(w.is_alive() for w in workers)
+        second, _ = pool.run(two_rooms, actions(two_rooms))
+        assert pool.started == 2 and first == second == reference
+    finally:
+        pool.close()
+    kept = ProcessExecutor(2, idle_seconds=60)
+    try:
+        kept.run(two_rooms, actions(two_rooms))
+        kept.run(two_rooms, actions(two_rooms))
+        assert kept.started == 1 and kept._pool is not None
+    finally:
+        kept.close()
+    assert kept._pool is None and kept._idle is None

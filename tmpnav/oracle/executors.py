@@ -178,41 +178,93 @@ def _init_worker(ctx: OracleContext, parent: int) -> None:
 
 def _work(block: list[Request]) -> Work:
     """A block's outcome, and the reach and scan cells computed for it, which the parent takes
-    (World.learn) rather than compute them again for the requests it evaluates itself."""
+    (World.learn) rather than compute them again for the requests it evaluates itself. The
+    memory the block's work freed goes back to the system (:func:`release_freed`)."""
     assert _WORKER_CTX is not None
     outcome = evaluate(library(_WORKER_CTX), block)
-    return outcome, _WORKER_CTX.world.take_new()
+    learned = _WORKER_CTX.world.take_new()
+    release_freed()
+    return outcome, learned
+
+
+def release_freed() -> None:
+    """Give the heap's free pages back to the system (glibc's ``malloc_trim``; elsewhere nothing).
+
+    A block's simulations allocate and free hundreds of MB in pieces; glibc keeps the freed
+    pages, so a worker's resident size was its largest block's, not what it holds (100 MB more
+    a worker at office 100 x 16; about 1 ms a block)."""
+    if sys.platform.startswith("linux"):
+        with contextlib.suppress(OSError, AttributeError):
+            ctypes.CDLL(None).malloc_trim(0)
+
+
+#: seconds a pool of workers may stand idle before they are let go (:class:`ProcessExecutor`)
+IDLE_SECONDS = 10.0
 
 
 class ProcessExecutor:
     """Local worker processes (``--workers N``); the context is sent once per worker.
 
-    The pool lives until :meth:`close`, so the nominal motions a worker computed for one
-    wave of requests (singles, then pairs) are still in its memory for the next.
+    The pool lives from one wave of requests to the next, so the nominal motions a worker
+    computed for one wave (singles, then pairs) are still in its memory for the next. A pool
+    that no wave has used for :data:`IDLE_SECONDS` is let go: a fleet's run asks its workers
+    for the single moves' table and then, through the search, for one move at a time, which
+    this process computes itself, and the idle workers held their tables and motions (1 GB at
+    office 100 x 16) to the end. The next wave forks new workers, which share this process's
+    pages; the results do not depend on which workers compute them.
     """
 
     name = "processes"
 
-    def __init__(self, workers: int):
+    def __init__(self, workers: int, idle_seconds: float | None = None):
         self.workers = workers
+        self.idle_seconds = IDLE_SECONDS if idle_seconds is None else idle_seconds
         self._pool: ProcessPoolExecutor | None = None
         self._ctx: OracleContext | None = None
+        self._lock = threading.Lock()  # a wave, or letting the pool go: one at a time
+        self._idle: threading.Timer | None = None
+        #: pools started so far (one, unless an idle pool was let go and a later wave needed one)
+        self.started = 0
 
     def _get_pool(self, ctx: OracleContext) -> ProcessPoolExecutor:
         if self._pool is None or self._ctx is not ctx:
-            self.close()
+            self._shut()
             method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
             mp = multiprocessing.get_context(method)
             self._pool = ProcessPoolExecutor(
                 self.workers, mp_context=mp, initializer=_init_worker, initargs=(ctx, os.getpid())
             )
             self._ctx = ctx
+            self.started += 1
         return self._pool
 
     def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome:
         todo, order = blocks(requests)
         if len(todo) <= 1:
             return SerialExecutor().run(ctx, requests, progress)
+        with self._lock:
+            self._cancel_idle()
+            outcome = self._wave(ctx, todo, order, progress)
+            if self._pool is not None:
+                self._idle = threading.Timer(self.idle_seconds, self._let_go_idle)
+                self._idle.daemon = True
+                self._idle.start()
+        return outcome
+
+    def _let_go_idle(self) -> None:
+        """The idle timer's end: the workers are let go unless a wave has begun since (it
+        holds the lock, and arms a timer of its own when it ends)."""
+        if self._lock.acquire(blocking=False):
+            try:
+                if self._idle is threading.current_thread():
+                    self._idle = None
+                    self._shut()
+            finally:
+                self._lock.release()
+
+    def _wave(
+        self, ctx: OracleContext, todo: list[list[Request]], order: list[int], progress: Progress | None
+    ) -> Outcome:
         pool = self._get_pool(ctx)
         try:
             with signals_held():  # the first blocks fork the workers
@@ -246,10 +298,20 @@ class ProcessExecutor:
                 if process.is_alive():
                     process.kill()
 
-    def close(self) -> None:
+    def _cancel_idle(self) -> None:
+        if self._idle is not None:
+            self._idle.cancel()
+            self._idle = None
+
+    def _shut(self) -> None:
         if self._pool is not None:
             self._pool.shutdown()
             self._pool = None
+
+    def close(self) -> None:
+        with self._lock:
+            self._cancel_idle()
+            self._shut()
 
 
 #: threads whose exceptions are not printed (:func:`_quiet`)
