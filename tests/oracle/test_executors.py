@@ -106,7 +106,8 @@ def test_an_idle_pool_is_let_go_and_the_next_wave_forks_workers_that_agree(
     two_rooms: OracleContext, reference, monkeypatch: pytest.MonkeyPatch
 ) -> None:  # type: ignore[no-untyped-def]
     """Workers no wave used for idle_seconds end (their memory with them); a later wave starts
-    new ones and gets the same results. Waves closer together keep one pool."""
+    new ones and gets the same results. Waves closer together keep one pool, unless the caller
+    lets it go."""
     import time
 
     monkeypatch.setattr(executors, "BLOCK", 4)
@@ -127,6 +128,10 @@ def test_an_idle_pool_is_let_go_and_the_next_wave_forks_workers_that_agree(
         kept.run(two_rooms, actions(two_rooms))
         kept.run(two_rooms, actions(two_rooms))
         assert kept.started == 1 and kept._pool is not None
+        kept.let_go()  # the caller knows no wave is near
+        assert kept._pool is None
+        again, _ = kept.run(two_rooms, actions(two_rooms))
+        assert kept.started == 2 and again == reference
     finally:
         kept.close()
     assert kept._pool is None and kept._idle is None

@@ -13,8 +13,14 @@ from tmpnav.results import StageTimes
 from tmpnav.task.bound import Bound
 
 
-def _run() -> SimpleNamespace:
-    return SimpleNamespace(canonical=SimpleNamespace(oracle=SimpleNamespace(ctx=None)), times=StageTimes())
+def _run(partners_fused: bool = True) -> SimpleNamespace:
+    oracle = SimpleNamespace(ctx=None, let_go=[])
+    oracle.let_go_of_workers = lambda: oracle.let_go.append(True)
+    return SimpleNamespace(
+        canonical=SimpleNamespace(oracle=oracle),
+        scenario=SimpleNamespace(models=SimpleNamespace(partners_fused=partners_fused)),
+        times=StageTimes(),
+    )
 
 
 @pytest.fixture
@@ -56,3 +62,17 @@ def test_a_bound_process_that_dies_is_an_error_not_a_hang(monkeypatch, no_librar
     later.start()
     with pytest.raises(RuntimeError, match="exit code 3"):
         later()
+
+
+@pytest.mark.parametrize("partners_fused", [True, False])
+def test_the_oracle_workers_are_let_go_at_the_fork_when_no_paired_move_is_to_come(
+    monkeypatch, no_library, partners_fused
+):
+    """Without paired moves the single moves' table was the workers' last wave: they are let go
+    before the bound's process forks beside them; with paired moves the search needs them."""
+    monkeypatch.setattr(planning_bound, "certified_bound", lambda run: Bound(1.0, "flow"))
+    run = _run(partners_fused)
+    later = planning_bound.LaterBound(run)
+    later.start()
+    assert later().value == 1.0
+    assert run.canonical.oracle.let_go == ([] if partners_fused else [True])

@@ -136,6 +136,9 @@ class SerialExecutor:
                 progress(k + 1, len(todo))
         return _merge(parts, order)
 
+    def let_go(self) -> None:
+        return None
+
     def close(self) -> None:
         return None
 
@@ -199,7 +202,7 @@ def release_freed() -> None:
 
 
 #: seconds a pool of workers may stand idle before they are let go (:class:`ProcessExecutor`)
-IDLE_SECONDS = 10.0
+IDLE_SECONDS = 3.0
 
 
 class ProcessExecutor:
@@ -308,6 +311,11 @@ class ProcessExecutor:
             self._pool.shutdown()
             self._pool = None
 
+    def let_go(self) -> None:
+        """Let the workers go now: the caller knows that no wave is near (a later one forks new
+        workers, as after :data:`IDLE_SECONDS`)."""
+        self.close()
+
     def close(self) -> None:
         with self._lock:
             self._cancel_idle()
@@ -381,6 +389,9 @@ class RayExecutor:
                 if progress:
                     progress(done, len(todo))
         return _merge([p for p in parts if p is not None], order)
+
+    def let_go(self) -> None:
+        return None  # the cluster's workers are the cluster's
 
     def close(self) -> None:
         if self._started:

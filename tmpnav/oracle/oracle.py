@@ -48,6 +48,8 @@ class Executor(Protocol):
 
     def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome: ...
 
+    def let_go(self) -> None: ...
+
     def close(self) -> None: ...
 
 
@@ -93,6 +95,11 @@ class Oracle:
         self.stats = OracleStats()
         #: results of this run, by key: the searches ask the same questions again (with --no-cache too)
         self._seen: OrderedDict[str, MotionResult | None] = OrderedDict()
+
+    def let_go_of_workers(self) -> None:
+        """Let local workers go now, when no wave of requests is near (a later one forks new
+        workers; tmpnav.oracle.executors.ProcessExecutor)."""
+        self.executor.let_go()
 
     def close(self) -> None:
         """Stop the executor and close the cache."""

@@ -105,7 +105,13 @@ class LaterBound:
         """Fork the bound's process (once; nothing where the platform cannot fork)."""
         if self._process is not None or "fork" not in multiprocessing.get_all_start_methods():
             return
-        library(self._run.canonical.oracle.ctx)  # the paths' library, made before the fork
+        oracle = self._run.canonical.oracle
+        if not self._run.scenario.models.partners_fused:
+            # no paired moves to cost: the single moves' table was the workers' last wave (the
+            # search asks for a move at a time, computed in this process); their memory is let
+            # go before the bound's process forks beside them
+            oracle.let_go_of_workers()
+        library(oracle.ctx)  # the paths' library, made before the fork
         fork = multiprocessing.get_context("fork")
         self._reader, writer = fork.Pipe(duplex=False)
         process = fork.Process(target=_forked, args=(self._run, writer, os.getpid()), name="tmpnav-bound", daemon=True)
