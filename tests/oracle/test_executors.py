@@ -6,6 +6,7 @@ Ray instance: tests/oracle/test_ray.py): the same costs, goal instantiations, pa
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import pytest
@@ -115,6 +116,8 @@ def test_an_idle_pool_is_let_go_and_the_next_wave_forks_workers_that_agree(
     try:
         first, _ = pool.run(two_rooms, actions(two_rooms))
         workers = list(pool._pool._processes.values())  # type: ignore[union-attr]
+        if sys.platform.startswith("linux"):  # named where ps and top show them
+            assert {Path(f"/proc/{w.pid}/comm").read_text().strip() for w in workers} == {"tmpnav-oracle"}
         deadline = time.monotonic() + 30
         while pool._pool is not None and time.monotonic() < deadline:
             time.sleep(0.05)

@@ -16,7 +16,7 @@ from typing import TypeAlias
 from tmpnav.attachment.floors import FloorsStopped, motion_floors
 from tmpnav.beside import WAIT_SLICE
 from tmpnav.lifetime import signals_held
-from tmpnav.oracle.executors import die_with_parent, library
+from tmpnav.oracle.executors import die_with_parent, library, name_process
 from tmpnav.planning.run import TaskRun
 from tmpnav.task.bound import CUT_ROUNDS, Bound, lower_bound, makespan_bound
 from tmpnav.types import CostTable, Goals
@@ -153,6 +153,7 @@ def _forked(run: TaskRun, writer: _Pipe, parent: int) -> None:
     """The bound's process: :func:`certified_bound`, sent to the run (or its error, in words)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the run's business; it ends this process
     die_with_parent(parent)
+    name_process("tmpnav-bound")
     try:
         writer.send(("bound", certified_bound(run)))
     except Exception as error:  # the run raises it where the bound is asked for
