@@ -99,3 +99,27 @@ def test_rpp_motions_drive_the_shortened_path_and_keep_half_the_roadmap_margin()
     total = 8 * (len(nodes) - 1)
     # the depot's doors are about as wide as its robots: RPP drives half of these moves
     assert pursued >= 0.4 * total and shortened >= 0.3 * total, (pursued, shortened, total)
+
+
+def test_the_library_keeps_the_motions_its_byte_budget_holds(monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Least recently used motions go past MAX_MOTION_BYTES of arrays (footprint): asked again,
+    one is computed again, the same; a motion of unseen landmarks counts no row of them."""
+    from tmpnav.oracle import motions as motions_module
+
+    ctx = make_two_rooms()
+    scenario = replace(ctx.scenario, models=replace(ctx.scenario.models, range_sensor=LIDAR))
+    lib = MotionLibrary(scenario, ctx.world, ctx.roadmap)
+    nodes = sorted(g for goals in ctx.roadmap.instantiations.values() for g in goals)
+    start = ctx.roadmap.starts["r1"]
+    every = [m for g in nodes if (m := lib.motion("r1", start, 0.0, g)) is not None]
+    assert lib._motion_bytes == sum(motions_module.footprint(m) for m in every)
+    unseen = every[0]
+    if not scenario.models.others_fused:
+        assert unseen.lm_visible.strides[0] == 0
+    budget = sum(motions_module.footprint(m) for m in every[-2:])
+    monkeypatch.setattr(motions_module, "MAX_MOTION_BYTES", budget)
+    small = MotionLibrary(scenario, ctx.world, ctx.roadmap)
+    kept = [small.motion("r1", start, 0.0, g) for g in nodes]
+    assert 1 <= len(small._motions) < len(every) and small._motion_bytes <= budget
+    again = small.motion("r1", start, 0.0, nodes[0])  # dropped: computed again
+    assert again is not None and again is not kept[0] and np.array_equal(again.poses, kept[0].poses)

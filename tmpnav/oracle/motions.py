@@ -92,6 +92,17 @@ _VISIBILITY: dict[tuple[str, float], LandmarkVisibility] = {}
 SetLayout = tuple[tuple[int, ...], np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
 
+def footprint(m: NominalMotion | None) -> int:
+    """The bytes of a motion's arrays: controls, poses, the landmarks seen (none for a broadcast
+    row of unseen ones) and its cells and scan keys, twice: the rows of the reach and scan tables
+    the library keeps for them (:meth:`MotionLibrary._rows`) take as many again."""
+    if m is None:
+        return 0
+    seen = 0 if m.lm_visible.ndim and m.lm_visible.strides[0] == 0 else m.lm_visible.nbytes
+    keys = m.cells.nbytes + (0 if m.scan_keys is None else m.scan_keys.nbytes)
+    return m.controls.nbytes + m.poses.nbytes + seen + 2 * keys
+
+
 def _scan_keys(m: NominalMotion) -> np.ndarray:
     """The motion's scan keys; -1 (no scan) at every pose of a motion without them."""
     return m.scan_keys if m.scan_keys is not None else np.full(m.poses.shape[0], -1, dtype=np.int64)
@@ -131,6 +142,10 @@ RPP = RppParams()
 #: hundred steps with its landmark visibility takes 10-20 kB, and a building of 60 rooms and
 #: 8 robots asks for over 100,000 of them
 MAX_MOTIONS = 8192
+#: and the bytes their arrays may take (:func:`footprint`): a fleet's motions are long, 8192 of
+#: them took 230 MB of each oracle worker at 100 rooms and 16 robots, where none was asked for
+#: again past the last 1024; a 24-room office's 8192 take about half of this
+MAX_MOTION_BYTES = 96 * 2**20
 _MISSING = object()
 #: the landmarks a motion sees where no belief fuses them: none (broadcast to its poses and landmarks)
 _UNSEEN = np.zeros((1, 1), dtype=bool)
@@ -155,6 +170,7 @@ class MotionLibrary:
         self.scans: ScanInformation | None = world.scans(sensor) if sensor is not None else None
         self.noise = NoiseStreams()  # the simulated observations' draws, by stream
         self._motions: OrderedDict[tuple[str, int, float, int], NominalMotion | None] = OrderedDict()
+        self._motion_bytes = 0  # their footprint (MAX_MOTION_BYTES)
         #: the heading a motion ends at, at the node of a job's goal pose (goals.jobs)
         self.goal_headings: dict[int, float] = {
             roadmap.instantiations[j.room][0]: j.pose[2]
@@ -187,7 +203,7 @@ class MotionLibrary:
         shared = self.roadmap.base_nodes
         for key, motion in other._motions.items():
             if key[1] < shared and key not in self._motions:
-                self._motions[key] = motion
+                self._keep(key, motion)
         for key2, along in other._along.items():
             if max(key2[1]) < shared:
                 self._along.setdefault(key2, along)
@@ -198,12 +214,19 @@ class MotionLibrary:
         found = self._motions.get(key, _MISSING)
         if found is _MISSING:
             found = self._compute(robot, start, heading, goal)
-            self._motions[key] = found
-            if len(self._motions) > MAX_MOTIONS:
-                self._motions.popitem(last=False)
+            self._keep(key, found)
         else:
             self._motions.move_to_end(key)
         return found  # type: ignore[return-value]
+
+    def _keep(self, key: tuple[str, int, float, int], motion: NominalMotion | None) -> None:
+        """Remember ``motion``, dropping the least recently used past :data:`MAX_MOTIONS` or
+        :data:`MAX_MOTION_BYTES`."""
+        self._motions[key] = motion
+        self._motion_bytes += footprint(motion)
+        while len(self._motions) > 1 and (len(self._motions) > MAX_MOTIONS or self._motion_bytes > MAX_MOTION_BYTES):
+            _, dropped = self._motions.popitem(last=False)
+            self._motion_bytes -= footprint(dropped)
 
     def reach(self, motion: NominalMotion, rows: np.ndarray | slice = slice(None)) -> np.ndarray:
         """The sector reach (T+1, K) m of ``motion``'s footprint at its poses (``rows`` of them),
