@@ -186,6 +186,14 @@ def prepare(
     return Prepared(scenario, world, roadmap, roadmap_hit, cache, warnings, oracle)
 
 
+def searches_over() -> None:
+    """A command's planning is done: ENHSP's JVM is let go before the figures are drawn or the
+    sessions executed (tmpnav.task.enhsp_jvm.release; a planning service keeps it)."""
+    from tmpnav.task import enhsp_jvm
+
+    enhsp_jvm.release()
+
+
 def export_problem(path: str | Path, options: PlanOptions) -> EncodedTask:
     """The encoded task problem with its computed costs (``tmpnav export-pddl``)."""
     from tmpnav.planning.table import full_table

@@ -277,3 +277,17 @@ def test_a_run_that_ends_while_the_warm_up_runs_ends_at_once(delay: float) -> No
     )
     assert proc.returncode == 130, proc.stderr
     assert "Traceback" not in proc.stderr and "Fatal" not in proc.stderr
+
+
+def test_a_released_server_ends_and_the_next_search_starts_another() -> None:
+    """A command's searches over, its JVM is let go (enhsp_jvm.release); a later search in the
+    same process starts a new server and plans as before."""
+    task = _task(*CASES[1][:4])
+    first = _solve(task, "enhsp-blind")
+    server = enhsp_jvm._JVM.server
+    assert server is not None
+    assert enhsp_jvm.release() is True
+    assert server.process.poll() is not None and enhsp_jvm._JVM.server is None
+    assert enhsp_jvm.release() is False  # nothing left to let go
+    assert _solve(task, "enhsp-blind") == first
+    assert enhsp_jvm._JVM.server is not None and enhsp_jvm._JVM.server is not server

@@ -214,7 +214,7 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
     --anytime-budget caps the anytime search and --time-limit the whole command (past them,
     the best plan so far).
     """
-    from tmpnav.pipeline import pddl_texts
+    from tmpnav.pipeline import pddl_texts, searches_over
     from tmpnav.pipeline import plan as run_plan
     from tmpnav.report.plan_json import dumps, plan_document
     from tmpnav.report.text import plan_summary
@@ -223,6 +223,7 @@ def plan(scenario: Path, output: Path | None, fmt: str, exports: tuple[str, ...]
         raise click.UsageError("--export needs -o DIR: the waypoint files go to DIR/nav2/")
     check_planner(scenario, kw["planner_name"])
     report = run_plan(scenario, plan_options(kw))
+    searches_over()  # ENHSP's JVM is not needed past here
     warn_scenario(report.scenario, bool(kw.get("no_range_sensor")), report.world)
     warn_conflicts(report)
     written: list[Path] = []

@@ -170,6 +170,7 @@ def simulate(
     """
     from tmpnav.execution import error_summary, execute
     from tmpnav.pipeline import plan as run_plan
+    from tmpnav.pipeline import searches_over
 
     check_planner(scenario, kw["planner_name"])
     localisation = _localisation(
@@ -192,6 +193,7 @@ def simulate(
     sessions = sessions or 25
     started = time.perf_counter()
     report = run_plan(scenario, plan_options(kw))
+    searches_over()  # ENHSP's JVM is not needed past here
     warn_scenario(report.scenario, bool(kw.get("no_range_sensor")))
     warn_conflicts(report)
     limit = report.scenario.planner.time_limit  # --time-limit: the plan and its executions

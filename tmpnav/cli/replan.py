@@ -80,7 +80,7 @@ def replan(
     before any robot can get there) are named one per line (exit code 12); the rest is
     planned and written.
     """
-    from tmpnav.pipeline import pddl_texts
+    from tmpnav.pipeline import pddl_texts, searches_over
     from tmpnav.replan import replan as run_replan
     from tmpnav.report.text import plan_summary
 
@@ -94,6 +94,7 @@ def replan(
         raise click.UsageError("--export needs -o DIR: the waypoint files go to DIR/nav2/")
     check_planner(scenario, kw["planner_name"])
     report = run_replan(scenario, plan_path, state_path, plan_options(kw))
+    searches_over()  # ENHSP's JVM is not needed past here
     warn_scenario(report.scenario, bool(kw.get("no_range_sensor")))
     warn_conflicts(report)
     written: list[Path] = []
