@@ -1,7 +1,8 @@
 """Where a fleet's run holds its memory: PSS by process, sampled through a fresh ``tmpnav plan``.
 
     .venv/bin/python benchmarks/bench_fleet_memory.py [--sizes office:100:16] [--seeds 1-3]
-        [--code DIR] [--label NAME] [--interval 1] [-o benchmarks/fleet/memory.txt]
+        [--code DIR] [--label NAME] [--interval 1] [--plan-args '--time-limit 600']
+        [-o benchmarks/fleet/memory.txt]
 
 For each generated building (benchmarks/families.py: kind, rooms, robots) and seed, one fresh
 ``tmpnav plan FILE --cache-dir EMPTY -o OUT`` with default options (``--code DIR``: the tmpnav of
@@ -79,13 +80,13 @@ def sample(root: int) -> dict[str, float]:
     return by
 
 
-def run(scenario: Path, code: Path, interval: float) -> dict[str, object]:
+def run(scenario: Path, code: Path, interval: float, extra: list[str]) -> dict[str, object]:
     """One fresh command; the peak of its PSS and each role's share then, its time and plan."""
     with tempfile.TemporaryDirectory(prefix="tmpnav-memory-") as work:
         out = Path(work) / "out"
         command = [sys.executable, "-m", "tmpnav", "plan", str(scenario), "--cache-dir", str(Path(work) / "cache")]
         start = time.perf_counter()
-        proc = subprocess.Popen([*command, "-q", "-o", str(out)], cwd=code, stdout=subprocess.DEVNULL)
+        proc = subprocess.Popen([*command, *extra, "-q", "-o", str(out)], cwd=code, stdout=subprocess.DEVNULL)
         peak: dict[str, float] = dict.fromkeys(ROLES, 0.0)
         most = dict.fromkeys(ROLES, 0.0)
         at = 0.0
@@ -110,6 +111,7 @@ def main() -> None:
     parser.add_argument("--code", type=Path, default=ROOT, help="the checkout whose tmpnav runs")
     parser.add_argument("--label", default="this checkout")
     parser.add_argument("--interval", type=float, default=1.0, help="seconds between samples")
+    parser.add_argument("--plan-args", default="", help="more options of tmpnav plan, e.g. '--time-limit 600'")
     parser.add_argument("-o", "--output", type=Path, default=ROOT / "benchmarks" / "fleet" / "memory.txt")
     args = parser.parse_args()
     first, _, last = args.seeds.partition("-")
@@ -122,7 +124,7 @@ def main() -> None:
                 doc = KINDS[kind](int(rooms), int(robots), seed)
                 path = write(doc, Path(folder) / f"{kind}-{rooms}x{robots}-seed{seed}.yaml")
                 load = os.getloadavg()[0]
-                r = run(path, args.code.resolve(), args.interval)
+                r = run(path, args.code.resolve(), args.interval, args.plan_args.split())
                 peak, most = r["peak"], r["most"]
                 assert isinstance(peak, dict) and isinstance(most, dict)
                 shares = " ".join(f"{role} {peak[role]:.0f}" for role in ROLES)
@@ -136,7 +138,8 @@ def main() -> None:
     args.output.parent.mkdir(parents=True, exist_ok=True)
     with args.output.open("a") as f:
         f.write(
-            f"# bench_fleet_memory.py --sizes {args.sizes} --seeds {args.seeds} ({args.label}), "
+            f"# bench_fleet_memory.py --sizes {args.sizes} --seeds {args.seeds} --plan-args '{args.plan_args}' "
+            f"({args.label}), "
             f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, {os.cpu_count()} cores\n"
             "| code | building | seed | peak PSS (MB by role then) | each role's most (MB) | wall | exit | objective "
             "| load before |\n"
