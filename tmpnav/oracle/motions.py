@@ -98,7 +98,7 @@ def footprint(m: NominalMotion | None) -> int:
     the library keeps for them (:meth:`MotionLibrary._rows`) take as many again."""
     if m is None:
         return 0
-    seen = 0 if m.lm_visible.ndim and m.lm_visible.strides[0] == 0 else m.lm_visible.nbytes
+    seen = 0 if m.lm_visible.strides[0] == 0 else m.lm_visible.nbytes
     keys = m.cells.nbytes + (0 if m.scan_keys is None else m.scan_keys.nbytes)
     return m.controls.nbytes + m.poses.nbytes + seen + 2 * keys
 
