@@ -253,6 +253,7 @@ def test_the_kernel_unpacks_the_named_tuples_in_field_order() -> None:
         "lm_visible",
         "noise_stream",
         "reach",
+        "reach_values",
         "reach_row",
         "scan_row",
         "scan_table",

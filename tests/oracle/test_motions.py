@@ -26,8 +26,8 @@ def test_the_reach_and_scan_rows_of_motions_are_their_poses_own() -> None:
     assert first and later
 
     def check(batch: list) -> None:
-        table, rows = lib.reach_layout(batch)
-        assert np.array_equal(table[rows], np.concatenate([lib.reach(m) for m in batch]))
+        codes, values, rows = lib.reach_layout(batch)
+        assert np.array_equal(values[codes[rows]], np.concatenate([lib.reach(m) for m in batch]))
         scans = lib.scan_rows_all(batch)
         assert np.array_equal(scans, np.concatenate([m.scan_rows(lib) for m in batch]))
 

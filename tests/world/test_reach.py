@@ -129,3 +129,21 @@ def test_the_table_is_the_construction_written_plainly(case: str) -> None:
     computed = table.of_cells(keys)
     for key, row in zip(keys, computed, strict=True):
         assert np.allclose(row, plain_reach(table, int(key)), rtol=0.0, atol=1e-12)
+
+
+def test_the_table_keeps_codes_of_the_floats_computed_two_bytes_a_sector() -> None:
+    """Each sector is a uint16 code into the distinct reaches there can be, and reads back as the
+    float the construction gives, bit for bit: the offsets' distances, 0 and the cap."""
+    from tmpnav.world.reach import _offsets, encoded
+
+    grid, _ = PATHS["corner"]
+    table = SectorReach(grid, clearance(grid), RADIUS)
+    rng = np.random.default_rng(3)
+    reach = table.at(rng.uniform((0.0, 0.0), grid.extent[2:], (400, 2)))
+    assert table.codes.dtype == np.uint16 and table.codes.nbytes == table.codes.shape[0] * SECTORS * 2
+    _, _, dist, _, _, count = _offsets(grid.resolution, table.subdivisions, REACH, SECTORS)
+    offered = {0.0, REACH} | {float(d) for q in range(count.size) for d in dist[q, : count[q]] if d > 0.0}
+    assert set(np.unique(reach).tolist()) <= offered and set(table.values.tolist()) == offered
+    assert (reach == 0).any() and (reach == REACH).any() and ((reach > 0) & (reach < REACH)).any()
+    codes, values = encoded(reach)  # any array of reaches, in the kernels' form
+    assert np.array_equal(values[codes], reach) and codes.dtype == np.uint16

@@ -381,6 +381,14 @@ def _passage(R, q, c, b, s, tail):
     return max(first - second, 0.0) / q
 
 
+@nb.njit(cache=True, inline="always")
+def _decode(codes, values, row, out, at):
+    """Row ``row`` of a reach table kept as codes (:class:`tmpnav.world.reach.SectorReach`) into
+    row ``at`` of ``out`` (., K) m."""
+    for k in range(codes.shape[1]):
+        out[at, k] = values[codes[row, k]]
+
+
 @nb.njit(cache=True)
 def _step_bound(a, b, c, reach, row, masses, qs):
     """p_t of tmpnav.belief.risk.step_bound at ``row`` for the position covariance
@@ -468,8 +476,8 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
     moves its (p_t, X_t) are stored and its collision bound grows by min(p_1, p_0 + X_1) at
     step 1, by X_t after (tmpnav.belief.risk.move_bound)."""
     h_mean, h_cov, h_csig, h_fxy, h_mut, mean, cov, u, h_risk, h_step = hist
-    work, PHt, K, H, cols, y, g, Cx, masses, qs, support = scratch
-    m_off, m_T, ctrl, pose, vis, stream, reach, reach_row, scan_row, scan_table = motions  # MotionArrays' fields
+    work, PHt, K, H, cols, y, g, Cx, masses, qs, support, pair = scratch
+    m_off, m_T, ctrl, pose, vis, stream, reach, reach_values, reach_row, scan_row, scan_table = motions  # MotionArrays
     # EKFConstants' fields
     dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds, others, lvar, lrho, hz = ekf
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
@@ -543,8 +551,9 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
                     C00, C01 = Cx[3 * i, 2 * i], Cx[3 * i, 2 * i + 1]
                     C10, C11 = Cx[3 * i + 1, 2 * i], Cx[3 * i + 1, 2 * i + 1]
                 row = m_off[m] + m + t
-                prev, here = reach_row[row - 1], reach_row[row]  # their rows of the reach table
-                p, x = _step_risk(prev, ap, bp, dp, here, a, b, d, C00, C01, C10, C11, reach, masses, qs, support)
+                _decode(reach, reach_values, reach_row[row - 1], pair, 0)  # the two poses' reach
+                _decode(reach, reach_values, reach_row[row], pair, 1)
+                p, x = _step_risk(0, ap, bp, dp, 1, a, b, d, C00, C01, C10, C11, pair, masses, qs, support)
                 if hz > 0.0:  # the localiser's failures along the step driven (risk.move_bound's hazard)
                     f = hz * math.hypot(pose[row, 0] - pose[row - 1, 0], pose[row, 1] - pose[row - 1, 1])
                     p, x = min(1.0, p + f), x + f
@@ -581,7 +590,7 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
     h_risk, h_step = np.zeros((T + 1, n)), np.zeros((T + 1, n, 2))
     hist = (h_mean, h_cov, h_csig, h_fxy, h_mut, np.empty(D), np.empty((D, D)), np.zeros((n, 2)), h_risk, h_step)
     K = motions.reach.shape[1]
-    masses, qs = np.empty(K), np.empty(K)
+    masses, qs, pair = np.empty(K), np.empty(K), np.empty((2, K))  # pair: two poses' reach, decoded
     scratch = (
         np.empty((D, D)),
         np.empty((D, 2)),
@@ -594,6 +603,7 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
         masses,
         qs,
         np.empty(K),
+        pair,
     )
     C = seqs.group.shape[0]
     for c in range(C):
@@ -615,8 +625,8 @@ def run_sequences(n, ekf, motions, lm_noise, scan_noise, groups, seqs, mutual_vi
                     if ekf.local_var > 0.0:
                         a, b, d = ekf.local_var, 0.0, ekf.local_var
                     m = seqs.motions[c, i]
-                    row = motions.reach_row[motions.offset[m] + m]
-                    h_step[0, i, 0] = _step_bound(a, b, d, motions.reach, row, masses, qs)[0]
+                    _decode(motions.reach, motions.reach_values, motions.reach_row[motions.offset[m] + m], pair, 0)
+                    h_step[0, i, 0] = _step_bound(a, b, d, pair, 0, masses, qs)[0]
                 h_fxy[0, i, 0] = groups.mean0[g, 3 * i]
                 h_fxy[0, i, 1] = groups.mean0[g, 3 * i + 1]
             h_mut[0] = 0

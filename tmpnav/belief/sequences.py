@@ -23,6 +23,7 @@ import numpy as np
 
 from tmpnav.belief.kernel import run_sequences
 from tmpnav.types import Models, ObservationMode, ScanModelKind
+from tmpnav.world.reach import encoded
 
 
 class EKFConstants(NamedTuple):
@@ -119,7 +120,8 @@ class MotionArrays(NamedTuple):
     poses: np.ndarray  # (sum T_m + 1, 3)
     lm_visible: np.ndarray  # (sum T_m + 1, L) bool
     noise_stream: np.ndarray  # (M,) int64
-    reach: np.ndarray  # (R, K) m: sector reaches (tmpnav.world.reach), a pose's at its row of reach_row
+    reach: np.ndarray  # (R, K) uint16/uint32: sector reaches (tmpnav.world.reach) as codes into reach_values
+    reach_values: np.ndarray  # (V,) m: the reaches the codes stand for; a pose's are reach_values[reach[row]]
     reach_row: np.ndarray  # (sum T_m + 1,) int64: the row of ``reach`` of each nominal pose
     scan_row: np.ndarray  # (sum T_m + 1,) int64: the row of scan_table of each nominal pose's scan
     scan_table: np.ndarray  # (R, 3, 3): factors G of scan information, J = Gᵀ G; row 0 zero
@@ -131,26 +133,27 @@ class MotionArrays(NamedTuple):
         lm_visible: Sequence[np.ndarray],
         noise_stream: np.ndarray,
         landmarks: int,
-        reach: Sequence[np.ndarray] | np.ndarray | tuple[np.ndarray, np.ndarray] | None = None,
+        reach: Sequence[np.ndarray] | np.ndarray | tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
         scans: tuple[np.ndarray, np.ndarray] | None = None,
     ) -> MotionArrays:
         """Lay out motions given as per-motion arrays (T_m, 2), (T_m + 1, 3), (T_m + 1, L)
         and (T_m + 1, K) sector reach, or the reach already laid end to end (sum (T_m + 1), K),
-        or a table of reaches (R, K) with the row of each pose laid end to end (sum (T_m + 1),)
-        as a tuple (none given: no collision bound, one sector of infinite reach); ``scans``: the
+        or a table of reaches as codes (R, K), the values they index (V,) and the row of each
+        pose laid end to end (sum (T_m + 1),) as a tuple (:class:`~tmpnav.world.reach.SectorReach`;
+        none given: no collision bound, one sector of infinite reach); ``scans``: the
         scan rows laid end to end (sum (T_m + 1),) and their table (R, 3, 3) (none given: no scans)."""
         steps = np.array([c.shape[0] for c in controls], dtype=np.int64)
         rows = int((steps + 1).sum())
         reach_row = np.arange(rows, dtype=np.int64)
         if reach is None:  # one sector of infinite reach: the kernel's bound is 0 at once
-            far = np.full((1, 1), np.inf)
+            codes, values = np.zeros((1, 1), dtype=np.uint16), np.full(1, np.inf)
             reach_row = np.zeros(rows, dtype=np.int64)
         elif isinstance(reach, tuple):
-            far, reach_row = np.asarray(reach[0], dtype=float), np.asarray(reach[1], dtype=np.int64)
+            codes, values, reach_row = reach[0], np.asarray(reach[1], dtype=float), np.asarray(reach[2], dtype=np.int64)
         elif isinstance(reach, np.ndarray):
-            far = np.asarray(reach, dtype=float).reshape(rows, -1)
+            codes, values = encoded(np.asarray(reach, dtype=float).reshape(rows, -1))
         else:
-            far = np.concatenate(list(reach)).astype(float).reshape(rows, -1)
+            codes, values = encoded(np.concatenate(list(reach)).astype(float).reshape(rows, -1))
         return MotionArrays(
             offset=np.concatenate([[0], np.cumsum(steps)[:-1]]).astype(np.int64),
             steps=steps,
@@ -160,7 +163,8 @@ class MotionArrays(NamedTuple):
                 np.concatenate(list(lm_visible)).reshape(int((steps + 1).sum()), landmarks)
             ),
             noise_stream=np.asarray(noise_stream, dtype=np.int64),
-            reach=np.ascontiguousarray(far),
+            reach=np.ascontiguousarray(codes),
+            reach_values=values,
             reach_row=reach_row,
             scan_row=np.zeros(rows, dtype=np.int64) if scans is None else np.asarray(scans[0], dtype=np.int64),
             scan_table=np.zeros((1, 3, 3)) if scans is None else np.asarray(scans[1], dtype=float),

@@ -26,6 +26,7 @@ from tmpnav.roadmap.graph import safe_weights
 from tmpnav.roadmap.shortcut import least_clearance, required_clearance, shortcut
 from tmpnav.types import Roadmap, Scenario
 from tmpnav.world import World
+from tmpnav.world.reach import encoded
 from tmpnav.world.scan_information import ScanInformation
 from tmpnav.world.visibility import LandmarkVisibility
 
@@ -233,11 +234,12 @@ class MotionLibrary:
         through the rows the motion keeps (:meth:`_rows`)."""
         table = self.world.reach(self.scenario.robot(motion.robot).radius)
         found = self._rows([motion], table, lambda m: m.cells, table.rows_of)
-        return table.table[found[rows]]
+        return table.values[table.codes[found[rows]]]
 
-    def reach_layout(self, motions: list[NominalMotion]) -> tuple[np.ndarray, np.ndarray]:
-        """The sector reach of every pose of ``motions`` laid end to end, as a table (R, K) m and
-        the row of it of each pose (sum (T+1),): the pose's reach is ``table[rows[k]]``.
+    def reach_layout(self, motions: list[NominalMotion]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The sector reach of every pose of ``motions`` laid end to end, as a table of codes
+        (R, K), the reaches they stand for (V,) m, and the row of the table of each pose
+        (sum (T+1),): the pose's reach is ``values[codes[rows[k]]]``.
 
         With one robot radius the table is that radius' :class:`~tmpnav.world.reach.SectorReach`
         table and each motion's rows are found once and kept with it (:meth:`_rows`): an
@@ -246,11 +248,11 @@ class MotionLibrary:
         oracle time. With several radii, the reach itself, one row per pose."""
         radii = {self.scenario.robot(m.robot).radius for m in motions}
         if len(radii) > 1:
-            full = np.concatenate([self.reach(m) for m in motions])
-            return full, np.arange(full.shape[0], dtype=np.int64)
+            codes, values = encoded(np.concatenate([self.reach(m) for m in motions]))
+            return codes, values, np.arange(codes.shape[0], dtype=np.int64)
         reach = self.world.reach(radii.pop() if radii else 0.0)
         rows = self._rows(motions, reach, lambda m: m.cells, reach.rows_of)
-        return reach.table, rows  # the table after the rows were added to it
+        return reach.codes, reach.values, rows  # the table after the rows were added to it
 
     def scan_rows_all(self, motions: list[NominalMotion]) -> np.ndarray:
         """The rows of :attr:`scans`' table of every pose's scan of ``motions``, laid end to end

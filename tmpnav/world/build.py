@@ -27,8 +27,9 @@ from tmpnav.world.scan_information import ScanInformation
 
 @dataclass(frozen=True)
 class Learned:
-    """Cells a copy of a :class:`World` computed: each reach table's sub-cells and their reach,
-    each scan table's keys and factors (:meth:`World.take_new`)."""
+    """Cells a copy of a :class:`World` computed: each reach table's sub-cells and their reach
+    (as codes, :class:`~tmpnav.world.reach.SectorReach`), each scan table's keys and factors
+    (:meth:`World.take_new`)."""
 
     reach: dict[float, tuple[np.ndarray, np.ndarray]]
     scans: dict[RangeSensor, tuple[np.ndarray, np.ndarray]]
@@ -109,9 +110,9 @@ class World:
 
     def learn(self, new: Learned) -> None:
         """Take what another copy of this world computed (:meth:`take_new`)."""
-        for radius, (keys, values) in new.reach.items():
+        for radius, (keys, codes) in new.reach.items():
             if keys.size:
-                self.reach(radius).learn(keys, values)
+                self.reach(radius).learn(keys, codes)
         for sensor, (keys, values) in new.scans.items():
             if keys.size:
                 self.scans(sensor).learn(keys, values)

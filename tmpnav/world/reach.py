@@ -20,7 +20,11 @@ cells with a free 8-neighbour are scanned: the nearest point of H in a sector (a
 lies on H's boundary. A sub-cell of a hit cell, or off the grid, has reach 0 in every sector.
 
 Sub-cells are computed when first asked for and remembered (:class:`SectorReach`): a plan of
-a building asks for some thousands among millions of poses.
+a building asks for some thousands among millions of poses, a fleet's for millions.
+
+A reach is 0, :data:`REACH` or the distance of one of the offsets' squares, so the table keeps
+each sector as a code, the index of its value among those few thousand distances (``values``):
+2 bytes where a float takes 8, and every value read back is the float computed, bit for bit.
 """
 
 from __future__ import annotations
@@ -61,10 +65,14 @@ class SectorReach:
         self.boundary = hit & ndimage.binary_dilation(~hit, structure=np.ones((3, 3), dtype=bool))
         self.keys = np.zeros(0, dtype=np.int64)  # the sub-cells computed, sorted
         self.key_rows = np.zeros(0, dtype=np.int64)  # and their rows of the table
-        self.table = np.zeros((1, SECTORS))  # row 0: off the grid, reach 0
+        self._offsets = _offsets(grid.resolution, subdivisions, REACH, SECTORS)
+        #: every reach there can be (V,) m, sorted: 0, the offsets' distances below REACH, REACH
+        self.values, self._offset_codes = _codebook(self._offsets)
+        #: (R, K) each sub-cell's reach as codes, indices into :attr:`values` (uint16 while V fits);
+        #: row 0 is off the grid, reach 0
+        self.codes: np.ndarray = np.zeros((1, SECTORS), dtype=code_type(self.values.size))
         self.rows = 1
-        self._offsets: tuple[np.ndarray, ...] | None = None  # _offsets(), when first needed
-        self._lookup: tuple[np.ndarray, ...] | None = None  # _offset_index() and _boundary_rows(), with them
+        self._lookup: tuple[np.ndarray, ...] | None = None  # _offset_index() and _boundary_rows(), when first needed
         self._new: list[np.ndarray] | None = None  # keys computed since :meth:`take_new`, once called
 
     def cells(self, points: np.ndarray) -> np.ndarray:
@@ -81,10 +89,10 @@ class SectorReach:
         """R (..., K) m for sub-cell keys (...,) (:meth:`cells`)."""
         cells = np.asarray(cells, dtype=np.int64)
         rows = self.rows_of(cells.ravel())  # before the table is read: it may grow
-        return self.table[rows].reshape(*cells.shape, SECTORS)
+        return self.values[self.codes[rows]].reshape(*cells.shape, SECTORS)
 
     def rows_of(self, cells: np.ndarray) -> np.ndarray:
-        """The row of :attr:`table` holding the reach of each sub-cell key (N,) (:meth:`cells`),
+        """The row of :attr:`codes` holding the reach of each sub-cell key (N,) (:meth:`cells`),
         computing those not known yet; row 0 (reach 0) off the grid. Rows stay where they are
         as the table grows."""
         flat = np.asarray(cells, dtype=np.int64)
@@ -103,44 +111,46 @@ class SectorReach:
         return self.of_cells(self.cells(points))
 
     def take_new(self) -> tuple[np.ndarray, np.ndarray]:
-        """The sub-cells computed here since the last call, and their reach (N, K): what a
-        worker's copy of the table hands back to its parent's (:meth:`learn`). The first call
-        starts the record and returns none: only a worker's copy keeps one."""
+        """The sub-cells computed here since the last call, and their reach's codes (N, K): what
+        a worker's copy of the table hands back to its parent's (:meth:`learn`; every copy has
+        the same :attr:`values`). The first call starts the record and returns none: only a
+        worker's copy keeps one."""
         keys = np.concatenate(self._new) if self._new else np.zeros(0, dtype=np.int64)
         self._new = []
-        return keys, self.of_cells(keys)
+        return keys, self.codes[self.rows_of(keys)]
 
-    def learn(self, keys: np.ndarray, reach: np.ndarray) -> None:
-        """Take the reach (N, K) of sub-cells ``keys`` (N,) another copy of this table computed
-        (:meth:`take_new`), for those not known yet."""
+    def learn(self, keys: np.ndarray, codes: np.ndarray) -> None:
+        """Take the reach's codes (N, K) of sub-cells ``keys`` (N,) another copy of this table
+        computed (:meth:`take_new`), for those not known yet."""
         keys = np.asarray(keys, dtype=np.int64)
         if self.keys.size:
             at = np.minimum(np.searchsorted(self.keys, keys), self.keys.size - 1)
             fresh = self.keys[at] != keys
-            keys, reach = keys[fresh], np.asarray(reach, dtype=float)[fresh]
+            keys, codes = keys[fresh], np.asarray(codes)[fresh]
         if keys.size:
-            self._store(keys, reach)
+            self._store(keys, codes)
 
     def _compute(self, keys: np.ndarray) -> None:
         if self._new is not None:
             self._new.append(keys)
         s, cols = self.subdivisions, self.grid.shape[1] * self.subdivisions
-        out = np.empty((keys.size, SECTORS))
-        if self._offsets is None or self._lookup is None:
-            self._offsets = _offsets(self.grid.resolution, s, REACH, SECTORS)
+        out = np.empty((keys.size, SECTORS), dtype=self.codes.dtype)
+        if self._lookup is None:
             self._lookup = (_offset_index(self._offsets), *_boundary_rows(self.boundary))
         index, starts, columns = self._lookup
-        _sector_reach(self.hit, starts, columns, s, keys // cols, keys % cols, REACH, self._offsets, index, out)
+        far = self.values.size - 1  # REACH's code: the largest value
+        si, sj = keys // cols, keys % cols
+        _sector_reach(self.hit, starts, columns, s, si, sj, REACH, far, self._offsets, self._offset_codes, index, out)
         self._store(keys, out)
 
-    def _store(self, keys: np.ndarray, out: np.ndarray) -> None:
-        """Rows for sub-cells ``keys`` (none known yet, sorted or not) holding their reach ``out``."""
+    def _store(self, keys: np.ndarray, codes: np.ndarray) -> None:
+        """Rows for sub-cells ``keys`` (none known yet, sorted or not) holding their reach's ``codes``."""
         need = self.rows + keys.size
-        if need > self.table.shape[0]:
-            grown = np.zeros((max(need, 2 * self.table.shape[0]), SECTORS))
-            grown[: self.rows] = self.table[: self.rows]
-            self.table = grown
-        self.table[self.rows : need] = out
+        if need > self.codes.shape[0]:
+            grown = np.zeros((max(need, 2 * self.codes.shape[0]), SECTORS), dtype=self.codes.dtype)
+            grown[: self.rows] = self.codes[: self.rows]
+            self.codes = grown
+        self.codes[self.rows : need] = codes
         order = np.argsort(np.concatenate([self.keys, keys]), kind="stable")
         self.keys = np.concatenate([self.keys, keys])[order]
         self.key_rows = np.concatenate([self.key_rows, np.arange(self.rows, need)])[order]
@@ -223,11 +233,35 @@ def _boundary_rows(boundary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return starts.astype(np.int64), columns.astype(np.int64)
 
 
+def code_type(values: int) -> type:
+    """The unsigned integer type of codes into ``values`` distinct reaches."""
+    return np.uint16 if values <= np.iinfo(np.uint16).max + 1 else np.uint32
+
+
+def encoded(reach: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Reaches (R, K) m as a table's codes (R, K) and the values they index (V,): any array of
+    reaches in the form the kernels read (:class:`tmpnav.belief.sequences.MotionArrays`)."""
+    values, inverse = np.unique(np.asarray(reach, dtype=float), return_inverse=True)
+    return inverse.reshape(reach.shape).astype(code_type(values.size)), values
+
+
+def _codebook(offsets: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct reaches a table can hold (V,), sorted (0 first, :data:`REACH` last), and the
+    code of each offset's distance (sub * sub, C) (:func:`_offsets`; 0 where d <= 0)."""
+    _, _, dist, _, _, count = offsets
+    used = np.arange(dist.shape[1])[None, :] < count[:, None]
+    values = np.unique(np.concatenate([[0.0, REACH], dist[used & (dist > 0.0)]]))
+    codes = np.where(used & (dist > 0.0), np.searchsorted(values, np.where(used, dist, 0.0)), 0)
+    return values, codes.astype(np.int64)
+
+
 @nb.njit(cache=True)
-def _sector_reach(hit, starts, columns, sub, si, sj, reach, offsets, index, out):
-    """Fill out (N, K) with the reach of sub-cells (si, sj) (the module docstring's construction;
-    ``sub`` sub-cells per cell and axis): the least distance, per sector, of the boundary cells
-    among ``offsets`` (:func:`_offsets`, found by ``index``, :func:`_offset_index`) around each.
+def _sector_reach(hit, starts, columns, sub, si, sj, reach, far, offsets, codes, index, out):
+    """Fill out (N, K) with the codes of the reach of sub-cells (si, sj) (the module docstring's
+    construction; ``sub`` sub-cells per cell and axis): the least distance, per sector, of the
+    boundary cells among ``offsets`` (:func:`_offsets`, found by ``index``, :func:`_offset_index`)
+    around each, as its code (``codes`` of each offset, :func:`_codebook`; 0 for reach 0 and
+    ``far`` for ``reach``, the cap).
     ``hit`` and the boundary cells (``starts``, ``columns``: :func:`_boundary_rows`) carry one
     ring of cells around the grid (grid cell (i, j) is their (i + 1, j + 1)). The boundary is
     read row by row from its list: a sub-cell meets the few hundred boundary cells within reach
@@ -235,14 +269,16 @@ def _sector_reach(hit, starts, columns, sub, si, sj, reach, offsets, index, out)
     _, _, dist, k0s, k1s, _ = offsets
     K = out.shape[1]
     n = (index.shape[1] - 1) // 2
+    best = np.empty(K)
     for p in range(si.shape[0]):
         i0, j0 = si[p] // sub + 1, sj[p] // sub + 1
         q = (si[p] % sub) * sub + (sj[p] % sub)
         for k in range(K):
-            out[p, k] = reach
+            best[k] = reach
+            out[p, k] = far
         if hit[i0, j0]:
             for k in range(K):
-                out[p, k] = 0.0
+                out[p, k] = 0
             continue
         for i in range(max(i0 - n, 0), min(i0 + n + 1, hit.shape[0])):
             e = _first_at_least(columns, starts[i], starts[i + 1], j0 - n)
@@ -254,12 +290,14 @@ def _sector_reach(hit, starts, columns, sub, si, sj, reach, offsets, index, out)
                 d = dist[q, c]
                 if k0s[q, c] < 0:
                     for k in range(K):
-                        out[p, k] = 0.0
+                        best[k] = 0.0
+                        out[p, k] = 0
                     continue
                 for k in range(k0s[q, c], k1s[q, c] + 1):
                     kk = k % K
-                    if d < out[p, kk]:
-                        out[p, kk] = d
+                    if d < best[kk]:
+                        best[kk] = d
+                        out[p, kk] = codes[q, c]
 
 
 @nb.njit(cache=True, inline="always")
