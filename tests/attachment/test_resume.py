@@ -73,7 +73,7 @@ def test_runs_with_other_waits_resume_and_match_runs_from_the_start(team: tuple[
 
 def test_a_run_parts_from_another_where_a_changed_step_is_scheduled_or_started() -> None:
     made: Made[None, None] = Made(
-        {2: 4}, {(3, "r1"): (1, 2)}, (), {1: -1, 2: 0, 3: 1, 4: 3}, {1: 0, 2: 2, 3: 3, 4: 5}, {}, None
+        {2: 4}, {(3, "r1"): (1, 2)}, (), {1: -1, 2: 0, 3: 1, 4: 3}, {1: 0, 2: 2, 3: 3, 4: 5}, {}, {}, None
     )
     assert parting(made, {2: 4}, {(3, "r1"): (1, 2)}) is None  # the same run
     assert parting(made, {2: 4, 4: 1}, {(3, "r1"): (1, 2)}) == 3  # a wait on step 4: where it was scheduled

@@ -136,7 +136,8 @@ class TeamClock:
         state = self.advance(loop.state, max(loop.state.free, default=0), loop.trace)
         result = self._result(state, plan, loop.trace)
         if loop.trace is not None:  # kept to resume from: the runs of a plan kept apart are recorded
-            made = Made(held, ways, tuple(loop.checkpoints), loop.pushed, loop.dispatched, loop.trace.steps, result)
+            trace, points = loop.trace, tuple(loop.checkpoints)
+            made = Made(held, ways, points, loop.pushed, loop.dispatched, trace.steps, trace.segments, result)
             self.resumes.keep(plan, made)
         return result
 
@@ -158,7 +159,7 @@ class TeamClock:
             return loop
         made, at = resume.made, resume.at
         point = made.checkpoints[at]
-        trace = Trace.resumed(self.start.names, self.dt, made.steps, point.traced) if record else None
+        trace = Trace.resumed(self.start.names, self.dt, made.steps, made.segments, point.traced) if record else None
         loop = _Loop(self, plan, held, order, point.state, list(point.events), list(point.done), trace)
         loop.checkpoints = list(made.checkpoints[:at])
         loop.pushed = {k: j for k, j in made.pushed.items() if j < at}
@@ -300,7 +301,8 @@ class TeamClock:
             beliefs.append(b)
             mean[3 * i : 3 * i + 3], cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = b.means[b.row(r)], b.covs[b.row(r)]
             if trace is not None:
-                trace.steps[i].extend(own.records(b, a - legs[-1].start + 1, r + 1))
+                lo = a - legs[-1].start + 1
+                trace.add(i, own.records(b, lo, r + 1), b, lo, r + 1)
         nodes = tuple(state.where(i)[0] for i in range(n))
         headings = tuple(state.where(i)[1] for i in range(n))
         moved = Team(state.team.names, nodes, headings, mean, cov, until * self.dt)
@@ -370,8 +372,9 @@ class TeamClock:
                     m.step, move[0], move[1], move[2], partner, m.ready * dt, m.start * dt, m.end * dt, service, opens
                 )
             )
-        trajectories = trace.trajectories() if trace is not None else None
-        return ClockRun(moves, Schedule(names, tuple(timed)), state, trajectories)
+        if trace is None:
+            return ClockRun(moves, Schedule(names, tuple(timed)), state)
+        return ClockRun(moves, Schedule(names, tuple(timed)), state, trace.trajectories(), trace.tracks())
 
 
 class _Loop:

@@ -5,7 +5,7 @@ run on it (:class:`ClockRun`)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -101,6 +101,9 @@ class ClockRun:
     schedule: Schedule
     end: ClockState
     trajectories: dict[str, list[TrajectoryStep]] | None = None
+    #: (when recorded) each robot's positions (T, 2) and position stds (T,) at the steps of its
+    #: trajectory, as arrays (tmpnav.belief.conflicts.find_conflicts' ``tracks``)
+    tracks: dict[str, tuple[np.ndarray, np.ndarray]] | None = field(default=None, repr=False, compare=False)
 
     @property
     def makespan(self) -> float:

@@ -143,7 +143,7 @@ def resolve_conflicts(
         run = clock.run(steps, delays, record=True, detours=detours)
         assert run.trajectories is not None
         windows = trajectory_windows(run.trajectories, run.schedule, rate)
-        return _Node(delays, run, find_conflicts(run.trajectories, radii, risk, windows, apart_std))
+        return _Node(delays, run, find_conflicts(run.trajectories, radii, risk, windows, apart_std, run.tracks))
 
     root = check({})
     best, runs, longest = root, 1, root.run.makespan + clock.dt

@@ -35,6 +35,7 @@ from weakref import WeakKeyDictionary
 
 import numpy as np
 
+from tmpnav.belief.conflicts import position_sigma
 from tmpnav.belief.risk import running_bound
 from tmpnav.belief.sequences import (
     EKFConstants,
@@ -79,10 +80,21 @@ class LegBelief:
     risk: np.ndarray  # (drive + 1,) the move's running collision bound
     nodes: dict[int, int]  # row -> the roadmap node reached there
     record: list[TrajectoryStep] = field(default_factory=list)  # rows 1.. as far as asked
+    _sigma: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)  # position_sigma(covs), as of covs
 
     def row(self, r: int) -> int:
         """The row of the arrays that holds row ``r`` (computed)."""
         return min(r, self.drive) if self.static else r
+
+    def track(self, lo: int, hi: int) -> tuple[np.ndarray, np.ndarray]:
+        """Rows lo..hi-1 (computed) as positions (n, 2) m and position stds (n,) m
+        (tmpnav.attachment.record.Rows): what :meth:`OwnLegs.records` holds of them."""
+        rows = np.arange(lo, hi)
+        if self.static:
+            rows = np.minimum(rows, self.drive)
+        if self._sigma.shape[0] != self.covs.shape[0]:  # the leg's standing grew: its rows' stds again
+            self._sigma = position_sigma(self.covs)
+        return self.means[rows, :2], self._sigma[rows]
 
 
 class OwnLegs:

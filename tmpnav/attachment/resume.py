@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections import OrderedDict
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Generic, TypeVar
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 if TYPE_CHECKING:
     from tmpnav.task.plans import Plan
@@ -62,6 +62,7 @@ class Made(Generic[S, R]):
     pushed: Mapping[int, int]
     dispatched: Mapping[int, int]
     steps: Mapping[int, list[TrajectoryStep]]
+    segments: Mapping[int, list[Any]]  # where the steps came from (tmpnav.attachment.record.Trace)
     run: R
 
 

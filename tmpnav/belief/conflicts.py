@@ -111,16 +111,26 @@ def find_conflicts(
     delta: float = DEFAULT_DELTA,
     windows: Mapping[tuple[str, str], np.ndarray] | None = None,
     seen: float | None = None,
+    tracks: Mapping[str, tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> list[Conflict]:
     """Every conflict (module docstring) of the planned beliefs, by start time, then robots.
     The trajectories must share one time grid from a common start; ValueError otherwise.
     ``windows``: (a, b) with a < b -> the pair's time window (s) at each step of the grid (a
     pair without one: 0, the same instant only); ``seen``: each robot's std as the others see it
-    (:func:`seen_std`) in place of its belief's."""
+    (:func:`seen_std`) in place of its belief's. ``tracks``: each robot's positions (T, 2) and
+    position stds (:func:`position_sigma`, (T,)) at its trajectory's steps, as arrays made from
+    the same beliefs (a clock run's record, ``ClockRun.tracks``): read in place of the steps,
+    which then give only the grid, from the longest (the same conflicts, found sooner)."""
     names = sorted(trajectories)
-    times = _grid([[s.t for s in trajectories[r]] for r in names])
-    means = _held([np.array([s.mean[:2] for s in trajectories[r]], dtype=float) for r in names], len(times))
-    sigmas = _held([separation_std(trajectories[r], seen) for r in names], len(times))
+    if tracks is None:
+        times = _grid([[s.t for s in trajectories[r]] for r in names])
+        xy = [np.array([s.mean[:2] for s in trajectories[r]], dtype=float) for r in names]
+        spread = [separation_std(trajectories[r], seen) for r in names]
+    else:
+        times = np.array([s.t for s in max((trajectories[r] for r in names), key=len, default=[])], dtype=float)
+        xy = [tracks[r][0] for r in names]
+        spread = [tracks[r][1] if seen is None else np.full(len(tracks[r][1]), seen) for r in names]
+    means, sigmas = _held(xy, len(times)), _held(spread, len(times))
     k = margin_factor(delta)
     if windows:
         dt = float(times[1] - times[0]) if len(times) > 1 else 1.0
