@@ -146,6 +146,33 @@ def test_room_names_that_would_stick_out_of_a_cropped_view_are_hidden() -> None:
     plt.close(fig)
 
 
+def test_a_badges_note_that_would_run_out_of_the_axes_goes_to_its_other_side() -> None:
+    """Past the right edge it would run under the legend beside the map, below the bottom off
+    the figure: there it is put to the badge's left, or above it; elsewhere it stays."""
+    import matplotlib.pyplot as plt
+
+    from tmpnav.report.figures import badge_note, keep_labels_inside
+
+    fig, ax = plt.subplots(figsize=(4, 3))
+    ax.set_xlim(0, 10)
+    ax.set_ylim(0, 10)
+    ax.set_aspect("equal")
+    for xy in ((2, 8), (9.6, 8), (2, 0.3), (9.6, 0.3)):
+        badge_note(ax, xy, "227.5 s, p≤0.0023", "#1f77b4")
+    keep_labels_inside(ax)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    box = ax.get_window_extent(renderer)
+    notes = list(ax.texts)
+    for note in notes:
+        extent = note.get_window_extent(renderer)
+        assert box.x0 <= extent.x0 and extent.x1 <= box.x1 and box.y0 <= extent.y0 and extent.y1 <= box.y1
+    assert notes[0].get_horizontalalignment() == "left" and notes[0].get_verticalalignment() == "top"
+    assert notes[1].get_horizontalalignment() == "right" and notes[2].get_verticalalignment() == "bottom"
+    assert notes[3].get_horizontalalignment() == "right" and notes[3].get_verticalalignment() == "bottom"
+    plt.close(fig)
+
+
 def test_start_ellipses_too_small_to_see_are_magnified_and_the_title_says_so(tmp_path: Path) -> None:
     from tmpnav.pipeline import load_world
     from tmpnav.report import figures as fg

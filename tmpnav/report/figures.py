@@ -14,11 +14,13 @@ from typing import BinaryIO
 import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.backend_bases import RendererBase
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
 from matplotlib.patches import Circle, Ellipse, Polygon
+from matplotlib.text import Annotation
 from matplotlib.transforms import Bbox
 from numpy.typing import NDArray
 
@@ -35,6 +37,7 @@ from tmpnav.world.scan_information import LOCALISABILITY_POINTS
 ROBOT_COLORS = ("#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 LANDMARK_MARKERS = ("*", "P", "X", "D", "p", "h", "s", "^")
 ROOM_LABEL = "room-label"  # gid of the room names (keep_labels_inside)
+BADGE_NOTE = "badge-note"  # gid of the notes beside the step badges (keep_labels_inside)
 #: the picture formats Agg draws (the others have a renderer of their own)
 AGG_FORMATS = frozenset(("png", "jpg", "jpeg", "tif", "tiff", "webp", "gif"))
 
@@ -244,7 +247,8 @@ def draw_stations(ax: Axes, scenario: Scenario) -> None:
 
 def keep_labels_inside(ax: Axes) -> None:
     """Hide the room names that do not fit wholly inside the axes (a room at the edge of a
-    cropped view): a name cut in half reads as another name."""
+    cropped view): a name cut in half reads as another name. Move a badge's note that would run
+    out of the axes (over the legend beside them, or off the figure) to the badge's other side."""
     fig = ax.get_figure(root=True)
     if fig is None:
         return
@@ -254,11 +258,27 @@ def keep_labels_inside(ax: Axes) -> None:
     renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
     box = ax.get_window_extent(renderer).padded(-2.0)
     for text in ax.texts:
+        if text.get_gid() == BADGE_NOTE and isinstance(text, Annotation):
+            _turn_inside(text, box, renderer)
         if text.get_gid() != ROOM_LABEL:
             continue
         extent = text.get_window_extent(renderer)
         inside = box.x0 <= extent.x0 and extent.x1 <= box.x1 and box.y0 <= extent.y0 and extent.y1 <= box.y1
         text.set_visible(inside)
+
+
+def _turn_inside(note: Annotation, box: Bbox, renderer: RendererBase) -> None:
+    """A :func:`badge_note` past the right edge of ``box`` put to its badge's left, one past the
+    bottom put above it (the note's offset mirrored about the badge)."""
+    extent = note.get_window_extent(renderer)
+    dx, dy = note.xyann
+    if extent.x1 > box.x1:
+        dx = dx - 2 * NOTE_OFFSET
+        note.set_horizontalalignment("right")
+    if extent.y0 < box.y0:
+        dy = dy + 2 * NOTE_OFFSET
+        note.set_verticalalignment("bottom")
+    note.xyann = (dx, dy)
 
 
 def draw_doors(ax: Axes, scenario: Scenario) -> None:
@@ -384,12 +404,17 @@ def step_badge(ax: Axes, xy: tuple[float, float], text: str, color: str, offset:
     )
 
 
+#: points from a step badge's centre to the corner of its note
+NOTE_OFFSET = 9
+
+
 def badge_note(ax: Axes, xy: tuple[float, float], text: str, color: str, offset: tuple[float, float] = (0, 0)) -> None:
-    """A small note (an arrival time) to the lower right of a :func:`step_badge` at ``xy``."""
+    """A small note (an arrival time) to the lower right of a :func:`step_badge` at ``xy``
+    (to its left or above where that runs out of the axes: :func:`keep_labels_inside`)."""
     ax.annotate(
         text,
         xy,
-        xytext=(offset[0] + 9, offset[1] - 9),
+        xytext=(offset[0] + NOTE_OFFSET, offset[1] - NOTE_OFFSET),
         textcoords="offset points",
         ha="left",
         va="top",
@@ -397,6 +422,7 @@ def badge_note(ax: Axes, xy: tuple[float, float], text: str, color: str, offset:
         color=darker(color, 0.8),
         bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.8},
         zorder=9,
+        gid=BADGE_NOTE,
     )
 
 
