@@ -153,7 +153,7 @@ def test_a_badges_note_that_would_run_out_of_the_axes_goes_to_its_other_side() -
 
     from tmpnav.report.figures import badge_note, keep_labels_inside
 
-    fig, ax = plt.subplots(figsize=(4, 3))
+    fig, ax = plt.subplots(figsize=(8, 6))
     ax.set_xlim(0, 10)
     ax.set_ylim(0, 10)
     ax.set_aspect("equal")
@@ -164,6 +164,7 @@ def test_a_badges_note_that_would_run_out_of_the_axes_goes_to_its_other_side() -
     renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
     box = ax.get_window_extent(renderer)
     notes = list(ax.texts)
+    assert all(note.get_visible() for note in notes)
     for note in notes:
         extent = note.get_window_extent(renderer)
         assert box.x0 <= extent.x0 and extent.x1 <= box.x1 and box.y0 <= extent.y0 and extent.y1 <= box.y1
@@ -171,6 +172,33 @@ def test_a_badges_note_that_would_run_out_of_the_axes_goes_to_its_other_side() -
     assert notes[1].get_horizontalalignment() == "right" and notes[2].get_verticalalignment() == "bottom"
     assert notes[3].get_horizontalalignment() == "right" and notes[3].get_verticalalignment() == "bottom"
     plt.close(fig)
+
+
+def test_notes_that_would_cover_each_other_take_both_sides_then_are_left_out() -> None:
+    import matplotlib.pyplot as plt
+
+    from tmpnav.report.figures import badge_note, keep_labels_inside
+
+    fig, ax = plt.subplots(figsize=(4, 3))
+    ax.set_xlim(0, 10)
+    ax.set_ylim(0, 10)
+    ax.set_aspect("equal")
+    for xy in ((5, 5), (5.1, 5), (5.2, 5), (2, 8)):
+        badge_note(ax, xy, "227.5 s, p≤0.0023", "#1f77b4")
+    keep_labels_inside(ax)
+    first, second, third, apart = ax.texts
+    assert first.get_visible() and first.get_horizontalalignment() == "left"
+    assert second.get_visible() and second.get_horizontalalignment() == "right"  # the badge's other side
+    assert not third.get_visible() and apart.get_visible()
+    plt.close(fig)
+
+
+def test_a_fleets_robots_that_share_a_colour_differ_in_their_line() -> None:
+    from tmpnav.report.figures import ROBOT_COLORS, robot_color, robot_line
+
+    styles = [(robot_color(i), str(robot_line(i))) for i in range(4 * len(ROBOT_COLORS))]
+    assert len(set(styles)) == len(styles)  # 32 robots, each its own colour and line
+    assert all(robot_line(i) == "-" for i in range(len(ROBOT_COLORS)))  # a team of up to 8: solid lines
 
 
 def test_start_ellipses_too_small_to_see_are_magnified_and_the_title_says_so(tmp_path: Path) -> None:

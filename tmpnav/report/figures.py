@@ -42,9 +42,20 @@ BADGE_NOTE = "badge-note"  # gid of the notes beside the step badges (keep_label
 AGG_FORMATS = frozenset(("png", "jpg", "jpeg", "tif", "tiff", "webp", "gif"))
 
 
+#: the line of the robots past each len(ROBOT_COLORS): a fleet's robots that share a colour
+#: are told apart by it (solid, dashed, dotted, dash-dotted)
+ROBOT_LINES = ("-", (0, (5, 2)), (0, (1, 1.5)), (0, (5, 2, 1, 2)))
+
+
 def robot_color(index: int) -> str:
     """The colour of the robot at ``index`` in the scenario's list of robots."""
     return ROBOT_COLORS[index % len(ROBOT_COLORS)]
+
+
+def robot_line(index: int) -> str | tuple[float, tuple[float, ...]]:
+    """The line style of the robot at ``index``: solid for the first len(ROBOT_COLORS) robots,
+    then another for each round of the colours (:data:`ROBOT_LINES`)."""
+    return ROBOT_LINES[(index // len(ROBOT_COLORS)) % len(ROBOT_LINES)]
 
 
 def robot_colors(names: Sequence[str]) -> dict[str, str]:
@@ -248,7 +259,8 @@ def draw_stations(ax: Axes, scenario: Scenario) -> None:
 def keep_labels_inside(ax: Axes) -> None:
     """Hide the room names that do not fit wholly inside the axes (a room at the edge of a
     cropped view): a name cut in half reads as another name. Move a badge's note that would run
-    out of the axes (over the legend beside them, or off the figure) to the badge's other side."""
+    out of the axes (over the legend beside them, or off the figure) or over another note to the
+    badge's other side, and leave it out where it covers another there too (:func:`_place_note`)."""
     fig = ax.get_figure(root=True)
     if fig is None:
         return
@@ -257,9 +269,10 @@ def keep_labels_inside(ax: Axes) -> None:
     ax.apply_aspect()
     renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
     box = ax.get_window_extent(renderer).padded(-2.0)
+    notes: list[Bbox] = []
     for text in ax.texts:
         if text.get_gid() == BADGE_NOTE and isinstance(text, Annotation):
-            _turn_inside(text, box, renderer)
+            _place_note(text, box, notes, renderer)
         if text.get_gid() != ROOM_LABEL:
             continue
         extent = text.get_window_extent(renderer)
@@ -267,9 +280,11 @@ def keep_labels_inside(ax: Axes) -> None:
         text.set_visible(inside)
 
 
-def _turn_inside(note: Annotation, box: Bbox, renderer: RendererBase) -> None:
+def _place_note(note: Annotation, box: Bbox, placed: list[Bbox], renderer: RendererBase) -> None:
     """A :func:`badge_note` past the right edge of ``box`` put to its badge's left, one past the
-    bottom put above it (the note's offset mirrored about the badge)."""
+    bottom put above it (the note's offset mirrored about the badge); one that would then cover
+    a note ``placed`` before it tried on the badge's other side, and left out where it covers
+    one there too (a fleet's badges crowd: schedule.png gives every arrival's time)."""
     extent = note.get_window_extent(renderer)
     dx, dy = note.xyann
     if extent.x1 > box.x1:
@@ -279,6 +294,17 @@ def _turn_inside(note: Annotation, box: Bbox, renderer: RendererBase) -> None:
         dy = dy + 2 * NOTE_OFFSET
         note.set_verticalalignment("bottom")
     note.xyann = (dx, dy)
+    extent = note.get_window_extent(renderer)
+    if any(extent.overlaps(other) for other in placed):
+        right = note.get_horizontalalignment() == "left"
+        note.set_horizontalalignment("right" if right else "left")
+        note.xyann = (dx - 2 * NOTE_OFFSET if right else dx + 2 * NOTE_OFFSET, dy)
+        extent = note.get_window_extent(renderer)
+        inside = box.x0 <= extent.x0 and extent.x1 <= box.x1
+        if not inside or any(extent.overlaps(other) for other in placed):
+            note.set_visible(False)
+            return
+    placed.append(extent)
 
 
 def draw_doors(ax: Axes, scenario: Scenario) -> None:

@@ -92,8 +92,10 @@ def _draw_beliefs(ax: Axes, report: PlanReport, spacing: float) -> None:
         if not steps:
             continue
         xy = np.array([s.mean[:2] for s in steps], dtype=float)
-        # later robots are drawn thinner on top, so robots that share a corridor both stay visible
-        ax.plot(xy[:, 0], xy[:, 1], "-", color=color, lw=_line_width(index), zorder=5 + 0.01 * index)
+        # later robots are drawn thinner on top, so robots that share a corridor both stay visible;
+        # a fleet's robots that share a colour differ in their line
+        line = fg.robot_line(index)
+        ax.plot(xy[:, 0], xy[:, 1], color=color, ls=line, lw=_line_width(index), zorder=5 + 0.01 * index)
         patches = [
             fg.covariance_ellipse(np.array(steps[i].mean), np.array(steps[i].cov), N_SIGMA)
             for i in ellipse_steps(steps, spacing, goal_steps(report, robot))
@@ -101,7 +103,12 @@ def _draw_beliefs(ax: Axes, report: PlanReport, spacing: float) -> None:
         # one collection per robot: drawn as the patches would be, without a patch's own bookkeeping
         # (add_patch updates the data limits one patch at a time: a fifth of a replan's figure)
         ellipses = PatchCollection(
-            patches, facecolor=(*to_rgb(color), 0.25), edgecolor=fg.darker(color), linewidth=0.9, zorder=5.5
+            patches,
+            facecolor=(*to_rgb(color), 0.25),
+            edgecolor=fg.darker(color),
+            linewidth=0.9,
+            linestyle=line,
+            zorder=5.5,
         )  # above the lines: the small ellipses of a well-localized robot stay visible
         ax.add_collection(ellipses)
 
@@ -217,15 +224,26 @@ def _legend(ax: Axes, report: PlanReport, spacing: float) -> None:
             labels.append(label)
     extra: list[tuple[Artist, str]] = []
     colors = fg.robot_colors([r.name for r in report.scenario.robots])
+    fleet = len(colors) > len(fg.ROBOT_COLORS)  # one entry a robot, the ellipses' once for all
     for index, (robot, color) in enumerate(colors.items()):
-        if report.trajectories.get(robot):
-            extra.append((Line2D([], [], color=color, lw=_line_width(index)), f"{robot}: belief mean"))
+        if not report.trajectories.get(robot):
+            continue
+        line = Line2D([], [], color=color, ls=fg.robot_line(index), lw=_line_width(index))
+        extra.append((line, robot if fleet else f"{robot}: belief mean"))
+        if not fleet:
             extra.append(
                 (
                     Ellipse((0, 0), 1, 0.6, fc=(*to_rgb(color), 0.25), ec=fg.darker(color), lw=0.9),
                     f"{robot}: {N_SIGMA:g}σ (x, y) covariance, every {spacing:.1f} m",
                 )
             )
+    if fleet:
+        extra.append(
+            (
+                Ellipse((0, 0), 1, 0.6, fc=(0.5, 0.5, 0.5, 0.25), ec="#555555", lw=0.9),
+                f"{N_SIGMA:g}σ (x, y) covariance, every {spacing:.1f} m, along each robot's belief mean",
+            )
+        )
     extra.append(
         (
             Line2D([], [], marker="o", ms=11, mfc="white", mec="black", ls="none"),
@@ -241,7 +259,7 @@ def _legend(ax: Axes, report: PlanReport, spacing: float) -> None:
         [label for _, label in extra] + labels,
         loc="upper center" if below else "upper left",
         bbox_to_anchor=(0.5, -_below_label(ax)) if below else (1.0, 1.0),
-        ncol=4 if below else 1,
+        ncol=(8 if fleet else 4) if below else (2 if fleet else 1),
         fontsize=9,
         frameon=False,
     )
