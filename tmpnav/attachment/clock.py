@@ -55,6 +55,7 @@ import numpy as np
 from tmpnav.attachment.clock_state import ClockRun, ClockState, Leg, MoveRun, Pairing, Unreachable
 from tmpnav.attachment.joint_window import JointWindow
 from tmpnav.attachment.own_legs import LegBelief, OwnLegs
+from tmpnav.attachment.own_runs import RobotRuns
 from tmpnav.attachment.record import Trace
 from tmpnav.attachment.resume import Checkpoint, Made, Resume, Resumes
 from tmpnav.attachment.team import Team
@@ -92,6 +93,10 @@ class TeamClock:
         self.joint = JointWindow(lib, self.ekf, start.names, self.sensing, radii)
         #: the runs made, to resume the next runs of their plans from
         self.resumes: Resumes[ClockState, ClockRun] = Resumes()
+        #: a plan of one robot's moves on a team on its own legs is run one robot at a time,
+        #: each robot's run kept (tmpnav.attachment.own_runs); False: by the event loop
+        self.one_at_a_time = True
+        self.robot_runs = RobotRuns(self)
 
     # ------------------------------------------------------------------ a whole plan
 
@@ -111,6 +116,8 @@ class TeamClock:
         plan = tuple(plan)
         held = {k: v for k, s in (delays or {}).items() if (v := round(s / self.dt))}
         ways = dict(detours or {})
+        if self.one_at_a_time and RobotRuns.applies(self, plan):
+            return self.robot_runs.run(plan, held, ways, record)
         resume = self.resumes.find(plan, held, ways)
         if resume is not None and resume.at is None:
             return resume.made.run  # the same waits and paths: the run already made
