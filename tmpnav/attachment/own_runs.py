@@ -22,7 +22,7 @@ import itertools
 from collections import OrderedDict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
@@ -35,13 +35,32 @@ from tmpnav.task.plans import MoveKey, Plan
 from tmpnav.types import CostTerms, TrajectoryStep, cov3, vec3
 
 if TYPE_CHECKING:
-    from tmpnav.attachment.clock import TeamClock
-    from tmpnav.attachment.own_legs import LegBelief
+    from tmpnav.attachment.own_legs import LegBelief, OwnLegs
+    from tmpnav.oracle.motions import MotionLibrary
+    from tmpnav.oracle.oracle import Oracle
+    from tmpnav.types import Scenario
 
 #: robots' runs kept (the least recently used dropped first)
 MAX_ROBOT_RUNS = 8192
 #: a detour's roadmap nodes (TeamClock.run's ``detours``)
 Path = tuple[int, ...]
+
+
+class TeamClock(Protocol):
+    """What a robot's run reads of :class:`tmpnav.attachment.clock.TeamClock`."""
+
+    start: Team
+    dt: float
+    scenario: Scenario
+    oracle: Oracle
+    lib: MotionLibrary
+    own: OwnLegs | None
+
+    def initial(self) -> ClockState: ...
+    def opens_steps(self, room: str, arrive: int) -> int: ...
+    def service_steps(self, room: str) -> int: ...
+    def _own_start(self, i: int) -> tuple[np.ndarray, np.ndarray]: ...
+    def _result(self, state: ClockState, plan: Plan, trace: Trace | None) -> ClockRun: ...
 
 
 @dataclass(frozen=True, eq=False)
