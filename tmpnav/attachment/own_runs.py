@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import itertools
 from collections import OrderedDict
-from collections.abc import Mapping, Sequence
+from collections.abc import Generator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Protocol
 
@@ -32,7 +32,7 @@ from tmpnav.attachment.team import Team
 from tmpnav.belief.conflicts import position_sigma
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.task.plans import MoveKey, Plan
-from tmpnav.types import CostTerms, TrajectoryStep, cov3, vec3
+from tmpnav.types import CostTerms, MotionResult, TrajectoryStep, cov3, vec3
 
 if TYPE_CHECKING:
     from tmpnav.attachment.own_legs import LegBelief, OwnLegs
@@ -98,15 +98,11 @@ class RobotRuns:
         priced = clock.scenario.planner.max_risk is not None or record
         initial = clock.initial()
         order = [[k for k, step in enumerate(plan) if step[0][0] == r] for r in names]
-        robot_runs, failed = [], []
-        for i, steps in enumerate(order):
-            found = self._robot(i, [plan[k][0] for k in steps], steps, held, ways, priced, initial)
-            if isinstance(found, _Stopped):
-                failed.append((found.t, steps[found.place], found.error))
-            else:
-                robot_runs.append(found)
+        found = self._robots(plan, order, held, ways, priced, initial)
+        failed = [(f.t, order[i][f.place], f.error) for i, f in enumerate(found) if isinstance(f, _Stopped)]
         if failed:  # the event loop stops at the first, in its order: the earliest start, then plan step
             raise min(failed, key=lambda f: (f[0], f[1]))[2]
+        robot_runs = [f for f in found if isinstance(f, RobotRun)]
         starts = sorted({m.start for run in robot_runs for m in run.moves})
         end = max([0, *(run.free for run in robot_runs)])
         moves = [replace(m, step=order[i][m.step]) for i, run in enumerate(robot_runs) for m in run.moves]
@@ -135,32 +131,63 @@ class RobotRuns:
 
     # ------------------------------------------------------------------ one robot
 
-    def _robot(
+    def _robots(
         self,
-        i: int,
-        moves: list[MoveKey],
-        steps: list[int],
+        plan: Plan,
+        order: list[list[int]],
         held: Mapping[int, int],
         ways: Mapping[tuple[int, str], Path],
         priced: bool,
         initial: ClockState,
-    ) -> RobotRun | _Stopped:
-        robot = self.clock.start.names[i]
-        holds = tuple(held.get(k, 0) for k in steps)
-        paths = tuple(ways.get((k, robot)) for k in steps)
-        key = (i, priced, tuple(moves), holds, paths)
-        found = self._runs.get(key)
-        if found is None:
-            try:
-                found = self._make(i, moves, holds, paths, priced, initial)
-            except _Stopped as stopped:
-                found = stopped
-            self._runs[key] = found
+    ) -> list[RobotRun | _Stopped]:
+        """Each robot's run for its steps (``order``: its plan steps), read where kept, the others
+        made together: each round asks the oracle for every such robot's next move at once, as
+        the event loop asks for the moves of an event (one batch to its cache, not one a move)."""
+        names = self.clock.start.names
+        keys, found, making = [], [], {}
+        for i, steps in enumerate(order):
+            moves = tuple(plan[k][0] for k in steps)
+            waits, paths = tuple(held.get(k, 0) for k in steps), tuple(ways.get((k, names[i])) for k in steps)
+            key = (i, priced, moves, waits, paths)
+            keys.append(key)
+            kept = self._runs.get(key)
+            if kept is not None:
+                self._runs.move_to_end(key)
+            else:
+                making[i] = self._make(i, list(moves), waits, paths, priced, initial)
+            found.append(kept)
+        asking: dict[int, Request] = {}
+        for i, run in making.items():
+            self._step(i, run, asking, found, first=True)
+        while asking:
+            answers = self.clock.oracle.evaluate(list(asking.values()))
+            now, asking = asking, {}
+            for i, answer in zip(now, answers, strict=True):
+                self._step(i, making[i], asking, found, answer=answer)
+        for i in making:
+            self._runs[keys[i]] = found[i]  # type: ignore[assignment]
             if len(self._runs) > MAX_ROBOT_RUNS:
                 self._runs.popitem(last=False)
-        else:
-            self._runs.move_to_end(key)
-        return found
+        return found  # type: ignore[return-value]
+
+    @staticmethod
+    def _step(
+        i: int,
+        run: Generator[Request, MotionResult | None, RobotRun],
+        asking: dict[int, Request],
+        found: list[RobotRun | _Stopped | None],
+        answer: MotionResult | None = None,
+        first: bool = False,
+    ) -> None:
+        """Robot i's run started (``first``) or taken on by the oracle's ``answer`` (None: its
+        robot cannot reach the room), to its next question (into ``asking``) or its end (into
+        ``found``)."""
+        try:
+            asking[i] = next(run) if first else run.send(answer)
+        except StopIteration as done:
+            found[i] = done.value
+        except _Stopped as stopped:
+            found[i] = stopped
 
     def _make(
         self,
@@ -170,9 +197,10 @@ class RobotRuns:
         paths: tuple[Path | None, ...],
         priced: bool,
         initial: ClockState,
-    ) -> RobotRun:
+    ) -> Generator[Request, MotionResult | None, RobotRun]:
         """Robot i's moves in its order, each started when the event loop starts it: when the
-        robot is free and its wait is over, from its belief then (:meth:`TeamClock.dispatch`)."""
+        robot is free and its wait is over, from its belief then (:meth:`TeamClock.dispatch`).
+        Yields the oracle's request for each move and is sent its answer."""
         clock, own = self.clock, self.clock.own
         assert own is not None
         self.made += 1
@@ -186,7 +214,7 @@ class RobotRuns:
             row = b.row(t - legs[-1].start)
             node, heading = legs[-1].node, float(legs[-1].heading)
             start = StartState(node, heading, vec3(b.means[row]), cov3(b.covs[row]))
-            (result,) = clock.oracle.evaluate([Request((robot,), (start,), (move[2],), None)])
+            result = yield Request((robot,), (start,), (move[2],), None)
             if result is None:
                 raise _Stopped(t, p, Unreachable(f"{robot} cannot reach {move[2]} from where they are"))
             goal = result.goal_nodes[0]
