@@ -146,6 +146,17 @@ def test_room_names_that_would_stick_out_of_a_cropped_view_are_hidden() -> None:
     plt.close(fig)
 
 
+def _square_axes(size: tuple[float, float]) -> tuple[Any, Any]:
+    """A figure of ``size`` inches with axes over [0, 10] x [0, 10], equal aspect."""
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=size)
+    ax.set_xlim(0, 10)
+    ax.set_ylim(0, 10)
+    ax.set_aspect("equal")
+    return fig, ax
+
+
 def test_a_badges_note_that_would_run_out_of_the_axes_goes_to_its_other_side() -> None:
     """Past the right edge it would run under the legend beside the map, below the bottom off
     the figure: there it is put to the badge's left, or above it; elsewhere it stays."""
@@ -153,10 +164,7 @@ def test_a_badges_note_that_would_run_out_of_the_axes_goes_to_its_other_side() -
 
     from tmpnav.report.figures import badge_note, keep_labels_inside
 
-    fig, ax = plt.subplots(figsize=(8, 6))
-    ax.set_xlim(0, 10)
-    ax.set_ylim(0, 10)
-    ax.set_aspect("equal")
+    fig, ax = _square_axes((8, 6))
     for xy in ((2, 8), (9.6, 8), (2, 0.3), (9.6, 0.3)):
         badge_note(ax, xy, "227.5 s, p≤0.0023", "#1f77b4")
     keep_labels_inside(ax)
@@ -179,10 +187,7 @@ def test_notes_that_would_cover_each_other_take_both_sides_then_are_left_out() -
 
     from tmpnav.report.figures import badge_note, keep_labels_inside
 
-    fig, ax = plt.subplots(figsize=(4, 3))
-    ax.set_xlim(0, 10)
-    ax.set_ylim(0, 10)
-    ax.set_aspect("equal")
+    fig, ax = _square_axes((4, 3))
     for xy in ((5, 5), (5.1, 5), (5.2, 5), (2, 8)):
         badge_note(ax, xy, "227.5 s, p≤0.0023", "#1f77b4")
     keep_labels_inside(ax)
