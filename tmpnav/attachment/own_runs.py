@@ -27,12 +27,11 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 from tmpnav.attachment.clock_state import ClockRun, ClockState, Leg, MoveRun, Unreachable
-from tmpnav.attachment.record import Arrays, Segment, Trace, belief_step
+from tmpnav.attachment.record import Trace
 from tmpnav.attachment.team import Team
-from tmpnav.belief.conflicts import position_sigma
 from tmpnav.oracle.requests import Request, StartState
 from tmpnav.task.plans import MoveKey, Plan
-from tmpnav.types import CostTerms, MotionResult, TrajectoryStep, cov3, vec3
+from tmpnav.types import CostTerms, MotionResult, cov3, vec3
 
 if TYPE_CHECKING:
     from tmpnav.attachment.own_legs import LegBelief, OwnLegs
@@ -108,11 +107,11 @@ class RobotRuns:
         moves = [replace(m, step=order[i][m.step]) for i, run in enumerate(robot_runs) for m in run.moves]
         closed, cost = _closed(moves, starts, end, clock)
         legs = tuple(run.legs for run in robot_runs)
-        beliefs = [self._belief(i, legs[i], priced, end) for i in range(len(names))]
-        mean = np.concatenate([b.means[b.row(end - legs[i][-1].start)] for i, b in enumerate(beliefs)])
-        cov = np.zeros((3 * len(names), 3 * len(names)))
-        for i, b in enumerate(beliefs):
-            cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = b.covs[b.row(end - legs[i][-1].start)]
+        mean, cov = np.empty(3 * len(names)), np.zeros((3 * len(names), 3 * len(names)))
+        for i in range(len(names)):
+            b = self._belief(i, legs[i], priced, end)
+            row = b.row(end - legs[i][-1].start)
+            mean[3 * i : 3 * i + 3], cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3] = b.means[row], b.covs[row]
         nodes = tuple(legs[i][-1].node for i in range(len(names)))
         headings = tuple(legs[i][-1].heading for i in range(len(names)))
         state = ClockState(
@@ -126,7 +125,7 @@ class RobotRuns:
             closed_cost=cost,
             late=initial.late or any(run.late for run in robot_runs),
         )
-        trace = self._trace(legs, priced, end) if record else None
+        trace = self._trace(initial, legs, priced, end) if record else None
         return clock._result(state, plan, trace)
 
     # ------------------------------------------------------------------ one robot
@@ -246,27 +245,21 @@ class RobotRuns:
         assert own is not None
         return own.belief(i, legs, priced, t - legs[-1].start, self.clock._own_start(i))
 
-    def _trace(self, legs: tuple[tuple[Leg, ...], ...], priced: bool, end: int) -> Trace:
+    def _trace(self, initial: ClockState, legs: tuple[tuple[Leg, ...], ...], priced: bool, end: int) -> Trace:
         """The record of the run to step ``end``: each robot's steps along each of its legs, to
         where the next leg starts (the event loop records a step on the leg it was on before the
         move that starts there)."""
-        own, team = self.clock.own, self.clock.start
+        own = self.clock.own
         assert own is not None
-        steps: dict[int, list[TrajectoryStep]] = {}
-        segments: dict[int, list[Segment]] = {}
+        trace = Trace.at_start(self.clock.dt, initial)
         for i, mine in enumerate(legs):
-            cov = team.cov[None, 3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
-            steps[i] = [belief_step(0.0, team.mean, team.cov, i, team.node[i])]
-            segments[i] = [(Arrays(team.mean[None, 3 * i : 3 * i + 2].copy(), position_sigma(cov)), 0, 1)]
             for j, leg in enumerate(mine):
                 until = mine[j + 1].start if j + 1 < len(mine) else end
-                if until <= leg.start:
-                    continue
-                b = self._belief(i, mine[: j + 1], priced, until)
-                hi = until - leg.start + 1
-                steps[i].extend(own.records(b, 1, hi))
-                segments[i].append((b, 1, hi))
-        return Trace(team.names, self.clock.dt, steps, segments)
+                if until > leg.start:
+                    b = self._belief(i, mine[: j + 1], priced, until)
+                    hi = until - leg.start + 1
+                    trace.add(i, own.records(b, 1, hi), b, 1, hi)
+        return trace
 
 
 class _Stopped(Exception):
