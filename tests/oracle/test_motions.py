@@ -58,6 +58,31 @@ def test_a_motion_set_built_before_is_taken_with_the_new_start() -> None:
     assert np.array_equal(again.steps, fresh.steps) and np.array_equal(again.c_u, fresh.c_u)
 
 
+def test_motions_are_ordered_by_their_controls_as_tuples_of_floats_order_them() -> None:
+    """order_key sorts control sequences (T, 2) as tuples of their floats do: negative and
+    positive values, zeros of both signs, infinities, equal sequences, and sequences that are
+    each other's prefixes (the shorter first)."""
+    from tmpnav.oracle.motionsets import order_key
+
+    rng = np.random.default_rng(7)
+    values = np.array([0.0, -0.0, 0.5, -0.5, 1e-300, -1e-300, 3.0, -3.0, np.inf, -np.inf, np.nextafter(0.5, 0.0)])
+    for _ in range(500):
+        seqs: list[np.ndarray] = []
+        for _ in range(int(rng.integers(1, 20))):
+            if seqs and rng.random() < 0.5:  # a prefix of another, perhaps changed at its end, perhaps longer
+                base = seqs[int(rng.integers(len(seqs)))]
+                c = base[: int(rng.integers(0, base.shape[0] + 1))].copy()
+                if c.size and rng.random() < 0.5:
+                    c[-1, int(rng.integers(2))] = rng.choice(values)
+                if rng.random() < 0.5:
+                    c = np.vstack([c, rng.choice(values, size=(int(rng.integers(1, 3)), 2))])
+            else:
+                c = rng.choice(values, size=(int(rng.integers(0, 5)), 2))
+            seqs.append(c)
+        by_tuples = sorted(range(len(seqs)), key=lambda i: tuple(seqs[i].ravel().tolist()))
+        assert sorted(range(len(seqs)), key=lambda i: order_key(seqs[i])) == by_tuples
+
+
 def test_rpp_motions_drive_the_shortened_path_and_keep_half_the_roadmap_margin() -> None:
     """models.controller: rpp on a map with narrow doors (the depot): a motion between two rooms'
     instantiations is RPP's (turning while it drives) along the roadmap path or its shortcut, or

@@ -50,7 +50,7 @@ class MotionSet:
 
     @staticmethod
     def build(robot: str, start: StartState, motions: dict[int, NominalMotion], dt: float) -> MotionSet:
-        ordered = sorted(motions.items(), key=lambda kv: tuple(kv[1].controls.ravel().tolist()))
+        ordered = sorted(motions.items(), key=lambda kv: order_key(kv[1].controls))
         ms = [m for _, m in ordered]
         T = np.array([m.n_steps for m in ms], dtype=np.int64)
         off = np.concatenate([[0], np.cumsum(T)[:-1]]).astype(np.int64)
@@ -70,6 +70,17 @@ class MotionSet:
     def goals_in(self, lib: MotionLibrary, room: str) -> list[int]:
         """Positions of the motions to the room's instantiations, in the roadmap's order."""
         return [self.by_goal[g] for g in lib.roadmap.instantiations[room] if g in self.by_goal]
+
+
+def order_key(controls: np.ndarray) -> bytes:
+    """Bytes that sort as the controls (T, 2) do in lexicographic order of their floats (as
+    tuples of them would), a shorter sequence first where it is the other's prefix: each float
+    mapped to an unsigned integer of the same order (sign bit set on a positive one, every bit
+    flipped on a negative one; -0.0 counted as 0.0), written big-endian. Sorting a fleet's motion
+    sets by tuples of their controls took a tenth of its oracle workers' time."""
+    bits = (np.ascontiguousarray(controls, dtype=float).ravel() + 0.0).view(np.uint64)
+    keyed = np.where(bits >> np.uint64(63), ~bits, bits | np.uint64(1 << 63))
+    return keyed.astype(">u8").tobytes()
 
 
 SetKey = tuple[str, StartState]
