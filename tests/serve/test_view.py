@@ -1,6 +1,7 @@
 """The live view in a real headless Chromium (Debian's chromium and chromium-driver, driven by
 selenium): the page loads a plan, draws every robot, the time slider moves them, and a state
-posted to the service redraws the page with the revision, pushed as a server-sent event."""
+posted to the service redraws the page with the revision, pushed as a server-sent event; in a
+fleet of more than eight robots, robots that share a colour differ in their line."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.serve.server import Server
+from tests.serve.server import ROOT, Server
 from tmpnav.client import Client
 
 CHROMIUM, DRIVER = Path("/usr/bin/chromium"), Path("/usr/bin/chromedriver")
@@ -90,3 +91,67 @@ def test_the_view_draws_the_plan_moves_the_robots_and_shows_revisions(
     wait.until(lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-drawn") == str(revised["revision"]))
     assert browser.find_element(By.ID, "revision").text == str(revised["revision"])  # type: ignore[attr-defined]
     assert f"revision {revised['revision']}" in browser.find_element(By.ID, "summary").text  # type: ignore[attr-defined]
+
+
+#: ten robots on configs/two-rooms.yaml's site, r3-r8 in a row in C: r1 drives to B, r9 (r1's
+#: colour, from C's east end) to A, the others stay where they are
+FLEET = ((3.0, 6.0, -1.5708), (11.0, 7.2, -1.5708), *((1.0 + 1.6 * i, 1.0, 0.0) for i in range(6)),
+         (11.0, 1.0, 3.1416), (1.0, 3.0, 0.0))  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def fleet(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    folder = tmp_path_factory.mktemp("serve-fleet")
+    site = (ROOT / "configs" / "two-rooms.yaml").read_text().split("\nrobots:")[0]
+    robots = "".join(f"\n  - {{name: r{k}, pose: [{x:g}, {y:g}, {th:g}]}}" for k, (x, y, th) in enumerate(FLEET, 1))
+    roadmap = "\nroadmap: {samples: 300, instantiations: 3, seed: 1}"
+    (folder / "fleet.yaml").write_text(f"{site}\nrobots:{robots}{roadmap}\ngoals:\n  robots: {{r1: [B], r9: [A]}}\n")
+    running = Server(str(folder / "fleet.yaml"), folder)
+    try:
+        yield running
+    finally:
+        running.stop()
+
+
+def strokes(driver: object) -> list[tuple[str, str]]:
+    """The colour and dash pattern of every line the map's canvas strokes in one redraw."""
+    script = """
+        const seen = [], proto = CanvasRenderingContext2D.prototype, stroke = proto.stroke;
+        proto.stroke = function (...args) {
+            if (this.canvas.id === 'map') seen.push([String(this.strokeStyle), this.getLineDash().join(' ')]);
+            return stroke.apply(this, args);
+        };
+        try { draw(); } finally { proto.stroke = stroke; }
+        return seen;"""
+    return [(colour, dash) for colour, dash in driver.execute_script(script)]  # type: ignore[attr-defined]
+
+
+def test_a_fleet_s_robots_that_share_a_colour_differ_in_their_line(fleet: Server, browser: object) -> None:
+    plan = Client(fleet.url, timeout=600).plan()
+    browser.get(f"{fleet.url}/?plan={plan['id']}")  # type: ignore[attr-defined]
+    WebDriverWait(browser, 120).until(lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-drawn") == "0")
+    script = """
+        const out = {};
+        for (const li of document.querySelectorAll('#robots li')) {
+            const line = li.querySelector('svg line');
+            out[li.dataset.robot] = {
+                colour: li.dataset.colour, dash: li.dataset.dash, dot: getComputedStyle(li, '::before').color,
+                swatch: line && [line.getAttribute('stroke'), line.getAttribute('stroke-dasharray')],
+            };
+        }
+        return out;"""
+    legend = browser.execute_script(script)  # type: ignore[attr-defined]
+    assert len(legend) == 10
+    r1, r9 = legend["r1"], legend["r9"]
+    # r1 as the first eight always were: red, solid, the list's dot and no line
+    assert r1 == {"colour": "#d62728", "dash": "", "dot": "rgb(214, 39, 40)", "swatch": None}
+    assert all(legend[f"r{k}"]["dash"] == "" for k in range(1, 9))
+    # r9: r1's colour, a dash of its own, in the list as a line after the dot
+    assert r9["colour"] == r1["colour"] and r9["dot"] == r1["dot"] and r9["dash"] != ""
+    assert r9["swatch"] == [r1["colour"], r9["dash"]]
+    assert legend["r10"]["colour"] == legend["r2"]["colour"] and legend["r10"]["dash"] == r9["dash"]
+    # on the map: r1's path and ellipses solid, r9's in its dash, a dashed ring around r9's disc
+    drawn = strokes(browser)
+    assert {dash for colour, dash in drawn if colour == r1["colour"]} == {"", r9["dash"]}
+    assert ("#000000", r9["dash"]) in drawn
+    assert painted(browser, (0xD6, 0x27, 0x28)) > 50

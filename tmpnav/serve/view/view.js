@@ -5,6 +5,8 @@
 const params = new URLSearchParams(location.search);
 const token = params.get("token");
 const COLOURS = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2"];
+// the line of each round of COLOURS (canvas dash arrays, px): solid, dashed, dotted, dash-dotted
+const DASHES = [[], [8, 4], [2, 3], [8, 4, 2, 4]];
 const view = { site: null, map: null, plan: null, planId: params.get("plan"), revision: -1, t: 0 };
 
 function withToken(path) {
@@ -24,9 +26,32 @@ function frame(canvas) {
   return { s, px: (x) => pad + (x - x0) * s, py: (y) => pad + (y1 - y) * s };
 }
 
-function colourOf(robot) {
+// robot k of the site's list (0-based): colour COLOURS[k % 8], line DASHES[k // 8], so that the
+// robots of a fleet that share a colour are told apart by their line (as in plan.png)
+function robotStyle(index) {
+  const round = Math.floor(index / COLOURS.length) % DASHES.length;
+  return { colour: COLOURS[index % COLOURS.length], dash: DASHES[round] };
+}
+
+function styleOf(robot) {
   const names = view.site.robots.map((r) => r.name);
-  return COLOURS[Math.max(0, names.indexOf(robot)) % COLOURS.length];
+  return robotStyle(Math.max(0, names.indexOf(robot)));
+}
+
+// a line of the robot's dash after its dot in the list, for the robots past the eighth
+function dashSwatch(style) {
+  const ns = "http://www.w3.org/2000/svg";
+  const svg = document.createElementNS(ns, "svg"), line = document.createElementNS(ns, "line");
+  svg.setAttribute("width", "26");
+  svg.setAttribute("height", "8");
+  svg.style.verticalAlign = "middle";
+  svg.style.marginRight = "4px";
+  const attributes = {
+    x1: 0, y1: 4, x2: 26, y2: 4, stroke: style.colour, "stroke-width": 2, "stroke-dasharray": style.dash.join(" "),
+  };
+  for (const [name, value] of Object.entries(attributes)) line.setAttribute(name, String(value));
+  svg.appendChild(line);
+  return svg;
 }
 
 // the belief of a robot at time t: its trajectory's step at or before t (docs/plan-json.md)
@@ -45,13 +70,15 @@ function ellipse(cov) {
   return { rx: 2 * Math.sqrt(l1), ry: 2 * Math.sqrt(l2), angle: Math.atan2(l1 - a, b || 1e-12) };
 }
 
-function drawEllipse(g, f, x, y, cov, colour, fill) {
+function drawEllipse(g, f, x, y, cov, style, fill) {
   const e = ellipse(cov);
   g.beginPath();
   g.ellipse(f.px(x), f.py(y), Math.max(e.rx * f.s, 1), Math.max(e.ry * f.s, 1), -e.angle, 0, 2 * Math.PI);
-  g.strokeStyle = colour;
+  g.strokeStyle = style.colour;
   g.lineWidth = 1;
+  g.setLineDash(style.dash);
   g.stroke();
+  g.setLineDash([]);
   if (fill) { g.fillStyle = fill; g.fill(); }
 }
 
@@ -100,10 +127,13 @@ function drawPlan(g, f) {
     for (const move of action.moves) {
       g.beginPath();
       move.path_points.forEach(([x, y], i) => (i ? g.lineTo(f.px(x), f.py(y)) : g.moveTo(f.px(x), f.py(y))));
-      g.strokeStyle = colourOf(move.robot);
+      const style = styleOf(move.robot);
+      g.strokeStyle = style.colour;
       g.globalAlpha = 0.6;
       g.lineWidth = 2;
+      g.setLineDash(style.dash);
       g.stroke();
+      g.setLineDash([]);
       g.globalAlpha = 1;
     }
   }
@@ -112,7 +142,7 @@ function drawPlan(g, f) {
     const driving = steps.filter((s) => s.action !== null);
     const every = Math.max(1, Math.floor(driving.length / 12));
     driving.forEach((s, i) => {
-      if (i % every === 0) drawEllipse(g, f, s.mean[0], s.mean[1], s.cov, colourOf(robot), null);
+      if (i % every === 0) drawEllipse(g, f, s.mean[0], s.mean[1], s.cov, styleOf(robot), null);
     });
   }
 }
@@ -122,16 +152,29 @@ function drawRobots(g, f) {
   list.textContent = "";
   for (const r of view.site.robots) {
     const b = beliefAt(r.name, view.t);
-    const item = document.createElement("li");
+    const style = styleOf(r.name), item = document.createElement("li");
     item.dataset.robot = r.name;
-    item.style.setProperty("--colour", colourOf(r.name));
+    item.dataset.colour = style.colour;
+    item.dataset.dash = style.dash.join(" ");
+    item.style.setProperty("--colour", style.colour);
+    if (style.dash.length) item.appendChild(dashSwatch(style));
+    let label;
     if (b) {
-      const [x, y, th] = b.mean;
-      drawEllipse(g, f, x, y, b.cov, colourOf(r.name), "rgba(0, 0, 0, 0.08)");
+      const [x, y, th] = b.mean, radius = Math.max(r.radius * f.s, 4);
+      drawEllipse(g, f, x, y, b.cov, style, "rgba(0, 0, 0, 0.08)");
       g.beginPath();
-      g.arc(f.px(x), f.py(y), Math.max(r.radius * f.s, 4), 0, 2 * Math.PI);
-      g.fillStyle = colourOf(r.name);
+      g.arc(f.px(x), f.py(y), radius, 0, 2 * Math.PI);
+      g.fillStyle = style.colour;
       g.fill();
+      if (style.dash.length) {  // past the eighth robot: a ring in its line around the disc
+        g.beginPath();
+        g.arc(f.px(x), f.py(y), radius + 2.5, 0, 2 * Math.PI);
+        g.strokeStyle = "#000";
+        g.lineWidth = 1.5;
+        g.setLineDash(style.dash);
+        g.stroke();
+        g.setLineDash([]);
+      }
       g.beginPath();
       g.moveTo(f.px(x), f.py(y));
       g.lineTo(f.px(x + 0.8 * Math.cos(th)), f.py(y + 0.8 * Math.sin(th)));
@@ -140,11 +183,12 @@ function drawRobots(g, f) {
       g.stroke();
       item.dataset.x = x.toFixed(3);
       item.dataset.y = y.toFixed(3);
-      item.textContent = `${r.name} (${x.toFixed(1)}, ${y.toFixed(1)})`;
+      label = `${r.name} (${x.toFixed(1)}, ${y.toFixed(1)})`;
     } else {
       item.dataset.down = "true";
-      item.textContent = `${r.name} (not in this plan)`;
+      label = `${r.name} (not in this plan)`;
     }
+    item.appendChild(document.createTextNode(label));
     list.appendChild(item);
   }
 }
@@ -158,14 +202,21 @@ function drawGantt() {
   const px = (t) => left + (t / span) * (canvas.width - left - right);
   g.font = "11px system-ui";
   robots.forEach((robot, i) => {
-    const y = 4 + i * row;
+    const y = 4 + i * row, style = styleOf(robot);
     g.fillStyle = "#222";
     g.fillText(robot, 6, y + row * 0.6);
     for (const m of view.plan.schedule.robots[robot].moves) {
       g.fillStyle = "#ddd";
       g.fillRect(px(m.ready), y + 4, px(m.start) - px(m.ready), row - 8);  // waiting
-      g.fillStyle = colourOf(robot);
+      g.fillStyle = style.colour;
       g.fillRect(px(m.start), y + 2, Math.max(px(m.end) - px(m.start), 1), row - 4);  // driving
+      if (style.dash.length) {  // past the eighth robot: the bar outlined in its line
+        g.strokeStyle = "#000";
+        g.lineWidth = 1;
+        g.setLineDash(style.dash);
+        g.strokeRect(px(m.start), y + 2, Math.max(px(m.end) - px(m.start), 1), row - 4);
+        g.setLineDash([]);
+      }
       g.globalAlpha = 0.4;
       g.fillRect(px(m.end), y + 2, px(m.end + m.opens + m.service) - px(m.end), row - 4);  // at the station
       g.globalAlpha = 1;
