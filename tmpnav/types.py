@@ -8,6 +8,7 @@ Units are SI throughout: metres, radians, seconds.
 from __future__ import annotations
 
 import enum
+import functools
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
@@ -593,7 +594,12 @@ class Scenario:
         return None
 
     def robot(self, name: str) -> RobotSpec:
-        return next(r for r in self.robots if r.name == name)
+        return self._robots_by_name[name]
+
+    @functools.cached_property
+    def _robots_by_name(self) -> dict[str, RobotSpec]:
+        """Each robot by its name: the oracle asks for a robot's spec on every motion it lays out."""
+        return {r.name: r for r in self.robots}
 
     def room(self, name: str) -> Room:
         return next(r for r in self.rooms if r.name == name)
