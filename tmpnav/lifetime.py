@@ -56,8 +56,8 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import Future, wait
+from collections.abc import Callable, Collection, Iterator, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from pathlib import Path
 from types import FrameType
 from typing import TypeVar
@@ -229,6 +229,14 @@ def gather(futures: Sequence[Future[T]]) -> Iterator[T]:
         while not wait([future], timeout=SIGNAL_POLL).done:
             pass
         yield future.result()
+
+
+def first_done(futures: Collection[Future[T]]) -> set[Future[T]]:
+    """Those of ``futures`` done once one of them is, waited for in slices as :func:`gather` waits."""
+    while True:
+        done, _ = wait(futures, timeout=SIGNAL_POLL, return_when=FIRST_COMPLETED)
+        if done:
+            return done
 
 
 def _start_sentinel() -> None:

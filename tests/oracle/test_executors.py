@@ -138,3 +138,50 @@ def test_an_idle_pool_is_let_go_and_the_next_wave_forks_workers_that_agree(
     finally:
         kept.close()
     assert kept._pool is None and kept._idle is None
+
+
+def test_a_worker_takes_the_cells_the_others_computed_from_the_news(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The news of a wave (executors.News: what the parent learned from the blocks finished)
+    puts the other workers' cells into a worker's world, so that it computes none of them
+    again; entries it took before are not taken twice, and a new wave's log starts afresh."""
+    import numpy as np
+
+    from tests.oracle.support import make_two_rooms
+    from tests.oracle.test_motions import LIDAR
+    from tmpnav.world.build import Learned
+
+    monkeypatch.setattr(executors, "_TAKEN", [-1, 0])  # this process's, as a fresh worker's
+    one, other = make_two_rooms().world, make_two_rooms().world
+    radius = 0.3
+    for world in (one, other):
+        world.take_new()  # both record what they compute, as workers do
+    poses = np.array([[1.0, 1.0, 0.0], [2.0, 1.5, 1.0], [3.0, 2.0, 2.0]])
+    scans = one.scans(LIDAR)
+    scans.rows(scans.keys(poses))
+    one.reach(radius).rows_of(one.reach(radius).cells(poses))
+    computed = one.take_new()
+    assert computed and other.learn(computed)  # the parent's log holds what it did not know
+    taken = executors._take_news(other, executors.News(wave=7, start=0, entries=(computed,)))
+    assert taken == 1
+    other.scans(LIDAR).rows(other.scans(LIDAR).keys(poses))
+    other.reach(radius).rows_of(other.reach(radius).cells(poses))
+    assert not other.take_new()  # nothing computed: every cell came with the news
+    assert not other.learn(computed)  # and known, so the parent would log nothing of it again
+    empty = Learned({}, {})
+    assert executors._take_news(other, executors.News(wave=7, start=0, entries=(computed, empty))) == 2
+    assert executors._take_news(other, executors.News(wave=8, start=0, entries=())) == 0
+
+
+@pytest.mark.parametrize("queued", [1, 2])
+def test_workers_with_the_news_give_the_same_results(
+    two_rooms: OracleContext, reference, queued: int, monkeypatch: pytest.MonkeyPatch
+) -> None:  # type: ignore[no-untyped-def]
+    """Blocks submitted a few at a time, each with the news of those finished before: the same
+    results as in this process."""
+    monkeypatch.setattr(executors, "BLOCK", 2)
+    monkeypatch.setattr(executors, "QUEUED", queued)
+    pool = ProcessExecutor(2)
+    try:
+        assert Oracle(two_rooms, NullCache(), pool).evaluate(actions(two_rooms)) == reference
+    finally:
+        pool.close()

@@ -25,12 +25,12 @@ import threading
 import time
 import weakref
 from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
 from tmpnav.errors import InputError
-from tmpnav.lifetime import gather, signals_held
+from tmpnav.lifetime import first_done, signals_held
 from tmpnav.oracle.evaluate import EvalStats, Request, evaluate
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.types import MotionResult, Roadmap, Scenario
@@ -39,8 +39,9 @@ from tmpnav.world.build import Learned
 
 Progress = Callable[[int, int], None]
 Outcome = tuple[list[MotionResult | None], EvalStats]
-#: a worker's outcome and the cells its world computed for it (World.take_new)
-Work = tuple[Outcome, Learned]
+#: a worker's outcome, the cells its world computed for it (World.take_new), and the worker's
+#: process id with the entries of its wave's news it has taken (:class:`News`)
+Work = tuple[Outcome, Learned, tuple[int, int]]
 
 #: requests per block: large enough that per-task overhead (Ray: ~1 ms) is negligible
 BLOCK = 64
@@ -193,15 +194,46 @@ def _init_worker(ctx: OracleContext, parent: int) -> None:
     _WORKER_CTX = ctx
 
 
-def _work(block: list[Request]) -> Work:
+@dataclass(frozen=True)
+class News:
+    """The cells a wave's finished blocks computed that the parent did not know (World.learn
+    returns them), entries ``start`` on of the wave's log. Each worker computes the reach and
+    scan cells of its own blocks; without the news each computed most of the other's again
+    (office 100 x 16: 196,000 scan keys computed for 107,000 distinct ones). A worker that
+    missed entries computes their cells itself: the same values, only later."""
+
+    wave: int
+    start: int
+    entries: tuple[Learned, ...]
+
+
+#: the wave whose news a worker last took, and how many entries of its log it has taken
+_TAKEN = [-1, 0]
+
+
+def _take_news(world: World, news: News) -> int:
+    """Put the entries of ``news`` the worker has not taken into its world; how many of the
+    wave's entries it has taken now."""
+    wave, taken = _TAKEN
+    if wave != news.wave:
+        taken = 0
+    for entry in news.entries[max(taken - news.start, 0) :]:
+        world.learn(entry)
+    _TAKEN[:] = [news.wave, max(taken, news.start + len(news.entries))]
+    return _TAKEN[1]
+
+
+def _work(block: list[Request], news: News) -> Work:
     """A block's outcome, and the reach and scan cells computed for it, which the parent takes
-    (World.learn) rather than compute them again for the requests it evaluates itself. The
-    memory the block's work freed goes back to the system (:func:`release_freed`)."""
+    (World.learn) rather than compute them again for the requests it evaluates itself, and
+    hands on to the other workers (:class:`News`). The memory the block's work freed goes back
+    to the system (:func:`release_freed`)."""
     assert _WORKER_CTX is not None
+    taken = _take_news(_WORKER_CTX.world, news)
     outcome = evaluate(library(_WORKER_CTX), block)
     learned = _WORKER_CTX.world.take_new()
     release_freed()
-    return outcome, learned
+    return outcome, learned, (os.getpid(), taken)
 
 
 def release_freed() -> None:
@@ -217,6 +249,9 @@ def release_freed() -> None:
 
 #: seconds a pool of workers may stand idle before they are let go (:class:`ProcessExecutor`)
 IDLE_SECONDS = 3.0
+#: blocks per worker submitted at a time: a worker's next block waits for it when it finishes
+#: one, and a block submitted later carries the news of the blocks finished before (:class:`News`)
+QUEUED = 2
 
 
 class ProcessExecutor:
@@ -242,6 +277,7 @@ class ProcessExecutor:
         self._idle: threading.Timer | None = None
         #: pools started so far (one, unless an idle pool was let go and a later wave needed one)
         self.started = 0
+        self._waves = 0
 
     def _get_pool(self, ctx: OracleContext) -> ProcessPoolExecutor:
         if self._pool is None or self._ctx is not ctx:
@@ -283,19 +319,32 @@ class ProcessExecutor:
         self, ctx: OracleContext, todo: list[list[Request]], order: list[int], progress: Progress | None
     ) -> Outcome:
         pool = self._get_pool(ctx)
+        self._waves += 1
+        log: list[Learned] = []  # the wave's news (:class:`News`)
+        taken: dict[int, int] = {}  # the entries of the log each worker (process id) has taken
+        parts: list[Outcome | None] = [None] * len(todo)
+        running: dict[Future[Work], int] = {}
+        sent = done = 0
         try:
-            with signals_held():  # the first blocks fork the workers
-                futures = [pool.submit(_work, block) for block in todo]
-            parts = []
-            for k, (part, learned) in enumerate(gather(futures)):
-                parts.append(part)
-                ctx.world.learn(learned)
-                if progress:
-                    progress(k + 1, len(todo))
+            while done < len(todo):
+                while sent < len(todo) and len(running) < QUEUED * self.workers:
+                    start = min(taken.values(), default=0)
+                    with signals_held():  # the first blocks fork the workers
+                        running[pool.submit(_work, todo[sent], News(self._waves, start, tuple(log[start:])))] = sent
+                    sent += 1
+                for future in first_done(running):
+                    part, learned, (pid, entries) = future.result()
+                    parts[running.pop(future)] = part
+                    taken[pid] = entries
+                    if fresh := ctx.world.learn(learned):
+                        log.append(fresh)
+                    done += 1
+                    if progress:
+                        progress(done, len(todo))
         except BaseException:
             self._terminate()  # Ctrl-C or a failure: do not wait for the blocks under way
             raise
-        return _merge(parts, order)
+        return _merge([p for p in parts if p is not None], order)
 
     def _terminate(self) -> None:
         """Stop the workers now (cancelling queued blocks) and reap them."""

@@ -34,6 +34,10 @@ class Learned:
     reach: dict[float, tuple[np.ndarray, np.ndarray]]
     scans: dict[RangeSensor, tuple[np.ndarray, np.ndarray]]
 
+    def __bool__(self) -> bool:
+        """Whether any cell is in it."""
+        return any(keys.size for keys, _ in (*self.reach.values(), *self.scans.values()))
+
 
 @dataclass(frozen=True, eq=False)
 class World:
@@ -108,14 +112,15 @@ class World:
         scans = {sensor: table.take_new() for sensor, table in self._scans.items()}
         return Learned(reach, scans)
 
-    def learn(self, new: Learned) -> None:
-        """Take what another copy of this world computed (:meth:`take_new`)."""
-        for radius, (keys, codes) in new.reach.items():
-            if keys.size:
-                self.reach(radius).learn(keys, codes)
-        for sensor, (keys, values) in new.scans.items():
-            if keys.size:
-                self.scans(sensor).learn(keys, values)
+    def learn(self, new: Learned) -> Learned:
+        """Take what another copy of this world computed (:meth:`take_new`); what of it this
+        copy did not know yet."""
+        reach = {r: self.reach(r).learn(keys, codes) for r, (keys, codes) in new.reach.items() if keys.size}
+        scans = {s: self.scans(s).learn(keys, values) for s, (keys, values) in new.scans.items() if keys.size}
+        return Learned(
+            {r: fresh for r, fresh in reach.items() if fresh[0].size},
+            {s: fresh for s, fresh in scans.items() if fresh[0].size},
+        )
 
     def line_of_sight(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether segments a[k]-b[k] cross no occupied cell (sphere tracing)."""

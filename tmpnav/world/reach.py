@@ -119,16 +119,17 @@ class SectorReach:
         self._new = []
         return keys, self.codes[self.rows_of(keys)]
 
-    def learn(self, keys: np.ndarray, codes: np.ndarray) -> None:
+    def learn(self, keys: np.ndarray, codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Take the reach's codes (N, K) of sub-cells ``keys`` (N,) another copy of this table
-        computed (:meth:`take_new`), for those not known yet."""
-        keys = np.asarray(keys, dtype=np.int64)
+        computed (:meth:`take_new`), for those not known yet, and return those sub-cells and codes."""
+        keys, codes = np.asarray(keys, dtype=np.int64), np.asarray(codes)
         if self.keys.size:
             at = np.minimum(np.searchsorted(self.keys, keys), self.keys.size - 1)
             fresh = self.keys[at] != keys
-            keys, codes = keys[fresh], np.asarray(codes)[fresh]
+            keys, codes = keys[fresh], codes[fresh]
         if keys.size:
             self._store(keys, codes)
+        return keys, codes
 
     def _compute(self, keys: np.ndarray) -> None:
         if self._new is not None:

@@ -211,7 +211,7 @@ class ScanInformation:
     def preload(self, keys: np.ndarray, factors: np.ndarray) -> None:
         """Take factors computed earlier (:meth:`contents`, read from the cache directory) for the
         keys not known yet."""
-        self._preloaded += self.learn(keys, factors)
+        self._preloaded += self.learn(keys, factors)[0].size
 
     def take_new(self) -> tuple[np.ndarray, np.ndarray]:
         """The keys computed here since the last call, and their factors (K, 3, 3): what a
@@ -221,14 +221,15 @@ class ScanInformation:
         self._new = []
         return keys, self.table[self.rows(keys)] if keys.size else np.zeros((0, 3, 3))
 
-    def learn(self, keys: np.ndarray, factors: np.ndarray) -> int:
+    def learn(self, keys: np.ndarray, factors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Take factors another copy of this table computed in this run (:meth:`take_new`) for
-        the keys not known yet, and say how many; unlike :meth:`preload`, they count as
-        :attr:`computed`."""
+        the keys not known yet, and return those keys and factors; unlike :meth:`preload`, they
+        count as :attr:`computed`."""
         keys = np.asarray(keys, dtype=np.int64)
         fresh = ~_among(keys, self._keys)
-        self._add(keys[fresh], np.asarray(factors, dtype=float)[fresh])
-        return int(fresh.sum())
+        keys, factors = keys[fresh], np.asarray(factors, dtype=float)[fresh]
+        self._add(keys, factors)
+        return keys, factors
 
     def _compute(self, keys: np.ndarray) -> None:
         if self._new is not None:
