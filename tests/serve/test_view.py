@@ -14,6 +14,7 @@ import pytest
 
 from tests.serve.server import ROOT, Server
 from tmpnav.client import Client
+from tmpnav.report.figures import ROBOT_COLORS
 
 CHROMIUM, DRIVER = Path("/usr/bin/chromium"), Path("/usr/bin/chromedriver")
 webdriver = pytest.importorskip("selenium.webdriver", reason="the view's test needs selenium (the test extra)")
@@ -80,7 +81,7 @@ def test_the_view_draws_the_plan_moves_the_robots_and_shows_revisions(
     wait.until(lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-drawn") == "0")
     start = robots(browser)
     assert set(start) == set(first["robots"])
-    assert painted(browser, (0xD6, 0x27, 0x28)) > 50 and painted(browser, (0x1F, 0x77, 0xB4)) > 50  # r1, r2
+    assert painted(browser, (0x1F, 0x77, 0xB4)) > 50 and painted(browser, (0x2C, 0xA0, 0x2C)) > 50  # r1, r2
     slider = browser.find_element(By.ID, "time")  # type: ignore[attr-defined]
     slider.send_keys(Keys.END)  # the end of the schedule
     wait.until(lambda d: robots(d) != start)
@@ -143,8 +144,9 @@ def test_a_fleet_s_robots_that_share_a_colour_differ_in_their_line(fleet: Server
     legend = browser.execute_script(script)  # type: ignore[attr-defined]
     assert len(legend) == 10
     r1, r9 = legend["r1"], legend["r9"]
-    # r1 as the first eight always were: red, solid, the list's dot and no line
-    assert r1 == {"colour": "#d62728", "dash": "", "dot": "rgb(214, 39, 40)", "swatch": None}
+    # r1 as in plan.png: blue, solid, the list's dot and no line
+    assert r1 == {"colour": "#1f77b4", "dash": "", "dot": "rgb(31, 119, 180)", "swatch": None}
+    assert [legend[f"r{k}"]["colour"] for k in range(1, 9)] == list(ROBOT_COLORS)
     assert all(legend[f"r{k}"]["dash"] == "" for k in range(1, 9))
     # r9: r1's colour, a dash of its own, in the list as a line after the dot
     assert r9["colour"] == r1["colour"] and r9["dot"] == r1["dot"] and r9["dash"] != ""
@@ -154,4 +156,4 @@ def test_a_fleet_s_robots_that_share_a_colour_differ_in_their_line(fleet: Server
     drawn = strokes(browser)
     assert {dash for colour, dash in drawn if colour == r1["colour"]} == {"", r9["dash"]}
     assert ("#000000", r9["dash"]) in drawn
-    assert painted(browser, (0xD6, 0x27, 0x28)) > 50
+    assert painted(browser, (0x1F, 0x77, 0xB4)) > 50

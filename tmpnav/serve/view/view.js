@@ -4,7 +4,8 @@
 
 const params = new URLSearchParams(location.search);
 const token = params.get("token");
-const COLOURS = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf", "#8c564b", "#e377c2"];
+// the robots' colours in the order plan.png and schedule.png give them (tmpnav.report.figures.ROBOT_COLORS)
+const COLOURS = ["#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf"];
 // the line of each round of COLOURS (canvas dash arrays, px): solid, dashed, dotted, dash-dotted
 const DASHES = [[], [8, 4], [2, 3], [8, 4, 2, 4]];
 const view = { site: null, map: null, plan: null, planId: params.get("plan"), revision: -1, t: 0 };
