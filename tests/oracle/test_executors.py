@@ -185,12 +185,3 @@ def test_workers_with_the_news_give_the_same_results(
         assert Oracle(two_rooms, NullCache(), pool).evaluate(actions(two_rooms)) == reference
     finally:
         pool.close()
-
-
-def test_a_small_wave_is_shared_among_the_workers() -> None:
-    """Local workers' blocks: BLOCK requests, fewer where a wave has fewer than BLOCK per
-    worker (66 paired moves for 2 workers: 33 each, not 64 and 2), never below SHARED_BLOCK."""
-    assert executors.shared_block(1000, 2) == executors.BLOCK
-    assert executors.shared_block(66, 2) == 33
-    assert executors.shared_block(20, 2) == executors.SHARED_BLOCK
-    assert executors.shared_block(66, 1) == executors.BLOCK

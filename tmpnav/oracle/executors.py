@@ -1,8 +1,7 @@
 """Where oracle evaluations run: in this process, in local worker processes, or on Ray.
 
-The requests are cut into blocks of whole start groups (local workers' blocks are smaller
-where a wave is small, so that each worker gets a share), and each result depends only on its
-own request, so every executor returns bit-identical results. Ray stays an
+The requests are cut into the same blocks whatever the executor, and each result depends
+only on its own request, so every executor returns bit-identical results. Ray stays an
 optional dependency (``pip install tmpnav[ray]``) and is imported only here.
 
 Local workers never outlive the process that started them, however it ends: on Linux the
@@ -110,18 +109,6 @@ def blocks(requests: list[Request], size: int | None = None) -> tuple[list[list[
         out.append([requests[i] for i in current])
         order.extend(current)
     return out, order
-
-
-#: requests per block at least where a wave is cut for its workers to share (:func:`shared_block`):
-#: a smaller wave is computed in the calling process, which takes less than a worker's round trip
-SHARED_BLOCK = 16
-
-
-def shared_block(requests: int, workers: int) -> int:
-    """The size of the blocks of a wave of ``requests`` for ``workers``: :data:`BLOCK`, or less
-    where the wave has fewer than ``BLOCK`` per worker, so that each worker gets a share (a
-    search's wave of 66 paired moves went as 64 and 2), but at least :data:`SHARED_BLOCK`."""
-    return min(BLOCK, max(SHARED_BLOCK, -(-requests // max(workers, 1))))
 
 
 def _merge(parts: list[Outcome], order: list[int]) -> Outcome:
@@ -305,7 +292,7 @@ class ProcessExecutor:
         return self._pool
 
     def run(self, ctx: OracleContext, requests: list[Request], progress: Progress | None = None) -> Outcome:
-        todo, order = blocks(requests, shared_block(len(requests), self.workers))
+        todo, order = blocks(requests)
         if len(todo) <= 1:
             return SerialExecutor().run(ctx, requests, progress)
         with self._lock:
