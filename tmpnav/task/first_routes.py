@@ -15,6 +15,14 @@ from tmpnav.types import CostTable, Goals
 #: OR-Tools' guided local search stops after this many solutions: on 20-60 rooms and 2-8
 #: robots it reaches in 0.1-1.2 s the routes it reaches in 10 s (within 0.02%)
 ROUTING_SOLUTIONS = 500
+#: ... and for a team of more than :data:`FLEET_ROBOTS` robots (past the sizes measured above)
+#: after :data:`FLEET_SOLUTIONS`. Each solution costs more as the model grows, and later ones
+#: most (office, 100 rooms, 16 robots: 100 solutions in 0.55 s, 500 in 5.2 s, each routing), and
+#: the search after the first plan moves the work between robots anyway. On offices of 100
+#: rooms and 16 robots (seeds 1-3, benchmarks/fleet/fleet_solutions.txt) the runs took 4-7 s
+#: less, their plans as good or better (seed 1 1766.0 against 1813.0, seed 2 the same, seed 3
+#: 1822.4 against 1822.2).
+FLEET_SOLUTIONS, FLEET_ROBOTS = 100, 8
 #: ... and up to :data:`FEW_ROOMS` rooms and two robots, also after this many in a row that did
 #: not improve its objective. On the generated 20-room offices and warehouses with 2 robots
 #: (benchmarks/routing/first_routes.txt) it gave the same or cheaper first plans than the fixed
@@ -55,7 +63,8 @@ def first_routes(
 ) -> tuple[Routes, bool]:
     """The routes of the search's first plan, and whether OR-Tools stopped at its time limit
     (the plan then depends on the machine's speed). OR-Tools' guided local search stops after
-    :data:`ROUTING_SOLUTIONS` solutions; a replan's (``start_from``: the plan under way, where
+    :data:`ROUTING_SOLUTIONS` solutions (:data:`FLEET_SOLUTIONS` for a team of more than
+    :data:`FLEET_ROBOTS`); a replan's (``start_from``: the plan under way, where
     the search starts) after :data:`REPLAN_STAGNATION` without improvement, few rooms and
     robots after :data:`FEW_STAGNATION`; or at its own time limit, ``routing_time`` or a
     quarter of the search's ``budget`` (not what a cold oracle left of the budget: cut to 0.1 s,
@@ -70,7 +79,7 @@ def first_routes(
         singles,
         goals,
         time_limit=max(0.001, min(limit, time_left)),
-        solution_limit=ROUTING_SOLUTIONS,
+        solution_limit=FLEET_SOLUTIONS if len(robots) > FLEET_ROBOTS else ROUTING_SOLUTIONS,
         stagnation=REPLAN_STAGNATION if start_from is not None else FEW_STAGNATION if few or second else None,
         first_solution=FLEET_FIRST_SOLUTION if fleet and span_weight else "PATH_CHEAPEST_ARC",
         span_weight=span_weight,
