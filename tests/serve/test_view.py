@@ -157,3 +157,28 @@ def test_a_fleet_s_robots_that_share_a_colour_differ_in_their_line(fleet: Server
     assert {dash for colour, dash in drawn if colour == r1["colour"]} == {"", r9["dash"]}
     assert ("#000000", r9["dash"]) in drawn
     assert painted(browser, (0x1F, 0x77, 0xB4)) > 50
+
+
+def test_the_schedule_chart_grows_to_give_each_robot_of_a_fleet_a_readable_row(fleet: Server, browser: object) -> None:
+    plan = Client(fleet.url, timeout=600).plan()
+    browser.get(f"{fleet.url}/?plan={plan['id']}")  # type: ignore[attr-defined]
+    WebDriverWait(browser, 120).until(lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-drawn") == "0")
+    script = """
+        const robots = view.plan.schedule.robots, names = Object.keys(robots), chart = document.getElementById('gantt');
+        const labels = (n) => {
+            for (let k = names.length + 1; k <= n; k++) robots['r' + k] = robots[names[(k - 1) % names.length]];
+            const ys = {}, proto = CanvasRenderingContext2D.prototype, fill = proto.fillText;
+            proto.fillText = function (text, x, y, ...rest) {
+                if (this.canvas.id === 'gantt' && x === 6) ys[text] = y;
+                return fill.call(this, text, x, y, ...rest);
+            };
+            try { drawGantt(); } finally { proto.fillText = fill; }
+            return [chart.height, ys];
+        };
+        return [labels(names.length), labels(32)];"""
+    (ten_height, ten), (height, labels) = browser.execute_script(script)  # type: ignore[attr-defined]
+    assert 160 <= ten_height < 200 and len(ten) == 10  # about the page's chart for ten
+    assert len(labels) == 32 and height >= 32 * 14 + 20
+    ys = [labels[f"r{k}"] for k in range(1, 33)]
+    assert all(b - a >= 14 - 1e-9 for a, b in zip(ys, ys[1:], strict=False))  # rows one label high at least
+    assert ys[-1] <= height - 20  # the last row above the time axis

@@ -194,12 +194,18 @@ function drawRobots(g, f) {
   }
 }
 
+// px: the Gantt chart's rows at most and at least (its labels' 11 px font and a gap), and the room
+// below them for the time axis; the chart grows past its page height (160 px) to fit a fleet
+const ROW_MAX = 28, ROW_MIN = 14, AXIS = 20, GANTT_HEIGHT = 160;
+
 function drawGantt() {
   const canvas = document.getElementById("gantt"), g = canvas.getContext("2d");
-  g.clearRect(0, 0, canvas.width, canvas.height);
   const robots = Object.keys(view.plan.schedule.robots);
+  const height = Math.max(GANTT_HEIGHT, AXIS + 4 + ROW_MIN * robots.length);
+  if (canvas.height !== height) canvas.height = height;  // resizing clears it too
+  g.clearRect(0, 0, canvas.width, canvas.height);
   const span = Math.max(view.plan.schedule.makespan, 1e-6), left = 60, right = 10;
-  const row = Math.min(28, (canvas.height - 20) / Math.max(robots.length, 1));
+  const row = Math.min(ROW_MAX, (canvas.height - AXIS - 4) / Math.max(robots.length, 1));
   const px = (t) => left + (t / span) * (canvas.width - left - right);
   g.font = "11px system-ui";
   robots.forEach((robot, i) => {
