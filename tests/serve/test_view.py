@@ -5,6 +5,7 @@ fleet of more than eight robots, robots that share a colour differ in their line
 
 from __future__ import annotations
 
+import itertools
 import shutil
 import tempfile
 from collections.abc import Iterator
@@ -180,5 +181,5 @@ def test_the_schedule_chart_grows_to_give_each_robot_of_a_fleet_a_readable_row(f
     assert 160 <= ten_height < 200 and len(ten) == 10  # about the page's chart for ten
     assert len(labels) == 32 and height >= 32 * 14 + 20
     ys = [labels[f"r{k}"] for k in range(1, 33)]
-    assert all(b - a >= 14 - 1e-9 for a, b in zip(ys, ys[1:], strict=False))  # rows one label high at least
+    assert all(b - a >= 14 - 1e-9 for a, b in itertools.pairwise(ys))  # rows one label high at least
     assert ys[-1] <= height - 20  # the last row above the time axis
