@@ -39,12 +39,17 @@ def _corridor(lidar: bool) -> tuple[Scenario, World, LandmarkVisibility]:
     return scenario, world, LandmarkVisibility(world, scenario.models.landmark_sensor.range)
 
 
-def _run(setup: tuple[Scenario, World, LandmarkVisibility], seed: int, mutual: bool, compiled: bool) -> SessionTrace:
+def _run(
+    setup: tuple[Scenario, World, LandmarkVisibility], seed: int, mutual: bool, compiled: bool, rpp: bool = False
+) -> SessionTrace:
     scenario, world, vis = setup
     sensor = scenario.models.range_sensor
     beams = sensor.beams if sensor is not None else 0
     draws = Draws.draw(seed, 0, 2, 2000, world.landmark_xy.shape[0], beams)
-    return Session(scenario, world, QUEUES, draws, vis, mutual, Localisation(compiled=compiled)).run()
+    queues = QUEUES
+    if rpp:
+        queues = {r: tuple(dataclasses.replace(m, controller="rpp") for m in q) for r, q in QUEUES.items()}
+    return Session(scenario, world, queues, draws, vis, mutual, Localisation(compiled=compiled)).run()
 
 
 @pytest.mark.parametrize("lidar", [False, True], ids=["landmarks and partners", "with a lidar"])
@@ -86,3 +91,18 @@ def test_the_compiled_count_is_hits_wall_and_the_radii() -> None:
         near = (gap < radii[:, None] + radii[None, :]) & ~np.eye(4, dtype=bool)
         np.testing.assert_array_equal(walls, hits_wall(world.grid, world.clearance, truth[:, :2], radii))
         np.testing.assert_array_equal(touch, near.any(axis=1))
+
+
+def test_with_rpp_at_nav2s_rate_the_compiled_filter_is_the_reference_and_consistent() -> None:
+    """Moves RPP drives: each control step's commands at nav2's rate, the truth and both filters
+    following them one by one; the two filters agree, and the lidar's filter stays consistent
+    (its own NEES about a consistent filter's 1.39)."""
+    setup = _corridor(True)
+    for seed in range(2):
+        fast, ref = _run(setup, seed, True, True, rpp=True), _run(setup, seed, True, False, rpp=True)
+        assert not fast.truncated and [m.end for m in fast.moves] == [m.end for m in ref.moves]
+        for robot in ("r1", "r2"):
+            np.testing.assert_allclose(fast.errors[robot], ref.errors[robot], rtol=1e-7, atol=1e-9)
+            np.testing.assert_allclose(fast.own_nees[robot], ref.own_nees[robot], rtol=1e-6, atol=1e-9)
+        own = np.concatenate([fast.own_nees[r] for r in ("r1", "r2")])
+        assert 0.7 <= float(np.median(own)) <= 2.2 and float(np.mean(own > 9.0)) <= 0.05

@@ -10,7 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tmpnav.execution.rpp import RppFollower, RppParams, densify
+from tmpnav.belief.models import motion, motion_noise_cov
+from tmpnav.belief.pursuit import pursuit_controls
+from tmpnav.execution.rpp import CONTROLLER_FREQUENCY, RppFollower, RppParams, densify
+from tmpnav.execution.rpp import drive as drive_step
 
 ROOT = Path(__file__).resolve().parents[2]
 DT = 0.1
@@ -139,3 +142,55 @@ def test_nav2s_goal_checker_holds_the_position_once_reached_and_waits_for_the_he
     assert f.at_goal(np.array([2.7, 0.0, math.pi / 2 - 0.2]))
     plain = follower([[0.0, 0.0], [3.0, 0.0]])
     assert plain.at_goal(np.array([2.8, 0.0, 0.0]))  # a goal without a heading: its position only
+
+
+def test_a_control_step_holds_the_laws_commands_at_nav2s_rate_on_the_dead_reckoned_pose() -> None:
+    """RppFollower.step gives the commands the compiled law gives 20 times a second, each on the
+    pose the ones before it reached: the planner's rollout of the law at dt / N, step for step."""
+    points = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 3.0]])
+    f = RppFollower(points, RppParams(), 0.5, 1.0, 0.5)
+    assert f.substeps == round(0.5 * CONTROLLER_FREQUENCY) == 10
+    clear, origin = np.full((200, 200), FREE), (-5.0, -5.0)
+    fine = pursuit_controls(points, 0.4, 0.5, 1.0, 0.05, RppParams(), clear, origin, 0.05)
+    assert fine is not None
+    pose = np.array([0.0, 0.0, 0.4])
+    for k in range(3):  # three control steps: a turn on the spot, then driving
+        commands = f.step(pose, FREE)
+        assert np.allclose(commands, fine.controls[10 * k : 10 * k + 10])
+        pose = drive_step(pose, commands, np.zeros(2), np.zeros(4), 0.5)
+        assert np.allclose(pose, fine.poses[10 * k + 10])
+
+
+def test_the_commands_after_the_goal_checker_is_satisfied_are_zero() -> None:
+    f = RppFollower(np.array([[0.0, 0.0], [1.0, 0.0]]), RppParams(), 0.5, 1.0, 0.5)
+    commands = f.step(np.array([0.7, 0.0, 0.0]), FREE)  # 0.3 m to go, 0.25 m of tolerance: stops within the step
+    stopped = np.flatnonzero(np.all(commands == 0.0, axis=1))
+    assert 0 < stopped[0] < len(commands) and np.all(commands[stopped[0] :] == 0.0)
+    assert f.within and f.at_goal(drive_step(np.array([0.7, 0.0, 0.0]), commands, np.zeros(2), np.zeros(4), 0.5))
+
+
+def test_one_command_drives_the_motion_models_step_with_its_noise() -> None:
+    """drive with one command is the session's step of every other follower: u + sqrt(W(u)) z by eq. (4)."""
+    pose, u, z = np.array([1.0, 2.0, 0.3]), np.array([0.4, 0.5]), np.array([0.7, -1.2])
+    alphas = np.array([0.1, 0.02, 0.03, 0.2])
+    W = motion_noise_cov(u, alphas)
+    expected = motion(pose, u + np.sqrt(np.diag(W)) * z, 0.5)
+    assert np.allclose(drive_step(pose, u[None], z, alphas, 0.5), expected)
+
+
+def test_at_nav2s_rate_the_robot_weaves_less_and_arrives_no_later_than_the_plan_says() -> None:
+    """The planner evaluates the law once per 0.5 s control step; driven 20 times a second through
+    a door-like bend, the same path takes no longer and is driven no longer (less weaving)."""
+    points = np.array([[0.0, 0.0], [3.0, 0.0], [3.3, 0.8], [3.3, 4.0]])
+    clear, origin = np.full((300, 300), FREE), (-5.0, -5.0)
+    plan = pursuit_controls(points, math.pi / 2, 0.5, 1.0, 0.5, RppParams(), clear, origin, 0.05)
+    assert plan is not None
+    f = RppFollower(points, RppParams(), 0.5, 1.0, 0.5)
+    pose, steps, driven = np.array([0.0, 0.0, math.pi / 2]), 0, 0.0
+    while not f.at_goal(pose) and steps < 200:
+        after = drive_step(pose, f.step(pose, FREE), np.zeros(2), np.zeros(4), 0.5)
+        driven += float(np.hypot(*(after[:2] - pose[:2])))
+        pose, steps = after, steps + 1
+    planned = float(np.hypot(*np.diff(plan.poses[:, :2], axis=0).T).sum())
+    assert f.at_goal(pose) and steps <= plan.n_steps and steps >= 0.9 * plan.n_steps
+    assert driven <= planned

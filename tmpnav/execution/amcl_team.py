@@ -62,9 +62,14 @@ class AmclTeam:
         """Robot i's covariance (3, 3) as its AMCL reports it."""
         return self.localisers[i].cov
 
-    def predict(self, u: np.ndarray) -> None:
-        """Odometry: the commands (n, 2) integrated."""
-        self.odom = motion(self.odom, u, self.scenario.models.dt)
+    def predict(self, u: np.ndarray, steps: np.ndarray | None = None) -> None:
+        """Odometry: the commands (n, 2) integrated; with ``steps`` (n, N, 2), one by one."""
+        dt = self.scenario.models.dt
+        if steps is None:
+            self.odom = motion(self.odom, u, dt)
+            return
+        for k in range(steps.shape[1]):
+            self.odom = motion(self.odom, steps[:, k], dt / steps.shape[1])
 
     def observe(self, truth: np.ndarray, step: int) -> list[tuple[int, int]]:
         """Each robot's lidar scans the site from its true pose (the sensor's range noise on every

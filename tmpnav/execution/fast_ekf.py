@@ -20,6 +20,7 @@ import numpy as np
 
 from tmpnav.belief.kernel import _landmark_observation, _predict, _robot_observation, _update, _update_scalar
 from tmpnav.execution.joint_ekf import mutually_visible, sensing_pairs
+from tmpnav.execution.localisers import substep_noise
 from tmpnav.execution.scans import CONVERGED, GATE, ITERATIONS, RECAST
 from tmpnav.execution.trace import Draws
 from tmpnav.types import Belief, Scenario
@@ -64,10 +65,16 @@ class CompiledJointEkf:
         """Robot i's covariance (3, 3): its block of the joint covariance."""
         return self.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3].copy()
 
-    def predict(self, u: np.ndarray) -> None:
-        """The prediction with the commands (n, 2), eqs. (8), (11), (12)."""
+    def predict(self, u: np.ndarray, steps: np.ndarray | None = None) -> None:
+        """The prediction with the commands (n, 2), eqs. (8), (11), (12); with ``steps`` (n, N, 2)
+        one by one (:meth:`tmpnav.execution.localisers.TeamLocaliser.predict`)."""
         dt = self.scenario.models.dt
-        _predict(self.mean, self.cov, np.ascontiguousarray(u, dtype=float), self.n, dt, self.alphas, self.work)
+        if steps is None:
+            _predict(self.mean, self.cov, np.ascontiguousarray(u, dtype=float), self.n, dt, self.alphas, self.work)
+            return
+        n, alphas = steps.shape[1], substep_noise(self.alphas, steps.shape[1])
+        for k in range(n):
+            _predict(self.mean, self.cov, np.ascontiguousarray(steps[:, k]), self.n, dt / n, alphas, self.work)
 
     def observe(self, truth: np.ndarray, step: int) -> list[tuple[int, int]]:
         """As :meth:`tmpnav.execution.joint_ekf.JointEkf.observe`: landmarks, scans, partners."""

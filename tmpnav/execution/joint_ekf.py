@@ -13,6 +13,7 @@ import numpy as np
 
 from tmpnav.belief import ekf
 from tmpnav.belief.models import landmark_obs, mutual_obs, noisy_observation
+from tmpnav.execution.localisers import substep_noise
 from tmpnav.execution.scans import ScanSimulator
 from tmpnav.execution.trace import Draws
 from tmpnav.types import Belief, Scenario
@@ -40,10 +41,16 @@ class JointEkf:
         """Robot i's covariance (3, 3): its block of the joint belief's."""
         return self.belief.cov[3 * i : 3 * i + 3, 3 * i : 3 * i + 3]
 
-    def predict(self, u: np.ndarray) -> None:
-        """The prediction with the commands (n, 2) of the step just driven."""
+    def predict(self, u: np.ndarray, steps: np.ndarray | None = None) -> None:
+        """The prediction with the commands (n, 2) of the step just driven; with ``steps`` (n, N, 2)
+        one by one (:meth:`tmpnav.execution.localisers.TeamLocaliser.predict`)."""
         models = self.scenario.models
-        self.belief = ekf.predict(self.belief, u, models.dt, models.motion_noise)
+        if steps is None:
+            self.belief = ekf.predict(self.belief, u, models.dt, models.motion_noise)
+            return
+        alphas = tuple(substep_noise(np.asarray(models.motion_noise), steps.shape[1]).tolist())
+        for k in range(steps.shape[1]):
+            self.belief = ekf.predict(self.belief, steps[:, k], models.dt / steps.shape[1], alphas)
 
     def observe(self, truth: np.ndarray, step: int) -> list[tuple[int, int]]:
         """Every robot's landmark observations from its true pose, its range scan, then every

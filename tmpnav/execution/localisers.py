@@ -51,6 +51,13 @@ FOLLOWERS = {
 }
 
 
+def substep_noise(alphas: np.ndarray, substeps: int) -> np.ndarray:
+    """The motion noise's alphas (4,) for a prediction in ``substeps`` steps of dt / N, each of
+    the noise W(u) of paper eq. (4) held for the whole step: N times W, so that the N
+    independent steps add up to the position variance dt² W of the one step they make."""
+    return np.asarray(alphas, dtype=float) * substeps
+
+
 class Localiser(Protocol):
     """One robot's localiser fed by odometry and scans (``amcl``); the joint EKF is the session's own."""
 
@@ -84,8 +91,11 @@ class TeamLocaliser(Protocol):
         """Robot i's covariance (3, 3) as its localiser reports it."""
         ...
 
-    def predict(self, u: np.ndarray) -> None:
-        """The commands (n, 2) of the control step just driven."""
+    def predict(self, u: np.ndarray, steps: np.ndarray | None = None) -> None:
+        """The commands (n, 2) of the control step just driven; with ``steps`` (n, N, 2), the
+        commands each robot drove at its controller's rate, each held dt / N (``u`` their mean;
+        a robot that held one command for the step has it N times): the prediction follows them
+        one by one, as a robot's odometry does (:func:`substep_noise`)."""
         ...
 
     def observe(self, truth: np.ndarray, step: int) -> list[tuple[int, int]]:

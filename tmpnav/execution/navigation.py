@@ -49,6 +49,9 @@ class Navigator:
         self.stations = {j.room: j.pose for j in scenario.goals.jobs if j.pose is not None}
         self._steered: dict[int, np.ndarray] = {}  # the steering poses of step _steered_at, by robot
         self._steered_at = -1
+        #: the commands (N, 2) at nav2's controller rate of the robots RPP drives this step, by
+        #: robot (tmpnav.execution.rpp.RppFollower.step): :meth:`command` returns their mean
+        self.profiles: dict[int, np.ndarray] = {}
 
     def see(self, world: World, site: object, session: int) -> None:
         """With ``steers_local``: what the robots' lidars show their controllers of the walls
@@ -92,6 +95,7 @@ class Navigator:
         ``team`` (n, 3): a recovery behaviour's, or the controller's kept clear of what it sees
         (the walls, the clutter and the other robots within :data:`OBSTACLE_RANGE`). A failure of
         the controller is recorded in ``r.recovery`` (which may give the move up)."""
+        self.profiles.pop(i, None)
         spec = self.scenario.robots[i]
         truth = team[i]
         if self.view is not None:
@@ -109,7 +113,9 @@ class Navigator:
             if r.rpp.goal_heading is None and r.move is not None:
                 r.rpp.goal_heading = self.goal_heading(r.move)
             cell = world.grid.cells(truth[:2][None])
-            command = r.rpp.command(pose, float(world.clearance[cell[0], cell[1]][0]))
+            commands = r.rpp.step(pose, float(world.clearance[cell[0], cell[1]][0]))
+            command = commands.mean(axis=0)
+            self.profiles[i] = commands
         else:
             align = ALIGN if r.aligned else ALIGN_START
             command = control(pose, r.waypoints[0], spec.speed, spec.turn_rate, self.dt, align)
@@ -120,6 +126,8 @@ class Navigator:
         safe = self.view.safe_command(truth, command, spec.radius, (spec.speed, spec.turn_rate), ahead, r.waypoints[0])
         if rec is not None:
             rec.followed(safe is None, truth[:2], step)
+        if safe is None or not np.array_equal(safe, command):  # a command of its own, held for the step
+            self.profiles.pop(i, None)
         return np.array([0.0, command[1]]) if safe is None else safe
 
     def goal_heading(self, move: QueuedMove) -> float | None:

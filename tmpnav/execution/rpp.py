@@ -37,6 +37,17 @@ and omega never exceeds its ``turn_rate`` (nav2's velocity smoother would clip t
 way). ``desired_linear_vel`` (0.5 m/s in nav2) is the robot's ``speed``: the one the plan drives
 at.
 
+**At nav2's rate.** nav2's controller server runs the law at ``controller_frequency``, 20 Hz by
+default (:data:`CONTROLLER_FREQUENCY`); the plan and the localisers step every ``dt`` (0.5 s).
+:meth:`RppFollower.step` gives a control step's commands as the controller server gives them:
+the law :data:`CONTROLLER_FREQUENCY` times a second, each time on the estimate dead-reckoned with
+the commands given since the step began (the robot's odometry between two localiser updates),
+stopping once nav2's goal checker is satisfied. The true robot drives those commands
+(:func:`drive`), and the localiser predicts with them one by one, as a robot's odometry follows
+each (tmpnav.execution.localisers.TeamLocaliser.predict). The planner's motions
+(tmpnav.belief.pursuit) evaluate the same law once per ``dt``: executing a plan at nav2's rate is
+a check of that discretisation, not the planner's rollout run again.
+
 Not modelled: the collision check that stops the robot (``use_collision_detection``), nav2's
 recovery behaviours, and reversing.
 """
@@ -45,6 +56,7 @@ from __future__ import annotations
 
 import math
 
+import numba as nb
 import numpy as np
 
 from tmpnav.belief.pursuit import (
@@ -57,8 +69,13 @@ from tmpnav.belief.pursuit import (
     heading_reached,
     length_left,
 )
+from tmpnav.world.geometry import wrap_angle_scalar
 
-__all__ = ["RESOLUTION", "Rounding", "RppFollower", "RppParams", "densify"]
+__all__ = ["CONTROLLER_FREQUENCY", "RESOLUTION", "Rounding", "RppFollower", "RppParams", "densify", "drive"]
+
+#: Hz: how often nav2's controller server runs the law (``controller_server.controller_frequency``,
+#: nav2_bringup/params/nav2_params.yaml and nav2's configuration guide: 20.0)
+CONTROLLER_FREQUENCY = 20.0
 
 
 class RppFollower:
@@ -115,3 +132,60 @@ class RppFollower:
         )  # fmt: skip
         self.v, self.w = float(v), float(w)
         return np.array([self.v, self.w])
+
+    @property
+    def substeps(self) -> int:
+        """The law's commands in a control step of ``dt`` at :data:`CONTROLLER_FREQUENCY` (at least 1)."""
+        return max(1, round(self.dt * CONTROLLER_FREQUENCY))
+
+    def step(self, est: np.ndarray, obstacle_distance: float) -> np.ndarray:
+        """The commands (N, 2) (v, omega) of one control step at nav2's rate (N = :attr:`substeps`,
+        each held dt / N), from the estimate ``est`` (3,) at the step's start, dead-reckoned with
+        them from one to the next; zero from the one at which nav2's goal checker is satisfied (the
+        position once reached stays reached, :meth:`at_goal`). The obstacle distance is the step's
+        start's (module docstring)."""
+        out = np.zeros((self.substeps, 2))
+        self.index, self.within, self.v, self.w = _step(
+            self.path, self.left, self.index, float(est[0]), float(est[1]), float(est[2]), self.v, self.w,
+            float(obstacle_distance), self.speed, self.turn_rate, self.dt / self.substeps, self._vector,
+            self._goal, self.p.xy_goal_tolerance, self.within, out,
+        )  # fmt: skip
+        return out
+
+
+@nb.njit(cache=True)
+def _step(
+    path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, h, p, goal, tolerance, within, out
+):  # pragma: no cover
+    """:meth:`RppFollower.step`, compiled: the law's commands into ``out`` (N, 2), each held ``h``
+    s, the goal checker's distance ``tolerance`` (m); returns the path index, the goal checker's
+    state and the last command."""
+    n = path.shape[0]
+    for k in range(out.shape[0]):
+        within = within or math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y) <= tolerance
+        if within and heading_reached(th, goal, p):
+            return index, within, 0.0, 0.0
+        v, w, index = command(path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, h, p, goal)
+        out[k, 0], out[k, 1] = v, w
+        x, y = x + v * h * math.cos(th), y + v * h * math.sin(th)
+        th = wrap_angle_scalar(th + w * h)
+    return index, within, v, w
+
+
+@nb.njit(cache=True)
+def drive(pose, commands, z, alphas, dt):  # pragma: no cover
+    """The pose (3,) after a control step of ``dt`` s from ``pose`` driving ``commands`` (N, 2), each
+    held dt / N, with the step's control noise: command u plus sqrt(W(u)) ``z`` (``z`` (2,) the
+    step's standard normal draw, W(u) = diag(a1 v² + a2 omega², a3 v² + a4 omega²) with ``alphas``
+    (a1..a4), paper eq. (4)), each by the motion model's Euler step (tmpnav.belief.models.motion).
+    With one command it is that step of ``dt``."""
+    h = dt / commands.shape[0]
+    x, y, th = pose[0], pose[1], pose[2]
+    for k in range(commands.shape[0]):
+        v, w = commands[k, 0], commands[k, 1]
+        v2, w2 = v * v, w * w
+        v += math.sqrt(alphas[0] * v2 + alphas[1] * w2) * z[0]
+        w += math.sqrt(alphas[2] * v2 + alphas[3] * w2) * z[1]
+        x, y = x + v * h * math.cos(th), y + v * h * math.sin(th)
+        th = wrap_angle_scalar(th + w * h)
+    return np.array([x, y, th])

@@ -13,9 +13,12 @@ simulated world around it. Each control step, for the whole team together:
    placed among the walls it sees, each command checked against them, and nav2's recovery
    behaviours when the controller cannot go on, a move nav2 gives up cut where the robot stands),
    every other robot (waiting, idle, done) none: zero control, so its uncertainty does not grow;
-3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the
-   team's localiser (:class:`~tmpnav.execution.localisers.TeamLocaliser`: the joint EKF of
-   :mod:`.joint_ekf`, or every robot's AMCL) predicts with the commands;
+3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)), a robot
+   RPP drives with the step's commands at nav2's controller rate (:meth:`RppFollower.step
+   <tmpnav.execution.rpp.RppFollower.step>`), each with the step's noise; the team's localiser
+   (:class:`~tmpnav.execution.localisers.TeamLocaliser`: the joint EKF of
+   :mod:`.joint_ekf`, or every robot's AMCL) predicts with the commands, those of a robot RPP
+   drives one by one, as its odometry follows them;
 4. every robot observes from its true pose, moving or standing, what its localiser takes: the
    landmarks it sees (range, field of view, line of sight) with sensor noise; with a range
    sensor, a scan of the walls the filter compares with one ray cast from its estimate
@@ -45,7 +48,7 @@ from tmpnav.execution.localisers import Localisation, TeamLocaliser
 from tmpnav.execution.moves import QueuedMove, RobotQueue
 from tmpnav.execution.navigation import Navigator
 from tmpnav.execution.recovery import BEHAVIOURS, Recovery
-from tmpnav.execution.rpp import Rounding, RppFollower
+from tmpnav.execution.rpp import Rounding, RppFollower, drive
 from tmpnav.execution.schedule import TeamSchedule
 from tmpnav.execution.trace import Draws, HitEvent, SessionTrace, nees
 from tmpnav.roadmap.shortcut import required_clearance
@@ -89,6 +92,9 @@ class Session:
             terms.update(dict.fromkeys(self.names, 0.0))
         #: the robots' speed now, as a share of their commands (0: stopped; set by a closed loop's events)
         self.speed = np.ones(len(self.names))
+        #: this step's commands (N, 2) at nav2's controller rate of the robots RPP drives, by robot
+        #: (tmpnav.execution.rpp.RppFollower.step; their mean is the robot's command)
+        self.profiles: dict[int, np.ndarray] = {}
         self.schedule = TeamSchedule(self.names, queues, self.trace, scenario.goals, self.dt, self)
         self.localiser = self._localiser(belief, queues, session)
         self.session = session
@@ -167,8 +173,11 @@ class Session:
         return self.trace
 
     def _commands(self) -> np.ndarray:
-        """The driving robots' commands (n, 2) this step, at their speed now; zero for the others."""
+        """The driving robots' commands (n, 2) this step, at their speed now; zero for the others.
+        The robots RPP drives get the mean of the step's commands at nav2's controller rate, which
+        they drive (:attr:`profiles`)."""
         u = np.zeros((len(self.names), 2))
+        self.profiles = {}
         for i, r in enumerate(self.schedule.robots):
             if not r.waypoints:
                 continue
@@ -177,6 +186,8 @@ class Session:
                 self.schedule.give_up(i, self.step)
                 continue
             u[i] = self.speed[i] * command
+            if (profile := self.navigator.profiles.get(i)) is not None and self.speed[i] > 0.0:
+                self.profiles[i] = self.speed[i] * profile
             if self.speed[i] == 0.0:
                 self.schedule.hold(i, self.step)
         return u
@@ -267,18 +278,35 @@ class Session:
 
     def _move(self, u: np.ndarray) -> None:
         """The true robots move with noisy controls (none for a robot standing: W(0) = 0); the
-        filter predicts with the commands."""
+        filter predicts with the commands. A robot RPP drives moves with each of the step's
+        commands at nav2's controller rate (:attr:`profiles`), the localiser predicting with them
+        one by one, as its odometry would."""
         models = self.scenario.models
         W = motion_noise_cov(u, models.motion_noise)  # (n, 2, 2), diagonal
-        noisy = u + np.sqrt(np.stack([W[:, 0, 0], W[:, 1, 1]], axis=-1)) * self.draws.motion[:, self.step]
+        z = self.draws.motion[:, self.step]
+        noisy = u + np.sqrt(np.stack([W[:, 0, 0], W[:, 1, 1]], axis=-1)) * z
         moved = motion(self.truth, noisy, models.dt)
+        alphas = np.asarray(models.motion_noise, dtype=float)
+        for i, commands in self.profiles.items():  # RPP's commands at nav2's rate, each with the step's noise
+            moved[i] = drive(self.truth[i], commands, z[i], alphas, models.dt)
         if self.world is self.base:
             self.truth = moved
         else:
             for i in range(len(self.names)):
                 if not self._closed_in_way(moved[i, :2], self.radii[i]):
                     self.truth[i] = moved[i]
-        self.localiser.predict(u)
+        self.localiser.predict(u, self._steps(u))
+
+    def _steps(self, u: np.ndarray) -> np.ndarray | None:
+        """The team's commands (n, N, 2) at the controller rate this step, where some robot has
+        them (:attr:`profiles`), the others holding theirs; None where none has."""
+        if not self.profiles:
+            return None
+        n = max(commands.shape[0] for commands in self.profiles.values())
+        steps = np.repeat(u[:, None, :], n, axis=1)
+        for i, commands in self.profiles.items():
+            steps[i] = commands if commands.shape[0] == n else commands.mean(axis=0)
+        return steps
 
     def _closed_in_way(self, xy: np.ndarray, radius: float) -> bool:
         """Whether a robot at ``xy`` would touch a cell the world has now and had not at the start (a
