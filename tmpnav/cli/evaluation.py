@@ -122,8 +122,9 @@ def amcl_options(command: Any) -> Any:
     default="auto",
     show_default=True,
     help="Who steers the simulated robots along their moves: waypoint, turning on the spot at each node "
-    "of the path; rpp, nav2's Regulated Pure Pursuit with nav2's defaults (turns while it drives, slows at "
-    "bends, near walls and on approach; docs/rpp.md); auto, the plan's own controller (models.controller: "
+    "of the path; rpp, nav2's Regulated Pure Pursuit with nav2's defaults, run 20 times a second as nav2's "
+    "controller server runs it (turns while it drives, slows at bends, near walls and on approach; "
+    "docs/rpp.md); auto, the plan's own controller (models.controller: "
     "rpp for rpp, waypoint for turn-then-drive).",
 )
 @option(
