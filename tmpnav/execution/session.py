@@ -278,28 +278,31 @@ class Session:
 
     def _move(self, u: np.ndarray) -> None:
         """The true robots move with noisy controls (none for a robot standing: W(0) = 0); the
-        filter predicts with the commands. A robot RPP drives moves with each of the step's
-        commands at nav2's controller rate (:attr:`profiles`), the localiser predicting with them
-        one by one, as its odometry would."""
+        filter predicts with the commands. In a step where RPP drives some robot at nav2's
+        controller rate (:attr:`profiles`), every robot moves command by command (the others
+        holding theirs), each command with the robot's noise of the step, and the localiser
+        predicts with them one by one, as odometry would: truth and prediction follow the same
+        commands."""
         models = self.scenario.models
-        W = motion_noise_cov(u, models.motion_noise)  # (n, 2, 2), diagonal
         z = self.draws.motion[:, self.step]
-        noisy = u + np.sqrt(np.stack([W[:, 0, 0], W[:, 1, 1]], axis=-1)) * z
-        moved = motion(self.truth, noisy, models.dt)
-        alphas = np.asarray(models.motion_noise, dtype=float)
-        for i, commands in self.profiles.items():  # RPP's commands at nav2's rate, each with the step's noise
-            moved[i] = drive(self.truth[i], commands, z[i], alphas, models.dt)
+        steps = self._steps(u)
+        if steps is None:
+            W = motion_noise_cov(u, models.motion_noise)  # (n, 2, 2), diagonal
+            moved = motion(self.truth, u + np.sqrt(np.stack([W[:, 0, 0], W[:, 1, 1]], axis=-1)) * z, models.dt)
+        else:
+            alphas = np.asarray(models.motion_noise, dtype=float)
+            moved = np.stack([drive(self.truth[i], steps[i], z[i], alphas, models.dt) for i in range(len(u))])
         if self.world is self.base:
             self.truth = moved
         else:
             for i in range(len(self.names)):
                 if not self._closed_in_way(moved[i, :2], self.radii[i]):
                     self.truth[i] = moved[i]
-        self.localiser.predict(u, self._steps(u))
+        self.localiser.predict(u, steps)
 
     def _steps(self, u: np.ndarray) -> np.ndarray | None:
         """The team's commands (n, N, 2) at the controller rate this step, where some robot has
-        them (:attr:`profiles`), the others holding theirs; None where none has."""
+        them (:attr:`profiles`), the others holding theirs (``u``) N times; None where none has."""
         if not self.profiles:
             return None
         n = max(commands.shape[0] for commands in self.profiles.values())
