@@ -8,10 +8,13 @@ Each control step, for every robot that drives:
    the robot sees;
 2. the controller's command from that pose: the waypoint follower (:mod:`.control`) or nav2's
    Regulated Pure Pursuit (:mod:`.rpp`), which at a job's station turns to its goal pose's heading;
+   RPP gives the step's commands at nav2's controller rate (:attr:`Navigator.profiles`), and the
+   command is their mean;
 3. with ``steers_local``, the command checked against what the robot sees
    (:meth:`~tmpnav.execution.local_view.LocalView.safe_command`), and nav2's recoveries when
    the controller cannot go on (:mod:`.recovery`): a recovery behaviour's command replaces the
-   controller's, and a move whose navigation fails is given up.
+   controller's, and a move whose navigation fails is given up. A command changed there is
+   held for the whole step.
 """
 
 from __future__ import annotations
