@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from tmpnav.execution.session import free_start
+from tmpnav.execution.trace import free_start
 from tmpnav.pipeline import load_world
 from tmpnav.shipped import configs_dir
 from tmpnav.types import Pose

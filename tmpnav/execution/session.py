@@ -50,7 +50,7 @@ from tmpnav.execution.navigation import Navigator
 from tmpnav.execution.recovery import BEHAVIOURS, Recovery
 from tmpnav.execution.rpp import Rounding, RppFollower, drive
 from tmpnav.execution.schedule import TeamSchedule
-from tmpnav.execution.trace import Draws, HitEvent, SessionTrace, nees
+from tmpnav.execution.trace import Draws, HitEvent, SessionTrace, free_start, nees
 from tmpnav.roadmap.shortcut import required_clearance
 from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
@@ -379,25 +379,3 @@ class Session:
             )
             self._contacts[(i, kind)] = event
             self.trace.hit_events.append(event)
-
-
-#: redraws of a true start that a robot's disc would find in collision with the map
-START_REDRAWS = 64
-
-
-def free_start(mean: np.ndarray, cov: np.ndarray, z: np.ndarray, world: World, radius: float) -> np.ndarray:
-    """A true start pose (3,) drawn from the belief N(mean, cov) with the standard normal draw
-    ``z`` (3,), conditioned on the robot's disc being free of the map: a robot cannot stand in a
-    wall, however wide its initial belief. Where mean + L z (L L^T = cov) is free, that pose;
-    else the first free one of up to :data:`START_REDRAWS` redraws from a stream seeded by the
-    bits of ``z`` (the same in every process), or the last of them."""
-    root = np.linalg.cholesky(cov)
-    pose = mean + root @ z
-    if world.is_free(pose[None, :2], radius)[0]:
-        return pose
-    rng = np.random.default_rng(np.frombuffer(np.ascontiguousarray(z, dtype=float).tobytes(), dtype=np.uint32))
-    for _ in range(START_REDRAWS):
-        pose = mean + root @ rng.standard_normal(3)
-        if world.is_free(pose[None, :2], radius)[0]:
-            break
-    return pose

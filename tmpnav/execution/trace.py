@@ -1,15 +1,20 @@
 """What one session of ``tmpnav simulate`` draws and records: its random numbers
-(:class:`Draws`, shared by both configurations) and its trace (:class:`SessionTrace`)."""
+(:class:`Draws`, shared by both configurations), the true start poses drawn from them
+(:func:`free_start`), and its trace (:class:`SessionTrace`)."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from tmpnav.execution.consistency import ConsistencyTrace
 from tmpnav.results import Schedule, TimedMove
+
+if TYPE_CHECKING:
+    from tmpnav.world import World
 
 
 @dataclass
@@ -121,3 +126,25 @@ def nees(error: np.ndarray, cov: np.ndarray | None) -> float:
         return math.nan
     e0, e1 = float(error[0]), float(error[1])
     return (d * e0 * e0 - (b + c) * e0 * e1 + a * e1 * e1) / det  # eᵀ Σ⁻¹ e, Σ⁻¹ = [[d, -b], [-c, a]] / det
+
+
+#: redraws of a true start that a robot's disc would find in collision with the map
+START_REDRAWS = 64
+
+
+def free_start(mean: np.ndarray, cov: np.ndarray, z: np.ndarray, world: World, radius: float) -> np.ndarray:
+    """A true start pose (3,) drawn from the belief N(mean, cov) with the standard normal draw
+    ``z`` (3,), conditioned on the robot's disc being free of the map: a robot cannot stand in a
+    wall, however wide its initial belief. Where mean + L z (L L^T = cov) is free, that pose;
+    else the first free one of up to :data:`START_REDRAWS` redraws from a stream seeded by the
+    bits of ``z`` (the same in every process), or the last of them."""
+    root = np.linalg.cholesky(cov)
+    pose = mean + root @ z
+    if world.is_free(pose[None, :2], radius)[0]:
+        return pose
+    rng = np.random.default_rng(np.frombuffer(np.ascontiguousarray(z, dtype=float).tobytes(), dtype=np.uint32))
+    for _ in range(START_REDRAWS):
+        pose = mean + root @ rng.standard_normal(3)
+        if world.is_free(pose[None, :2], radius)[0]:
+            break
+    return pose
