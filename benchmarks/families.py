@@ -45,6 +45,18 @@ def _box(x0: float, y0: float, x1: float, y1: float) -> list[list[float]]:
     ]
 
 
+#: m: the spacing of robots queued at one corridor end, and the least x a queued robot stands at
+QUEUE_SPACING, QUEUE_WEST = 1.5, 0.6
+
+
+def _queued_x(x: float, k: int) -> float:
+    """The x of the k-th robot queued at a corridor end whose first robot stands at ``x``: every
+    1.5 m westwards while inside the map (x at least 0.6 m: the west corridor), then eastwards
+    from beyond the first (a fleet of 32 robots on 2 corridors queues 8 at each end)."""
+    west = int((x - QUEUE_WEST) // QUEUE_SPACING) + 1  # robots that fit westwards, the first included
+    return x - QUEUE_SPACING * k if k < west else x + QUEUE_SPACING * (k - west + 1)
+
+
 def _widths(rng: np.random.Generator, n: int) -> list[float]:
     return [float(round(rng.uniform(4.0, 10.0) * 2) / 2) for _ in range(n)]
 
@@ -112,7 +124,7 @@ def office(
         {
             "name": f"r{i + 1}",
             "pose": [
-                round(starts[i % len(starts)][0] - 1.5 * (i // len(starts)), 3),
+                round(_queued_x(starts[i % len(starts)][0], i // len(starts)), 3),
                 round(starts[i % len(starts)][1], 3),
                 round(starts[i % len(starts)][2], 4),
             ],
