@@ -132,7 +132,7 @@ def test_the_plan_says_when_and_in_what_units(plan_report: Any) -> None:
 def test_room_names_that_would_stick_out_of_a_cropped_view_are_hidden() -> None:
     import matplotlib.pyplot as plt
 
-    from tmpnav.report.figures import ROOM_LABEL, keep_labels_inside
+    from tmpnav.report.labels import ROOM_LABEL, keep_labels_inside
 
     fig, ax = plt.subplots(figsize=(4, 3))
     ax.set_xlim(0, 10)
@@ -162,7 +162,8 @@ def test_a_badges_note_that_would_run_out_of_the_axes_goes_to_its_other_side() -
     the figure: there it is put to the badge's left, or above it; elsewhere it stays."""
     import matplotlib.pyplot as plt
 
-    from tmpnav.report.figures import badge_note, keep_labels_inside
+    from tmpnav.report.figures import badge_note
+    from tmpnav.report.labels import keep_labels_inside
 
     fig, ax = _square_axes((8, 6))
     for xy in ((2, 8), (9.6, 8), (2, 0.3), (9.6, 0.3)):
@@ -185,7 +186,8 @@ def test_a_badges_note_that_would_run_out_of_the_axes_goes_to_its_other_side() -
 def test_notes_that_would_cover_each_other_take_both_sides_then_are_left_out() -> None:
     import matplotlib.pyplot as plt
 
-    from tmpnav.report.figures import badge_note, keep_labels_inside
+    from tmpnav.report.figures import badge_note
+    from tmpnav.report.labels import keep_labels_inside
 
     fig, ax = _square_axes((4, 3))
     for xy in ((5, 5), (5.1, 5), (5.2, 5), (2, 8)):
@@ -217,3 +219,26 @@ def test_start_ellipses_too_small_to_see_are_magnified_and_the_title_says_so(tmp
     from tmpnav.report.world_plot import _robots_and_rooms
 
     assert "2 robots (2σ start ellipses: r1 0.20 m, r2 0.20 m, drawn 4x)" in _robots_and_rooms(scenario, 4)
+
+
+def test_robot_names_that_would_cover_each_other_go_below_then_are_left_out() -> None:
+    """A fleet queued at a corridor's end: each robot's name above its start, the next below it
+    where it would cover a name, and left out where it covers one there too."""
+    import matplotlib.pyplot as plt
+
+    from tmpnav.report.labels import ROBOT_NAME, keep_labels_inside
+
+    fig, ax = _square_axes((4, 3))
+    names = [
+        ax.annotate(name, xy, xytext=(8, 8), textcoords="offset points", fontsize=11, weight="bold", gid=ROBOT_NAME)
+        for name, xy in (("r5", (5.0, 5.0)), ("r11", (5.2, 5.0)), ("r17", (5.4, 5.0)), ("r1", (1.0, 9.0)))
+    ]
+    keep_labels_inside(ax)
+    first, second, third, apart = names
+    assert first.get_visible() and first.xyann == (8, 8)
+    assert second.get_visible() and second.xyann == (8, -8)  # below its start
+    assert not third.get_visible() and apart.get_visible()
+    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+    shown = [n.get_window_extent(renderer) for n in names if n.get_visible()]
+    assert not any(a.overlaps(b) for i, a in enumerate(shown) for b in shown[i + 1 :])
+    plt.close(fig)

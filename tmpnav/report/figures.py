@@ -14,13 +14,11 @@ from typing import BinaryIO
 import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.backend_bases import RendererBase
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 from matplotlib.image import AxesImage
 from matplotlib.patches import Circle, Ellipse, Polygon
-from matplotlib.text import Annotation
 from matplotlib.transforms import Bbox
 from numpy.typing import NDArray
 
@@ -28,6 +26,7 @@ from tmpnav.atomic import write_file
 from tmpnav.cachedir import CacheDir
 from tmpnav.errors import OutputError
 from tmpnav.report import figure_format, figure_suffixes
+from tmpnav.report.labels import BADGE_NOTE, NOTE_OFFSET, ROBOT_NAME, ROOM_LABEL
 from tmpnav.roadmap.store import stored_localisability
 from tmpnav.types import Roadmap, RosMap, Scenario
 from tmpnav.world import World
@@ -36,8 +35,6 @@ from tmpnav.world.scan_information import LOCALISABILITY_POINTS
 
 ROBOT_COLORS = ("#1f77b4", "#2ca02c", "#d62728", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf")
 LANDMARK_MARKERS = ("*", "P", "X", "D", "p", "h", "s", "^")
-ROOM_LABEL = "room-label"  # gid of the room names (keep_labels_inside)
-BADGE_NOTE = "badge-note"  # gid of the notes beside the step badges (keep_labels_inside)
 #: the picture formats Agg draws (the others have a renderer of their own)
 AGG_FORMATS = frozenset(("png", "jpg", "jpeg", "tif", "tiff", "webp", "gif"))
 
@@ -206,7 +203,7 @@ def localisability_colorbar(fig: Figure, ax: Axes, image: AxesImage) -> None:
 
 def draw_rooms(ax: Axes, scenario: Scenario, view: tuple[float, float, float, float] | None = None) -> None:
     """Rooms, each named in the top-left corner of its part inside ``view`` (xmin, ymin, xmax, ymax;
-    None: the whole room), away from robots and paths; :func:`keep_labels_inside` then hides a
+    None: the whole room), away from robots and paths; tmpnav.report.labels.keep_labels_inside then hides a
     name that still sticks out of the axes. Stations are drawn at their poses (:func:`draw_stations`)."""
     for room in scenario.places:
         poly = np.array(room.polygon)
@@ -254,57 +251,6 @@ def draw_stations(ax: Axes, scenario: Scenario) -> None:
             zorder=3,
             gid=ROOM_LABEL,
         )
-
-
-def keep_labels_inside(ax: Axes) -> None:
-    """Hide the room names that do not fit wholly inside the axes (a room at the edge of a
-    cropped view): a name cut in half reads as another name. Move a badge's note that would run
-    out of the axes (over the legend beside them, or off the figure) or over another note to the
-    badge's other side, and leave it out where it covers another there too (:func:`_place_note`)."""
-    fig = ax.get_figure(root=True)
-    if fig is None:
-        return
-    # the equal aspect shrinks the axes; applying it is all the layout the names need (a whole
-    # draw, as fig.draw_without_rendering does, was a third of the time plan.png took)
-    ax.apply_aspect()
-    renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
-    box = ax.get_window_extent(renderer).padded(-2.0)
-    notes: list[Bbox] = []
-    for text in ax.texts:
-        if text.get_gid() == BADGE_NOTE and isinstance(text, Annotation):
-            _place_note(text, box, notes, renderer)
-        if text.get_gid() != ROOM_LABEL:
-            continue
-        extent = text.get_window_extent(renderer)
-        inside = box.x0 <= extent.x0 and extent.x1 <= box.x1 and box.y0 <= extent.y0 and extent.y1 <= box.y1
-        text.set_visible(inside)
-
-
-def _place_note(note: Annotation, box: Bbox, placed: list[Bbox], renderer: RendererBase) -> None:
-    """A :func:`badge_note` past the right edge of ``box`` put to its badge's left, one past the
-    bottom put above it (the note's offset mirrored about the badge); one that would then cover
-    a note ``placed`` before it tried on the badge's other side, and left out where it covers
-    one there too (a fleet's badges crowd: schedule.png gives every arrival's time)."""
-    extent = note.get_window_extent(renderer)
-    dx, dy = note.xyann
-    if extent.x1 > box.x1:
-        dx = dx - 2 * NOTE_OFFSET
-        note.set_horizontalalignment("right")
-    if extent.y0 < box.y0:
-        dy = dy + 2 * NOTE_OFFSET
-        note.set_verticalalignment("bottom")
-    note.xyann = (dx, dy)
-    extent = note.get_window_extent(renderer)
-    if any(extent.overlaps(other) for other in placed):
-        right = note.get_horizontalalignment() == "left"
-        note.set_horizontalalignment("right" if right else "left")
-        note.xyann = (dx - 2 * NOTE_OFFSET if right else dx + 2 * NOTE_OFFSET, dy)
-        extent = note.get_window_extent(renderer)
-        inside = box.x0 <= extent.x0 and extent.x1 <= box.x1
-        if not inside or any(extent.overlaps(other) for other in placed):
-            note.set_visible(False)
-            return
-    placed.append(extent)
 
 
 def draw_doors(ax: Axes, scenario: Scenario) -> None:
@@ -391,6 +337,7 @@ def draw_robot_start(ax: Axes, scenario: Scenario, index: int, magnify: float = 
         fontsize=11,
         weight="bold",
         zorder=8,
+        gid=ROBOT_NAME,
     )
 
 
@@ -430,13 +377,9 @@ def step_badge(ax: Axes, xy: tuple[float, float], text: str, color: str, offset:
     )
 
 
-#: points from a step badge's centre to the corner of its note
-NOTE_OFFSET = 9
-
-
 def badge_note(ax: Axes, xy: tuple[float, float], text: str, color: str, offset: tuple[float, float] = (0, 0)) -> None:
     """A small note (an arrival time) to the lower right of a :func:`step_badge` at ``xy``
-    (to its left or above where that runs out of the axes: :func:`keep_labels_inside`)."""
+    (to its left or above where that runs out of the axes: tmpnav.report.labels.keep_labels_inside)."""
     ax.annotate(
         text,
         xy,

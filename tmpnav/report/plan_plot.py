@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from tmpnav.cachedir import CacheDir
 from tmpnav.numbers import probability
 from tmpnav.report import figures as fg
+from tmpnav.report.labels import keep_labels_inside
 from tmpnav.results import PlanReport
 from tmpnav.types import TrajectoryStep
 
@@ -328,7 +329,7 @@ def plan_figure(report: PlanReport, crop: bool = True) -> Figure:
             text.set_clip_on(True)
     ax.set_title(_title(report), fontsize=10)
     _legend(ax, report, spacing)
-    fg.keep_labels_inside(ax)
+    keep_labels_inside(ax)
     return fig
 
 
