@@ -13,12 +13,12 @@ simulated world around it. Each control step, for the whole team together:
    placed among the walls it sees, each command checked against them, and nav2's recovery
    behaviours when the controller cannot go on, a move nav2 gives up cut where the robot stands),
    every other robot (waiting, idle, done) none: zero control, so its uncertainty does not grow;
-3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)), a robot
-   RPP drives with the step's commands at nav2's controller rate (:meth:`RppFollower.step
-   <tmpnav.execution.rpp.RppFollower.step>`), each with the step's noise; the team's localiser
-   (:class:`~tmpnav.execution.localisers.TeamLocaliser`: the joint EKF of
-   :mod:`.joint_ekf`, or every robot's AMCL) predicts with the commands, those of a robot RPP
-   drives one by one, as its odometry follows them;
+3. the true robots move with the commands plus noise drawn from W(u) (paper eq. (4)); the
+   team's localiser (:class:`~tmpnav.execution.localisers.TeamLocaliser`: the joint EKF of
+   :mod:`.joint_ekf`, or every robot's AMCL) predicts with the commands. In a step where RPP
+   drives a robot at nav2's controller rate (:meth:`RppFollower.step
+   <tmpnav.execution.rpp.RppFollower.step>`), every robot moves, and is predicted, command by
+   command, as odometry follows them;
 4. every robot observes from its true pose, moving or standing, what its localiser takes: the
    landmarks it sees (range, field of view, line of sight) with sensor noise; with a range
    sensor, a scan of the walls the filter compares with one ray cast from its estimate
@@ -305,10 +305,10 @@ class Session:
         them (:attr:`profiles`), the others holding theirs (``u``) N times; None where none has."""
         if not self.profiles:
             return None
-        n = max(commands.shape[0] for commands in self.profiles.values())
+        n = next(iter(self.profiles.values())).shape[0]  # every follower steps at the same dt
         steps = np.repeat(u[:, None, :], n, axis=1)
         for i, commands in self.profiles.items():
-            steps[i] = commands if commands.shape[0] == n else commands.mean(axis=0)
+            steps[i] = commands
         return steps
 
     def _closed_in_way(self, xy: np.ndarray, radius: float) -> bool:
