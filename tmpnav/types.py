@@ -310,6 +310,14 @@ class Models:
         return self.controller
 
     @property
+    def midpoint(self) -> bool:
+        """Each control step translates along the heading at its middle (a second-order step of
+        the unicycle, tmpnav.belief.models.motion): RPP turns while it drives, and its 0.5 s steps
+        then stay on the arcs nav2's 20 Hz commands drive. The paper's turn-then-drive steps
+        either turn or drive and keep the Euler step of eq. (4)."""
+        return self.driving == "rpp"
+
+    @property
     def belief_noise(self) -> tuple[float, float, float, float]:
         """alpha1..alpha4 of W(u) that the planned beliefs predict with: the robots' own
         ``motion_noise``, or the motion model of the localiser that keeps them

@@ -14,9 +14,12 @@ LM_SENSOR = RangeBearingSensor(range=8.0, fov=2 * np.pi, sigma_range=0.1, sigma_
 MUTUAL_SENSOR = RangeBearingSensor(range=4.0, fov=2 * np.pi, sigma_range=0.15, sigma_bearing=0.08)
 
 
-def models(max_likelihood: bool = False, mutual: bool = True, dt: float = DT, seed: int = 0) -> Models:
+def models(
+    max_likelihood: bool = False, mutual: bool = True, dt: float = DT, seed: int = 0, controller: str = "auto"
+) -> Models:
+    """Test models; ``controller="rpp"``: steps that turn while they drive (the midpoint step)."""
     mode = ObservationMode.MAX_LIKELIHOOD if max_likelihood else ObservationMode.NOISY
-    return Models(dt, ALPHAS, LM_SENSOR, MUTUAL_SENSOR, mutual, mode, seed=seed)
+    return Models(dt, ALPHAS, LM_SENSOR, MUTUAL_SENSOR, mutual, mode, seed=seed, controller=controller)
 
 
 def random_case(

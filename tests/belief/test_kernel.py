@@ -39,12 +39,14 @@ def assert_same_propagation(fast: Propagation, ref: Propagation) -> None:
 
 
 @settings(max_examples=30, deadline=None)
-@given(st.integers(0, 2**32 - 1), st.sampled_from([1, 2, 3]), st.booleans())
-def test_kernel_matches_filterpy_step_by_step(seed: int, n: int, ml: bool) -> None:
+@given(st.integers(0, 2**32 - 1), st.sampled_from([1, 2, 3]), st.booleans(), st.sampled_from(["auto", "rpp"]))
+def test_kernel_matches_filterpy_step_by_step(seed: int, n: int, ml: bool, controller: str) -> None:
+    """Step by step, with the Euler step (the paper's) and the midpoint step (RPP's)."""
     rng = np.random.default_rng(seed)
     T, L = int(rng.integers(1, 12)), int(rng.integers(0, 4))
     belief, rollout, landmarks, noise = random_case(rng, n, T, L)
-    m = models(ml)
+    m = models(ml, controller=controller)
+    assert m.midpoint == (controller == "rpp")
     fast = propagate_rollout(belief, rollout, landmarks, m, noise)
     ref = propagate_reference(belief, rollout, landmarks, m, noise)
     assert_same_propagation(fast, ref)
@@ -273,4 +275,5 @@ def test_the_kernel_unpacks_the_named_tuples_in_field_order() -> None:
         "local_var",
         "local_rho",
         "hazard",
+        "midpoint",
     )

@@ -82,11 +82,27 @@ def test_models_work_on_batches_like_on_single_poses() -> None:
 
 
 @settings(max_examples=60)
-@given(pose, control, st.floats(0.01, 0.5))
-def test_motion_jacobians_equal_finite_differences(x: np.ndarray, u: np.ndarray, dt: float) -> None:
-    F, V = motion_jacobians(x, u, dt)
-    np.testing.assert_allclose(F, numeric_jacobian(lambda s: motion(s, u, dt), x, (2,)), atol=1e-7)
-    np.testing.assert_allclose(V, numeric_jacobian(lambda c: motion(x, c, dt), u, (2,)), atol=1e-7)
+@given(pose, control, st.floats(0.01, 0.5), st.booleans())
+def test_motion_jacobians_equal_finite_differences(x: np.ndarray, u: np.ndarray, dt: float, midpoint: bool) -> None:
+    F, V = motion_jacobians(x, u, dt, midpoint)
+    np.testing.assert_allclose(F, numeric_jacobian(lambda s: motion(s, u, dt, midpoint), x, (2,)), atol=1e-7)
+    np.testing.assert_allclose(V, numeric_jacobian(lambda c: motion(x, c, dt, midpoint), u, (2,)), atol=1e-7)
+
+
+def test_the_midpoint_step_follows_the_arc_and_equals_euler_where_a_step_only_turns_or_drives() -> None:
+    """The midpoint step lands within O(dt³) of the arc a command held for dt drives (the Euler
+    step within O(dt²)); on a step that either turns or drives the two steps are the same pose."""
+    x, u, dt = np.array([1.0, 2.0, 0.3]), np.array([0.5, 0.8]), 0.5
+    r = u[0] / u[1]  # the exact arc's radius
+    end = x[2] + u[1] * dt
+    arc = np.array([x[0] + r * (np.sin(end) - np.sin(x[2])), x[1] - r * (np.cos(end) - np.cos(x[2]))])
+    mid_error = np.hypot(*(motion(x, u, dt, midpoint=True)[:2] - arc))
+    euler_error = np.hypot(*(motion(x, u, dt)[:2] - arc))
+    assert mid_error < 0.002 < 0.04 < euler_error
+    for only in (np.array([0.5, 0.0]), np.array([0.0, 0.8])):
+        np.testing.assert_array_equal(motion(x, only, dt, midpoint=True), motion(x, only, dt))
+        F, _ = motion_jacobians(x, only, dt, midpoint=True)
+        np.testing.assert_array_equal(F, motion_jacobians(x, only, dt)[0])
 
 
 def test_motion_noise_is_zero_when_standing_still() -> None:

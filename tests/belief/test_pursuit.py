@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from tmpnav.belief.controls import path_controls
-from tmpnav.belief.pursuit import RppParams, pursuit_controls
+from tmpnav.belief.models import motion
+from tmpnav.belief.pursuit import PLAN_SUBSTEPS, RppParams, pursuit_controls
 from tmpnav.execution.rpp import RppFollower
 from tmpnav.roadmap.shortcut import shortcut
 
@@ -35,9 +36,11 @@ def walled(rows: slice, cols: slice, size: float = 20.0) -> tuple[np.ndarray, tu
 
 
 def unicycle(pose: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """The pose after one control step of DT without noise, its heading wrapped."""
+    """The pose after one control step of DT without noise (the midpoint step the planner's
+    rollout takes), its heading wrapped."""
     x, y, theta = pose
-    after = np.array([x + u[0] * DT * math.cos(theta), y + u[0] * DT * math.sin(theta), theta + u[1] * DT])
+    mid = theta + 0.5 * u[1] * DT
+    after = np.array([x + u[0] * DT * math.cos(mid), y + u[0] * DT * math.sin(mid), theta + u[1] * DT])
     after[2] = (after[2] + math.pi) % (2 * math.pi) - math.pi
     return after
 
@@ -55,9 +58,18 @@ def follow_without_noise(f: RppFollower, pc, start: np.ndarray) -> np.ndarray:  
     return pose
 
 
-def drive(points: list[list[float]], theta: float = 0.0, speed: float = 0.5, turn_rate: float = 1.0):
+def drive(
+    points: list[list[float]],
+    theta: float = 0.0,
+    speed: float = 0.5,
+    turn_rate: float = 1.0,
+    dt: float = DT,
+    substeps: int = PLAN_SUBSTEPS,
+):  # type: ignore[no-untyped-def]
     clear, origin = open_floor()
-    pc = pursuit_controls(np.array(points, float), theta, speed, turn_rate, DT, RppParams(), clear, origin, RES)
+    pc = pursuit_controls(
+        np.array(points, float), theta, speed, turn_rate, dt, RppParams(), clear, origin, RES, substeps=substeps
+    )
     assert pc is not None
     return pc
 
@@ -89,14 +101,45 @@ def test_a_corner_is_turned_while_driving_within_the_robot_limits() -> None:
 
 
 def test_the_poses_follow_the_motion_model_step_by_step() -> None:
+    """Each step is the motion model's midpoint step: it translates along the heading at the
+    step's middle, theta + omega dt / 2."""
     pc = drive([[0.0, 0.0], [3.0, 1.0], [2.0, 4.0], [-1.0, 4.0]], theta=2.0)
     x, u = pc.poses[:-1], pc.controls
+    mid = x[:, 2] + 0.5 * u[:, 1] * DT
     expected = np.column_stack(
-        [x[:, 0] + u[:, 0] * DT * np.cos(x[:, 2]), x[:, 1] + u[:, 0] * DT * np.sin(x[:, 2]), x[:, 2] + u[:, 1] * DT]
+        [x[:, 0] + u[:, 0] * DT * np.cos(mid), x[:, 1] + u[:, 0] * DT * np.sin(mid), x[:, 2] + u[:, 1] * DT]
     )
     wrapped = (expected[:, 2] + np.pi) % (2 * np.pi) - np.pi
     assert np.allclose(pc.poses[1:, :2], expected[:, :2])
     assert np.allclose(np.cos(pc.poses[1:, 2] - wrapped), 1.0)
+    assert np.allclose(pc.poses[1:], motion(x, u, DT, midpoint=True))
+    assert np.any(u[:, 0] * u[:, 1] != 0.0)  # steps that turn while they drive, where the two steps differ
+
+
+def test_the_plan_step_drives_as_the_law_at_nav2s_rate() -> None:
+    """At the plan's 0.5 s the law's commands held for a step drive the bends as the law run at
+    20 Hz does: no longer, and in no more time than a step's grain (with the Euler step the robot
+    went on along its heading before each turn, weaved about the path and took 3% longer in the
+    median over office-ros' motions, benchmarks/rpp/controller_rate.txt)."""
+    points = [[0.0, 0.0], [3.0, 1.0], [2.0, 4.0], [-1.0, 4.0]]  # Euler's steps: 20.0 s against 18.75 s
+    coarse = drive(points, theta=0.0)
+    fine = drive(points, theta=0.0, dt=DT / 10)
+    length = [float(np.hypot(*np.diff(p.poses[:, :2], axis=0).T).sum()) for p in (coarse, fine)]
+    assert length[0] <= 1.01 * length[1]
+    assert coarse.n_steps * DT <= fine.n_steps * DT / 10 + DT
+
+
+def test_a_turn_on_the_spot_ramps_up_as_at_nav2s_rate() -> None:
+    """A short move that starts with a turn on the spot (a robot leaving a dock or a room the way
+    it came): at 20 Hz the turn ramps up within max_angular_accel, 0.3 s to full rate. The law
+    once per 0.5 s step reached full rate at once and planned a step less than 20 Hz drives on
+    the plan's grid (building-4robots' r4 out of its dock: 5.5 s where 20 Hz drives 6.2 s);
+    run twice a step it plans what 20 Hz drives."""
+    for points in ([[0.0, 0.0], [0.0, -0.5], [0.0, -2.5]], [[0.0, 0.0], [-0.5, -0.2], [-2.5, -0.2]]):
+        fine = drive(points, theta=0.0, dt=DT / 10, substeps=1).n_steps * DT / 10
+        grid = math.ceil(fine / DT - 1e-9) * DT
+        assert drive(points, theta=0.0, substeps=1).n_steps * DT == grid - DT
+        assert drive(points, theta=0.0).n_steps * DT == grid
 
 
 def test_a_start_facing_away_turns_on_the_spot_first() -> None:
@@ -108,9 +151,10 @@ def test_a_start_facing_away_turns_on_the_spot_first() -> None:
 
 def test_the_planner_rollout_is_the_follower_driven_without_noise() -> None:
     """simulate --follower rpp steers with the same compiled law: driven on its own poses with the
-    same obstacle distances, it gives the planner's controls."""
+    same obstacle distances, it gives the planner's controls (the planner's rollout with the law
+    once per step, as RppFollower.command gives it)."""
     points = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [1.0, 5.0]])
-    pc = drive(points.tolist(), theta=0.3)
+    pc = drive(points.tolist(), theta=0.3, substeps=1)
     f = RppFollower(points, RppParams(), 0.5, 1.0, DT)
     pose = follow_without_noise(f, pc, np.array([0.0, 0.0, 0.3]))
     assert f.at_goal(pose)
@@ -167,8 +211,10 @@ def test_at_a_goal_pose_it_stops_within_the_tolerance_and_turns_to_the_heading()
     the spot to the pose's heading until within 0.25 rad of it; it does not close in on the pose."""
     clear, origin = open_floor()
     points, params = np.array([[0.0, 0.0], [5.0, 0.0]]), RppParams()
-    plain = pursuit_controls(points, 0.0, 0.5, 1.0, DT, params, clear, origin, RES)
-    posed = pursuit_controls(points, 0.0, 0.5, 1.0, DT, params, clear, origin, RES, goal_heading=math.pi / 2)
+    plain = pursuit_controls(points, 0.0, 0.5, 1.0, DT, params, clear, origin, RES, substeps=1)
+    posed = pursuit_controls(
+        points, 0.0, 0.5, 1.0, DT, params, clear, origin, RES, goal_heading=math.pi / 2, substeps=1
+    )
     assert plain is not None and posed is not None
     # the same drive, then the turn: about pi / 2 at 1 rad/s, no step driven
     n = plain.n_steps
@@ -181,14 +227,14 @@ def test_at_a_goal_pose_it_stops_within_the_tolerance_and_turns_to_the_heading()
     assert math.hypot(end[0] - 5.0, end[1]) <= params.xy_goal_tolerance
     assert abs(end[2] - math.pi / 2) <= params.yaw_goal_tolerance
     # a heading it already points within the tolerance of adds nothing
-    near = pursuit_controls(points, 0.0, 0.5, 1.0, DT, params, clear, origin, RES, goal_heading=0.2)
+    near = pursuit_controls(points, 0.0, 0.5, 1.0, DT, params, clear, origin, RES, goal_heading=0.2, substeps=1)
     assert near is not None and near.n_steps == n
 
 
 def test_the_follower_turns_to_a_goal_pose_as_the_planner_rollout_does() -> None:
     points = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0]])
     clear, origin = open_floor()
-    pc = pursuit_controls(points, 0.0, 0.5, 1.0, DT, RppParams(), clear, origin, RES, goal_heading=-2.5)
+    pc = pursuit_controls(points, 0.0, 0.5, 1.0, DT, RppParams(), clear, origin, RES, goal_heading=-2.5, substeps=1)
     assert pc is not None
     f = RppFollower(points, RppParams(), 0.5, 1.0, DT, goal_heading=-2.5)
     pose = np.array([0.0, 0.0, 0.0])

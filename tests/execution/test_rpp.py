@@ -151,7 +151,7 @@ def test_a_control_step_holds_the_laws_commands_at_nav2s_rate_on_the_dead_reckon
     f = RppFollower(points, RppParams(), 0.5, 1.0, 0.5)
     assert f.substeps == round(0.5 * CONTROLLER_FREQUENCY) == 10
     clear, origin = np.full((200, 200), FREE), (-5.0, -5.0)
-    fine = pursuit_controls(points, 0.4, 0.5, 1.0, 0.05, RppParams(), clear, origin, 0.05)
+    fine = pursuit_controls(points, 0.4, 0.5, 1.0, 0.05, RppParams(), clear, origin, 0.05, substeps=1)
     assert fine is not None
     pose = np.array([0.0, 0.0, 0.4])
     for k in range(3):  # three control steps: a turn on the spot, then driving
@@ -170,11 +170,11 @@ def test_the_commands_after_the_goal_checker_is_satisfied_are_zero() -> None:
 
 
 def test_one_command_drives_the_motion_models_step_with_its_noise() -> None:
-    """drive with one command is the session's step of every other follower: u + sqrt(W(u)) z by eq. (4)."""
+    """drive with one command is the motion model's midpoint step of u + sqrt(W(u)) z, eq. (4)."""
     pose, u, z = np.array([1.0, 2.0, 0.3]), np.array([0.4, 0.5]), np.array([0.7, -1.2])
     alphas = np.array([0.1, 0.02, 0.03, 0.2])
     W = motion_noise_cov(u, alphas)
-    expected = motion(pose, u + np.sqrt(np.diag(W)) * z, 0.5)
+    expected = motion(pose, u + np.sqrt(np.diag(W)) * z, 0.5, midpoint=True)
     assert np.allclose(drive_step(pose, u[None], z, alphas, 0.5), expected)
 
 

@@ -82,7 +82,7 @@ def test_rpp_drives_a_rounded_corner_at_full_speed_and_a_sharp_one_slowed() -> N
 def test_the_follower_drives_the_rounded_path_the_plan_drove() -> None:
     clear, origin = open_floor()
     points = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 3.0], [1.0, 5.0]])
-    pc = pursuit_controls(points, 0.3, 0.5, 1.0, DT, RppParams(), clear, origin, RES, required=0.8)
+    pc = pursuit_controls(points, 0.3, 0.5, 1.0, DT, RppParams(), clear, origin, RES, required=0.8, substeps=1)
     assert pc is not None
     f = RppFollower(points, RppParams(), 0.5, 1.0, DT, rounding=Rounding(0.8, clear, origin, RES))
     pose = follow_without_noise(f, pc, np.array([0.0, 0.0, 0.3]))

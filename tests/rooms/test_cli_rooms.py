@@ -92,12 +92,20 @@ def test_the_skeleton_of_the_shipped_map_plans_as_written(tmp_path: Path) -> Non
 
 @pytest.mark.slow
 def test_the_skeleton_of_a_generated_map_plans_as_written(corridor: tuple[GeneratedMap, Path], tmp_path: Path) -> None:
-    """Issue 15: on a generated map with known rooms, the written scenario validates and plans."""
+    """Issue 15: on a generated map with known rooms, the written scenario validates and plans.
+    Its first move leaves the corridor through a door 1 m wide and turns at once: RPP cuts that
+    corner by the door's jamb (the move's bound 0.066; nav2's AMCL executing it at 20 Hz touched
+    the jamb in 1 of 100 sessions), above the default max_risk of 0.05, which the planner refuses
+    with exit 9 and the bound it found; planned with that bound allowed, it plans."""
     g, map_yaml = corridor
     out = tmp_path / "depot.yaml"
     assert tmpnav("rooms", map_yaml, "-o", out).returncode == 0
     assert len(load_world(out)[0].rooms) == len(g.truth.rooms)  # no room left out
-    proc = tmpnav("plan", out, "--cache-dir", tmp_path / "cache", "-q", "--format", "json")
+    refused = tmpnav("plan", out, "--cache-dir", tmp_path / "cache", "-q")
+    assert refused.returncode in (0, 9), refused.stderr
+    if refused.returncode == 9:
+        assert "no plan keeps every move's collision bound within max_risk 0.05" in refused.stderr
+    proc = tmpnav("plan", out, "--cache-dir", tmp_path / "cache", "-q", "--format", "json", "--max-risk", "0.1")
     assert proc.returncode == 0, proc.stderr
     doc = yaml.safe_load(proc.stdout)  # JSON is YAML
     assert doc["status"] == "solved-optimally"

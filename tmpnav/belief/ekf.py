@@ -36,15 +36,16 @@ from tmpnav.types import Belief
 class _JointUnicycleEKF(ExtendedKalmanFilter):
     """filterpy's EKF whose state prediction is the unicycle model of every robot."""
 
-    def __init__(self, belief: Belief, dt: float = 0.0):
+    def __init__(self, belief: Belief, dt: float = 0.0, midpoint: bool = False):
         super().__init__(dim_x=belief.dim, dim_z=2)
         self.x = np.array(belief.mean, dtype=float)
         self.P = np.array(belief.cov, dtype=float)
         self.dt = dt
+        self.midpoint = midpoint
 
     def predict_x(self, u: np.ndarray | int = 0) -> None:
         # eq. (11): the predicted joint mean is f applied to each robot's mean
-        self.x = motion(self.x.reshape(-1, 3), np.asarray(u), self.dt).reshape(-1)
+        self.x = motion(self.x.reshape(-1, 3), np.asarray(u), self.dt, self.midpoint).reshape(-1)
 
     def belief(self) -> Belief:
         mean = np.array(self.x, dtype=float).reshape(-1)
@@ -53,22 +54,23 @@ class _JointUnicycleEKF(ExtendedKalmanFilter):
         return Belief(mean, 0.5 * (cov + cov.T))
 
 
-def predict(belief: Belief, controls: np.ndarray, dt: float, alphas: Sequence[float]) -> Belief:
+def predict(belief: Belief, controls: np.ndarray, dt: float, alphas: Sequence[float], midpoint: bool = False) -> Belief:
     """Joint EKF prediction of n robots, paper eqs. (8), (11), (12).
 
     mean' = [f(mean_1, u_1), ..., f(mean_n, u_n)],   P' = F P Fᵀ + R,
     with F = blockdiag(F_i) and R = blockdiag(V_i W(u_i) V_iᵀ).
 
-    controls: (n, 2) (v m/s, omega rad/s) per robot; dt: s; alphas: (a1, a2, a3, a4).
+    controls: (n, 2) (v m/s, omega rad/s) per robot; dt: s; alphas: (a1, a2, a3, a4);
+    ``midpoint``: f's step along the heading at the step's middle (models.motion), else Euler's.
     """
     poses = np.asarray(belief.mean, dtype=float).reshape(-1, 3)
     u = np.asarray(controls, dtype=float).reshape(-1, 2)
     if u.shape[0] != poses.shape[0]:
         raise ValueError(f"{u.shape[0]} controls for {poses.shape[0]} robots")
-    F, _ = motion_jacobians(poses, u, dt)
-    ekf = _JointUnicycleEKF(belief, dt)
+    F, _ = motion_jacobians(poses, u, dt, midpoint)
+    ekf = _JointUnicycleEKF(belief, dt, midpoint)
     ekf.F = joint_block_diag(F)
-    ekf.Q = joint_block_diag(process_noise(poses, u, dt, alphas))  # filterpy's Q is our R
+    ekf.Q = joint_block_diag(process_noise(poses, u, dt, alphas, midpoint))  # filterpy's Q is our R
     ekf.predict(u=u)
     return Belief(np.array(ekf.x, dtype=float), np.array(ekf.P, dtype=float))
 

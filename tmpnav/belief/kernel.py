@@ -41,21 +41,23 @@ from tmpnav.world.reach import SECTORS
 
 
 @nb.njit(cache=True)
-def _predict(mean, cov, u, n, dt, alphas, work):
+def _predict(mean, cov, u, n, dt, alphas, work, mid=0.0):
     """Joint prediction, paper eqs. (8), (11)-(12): P = F P Fᵀ + V W Vᵀ.
 
     F is block-diagonal with F_i = I + E_i, where E_i has only the entries (0, 2) =
-    -v dt sin(th) and (1, 2) = v dt cos(th); F P Fᵀ is therefore computed as
-    (P + E P) + (P + E P) Eᵀ with a few multiplications per entry.
+    -v dt sin(phi) and (1, 2) = v dt cos(phi); F P Fᵀ is therefore computed as
+    (P + E P) + (P + E P) Eᵀ with a few multiplications per entry. phi is the heading the step
+    translates along (tmpnav.belief.models.motion): th + mid omega dt / 2, ``mid`` 1 for the
+    midpoint step, 0 for the Euler step.
     """
     D = 3 * n
     for r in range(D):
         for c in range(D):
             work[r, c] = cov[r, c]
     for i in range(n):
-        th = mean[3 * i + 2]
+        phi = mean[3 * i + 2] + mid * 0.5 * u[i, 1] * dt
         v = u[i, 0]
-        e0, e1 = -v * dt * math.sin(th), v * dt * math.cos(th)
+        e0, e1 = -v * dt * math.sin(phi), v * dt * math.cos(phi)
         if e0 != 0.0 or e1 != 0.0:
             for c in range(D):  # rows 3i, 3i+1 of (I + E) P
                 work[3 * i, c] += e0 * cov[3 * i + 2, c]
@@ -64,9 +66,9 @@ def _predict(mean, cov, u, n, dt, alphas, work):
         for c in range(D):
             cov[r, c] = work[r, c]
     for j in range(n):
-        th = mean[3 * j + 2]
+        phi = mean[3 * j + 2] + mid * 0.5 * u[j, 1] * dt
         v = u[j, 0]
-        e0, e1 = -v * dt * math.sin(th), v * dt * math.cos(th)
+        e0, e1 = -v * dt * math.sin(phi), v * dt * math.cos(phi)
         if e0 != 0.0 or e1 != 0.0:
             for r in range(D):  # columns 3j, 3j+1 of (...) (I + E)ᵀ
                 cov[r, 3 * j] += work[r, 3 * j + 2] * e0
@@ -74,16 +76,27 @@ def _predict(mean, cov, u, n, dt, alphas, work):
     for i in range(n):
         th = mean[3 * i + 2]
         v, w = u[i, 0], u[i, 1]
-        co, sn = math.cos(th), math.sin(th)
+        phi = th + mid * 0.5 * w * dt
+        co, sn = math.cos(phi), math.sin(phi)
         w_v = alphas[0] * v * v + alphas[1] * w * w
         w_w = alphas[2] * v * v + alphas[3] * w * w
-        # R_i = V W Vᵀ with V = [[dt c, 0], [dt s, 0], [0, dt]]
+        # R_i = V W Vᵀ with V = [[dt c, V01], [dt s, V11], [0, dt]]
         V00, V10 = dt * co, dt * sn
         cov[3 * i, 3 * i] += V00 * w_v * V00
         cov[3 * i, 3 * i + 1] += V00 * w_v * V10
         cov[3 * i + 1, 3 * i] += V10 * w_v * V00
         cov[3 * i + 1, 3 * i + 1] += V10 * w_v * V10
         cov[3 * i + 2, 3 * i + 2] += dt * w_w * dt
+        if mid != 0.0 and v != 0.0:  # the midpoint step: the turn's noise moves the position too
+            V01, V11 = -0.5 * v * dt * dt * sn * mid, 0.5 * v * dt * dt * co * mid
+            cov[3 * i, 3 * i] += V01 * w_w * V01
+            cov[3 * i, 3 * i + 1] += V01 * w_w * V11
+            cov[3 * i + 1, 3 * i] += V11 * w_w * V01
+            cov[3 * i + 1, 3 * i + 1] += V11 * w_w * V11
+            cov[3 * i, 3 * i + 2] += V01 * w_w * dt
+            cov[3 * i + 2, 3 * i] += dt * w_w * V01
+            cov[3 * i + 1, 3 * i + 2] += V11 * w_w * dt
+            cov[3 * i + 2, 3 * i + 1] += dt * w_w * V11
         mean[3 * i] = mean[3 * i] + v * dt * co
         mean[3 * i + 1] = mean[3 * i + 1] + v * dt * sn
         mean[3 * i + 2] = wrap_angle_scalar(th + w * dt)
@@ -203,13 +216,13 @@ def _scan_update(mean, cov, i, G, w, px, py, pth, e, max_likelihood, n, work, PH
 
 
 @nb.njit(cache=True, inline="always")
-def _predict_cross(Cx, mean, u, n, dt):
+def _predict_cross(Cx, mean, u, n, dt, mid):
     """Cov(e, e_prev) through the prediction: Cx <- F Cx (F = I + E as in :func:`_predict`,
     from the mean before it moves; the motion noise is independent of the past)."""
     for i in range(n):
-        th = mean[3 * i + 2]
+        phi = mean[3 * i + 2] + mid * 0.5 * u[i, 1] * dt
         v = u[i, 0]
-        e0, e1 = -v * dt * math.sin(th), v * dt * math.cos(th)
+        e0, e1 = -v * dt * math.sin(phi), v * dt * math.cos(phi)
         if e0 != 0.0 or e1 != 0.0:
             for c in range(Cx.shape[1]):
                 Cx[3 * i, c] += e0 * Cx[3 * i + 2, c]
@@ -479,7 +492,7 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
     work, PHt, K, H, cols, y, g, Cx, masses, qs, support, pair = scratch
     m_off, m_T, ctrl, pose, vis, stream, reach, reach_values, reach_row, scan_row, scan_table = motions  # MotionArrays
     # EKFConstants' fields
-    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds, others, lvar, lrho, hz = ekf
+    dt, alphas, Q_lm, chol_lm, Q_mu, chol_mu, ml, landmarks, scans, thresholds, others, lvar, lrho, hz, mid = ekf
     sim, mu_noise, row0 = seqs.motions[c], groups.mutual_noise[seqs.group[c]], seqs.mutual_offset[c]
     priced = reach.shape[1] > 1
     for k in range(seqs.restart[c], seqs.horizon[c]):
@@ -495,8 +508,8 @@ def _propagate_steps(c, n, ekf, motions, lm_noise, scan_noise, groups, seqs, mut
                 for r in range(3 * n):
                     Cx[r, 2 * i] = cov[r, 3 * i]
                     Cx[r, 2 * i + 1] = cov[r, 3 * i + 1]
-            _predict_cross(Cx, mean, u, n, dt)
-        _predict(mean, cov, u, n, dt, alphas, work)
+            _predict_cross(Cx, mean, u, n, dt, mid)
+        _predict(mean, cov, u, n, dt, alphas, work, mid)
         for i in range(n):
             m = sim[i]
             row = m_off[m] + m + (t if t <= m_T[m] else m_T[m])

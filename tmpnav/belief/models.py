@@ -45,10 +45,15 @@ __all__ = [
 # --------------------------------------------------------------------------- motion
 
 
-def motion(x: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
-    """Unicycle motion model, paper eq. (4) with w = 0 (Euler step of length dt).
+def motion(x: np.ndarray, u: np.ndarray, dt: float, midpoint: bool = False) -> np.ndarray:
+    """Unicycle motion model, paper eq. (4) with w = 0: one step of length dt.
 
-    f(x, u) = [x + v dt cos(theta), y + v dt sin(theta), wrap(theta + omega dt)]
+    f(x, u) = [x + v dt cos(phi), y + v dt sin(phi), wrap(theta + omega dt)]
+
+    with phi = theta (an Euler step, the paper's turn-then-drive) or, with ``midpoint``,
+    phi = theta + omega dt / 2, the heading at the step's middle (a second-order step of the arc
+    the command drives; RPP turns while it drives). Where a step either turns or drives
+    (v omega = 0) the two are the same.
 
     x: (..., 3) pose (m, m, rad); u: (..., 2) control (v m/s, omega rad/s); dt: s.
     Returns the next pose, shape broadcast(x, u)[..., 3].
@@ -56,27 +61,32 @@ def motion(x: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     u = np.asarray(u, dtype=float)
     theta, v, omega = x[..., 2], u[..., 0], u[..., 1]
+    phi = theta + 0.5 * omega * dt if midpoint else theta
     out = np.empty((*np.broadcast_shapes(x.shape[:-1], u.shape[:-1]), 3))
-    out[..., 0] = x[..., 0] + v * dt * np.cos(theta)
-    out[..., 1] = x[..., 1] + v * dt * np.sin(theta)
+    out[..., 0] = x[..., 0] + v * dt * np.cos(phi)
+    out[..., 1] = x[..., 1] + v * dt * np.sin(phi)
     out[..., 2] = wrap_angle(theta + omega * dt)
     return out
 
 
-def motion_jacobians(x: np.ndarray, u: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+def motion_jacobians(x: np.ndarray, u: np.ndarray, dt: float, midpoint: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Jacobians of :func:`motion` for the EKF prediction, paper eq. (8).
 
-    F = df/dx = [[1, 0, -v dt sin(theta)],      V = df/du = [[dt cos(theta), 0 ],
-                 [0, 1,  v dt cos(theta)],                   [dt sin(theta), 0 ],
-                 [0, 0,  1              ]]                   [0,             dt]]
+    F = df/dx = [[1, 0, -v dt sin(phi)],      V = df/du = [[dt cos(phi), -v dt² sin(phi) / 2],
+                 [0, 1,  v dt cos(phi)],                   [dt sin(phi),  v dt² cos(phi) / 2],
+                 [0, 0,  1            ]]                   [0,            dt                ]]
+
+    with phi as in :func:`motion`; V's second column's first two entries are those of the
+    ``midpoint`` step only (0 for the Euler step).
 
     x: (..., 3); u: (..., 2). Returns F (..., 3, 3) and V (..., 3, 2).
     """
     x = np.asarray(x, dtype=float)
     u = np.asarray(u, dtype=float)
     shape = np.broadcast_shapes(x.shape[:-1], u.shape[:-1])
-    c, s = np.cos(x[..., 2]), np.sin(x[..., 2])
     v = u[..., 0]
+    phi = x[..., 2] + 0.5 * u[..., 1] * dt if midpoint else x[..., 2]
+    c, s = np.cos(phi), np.sin(phi)
     F = np.zeros((*shape, 3, 3))
     F[..., 0, 0] = F[..., 1, 1] = F[..., 2, 2] = 1.0
     F[..., 0, 2] = -v * dt * s
@@ -85,6 +95,9 @@ def motion_jacobians(x: np.ndarray, u: np.ndarray, dt: float) -> tuple[np.ndarra
     V[..., 0, 0] = dt * c
     V[..., 1, 0] = dt * s
     V[..., 2, 1] = dt
+    if midpoint:
+        V[..., 0, 1] = -0.5 * v * dt * dt * s
+        V[..., 1, 1] = 0.5 * v * dt * dt * c
     return F, V
 
 
@@ -105,12 +118,15 @@ def motion_noise_cov(u: np.ndarray, alphas: Sequence[float]) -> np.ndarray:
     return W
 
 
-def process_noise(x: np.ndarray, u: np.ndarray, dt: float, alphas: Sequence[float]) -> np.ndarray:
-    """Linearised process noise R = V W Vᵀ of paper eq. (8). x: (..., 3); u: (..., 2).
+def process_noise(
+    x: np.ndarray, u: np.ndarray, dt: float, alphas: Sequence[float], midpoint: bool = False
+) -> np.ndarray:
+    """Linearised process noise R = V W Vᵀ of paper eq. (8), V that of :func:`motion`'s step
+    (``midpoint`` or Euler). x: (..., 3); u: (..., 2).
 
     Returns (..., 3, 3) in m², m², rad² (per step).
     """
-    _, V = motion_jacobians(x, u, dt)
+    _, V = motion_jacobians(x, u, dt, midpoint)
     W = motion_noise_cov(u, alphas)
     return V @ W @ np.swapaxes(V, -1, -2)
 

@@ -50,6 +50,8 @@ from tmpnav.world.geometry import wrap_angle_scalar
 
 #: m: the spacing of the densified path (nav2's global plans come one per costmap cell)
 RESOLUTION = 0.05
+#: the law's evaluations per control step in the planner's rollout (:func:`pursuit_controls`)
+PLAN_SUBSTEPS = 2
 
 
 @dataclass(frozen=True)
@@ -307,12 +309,19 @@ def pursuit_controls(
     resolution: float,
     goal_heading: float | None = None,
     required: float | None = None,
+    substeps: int = PLAN_SUBSTEPS,
 ) -> PathControls | None:
     """The controls and nominal poses of a robot driving the polyline ``points`` (P, 2) from its
     first point with heading ``start_theta`` under RPP (the module docstring), the obstacle
     distance read off ``clearance`` (a grid of ``resolution`` m cells from ``origin``: the
     distance from each cell's centre to the nearest occupied one, tmpnav.world.grid.clearance).
-    The poses follow the motion model, paper eq. (4), step by step, as turn-then-drive's do. The
+    Within each control step of ``dt`` the law runs ``substeps`` times (each command held
+    dt / substeps on its arc, from the pose the ones before it reached, the obstacle distance
+    the step's start's, as ``tmpnav simulate``'s follower runs it 20 times a second), and the step
+    holds their mean: the kernel's beliefs take one command a step. The poses follow the motion
+    model, paper eq. (4), step by step in its midpoint form (tmpnav.belief.models.motion: each step
+    translates along the heading at its middle), so they stay on the arcs nav2's 20 Hz commands
+    drive, and a turn on the spot ramps up within ``max_angular_accel`` as nav2's does. The
     motion ends within ``xy_goal_tolerance`` of the last point, with a ``goal_heading`` (rad: a
     goal pose's) turned on the spot to within ``yaw_goal_tolerance`` of it there, and
     ``node_steps[k]`` is the step at which the robot has come abreast of point k (its nearest path
@@ -322,8 +331,8 @@ def pursuit_controls(
     pts = np.asarray(points, dtype=float).reshape(-1, 2)
     if pts.shape[0] == 0:
         raise ValueError("pursuit_controls needs at least one point")
-    if speed <= 0 or turn_rate <= 0 or dt <= 0:
-        raise ValueError("speed, turn_rate and dt must be positive")
+    if speed <= 0 or turn_rate <= 0 or dt <= 0 or substeps < 1:
+        raise ValueError("speed, turn_rate, dt and substeps must be positive")
     x0, y0 = origin
     rounding = None if required is None else Rounding(required, clearance, (x0, y0), resolution)
     path, vertices = driven_path(pts, rounding)
@@ -334,7 +343,7 @@ def pursuit_controls(
     goal = math.nan if goal_heading is None else float(goal_heading)
     controls, poses, node_steps, arrived = _pursue(
         path, left, vertices, float(start_theta), float(speed), float(turn_rate), float(dt), params.vector(),
-        clearance, float(x0), float(y0), float(resolution), budget, goal,
+        clearance, float(x0), float(y0), float(resolution), budget, goal, int(substeps),
     )  # fmt: skip
     if not arrived:
         return None
@@ -343,7 +352,7 @@ def pursuit_controls(
 
 @nb.njit(cache=True)
 def _pursue(
-    path, left, vertices, theta0, speed, turn_rate, dt, p, clear, x0, y0, res, budget, goal
+    path, left, vertices, theta0, speed, turn_rate, dt, p, clear, x0, y0, res, budget, goal, substeps
 ):  # pragma: no cover
     """The rollout of :func:`pursuit_controls` (which documents it): controls (T, 2), poses
     (T+1, 3), the step each vertex is passed (P,), and whether the goal was reached."""
@@ -357,6 +366,7 @@ def _pursue(
     poses[0, 0], poses[0, 1], poses[0, 2] = path[0, 0], path[0, 1], wrap_angle_scalar(theta0)
     index, v, w, t = 0, 0.0, 0.0, 0
     arrived = within = False
+    h = dt / substeps
     while t < budget:
         x, y, th = poses[t, 0], poses[t, 1], poses[t, 2]
         # nav2's goal checker: the position once within its tolerance stays reached (stateful)
@@ -367,14 +377,28 @@ def _pursue(
         i = math.floor((y - y0) / res)
         j = math.floor((x - x0) / res)
         obstacle = clear[i, j] if 0 <= i < rows and 0 <= j < cols else 0.0
-        v, w, index = command(path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, dt, p, goal)
+        # the law at substeps / dt Hz, each command on its arc, the goal checker at each; the step
+        # holds their mean (zero after the goal checker is satisfied)
+        sx, sy, sth, dist, turned = x, y, th, 0.0, 0.0
+        for k in range(substeps):
+            if k > 0:
+                within = within or math.hypot(path[n - 1, 0] - sx, path[n - 1, 1] - sy) <= p[_GOAL_TOLERANCE]
+                if within and heading_reached(sth, goal, p):
+                    v, w = 0.0, 0.0
+                    break
+            v, w, index = command(path, left, index, sx, sy, sth, v, w, obstacle, speed, turn_rate, h, p, goal)
+            mid = sth + 0.5 * w * h
+            sx, sy, sth = sx + v * h * math.cos(mid), sy + v * h * math.sin(mid), sth + w * h
+            dist += v * h
+            turned += w * h
         for k in range(1, P):
             if node_steps[k] < 0 and index >= vertices[k]:
                 node_steps[k] = t
-        controls[t, 0], controls[t, 1] = v, w
-        poses[t + 1, 0] = x + v * dt * math.cos(th)
-        poses[t + 1, 1] = y + v * dt * math.sin(th)
-        poses[t + 1, 2] = wrap_angle_scalar(th + w * dt)
+        vm, wm = dist / dt, turned / dt
+        controls[t, 0], controls[t, 1] = vm, wm
+        poses[t + 1, 0] = x + vm * dt * math.cos(th + 0.5 * wm * dt)  # the midpoint step (models.motion)
+        poses[t + 1, 1] = y + vm * dt * math.sin(th + 0.5 * wm * dt)
+        poses[t + 1, 2] = wrap_angle_scalar(th + wm * dt)
         t += 1
     for k in range(P):
         if node_steps[k] < 0:

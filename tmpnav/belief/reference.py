@@ -82,7 +82,7 @@ def propagate_reference(
     b = beliefs[0]
     for k in range(T):
         t = k + 1
-        b = ekf.predict(b, rollout.controls[:, k], models.dt, models.belief_noise)
+        b = ekf.predict(b, rollout.controls[:, k], models.dt, models.belief_noise, models.midpoint)
         for i in range(n):
             for l_ in np.flatnonzero(lm_visible[i, t]):
                 if ml:

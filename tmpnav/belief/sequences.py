@@ -52,6 +52,9 @@ class EKFConstants(NamedTuple):
     #: wall hits per metre driven that the collision bound adds to the Gaussian error's
     #: (ScanModel.hazard, docs/models.md "Localisation failures"; 0: none)
     hazard: float
+    #: 1: a step translates along the heading at its middle (Models.midpoint, RPP's steps that turn
+    #: while they drive); 0: along the heading it starts with (the Euler step, the paper's)
+    midpoint: float
 
     @staticmethod
     def of(models: Models, landmarks: np.ndarray) -> EKFConstants:
@@ -73,6 +76,7 @@ class EKFConstants(NamedTuple):
             local_var=local_var,
             local_rho=local_rho,
             hazard=hazard(models),
+            midpoint=1.0 if models.midpoint else 0.0,
         )
 
 

@@ -63,13 +63,14 @@ class AmclTeam:
         return self.localisers[i].cov
 
     def predict(self, u: np.ndarray, steps: np.ndarray | None = None) -> None:
-        """Odometry: the commands (n, 2) integrated; with ``steps`` (n, N, 2), one by one."""
+        """Odometry: the commands (n, 2) integrated; with ``steps`` (n, N, 2), one by one, each on
+        its arc (the midpoint step the true robot drives them by, tmpnav.execution.rpp.drive)."""
         dt = self.scenario.models.dt
         if steps is None:
             self.odom = motion(self.odom, u, dt)
             return
         for k in range(steps.shape[1]):
-            self.odom = motion(self.odom, steps[:, k], dt / steps.shape[1])
+            self.odom = motion(self.odom, steps[:, k], dt / steps.shape[1], midpoint=True)
 
     def observe(self, truth: np.ndarray, step: int) -> list[tuple[int, int]]:
         """Each robot's lidar scans the site from its true pose (the sensor's range noise on every

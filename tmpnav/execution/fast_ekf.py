@@ -74,7 +74,7 @@ class CompiledJointEkf:
             return
         n, alphas = steps.shape[1], substep_noise(self.alphas, steps.shape[1])
         for k in range(n):
-            _predict(self.mean, self.cov, np.ascontiguousarray(steps[:, k]), self.n, dt / n, alphas, self.work)
+            _predict(self.mean, self.cov, np.ascontiguousarray(steps[:, k]), self.n, dt / n, alphas, self.work, 1.0)
 
     def observe(self, truth: np.ndarray, step: int) -> list[tuple[int, int]]:
         """As :meth:`tmpnav.execution.joint_ekf.JointEkf.observe`: landmarks, scans, partners."""

@@ -43,14 +43,15 @@ class JointEkf:
 
     def predict(self, u: np.ndarray, steps: np.ndarray | None = None) -> None:
         """The prediction with the commands (n, 2) of the step just driven; with ``steps`` (n, N, 2)
-        one by one (:meth:`tmpnav.execution.localisers.TeamLocaliser.predict`)."""
+        one by one (:meth:`tmpnav.execution.localisers.TeamLocaliser.predict`), each by the midpoint
+        step the true robot drives them by (tmpnav.execution.rpp.drive)."""
         models = self.scenario.models
         if steps is None:
             self.belief = ekf.predict(self.belief, u, models.dt, models.motion_noise)
             return
         alphas = tuple(substep_noise(np.asarray(models.motion_noise), steps.shape[1]).tolist())
         for k in range(steps.shape[1]):
-            self.belief = ekf.predict(self.belief, steps[:, k], models.dt / steps.shape[1], alphas)
+            self.belief = ekf.predict(self.belief, steps[:, k], models.dt / steps.shape[1], alphas, midpoint=True)
 
     def observe(self, truth: np.ndarray, step: int) -> list[tuple[int, int]]:
         """Every robot's landmark observations from its true pose, its range scan, then every

@@ -45,8 +45,8 @@ the commands given since the step began (the robot's odometry between two locali
 stopping once nav2's goal checker is satisfied. The true robot drives those commands
 (:func:`drive`), and the localiser predicts with them one by one, as a robot's odometry follows
 each (tmpnav.execution.localisers.TeamLocaliser.predict). The planner's motions
-(tmpnav.belief.pursuit) evaluate the same law once per ``dt``: executing a plan at nav2's rate is
-a check of that discretisation, not the planner's rollout run again.
+(tmpnav.belief.pursuit) evaluate the same law twice per ``dt`` and hold their mean: executing a
+plan at nav2's rate is a check of that discretisation, not the planner's rollout run again.
 
 Not modelled: the collision check that stops the robot (``use_collision_detection``), nav2's
 recovery behaviours, and reversing.
@@ -167,7 +167,8 @@ def _step(
             return index, within, 0.0, 0.0
         v, w, index = command(path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, h, p, goal)
         out[k, 0], out[k, 1] = v, w
-        x, y = x + v * h * math.cos(th), y + v * h * math.sin(th)
+        mid = th + 0.5 * w * h  # the command's arc, by the motion model's midpoint step
+        x, y = x + v * h * math.cos(mid), y + v * h * math.sin(mid)
         th = wrap_angle_scalar(th + w * h)
     return index, within, v, w
 
@@ -177,8 +178,8 @@ def drive(pose, commands, z, alphas, dt):  # pragma: no cover
     """The pose (3,) after a control step of ``dt`` s from ``pose`` driving ``commands`` (N, 2), each
     held dt / N, with the step's control noise: command u plus sqrt(W(u)) ``z`` (``z`` (2,) the
     step's standard normal draw, W(u) = diag(a1 v² + a2 omega², a3 v² + a4 omega²) with ``alphas``
-    (a1..a4), paper eq. (4)), each by the motion model's Euler step (tmpnav.belief.models.motion).
-    With one command it is that step of ``dt``."""
+    (a1..a4), paper eq. (4)), each on its arc by the motion model's midpoint step
+    (tmpnav.belief.models.motion). With one command it is that step of ``dt``."""
     h = dt / commands.shape[0]
     x, y, th = pose[0], pose[1], pose[2]
     for k in range(commands.shape[0]):
@@ -186,6 +187,7 @@ def drive(pose, commands, z, alphas, dt):  # pragma: no cover
         v2, w2 = v * v, w * w
         v += math.sqrt(alphas[0] * v2 + alphas[1] * w2) * z[0]
         w += math.sqrt(alphas[2] * v2 + alphas[3] * w2) * z[1]
-        x, y = x + v * h * math.cos(th), y + v * h * math.sin(th)
+        mid = th + 0.5 * w * h
+        x, y = x + v * h * math.cos(mid), y + v * h * math.sin(mid)
         th = wrap_angle_scalar(th + w * h)
     return np.array([x, y, th])
