@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from tests.belief.test_pursuit import DT, RES, follow_without_noise, open_floor, walled
-from tmpnav.belief.pursuit import Rounding, RppParams, pursuit_controls
+from tmpnav.belief.pursuit import RppParams, pursuit_controls
+from tmpnav.belief.pursuit_path import Rounding
 from tmpnav.execution.rpp import RppFollower
 from tmpnav.roadmap.shortcut import CORNER_RADIUS, least_clearance, round_corners
 

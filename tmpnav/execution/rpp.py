@@ -59,16 +59,8 @@ import math
 import numba as nb
 import numpy as np
 
-from tmpnav.belief.pursuit import (
-    RESOLUTION,
-    Rounding,
-    RppParams,
-    command,
-    densify,
-    driven_path,
-    heading_reached,
-    length_left,
-)
+from tmpnav.belief.pursuit import RppParams, command, heading_reached
+from tmpnav.belief.pursuit_path import RESOLUTION, Rounding, densify, driven_path, length_left
 from tmpnav.world.geometry import wrap_angle_scalar
 
 __all__ = ["CONTROLLER_FREQUENCY", "RESOLUTION", "Rounding", "RppFollower", "RppParams", "densify", "drive"]
@@ -92,7 +84,7 @@ class RppFollower:
         rounding: Rounding | None = None,
     ):
         #: the densified path (its corners rounded with ``rounding``, as the plan's motion rounds
-        #: them: tmpnav.belief.pursuit.driven_path) and the index of each of ``points`` in it
+        #: them: tmpnav.belief.pursuit_path.driven_path) and the index of each of ``points`` in it
         self.path, self.vertices = driven_path(points, rounding)
         #: m: the path's length from each point to its end
         self.left = length_left(self.path)

@@ -28,7 +28,9 @@ from tmpnav.world import World
 CODE_FILES = (
     "belief/controls.py",
     "belief/pursuit.py",
+    "belief/pursuit_path.py",
     "belief/kernel.py",
+    "belief/kernel_bound.py",
     "belief/risk.py",
     "belief/sequences.py",
     "belief/trie.py",
