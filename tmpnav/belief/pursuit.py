@@ -4,9 +4,9 @@ The law is that of nav2's ``nav2_regulated_pure_pursuit_controller`` (Macenski e
 "Regulated Pure Pursuit for Robot Path Tracking", Autonomous Robots 2023). At every control
 step, from the robot's pose:
 
-1. the path, densified to :data:`RESOLUTION` (a costmap's cells, as nav2's global plans are),
-   is pruned up to the point nearest the robot, searched within ``max_robot_pose_search_dist``
-   ahead of the last one;
+1. the path, densified to ``pursuit_path.RESOLUTION`` (a costmap's cells, as nav2's global
+   plans are), is pruned up to the point nearest the robot, searched within
+   ``max_robot_pose_search_dist`` ahead of the last one;
 2. the carrot is the path's point at the lookahead distance L from the robot (interpolated
    between the path's points), or the path's end when that is nearer;
 3. when the carrot lies more than ``rotate_to_heading_min_angle`` to the side, the robot turns on
@@ -30,7 +30,8 @@ distance the robot turns on the spot towards the pose's heading, as in 3, until 
 
 :func:`command` is the law, compiled; ``tmpnav simulate --follower rpp`` steers with it on the
 robot's estimate (tmpnav.execution.rpp), and :func:`pursuit_controls` rolls it out on the
-nominal poses: the motions the planner prices with ``models.controller: rpp``.
+nominal poses, :data:`PLAN_SUBSTEPS` times a control step: the motions the planner prices with
+``models.controller: rpp``.
 
 The path it drives is a roadmap path shortened first, its corners rounded to arcs RPP drives at
 full speed where the map leaves room (tmpnav.roadmap.shortcut).
