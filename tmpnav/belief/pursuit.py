@@ -227,6 +227,28 @@ def command(path, left, index, x, y, th, last_v, last_w, obstacle, speed, turn_r
     return v, w, index
 
 
+@nb.njit(cache=True)
+def step_commands(
+    path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, h, p, goal, within, out
+):  # pragma: no cover
+    """One control step's commands into ``out`` (N, 2), each held ``h`` s: the law (:func:`command`)
+    N times, each on the pose the commands before it reached on their arcs (the motion model's
+    midpoint step), the obstacle distance the step's start's; zero from the one at which nav2's
+    goal checker is satisfied (``within``: its stateful position check, :func:`heading_reached`).
+    Returns the path index, the goal checker's state and the last command. ``tmpnav simulate``'s
+    follower runs it at nav2's 20 Hz, the planner's rollout :data:`PLAN_SUBSTEPS` times a step."""
+    n = path.shape[0]
+    for k in range(out.shape[0]):
+        within = within or math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y) <= p[_GOAL_TOLERANCE]
+        if within and heading_reached(th, goal, p):
+            return index, within, 0.0, 0.0
+        v, w, index = command(path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, h, p, goal)
+        out[k, 0], out[k, 1] = v, w
+        mid = th + 0.5 * w * h
+        x, y, th = x + v * h * math.cos(mid), y + v * h * math.sin(mid), th + w * h  # the law wraps differences
+    return index, within, v, w
+
+
 def pursuit_controls(
     points: np.ndarray,
     start_theta: float,
@@ -297,6 +319,7 @@ def _pursue(
     index, v, w, t = 0, 0.0, 0.0, 0
     arrived = within = False
     h = dt / substeps
+    out = np.zeros((substeps, 2))
     while t < budget:
         x, y, th = poses[t, 0], poses[t, 1], poses[t, 2]
         # nav2's goal checker: the position once within its tolerance stays reached (stateful)
@@ -307,20 +330,15 @@ def _pursue(
         i = math.floor((y - y0) / res)
         j = math.floor((x - x0) / res)
         obstacle = clear[i, j] if 0 <= i < rows and 0 <= j < cols else 0.0
-        # the law at substeps / dt Hz, each command on its arc, the goal checker at each; the step
-        # holds their mean (zero after the goal checker is satisfied)
-        sx, sy, sth, dist, turned = x, y, th, 0.0, 0.0
+        # the law at substeps / dt Hz (the follower's step); the step holds their mean
+        out[:] = 0.0
+        index, within, v, w = step_commands(
+            path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, h, p, goal, within, out
+        )
+        dist, turned = 0.0, 0.0
         for k in range(substeps):
-            if k > 0:
-                within = within or math.hypot(path[n - 1, 0] - sx, path[n - 1, 1] - sy) <= p[_GOAL_TOLERANCE]
-                if within and heading_reached(sth, goal, p):
-                    v, w = 0.0, 0.0
-                    break
-            v, w, index = command(path, left, index, sx, sy, sth, v, w, obstacle, speed, turn_rate, h, p, goal)
-            mid = sth + 0.5 * w * h
-            sx, sy, sth = sx + v * h * math.cos(mid), sy + v * h * math.sin(mid), sth + w * h
-            dist += v * h
-            turned += w * h
+            dist += out[k, 0] * h
+            turned += out[k, 1] * h
         for k in range(1, P):
             if node_steps[k] < 0 and index >= vertices[k]:
                 node_steps[k] = t

@@ -59,7 +59,7 @@ import math
 import numba as nb
 import numpy as np
 
-from tmpnav.belief.pursuit import RppParams, command, heading_reached
+from tmpnav.belief.pursuit import RppParams, command, heading_reached, step_commands
 from tmpnav.belief.pursuit_path import RESOLUTION, Rounding, densify, driven_path, length_left
 from tmpnav.world.geometry import wrap_angle_scalar
 
@@ -137,32 +137,12 @@ class RppFollower:
         position once reached stays reached, :meth:`at_goal`). The obstacle distance is the step's
         start's (module docstring)."""
         out = np.zeros((self.substeps, 2))
-        self.index, self.within, self.v, self.w = _step(
+        self.index, self.within, self.v, self.w = step_commands(
             self.path, self.left, self.index, float(est[0]), float(est[1]), float(est[2]), self.v, self.w,
             float(obstacle_distance), self.speed, self.turn_rate, self.dt / self.substeps, self._vector,
-            self._goal, self.p.xy_goal_tolerance, self.within, out,
+            self._goal, self.within, out,
         )  # fmt: skip
         return out
-
-
-@nb.njit(cache=True)
-def _step(
-    path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, h, p, goal, tolerance, within, out
-):  # pragma: no cover
-    """:meth:`RppFollower.step`, compiled: the law's commands into ``out`` (N, 2), each held ``h``
-    s, the goal checker's distance ``tolerance`` (m); returns the path index, the goal checker's
-    state and the last command."""
-    n = path.shape[0]
-    for k in range(out.shape[0]):
-        within = within or math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y) <= tolerance
-        if within and heading_reached(th, goal, p):
-            return index, within, 0.0, 0.0
-        v, w, index = command(path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, h, p, goal)
-        out[k, 0], out[k, 1] = v, w
-        mid = th + 0.5 * w * h  # the command's arc, by the motion model's midpoint step
-        x, y = x + v * h * math.cos(mid), y + v * h * math.sin(mid)
-        th = wrap_angle_scalar(th + w * h)
-    return index, within, v, w
 
 
 @nb.njit(cache=True)
