@@ -20,6 +20,7 @@ from tmpnav.oracle.oracle import Oracle
 from tmpnav.pipeline import load_world
 from tmpnav.results import TaskCounts, TaskResult
 from tmpnav.roadmap import build_roadmap
+from tmpnav.task.model import UNSAFE_PRICE
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.types import Goals, PlanStatus
 
@@ -288,3 +289,43 @@ def test_a_robot_parked_in_the_way_steps_aside_into_a_room_no_goal_names() -> No
     assert res.conflicts_left == [] and res.plan[1:] == plan
     (first,) = res.plan[0]
     assert first[:2] == ("r2", "r2-start") and first[2] not in {"O6", "O1"}
+
+
+#: BAY's corridor with two robots queued in it, both facing west: r1 in front turns into the bay
+#: beside it, r2 behind it goes on to room W, past where r1 stands
+QUEUE = BAY.replace(
+    "  - {name: r1, pose: [2, 3.75, 0]}\n  - {name: r2, pose: [15, 6.8, -1.5708]}",
+    "  - {name: r1, pose: [15, 3.75, 3.1416]}\n  - {name: r2, pose: [16.5, 3.75, 3.1416]}",
+).replace("goals: {robots: {r1: [E], r2: [W]}}", "goals: {robots: {r1: [B], r2: [W]}}")
+
+
+def test_of_two_robots_queued_in_a_lane_the_one_behind_gives_way(tmp_path: Path) -> None:
+    """r2 drives through where r1 stands, so r1 held back at its start gives way in vain: the
+    wait goes to r2, the robot behind, though r1's step comes later in the plan (which would
+    otherwise make r1 give way: prioritised planning)."""
+    carried = carried_world(tmp_path, QUEUE)
+    plan: Plan = ((("r2", "r2-start", "W"),), (("r1", "r1-start", "B"),))
+    res = resolve_conflicts(carried, plan)
+    assert res.conflicts_before and res.resolved
+    assert list(res.delays) == [0]  # r2 waits; r1 leaves at once
+    again = carried.replay(plan, res.delays)
+    assert again.trajectories is not None and find_conflicts(again.trajectories, radii(carried)) == []
+
+
+def test_a_plan_whose_robots_nothing_keeps_apart_ranks_below_every_plan_kept_apart() -> None:
+    """office-ros with the AMCL model and every room a goal: r2 stands at its start in r1's way,
+    and no room is left for it to step aside into. Under a chance constraint ``tmpnav plan``
+    refuses such a plan (exit 10), so the search's rank (``PlanCost.ranked``) puts it below any
+    plan kept apart; without one (the paper's model) the conflict is reported and not priced."""
+    rooms = ("O1", "O2", "O3", "O4", "O5", "O6", "O7")
+    _, _, carried = carried_problem("office-ros.yaml", rooms, 2)
+    plan: Plan = ((("r1", "r1-start", "O6"),), (("r1", "O6", "O1"),))
+    assert resolve_with_sidesteps(carried, plan).conflicts_left  # no siding: every room is a goal
+    planned = carried.plan_cost(plan)
+    executed = ExecutedCost(carried, 0.05)
+    refused = executed(plan, planned)
+    assert refused.unsafe >= 1 and refused.ranked(1.0) >= UNSAFE_PRICE > 100 * refused.value(1.0)
+    assert refused.value(1.0) == planned.value(1.0)  # run as planned: nothing cleared them
+    assert executed.robots_apart(plan) == {"r1", "r2"}  # the route edits' screen frees these first
+    reported = ExecutedCost(carried, None)(plan, planned)
+    assert reported.unsafe == 0 and reported.ranked(1.0) == reported.value(1.0)

@@ -103,9 +103,20 @@ def keep_apart(
 #: search prices its best plans with them (:class:`ExecutedCost`), and ``tmpnav plan`` keeps the
 #: plan it returns apart with the same one (:func:`keep_apart`) instead of searching again
 MAX_RESOLVED = 64
-_RESOLVED: WeakKeyDictionary[CarriedCosts, OrderedDict[tuple[Plan, float | None], Resolution | None]] = (
-    WeakKeyDictionary()
-)
+
+
+@dataclass(frozen=True)
+class _Resolved:
+    """What keeping a plan apart comes to: the resolution :func:`keep_apart` applies (None: the
+    plan runs as planned) and, under a chance constraint, the conflicts the plan so executed
+    still has at the same planned instant: those ``tmpnav plan`` refuses the plan for
+    (tmpnav.pipeline.check_conflicts)."""
+
+    res: Resolution | None
+    left: tuple[Conflict, ...] = ()
+
+
+_RESOLVED: WeakKeyDictionary[CarriedCosts, OrderedDict[tuple[Plan, float | None], _Resolved]] = WeakKeyDictionary()
 
 
 def _kept(
@@ -115,6 +126,12 @@ def _kept(
     also for a plan with a move over ``delta`` as planned: its run fails the chance constraint
     whatever is done). Remembered by plan and ``delta``: ``cost_before`` and ``makespan_before``
     are the plan's own, as planned on the clock."""
+    return _resolved(carried, plan, delta, cost_before, makespan_before).res
+
+
+def _resolved(
+    carried: CarriedCosts, plan: Plan, delta: float | None, cost_before: float, makespan_before: float
+) -> _Resolved:
     memo = _RESOLVED.setdefault(carried, OrderedDict())
     key = (tuple(plan), delta)
     if key in memo:
@@ -128,22 +145,31 @@ def _kept(
 
 def _resolve(
     carried: CarriedCosts, plan: Plan, delta: float | None, cost_before: float, makespan_before: float
-) -> Resolution | None:
+) -> _Resolved:
     planned = carried.run(plan)
     if planned is None or (delta is not None and max((m.risk for m in planned.moves), default=0.0) > delta):
-        return None
-    res = _accepted(carried, plan, delta, cost_before, makespan_before)
+        return _Resolved(None)  # (a move over the chance constraint: its cost's penalty says so)
+    res, tried = _accepted(carried, plan, delta, cost_before, makespan_before)
     if clock_drift(carried.scenario) <= 0.0:
-        return res
+        # without time windows the resolution's conflicts are those at the same instant
+        return _Resolved(res, _refused(delta, res.conflicts_left if res is not None else tried.conflicts_before))
     # where the time windows (tmpnav.attachment.drift) leave robots in each other's way on the
     # plan's own clock, or cost too much: the plan kept apart on its own clock, if that leaves
     # fewer conflicts there; what the windows leave is reported with the plan (never hidden:
     # tmpnav.planning.safety.conflicts_left)
     left = _on_own_clock(carried, res.run if res is not None else carried.replay(plan), delta)
     if not left:
-        return res
-    own = _accepted(carried, plan, delta, cost_before, makespan_before, drift=0.0)
-    return own if own is not None and len(own.conflicts_left) < len(left) else res
+        return _Resolved(res)
+    own, _ = _accepted(carried, plan, delta, cost_before, makespan_before, drift=0.0)
+    if own is not None and len(own.conflicts_left) < len(left):
+        return _Resolved(own, _refused(delta, own.conflicts_left))
+    return _Resolved(res, _refused(delta, left))
+
+
+def _refused(delta: float | None, conflicts: Sequence[Conflict]) -> tuple[Conflict, ...]:
+    """The conflicts ``tmpnav plan`` refuses a plan for: all of them under a chance constraint,
+    none without one (the paper's model reports them)."""
+    return tuple(conflicts) if delta is not None else ()
 
 
 def _accepted(
@@ -153,21 +179,22 @@ def _accepted(
     cost_before: float,
     makespan_before: float,
     drift: float | None = None,
-) -> Resolution | None:
+) -> tuple[Resolution | None, Resolution]:
     """The plan kept apart (:func:`resolve_with_sidesteps`) with the time windows of ``drift``
-    (the scenario's by default), if that is applied (:func:`keep_apart`'s docstring)."""
+    (the scenario's by default), if that is applied (:func:`keep_apart`'s docstring), and the
+    resolution tried, applied or not."""
     budget = None if delta is not None else RUN_BUDGET
     res = resolve_with_sidesteps(carried, plan, delta=delta, budget=budget, drift=drift)
     if not res.conflicts_before or len(res.conflicts_left) >= len(res.conflicts_before):
-        return None
+        return None, res
     if delta is not None and max((m.risk for m in res.run.moves), default=0.0) > delta:
-        return None  # kept apart only by a move over the chance constraint: the conflicts stay reported
+        return None, res  # kept apart only by a move over the chance constraint: the conflicts stay reported
     w, objective = carried.scenario.cost, OBJECTIVES[carried.scenario.planner.objective]
     if delta is None:
         value = objective.value(sum(res.run.step_costs(len(res.plan), w)), res.run.makespan, w)
         if value > (1.0 + MAX_RISE) * objective.value(cost_before, makespan_before, w):
-            return None  # a wait or detour that costs the robots their localisation: reported, not applied
-    return res
+            return None, res  # a wait or detour that costs the robots their localisation: reported, not applied
+    return res, res
 
 
 def _on_own_clock(carried: CarriedCosts, run: ClockRun, delta: float | None) -> list[Conflict]:
@@ -210,10 +237,14 @@ class ExecutedCost:
         if not math.isfinite(cost.total):
             return cost
         self.priced += 1
-        res = _kept(self.carried, plan, self.delta, cost.total, cost.makespan)
+        found = _resolved(self.carried, plan, self.delta, cost.total, cost.makespan)
+        res, unsafe = found.res, len(found.left)
         if res is None:
+            if unsafe:  # nothing clears them: the plan as planned, which the command refuses
+                self._apart[plan] = frozenset(r for c in found.left for r in c.robots)
+                return replace(cost, unsafe=unsafe)
             return cost
-        self._apart[plan] = frozenset(r for c in res.conflicts_before for r in c.robots)
+        self._apart[plan] = frozenset(r for c in (*res.conflicts_before, *found.left) for r in c.robots)
         executed = tuple(res.run.step_costs(len(res.plan), self.carried.scenario.cost, self.delta))
         same = len(res.plan) == len(plan)  # no sidestep split a move: the steps are the plan's
         return PlanCost(
@@ -222,6 +253,7 @@ class ExecutedCost:
             res.run.schedule if same else cost.schedule,
             cost.dropped,
             None if same else res.run.makespan,
+            unsafe,
         )
 
 

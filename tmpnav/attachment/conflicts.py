@@ -24,7 +24,9 @@ Phillips and Likhachev's safe-interval path planning, ICRA 2011):
    so the robot whose move started later (the later plan step at a tie) yields, which is
    prioritised planning; the other branch is tried when that one cannot resolve it -- a
    robot standing for good (it has ended its plan) in the other's path cannot be waited
-   out, so the move that brought it there is held back and the passer goes first;
+   out, so the move that brought it there is held back and the passer goes first. A robot
+   that, held back, would stand where the other drives meanwhile gives way in vain (robots
+   queued along one lane, the one in front held back): the other's branch goes first;
 4. a wait changes the beliefs of everything after it (observations, goal choices), so every
    branch is run and checked again; depth first, until no conflict is left or after
    ``max_runs`` runs.
@@ -189,13 +191,35 @@ def _branches(node: _Node, dt: float, longest: float) -> Iterator[dict[int, floa
     a, b = conflict.robots
     options = [(_holds(schedule, a, conflict.t_from), a), (_holds(schedule, b, conflict.t_from), b)]
     options.sort(key=lambda o: (o[0].start, o[0].step) if o[0] is not None else (-1.0, -1), reverse=True)
+    waits = []
     for move, robot in options:
         other = b if robot == a else a
         if move is None or _pointless(schedule, move, other, conflict.t_from):
             continue
         wait = node.delays.get(move.step, 0.0) + conflict.t_to + conflict.window + dt - move.start
         if wait <= longest:
-            yield {**node.delays, move.step: round(wait / dt) * dt}
+            until = conflict.t_to + conflict.window + dt  # when the move would start
+            waits.append((_stands_in_way(node.run, move, other, until, conflict.required_separation, dt), move, wait))
+    # a robot held back where the other then drives through gives way in vain: the other first
+    waits.sort(key=lambda w: w[0])  # (stable: otherwise the robot of lower priority first)
+    for _, move, wait in waits:
+        yield {**node.delays, move.step: round(wait / dt) * dt}
+
+
+def _stands_in_way(run: ClockRun, move: TimedMove, other: str, until: float, separation: float, dt: float) -> bool:
+    """Whether ``move``'s robot, held back until ``until`` (s) where the move starts, would stand
+    where ``other`` drives meanwhile (closer than ``separation``), as ``other`` drives in ``run``:
+    robots queued along one lane, the one in front held back, the one behind driving through it."""
+    tracks = run.tracks
+    if tracks is None or move.robot not in tracks or other not in tracks:
+        return False
+    here, there = tracks[move.robot][0], tracks[other][0]
+    if not len(here) or not len(there):
+        return False
+    lo, hi = round(move.start / dt), round(until / dt)
+    stand = here[min(lo, len(here) - 1)]
+    path = there[min(lo, len(there) - 1) : min(hi, len(there) - 1) + 1]
+    return bool(len(path)) and float(np.min(np.hypot(*(path - stand).T))) < separation
 
 
 def _holds(schedule: Schedule, robot: str, t: float) -> TimedMove | None:

@@ -53,9 +53,10 @@ def _dearer_kept_apart(run: TaskRun, task: TaskResult, executed: ExecutedCost) -
     unfolded belief space has no clock of where each robot is, so its optimum is the optimum as
     planned, robots passing through each other; where keeping them apart costs nothing it is
     the plan executed, else the anytime search goes on from it with every plan priced as
-    executed (tmpnav.planning.anytime), so that the plan picked is the plan executed."""
+    executed (tmpnav.planning.anytime), so that the plan picked is the plan executed. A plan whose
+    robots stay in each other's way under a chance constraint ranks dearer too (``PlanCost.ranked``)."""
     if not task.steps:
         return False
     planned = run.carried.plan_cost(task.steps)
     value = planned.value(run.span_weight)
-    return executed(task.steps, planned).value(run.span_weight) > value * (1 + EPSILON) + EPSILON
+    return executed(task.steps, planned).ranked(run.span_weight) > value * (1 + EPSILON) + EPSILON

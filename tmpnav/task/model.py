@@ -24,7 +24,12 @@ from tmpnav.results import Schedule
 from tmpnav.task.encodings import ENCODINGS
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.timing import schedule, table_durations
-from tmpnav.types import CostTable, Goals, MoveKey
+from tmpnav.types import PENALISED, CostTable, Goals, MoveKey
+
+#: what the anytime search adds to a plan's objective per conflict left (``PlanCost.unsafe``):
+#: more than any plan's objective tmpnav meets, so a plan the command would refuse is taken only
+#: where no plan kept apart was found
+UNSAFE_PRICE = PENALISED
 
 
 @dataclass(frozen=True)
@@ -39,6 +44,10 @@ class PlanCost:
     #: the makespan when it is not the schedule's: a plan executed with a move split in two
     #: (a sidestep, tmpnav.attachment.apart.ExecutedCost) keeps the plan's own schedule
     span: float | None = None
+    #: under a chance constraint, the robots still in each other's way when the plan is kept
+    #: apart (tmpnav.attachment.apart.ExecutedCost): ``tmpnav plan`` refuses such a plan, so the
+    #: search ranks it below every plan without (:data:`UNSAFE_PRICE`)
+    unsafe: int = 0
 
     @property
     def makespan(self) -> float:
@@ -53,6 +62,10 @@ class PlanCost:
         """The objective: the total plus ``span_weight`` per second of makespan (tmpnav.task.objectives),
         plus the penalties of the optional goals left undone."""
         return self.total + self.dropped + (span_weight * self.makespan if span_weight else 0.0)
+
+    def ranked(self, span_weight: float) -> float:
+        """:meth:`value`, plus :data:`UNSAFE_PRICE` for each conflict left: what the search compares."""
+        return self.value(span_weight) + UNSAFE_PRICE * self.unsafe
 
     @classmethod
     def impossible(cls, n: int) -> PlanCost:

@@ -265,7 +265,7 @@ class AnytimeSearch:
             if self.value(seed_cost) < self.value(cost):
                 best, cost, start = seed, seed_cost, name
         self.rules.check(best)
-        self._note(self.value(cost), "first plan")
+        self._note(cost, "first plan")
         if not best:
             return SearchResult(best, cost, "nothing to do", self.stats, start, tuple(self.budget.capped))
         self.best, self.best_cost = best, cost
@@ -359,7 +359,7 @@ class AnytimeSearch:
         self.best, self.best_cost = best[0], best[1]
         self.stats.improvements += 1
         self.stats.route_improvements += 1
-        self._note(new, "between routes")
+        self._note(self.best_cost, "between routes")
         return True
 
     def _apart_price(self) -> KeptApartPrice:
@@ -502,7 +502,7 @@ class AnytimeSearch:
         candidate, cost, sub = best
         self.best, self.best_cost = candidate, cost
         self.stats.improvements += 1
-        self._note(self.value(cost), f"{len(sub.hood.robots)} robots, {len(sub.hood.rooms)} rooms")
+        self._note(cost, f"{len(sub.hood.robots)} robots, {len(sub.hood.rooms)} rooms")
         return True
 
     def _solve(self, sub: Sub, timeout: float) -> list[Step] | None:
@@ -553,8 +553,9 @@ class AnytimeSearch:
         return best if best is not None else costed[order[0]]
 
     def value(self, cost: PlanCost) -> float:
-        """The objective of a plan of this cost (tmpnav.task.objectives)."""
-        return cost.value(self.options.span_weight)
+        """The objective of a plan of this cost (tmpnav.task.objectives), ranked below every plan
+        kept apart where robots are still in each other's way (``PlanCost.ranked``)."""
+        return cost.ranked(self.options.span_weight)
 
     # ------------------------------------------------------------------ progress
 
@@ -565,9 +566,14 @@ class AnytimeSearch:
             return most
         return self.rng.randint(min(2, len(self.model.robots)), most)
 
-    def _note(self, cost: float, what: str) -> None:
-        self.stats.history.append((round(self.elapsed(), 3), cost))
-        self.watch.note(cost, what)
+    def _note(self, cost: PlanCost, what: str) -> None:
+        """The search's progress: the objective of its best plan (without the rank's price of
+        conflicts left, which are told in words)."""
+        value = cost.value(self.options.span_weight)
+        if cost.unsafe:
+            what = f"{what}; robots in each other's way: {cost.unsafe}"
+        self.stats.history.append((round(self.elapsed(), 3), value))
+        self.watch.note(value, what)
 
 
 #: the name of a seed that is the plan being executed (a replan's incumbent): OR-Tools' routes
