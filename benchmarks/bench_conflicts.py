@@ -11,7 +11,7 @@ For every shipped scenario with two or more robots:
    report's trajectories, with what was done and the seconds of the ``resimulate`` stage
    that holds the search;
 3. resolves the plan as planned once more with siding rooms too (what ``--max-risk`` adds,
-   :func:`tmpnav.attachment.conflicts.resolve_with_sidesteps`), runs the result again from
+   :func:`tmpnav.attachment.passing.resolve_with_sidesteps`), runs the result again from
    scratch and checks it.
 
 Prints a table (conflicts, makespan and executed cost for each) and writes the rows as JSON.
@@ -32,7 +32,7 @@ sys.path.insert(0, str(ROOT))
 
 from tmpnav.attachment.canonical import CanonicalCosts  # noqa: E402
 from tmpnav.attachment.carried import CarriedCosts  # noqa: E402
-from tmpnav.attachment.conflicts import resolve_with_sidesteps  # noqa: E402
+from tmpnav.attachment.passing import resolve_with_sidesteps  # noqa: E402
 from tmpnav.belief.conflicts import find_conflicts  # noqa: E402
 from tmpnav.pipeline import Execution, PlanOptions, make_oracle, plan  # noqa: E402
 from tmpnav.scenario import load_partial  # noqa: E402

@@ -49,6 +49,7 @@ LAYERS: dict[str, int] = {
     "tmpnav.task": 8,  # searches over tables and cost models: never the oracle
     "tmpnav.attachment": 9,  # the cost models on the oracle, for the task's searches
     "tmpnav.attachment.conflicts": 9,  # waits that keep robots out of each other's way, on the clock
+    "tmpnav.attachment.passing": 9,  # detours and sidesteps past what the waits leave
     "tmpnav.planning": 10,  # stage 6 for a run: the registry of task planners
     "tmpnav.resimulate": 11,
     "tmpnav.options": 11,  # what a run is asked for, and the scenario that puts in force

@@ -12,8 +12,9 @@ from tests.attachment.support import carried_problem
 from tmpnav.attachment.apart import ExecutedCost, _sidesteps, keep_apart
 from tmpnav.attachment.canonical import CanonicalCosts
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.attachment.conflicts import resolve_conflicts, resolve_with_sidesteps
+from tmpnav.attachment.conflicts import resolve_conflicts
 from tmpnav.attachment.drift import trajectory_windows
+from tmpnav.attachment.passing import resolve_with_sidesteps
 from tmpnav.belief.conflicts import find_conflicts
 from tmpnav.oracle.executors import OracleContext
 from tmpnav.oracle.oracle import Oracle

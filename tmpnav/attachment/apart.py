@@ -1,4 +1,5 @@
-"""A plan kept apart: the resolver (:mod:`tmpnav.attachment.conflicts`) applied to a task plan.
+"""A plan kept apart: the resolver (:mod:`tmpnav.attachment.conflicts`, :mod:`tmpnav.attachment.passing`)
+applied to a task plan.
 
 :func:`keep_apart` turns the waits, detours and sidesteps that keep a plan's robots out of each
 other's way into the plan ``tmpnav plan`` returns (a TaskResult, and what was done); where the
@@ -19,8 +20,9 @@ import numpy as np
 
 from tmpnav.attachment.carried import CarriedCosts
 from tmpnav.attachment.clock_state import ClockRun
-from tmpnav.attachment.conflicts import EPS, Resolution, radii_of, resolve_with_sidesteps
+from tmpnav.attachment.conflicts import EPS, Resolution, radii_of
 from tmpnav.attachment.drift import clock_drift
+from tmpnav.attachment.passing import resolve_with_sidesteps
 from tmpnav.belief.conflicts import DEFAULT_DELTA, Conflict, find_conflicts, seen_std
 from tmpnav.oracle.motions import MotionLibrary
 from tmpnav.results import KeptApart, TaskResult

@@ -19,7 +19,7 @@ cost is the arrival step, and the heuristic the straight-line drive to the goal 
 (admissible: an edge takes at least its length over the speed), so the detour found is the
 earliest-arriving one among the paths searched. The search stays near the original path
 (roadmap nodes within ``reach`` metres of it), on the roadmap edges it is given (the resolver
-gives those whose footprint clears the walls, tmpnav.attachment.conflicts), and gives up after
+gives those whose footprint clears the walls, tmpnav.attachment.passing), and gives up after
 ``max_expansions`` states.
 
 There is no wait on the way: a move is one continuous motion, so that its controls, its
