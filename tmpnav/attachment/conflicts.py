@@ -1,4 +1,4 @@
-"""Robots in each other's way: conflicts of a plan's schedule resolved by waits, detours and sidesteps.
+"""Robots in each other's way: conflicts of a plan's schedule resolved by waits (then :mod:`tmpnav.attachment.passing`).
 
 A plan's schedule (:mod:`tmpnav.attachment.clock`) moves every robot at once along the paths
 the oracle chose for it, without looking at the other robots. Where two robots come closer
