@@ -102,3 +102,22 @@ def test_keeping_robots_apart_is_not_blamed_on_the_search(kept_report: PlanRepor
     far = BoundSummary(apart.cost_before * 0.5, "flow", 0.5, False)
     report = dataclasses.replace(kept_report, task=dataclasses.replace(kept_report.task, bound=far))
     assert [w.kind for w in plan_warnings(report) if w.kind == "gap"] == ["gap"]
+
+
+@pytest.mark.slow
+def test_a_fleet_the_weighted_objective_leaves_idle_is_told_so(plan_report: PlanReport) -> None:
+    """Two more robots that never move, under the weighted objective: half the team idle all
+    plan, so the summary says so and names the makespan objective; not under ``cost``, which
+    puts no price on time."""
+    planner = dataclasses.replace(plan_report.scenario.planner, objective="weighted")
+    schedule = dataclasses.replace(plan_report.schedule, robots=(*plan_report.schedule.robots, "r3", "r4"))
+    fleet = dataclasses.replace(
+        plan_report, scenario=dataclasses.replace(plan_report.scenario, planner=planner), schedule=schedule
+    )
+    (idle,) = [w for w in plan_warnings(fleet) if w.kind == "idle"]
+    assert idle.value == 2 and idle.robot in {"r1", "r2"}
+    assert "2 of 4 robots (r3, r4) stand idle" in idle.message and "--objective makespan" in idle.message
+    costed = dataclasses.replace(planner, objective="cost")
+    plain = dataclasses.replace(fleet, scenario=dataclasses.replace(fleet.scenario, planner=costed))
+    assert not [w for w in plan_warnings(plain) if w.kind == "idle"]
+    assert not [w for w in plan_warnings(plan_report) if w.kind == "idle"]  # two robots, both at work

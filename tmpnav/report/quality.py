@@ -12,6 +12,12 @@ A plan can be poor in two ways the status line does not show:
   robots reach without a move over the chance constraint, and robots outside the group of the
   robot that ends the plan stand idle for more than :data:`tmpnav.report.reach.IDLE_SHARE` of the
   makespan: no plan can give them its work (:mod:`tmpnav.report.reach`).
+- **A fleet the objective leaves idle.** Where the objective prices time (``weighted``) and at
+  least :data:`IDLE_ROBOTS` robots, and at least :data:`IDLE_TEAM` of the team, make fewer than
+  half the moves a robot makes on average and stand idle for more than
+  :data:`tmpnav.report.reach.IDLE_SHARE` of the makespan, and no split by the chance
+  constraint explains it: the objective's price of a second did not pay for the motion of
+  giving them rooms. ``--objective makespan`` plans for the earliest end instead.
 - **More uncertain than a door allows.** Where a robot's belief mean passes an open door, the
   2-sigma spread of its position across the door (along the door's segment) is compared with
   the room it has there: half the door's width less the robot's radius. Past that, the robot
@@ -43,16 +49,22 @@ from tmpnav.types import Door, TrajectoryStep
 GAP_WARN = 0.20
 #: the spread compared with a door's room: this many standard deviations across the door
 N_SIGMA = 2.0
+#: an ``idle`` warning needs at least this many robots idle for most of the plan ...
+IDLE_ROBOTS = 2
+#: ... and at least this share of the team
+IDLE_TEAM = 0.25
+#: robots named in an ``idle`` warning at most (the rest counted)
+IDLE_NAMED = 4
 
 
 @dataclass(frozen=True)
 class PlanWarning:
     """One warning: what it is about, its numbers, and the message with what to try."""
 
-    kind: str  # "risk" | "conflict" | "gap" | "split" | "door"
-    robot: str | None  # the robot a "door" warning is about; split: the robot that ends the plan
-    value: float  # gap: the gap (fraction); split: the groups; door: the 2-sigma spread across the door (m)
-    limit: float  # gap: GAP_WARN; split: IDLE_SHARE; door: half the door's width less the robot's radius (m)
+    kind: str  # "risk" | "conflict" | "gap" | "split" | "idle" | "door"
+    robot: str | None  # the robot a "door" warning is about; split, idle: the robot that ends the plan
+    value: float  # gap: the gap (fraction); split: the groups; idle: the idle robots; door: the 2-sigma spread (m)
+    limit: float  # gap: GAP_WARN; split, idle: IDLE_SHARE; door: half the door's width less the robot's radius (m)
     message: str
 
 
@@ -60,7 +72,9 @@ def plan_warnings(report: PlanReport) -> list[PlanWarning]:
     """The warnings of a plan: a move over the chance constraint and robots still in each other's
     way (a plan taken with --accept-risk), its gap, then each robot's worst door (at most one per
     robot)."""
-    found = [w for w in (_over_threshold(report), _in_the_way(report), _gap(report), _split(report)) if w is not None]
+    found = [w for w in (_over_threshold(report), _in_the_way(report), _gap(report)) if w is not None]
+    split = _split(report)
+    found += [w for w in (split if split is not None else _idle(report),) if w is not None]
     for robot in report.scenario.robots:
         door = _worst_door(report, robot.name, robot.radius)
         if door is not None:
@@ -112,6 +126,31 @@ def _split(report: PlanReport) -> PlanWarning | None:
         return None  # their jobs or the roadmap keep them out, not the chance constraint
     text = split_message(groups, idle, last, makespan, delta)
     return PlanWarning("split", last, float(len(groups)), IDLE_SHARE, text)
+
+
+def _idle(report: PlanReport) -> PlanWarning | None:
+    """Robots idle for most of the plan, with fewer than half the moves a robot makes on average,
+    where the objective (``weighted``) did not pay for giving them rooms: the price of a second
+    of makespan against the motion it would take."""
+    planner, schedule = report.scenario.planner, report.schedule
+    if planner.objective != "weighted" or not schedule.moves or len(schedule.robots) < 3:
+        return None
+    makespan, team = schedule.makespan, len(schedule.robots)
+    fair = len(schedule.moves) / team  # the moves a robot makes on average
+    idle = [
+        r for r in schedule.robots if len(schedule.timeline(r)) < fair / 2 and schedule.idle(r) > IDLE_SHARE * makespan
+    ]
+    if len(idle) < max(IDLE_ROBOTS, IDLE_TEAM * team):
+        return None
+    last = max(schedule.moves, key=lambda m: m.done).robot
+    named = ", ".join(idle[:IDLE_NAMED]) + (f" and {len(idle) - IDLE_NAMED} more" if len(idle) > IDLE_NAMED else "")
+    text = (
+        f"{len(idle)} of {len(schedule.robots)} robots ({named}) stand idle for more than half of the "
+        f"{makespan:.1f} s makespan, which {last} ends: the weighted objective prices a second of makespan at "
+        f"cost.M_T = {report.scenario.cost.M_T:g}, and giving them rooms was not found to save more than the "
+        'motion it adds. --objective makespan plans for the earliest end instead (docs/planning.md, "Objective").'
+    )
+    return PlanWarning("idle", last, float(len(idle)), IDLE_SHARE, text)
 
 
 def warning_lines(report: PlanReport, width: int = 100) -> list[str]:
