@@ -241,12 +241,11 @@ class ExecutedCost:
         self.priced += 1
         found = _resolved(self.carried, plan, self.delta, cost.total, cost.makespan)
         res, unsafe = found.res, len(found.left)
-        if res is None:
-            if unsafe:  # nothing clears them: the plan as planned, which the command refuses
-                self._apart[plan] = frozenset(r for c in found.left for r in c.robots)
-                return replace(cost, unsafe=unsafe)
-            return cost
-        self._apart[plan] = frozenset(r for c in (*res.conflicts_before, *found.left) for r in c.robots)
+        met = (*(res.conflicts_before if res is not None else ()), *found.left)
+        if met:
+            self._apart[plan] = frozenset(r for c in met for r in c.robots)
+        if res is None:  # the plan as planned; with conflicts left, one the command refuses
+            return replace(cost, unsafe=unsafe) if unsafe else cost
         executed = tuple(res.run.step_costs(len(res.plan), self.carried.scenario.cost, self.delta))
         same = len(res.plan) == len(plan)  # no sidestep split a move: the steps are the plan's
         return PlanCost(

@@ -2,7 +2,7 @@
 beliefs.
 
 The numpy reference of the bound stated and proved in docs/models.md ("Collision bound"); the
-compiled kernel (:mod:`tmpnav.belief.kernel`) computes the same formulas while it propagates
+compiled kernel (:mod:`tmpnav.belief.kernel_bound`) computes the same formulas while it propagates
 beliefs, and tests/belief/test_collision_bound.py holds the two together. In short:
 
 * :func:`hits_wall` is what ``tmpnav simulate`` counts; :func:`margins` and the sector reach
