@@ -44,3 +44,31 @@ def test_mixed_offers_only_pairs_that_save_at_least_the_gain() -> None:
     assert list(mixed.offered_pairs(table, 0.05)) == [(("r1", "S", "A"), ("r2", "T", "B"))]
     assert len(mixed.offered_pairs(table, 0.0)) == 2
     assert scaled(10.0004) == 10000 and scaled(10.0006) == 10001
+
+
+def test_a_sub_problem_keeps_the_pairs_that_save_the_largest_share() -> None:
+    from tmpnav.task.encodings import strongest_pairs
+    from tmpnav.task.pddl_text import write_task
+
+    rooms = ("A", "B", "C", "D")
+    single = {(r, s, x): 10.0 for r, s in STARTS.items() for x in rooms}
+    saves = {("A", "B"): 0.40, ("B", "A"): 0.30, ("C", "D"): 0.30, ("D", "C"): 0.10, ("A", "C"): 0.02}
+    pair = {(("r1", "S", x), ("r2", "T", y)): 20.0 * (1 - share) for (x, y), share in saves.items()}
+    duration = {(m1, m2): (5.0, 6.0) for m1, m2 in pair}
+    table = CostTable(("r1", "r2"), rooms, (*rooms, "S", "T"), STARTS, single, pair, pair_duration=duration)
+
+    def kept(t: CostTable) -> list[tuple[str, str]]:
+        return sorted((m1[2], m2[2]) for m1, m2 in t.pair)
+
+    assert kept(strongest_pairs(table, 0.05, 1)) == [("A", "B")]
+    # of two that save alike, the first by the moves' names
+    assert kept(strongest_pairs(table, 0.05, 2)) == [("A", "B"), ("B", "A")]
+    # within the limit: the table itself (the encoding leaves out what saves less than the gain)
+    assert strongest_pairs(table, 0.05, 4) is table and strongest_pairs(table, 0.0, 5) is table
+    # a pair below the least gain is never kept in its place
+    assert ("A", "C") not in kept(strongest_pairs(table, 0.05, 3))
+    assert set(strongest_pairs(table, 0.05, 2).pair_duration) == set(strongest_pairs(table, 0.05, 2).pair)
+    # the PDDL text offers exactly the kept pairs
+    goals = Goals(visit=rooms, per_robot=())
+    assert len(set(write_task(table, goals, "mixed", "sub", 0.05, most_pairs=2).pair_actions.values())) == 2
+    assert len(set(write_task(table, goals, "mixed", "sub", 0.05).pair_actions.values())) == 4

@@ -30,7 +30,7 @@ This module imports no planning library.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib.resources import files
 from typing import Protocol
 
@@ -169,6 +169,29 @@ def offered_pairs(table: CostTable, min_gain: float) -> dict[tuple[MoveKey, Move
         if scaled(cost) < alone and scaled(cost) <= (1.0 - min_gain) * alone:
             out[(m1, m2)] = cost
     return out
+
+
+def strongest_pairs(table: CostTable, min_gain: float, most: int) -> CostTable:
+    """The table with only the ``most`` paired moves the mixed encoding would offer (those that
+    save ``min_gain``) that save the largest share of their two single moves (ties: by the moves'
+    names). A sub-problem of the anytime search offers ENHSP these alone: ENHSP parses and
+    grounds every paired move it is offered, four actions each where time is priced, and on
+    sub-problems that hold both robots of a pair-rich team that text is most of a search's time,
+    while the paired moves that improve a plan are among the few that save most (tmpnav.task.subproblems)."""
+    offered = offered_pairs(table, min_gain)
+    if len(offered) <= most:
+        return table
+
+    def share_kept(p: tuple[MoveKey, MoveKey]) -> float:  # the pair's cost over its moves alone
+        return scaled(offered[p]) / (scaled(table.single[p[0]]) + scaled(table.single[p[1]]))
+
+    order = sorted(offered, key=lambda p: (share_kept(p), p))
+    kept = set(order[:most])
+    return replace(
+        table,
+        pair={p: c for p, c in table.pair.items() if p in kept},
+        pair_duration={p: d for p, d in table.pair_duration.items() if p in kept},
+    )
 
 
 def _registered(cls: type[Encoding], name: str, domain_file: str) -> Encoding:

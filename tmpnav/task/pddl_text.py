@@ -35,7 +35,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from tmpnav.errors import PlannerCrashError
-from tmpnav.task.encodings import COST_SCALE, ENCODINGS, Encoding, scaled
+from tmpnav.task.encodings import COST_SCALE, ENCODINGS, Encoding, scaled, strongest_pairs
 from tmpnav.task.names import PddlNames
 from tmpnav.task.solve import SolveResult, solve_text
 from tmpnav.types import CostTable, Goals, MoveKey
@@ -376,6 +376,7 @@ def write_task(
     ends: dict[str, str] | None = None,
     span_weight: float = 0.0,
     clocks: Clocks | None = None,
+    most_pairs: int | None = None,
 ) -> PddlTask:
     """The PDDL text of ``encoding`` (``single`` or ``mixed``) for the cost table and the goals.
 
@@ -384,8 +385,12 @@ def write_task(
     ``ends`` (a sub-problem of the anytime search): robot -> the location it must end in.
     ``span_weight``: the objective's price of a second of makespan (0: none, no clocks);
     ``clocks``: where the team's clock starts (default: every robot free at 0).
+    ``most_pairs`` (mixed): at most this many paired moves, those that save most
+    (:func:`tmpnav.task.encodings.strongest_pairs`; None: every one that saves ``min_gain``).
     """
     enc = ENCODINGS[encoding] if isinstance(encoding, str) else encoding
+    if most_pairs is not None and table.pair:
+        table = strongest_pairs(table, min_gain, most_pairs)
     builder = TextBuilder(enc, table, goals, span_weight)
     enc.add_costs(builder, table, goals, min_gain)
     pname = _problem_name(name)

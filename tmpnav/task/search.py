@@ -289,7 +289,7 @@ class AnytimeSearch:
                 tuple(dict.fromkeys(m[2] for step in best for m in step)),
                 {},
             )
-            if self._try_batch(best, [whole], keep_equal=True):
+            if self._try_batch(best, [whole], keep_equal=True, every_pair=True):
                 return self._result("optimal", start)
         return self._result(self._improve_until_done(self.best, self.best_cost), start)
 
@@ -431,14 +431,20 @@ class AnytimeSearch:
             yield batch, self.rng.getstate()
             batch = []
 
-    def _try_batch(self, plan: Plan, hoods: list[Neighbourhood], keep_equal: bool = False) -> bool:
+    def _try_batch(
+        self, plan: Plan, hoods: list[Neighbourhood], keep_equal: bool = False, every_pair: bool = False
+    ) -> bool:
         """Solve the sub-problems of ``hoods`` and keep the cheapest spliced plan if it beats
-        the best one (or ties it, with ``keep_equal``: then True means ENHSP solved them)."""
-        return self._settle(plan, self._launch(plan, hoods, ()), keep_equal)
+        the best one (or ties it, with ``keep_equal``: then True means ENHSP solved them);
+        ``every_pair``: each offers every paired move that saves ``min_gain`` (the whole problem,
+        whose plan is then the optimum), not only the few that save most."""
+        return self._settle(plan, self._launch(plan, hoods, (), every_pair), keep_equal)
 
-    def _launch(self, plan: Plan, hoods: list[Neighbourhood], state: tuple[object, ...]) -> _Batch:
+    def _launch(
+        self, plan: Plan, hoods: list[Neighbourhood], state: tuple[object, ...], every_pair: bool = False
+    ) -> _Batch:
         """The sub-problems of ``hoods`` costed, and ENHSP started on those not solved before."""
-        subs = [sub for hood in hoods if (sub := self.subs.of(plan, hood, self.best_cost)) is not None]
+        subs = [sub for hood in hoods if (sub := self.subs.of(plan, hood, self.best_cost, every_pair)) is not None]
         timeout = min(self.options.sub_timeout, self.left())
         plans: list[Future[list[Step] | None] | list[Step] | None] = []
         for sub in subs:

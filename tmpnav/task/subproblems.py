@@ -20,6 +20,16 @@ from tmpnav.task.pddl_text import Clocks, PddlTask, write_task
 from tmpnav.task.plans import Cut, Plan, PlanError, Rules, State, cut
 from tmpnav.types import Goals
 
+#: paired moves a sub-problem offers ENHSP at most, those that save the largest share of their
+#: two single moves (tmpnav.task.encodings.strongest_pairs). Without a lidar two robots that see
+#: each other save much, and a sub-problem holding both offered up to 300-370 paired moves (1 MB
+#: of PDDL, four actions each where time is priced), which ENHSP parses and grounds for most of
+#: a search's time. On the generated landmark-only offices (24 rooms and 2 robots, seeds 1-5;
+#: 10 rooms, seed 2; 40 rooms and 4 robots, seeds 1-2) every plan that improved on another used
+#: paired moves among the 40 that save most, and the runs took 10-30% less
+#: (benchmarks/landmark_family/); 20 lost two of those improvements.
+SUB_PAIRS = 40
+
 
 @dataclass(frozen=True)
 class Sub:
@@ -48,9 +58,11 @@ class SubProblems:
         self.model, self.goals, self.rules, self.encoding, self.times = model, goals, rules, encoding, times
         self.waypoints: tuple[str, ...] = ()
 
-    def of(self, plan: Plan, hood: Neighbourhood, best: PlanCost) -> Sub | None:
+    def of(self, plan: Plan, hood: Neighbourhood, best: PlanCost, every_pair: bool = False) -> Sub | None:
         """The sub-problem of ``hood`` in ``plan`` (whose cost, with its schedule, is ``best``): the
-        plan opened, its goals, its costs, its PDDL text; None when the head is not a valid plan."""
+        plan opened, its goals, its costs, its PDDL text (with the :data:`SUB_PAIRS` paired moves
+        that save most; ``every_pair``: all that save the encoding's least gain); None when the
+        head is not a valid plan."""
         opened = cut(plan, set(hood.removed), set(hood.robots))
         try:
             head_state = self.rules.run(opened.head)
@@ -60,12 +72,14 @@ class SubProblems:
         entered = {m[2] for step in plan for m in step}
         free = [x for x in self.waypoints if x not in entered or x in hood.rooms]
         dropped = [x for x in goals.visit if x not in hood.rooms]  # optional goals left undone, to take up
-        enc = self.encoding
+        enc, most_pairs = self.encoding, None if every_pair else SUB_PAIRS
         with self.times.timed("oracle"):
             table = self.model.subtable(opened.head, hood.robots, (*hood.rooms, *dropped, *free), goals)
             clocks = self.clocks(opened, hood, best) if enc.span_weight or self.goals.windows else None
         with self.times.timed("encode"):
-            task = write_task(table, goals, enc.name, "sub", enc.min_gain, hood.ends, enc.span_weight, clocks)
+            task = write_task(
+                table, goals, enc.name, "sub", enc.min_gain, hood.ends, enc.span_weight, clocks, most_pairs
+            )
         return Sub(hood, opened, task)
 
     def clocks(self, opened: Cut, hood: Neighbourhood, best: PlanCost) -> Clocks:
