@@ -1,6 +1,6 @@
 """The shortened path (tmpnav/roadmap/shortcut.py) against the greedy pass written plainly: from
-each kept point, every later point tried in turn before the first narrow one, the last that keeps
-its clearance taken."""
+each kept point, every later point tried in turn before the first narrow one (below the clearance
+asked for, and on the ridge of its passage), the last that keeps its clearance taken."""
 
 from __future__ import annotations
 
@@ -28,6 +28,20 @@ def least(a: np.ndarray, b: np.ndarray, clear: np.ndarray, origin: tuple[float, 
     return out
 
 
+def narrow(points: np.ndarray, k: int, required: float, clear: np.ndarray, origin: tuple[float, float]) -> bool:
+    """Point k is below ``required`` and no side of it, three cells across the path, is clearer
+    by more than a cell."""
+    here = least(points[k], points[k], clear, origin)
+    if here >= required:
+        return False
+    along = points[min(k + 1, len(points) - 1)] - points[max(k - 1, 0)]
+    if not np.any(along):
+        return True
+    across = np.array([-along[1], along[0]]) / math.hypot(*along)
+    sides = (points[k] + side * 3 * RES * across for side in (-1.0, 1.0))
+    return all(least(p, p, clear, origin) <= here + RES for p in sides)
+
+
 def plain(points: np.ndarray, required: float, clear: np.ndarray, origin: tuple[float, float]) -> list[int]:
     if len(points) <= 2:
         return list(range(len(points)))
@@ -35,7 +49,7 @@ def plain(points: np.ndarray, required: float, clear: np.ndarray, origin: tuple[
     while i < len(points) - 1:
         nxt, kept = i + 1, least(points[i], points[i + 1], clear, origin)
         for j in range(i + 2, len(points)):
-            if least(points[j - 1], points[j - 1], clear, origin) < required:
+            if narrow(points, j - 1, required, clear, origin):
                 break
             kept = min(kept, least(points[j - 1], points[j], clear, origin))
             if least(points[i], points[j], clear, origin) >= min(kept, required):
@@ -65,3 +79,21 @@ def test_the_shortened_path_is_the_plain_greedy_pass(seed: int) -> None:
         points = np.cumsum(rng.normal(0.0, 0.8, (int(rng.integers(0, 30)), 2)), axis=0) + rng.uniform(2.0, 8.0, 2)
         required = float(rng.uniform(0.1, 0.6))
         assert shortcut(points, required, clear, origin, RES).tolist() == plain(points, required, clear, origin)
+
+
+def test_a_milestone_beside_a_corridor_wall_is_skipped_a_door_middle_is_not() -> None:
+    """A 2.4 m corridor (y 1-3.4) over a room (y below 1) joined by a 1 m door at x 7-8. A roadmap
+    path that touches the corridor's north wall on its way to the door is cut straight past that
+    point; the door's middle, below the clearance asked for but the clearest point across the door,
+    is gone through."""
+    occupied = np.zeros((80, 240), dtype=bool)  # 4 m x 12 m at 5 cm
+    occupied[:, [0, -1]] = occupied[[0, -1], :] = True
+    occupied[68:, :] = True  # the corridor's north wall, from y 3.4 m
+    occupied[18:20, :] = True  # the wall between the corridor and the room, y 0.9-1.0 m
+    occupied[18:20, 140:160] = False  # its door, x 7-8 m
+    clear = ndimage.distance_transform_edt(~occupied) * RES
+    points = np.array([[1.0, 2.2], [5.0, 3.1], [7.5, 1.6], [7.5, 0.95], [7.5, 0.4]])
+    kept = shortcut(points, 0.8, clear, (0.0, 0.0), RES).tolist()
+    assert 1 not in kept  # 5.0, 3.1: 0.3 m from the north wall, the corridor clear to its south
+    assert 3 in kept  # the door's middle
+    assert kept == plain(points, 0.8, clear, (0.0, 0.0))

@@ -105,7 +105,8 @@ def _shortcut(pts, required, clear, x0, y0, res):  # pragma: no cover
         edge[k] = _least(pts[k, 0], pts[k, 1], pts[k + 1, 0], pts[k + 1, 1], clear, x0, y0, res)
     narrow = np.empty(P, dtype=np.bool_)
     for k in range(P):
-        narrow[k] = _least(pts[k, 0], pts[k, 1], pts[k, 0], pts[k, 1], clear, x0, y0, res) < required
+        here = _least(pts[k, 0], pts[k, 1], pts[k, 0], pts[k, 1], clear, x0, y0, res)
+        narrow[k] = here < required and _on_ridge(pts, k, here, clear, x0, y0, res)
     kept = np.empty(P)  # kept[j]: the polyline's least clearance from i to j
     keep = np.empty(P, dtype=np.int64)
     keep[0] = 0
@@ -126,6 +127,32 @@ def _shortcut(pts, required, clear, x0, y0, res):  # pragma: no cover
         m += 1
         i = nxt
     return keep[:m].copy()
+
+
+#: cells across the path a point's clearance is compared at (:func:`_on_ridge`)
+RIDGE_CELLS = 3
+
+
+@nb.njit(cache=True)
+def _on_ridge(pts, k, here, clear, x0, y0, res):  # pragma: no cover
+    """Whether point k of the path lies on the ridge of its passage: RIDGE_CELLS cells to either
+    side across the path (square to the line from the point before it to the point after it) the
+    clearance is no more than a cell above ``here``, its own. The middle of a door is on its ridge;
+    a milestone the roadmap put beside a wall of a wide corridor is not (one side is clearer)."""
+    P = pts.shape[0]
+    a = pts[max(k - 1, 0)]
+    b = pts[min(k + 1, P - 1)]
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    norm = math.hypot(dx, dy)
+    if norm == 0.0:
+        return True
+    nx, ny = -dy / norm, dx / norm
+    off = RIDGE_CELLS * res
+    for side in (-1.0, 1.0):
+        px, py = pts[k, 0] + side * off * nx, pts[k, 1] + side * off * ny
+        if _least(px, py, px, py, clear, x0, y0, res) > here + res:
+            return False
+    return True
 
 
 #: m: the radius a corner is rounded to at most, nav2 RPP's ``regulated_linear_scaling_min_radius``:
