@@ -22,7 +22,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tests.task.instances import exact_optimum, small_instance, without_pairs
-from tmpnav.task.bound import Bound, lower_bound, required_entries
+from tmpnav.task import bound_lp
+from tmpnav.task.bound import CUT_ROUNDS, Bound, lower_bound, required_entries
 from tmpnav.types import CostTable, Goals
 
 instances = st.tuples(
@@ -168,3 +169,17 @@ def test_a_stop_ends_the_rounds_of_cuts_with_a_bound_that_holds() -> None:
         assert stopped.stopped and not full.stopped and len(asked) == 1
         assert stopped.cuts == 0 and stopped.value <= full.value + 1e-9
         assert stopped.value <= exact_optimum(table, goals) + 1e-6
+
+
+def test_the_rounds_of_cuts_end_when_four_in_a_row_do_not_raise_the_bound(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A table whose LPs stood still for four rounds before converging two rounds later
+    (tmpnav.task.bound_lp.STALL_ROUNDS): the rounds end there, with a bound that holds."""
+    rnd = random.Random(2981)
+    table, goals = small_instance(rnd, rnd.choice([2, 3, 4]), rnd.randint(6, 12), rnd.choice([0.0, 0.1, 0.3]))
+    stalled = lower_bound(table, goals)
+    monkeypatch.setattr(bound_lp, "STALL_ROUNDS", 1000)
+    full = lower_bound(table, goals)
+    assert full.converged and not stalled.converged
+    assert stalled.rounds == full.rounds - 2 and stalled.rounds < CUT_ROUNDS
+    assert stalled.value <= full.value + 1e-9
+    assert stalled.value == pytest.approx(full.value, rel=2e-3)
