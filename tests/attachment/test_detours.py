@@ -112,3 +112,32 @@ def test_a_time_window_makes_the_detour_keep_clear_of_an_earlier_crossing() -> N
     assert path is not None and path != mine and (path[0], path[-1]) == (mine[0], mine[-1])
     driven = path_controls(roadmap.nodes[list(path)], 0.0, SPEED, TURN, DT).poses
     assert late.clear(np.arange(driven.shape[0]), driven[:, :2])  # what the checker asks, within the window
+
+
+def test_the_window_boxes_clear_exactly_the_points_the_rows_clear() -> None:
+    """The search tests each obstacle against the box of its rows within the step's window first
+    (tmpnav.attachment.detours._window_boxes): on random obstacles with clock-drift windows,
+    points near and far, before, during and long after their rows, the compiled test says what
+    each obstacle's own rows say (Obstacle.clear)."""
+    from tmpnav.attachment import detours
+
+    rng = np.random.default_rng(5)
+    for _ in range(40):
+        obstacles = []
+        for _ in range(int(rng.integers(1, 6))):
+            n = int(rng.integers(1, 40))
+            xy = np.cumsum(rng.normal(0.0, 0.3, (n, 2)), axis=0) + rng.uniform(0.0, 6.0, 2)
+            window = np.minimum(np.arange(n) // int(rng.integers(2, 8)), 12)
+            obstacles.append(Obstacle(int(rng.integers(0, 20)), xy, rng.uniform(0.3, 1.2, n), window))
+        longest = max(o.xy.shape[0] for o in obstacles)
+        t0 = np.array([o.t0 for o in obstacles], dtype=np.int64)
+        rows = np.array([o.xy.shape[0] for o in obstacles], dtype=np.int64)
+        xy, sep = np.zeros((len(obstacles), longest, 2)), np.zeros((len(obstacles), longest))
+        win = np.zeros((len(obstacles), longest), dtype=np.int64)
+        for k, o in enumerate(obstacles):
+            xy[k, : o.xy.shape[0]], sep[k, : o.xy.shape[0]], win[k, : o.xy.shape[0]] = o.xy, o.separation, o.window
+        box = detours._window_boxes(rows, xy, sep, win)
+        for _ in range(200):
+            step, point = int(rng.integers(0, 90)), rng.uniform(-2.0, 9.0, 2)
+            expected = all(o.clear(np.array([step]), point[None]) for o in obstacles)
+            assert detours._clear(t0, rows, xy, sep, win, box, step, point[0], point[1]) == expected

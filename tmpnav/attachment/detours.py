@@ -156,6 +156,7 @@ def detour(
         xy,
         sep,
         win,
+        _window_boxes(rows, xy, sep, win),
         horizon,
         max(end, t_start),
         max_expansions,
@@ -164,14 +165,50 @@ def detour(
 
 
 @nb.njit(cache=True)
-def _clear(t0, rows, xy, sep, win, step, x, y):
+def _window_boxes(rows, xy, sep, win):
+    """For each obstacle k and row r (past its last row, as far as its window still reaches back,
+    then the last), the box (x0, y0, x1, y1) of its rows within r's window, as :func:`_clear`
+    reads them, and their largest separation: (K, R, 5). With the drift's windows at fleet size
+    (tens of rows each, for every other robot) the rows of most obstacles lie far from the
+    detour, and their boxes say so in one test (office of 100 rooms and 16 robots: a search
+    that expands its 20,000 states took 3.4 s)."""
+    count = rows.shape[0]
+    reach = 1
+    for k in range(count):
+        reach = max(reach, rows[k] + win[k, rows[k] - 1] if rows[k] > 0 else 1)
+    box = np.empty((count, reach, 5))
+    for k in range(count):
+        last = rows[k] - 1
+        for r in range(reach):
+            if last < 0:
+                box[k, r, 0], box[k, r, 1], box[k, r, 2], box[k, r, 3], box[k, r, 4] = 0.0, 0.0, 0.0, 0.0, 0.0
+                continue
+            w = win[k, min(r, last)]
+            x0, y0, x1, y1, s = math.inf, math.inf, -math.inf, -math.inf, 0.0
+            for q in range(min(max(r - w, 0), last), min(r + w, last) + 1):
+                x0, x1 = min(x0, xy[k, q, 0]), max(x1, xy[k, q, 0])
+                y0, y1 = min(y0, xy[k, q, 1]), max(y1, xy[k, q, 1])
+                s = max(s, sep[k, q])
+            box[k, r, 0], box[k, r, 1], box[k, r, 2], box[k, r, 3], box[k, r, 4] = x0, y0, x1, y1, s
+    return box
+
+
+@nb.njit(cache=True)
+def _clear(t0, rows, xy, sep, win, box, step, x, y):
     """Whether the point (x, y) at clock ``step`` keeps every obstacle's separation from each
-    of its rows within the window of ``step``'s row."""
+    of its rows within the window of ``step``'s row. An obstacle whose rows of that window lie
+    in a box (:func:`_window_boxes`) at least their largest separation from the point is clear
+    without looking at its rows: each row is at least as far."""
     for k in range(t0.shape[0]):
         r = step - t0[k]
         if r < 0:
             continue
         last = rows[k] - 1
+        b = min(r, box.shape[1] - 1)
+        gx = max(box[k, b, 0] - x, 0.0, x - box[k, b, 2])
+        gy = max(box[k, b, 1] - y, 0.0, y - box[k, b, 3])
+        if gx * gx + gy * gy >= box[k, b, 4] * box[k, b, 4]:
+            continue
         w = win[k, min(r, last)]
         for q in range(min(max(r - w, 0), last), min(r + w, last) + 1):
             dx, dy = x - xy[k, q, 0], y - xy[k, q, 1]
@@ -181,21 +218,21 @@ def _clear(t0, rows, xy, sep, win, step, x, y):
 
 
 @nb.njit(cache=True)
-def _drives(t0, rows, xy, sep, win, t, n_turn, n_drive, ax, ay, bx, by):
+def _drives(t0, rows, xy, sep, win, box, t, n_turn, n_drive, ax, ay, bx, by):
     """Whether turning at (ax, ay) for ``n_turn`` steps from step ``t``, then driving to (bx, by)
     in ``n_drive`` steps, keeps every obstacle's separation."""
     for k in range(1, n_turn + n_drive + 1):
         frac = 0.0 if k <= n_turn else (k - n_turn) / n_drive
-        if not _clear(t0, rows, xy, sep, win, t + k, ax + frac * (bx - ax), ay + frac * (by - ay)):
+        if not _clear(t0, rows, xy, sep, win, box, t + k, ax + frac * (bx - ax), ay + frac * (by - ay)):
             return False
     return True
 
 
 @nb.njit(cache=True)
-def _stands(t0, rows, xy, sep, win, first, last, x, y):
+def _stands(t0, rows, xy, sep, win, box, first, last, x, y):
     """Whether standing at (x, y) from step ``first`` to ``last`` keeps every separation."""
     for step in range(first, last + 1):  # noqa: SIM110 -- numba compiles no generator into all()
-        if not _clear(t0, rows, xy, sep, win, step, x, y):
+        if not _clear(t0, rows, xy, sep, win, box, step, x, y):
             return False
     return True
 
@@ -215,15 +252,15 @@ def _unwind(st_node, st_parent, s):
 
 @nb.njit(cache=True)
 def _search(
-    nodes, indptr, indices, start, goal, heading0, t_start, speed, turn_rate, dt, t0, rows, xy, sep, win, horizon, end,
-    cap,
+    nodes, indptr, indices, start, goal, heading0, t_start, speed, turn_rate, dt, t0, rows, xy, sep, win, box, horizon,
+    end, cap,
 ):  # fmt: skip
     """A* over (node, previous node, clock step) (the module docstring); the path's nodes, or
     an empty array."""
     per_step = speed * dt
     gx, gy = nodes[goal, 0], nodes[goal, 1]
     empty = np.empty(0, dtype=np.int64)
-    if not _clear(t0, rows, xy, sep, win, t_start, nodes[start, 0], nodes[start, 1]):
+    if not _clear(t0, rows, xy, sep, win, box, t_start, nodes[start, 0], nodes[start, 1]):
         return empty
     n = nodes.shape[0]
     st_node = [start]
@@ -244,7 +281,7 @@ def _search(
         seen[key] = True
         expanded += 1
         if node == goal:
-            if _stands(t0, rows, xy, sep, win, t, max(end, t), gx, gy):
+            if _stands(t0, rows, xy, sep, win, box, t, max(end, t), gx, gy):
                 return _unwind(st_node, st_parent, s)
             continue
         ax, ay = nodes[node, 0], nodes[node, 1]
@@ -265,7 +302,7 @@ def _search(
             h = math.ceil(math.hypot(bx - gx, by - gy) / per_step - 1e-9)
             if t_next + h > horizon:
                 continue
-            if _drives(t0, rows, xy, sep, win, t, n_turn, n_drive, ax, ay, bx, by):
+            if _drives(t0, rows, xy, sep, win, box, t, n_turn, n_drive, ax, ay, bx, by):
                 st_node.append(nxt)
                 st_parent.append(s)
                 st_heading.append(direction)
