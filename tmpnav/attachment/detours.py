@@ -165,6 +165,14 @@ def detour(
 
 
 @nb.njit(cache=True)
+def _window(win, k, r, last):
+    """The first and last of obstacle k's rows within the window of its row r (past its last
+    row: the window of the last, reaching back from r)."""
+    w = win[k, min(r, last)]
+    return min(max(r - w, 0), last), min(r + w, last)
+
+
+@nb.njit(cache=True)
 def _window_boxes(rows, xy, sep, win):
     """For each obstacle k and row r (past its last row, as far as its window still reaches back,
     then the last), the box (x0, y0, x1, y1) of its rows within r's window, as :func:`_clear`
@@ -183,9 +191,9 @@ def _window_boxes(rows, xy, sep, win):
             if last < 0:
                 box[k, r, 0], box[k, r, 1], box[k, r, 2], box[k, r, 3], box[k, r, 4] = 0.0, 0.0, 0.0, 0.0, 0.0
                 continue
-            w = win[k, min(r, last)]
+            lo, hi = _window(win, k, r, last)
             x0, y0, x1, y1, s = math.inf, math.inf, -math.inf, -math.inf, 0.0
-            for q in range(min(max(r - w, 0), last), min(r + w, last) + 1):
+            for q in range(lo, hi + 1):
                 x0, x1 = min(x0, xy[k, q, 0]), max(x1, xy[k, q, 0])
                 y0, y1 = min(y0, xy[k, q, 1]), max(y1, xy[k, q, 1])
                 s = max(s, sep[k, q])
@@ -209,8 +217,8 @@ def _clear(t0, rows, xy, sep, win, box, step, x, y):
         gy = max(box[k, b, 1] - y, 0.0, y - box[k, b, 3])
         if gx * gx + gy * gy >= box[k, b, 4] * box[k, b, 4]:
             continue
-        w = win[k, min(r, last)]
-        for q in range(min(max(r - w, 0), last), min(r + w, last) + 1):
+        lo, hi = _window(win, k, r, last)
+        for q in range(lo, hi + 1):
             dx, dy = x - xy[k, q, 0], y - xy[k, q, 1]
             if dx * dx + dy * dy < sep[k, q] * sep[k, q]:
                 return False
