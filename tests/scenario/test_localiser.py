@@ -70,3 +70,18 @@ def test_a_robot_is_compared_with_the_plan_at_the_same_point_of_its_path() -> No
     for x in np.arange(0.0, 10.01, 0.5):  # half the speed: 0.5 m per step
         k = move.planned_from(k, np.array([x, 0.1]))
         assert k == math.ceil(x - 1e-9)  # the nearest planned point (the later one at a tie), never behind
+
+
+def test_the_comparison_follows_a_path_that_first_moves_away_from_where_the_robot_goes() -> None:
+    """A planned mean that first swings east (the turn on the spot before a move, the way out of a
+    room) and then runs west: a robot that drives west at once is compared with the plan's
+    westward steps, not held at the plan's first step."""
+    east = np.column_stack([65.0 + np.linspace(0.0, 0.6, 6), np.linspace(7.0, 7.3, 6)])
+    west = np.column_stack([np.linspace(65.0, 45.0, 41), np.full(41, 7.0)])
+    means = np.vstack([east, west])
+    move = QueuedMove(0, "r1", "a", "b", None, (0, 1), means[[0, -1]], 0, len(means) - 1, (None,), (), None, means)
+    k = 0
+    for x in np.linspace(64.5, 45.0, 40):
+        k = move.planned_from(k, np.array([x, 7.1]))
+        assert np.hypot(*(means[k] - (x, 7.0))) <= 0.25 + 1e-9
+    assert k == len(means) - 1

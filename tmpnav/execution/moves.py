@@ -21,6 +21,8 @@ from tmpnav.results import PlanReport, TimedMove
 from tmpnav.types import TrajectoryStep
 
 _T_TOL = 1e-6  # s: trajectory times are rounded to 1e-9 s
+#: control steps of the planned track searched ahead for the point a driving robot has come to
+LOOKAHEAD = 20
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,15 +48,18 @@ class QueuedMove:
     controller: str = "turn-then-drive"
 
     def planned_from(self, k: int, xy: np.ndarray) -> int:
-        """The step of the planned track a robot at ``xy`` has come to, from step ``k`` on: the next
-        steps are taken while they lie nearer (an execution that drives slower or faster than
-        planned is compared at the same point of its path, not at the same time)."""
+        """The step of the planned track a robot at ``xy`` has come to, from step ``k`` on: the
+        nearest of the next :data:`LOOKAHEAD` planned steps (the later one at a tie), so that an
+        execution that drives slower or faster than planned is compared at the same point of its
+        path, not at the same time. The window, not only the next step, carries the match past a
+        stretch where the planned mean first moves away from where the robot goes (a turn on the
+        spot that swings it back, a path that leaves a room before it heads down the corridor)."""
         means = self.planned_means
         if means is None:
             return k
-        while k + 1 < len(means) and np.sum((means[k + 1] - xy) ** 2) <= np.sum((means[k] - xy) ** 2):
-            k += 1
-        return k
+        ahead = means[k : k + LOOKAHEAD + 1]
+        d2 = np.sum((ahead - xy) ** 2, axis=1)
+        return k + int(len(d2) - 1 - np.argmin(d2[::-1]))
 
     def planned_at(self, k: int) -> np.ndarray | None:
         """The plan's position covariance (2, 2) at step k of the move (its last past the end);
