@@ -25,21 +25,22 @@ def widest_std(out: Path) -> float:
     return float(np.sqrt(np.linalg.eigvalsh(covs)[:, -1].max()))
 
 
-def test_the_plan_predicts_with_amcls_motion_model_when_the_scenario_names_it(tmp_path: Path) -> None:
-    """Without prediction_noise the robots' own motion noise spreads their planned beliefs; with
-    it ({} is nav2's defaults, 0.2 each) AMCL's, far larger: the summary says so and the beliefs
-    are wider. A value out of range is one error line naming the key."""
+def test_the_plan_predicts_with_amcls_motion_model_unless_the_scenario_names_other_alphas(tmp_path: Path) -> None:
+    """By default (prediction_noise absent, or {}) AMCL's motion model, nav2's alphas of 0.2 each,
+    spreads the planned beliefs; alphas of a robot's odometry (0.01 each) spread them far less: the
+    summary says which, and the beliefs are narrower. A value out of range is one error line naming
+    the key."""
     doc = four_rooms(1)
     doc["models"]["range_sensor"]["localiser"] = {"model": "amcl"}
     own, amcl = tmp_path / "own.yaml", tmp_path / "amcl.yaml"
-    own.write_text(yaml.safe_dump(doc))
+    amcl.write_text(yaml.safe_dump(doc))
     with_model = copy.deepcopy(doc)
-    with_model["models"]["range_sensor"]["localiser"]["prediction_noise"] = {}
-    amcl.write_text(yaml.safe_dump(with_model))
+    with_model["models"]["range_sensor"]["localiser"]["prediction_noise"] = {f"alpha{k}": 0.01 for k in range(1, 5)}
+    own.write_text(yaml.safe_dump(with_model))
     cache = tmp_path / "cache"
     plain = tmpnav("plan", str(own), "-q", "--accept-risk", "--cache-dir", str(cache), "-o", str(tmp_path / "a"))
     assert plain.returncode == 0, plain.stderr
-    assert "AMCL's motion model" not in plain.stdout
+    assert "predicting with AMCL's motion model (alpha1-4 0.01, 0.01, 0.01, 0.01: prediction_noise)" in plain.stdout
     spread = tmpnav("plan", str(amcl), "-q", "--accept-risk", "--cache-dir", str(cache), "-o", str(tmp_path / "b"))
     assert spread.returncode == 0, spread.stderr
     assert "predicting with AMCL's motion model (alpha1-4 0.2, 0.2, 0.2, 0.2: prediction_noise)" in spread.stdout

@@ -192,6 +192,11 @@ class ScanModel:
     #: across the particles by its range times it: the likelihood field's endpoint variance becomes
     #: sigma_lf² + (r heading_blur)², and far returns tell less than near ones; 0: none
     heading_blur: float = 0.0
+    #: ``amcl``: the information of this many head-on beams, below which a direction of a scan does not
+    #: separate AMCL's particles (its weights add the beams' cubed likelihoods, so a direction few beams
+    #: see hardly changes them): each direction of a scan informs the belief by its excess over it alone
+    #: (docs/models.md, "Directions AMCL does not resolve"); 0: every direction by all it has
+    floor_beams: float = 0.0
 
     def belief_noise(self, own: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
         """alpha1..alpha4 of W(u) (docs/models.md, "Motion noise") that the planned belief of a robot
@@ -248,7 +253,13 @@ class ScanModel:
 #: counted in 248 executions of building-4robots under AMCL (4 moves with a wall hit in 74.9 km
 #: driven, the rate's upper 95% limit; benchmarks/amcl/failures/): the model the shipped lidar
 #: configs and ``tmpnav rooms`` skeletons plan with when they name no other
-NAV2_AMCL = ScanModel(ScanModelKind.AMCL, information=0.000875, failure_rate=0.000122)
+NAV2_AMCL = ScanModel(
+    ScanModelKind.AMCL,
+    information=0.12,
+    failure_rate=0.000122,
+    prediction_noise=(0.2, 0.2, 0.2, 0.2),
+    floor_beams=15.0,
+)
 
 
 @dataclass(frozen=True)

@@ -241,7 +241,7 @@ def test_the_likelihood_fields_information_weighs_each_beam_by_its_endpoints_spr
 
     grid = box()
     sdf = signed_distance(grid)
-    sensor = replaced(LIDAR, beams=120, localiser=replaced(NAV2_AMCL, heading_blur=blur))
+    sensor = replaced(LIDAR, beams=120, localiser=replaced(NAV2_AMCL, heading_blur=blur, floor_beams=0.0))
     pose = np.array([2.3, 1.7, 0.4])
     angles = localiser_angles(sensor)
     r, H, var = np.empty(angles.size), np.empty((angles.size, 3)), np.empty(angles.size)
@@ -253,3 +253,28 @@ def test_the_likelihood_fields_information_weighs_each_beam_by_its_endpoints_spr
     expected = (H[ok, :, None] * H[ok, None, :] * weight[:, None, None]).sum(axis=0)
     np.testing.assert_allclose(information_matrices(sdf, grid, sensor, pose[None])[0], expected, rtol=1e-9)
     assert params[8] == pytest.approx(blur**2)
+
+
+@pytest.mark.parametrize("floor", [0.0, 5.0, 15.0, 40.0])
+def test_each_direction_of_a_scan_loses_the_information_of_floor_beams_head_on_beams(floor: float) -> None:
+    """AMCL's model with ``floor_beams`` n_f: J = kappa sum_k max(lambda_k - n_f eta / sigma_lf², 0)
+    e_k e_kᵀ over the eigenpairs of the likelihood field's J (docs/models.md, "Directions AMCL does
+    not resolve"): a direction with less than the floor tells nothing, the others keep their excess."""
+    from dataclasses import replace as replaced
+
+    from tmpnav.types import NAV2_AMCL
+
+    grid = box()
+    sdf = signed_distance(grid)
+    pose = np.array([[2.3, 1.7, 0.4]])
+    full = information_matrices(sdf, grid, replaced(LIDAR, localiser=replaced(NAV2_AMCL, floor_beams=0.0)), pose)[0]
+    sensor = replaced(LIDAR, localiser=replaced(NAV2_AMCL, floor_beams=floor))
+    params = sensor_params(sensor, grid.resolution)
+    one_beam = params[7] / params[6]  # kappa eta / sigma_lf²: one head-on beam's information
+    assert params[9] == pytest.approx(floor * one_beam)
+    lam, vec = np.linalg.eigh(full)
+    kept = np.clip(lam - floor * one_beam, 0.0, None)
+    expected = (vec * kept) @ vec.T
+    np.testing.assert_allclose(information_matrices(sdf, grid, sensor, pose)[0], expected, atol=1e-9 * lam.max())
+    if floor == 40.0:
+        assert (lam < floor * one_beam).any()  # some direction lost all it had

@@ -151,7 +151,7 @@ class Calibration:
             f"localiser: {{model: amcl, sigma_hit: {m.sigma_hit:g}, z_hit: {m.z_hit:g}, z_rand: {m.z_rand:g}, "
             f"max_beams: {m.max_beams}, update_min_d: {m.update_min_d:g}, update_min_a: {m.update_min_a:g}, "
             f"information: {m.information:.4g}, lidar_only: {'true' if m.lidar_only else 'false'}, "
-            f"failure_rate: {m.failure_rate:.3g}{_prediction(m)}}}",
+            f"failure_rate: {m.failure_rate:.3g}, floor_beams: {m.floor_beams:g}{_prediction(m)}}}",
         ]
         return "\n".join(lines) + "\n"
 
@@ -211,7 +211,7 @@ def calibrate(
     # the executing AMCL's parameters; the scenario's own choices (walls, its prediction with AMCL's
     # motion model: then the executing AMCL's alphas) carried over
     model = replace(
-        own or ScanModel(ScanModelKind.AMCL, information=1.0),
+        own or NAV2_AMCL,
         sigma_hit=p.sigma_hit,
         z_hit=p.z_hit,
         z_rand=p.z_rand,
@@ -220,7 +220,7 @@ def calibrate(
         update_min_a=p.update_min_a,
         lidar_only=sensor.localiser.lidar_only,
         prediction_noise=None
-        if own is None or own.prediction_noise is None
+        if (own or NAV2_AMCL).prediction_noise is None
         else (p.alpha1, p.alpha2, p.alpha3, p.alpha4),
     )
     done: list[Round] = []

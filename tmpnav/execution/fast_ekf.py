@@ -49,7 +49,7 @@ class CompiledJointEkf:
         self.chol_lm, self.chol_mu = np.linalg.cholesky(self.q_lm), np.linalg.cholesky(self.q_mu)
         sensor = models.range_sensor
         self.angles = sensor.beam_angles() if sensor is not None else np.zeros(0)
-        self.params = sensor_params(sensor) if sensor is not None else np.zeros(9)
+        self.params = sensor_params(sensor) if sensor is not None else np.zeros(10)
         self.work = np.empty((3 * n, 3 * n))
         self.counts = np.zeros((n, 2), dtype=np.int64)
         # each robot's last true scan: its pose (nan: none yet), ranges and variances (n, B)

@@ -355,6 +355,13 @@ LOCALISER = Section(
             "0: none",
             default=_NAV2.heading_blur,
         ),
+        "floor_beams": Field(
+            Number(None, minimum=0.0, maximum=MAX_BEAMS, reason="a number of AMCL's beams"),
+            "amcl: a direction of a scan informs the localiser only by what it has beyond the information of this "
+            "many head-on beams (AMCL's weights add the beams' cubed likelihoods, so a direction few beams see, "
+            "along a corridor, barely moves them; docs/models.md); 0: by all it has",
+            default=_NAV2.floor_beams,
+        ),
         "prediction_noise": Field(
             Section(
                 fields={
@@ -373,8 +380,9 @@ LOCALISER = Section(
                 absent_is_none=True,
             ),
             "amcl: the motion model AMCL spreads its particles with (nav2's alpha1-4, odom_model_type diff; "
-            "{} gives nav2's defaults, 0.2 each); the planned beliefs then predict with it in place of the "
-            "robots' own motion_noise (docs/models.md). Absent: the robots' own",
+            "absent or {}: nav2's defaults, 0.2 each); the planned beliefs predict with it in place of the "
+            "robots' own motion_noise, as AMCL's cloud spreads (docs/models.md). To predict with the robots' own "
+            "noise, give their alphas here",
         ),
     }
 )

@@ -25,6 +25,7 @@ from tmpnav.scenario.yamlio import YamlLimitError, YamlValueError, read_yaml
 from tmpnav.types import (
     DEFAULT_MAX_RISK,
     DEFAULT_RISK_SOURCE,
+    NAV2_AMCL,
     CostWeights,
     Door,
     Goals,
@@ -380,6 +381,7 @@ def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
         m["failure_rate"],
         _nav2_alphas(m["prediction_noise"]),
         m["heading_blur"],
+        m["floor_beams"],
     )
     return RangeSensor(
         s["range"],
@@ -395,7 +397,7 @@ def _range_sensor(s: dict[str, Any] | None) -> RangeSensor | None:
 
 def _nav2_alphas(section: dict[str, Any] | None) -> tuple[float, float, float, float] | None:
     if section is None:
-        return None
+        return NAV2_AMCL.prediction_noise
     return (section["alpha1"], section["alpha2"], section["alpha3"], section["alpha4"])
 
 

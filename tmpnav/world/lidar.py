@@ -152,10 +152,13 @@ def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
     """The sensor as the compiled functions take it: (min_range m, range m, cos of the largest
     incidence, sigma_range m, divergence rad), then its localiser's scan model on a map of
     ``resolution`` m: (1 for the likelihood field else 0, its endpoint variance
-    sigma_hit² + resolution²/12 m², the information share times the mixture factor eta, the
-    cloud's heading spread squared rad²; docs/models.md, "What a localiser achieves")."""
+    sigma_lf² = sigma_hit² + resolution²/12 m², the information share times the mixture factor
+    eta, the cloud's heading spread squared rad², and the information of ``floor_beams`` head-on
+    beams kappa eta floor_beams / sigma_lf² m^-2 that each direction of a scan loses;
+    docs/models.md, "What a localiser achieves")."""
     model = sensor.localiser
     field = model.kind is ScanModelKind.AMCL
+    var_lf = model.sigma_hit**2 + resolution**2 / 12.0
     return np.array(
         [
             sensor.min_range,
@@ -164,9 +167,10 @@ def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
             sensor.sigma_range,
             sensor.divergence,
             1.0 if field else 0.0,
-            model.sigma_hit**2 + resolution**2 / 12.0,
+            var_lf,
             model.information * model.mixture_factor(sensor.range),
             model.heading_blur**2 if field else 0.0,
+            model.floor_beams * model.information * model.mixture_factor(sensor.range) / var_lf if field else 0.0,
         ]
     )
 

@@ -112,7 +112,8 @@ def cast_scan(sdf, ring, x0, y0, res, x, y, psis, r_max, r, gx, gy):
 @nb.njit(cache=True)
 def _factors(sdf, ring, x0, y0, res, xs, ys, thetas, angles, params, out):
     """out[p] (3, 3): the rows G of J = G^T G at (xs[p], ys[p], thetas[p]), J the scan's
-    information; ``ring`` is ``sdf`` inside its ring (tmpnav.world.lidar.ringed)."""
+    information, each of its eigenvalues less the information floor params[9] (none below it;
+    the heading's taken per metre, docs/models.md); ``ring`` is ``sdf`` inside its ring (tmpnav.world.lidar.ringed)."""
     J = np.empty((3, 3))
     beams = np.empty((4, angles.shape[0]))
     for p in range(xs.shape[0]):
@@ -120,6 +121,7 @@ def _factors(sdf, ring, x0, y0, res, xs, ys, thetas, angles, params, out):
         lam, vec = np.linalg.eigh(J)
         top = max(lam[2], 0.0)
         for k in range(3):
+            lam[k] -= params[9]  # the floor AMCL's particles do not resolve (0: none)
             s = math.sqrt(lam[k]) if lam[k] > 1e-12 * top and lam[k] > 0.0 else 0.0
             for c in range(3):
                 out[p, k, c] = s * vec[c, k]
