@@ -14,7 +14,7 @@ on the typical site. Results: ``amcl/tradeoff/NAME.csv`` (k, median NEES, share 
 and the table printed at the end (benchmarks/README.md, "The two consistency targets").
 
     .venv/bin/python benchmarks/bench_nees_tradeoff.py [--sessions 4] [--only NAME ...]
-        [--prediction-noise] [--information F] [--heading-blur RAD]
+        [--prediction-noise] [--information F] [--heading-blur RAD] [--floor-beams N] [--own-noise]
 """
 
 from __future__ import annotations
@@ -50,11 +50,18 @@ def step_nees(path: Path, sessions: int, seed: int, workers: int) -> np.ndarray:
 
 
 def with_localiser(
-    path: Path, prediction_noise: bool, information: float | None, heading_blur: float | None = None
+    path: Path,
+    prediction_noise: bool,
+    information: float | None,
+    heading_blur: float | None = None,
+    floor_beams: float | None = None,
+    own_noise: bool = False,
 ) -> None:
     """The scenario at ``path`` with its localiser predicting with AMCL's motion model at nav2's
-    defaults (``prediction_noise``), and with the information share ``information`` and the
-    ``heading_blur`` (rad) where given."""
+    defaults (``prediction_noise``), and with the information share ``information``, the
+    ``heading_blur`` (rad) and the ``floor_beams`` where given; with ``own_noise`` predicting with
+    the robots' own motion noise (models.motion_noise as nav2's alphas: the model before AMCL's
+    was the default)."""
     import yaml
 
     doc = yaml.safe_load(path.read_text())
@@ -65,6 +72,13 @@ def with_localiser(
         localiser["information"] = information
     if heading_blur is not None:
         localiser["heading_blur"] = heading_blur
+    if floor_beams is not None:
+        localiser["floor_beams"] = floor_beams
+    if own_noise:
+        from tmpnav.scenario.load import load
+
+        a1, a2, a3, a4 = load(path).models.motion_noise  # W = diag(a1 v² + a2 w², a3 v² + a4 w²)
+        localiser["prediction_noise"] = {"alpha1": a4, "alpha2": a3, "alpha3": a1, "alpha4": a2}
     path.write_text(yaml.safe_dump(doc, sort_keys=False))
 
 
@@ -139,11 +153,17 @@ def main() -> None:
     parser.add_argument(
         "--heading-blur", type=float, default=None, help="the localiser's heading_blur (rad) in every copy"
     )
+    parser.add_argument("--floor-beams", type=float, default=None, help="the localiser's floor_beams in every copy")
+    parser.add_argument(
+        "--own-noise", action="store_true", help="predict with the robots' own motion noise, not AMCL's alphas"
+    )
     args = parser.parse_args()
     variant = [
         *(["prediction-noise"] if args.prediction_noise else []),
         *([f"information-{args.information:g}"] if args.information is not None else []),
         *([f"heading-blur-{args.heading_blur:g}"] if args.heading_blur is not None else []),
+        *([f"floor-beams-{args.floor_beams:g}"] if args.floor_beams is not None else []),
+        *(["own-noise"] if args.own_noise else []),
     ]
     folder = OUT / "-".join(variant) if variant else OUT  # the shipped model's in OUT itself
     if args.plot_only:
@@ -155,8 +175,19 @@ def main() -> None:
         for name, path in scenarios(Path(tmpdir)).items():
             if args.only and name not in args.only:
                 continue
-            if args.prediction_noise or args.information is not None or args.heading_blur is not None:
-                with_localiser(path, args.prediction_noise, args.information, args.heading_blur)
+            if (
+                args.prediction_noise
+                or args.own_noise
+                or any(v is not None for v in (args.information, args.heading_blur, args.floor_beams))
+            ):
+                with_localiser(
+                    path,
+                    args.prediction_noise,
+                    args.information,
+                    args.heading_blur,
+                    args.floor_beams,
+                    args.own_noise,
+                )
             started = time.perf_counter()
             nees = step_nees(path, args.sessions, args.seed, args.workers)
             rows = curve(nees)
