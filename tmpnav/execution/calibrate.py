@@ -210,8 +210,9 @@ def calibrate(
     own = sensor.localiser if sensor.localiser.kind is ScanModelKind.AMCL else None
     # the executing AMCL's parameters; the scenario's own choices (walls, its prediction with AMCL's
     # motion model: then the executing AMCL's alphas) carried over
+    base = own or NAV2_AMCL
     model = replace(
-        own or NAV2_AMCL,
+        base,
         sigma_hit=p.sigma_hit,
         z_hit=p.z_hit,
         z_rand=p.z_rand,
@@ -220,7 +221,7 @@ def calibrate(
         update_min_a=p.update_min_a,
         lidar_only=sensor.localiser.lidar_only,
         prediction_noise=None
-        if (own or NAV2_AMCL).prediction_noise is None
+        if base.prediction_noise is None
         else (p.alpha1, p.alpha2, p.alpha3, p.alpha4),
     )
     done: list[Round] = []

@@ -159,6 +159,7 @@ def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
     model = sensor.localiser
     field = model.kind is ScanModelKind.AMCL
     var_lf = model.sigma_hit**2 + resolution**2 / 12.0
+    share = model.information * model.mixture_factor(sensor.range)
     return np.array(
         [
             sensor.min_range,
@@ -168,9 +169,9 @@ def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
             sensor.divergence,
             1.0 if field else 0.0,
             var_lf,
-            model.information * model.mixture_factor(sensor.range),
+            share,
             model.heading_blur**2 if field else 0.0,
-            model.floor_beams * model.information * model.mixture_factor(sensor.range) / var_lf if field else 0.0,
+            model.floor_beams * share / var_lf if field else 0.0,
         ]
     )
 
