@@ -14,7 +14,7 @@ on the typical site. Results: ``amcl/tradeoff/NAME.csv`` (k, median NEES, share 
 and the table printed at the end (benchmarks/README.md, "The two consistency targets").
 
     .venv/bin/python benchmarks/bench_nees_tradeoff.py [--sessions 4] [--only NAME ...]
-        [--prediction-noise] [--information F] [--heading-blur RAD] [--floor-beams N] [--own-noise]
+        [--prediction-noise] [--information F] [--heading-blur RAD] [--floor-beams N] [--own-noise] [--alphas A]
 """
 
 from __future__ import annotations
@@ -56,12 +56,13 @@ def with_localiser(
     heading_blur: float | None = None,
     floor_beams: float | None = None,
     own_noise: bool = False,
+    alphas: float | None = None,
 ) -> None:
     """The scenario at ``path`` with its localiser predicting with AMCL's motion model at nav2's
     defaults (``prediction_noise``), and with the information share ``information``, the
     ``heading_blur`` (rad) and the ``floor_beams`` where given; with ``own_noise`` predicting with
     the robots' own motion noise (models.motion_noise as nav2's alphas: the model before AMCL's
-    was the default)."""
+    was the default); with ``alphas`` predicting with all four of nav2's alphas at that value."""
     import yaml
 
     doc = yaml.safe_load(path.read_text())
@@ -79,6 +80,8 @@ def with_localiser(
 
         a1, a2, a3, a4 = load(path).models.motion_noise  # W = diag(a1 v² + a2 w², a3 v² + a4 w²)
         localiser["prediction_noise"] = {"alpha1": a4, "alpha2": a3, "alpha3": a1, "alpha4": a2}
+    if alphas is not None:
+        localiser["prediction_noise"] = {f"alpha{i}": alphas for i in (1, 2, 3, 4)}
     path.write_text(yaml.safe_dump(doc, sort_keys=False))
 
 
@@ -157,6 +160,9 @@ def main() -> None:
     parser.add_argument(
         "--own-noise", action="store_true", help="predict with the robots' own motion noise, not AMCL's alphas"
     )
+    parser.add_argument(
+        "--alphas", type=float, default=None, help="predict with all four of nav2's alphas at this value"
+    )
     args = parser.parse_args()
     variant = [
         *(["prediction-noise"] if args.prediction_noise else []),
@@ -164,6 +170,7 @@ def main() -> None:
         *([f"heading-blur-{args.heading_blur:g}"] if args.heading_blur is not None else []),
         *([f"floor-beams-{args.floor_beams:g}"] if args.floor_beams is not None else []),
         *(["own-noise"] if args.own_noise else []),
+        *([f"alphas-{args.alphas:g}"] if args.alphas is not None else []),
     ]
     folder = OUT / "-".join(variant) if variant else OUT  # the shipped model's in OUT itself
     if args.plot_only:
@@ -178,7 +185,7 @@ def main() -> None:
             if (
                 args.prediction_noise
                 or args.own_noise
-                or any(v is not None for v in (args.information, args.heading_blur, args.floor_beams))
+                or any(v is not None for v in (args.information, args.heading_blur, args.floor_beams, args.alphas))
             ):
                 with_localiser(
                     path,
@@ -187,6 +194,7 @@ def main() -> None:
                     args.heading_blur,
                     args.floor_beams,
                     args.own_noise,
+                    args.alphas,
                 )
             started = time.perf_counter()
             nees = step_nees(path, args.sessions, args.seed, args.workers)
