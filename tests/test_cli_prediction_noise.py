@@ -1,4 +1,4 @@
-"""The planned beliefs predicted with AMCL's own motion model (localiser.prediction_noise), and far
+"""The planned beliefs predicted with nav2's alphas (localiser.prediction_noise), and far
 returns blurred by the cloud's heading spread (localiser.heading_blur), end to end."""
 
 from __future__ import annotations
@@ -25,26 +25,31 @@ def widest_std(out: Path) -> float:
     return float(np.sqrt(np.linalg.eigvalsh(covs)[:, -1].max()))
 
 
-def test_the_plan_predicts_with_amcls_motion_model_unless_the_scenario_names_other_alphas(tmp_path: Path) -> None:
-    """By default (prediction_noise absent, or {}) AMCL's motion model, nav2's alphas of 0.2 each,
-    spreads the planned beliefs; alphas of a robot's odometry (0.01 each) spread them far less: the
-    summary says which, and the beliefs are narrower. A value out of range is one error line naming
-    the key."""
+def test_the_plan_predicts_with_the_fitted_alphas_unless_the_scenario_names_other_alphas(tmp_path: Path) -> None:
+    """By default (prediction_noise absent) the fitted alphas of 0.03 each spread the planned
+    beliefs; {} names nav2's own alphas, 0.2 each, the rate AMCL's cloud spreads at, and they spread
+    the beliefs wider; alphas of a robot's odometry (0.01 each) spread them least: the summary says
+    which. A value out of range is one error line naming the key."""
     doc = four_rooms(1)
     doc["models"]["range_sensor"]["localiser"] = {"model": "amcl"}
-    own, amcl = tmp_path / "own.yaml", tmp_path / "amcl.yaml"
-    amcl.write_text(yaml.safe_dump(doc))
-    with_model = copy.deepcopy(doc)
-    with_model["models"]["range_sensor"]["localiser"]["prediction_noise"] = {f"alpha{k}": 0.01 for k in range(1, 5)}
-    own.write_text(yaml.safe_dump(with_model))
+    widths = {}
     cache = tmp_path / "cache"
-    plain = tmpnav("plan", str(own), "-q", "--accept-risk", "--cache-dir", str(cache), "-o", str(tmp_path / "a"))
-    assert plain.returncode == 0, plain.stderr
-    assert "predicting with AMCL's motion model (alpha1-4 0.01, 0.01, 0.01, 0.01: prediction_noise)" in plain.stdout
-    spread = tmpnav("plan", str(amcl), "-q", "--accept-risk", "--cache-dir", str(cache), "-o", str(tmp_path / "b"))
-    assert spread.returncode == 0, spread.stderr
-    assert "predicting with AMCL's motion model (alpha1-4 0.2, 0.2, 0.2, 0.2: prediction_noise)" in spread.stdout
-    assert widest_std(tmp_path / "b") > 1.2 * widest_std(tmp_path / "a")
+    for name, alphas, said in (
+        ("own", {f"alpha{k}": 0.01 for k in range(1, 5)}, "0.01, 0.01, 0.01, 0.01"),
+        ("fitted", None, "0.03, 0.03, 0.03, 0.03"),
+        ("nav2", {}, "0.2, 0.2, 0.2, 0.2"),
+    ):
+        variant = copy.deepcopy(doc)
+        if alphas is not None:
+            variant["models"]["range_sensor"]["localiser"]["prediction_noise"] = alphas
+        (tmp_path / f"{name}.yaml").write_text(yaml.safe_dump(variant))
+        out = tmp_path / name
+        run = tmpnav("plan", str(out) + ".yaml", "-q", "--accept-risk", "--cache-dir", str(cache), "-o", str(out))
+        assert run.returncode == 0, run.stderr
+        assert f"its drift predicted with nav2's alpha1-4 {said} (prediction_noise)" in run.stdout
+        widths[name] = widest_std(out)
+    assert widths["nav2"] > 1.2 * widths["fitted"] and widths["fitted"] > widths["own"]
+    with_model = copy.deepcopy(doc)
     blurred = copy.deepcopy(doc)
     blurred["models"]["range_sensor"]["localiser"]["heading_blur"] = 0.1
     (tmp_path / "blur.yaml").write_text(yaml.safe_dump(blurred))

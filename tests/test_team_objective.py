@@ -91,15 +91,13 @@ def test_the_makespan_bound_puts_the_shift_within_a_few_percent(cache: Path) -> 
 def test_the_four_robot_building_puts_every_robot_to_work(cache: Path) -> None:
     """building-4robots, default options: kept apart, its plan once had r4 wait 40 s in the cross
     corridor for r2 and r3 stand at its dock after 2 rooms, since no edit of two routes paid and
-    the edits' screen did not see the wait. Three robots' tails passed round, screened free of
-    the wait, leave nothing to keep apart and every robot at work. With AMCL's beliefs along the
-    corridors (the default localiser model) the weighted objective's best plan leaves r3 on the
-    two rooms beside its dock: a plan that gives it A8 as well costs 0.3% more (499.089 against
-    497.490, benchmarks/README.md, "Directions AMCL does not resolve")."""
+    the edits' screen did not see the wait. Every robot visits at least 3 rooms, nothing is left
+    to keep apart, and what keeping apart adds (a wait, where the plan has one) costs the makespan
+    at most 5%."""
     from tmpnav.planning.safety import conflicts_left
 
     report = planned("configs/building-4robots.yaml", cache)
     rooms = {r: len(report.schedule.timeline(r)) for r in report.schedule.robots}
-    assert min(rooms.values()) >= 2, rooms
+    assert min(rooms.values()) >= 3, rooms
     assert not conflicts_left(report)
-    assert report.apart is None or not report.apart.waits
+    assert report.apart is None or report.schedule.makespan <= 1.05 * report.apart.makespan_before

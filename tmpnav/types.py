@@ -184,9 +184,10 @@ class ScanModel:
     #: path that the collision bound adds (docs/models.md, "Localisation failures"); fitted by
     #: ``tmpnav calibrate`` as the upper 95% limit of the rate it counts; 0: the Gaussian error alone
     failure_rate: float = 0.0  # 1/m
-    #: ``amcl``: nav2's alpha1..alpha4 (odom_model_type diff), the motion model AMCL spreads its
-    #: particles with; the planned belief then predicts with it (:meth:`belief_noise`) instead of the
-    #: robot's own motion noise. None: the robot's own (models.motion_noise)
+    #: ``amcl``: nav2's alpha1..alpha4 (odom_model_type diff) of the rate AMCL's estimate drifts at where
+    #: the scans say little; the planned belief predicts with it (:meth:`belief_noise`) instead of the
+    #: robot's own motion noise (nav2's defaults, 0.2 each, are the rate its particle cloud spreads
+    #: at). None: the robot's own (models.motion_noise)
     prediction_noise: tuple[float, float, float, float] | None = None
     #: ``amcl``: the heading spread (rad) of AMCL's particle cloud, which spreads a beam's endpoint
     #: across the particles by its range times it: the likelihood field's endpoint variance becomes
@@ -248,16 +249,18 @@ class ScanModel:
         return float(s**2 * np.sum(dphi**2 / (phi + c)) * (d[1] - d[0]))
 
 
-#: nav2's AMCL at its default parameters (docs/amcl.md), with the information share fitted by
-#: ``tmpnav calibrate`` on the shipped lidar scenarios (benchmarks/amcl/) and the failure rate
-#: counted in 248 executions of building-4robots under AMCL (4 moves with a wall hit in 74.9 km
-#: driven, the rate's upper 95% limit; benchmarks/amcl/failures/): the model the shipped lidar
-#: configs and ``tmpnav rooms`` skeletons plan with when they name no other
+#: nav2's AMCL at its default parameters (docs/amcl.md), with the information share, the floor
+#: and the prediction noise fitted together against nav2's AMCL on six sites (docs/models.md,
+#: benchmarks/amcl/tradeoff/) and the failure rate counted in 248 executions of building-4robots
+#: under AMCL (4 moves with a wall hit in 74.9 km driven, the rate's upper 95% limit;
+#: benchmarks/amcl/failures/): the model the shipped lidar configs and ``tmpnav rooms`` skeletons
+#: plan with when they name no other
 NAV2_AMCL = ScanModel(
     ScanModelKind.AMCL,
-    information=0.12,
+    information=0.16,
     failure_rate=0.000122,
-    prediction_noise=(0.2, 0.2, 0.2, 0.2),
+    prediction_noise=(0.03, 0.03, 0.03, 0.03),
+    heading_blur=0.05,
     floor_beams=15.0,
 )
 

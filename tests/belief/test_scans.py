@@ -130,24 +130,30 @@ def test_nav2s_alphas_are_the_control_noise_of_its_odometry_model() -> None:
     W = motion_noise_cov(np.array([[v, w]]), amcl.belief_noise(own))[0] * dt**2
     assert W[0, 0] == pytest.approx(0.3 * (v * dt) ** 2 + 0.1 * (w * dt) ** 2)
     assert W[1, 1] == pytest.approx(0.2 * (w * dt) ** 2 + 0.05 * (v * dt) ** 2)
-    assert NAV2_AMCL.belief_noise(own) == (0.2, 0.2, 0.2, 0.2)  # the default: nav2's alphas
+    assert NAV2_AMCL.belief_noise(own) == (0.03, 0.03, 0.03, 0.03)  # the default: the fitted alphas
     assert replace(NAV2_AMCL, prediction_noise=None).belief_noise(own) == own
     assert replace(ScanModel(), prediction_noise=(0.2, 0.2, 0.2, 0.2)).belief_noise(own) == own
     m = replace(models(), range_sensor=replace(LIDAR, localiser=amcl))
     assert m.belief_noise == (0.3, 0.1, 0.05, 0.2) and m.motion_noise == models().motion_noise
 
 
-def test_amcls_motion_model_spreads_the_belief_along_a_corridor_not_across() -> None:
-    """Predicting with AMCL's own motion model (nav2's defaults, 0.2 each, the default) instead of
-    the robot's odometry noise, the belief along a featureless corridor ends wider, as AMCL's
-    particle cloud spreads, while across it the scans hold it within a few centimetres."""
-    own = replace(NAV2_AMCL, prediction_noise=None)
-    x, along, across = corridor_stds(localiser=own)
-    _, along_amcl, across_amcl = corridor_stds(localiser=NAV2_AMCL)
-    middle = (x > 14.5) & (x < 49.5)  # both ends farther than the range
-    assert along_amcl[middle][-1] > 1.8 * along[middle][-1]
-    assert across_amcl[middle].max() < 0.1
-    assert np.all(along_amcl >= along - 1e-12) and np.all(across_amcl >= across - 1e-12)  # more noise, never tighter
+def test_the_prediction_noise_spreads_the_belief_along_a_corridor_not_across() -> None:
+    """Predicting with nav2's alphas (0.2 each, the rate AMCL's particle cloud spreads at) or the
+    fitted default (0.03 each) instead of a robot's odometry noise (0.01 each), the belief along a
+    featureless corridor ends wider, the wider the larger the alphas, while across it the scans
+    hold it within a few centimetres."""
+    middle = None
+    stds = {}
+    odometry, nav2 = (0.01, 0.01, 0.01, 0.01), (0.2, 0.2, 0.2, 0.2)
+    for name, alphas in (("odometry", odometry), ("fitted", NAV2_AMCL.prediction_noise), ("nav2", nav2)):
+        x, along, across = corridor_stds(localiser=replace(NAV2_AMCL, prediction_noise=alphas))
+        middle = (x > 14.5) & (x < 49.5)  # both ends farther than the range
+        stds[name] = (along, across)
+        assert across[middle].max() < 0.1
+    for narrow, wide in (("odometry", "fitted"), ("fitted", "nav2")):
+        (along, across), (along_w, across_w) = stds[narrow], stds[wide]
+        assert along_w[middle][-1] > 1.5 * along[middle][-1]
+        assert np.all(along_w >= along - 1e-12) and np.all(across_w >= across - 1e-12)  # more noise, never tighter
 
 
 def test_the_amcl_models_belief_keeps_a_corridors_shape() -> None:

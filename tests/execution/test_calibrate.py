@@ -84,13 +84,19 @@ def test_calibrate_writes_a_localiser_line_with_the_failure_rate(tmp_path: Path)
     assert sensor is not None and sensor.localiser.hazard == pytest.approx(localiser["failure_rate"])
 
 
-def test_calibrate_keeps_the_prediction_with_amcls_motion_model_at_the_executing_alphas(tmp_path: Path) -> None:
-    """A scenario whose beliefs predict with AMCL's motion model (prediction_noise) is calibrated
-    with it: the fitted line keeps it, at the alphas of the AMCL that executed (--nav2-params)."""
+def test_calibrate_keeps_the_scenarios_prediction_noise_whatever_alphas_amcl_executed_with(tmp_path: Path) -> None:
+    """A scenario whose beliefs predict with alphas of its own (prediction_noise) and a heading
+    spread of its own (heading_blur) is calibrated with them, and the fitted line keeps them,
+    whatever alphas the AMCL that executed spreads its particles with (--nav2-params): calibration
+    fits the information share alone."""
     pytest.importorskip("amcl", reason=NEEDS_AMCL)
     doc = yaml.safe_load((ROOT / "configs" / "office-ros.yaml").read_text())
     doc["map"]["ros"] = str(ROOT / "configs" / doc["map"]["ros"])
-    doc["models"]["range_sensor"]["localiser"] = {"model": "amcl", "prediction_noise": {"alpha1": 0.1}}
+    doc["models"]["range_sensor"]["localiser"] = {
+        "model": "amcl",
+        "prediction_noise": {"alpha1": 0.1},
+        "heading_blur": 0.08,
+    }
     scenario_file, params, out = tmp_path / "s.yaml", tmp_path / "nav2.yaml", tmp_path / "fit.yaml"
     scenario_file.write_text(yaml.safe_dump(doc))
     alphas = {"alpha1": 0.3, "alpha2": 0.1, "alpha3": 0.25, "alpha4": 0.05}
@@ -113,8 +119,9 @@ def test_calibrate_keeps_the_prediction_with_amcls_motion_model_at_the_executing
     assert run.returncode == 0, run.stderr
     line = next(line for line in out.read_text().splitlines() if line.startswith("localiser:"))
     localiser = yaml.safe_load(line)["localiser"]
-    assert localiser["prediction_noise"] == alphas
+    assert localiser["prediction_noise"] == {"alpha1": 0.1, "alpha2": 0.2, "alpha3": 0.2, "alpha4": 0.2}
+    assert localiser["heading_blur"] == 0.08
     doc["models"]["range_sensor"]["localiser"] = localiser
     scenario_file.write_text(yaml.safe_dump(doc))
     sensor = load(scenario_file).models.range_sensor
-    assert sensor is not None and sensor.localiser.prediction_noise == (0.3, 0.1, 0.25, 0.05)
+    assert sensor is not None and sensor.localiser.prediction_noise == (0.1, 0.2, 0.2, 0.2)

@@ -430,10 +430,10 @@ def calibrate(
     information share so that the plan's predicted covariance holds 96% of the driving steps'
     actual errors within 3 sigma; then plans again with it, up to --rounds times. The same
     executions count the wall hits per metre driven: the scenario's failure_rate stays where
-    the count agrees with it, else it becomes the count's upper 95% limit. A scenario whose
-    beliefs predict with AMCL's motion model (prediction_noise) keeps it, at the alphas of the
-    AMCL that executed. Writes the model as the line to put under models.range_sensor
-    (docs/models.md, "What a localiser achieves", "Localisation failures")."""
+    the count agrees with it, else it becomes the count's upper 95% limit. The scenario's floor
+    (floor_beams), heading spread (heading_blur) and prediction noise (prediction_noise) stay as
+    they are. Writes the model as the line to put under models.range_sensor (docs/models.md,
+    "What a localiser achieves", "Localisation failures")."""
     from tmpnav.atomic import write_files
     from tmpnav.execution.calibrate import calibrate as fit
 

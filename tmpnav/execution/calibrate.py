@@ -151,7 +151,8 @@ class Calibration:
             f"localiser: {{model: amcl, sigma_hit: {m.sigma_hit:g}, z_hit: {m.z_hit:g}, z_rand: {m.z_rand:g}, "
             f"max_beams: {m.max_beams}, update_min_d: {m.update_min_d:g}, update_min_a: {m.update_min_a:g}, "
             f"information: {m.information:.4g}, lidar_only: {'true' if m.lidar_only else 'false'}, "
-            f"failure_rate: {m.failure_rate:.3g}, floor_beams: {m.floor_beams:g}{_prediction(m)}}}",
+            f"failure_rate: {m.failure_rate:.3g}, floor_beams: {m.floor_beams:g}, heading_blur: {m.heading_blur:g}"
+            f"{_prediction(m)}}}",
         ]
         return "\n".join(lines) + "\n"
 
@@ -208,8 +209,8 @@ def calibrate(
         )
     p = localisation.amcl
     own = sensor.localiser if sensor.localiser.kind is ScanModelKind.AMCL else None
-    # the executing AMCL's parameters; the scenario's own choices (walls, its prediction with AMCL's
-    # motion model: then the executing AMCL's alphas) carried over
+    # the executing AMCL's parameters; the scenario's own choices (walls, the floor, the noise its
+    # beliefs predict with) carried over
     base = own or NAV2_AMCL
     model = replace(
         base,
@@ -220,9 +221,6 @@ def calibrate(
         update_min_d=p.update_min_d,
         update_min_a=p.update_min_a,
         lidar_only=sensor.localiser.lidar_only,
-        prediction_noise=None
-        if base.prediction_noise is None
-        else (p.alpha1, p.alpha2, p.alpha3, p.alpha4),
     )
     done: list[Round] = []
     described = ""

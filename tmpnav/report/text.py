@@ -133,7 +133,7 @@ def _sensing_line(report: PlanReport) -> str:
     amcl = lidar.localiser if lidar is not None and lidar.localiser.kind is ScanModelKind.AMCL else None
     if amcl is not None and amcl.prediction_noise is not None:
         alphas = ", ".join(f"{a:g}" for a in amcl.prediction_noise)
-        sensing += f", predicting with AMCL's motion model (alpha1-4 {alphas}: prediction_noise)"
+        sensing += f", its drift predicted with nav2's alpha1-4 {alphas} (prediction_noise)"
     if amcl is not None and amcl.floor_beams > 0:
         sensing += f", each direction less {amcl.floor_beams:g} beams' information (floor_beams)"
     if amcl is not None and amcl.heading_blur > 0:

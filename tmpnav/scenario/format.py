@@ -379,10 +379,11 @@ LOCALISER = Section(
                 },
                 absent_is_none=True,
             ),
-            "amcl: the motion model AMCL spreads its particles with (nav2's alpha1-4, odom_model_type diff; "
-            "absent or {}: nav2's defaults, 0.2 each); the planned beliefs predict with it in place of the "
-            "robots' own motion_noise, as AMCL's cloud spreads (docs/models.md). To predict with the robots' own "
-            "noise, give their alphas here",
+            "amcl: the motion noise the planned beliefs predict with in place of the robots' own motion_noise, "
+            "as nav2's alpha1-4 (odom_model_type diff): how fast AMCL's estimate drifts where the scans say "
+            "little; absent: 0.03 each, fitted to nav2's AMCL on six sites (docs/models.md); {}: nav2's defaults "
+            "(0.2 each), the rate AMCL's particle cloud spreads at; to predict with the robots' own noise, give "
+            "their alphas here",
         ),
     }
 )
