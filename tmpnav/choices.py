@@ -156,14 +156,16 @@ class TaskChoice:
         return self.mode == "exact" and self.costs == "table"
 
 
-def choose(encoding: str, search: Search, costs: Costs, rooms: int, robots: int) -> TaskChoice:
+def choose(encoding: str, search: Search, costs: Costs, rooms: int, robots: int, min_rooms: int = 0) -> TaskChoice:
     """The one rule that picks a run's search: the paper's encoding is the paper's model (the
     exact search with table costs); otherwise the search asked for, and for ``auto`` the exact
-    search where it finishes quickly (:func:`exact_fits`)."""
+    search where it finishes quickly (:func:`exact_fits`) and no minimum of rooms per robot is
+    asked for (``min_rooms``: only the anytime search keeps one, tmpnav.task.minimum)."""
     if encoding == "paper":
         return TaskChoice("exact", "table")
     if search == "auto":
-        return TaskChoice("exact" if exact_fits(rooms, robots, costs) else "anytime", costs)
+        exact = exact_fits(rooms, robots, costs) and min_rooms <= 0
+        return TaskChoice("exact" if exact else "anytime", costs)
     return TaskChoice(search, costs)
 
 

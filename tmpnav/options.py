@@ -34,6 +34,7 @@ class Overrides:
     time_limit: float | None = None
     costs: Costs | None = None
     objective: Objective | None = None
+    min_rooms: int | None = None
     max_risk: float | None = None
     keep_apart: bool | None = None
     clearance: float | None = None  # m: roadmap.clearance
@@ -124,6 +125,7 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
         time_limit=o.time_limit if o.time_limit is not None else planner.time_limit,
         costs=o.costs or planner.costs,
         objective=o.objective or planner.objective,
+        min_rooms=o.min_rooms if o.min_rooms is not None else planner.min_rooms,
         max_risk=planner.max_risk if o.max_risk is None else None if o.max_risk == NO_THRESHOLD else o.max_risk,
         max_risk_from=planner.max_risk_from
         if o.max_risk is None
@@ -134,6 +136,12 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
     )
     if (why := paper_conflict(planner.encoding, o.search, o.costs, o.objective)) is not None:
         raise InputError(why)
+    if planner.min_rooms and (planner.encoding == "paper" or planner.search == "exact"):
+        raise InputError(
+            f"planner.min_rooms {planner.min_rooms} needs the anytime search, which keeps it; the "
+            + ("paper's encoding" if planner.encoding == "paper" else "exact search")
+            + " does not: use --search anytime (or auto) with the mixed or single encoding, or --min-rooms 0"
+        )
     if planner.encoding == "paper":  # the paper's model, as tmpnav.choices.choose plans it
         choice = choose(planner.encoding, planner.search, planner.costs, 0, 0)
         planner = replace(

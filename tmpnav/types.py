@@ -587,6 +587,8 @@ class PlannerOptions:
     #: seconds a robot may fall behind the plan's clock per second it drives, which robots kept
     #: apart allow for (None: by the localiser; tmpnav.attachment.drift.clock_drift)
     clock_drift: float | None = None
+    #: work rooms each robot visits at least, where the goals allow (0: no minimum; tmpnav.task.minimum)
+    min_rooms: int = 0
 
 
 @dataclass(frozen=True)

@@ -311,6 +311,16 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             "or makespan (the time until the last robot is done first).",
         ),
         option(
+            "--min-rooms",
+            type=click.IntRange(min=0, max=10**4),
+            metavar="N",
+            default_text=scenario_default("min_rooms", "0"),
+            help="Every robot visits at least N goal rooms (fewer where the goals give fewer per robot), so "
+            "that none stands idle while others work; a plan that cannot keep to it is ranked below all "
+            "that do, and the summary names the robots short of it. Planned by the anytime search. "
+            "0: no minimum.",
+        ),
+        option(
             "--max-risk",
             type=ThresholdOrNone(min=0, min_open=True, max=1),
             metavar="DELTA",
@@ -425,6 +435,7 @@ def plan_options(kw: dict[str, Any]) -> PlanOptions:
         time_limit=kw["time_limit"],
         costs=kw["costs"],
         objective=kw["objective"],
+        min_rooms=kw.get("min_rooms"),
         max_risk=kw["max_risk"],
         keep_apart=kw.get("keep_apart"),
         accept_risk=bool(kw.get("accept_risk")),

@@ -49,7 +49,8 @@ def search_key(scenario: Scenario, context: str) -> str:
     robots = [(r.name, r.pose, r.covariance, r.radius, r.speed, r.turn_rate) for r in scenario.robots]
     parts = (VERSION, _code_version(), context, robots, scenario.goals, sp.name, sp.encoding, repr(sp.pair_min_gain))
     # what the plan minimises, within what, and whether it is judged with its robots kept apart
-    time = (sp.objective, repr(scenario.cost.M_T), repr(sp.max_risk), sp.keep_apart, repr(clock_drift(scenario)))
+    time: tuple[object, ...] = (sp.objective, repr(scenario.cost.M_T), repr(sp.max_risk), sp.keep_apart)
+    time += (repr(clock_drift(scenario)),) + ((sp.min_rooms,) if sp.min_rooms else ())  # no minimum: keys as before
     return hashlib.sha256(repr((*parts, sp.search, sp.costs, *time)).encode()).hexdigest()
 
 

@@ -101,7 +101,7 @@ class Planned:
 def choice_for(scenario: Scenario) -> TaskChoice:
     """The search and costs :func:`tmpnav.choices.choose` picks for the scenario."""
     sp = scenario.planner
-    return choose(sp.encoding, sp.search, sp.costs, len(scenario.goals.all_rooms), len(scenario.robots))
+    return choose(sp.encoding, sp.search, sp.costs, len(scenario.goals.all_rooms), len(scenario.robots), sp.min_rooms)
 
 
 def span_weight_of(scenario: Scenario) -> float:

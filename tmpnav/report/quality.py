@@ -18,6 +18,8 @@ A plan can be poor in two ways the status line does not show:
   :data:`tmpnav.report.reach.IDLE_SHARE` of the makespan, and no split by the chance
   constraint explains it: the objective's price of a second did not pay for the motion of
   giving them rooms. ``--objective makespan`` plans for the earliest end instead.
+- **Robots short of the minimum.** Where ``planner.min_rooms`` asks every robot to visit so many
+  goal rooms (:mod:`tmpnav.task.minimum`) and the plan leaves robots short of it.
 - **More uncertain than a door allows.** Where a robot's belief mean passes an open door, the
   2-sigma spread of its position across the door (along the door's segment) is compared with
   the room it has there: half the door's width less the robot's radius. Past that, the robot
@@ -43,6 +45,7 @@ from tmpnav.planning.safety import conflicts_left, riskiest_point, what_would_he
 from tmpnav.report.reach import IDLE_SHARE, reach_groups, reached_by, split_message
 from tmpnav.report.schedule import bound_values, move_at, objective_values, searched_gap
 from tmpnav.results import PlanReport
+from tmpnav.task.minimum import counts, need, work_rooms
 from tmpnav.types import Door, TrajectoryStep
 
 #: warn when the lower bound is more than this fraction of the plan's cost below it
@@ -61,7 +64,7 @@ IDLE_NAMED = 4
 class PlanWarning:
     """One warning: what it is about, its numbers, and the message with what to try."""
 
-    kind: str  # "risk" | "conflict" | "gap" | "split" | "idle" | "door"
+    kind: str  # "risk" | "conflict" | "gap" | "split" | "idle" | "short" | "door"
     robot: str | None  # the robot a "door" warning is about; split, idle: the robot that ends the plan
     value: float  # gap: the gap (fraction); split: the groups; idle: the idle robots; door: the 2-sigma spread (m)
     limit: float  # gap: GAP_WARN; split, idle: IDLE_SHARE; door: half the door's width less the robot's radius (m)
@@ -75,6 +78,7 @@ def plan_warnings(report: PlanReport) -> list[PlanWarning]:
     found = [w for w in (_over_threshold(report), _in_the_way(report), _gap(report)) if w is not None]
     split = _split(report)
     found += [w for w in (split if split is not None else _idle(report),) if w is not None]
+    found += [w for w in (_short(report),) if w is not None]
     for robot in report.scenario.robots:
         door = _worst_door(report, robot.name, robot.radius)
         if door is not None:
@@ -148,9 +152,31 @@ def _idle(report: PlanReport) -> PlanWarning | None:
         f"{len(idle)} of {len(schedule.robots)} robots ({named}) stand idle for more than half of the "
         f"{makespan:.1f} s makespan, which {last} ends: the weighted objective prices a second of makespan at "
         f"cost.M_T = {report.scenario.cost.M_T:g}, and giving them rooms was not found to save more than the "
-        'motion it adds. --objective makespan plans for the earliest end instead (docs/planning.md, "Objective").'
+        'motion it adds. --objective makespan plans for the earliest end instead (docs/planning.md, "Objective"); '
+        "--min-rooms N gives every robot N rooms at least."
     )
     return PlanWarning("idle", last, float(len(idle)), IDLE_SHARE, text)
+
+
+def _short(report: PlanReport) -> PlanWarning | None:
+    """Robots that visit fewer work rooms than planner.min_rooms asks (lowered to the goals' share
+    per robot, tmpnav.task.minimum): the search found no plan that keeps to it."""
+    sc = report.scenario
+    least = need(
+        sc.goals, {r: report.table.start_location.get(r, "") for r in report.table.robots}, sc.planner.min_rooms
+    )
+    entered = counts(report.task.steps, work_rooms(sc.goals))
+    short = {r.name: entered.get(r.name, 0) for r in sc.robots if entered.get(r.name, 0) < least}
+    if not short:
+        return None
+    named = ", ".join(f"{r} ({n})" for r, n in list(short.items())[:IDLE_NAMED])
+    more = f" and {len(short) - IDLE_NAMED} more" if len(short) > IDLE_NAMED else ""
+    text = (
+        f"{len(short)} of {len(sc.robots)} robots visit fewer than the {least} goal rooms planner.min_rooms asks "
+        f"each: {named}{more}. The search found no plan that keeps to it: their jobs, the roadmap or the chance "
+        "constraint may keep them out of the rooms, or a larger --anytime-work may find one."
+    )
+    return PlanWarning("short", next(iter(short)), float(len(short)), float(least), text)
 
 
 def warning_lines(report: PlanReport, width: int = 100) -> list[str]:

@@ -165,4 +165,4 @@ def plan_sizes(scenario: Scenario) -> list[Finding]:
 def _lists_the_whole_table(scenario: Scenario, rooms: int) -> bool:
     """Does the search in force cost every paired move first (:func:`tmpnav.choices.choose`)?"""
     sp = scenario.planner
-    return choose(sp.encoding, sp.search, sp.costs, rooms, len(scenario.robots)).lists_whole_table
+    return choose(sp.encoding, sp.search, sp.costs, rooms, len(scenario.robots), sp.min_rooms).lists_whole_table

@@ -700,6 +700,11 @@ PLANNER = Section(
             "robots kept apart (keep_apart) allow for running late on the plan's clock: each may fall behind by this many seconds per second it drives (a planned wait absorbs it; partners of a paired move start it together), and two robots are in each other's way when they come within their separation within that much time of each other; 0: at the same planned instant only (the paper's model); omitted: 0.1 where models.range_sensor.localiser is amcl (nav2 executes the plan), else 0 (docs/models.md, \"Two robots off the plan's clock\")",
             default=None,
         ),
+        "min_rooms": Field(
+            Number(None, minimum=0, maximum=10**4, integer=True),
+            "the goal rooms (goals.visit and the robots' own targets, not their ends) each robot visits at least, so that no robot stands idle while others work; lowered to the goal rooms' share per robot where there are fewer; a plan that cannot keep to it is ranked below every plan that does and its report names the robots short of it; the anytime search keeps it (search auto plans so; exact and the paper's encoding do not take it); 0: no minimum",
+            default=0,
+        ),
         "costs": Field(
             Choice(choices=COSTS_CHOICES),
             "what an action costs the planner: carried (from the beliefs the robots carry at that point of the plan, as executed) or table (every move from a canonical start state: faster, far off where landmarks are sparse)",

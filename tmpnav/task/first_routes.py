@@ -60,6 +60,7 @@ def first_routes(
     span_weight: float,
     start_from: Plan | None = None,
     second: bool = False,
+    min_rooms: int = 0,
 ) -> tuple[Routes, bool]:
     """The routes of the search's first plan, and whether OR-Tools stopped at its time limit
     (the plan then depends on the machine's speed). OR-Tools' guided local search stops after
@@ -72,7 +73,8 @@ def first_routes(
     within ``time_left``. A ``fleet`` (more robots than a neighbourhood holds) whose objective
     prices time (``span_weight``) starts from :data:`FLEET_FIRST_SOLUTION`. A ``second`` routing
     (the search's makespan-first candidate) stops after :data:`FEW_STAGNATION` solutions in a
-    row without improvement whatever the size."""
+    row without improvement whatever the size. ``min_rooms``: the work rooms each route should
+    enter (tmpnav.task.minimum)."""
     limit = routing_time if routing_time is not None else min(ROUTING_CAP, max(1.0, budget / 4))
     few = len(goals.all_rooms) <= FEW_ROOMS and len(robots) <= 2
     routes = solve_routes(
@@ -84,6 +86,7 @@ def first_routes(
         first_solution=FLEET_FIRST_SOLUTION if fleet and span_weight else "PATH_CHEAPEST_ARC",
         span_weight=span_weight,
         initial=None if start_from is None else routes_of(start_from, robots),
+        min_rooms=min_rooms,
     )
     timed_out = routes.timed_out
     if not routes.found and routes.status != NO_ROBOT_CAN_ENTER:

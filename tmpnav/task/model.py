@@ -22,6 +22,7 @@ from typing import Protocol
 from tmpnav.choices import Costs
 from tmpnav.results import Schedule
 from tmpnav.task.encodings import ENCODINGS
+from tmpnav.task.minimum import SHORT_PRICE
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.timing import schedule, table_durations
 from tmpnav.types import PENALISED, CostTable, Goals, MoveKey
@@ -48,6 +49,9 @@ class PlanCost:
     #: apart (tmpnav.attachment.apart.ExecutedCost): ``tmpnav plan`` refuses such a plan, so the
     #: search ranks it below every plan without (:data:`UNSAFE_PRICE`)
     unsafe: int = 0
+    #: the work rooms its robots lack of planner.min_rooms (tmpnav.task.minimum): the search ranks
+    #: it :data:`~tmpnav.task.minimum.SHORT_PRICE` higher per room
+    short: int = 0
 
     @property
     def makespan(self) -> float:
@@ -64,8 +68,9 @@ class PlanCost:
         return self.total + self.dropped + (span_weight * self.makespan if span_weight else 0.0)
 
     def ranked(self, span_weight: float) -> float:
-        """:meth:`value`, plus :data:`UNSAFE_PRICE` for each conflict left: what the search compares."""
-        return self.value(span_weight) + UNSAFE_PRICE * self.unsafe
+        """:meth:`value`, plus :data:`UNSAFE_PRICE` for each conflict left and
+        :data:`~tmpnav.task.minimum.SHORT_PRICE` for each room short of the minimum: what the search compares."""
+        return self.value(span_weight) + UNSAFE_PRICE * self.unsafe + SHORT_PRICE * self.short
 
     @classmethod
     def impossible(cls, n: int) -> PlanCost:

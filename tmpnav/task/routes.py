@@ -24,7 +24,9 @@ routes, and left out for one that changes one: such an edit may free the plan of
 it is worth the model's costing when it is dearer than the plan as planned yet cheaper than the
 plan as executed. :func:`route_edits` returns the edits whose
 screened value is below the plan's and that the plan rules accept; the caller costs them with
-its model (tmpnav.task.search).
+its model (tmpnav.task.search). With a minimum of work rooms per robot (planner.min_rooms,
+:mod:`tmpnav.task.minimum`), each room an edit leaves a robot short of it adds its price to the
+screen, and each it makes up takes it off: an edit that puts an idle robot to work comes first.
 
 **Each edit also reordered.** An edit that hands rooms to another robot leaves them in the order
 they had, which is rarely the order the new robot would take them in: two robots whose routes
@@ -48,6 +50,7 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 from tmpnav.task.balance import Moves, relocated_steps, unloadings
+from tmpnav.task.minimum import SHORT_PRICE, shortfall
 from tmpnav.task.plans import Plan, Rules, targets_only, with_origins
 from tmpnav.task.route_orders import Legs, Orders
 from tmpnav.types import CostTable, Goals
@@ -68,9 +71,11 @@ def route_edits(
     span_weight: float,
     limit: int = 6,
     apart: KeptApartPrice | None = None,
+    least: tuple[int, frozenset[str]] = (0, frozenset()),
 ) -> list[Steps]:
     """Up to ``limit`` edits of ``plan`` that the single moves say are better, best first, each one
-    the rules accept (module docstring)."""
+    the rules accept (module docstring); ``least``: the work rooms each robot should enter and
+    those rooms (tmpnav.task.minimum), each room an edit leaves a robot short of them priced."""
     steps = targets_only(plan)
     robots = list(singles.robots) or sorted({r for step in steps for r, _ in step})
     routes: dict[str, list[tuple[int, str]]] = {r: [] for r in robots}
@@ -88,7 +93,7 @@ def route_edits(
     in_routes = [x for route in routes.values() for _, x in route]
     screened = Orders(singles, goals, span_weight, list(routes), in_routes).screen([changed for changed, _ in edits])
     current = {r: [x for _, x in route] for r, route in routes.items()}
-    scored = _scored(edits, screened, current, screen, legs, apart or KeptApartPrice())
+    scored = _scored(edits, screened, current, screen, legs, apart or KeptApartPrice(), least)
     out: list[Steps] = []
     seen: set[tuple[tuple[tuple[str, str], ...], ...]] = set()
     for _, key in scored:
@@ -111,10 +116,17 @@ def _scored(
     screen: _Screen,
     legs: Legs,
     price: KeptApartPrice,
+    least: tuple[int, frozenset[str]] = (0, frozenset()),
 ) -> list[tuple[float, int]]:
     """(screened value, 2 n for edit n as it is, 2 n + 1 reordered) of the edits better than the
     plan, the plan's routes ``current`` and ``legs``; an edit that only gives the plan's own
-    routes back (reordered) is none."""
+    routes back (reordered) is none. The rooms an edit's routes lack of ``least`` (the
+    minimum and the work rooms) against the plan's are priced at :data:`SHORT_PRICE` each."""
+    need, work = least
+
+    def lacking(routes: dict[str, list[str]], robots: set[str]) -> int:
+        return shortfall({r: sum(x in work for x in routes[r]) for r in robots}, sorted(robots), need)
+
     now = screen.value(legs.values()) + price.slack
     scored: list[tuple[float, int]] = []
     for n, (changed, (as_is, order, reordered)) in enumerate(zip((c for c, _ in edits), screened, strict=True)):
@@ -125,6 +137,8 @@ def _scored(
             if not differ:
                 continue
             value = screen.value_with(legs, changed_legs) + price.after(differ)
+            if need:
+                value += SHORT_PRICE * (lacking(rooms, differ) - lacking(current, differ))
             if value < now - EPSILON * max(1.0, abs(now)):
                 scored.append((value, 2 * n + v))
     return sorted(scored)

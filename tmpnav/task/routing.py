@@ -38,6 +38,10 @@ the arc into it takes the move's travel time, the room's node waits (slack) unti
 opens, and the service follows (arc out of it); the time dimension is added for windows
 whatever the objective.
 
+Work rooms. With ``min_rooms`` (planner.min_rooms, tmpnav.task.minimum) a dimension counts the
+work rooms each route enters, and each route's end has a soft lower bound there: a room short
+of it costs :data:`tmpnav.task.minimum.SHORT_PRICE`.
+
 Search: a first solution (``PATH_CHEAPEST_ARC`` by default), then guided local search
 until the time limit (or ``solution_limit`` solutions). OR-Tools' local search is
 single-threaded and deterministic up to its stopping point: with a ``solution_limit``
@@ -56,6 +60,7 @@ from dataclasses import dataclass
 
 from tmpnav.task.bound import required_entries
 from tmpnav.task.encodings import COST_SCALE
+from tmpnav.task.minimum import SHORT_PRICE, work_rooms
 from tmpnav.types import CostTable, Goals, MoveKey
 
 #: OR-Tools' time unit: a hundredth of a second
@@ -119,6 +124,7 @@ def solve_routes(
     arc_costs: bool = True,
     initial: dict[str, tuple[str, ...]] | None = None,
     stagnation: int | None = None,
+    min_rooms: int = 0,
 ) -> Routes:
     """Routes for the robots that visit every goal, by OR-Tools within ``time_limit`` s.
 
@@ -128,6 +134,8 @@ def solve_routes(
     routes' makespan, ``arc_costs=False`` leaves the moves' costs out (min-max routing).
     ``initial`` (each robot's rooms in order: a replan's plan under way) is the solution the
     local search starts from instead of a first solution of its own, when the model accepts it.
+    ``min_rooms``: each route should enter that many work rooms (tmpnav.task.minimum), a room
+    it lacks priced at :data:`tmpnav.task.minimum.SHORT_PRICE`.
     See the module docstring for the model.
     """
     if first_solution not in FIRST_SOLUTION:
@@ -157,6 +165,8 @@ def solve_routes(
         model.routing.AddDisjunction([model.manager.NodeToIndex(node)], round(goals.optional[x] * COST_SCALE))
     if (span_weight > 0 or goals.windows or goals.held) and table.duration:
         model.add_time(span_weight, goals)
+    if min_rooms > 0:
+        model.add_minimum(min_rooms, work_rooms(goals))
     return model.solve(time_limit, solution_limit, first_solution, initial, stagnation)
 
 
@@ -329,6 +339,20 @@ class _Model:
             if window is not None:
                 earliest, latest = (round(w / TIME_UNIT) for w in window)
                 time.CumulVar(self.manager.NodeToIndex(node)).SetRange(earliest, latest)
+
+    def add_minimum(self, least: int, work: frozenset[str]) -> None:
+        """A dimension that counts the work rooms a route enters, with a soft lower bound of
+        ``least`` at every route's end: each room short of it costs
+        :data:`tmpnav.task.minimum.SHORT_PRICE` (in the arc costs' units)."""
+        n = len(self.location)
+        ones = [1 if i >= self.first_task and self.location[i] in work else 0 for i in range(n)]
+        callback = self.routing.RegisterUnaryTransitVector(ones)
+        self.routing.AddDimension(callback, 0, sum(ones), True, "work rooms")
+        rooms = self.routing.GetDimensionOrDie("work rooms")
+        for v in range(self.n_v):
+            rooms.SetCumulVarSoftLowerBound(self.routing.End(v), least, round(SHORT_PRICE * COST_SCALE))
+            # an empty route's costs count only for a vehicle "used when empty" (else an idle robot pays nothing)
+            self.routing.SetVehicleUsedWhenEmpty(True, v)
 
     def _forbid_missing_moves(self) -> None:
         """Remove each arc i -> j from every vehicle whose table has no such move."""

@@ -31,6 +31,8 @@ optimal ENHSP search, but any part of it a few rooms and robots wide is small. T
    robot that finishes last. A fleet (more robots than a neighbourhood holds) starts with the
    routes' edits, until they bring nothing, and where time is priced its first routes insert
    every room where it adds least into all routes at once (:data:`FLEET_FIRST_SOLUTION`).
+   With a minimum of rooms per robot (planner.min_rooms, :mod:`tmpnav.task.minimum`) every plan
+   is ranked with the rooms its robots lack priced, and the first routes and the edits keep to it.
 4. **Stop** when the lower bound proves the plan optimal, when neither the neighbourhoods nor
    the routes' edits improve the plan (a local optimum of both), or when its budget is spent:
    a count of sub-problems, so the same plan on any machine, with time as a cap
@@ -50,7 +52,7 @@ import random
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal, TypeVar
 
 from tmpnav.beside import Beside
@@ -61,6 +63,7 @@ from tmpnav.task import budget as caps
 from tmpnav.task.budget import SearchBudget
 from tmpnav.task.decode import canonical_order
 from tmpnav.task.first_routes import first_routes, no_routes
+from tmpnav.task.minimum import counts, need, shortfall, work_rooms
 from tmpnav.task.model import CostModel, PlanCost
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.objectives import MAKESPAN_WEIGHT
@@ -125,6 +128,8 @@ class AnytimeSearch:
         self._stack = contextlib.ExitStack()
         self._solver: Background | None = None
         self._running: dict[tuple[str, str], Future[list[Step] | None]] = {}  # searches by their text
+        self.work = work_rooms(goals)
+        self.need = need(goals, model.start_location, options.min_rooms)  # work rooms per robot (tmpnav.task.minimum)
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
@@ -180,6 +185,7 @@ class AnytimeSearch:
             span_weight=opts.span_weight if span_weight is None else span_weight,
             start_from=start_from,
             second=span_weight is not None,
+            min_rooms=self.need,
         )
 
     def _makespan_routing(self, singles: CostTable, seeds: dict[str, Plan]) -> Beside[tuple[Routes, bool]] | None:
@@ -336,7 +342,13 @@ class AnytimeSearch:
         cost, and most passes keep the edit the screen put first."""
         with self.times.timed("planner"):
             edits = route_edits(
-                self.best, self.singles, self.goals, self.rules, self.options.span_weight, apart=self._apart_price()
+                self.best,
+                self.singles,
+                self.goals,
+                self.rules,
+                self.options.span_weight,
+                apart=self._apart_price(),
+                least=(self.need, self.work),
             )
         costed: list[tuple[Plan, PlanCost, None]] = []
         best: tuple[Plan, PlanCost, None] | None = None
@@ -525,8 +537,17 @@ class AnytimeSearch:
             return None
 
     def cost(self, plan: Plan) -> PlanCost:
+        """The model's cost of the plan, with the rooms its robots lack of the minimum."""
         with self.times.timed("oracle"):
-            return self.model.plan_cost(plan)
+            cost = self.model.plan_cost(plan)
+        return self._with_short(plan, cost)
+
+    def _with_short(self, plan: Plan, cost: PlanCost) -> PlanCost:
+        """``cost`` with the work rooms ``plan``'s robots lack of :attr:`need` (tmpnav.task.minimum)."""
+        if not self.need:
+            return cost
+        lacking = shortfall(counts(plan, self.work), self.model.robots, self.need)
+        return cost if cost.short == lacking else replace(cost, short=lacking)
 
     def priced(self, plan: Plan, cost: PlanCost) -> PlanCost:
         """The plan's cost as it will be executed (robots kept apart, ``executed``), from
@@ -534,7 +555,7 @@ class AnytimeSearch:
         if self.executed is None:
             return cost
         with self.times.timed("oracle"):
-            return self.executed(plan, cost)
+            return self._with_short(plan, self.executed(plan, cost))
 
     def _cheapest(self, costed: list[tuple[Plan, PlanCost, _T]]) -> tuple[Plan, PlanCost, _T] | None:
         """Of the candidates (plan, cost as planned, what made it), the one of least objective as
@@ -578,6 +599,8 @@ class AnytimeSearch:
         value = cost.value(self.options.span_weight)
         if cost.unsafe:
             what = f"{what}; robots in each other's way: {cost.unsafe}"
+        if cost.short:
+            what = f"{what}; rooms short of planner.min_rooms: {cost.short}"
         self.stats.history.append((round(self.elapsed(), 3), value))
         self.watch.note(value, what)
 

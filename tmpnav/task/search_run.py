@@ -84,6 +84,8 @@ class SearchOptions:
     #: OR-Tools' routes as a first plan; False: the seeds', where there are seeds (a search that
     #: goes on from an exact plan, which OR-Tools' routes of single moves cannot beat as planned)
     first_routes: bool = True
+    #: the work rooms each robot should enter, planner.min_rooms (tmpnav.task.minimum; 0: none)
+    min_rooms: int = 0
 
 
 @dataclass

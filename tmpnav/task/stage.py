@@ -242,6 +242,7 @@ class AnytimeTask:
             span_weight=self.span_weight,
             first_routes=self.first_routes,
             routing_time=p.routing_time,
+            min_rooms=p.min_rooms,
         )
 
 
