@@ -119,6 +119,8 @@ CASES = [
          "0 is out of range; expected an integer >= 1 and <= 2000; a scan needs at least one beam"),
     Case("lidar-blind-beyond-its-range", nested("models.range_sensor", {"range": 5, "min_range": 6}),
          "models.range_sensor.min_range", "6 m is not below the sensor's range 5 m"),
+    Case("floor-of-every-beam", nested("models.range_sensor", {"beams": 40, "localiser": {"floor_beams": 40}}),
+         "models.range_sensor.localiser.floor_beams", "40 is not below the 40 beams the localiser weighs"),
     Case("lidar-along-the-wall", nested("models.range_sensor", {"max_incidence": "90 deg"}),
          "models.range_sensor.max_incidence", "'90 deg' is out of range; expected a number > 0 and <= 1.55334 in rad"),
     Case("sensor-range-1e9", nested("models.mutual_sensor", {"range": 1e9}), "models.mutual_sensor.range",

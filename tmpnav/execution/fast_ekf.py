@@ -26,7 +26,7 @@ from tmpnav.execution.trace import Draws
 from tmpnav.types import Belief, Scenario
 from tmpnav.world import World
 from tmpnav.world.geometry import wrap_angle_scalar
-from tmpnav.world.lidar import scan, scan_beams, sensor_params
+from tmpnav.world.lidar import SENSOR_PARAMS, scan, scan_beams, sensor_params
 from tmpnav.world.visibility import LandmarkVisibility
 
 
@@ -49,7 +49,7 @@ class CompiledJointEkf:
         self.chol_lm, self.chol_mu = np.linalg.cholesky(self.q_lm), np.linalg.cholesky(self.q_mu)
         sensor = models.range_sensor
         self.angles = sensor.beam_angles() if sensor is not None else np.zeros(0)
-        self.params = sensor_params(sensor) if sensor is not None else np.zeros(10)
+        self.params = sensor_params(sensor) if sensor is not None else np.zeros(SENSOR_PARAMS)
         self.work = np.empty((3 * n, 3 * n))
         self.counts = np.zeros((n, 2), dtype=np.int64)
         # each robot's last true scan: its pose (nan: none yet), ranges and variances (n, B)

@@ -265,6 +265,17 @@ def _range_sensor_reach(section: dict[str, Any], ctx: Ctx, path: str, raw: tuple
             f"{section['min_range']:g} m is not below the sensor's range {section['range']:g} m; expected a blind "
             "zone shorter than the range (no beam could return)",
         )
+    localiser = section.get("localiser")
+    if isinstance(localiser, dict) and localiser.get("model") == ScanModelKind.AMCL.value:
+        weighed = min(localiser["max_beams"], section["beams"])
+        if localiser["floor_beams"] >= weighed:
+            ctx.add(
+                f"{path}.localiser.floor_beams",
+                (*raw, "localiser", "floor_beams"),
+                f"{localiser['floor_beams']:g} is not below the {weighed} beams the localiser weighs "
+                "(localiser.max_beams, at most the sensor's beams); expected fewer: a scan would inform "
+                "no direction of the belief",
+            )
 
 
 #: beams of one scan: past this the per-step cost grows for information the filter would

@@ -148,6 +148,10 @@ def _beam_row(r, gx, gy, psi):
     return -gx / gd, -gy / gd, -r * gdp / gd
 
 
+#: the length of :func:`sensor_params`' vector (a placeholder without a sensor has as many zeros)
+SENSOR_PARAMS = 10
+
+
 def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
     """The sensor as the compiled functions take it: (min_range m, range m, cos of the largest
     incidence, sigma_range m, divergence rad), then its localiser's scan model on a map of
@@ -160,7 +164,7 @@ def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
     field = model.kind is ScanModelKind.AMCL
     var_lf = model.sigma_hit**2 + resolution**2 / 12.0
     share = model.information * model.mixture_factor(sensor.range)
-    return np.array(
+    params = np.array(
         [
             sensor.min_range,
             sensor.range,
@@ -174,6 +178,8 @@ def sensor_params(sensor: RangeSensor, resolution: float = 0.0) -> np.ndarray:
             model.floor_beams * share / var_lf if field else 0.0,
         ]
     )
+    assert params.shape == (SENSOR_PARAMS,)
+    return params
 
 
 def localiser_angles(sensor: RangeSensor) -> np.ndarray:
