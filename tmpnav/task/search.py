@@ -63,7 +63,7 @@ from tmpnav.task import budget as caps
 from tmpnav.task.budget import SearchBudget
 from tmpnav.task.decode import canonical_order
 from tmpnav.task.first_routes import first_routes, no_routes
-from tmpnav.task.minimum import counts, need, shortfall, work_rooms
+from tmpnav.task.minimum import SHORT_PRICE, counts, need, shortfall, work_rooms
 from tmpnav.task.model import CostModel, PlanCost
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.objectives import MAKESPAN_WEIGHT
@@ -356,7 +356,7 @@ class AnytimeSearch:
             if self.budget.out_of_time():
                 break
             candidate = self.canonical(with_origins(edit, self.model.start_location))
-            if not self.rules.valid(candidate):
+            if not self.rules.valid(candidate) or self._hopeless(candidate):
                 continue
             costed.append((candidate, self.cost(candidate), None))
             best = self._cheapest(costed[-1:]) if first else None
@@ -508,7 +508,7 @@ class AnytimeSearch:
             if found is None:
                 continue
             candidate = self.canonical(splice(sub.opened, found, self.model.start_location))
-            if not self.rules.valid(candidate):
+            if not self.rules.valid(candidate) or self._hopeless(candidate):
                 continue
             costed.append((candidate, self.cost(candidate), sub))
         best = self._cheapest(costed)
@@ -548,6 +548,14 @@ class AnytimeSearch:
             return cost
         lacking = shortfall(counts(plan, self.work), self.model.robots, self.need)
         return cost if cost.short == lacking else replace(cost, short=lacking)
+
+    def _hopeless(self, plan: Plan) -> bool:
+        """Whether the rooms ``plan``'s robots lack of the minimum alone rank it at or above the best
+        plan, whatever its cost (every objective is at least 0): it need not be costed."""
+        if not self.need:
+            return False
+        lacking = shortfall(counts(plan, self.work), self.model.robots, self.need)
+        return lacking > 0 and SHORT_PRICE * lacking >= self.value(self.best_cost)
 
     def priced(self, plan: Plan, cost: PlanCost) -> PlanCost:
         """The plan's cost as it will be executed (robots kept apart, ``executed``), from
