@@ -142,7 +142,8 @@ def main() -> None:
         t = np.array([float(r["seconds"]) for r in ok]) if ok else np.array([np.nan])  # type: ignore[arg-type]
         obj = np.array([float(r["objective"]) for r in ok]) if ok else np.array([np.nan])  # type: ignore[arg-type]
         pss = np.array([float(r["peak_pss_mb"]) for r in ok]) if ok else np.array([np.nan])  # type: ignore[arg-type]
-        converged = sum(r["stopped"] != "time budget" for r in ok)
+        # converged or proved optimal; a search stopped by its work or time budget did neither
+        converged = sum(r["stopped"] in ("converged", "optimal", "solved", "exact", "nothing to do") for r in ok)
         lines.append(
             f"| {kind} | {rooms} | {robots} | {len(ok)}/{len(mine)} | {np.median(t):.1f} | "
             f"{np.percentile(t, 90):.1f} | {converged}/{len(ok)} | {np.median(obj):.1f} | "
