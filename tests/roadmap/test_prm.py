@@ -13,7 +13,7 @@ import pytest
 
 from tmpnav.errors import RoadmapError
 from tmpnav.pipeline import load_world
-from tmpnav.roadmap import RoadmapGraph, build_roadmap
+from tmpnav.roadmap import RoadmapGraph, build_roadmap, prm
 from tmpnav.world.geometry import points_in_polygon
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -89,11 +89,21 @@ def test_shortest_path_is_shortest(loaded) -> None:  # type: ignore[no-untyped-d
     assert length == pytest.approx(graph.distance(s, g))
 
 
-def test_room_that_cannot_connect_is_named(loaded) -> None:  # type: ignore[no-untyped-def]
+def test_room_that_cannot_connect_is_named(loaded, monkeypatch: pytest.MonkeyPatch) -> None:  # type: ignore[no-untyped-def]
     sc, world = loaded
-    with pytest.raises(RoadmapError, match=r"room '[ABC]': none of its 3 pose instantiations connects .* grown to 320"):
-        # one neighbour per milestone: even 32 times 10 milestones do not get through the doors
+    monkeypatch.setattr(prm, "GROWTH", 1)  # no growth: 10 milestones of one neighbour each
+    with pytest.raises(RoadmapError, match=r"room '[ABC]': none of its 3 pose instantiations connects .* grown to 10"):
         build_roadmap(world, sc.robots, replace(sc.roadmap, samples=10, neighbors=1))
+
+
+def test_bounce_walks_find_the_doors_that_uniform_samples_miss(loaded) -> None:  # type: ignore[no-untyped-def]
+    """One neighbour per milestone: uniform sampling alone did not get through the doors even at
+    32 times 10 milestones; half of each growth round on PRM's bounce walks from the milestones
+    that failed to connect does, within a few rounds."""
+    sc, world = loaded
+    small = build_roadmap(world, sc.robots, replace(sc.roadmap, samples=10, neighbors=1))
+    assert set(small.instantiations) == {"A", "B", "C"} and all(small.instantiations.values())
+    assert small.n_nodes < 160 + 3 * sc.roadmap.instantiations + len(sc.robots)
 
 
 def test_a_roadmap_too_small_grows_until_every_room_connects(loaded) -> None:  # type: ignore[no-untyped-def]
