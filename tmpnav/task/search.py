@@ -47,13 +47,12 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import math
 import random
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
-from dataclasses import dataclass, replace
-from typing import Literal, TypeVar
+from dataclasses import dataclass
+from typing import Literal
 
 from tmpnav.beside import Beside
 from tmpnav.choices import StopReason
@@ -63,11 +62,11 @@ from tmpnav.task import budget as caps
 from tmpnav.task.budget import SearchBudget
 from tmpnav.task.decode import canonical_order
 from tmpnav.task.first_routes import first_routes, no_routes
-from tmpnav.task.minimum import SHORT_PRICE, counts, need, shortfall, work_rooms
 from tmpnav.task.model import CostModel, PlanCost
 from tmpnav.task.neighbourhoods import Closeness, Neighbourhood, neighbourhood
 from tmpnav.task.objectives import MAKESPAN_WEIGHT
 from tmpnav.task.plans import Plan, Rules, Step, splice, with_missing, with_origins
+from tmpnav.task.pricing import Pricing
 from tmpnav.task.routes import KeptApartPrice, route_edits
 from tmpnav.task.routing import Routes
 from tmpnav.task.search_run import Executed, KeepsApart, SearchOptions, SearchResult, SearchRun, SearchStats
@@ -77,8 +76,6 @@ from tmpnav.types import CostTable, Goals
 
 #: relative improvement below which a new plan does not count as better
 EPSILON = 1e-9
-
-_T = TypeVar("_T")
 
 
 @dataclass(frozen=True)
@@ -128,8 +125,7 @@ class AnytimeSearch:
         self._stack = contextlib.ExitStack()
         self._solver: Background | None = None
         self._running: dict[tuple[str, str], Future[list[Step] | None]] = {}  # searches by their text
-        self.work = work_rooms(goals)
-        self.need = need(goals, model.start_location, options.min_rooms)  # work rooms per robot (tmpnav.task.minimum)
+        self.pricing = Pricing(model, goals, options, self.times, executed)
 
     def elapsed(self) -> float:
         return time.perf_counter() - self.t0
@@ -185,7 +181,7 @@ class AnytimeSearch:
             span_weight=opts.span_weight if span_weight is None else span_weight,
             start_from=start_from,
             second=span_weight is not None,
-            min_rooms=self.need,
+            min_rooms=self.pricing.need,
         )
 
     def _makespan_routing(self, singles: CostTable, seeds: dict[str, Plan]) -> Beside[tuple[Routes, bool]] | None:
@@ -265,10 +261,10 @@ class AnytimeSearch:
             else:  # no routes found in time: the seeds (a replan's repaired plan) are the first plans
                 starts.insert(0, (routed, plan))
             starts.extend(self._makespan_first(singles, second))
-        (start, best), cost = starts[0], self.priced(starts[0][1], self.cost(starts[0][1]))
+        (start, best), cost = starts[0], self.pricing.priced(starts[0][1], self.pricing.cost(starts[0][1]))
         for name, seed in starts[1:]:
-            seed_cost = self.priced(seed, self.cost(seed))
-            if self.value(seed_cost) < self.value(cost):
+            seed_cost = self.pricing.priced(seed, self.pricing.cost(seed))
+            if self.pricing.value(seed_cost) < self.pricing.value(cost):
                 best, cost, start = seed, seed_cost, name
         self.rules.check(best)
         self._note(cost, "first plan")
@@ -317,7 +313,7 @@ class AnytimeSearch:
             while not self.budget.out_of_time() and self._between_routes(first=True):
                 pass
         while True:
-            if self.proves_optimal(self.value(self.best_cost)):
+            if self.proves_optimal(self.pricing.value(self.best_cost)):
                 return "optimal"
             outcome = self._round(self.options.sizes[size_index])
             self.stats.rounds += 1
@@ -348,7 +344,7 @@ class AnytimeSearch:
                 self.rules,
                 self.options.span_weight,
                 apart=self._apart_price(),
-                least=(self.need, self.work),
+                least=(self.pricing.need, self.pricing.work),
             )
         costed: list[tuple[Plan, PlanCost, None]] = []
         best: tuple[Plan, PlanCost, None] | None = None
@@ -356,16 +352,19 @@ class AnytimeSearch:
             if self.budget.out_of_time():
                 break
             candidate = self.canonical(with_origins(edit, self.model.start_location))
-            if not self.rules.valid(candidate) or self._hopeless(candidate):
+            if not self.rules.valid(candidate) or self.pricing.hopeless(candidate, self.best_cost):
                 continue
-            costed.append((candidate, self.cost(candidate), None))
-            best = self._cheapest(costed[-1:]) if first else None
-            if best is not None and self.value(best[1]) < self.value(self.best_cost) * (1 - EPSILON) - EPSILON:
+            costed.append((candidate, self.pricing.cost(candidate), None))
+            best = self.pricing.cheapest(costed[-1:], self.best_cost) if first else None
+            if (
+                best is not None
+                and self.pricing.value(best[1]) < self.pricing.value(self.best_cost) * (1 - EPSILON) - EPSILON
+            ):
                 break
-        best = best if first else self._cheapest(costed)
+        best = best if first else self.pricing.cheapest(costed, self.best_cost)
         if best is None:
             return False
-        new, old = self.value(best[1]), self.value(self.best_cost)
+        new, old = self.pricing.value(best[1]), self.pricing.value(self.best_cost)
         if not new < old * (1 - EPSILON) - EPSILON:
             return False
         self.best, self.best_cost = best[0], best[1]
@@ -379,7 +378,7 @@ class AnytimeSearch:
         apart (:class:`tmpnav.task.routes.KeptApartPrice`)."""
         if not isinstance(self.executed, KeepsApart):
             return KeptApartPrice()
-        slack = self.value(self.best_cost) - self.value(self.cost(self.best))
+        slack = self.pricing.value(self.best_cost) - self.pricing.value(self.pricing.cost(self.best))
         robots = self.executed.robots_apart(self.best)
         return KeptApartPrice(slack, robots) if slack > 0 and robots else KeptApartPrice()
 
@@ -393,7 +392,7 @@ class AnytimeSearch:
             if outcome != "improved":
                 return "improved" if improved and outcome == "unchanged" else outcome
             improved = True
-            if self.proves_optimal(self.value(self.best_cost)):
+            if self.proves_optimal(self.pricing.value(self.best_cost)):
                 return "optimal"
 
     def _sweep(self, plan: Plan, size: int) -> Literal["improved", "unchanged", "work budget", "time budget"]:
@@ -508,13 +507,13 @@ class AnytimeSearch:
             if found is None:
                 continue
             candidate = self.canonical(splice(sub.opened, found, self.model.start_location))
-            if not self.rules.valid(candidate) or self._hopeless(candidate):
+            if not self.rules.valid(candidate) or self.pricing.hopeless(candidate, self.best_cost):
                 continue
-            costed.append((candidate, self.cost(candidate), sub))
-        best = self._cheapest(costed)
+            costed.append((candidate, self.pricing.cost(candidate), sub))
+        best = self.pricing.cheapest(costed, self.best_cost)
         if best is None:
             return False
-        new, old = self.value(best[1]), self.value(self.best_cost)
+        new, old = self.pricing.value(best[1]), self.pricing.value(self.best_cost)
         if not new < old * (1 - EPSILON) - EPSILON:
             return keep_equal and new <= old * (1 + EPSILON) + EPSILON
         candidate, cost, sub = best
@@ -535,62 +534,6 @@ class AnytimeSearch:
             return None
         except UnsolvableError:
             return None
-
-    def cost(self, plan: Plan) -> PlanCost:
-        """The model's cost of the plan, with the rooms its robots lack of the minimum."""
-        with self.times.timed("oracle"):
-            cost = self.model.plan_cost(plan)
-        return self._with_short(plan, cost)
-
-    def _with_short(self, plan: Plan, cost: PlanCost) -> PlanCost:
-        """``cost`` with the work rooms ``plan``'s robots lack of :attr:`need` (tmpnav.task.minimum)."""
-        if not self.need:
-            return cost
-        lacking = shortfall(counts(plan, self.work), self.model.robots, self.need)
-        return cost if cost.short == lacking else replace(cost, short=lacking)
-
-    def _hopeless(self, plan: Plan) -> bool:
-        """Whether the rooms ``plan``'s robots lack of the minimum alone rank it at or above the best
-        plan, whatever its cost (every objective is at least 0): it need not be costed."""
-        if not self.need:
-            return False
-        lacking = shortfall(counts(plan, self.work), self.model.robots, self.need)
-        return lacking > 0 and SHORT_PRICE * lacking >= self.value(self.best_cost)
-
-    def priced(self, plan: Plan, cost: PlanCost) -> PlanCost:
-        """The plan's cost as it will be executed (robots kept apart, ``executed``), from
-        ``cost``, its cost as planned; ``cost`` without ``executed``."""
-        if self.executed is None:
-            return cost
-        with self.times.timed("oracle"):
-            return self._with_short(plan, self.executed(plan, cost))
-
-    def _cheapest(self, costed: list[tuple[Plan, PlanCost, _T]]) -> tuple[Plan, PlanCost, _T] | None:
-        """Of the candidates (plan, cost as planned, what made it), the one of least objective as
-        executed (:meth:`priced`), the first of equals; None without candidates. Priced lazily,
-        cheapest as planned first: one whose cost as planned is no less than the best found, or
-        than the best plan's, is not priced (executing with robots kept apart adds waits and
-        detours, never takes away)."""
-        order = sorted(range(len(costed)), key=lambda i: (self.value(costed[i][1]), i))
-        if not order:
-            return None
-        if self.executed is None:
-            return costed[order[0]]
-        limit = self.value(self.best_cost)
-        best: tuple[Plan, PlanCost, _T] | None = None
-        for i in order:
-            plan, cost, made = costed[i]
-            if self.value(cost) >= min(limit, self.value(best[1]) if best is not None else math.inf):
-                break
-            executed = self.priced(plan, cost)
-            if best is None or self.value(executed) < self.value(best[1]):
-                best = (plan, executed, made)
-        return best if best is not None else costed[order[0]]
-
-    def value(self, cost: PlanCost) -> float:
-        """The objective of a plan of this cost (tmpnav.task.objectives), ranked below every plan
-        kept apart where robots are still in each other's way (``PlanCost.ranked``)."""
-        return cost.ranked(self.options.span_weight)
 
     # ------------------------------------------------------------------ progress
 
