@@ -64,6 +64,7 @@ from tmpnav.report.schedule import (
 )
 from tmpnav.results import OTHER, STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
+from tmpnav.task.minimum import need
 from tmpnav.types import PlanStatus, ScanModelKind
 
 
@@ -215,14 +216,26 @@ def _objective(report: PlanReport) -> list[str]:
         makespan += f" (planner's schedule: {o.planner_makespan:.1f} s)"
     if o.units == "s":  # the makespan first, then the sum of costs: each in its own units
         value = f"{o.own:.1f} s, then cost {_cost(report.resimulated_cost)}"
-        return [f"{makespan}; objective {o.name} (the makespan, then the sum of action costs): {value}"]
+        first = "the makespan, then the sum of action costs"
+        return [f"{makespan}; objective {o.name} ({first}): {value}", *_minimum(report)]
     formula = f"cost + {o.span_weight:g} per s of makespan" if o.span_weight else "the sum of action costs"
     if report.scenario.goals.optional:
         formula += " + the penalties of optional goals left undone"
     value = _cost(o.value)
     if o.planner_value is not None and abs(o.planner_value - o.value) > 5e-4:
         value = f"planner {_cost(o.planner_value)}, re-simulated {value}"
-    return [f"{makespan}; objective {o.name} ({formula}): {value}"]
+    return [f"{makespan}; objective {o.name} ({formula}): {value}", *_minimum(report)]
+
+
+def _minimum(report: PlanReport) -> list[str]:
+    """The minimum of goal rooms per robot the plan keeps (planner.min_rooms), with what lowered it."""
+    sc, table = report.scenario, report.table
+    asked = sc.planner.min_rooms
+    if asked <= 0:
+        return []
+    least = need(sc.goals, {r: table.start_location.get(r, "") for r in table.robots}, asked)
+    lowered = ", lowered to the goal rooms' share per robot" if least < asked else ""
+    return [f"every robot to visit at least {least} goal rooms (planner.min_rooms {asked}{lowered})"]
 
 
 def _robots(report: PlanReport) -> list[str]:
