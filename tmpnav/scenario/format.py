@@ -539,7 +539,9 @@ COST = Section(
 ROADMAP = Section(
     fields={
         "samples": Field(
-            Number(None, minimum=10, maximum=200000, integer=True), "PRM milestones grown by OMPL", default=1500
+            Number(None, minimum=10, maximum=200000, integer=True),
+            "PRM milestones grown by OMPL; a roadmap that does not then reach every room grows on, doubling each round (up to 32 times), half of each round on PRM's bounce walks from the milestones that failed to connect (a narrow door)",
+            default=1500,
         ),
         "instantiations": Field(
             Number(None, minimum=1, maximum=50, integer=True), "pose instantiations sampled in each room", default=4
