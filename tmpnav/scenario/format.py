@@ -540,7 +540,7 @@ ROADMAP = Section(
     fields={
         "samples": Field(
             Number(None, minimum=10, maximum=200000, integer=True),
-            "PRM milestones grown by OMPL; a roadmap that does not then reach every room grows on, doubling each round (up to 32 times), half of each round on PRM's bounce walks from the milestones that failed to connect (a narrow door)",
+            "PRM milestones grown by OMPL; a roadmap that does not then reach every room grows on, doubling each round up to 32 times as many milestones, half of each round on PRM's bounce walks from the milestones that failed to connect (a narrow door)",
             default=1500,
         ),
         "instantiations": Field(
