@@ -98,12 +98,12 @@ def test_room_that_cannot_connect_is_named(loaded, monkeypatch: pytest.MonkeyPat
 
 def test_bounce_walks_find_the_doors_that_uniform_samples_miss(loaded) -> None:  # type: ignore[no-untyped-def]
     """One neighbour per milestone: uniform sampling alone did not get through the doors even at
-    32 times 10 milestones; half of each growth round on PRM's bounce walks from the milestones
-    that failed to connect does, within a few rounds."""
+    32 times 10 milestones; from the second growth round on, half of each round on PRM's bounce
+    walks from the milestones that failed to connect does, within a few rounds."""
     sc, world = loaded
     small = build_roadmap(world, sc.robots, replace(sc.roadmap, samples=10, neighbors=1))
     assert set(small.instantiations) == {"A", "B", "C"} and all(small.instantiations.values())
-    assert small.n_nodes < 160 + 3 * sc.roadmap.instantiations + len(sc.robots)
+    assert small.n_nodes < 320  # where uniform samples alone still had not connected it
 
 
 def test_a_roadmap_too_small_grows_until_every_room_connects(loaded) -> None:  # type: ignore[no-untyped-def]

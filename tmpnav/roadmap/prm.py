@@ -217,10 +217,12 @@ def _grow(
     """Grow the PRM with OMPL and add ``specials`` (instantiations, starts) as milestones, then
     grow it further, doubling its milestones each round, until ``connected(nodes, edges)`` (every
     room reaches a robot's start) or GROWTH times ``params.samples`` milestones (or GROWTH_SECONDS).
-    Each round puts its first half of new milestones on PRM's bounce walks from the milestones
-    that failed to connect (OMPL's expansion step, ``expandRoadmapPtc``: a door uniform samples
-    rarely find; a generated 24-room office connected at 2,348 milestones, not 24,098), and
-    samples the rest uniformly when that did not connect it.
+    Where the first round's uniform samples did not connect it, each later round puts its first
+    half of new milestones on PRM's bounce walks from the milestones that failed to connect
+    (OMPL's expansion step, ``expandRoadmapPtc``: a door uniform samples rarely find; a
+    generated 24-room office connected at 6,098 milestones, not after four rounds at 24,098) and
+    samples the rest uniformly. A roadmap that one round connects is the one uniform samples
+    make: walks in its first round changed the plans of the generated offices by -1.4% to +5.4%.
 
     Returns the vertices (N, 2), the undirected edges (E, 2) and the milestones grown (before
     the specials). A roadmap connected at ``params.samples`` is the one grown to that many."""
@@ -265,15 +267,14 @@ def _grow(
             break
         target = min(2 * target, GROWTH * params.samples)
         total = target + len(specials)
-        # half of the round's new milestones on PRM's bounce walks from the milestones that failed
-        # to connect (OMPL's expansion step: a narrow door), then the rest sampled uniformly
-        half = (milestones() + total) // 2
-        prm.expandRoadmapPtc(ob.PlannerTerminationCondition(lambda half=half: milestones() >= half))
-        grown = target
-        nodes, edges = _roadmap_of(ob, si, prm)
-        if connected(nodes, edges):
-            break
+        # from the second round on, half of the round's new milestones on PRM's bounce walks from
+        # the milestones that failed to connect (OMPL's expansion step: a narrow door), the rest
+        # sampled uniformly (the roadmap as dense everywhere as a round of uniform samples makes it)
+        if target > 2 * params.samples:  # the first round's uniform samples did not connect it
+            half = (milestones() + total) // 2
+            prm.expandRoadmapPtc(ob.PlannerTerminationCondition(lambda half=half: milestones() >= half))
         prm.growRoadmapPtc(ob.PlannerTerminationCondition(lambda total=total: milestones() >= total))
+        grown = target
         nodes, edges = _roadmap_of(ob, si, prm)
     del prm, pdef, si, space, goal, validator
     gc.collect()  # release the OMPL objects now, not at interpreter exit
