@@ -78,7 +78,8 @@ def plan_warnings(report: PlanReport) -> list[PlanWarning]:
     found = [w for w in (_over_threshold(report), _in_the_way(report), _gap(report)) if w is not None]
     split = _split(report)
     found += [w for w in (split if split is not None else _idle(report),) if w is not None]
-    found += [w for w in (_short(report),) if w is not None]
+    if (short := _short(report)) is not None:
+        found.append(short)
     for robot in report.scenario.robots:
         door = _worst_door(report, robot.name, robot.radius)
         if door is not None:
@@ -158,13 +159,18 @@ def _idle(report: PlanReport) -> PlanWarning | None:
     return PlanWarning("idle", last, float(len(idle)), IDLE_SHARE, text)
 
 
+def least_rooms(report: PlanReport) -> int:
+    """The goal rooms each robot of the plan is to visit: planner.min_rooms, lowered to the goals'
+    share per robot (tmpnav.task.minimum.need, from the robots' starts the planner saw)."""
+    table = report.table
+    starts = {r: table.start_location.get(r, "") for r in table.robots}
+    return need(report.scenario.goals, starts, report.scenario.planner.min_rooms)
+
+
 def _short(report: PlanReport) -> PlanWarning | None:
     """Robots that visit fewer work rooms than planner.min_rooms asks (lowered to the goals' share
     per robot, tmpnav.task.minimum): the search found no plan that keeps to it."""
-    sc = report.scenario
-    least = need(
-        sc.goals, {r: report.table.start_location.get(r, "") for r in report.table.robots}, sc.planner.min_rooms
-    )
+    sc, least = report.scenario, least_rooms(report)
     entered = counts(report.task.steps, work_rooms(sc.goals))
     short = {r.name: entered.get(r.name, 0) for r in sc.robots if entered.get(r.name, 0) < least}
     if not short:

@@ -52,7 +52,7 @@ from tmpnav.attachment.drift import clock_drift
 from tmpnav.belief.risk import position_std
 from tmpnav.choices import STOP_MEANINGS
 from tmpnav.numbers import angle, length, probability
-from tmpnav.report.quality import plan_conflicts, warning_lines
+from tmpnav.report.quality import least_rooms, plan_conflicts, warning_lines
 from tmpnav.report.schedule import (
     T_TOL,
     bound_values,
@@ -64,7 +64,6 @@ from tmpnav.report.schedule import (
 )
 from tmpnav.results import OTHER, STAGES, PlanReport
 from tmpnav.shipped import PREFIX, configs_dir
-from tmpnav.task.minimum import need
 from tmpnav.types import PlanStatus, ScanModelKind
 
 
@@ -229,11 +228,10 @@ def _objective(report: PlanReport) -> list[str]:
 
 def _minimum(report: PlanReport) -> list[str]:
     """The minimum of goal rooms per robot the plan keeps (planner.min_rooms), with what lowered it."""
-    sc, table = report.scenario, report.table
-    asked = sc.planner.min_rooms
+    asked = report.scenario.planner.min_rooms
     if asked <= 0:
         return []
-    least = need(sc.goals, {r: table.start_location.get(r, "") for r in table.robots}, asked)
+    least = least_rooms(report)
     lowered = ", lowered to the goal rooms' share per robot" if least < asked else ""
     return [f"every robot to visit at least {least} goal rooms (planner.min_rooms {asked}{lowered})"]
 
