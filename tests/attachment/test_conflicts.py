@@ -21,7 +21,7 @@ from tmpnav.oracle.oracle import Oracle
 from tmpnav.pipeline import load_world
 from tmpnav.results import TaskCounts, TaskResult
 from tmpnav.roadmap import build_roadmap
-from tmpnav.task.model import UNSAFE_PRICE
+from tmpnav.task.objectives import strict_price
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.types import Goals, PlanStatus
 
@@ -325,7 +325,7 @@ def test_a_plan_whose_robots_nothing_keeps_apart_ranks_below_every_plan_kept_apa
     planned = carried.plan_cost(plan)
     executed = ExecutedCost(carried, 0.05)
     refused = executed(plan, planned)
-    assert refused.unsafe >= 1 and refused.ranked(1.0) >= UNSAFE_PRICE > 100 * refused.value(1.0)
+    assert refused.unsafe >= 1 and refused.ranked(1.0) >= strict_price(1.0) > 100 * refused.value(1.0)
     assert refused.value(1.0) == planned.value(1.0)  # run as planned: nothing cleared them
     assert executed.robots_apart(plan) == {"r1", "r2"}  # the route edits' screen frees these first
     reported = ExecutedCost(carried, None)(plan, planned)

@@ -6,8 +6,9 @@ from __future__ import annotations
 
 import itertools
 
-from tmpnav.task.minimum import SHORT_PRICE, counts, need, shortfall, work_rooms
+from tmpnav.task.minimum import counts, need, shortfall, work_rooms
 from tmpnav.task.model import PlanCost, TableModel
+from tmpnav.task.objectives import strict_price
 from tmpnav.task.plans import Rules, with_origins
 from tmpnav.task.routes import route_edits
 from tmpnav.task.routing import solve_routes
@@ -57,7 +58,7 @@ def test_the_minimum_is_lowered_to_the_goals_share_and_ends_are_no_work() -> Non
 
 def test_a_room_short_ranks_a_plan_below_any_sum_of_costs() -> None:
     kept, short = PlanCost(100.0, (100.0,)), PlanCost(1.0, (1.0,), short=1)
-    assert short.ranked(0.0) - kept.ranked(0.0) > 0.5 * SHORT_PRICE
+    assert short.ranked(0.0) - kept.ranked(0.0) > 0.5 * strict_price(0.0)
     assert short.value(0.0) == 1.0  # the objective itself is the plan's
 
 

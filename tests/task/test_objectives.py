@@ -17,7 +17,7 @@ import random
 import pytest
 
 from tests.task.instances import Rules, small_instance
-from tmpnav.task.model import TableModel
+from tmpnav.task.model import PlanCost, TableModel
 from tmpnav.task.objectives import MAKESPAN_WEIGHT, OBJECTIVES
 from tmpnav.task.schedules import exact_schedule
 from tmpnav.task.timing import schedule, table_durations
@@ -137,3 +137,17 @@ def test_a_paired_move_starts_when_both_robots_are_free() -> None:
     assert found.makespan == 17.0 and found.waits("r2") == 6.0 and found.waits("r1") == 0.0
     assert found.busy("r1") == 15.0 and found.idle("r1") == 2.0
     assert found.busy("r2") == 11.0 and found.idle("r2") == 0.0  # busy + waits + idle = makespan
+
+
+@pytest.mark.parametrize("objective", ["weighted", "cost", "makespan"])
+def test_a_conflict_left_or_a_room_short_ranks_below_any_plan_without_under_every_objective(objective: str) -> None:
+    """The search's rank puts a plan ``tmpnav plan`` would refuse (a conflict left) or one short of
+    the minimum below every plan without, whatever its objective: under ``makespan`` too, where a
+    price of 10^6 cost units alone would be worth only 100 s, and a plan 100 s shorter that the
+    command refuses would win."""
+    weight = OBJECTIVES[objective].span_weight(CostWeights(1.0, 1.0, 1.0))
+    refused = PlanCost(50.0, (50.0,), span=100.0, unsafe=1)
+    short = PlanCost(50.0, (50.0,), span=100.0, short=1)
+    slow = PlanCost(5000.0, (5000.0,), span=5000.0)  # 50 times as long, 100 times the cost
+    assert refused.ranked(weight) > slow.ranked(weight) and short.ranked(weight) > slow.ranked(weight)
+    assert refused.value(weight) < slow.value(weight)  # its own objective is its own

@@ -15,9 +15,8 @@ A work room is a goal room a robot enters that is not its end (its dock): a room
 of them, W the work rooms no robot starts in (those are visited from the outset) and R the
 robots: a minimum the goals cannot give to every robot is lowered to what they can. A plan's
 **shortfall** is the sum over the robots of the rooms they lack, and the search ranks a plan
-:data:`SHORT_PRICE` higher per room it lacks (``PlanCost.ranked``): as much as a conflict left,
-more than any sum of action costs tmpnav meets, and 100 s of makespan under ``--objective
-makespan``. So the search keeps to the
+:func:`tmpnav.task.objectives.strict_price` higher per room it lacks (``PlanCost.ranked``): as
+much as a conflict left, more than any objective tmpnav meets. So the search keeps to the
 minimum wherever a plan that does exists among those it finds, and otherwise ends on the plan
 that lacks least, which the report names. Each stage works on the same price:
 
@@ -34,10 +33,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping, Sequence
 
-from tmpnav.types import PENALISED, Goals
-
-#: what the search adds to a plan's objective per room a robot lacks of the minimum
-SHORT_PRICE = PENALISED
+from tmpnav.types import Goals
 
 
 def work_rooms(goals: Goals) -> frozenset[str]:

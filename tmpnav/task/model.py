@@ -22,15 +22,10 @@ from typing import Protocol
 from tmpnav.choices import Costs
 from tmpnav.results import Schedule
 from tmpnav.task.encodings import ENCODINGS
-from tmpnav.task.minimum import SHORT_PRICE
+from tmpnav.task.objectives import strict_price
 from tmpnav.task.plans import Plan, Rules
 from tmpnav.task.timing import schedule, table_durations
-from tmpnav.types import PENALISED, CostTable, Goals, MoveKey
-
-#: what the anytime search adds to a plan's objective per conflict left (``PlanCost.unsafe``):
-#: more than any plan's objective tmpnav meets, so a plan the command would refuse is taken only
-#: where no plan kept apart was found
-UNSAFE_PRICE = PENALISED
+from tmpnav.types import CostTable, Goals, MoveKey
 
 
 @dataclass(frozen=True)
@@ -47,10 +42,10 @@ class PlanCost:
     span: float | None = None
     #: under a chance constraint, the robots still in each other's way when the plan is kept
     #: apart (tmpnav.attachment.apart.ExecutedCost): ``tmpnav plan`` refuses such a plan, so the
-    #: search ranks it below every plan without (:data:`UNSAFE_PRICE`)
+    #: search ranks it below every plan without (``ranked``)
     unsafe: int = 0
     #: the work rooms its robots lack of planner.min_rooms (tmpnav.task.minimum): the search ranks
-    #: it :data:`~tmpnav.task.minimum.SHORT_PRICE` higher per room
+    #: it below every plan that lacks fewer (``ranked``)
     short: int = 0
 
     @property
@@ -68,9 +63,10 @@ class PlanCost:
         return self.total + self.dropped + (span_weight * self.makespan if span_weight else 0.0)
 
     def ranked(self, span_weight: float) -> float:
-        """:meth:`value`, plus :data:`UNSAFE_PRICE` for each conflict left and
-        :data:`~tmpnav.task.minimum.SHORT_PRICE` for each room short of the minimum: what the search compares."""
-        return self.value(span_weight) + UNSAFE_PRICE * self.unsafe + SHORT_PRICE * self.short
+        """:meth:`value`, plus :func:`~tmpnav.task.objectives.strict_price` for each conflict left
+        and each room short of the minimum: what the search compares. So a plan the command would
+        refuse is taken only where no plan kept apart was found, under every objective."""
+        return self.value(span_weight) + strict_price(span_weight) * (self.unsafe + self.short)
 
     @classmethod
     def impossible(cls, n: int) -> PlanCost:

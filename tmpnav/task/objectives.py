@@ -24,10 +24,20 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from tmpnav.choices import Objective as Name
-from tmpnav.types import CostWeights
+from tmpnav.types import PENALISED, CostWeights
 
 #: cost units per second of makespan in the ``makespan`` objective
 MAKESPAN_WEIGHT = 1.0e4
+
+
+def strict_price(span_weight: float) -> float:
+    """What the searches add to a plan's objective for each thing that ranks it below every plan
+    without, under the objective of ``span_weight``: a conflict left (a plan ``tmpnav plan``
+    refuses), a room a robot lacks of planner.min_rooms. PENALISED cost units, more than any sum
+    of action costs tmpnav meets, and PENALISED seconds of makespan where a second is priced above
+    a unit (``makespan``): a price of PENALISED units alone would be worth only 100 s there, and a
+    plan 100 s shorter would rank above a plan kept apart."""
+    return PENALISED * max(1.0, span_weight)
 
 
 @dataclass(frozen=True)

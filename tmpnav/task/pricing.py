@@ -14,8 +14,9 @@ from dataclasses import replace
 from typing import TypeVar
 
 from tmpnav.results import StageTimes
-from tmpnav.task.minimum import SHORT_PRICE, counts, need, shortfall, work_rooms
+from tmpnav.task.minimum import counts, need, shortfall, work_rooms
 from tmpnav.task.model import CostModel, PlanCost
+from tmpnav.task.objectives import strict_price
 from tmpnav.task.plans import Plan
 from tmpnav.task.search_run import Executed, SearchOptions
 from tmpnav.types import Goals
@@ -54,7 +55,7 @@ class Pricing:
         """Whether the rooms ``plan``'s robots lack of the minimum alone rank it at or above the
         ``best`` plan's, whatever its cost (every objective is at least 0): it need not be costed."""
         lacking = self._short(plan)
-        return lacking > 0 and SHORT_PRICE * lacking >= self.value(best)
+        return lacking > 0 and strict_price(self.span_weight) * lacking >= self.value(best)
 
     def priced(self, plan: Plan, cost: PlanCost) -> PlanCost:
         """The plan's cost as it will be executed (robots kept apart, ``executed``), from

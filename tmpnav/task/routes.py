@@ -50,7 +50,8 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 from tmpnav.task.balance import Moves, relocated_steps, unloadings
-from tmpnav.task.minimum import SHORT_PRICE, shortfall
+from tmpnav.task.minimum import shortfall
+from tmpnav.task.objectives import strict_price
 from tmpnav.task.plans import Plan, Rules, targets_only, with_origins
 from tmpnav.task.route_orders import Legs, Orders
 from tmpnav.types import CostTable, Goals
@@ -121,7 +122,8 @@ def _scored(
     """(screened value, 2 n for edit n as it is, 2 n + 1 reordered) of the edits better than the
     plan, the plan's routes ``current`` and ``legs``; an edit that only gives the plan's own
     routes back (reordered) is none. The rooms an edit's routes lack of ``least`` (the
-    minimum and the work rooms) against the plan's are priced at :data:`SHORT_PRICE` each."""
+    minimum and the work rooms) against the plan's are priced at the search's
+    :func:`~tmpnav.task.objectives.strict_price` each."""
     need, work = least
 
     def lacking(routes: dict[str, list[str]], robots: set[str]) -> int:
@@ -138,7 +140,7 @@ def _scored(
                 continue
             value = screen.value_with(legs, changed_legs) + price.after(differ)
             if need:
-                value += SHORT_PRICE * (lacking(rooms, differ) - lacking(current, differ))
+                value += strict_price(screen.span_weight) * (lacking(rooms, differ) - lacking(current, differ))
             if value < now - EPSILON * max(1.0, abs(now)):
                 scored.append((value, 2 * n + v))
     return sorted(scored)

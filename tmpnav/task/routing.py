@@ -40,7 +40,7 @@ whatever the objective.
 
 Work rooms. With ``min_rooms`` (planner.min_rooms, tmpnav.task.minimum) a dimension counts the
 work rooms each route enters, and each route's end has a soft lower bound there: a room short
-of it costs :data:`tmpnav.task.minimum.SHORT_PRICE`.
+of it costs :func:`tmpnav.task.objectives.strict_price`.
 
 Search: a first solution (``PATH_CHEAPEST_ARC`` by default), then guided local search
 until the time limit (or ``solution_limit`` solutions). OR-Tools' local search is
@@ -60,7 +60,8 @@ from dataclasses import dataclass
 
 from tmpnav.task.bound import required_entries
 from tmpnav.task.encodings import COST_SCALE
-from tmpnav.task.minimum import SHORT_PRICE, work_rooms
+from tmpnav.task.minimum import work_rooms
+from tmpnav.task.objectives import strict_price
 from tmpnav.types import CostTable, Goals, MoveKey
 
 #: OR-Tools' time unit: a hundredth of a second
@@ -135,7 +136,7 @@ def solve_routes(
     ``initial`` (each robot's rooms in order: a replan's plan under way) is the solution the
     local search starts from instead of a first solution of its own, when the model accepts it.
     ``min_rooms``: each route should enter that many work rooms (tmpnav.task.minimum), a room
-    it lacks priced at :data:`tmpnav.task.minimum.SHORT_PRICE`.
+    it lacks priced at :func:`tmpnav.task.objectives.strict_price`.
     See the module docstring for the model.
     """
     if first_solution not in FIRST_SOLUTION:
@@ -166,7 +167,7 @@ def solve_routes(
     if (span_weight > 0 or goals.windows or goals.held) and table.duration:
         model.add_time(span_weight, goals)
     if min_rooms > 0:
-        model.add_minimum(min_rooms, work_rooms(goals))
+        model.add_minimum(min_rooms, work_rooms(goals), span_weight)
     return model.solve(time_limit, solution_limit, first_solution, initial, stagnation)
 
 
@@ -340,17 +341,17 @@ class _Model:
                 earliest, latest = (round(w / TIME_UNIT) for w in window)
                 time.CumulVar(self.manager.NodeToIndex(node)).SetRange(earliest, latest)
 
-    def add_minimum(self, least: int, work: frozenset[str]) -> None:
+    def add_minimum(self, least: int, work: frozenset[str], span_weight: float) -> None:
         """A dimension that counts the work rooms a route enters, with a soft lower bound of
-        ``least`` at every route's end: each room short of it costs
-        :data:`tmpnav.task.minimum.SHORT_PRICE` (in the arc costs' units)."""
+        ``least`` at every route's end: each room short of it costs the search's
+        :func:`tmpnav.task.objectives.strict_price` under ``span_weight`` (in the arc costs' units)."""
         n = len(self.location)
         ones = [1 if i >= self.first_task and self.location[i] in work else 0 for i in range(n)]
         callback = self.routing.RegisterUnaryTransitVector(ones)
         self.routing.AddDimension(callback, 0, sum(ones), True, "work rooms")
         rooms = self.routing.GetDimensionOrDie("work rooms")
         for v in range(self.n_v):
-            rooms.SetCumulVarSoftLowerBound(self.routing.End(v), least, round(SHORT_PRICE * COST_SCALE))
+            rooms.SetCumulVarSoftLowerBound(self.routing.End(v), least, round(strict_price(span_weight) * COST_SCALE))
             # an empty route's costs count only for a vehicle "used when empty" (else an idle robot pays nothing)
             self.routing.SetVehicleUsedWhenEmpty(True, v)
 
