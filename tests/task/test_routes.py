@@ -218,5 +218,38 @@ def test_robots_kept_apart_are_freed_of_the_price_by_an_edit_of_their_routes() -
     assert route_edits(plan, table, goals, rules, span_weight=0.0, apart=KeptApartPrice(20.0, frozenset({"r9"}))) == []
 
 
+def test_two_robots_nothing_keeps_apart_trade_their_whole_routes_first() -> None:
+    """r1 does L1-L3 and r2 L5, L4: the best routes by the screen. Where keeping them apart leaves
+    them in each other's way (robots docked in a row, the one behind with the work past the one
+    in front), the first edit offered is the trade of their whole routes, which the screen prices
+    dearer than the plan and would not offer; robots whose conflicts are cleared trade nothing."""
+    from tmpnav.task.routes import KeptApartPrice
+
+    table, goals = line_table(), Goals(ROOMS, ())
+    plan = plan_of(("r1", "L1"), ("r1", "L2"), ("r1", "L3"), ("r2", "L5"), ("r2", "L4"))
+    rules = Rules(table.start_location, goals)
+    stuck = KeptApartPrice(1e6, frozenset({"r1", "r2"}), frozenset({("r1", "r2")}))
+    edits = route_edits(plan, table, goals, rules, span_weight=1.0, apart=stuck)
+    assert routes(edits[0]) == {"r1": ["L5", "L4"], "r2": ["L1", "L2", "L3"]}
+    assert rules.valid(with_origins(edits[0], table.start_location))
+    cleared = KeptApartPrice(1e6, frozenset({"r1", "r2"}))
+    assert all(
+        routes(e) != {"r1": ["L5", "L4"], "r2": ["L1", "L2", "L3"]}
+        for e in route_edits(plan, table, goals, rules, span_weight=1.0, apart=cleared)
+    )
+
+
+def test_a_robot_whose_own_target_stays_does_not_trade() -> None:
+    """r1 must visit L1 itself (goals.per_robot): its route cannot go to r2, so no trade."""
+    from tmpnav.task.routes import KeptApartPrice
+
+    table, goals = line_table(), Goals(("L2", "L3", "L4", "L5"), (("r1", ("L1",)),))
+    plan = plan_of(("r1", "L1"), ("r1", "L2"), ("r2", "L5"), ("r2", "L4"), ("r2", "L3"))
+    rules = Rules(table.start_location, goals)
+    stuck = KeptApartPrice(1e6, frozenset({"r1", "r2"}), frozenset({("r1", "r2")}))
+    for edit in route_edits(plan, table, goals, rules, span_weight=1.0, apart=stuck):
+        assert "L1" in routes(edit)["r1"]
+
+
 def plan_steps(plan: tuple) -> list:
     return [tuple((r, x) for r, _, x in step) for step in plan]

@@ -223,6 +223,7 @@ class ExecutedCost:
         self.carried, self.delta = carried, delta
         self._memo: dict[Plan, PlanCost] = {}
         self._apart: dict[Plan, frozenset[str]] = {}
+        self._stuck: dict[Plan, frozenset[tuple[str, str]]] = {}
         self.priced = 0  # plans checked for conflicts (runs recorded)
 
     def __call__(self, plan: Plan, cost: PlanCost) -> PlanCost:
@@ -235,6 +236,11 @@ class ExecutedCost:
         """The robots whose conflicts keeping ``plan`` apart resolved (a plan priced before)."""
         return self._apart.get(tuple(plan), frozenset())
 
+    def robots_stuck(self, plan: Plan) -> frozenset[tuple[str, str]]:
+        """The pairs of robots still in each other's way in ``plan`` kept apart (a plan priced
+        before): those its conflicts left are between, each pair in name order."""
+        return self._stuck.get(tuple(plan), frozenset())
+
     def _price(self, plan: Plan, cost: PlanCost) -> PlanCost:
         if not math.isfinite(cost.total):
             return cost
@@ -244,6 +250,8 @@ class ExecutedCost:
         met = (*(res.conflicts_before if res is not None else ()), *found.left)
         if met:
             self._apart[plan] = frozenset(r for c in met for r in c.robots)
+        if found.left:
+            self._stuck[plan] = frozenset((min(c.robots), max(c.robots)) for c in found.left)
         if res is None:  # the plan as planned; with conflicts left, one the command refuses
             return replace(cost, unsafe=unsafe) if unsafe else cost
         executed = tuple(res.run.step_costs(len(res.plan), self.carried.scenario.cost, self.delta))

@@ -380,7 +380,8 @@ class AnytimeSearch:
             return KeptApartPrice()
         slack = self.pricing.value(self.best_cost) - self.pricing.value(self.pricing.cost(self.best))
         robots = self.executed.robots_apart(self.best)
-        return KeptApartPrice(slack, robots) if slack > 0 and robots else KeptApartPrice()
+        stuck = self.executed.robots_stuck(self.best)
+        return KeptApartPrice(slack, robots, stuck) if slack > 0 and robots else KeptApartPrice()
 
     def _round(self, size: int) -> Literal["improved", "unchanged", "work budget", "time budget", "optimal"]:
         """Neighbourhoods of ``size`` rooms around seeds until every room was in one

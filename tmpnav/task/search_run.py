@@ -22,9 +22,12 @@ Executed = Callable[[Plan, PlanCost], PlanCost]
 
 @runtime_checkable
 class KeepsApart(Protocol):
-    """An ``Executed`` that says which robots it kept apart in a plan it priced."""
+    """An ``Executed`` that says which robots it kept apart in a plan it priced, and which pairs
+    of them nothing kept apart."""
 
     def robots_apart(self, plan: Plan) -> frozenset[str]: ...
+
+    def robots_stuck(self, plan: Plan) -> frozenset[tuple[str, str]]: ...
 
 
 @dataclass(frozen=True)
