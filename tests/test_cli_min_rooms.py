@@ -47,7 +47,7 @@ def test_a_minimum_shares_the_rooms_the_sum_of_costs_gives_one_robot(tmp_path: P
     shared = tmpnav(*base, "--min-rooms", "3", "-o", str(tmp_path / "shared"))
     assert shared.returncode == 0, shared.stderr
     assert min(rooms_per_robot(tmp_path / "shared").values()) >= 3
-    assert "every robot to visit at least 3 goal rooms (planner.min_rooms 3)" in shared.stdout
+    assert "every robot to visit at least 3 goal rooms (--min-rooms 3)" in shared.stdout
     assert "warning: 1 of" not in shared.stdout  # kept: no warning
     doc = json.loads((tmp_path / "shared" / "plan.json").read_text())
     assert doc["search"]["mode"] == "anytime"

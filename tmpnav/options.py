@@ -13,7 +13,7 @@ from tmpnav import scenario as scenario_stage
 from tmpnav.choices import Costs, Objective, Search, choose, paper_conflict
 from tmpnav.errors import InputError, Problem, ScenarioError
 from tmpnav.results import SearchProgress
-from tmpnav.types import DEFAULT_RISK_SOURCE, SAFE_MARGIN, Goals, Roadmap, RobotSpec, Scenario
+from tmpnav.types import DEFAULT_RISK_SOURCE, FLEET_DEFAULT, SAFE_MARGIN, Goals, Roadmap, RobotSpec, Scenario
 
 
 @dataclass(frozen=True)
@@ -126,6 +126,7 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
         costs=o.costs or planner.costs,
         objective=o.objective or planner.objective,
         min_rooms=o.min_rooms if o.min_rooms is not None else planner.min_rooms,
+        min_rooms_from=planner.min_rooms_from if o.min_rooms is None else "--min-rooms" if o.min_rooms else "",
         max_risk=planner.max_risk if o.max_risk is None else None if o.max_risk == NO_THRESHOLD else o.max_risk,
         max_risk_from=planner.max_risk_from
         if o.max_risk is None
@@ -136,6 +137,12 @@ def apply_options(scenario: Scenario, overrides: Overrides) -> Scenario:
     )
     if (why := paper_conflict(planner.encoding, o.search, o.costs, o.objective)) is not None:
         raise InputError(why)
+    if (
+        planner.min_rooms
+        and planner.min_rooms_from == FLEET_DEFAULT
+        and (planner.encoding == "paper" or planner.search == "exact")
+    ):  # a fleet's default minimum gives way to a search asked for that does not keep one
+        planner = replace(planner, min_rooms=0, min_rooms_from="")
     if planner.min_rooms and (planner.encoding == "paper" or planner.search == "exact"):
         raise InputError(
             f"planner.min_rooms {planner.min_rooms} needs the anytime search, which keeps it; the "

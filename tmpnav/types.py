@@ -360,6 +360,8 @@ CostValue = TypeVar("CostValue", float, np.ndarray)
 #: (planner.max_risk): every move's collision bound at most 5% (docs/planning.md)
 DEFAULT_MAX_RISK = 0.05
 DEFAULT_RISK_SOURCE = "the default for robots with a range sensor"
+#: PlannerOptions.min_rooms_from of a fleet's default minimum (tmpnav.choices.default_min_rooms)
+FLEET_DEFAULT = "the default for a fleet of 9 robots or more"
 #: m: the margin from the walls paths prefer and goal poses keep when the robots carry a range
 #: sensor or plan within a threshold, and the scenario names none (roadmap.clearance;
 #: tmpnav.roadmap.graph.safe_weights)
@@ -589,6 +591,9 @@ class PlannerOptions:
     clock_drift: float | None = None
     #: work rooms each robot visits at least, where the goals allow (0: no minimum; tmpnav.task.minimum)
     min_rooms: int = 0
+    #: where min_rooms comes from, in words for the reports: "planner.min_rooms", "--min-rooms",
+    #: FLEET_DEFAULT (a fleet's default, tmpnav.choices.default_min_rooms) or "" (none in force)
+    min_rooms_from: str = ""
 
 
 @dataclass(frozen=True)

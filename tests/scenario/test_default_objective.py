@@ -55,3 +55,43 @@ def test_one_robot_is_no_team() -> None:
     assert default_objective(1, True) == "weighted"
     assert default_objective(2, True) == "makespan"
     assert default_objective(4, False) == "weighted"
+
+
+def fleet(tmp_path: Path, planner: str = "") -> Path:
+    """configs/building-8robots.yaml with a ninth robot (in corridor A, east of r1): a fleet."""
+    text = (ROOT / "configs" / "building-8robots.yaml").read_text()
+    old = "  - {name: r8, pose: [35.5, 11, 1.5708]}"
+    assert old in text
+    text = text.replace(old, old + "\n  - {name: r9, pose: [6.5, 7.25, 0]}")
+    if planner:
+        text = text.replace("\nrobots:\n", f"\nplanner: {planner}\n\nrobots:\n", 1)
+    path = tmp_path / "fleet.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_a_fleet_plans_for_the_makespan_with_a_minimum_of_rooms_by_default(tmp_path: Path) -> None:
+    """From 9 robots on, a tour too plans with the makespan first and every robot on at least 3
+    goal rooms (tmpnav.choices.FLEET); 8 robots keep the weighted objective and no minimum."""
+    from tmpnav.types import FLEET_DEFAULT
+
+    nine = load(fleet(tmp_path)).planner
+    assert (nine.objective, nine.min_rooms, nine.min_rooms_from) == ("makespan", 3, FLEET_DEFAULT)
+    eight = load(ROOT / "configs" / "building-8robots.yaml").planner
+    assert (eight.objective, eight.min_rooms, eight.min_rooms_from) == ("weighted", 0, "")
+    named = load(fleet(tmp_path, "{objective: weighted, min_rooms: 0}")).planner
+    assert (named.objective, named.min_rooms) == ("weighted", 0)
+
+
+def test_a_fleets_default_minimum_gives_way_to_a_search_that_keeps_none(tmp_path: Path) -> None:
+    """--search exact and the paper's encoding keep no minimum: a fleet's default one is set aside
+    for them, one the scenario or the command line names is refused (one line)."""
+    from tmpnav.errors import InputError
+    from tmpnav.options import Overrides, apply_options
+
+    scenario = load(fleet(tmp_path))
+    exact = apply_options(scenario, Overrides(search="exact")).planner
+    assert (exact.min_rooms, exact.min_rooms_from) == (0, "")
+    assert apply_options(scenario, Overrides(min_rooms=2)).planner.min_rooms_from == "--min-rooms"
+    with pytest.raises(InputError, match=r"planner\.min_rooms 3 needs the anytime search"):
+        apply_options(load(fleet(tmp_path, "{min_rooms: 3}")), Overrides(search="exact"))

@@ -305,7 +305,9 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
         option(
             "--objective",
             type=click.Choice(list(OBJECTIVES)),
-            default_text=scenario_default("objective", "makespan for a team on a shift, weighted otherwise"),
+            default_text=scenario_default(
+                "objective", "makespan for a team on a shift or a fleet of 9 robots or more, weighted otherwise"
+            ),
             help="What the plan minimises, the robots moving at once: weighted (the costs of all moves plus "
             "cost.M_T per second until the last robot is done), cost (the costs of all moves, as in the paper) "
             "or makespan (the time until the last robot is done first).",
@@ -314,7 +316,7 @@ def oracle_options(func: Callable[..., Any] | None = None, mutual: bool = True) 
             "--min-rooms",
             type=click.IntRange(min=0, max=10**4),
             metavar="N",
-            default_text=scenario_default("min_rooms", "0"),
+            default_text=scenario_default("min_rooms", "3 for a fleet of 9 robots or more, else 0"),
             help="Every robot visits at least N goal rooms (fewer where the goals give fewer per robot), so "
             "that none stands idle while others work; a plan that cannot keep to it is ranked below all "
             "that do, and the summary names the robots short of it. Planned by the anytime search. "

@@ -233,7 +233,9 @@ def _minimum(report: PlanReport) -> list[str]:
         return []
     least = least_rooms(report)
     lowered = ", lowered to the goal rooms' share per robot" if least < asked else ""
-    return [f"every robot to visit at least {least} goal rooms (planner.min_rooms {asked}{lowered})"]
+    source = report.scenario.planner.min_rooms_from or "planner.min_rooms"
+    source = f"{source} {asked}" if source in ("planner.min_rooms", "--min-rooms") else f"{asked}: {source}"
+    return [f"every robot to visit at least {least} goal rooms ({source}{lowered})"]
 
 
 def _robots(report: PlanReport) -> list[str]:

@@ -695,7 +695,7 @@ PLANNER = Section(
         ),
         "objective": Field(
             Choice(choices=OBJECTIVE_CHOICES),
-            "what the plan minimises: weighted (the sum of action costs plus cost.M_T per second of makespan), cost (the paper's sum of action costs) or makespan (the team's time first, then the sum); omitted: makespan for a team on a shift (two robots or more, and goals.ends or a job with a service time), else weighted",
+            "what the plan minimises: weighted (the sum of action costs plus cost.M_T per second of makespan), cost (the paper's sum of action costs) or makespan (the team's time first, then the sum); omitted: makespan for a team on a shift (two robots or more, and goals.ends or a job with a service time) and for a fleet of 9 robots or more, else weighted",
             default=None,
         ),
         "max_risk": Field(
@@ -715,8 +715,8 @@ PLANNER = Section(
         ),
         "min_rooms": Field(
             Number(None, minimum=0, maximum=10**4, integer=True),
-            "the goal rooms (goals.visit and the robots' own targets, not their ends) each robot visits at least, so that no robot stands idle while others work; lowered to the goal rooms' share per robot where there are fewer; a plan that cannot keep to it is ranked below every plan that does and its report names the robots short of it; the anytime search keeps it (search auto plans so; exact and the paper's encoding do not take it); 0: no minimum",
-            default=0,
+            "the goal rooms (goals.visit and the robots' own targets, not their ends) each robot visits at least, so that no robot stands idle while others work; lowered to the goal rooms' share per robot where there are fewer; a plan that cannot keep to it is ranked below every plan that does and its report names the robots short of it; the anytime search keeps it (search auto plans so; exact and the paper's encoding do not take it); 0: no minimum; omitted: 3 for a fleet of 9 robots or more (set aside by search exact or the paper's encoding), else 0",
+            default=None,
         ),
         "costs": Field(
             Choice(choices=COSTS_CHOICES),

@@ -15,7 +15,7 @@ from typing import Any
 
 import yaml
 
-from tmpnav.choices import Objective, default_objective
+from tmpnav.choices import Objective, default_min_rooms, default_objective
 from tmpnav.errors import Problem, ScenarioError
 from tmpnav.scenario.format import ROS_MAP, SCENARIO, polygonal_cells
 from tmpnav.scenario.limits import MAP_CELLS, YAML_BYTES
@@ -25,6 +25,7 @@ from tmpnav.scenario.yamlio import YamlLimitError, YamlValueError, read_yaml
 from tmpnav.types import (
     DEFAULT_MAX_RISK,
     DEFAULT_RISK_SOURCE,
+    FLEET_DEFAULT,
     NAV2_AMCL,
     CostWeights,
     Door,
@@ -321,7 +322,7 @@ def _build(doc: YamlDoc, d: dict[str, Any], ros: RosMap | None) -> Scenario:
             ),
             ends=tuple(d["goals"]["ends"].items()),
         ),
-        planner=_planner(d["planner"], d["models"]["range_sensor"] is not None, _objective(d)),
+        planner=_planner(d["planner"], d["models"]["range_sensor"] is not None, _objective(d), len(d["robots"])),
         key_lines={_display(raw, doc): line for raw, line in doc.lines.items()},
     )
 
@@ -350,9 +351,15 @@ def _objective(d: dict[str, Any]) -> Objective:
     return default_objective(len(d["robots"]), shift)
 
 
-def _planner(p: dict[str, Any], range_sensor: bool, objective: Objective) -> PlannerOptions:
+def _planner(p: dict[str, Any], range_sensor: bool, objective: Objective, robots: int) -> PlannerOptions:
     """The planner's options; a team with a range sensor plans within DEFAULT_MAX_RISK unless the
-    scenario names its own threshold."""
+    scenario names its own threshold, and a fleet keeps its default minimum of rooms per robot
+    unless it names its own."""
+    if p["min_rooms"] is None:
+        least = default_min_rooms(robots)
+        p = {**p, "min_rooms": least, "min_rooms_from": FLEET_DEFAULT if least else ""}
+    else:
+        p = {**p, "min_rooms_from": "planner.min_rooms" if p["min_rooms"] else ""}
     p = {**p, "objective": objective}
     if p["max_risk"] is not None:
         return PlannerOptions(**p, max_risk_from="planner.max_risk")
