@@ -88,3 +88,21 @@ def test_a_bad_minimum_in_the_scenario_names_its_key(tmp_path: Path) -> None:
     path.write_text(yaml.safe_dump(doc))
     proc = tmpnav("plan", str(path), "--cache-dir", str(tmp_path))
     assert_clean_failure(proc, 2, "planner.min_rooms")
+
+
+@pytest.mark.slow
+def test_a_fleet_plans_with_its_default_minimum(tmp_path: Path) -> None:
+    """configs/building-8robots.yaml with a ninth robot is a fleet: with no objective or minimum
+    named, it plans for the makespan with every robot on at least 3 of its 20 goal rooms, lowered
+    to the share of 2, and the summary says where the minimum comes from."""
+    from tests.scenario.test_default_objective import fleet
+
+    out = tmp_path / "out"
+    result = tmpnav("plan", str(fleet(tmp_path)), "--cache-dir", str(tmp_path / "cache"), "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    assert "objective makespan" in result.stdout
+    assert (
+        "every robot to visit at least 2 goal rooms (3: the default for a fleet of 9 robots or more, "
+        "lowered to the goal rooms' share per robot)" in result.stdout
+    )
+    assert min(rooms_per_robot(out).values()) >= 2
