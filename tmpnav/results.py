@@ -10,6 +10,7 @@ class of the oracle or the task stage (it sits below them: they return its value
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable, Iterator, Mapping
@@ -148,7 +149,16 @@ class Schedule:
 
     def timeline(self, robot: str) -> tuple[TimedMove, ...]:
         """The robot's moves in the order it makes them."""
-        return tuple(m for m in self.moves if m.robot == robot)
+        return self._timelines.get(robot, ())
+
+    @functools.cached_property
+    def _timelines(self) -> dict[str, tuple[TimedMove, ...]]:
+        """Robot -> its moves in plan order, for :meth:`timeline` (asked for every robot of every
+        plan the search prices)."""
+        found: dict[str, list[TimedMove]] = {}
+        for m in self.moves:
+            found.setdefault(m.robot, []).append(m)
+        return {r: tuple(ms) for r, ms in found.items()}
 
     def busy(self, robot: str) -> float:
         """Seconds the robot drives."""

@@ -135,22 +135,26 @@ def _scored(
     minimum and the work rooms) against the plan's are priced at the search's
     :func:`~tmpnav.task.objectives.strict_price` each."""
     need, work = least
+    have = {r: sum(x in work for x in xs) for r, xs in current.items()} if need else {}
 
-    def lacking(routes: dict[str, list[str]], robots: set[str]) -> int:
-        return shortfall({r: sum(x in work for x in routes[r]) for r in robots}, sorted(robots), need)
+    def lacking(rooms: dict[str, list[str]]) -> int:
+        """The rooms the edit's robots lack of the minimum, less those they lack in the plan (the
+        same whatever the order of each route's rooms)."""
+        robots = sorted(rooms)
+        entered = {r: sum(x in work for x in rooms[r]) for r in robots}
+        return shortfall(entered, robots, need) - shortfall(have, robots, need)
 
     now = screen.value(legs.values()) + price.slack
     scored: list[tuple[float, int]] = []
     for n, (changed, (as_is, order, reordered)) in enumerate(zip((c for c, _ in edits), screened, strict=True)):
+        short = strict_price(screen.span_weight) * lacking(changed) if need else 0.0
         for v, (rooms, changed_legs) in enumerate(
             ((changed, as_is), (order, reordered)) if order != changed else ((changed, as_is),)
         ):
             differ = {r for r, xs in rooms.items() if current[r] != xs}
             if not differ:
                 continue
-            value = screen.value_with(legs, changed_legs) + price.after(differ)
-            if need:
-                value += strict_price(screen.span_weight) * (lacking(rooms, differ) - lacking(current, differ))
+            value = screen.value_with(legs, changed_legs) + price.after(differ) + short
             if value < now - EPSILON * max(1.0, abs(now)):
                 scored.append((value, 2 * n + v))
     return sorted(scored)
