@@ -119,3 +119,23 @@ def test_the_search_leaves_a_share_of_the_limit_to_the_stages_after_it() -> None
     # a long plan's files and figures take longer: 200 goals keep 15 s of a 120 s limit
     assert deadline.Deadline(120.0).after_search(200) == pytest.approx(deadline.AFTER_SEARCH_PER_GOAL * 200)
     assert deadline.Deadline(120.0).after_search(20) == pytest.approx(deadline.AFTER_SEARCH_SHARE * 120.0)
+
+
+@pytest.mark.slow
+def test_a_simulation_ended_by_its_time_limit_exits_with_its_files_written(tmp_path: Path) -> None:
+    """Its sessions run on worker processes, forked while the parent held SIGTERM: the pool stopped
+    at the limit must end them, else the command waits for them at exit forever."""
+    out = tmp_path / "out"
+    args = ("simulate", "configs/corridor-2robots.yaml", "--sessions", "100000", "--workers", "2")
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run(
+        [sys.executable, "-m", "tmpnav", *args, "--time-limit", "6", "-o", str(out)],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=ROOT,
+        timeout=120,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert re.search(r"--time-limit 6 s: \d+ of 100000 sessions ran", proc.stdout), proc.stdout
+    assert (out / "summary.md").is_file()

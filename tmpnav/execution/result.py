@@ -252,6 +252,10 @@ def _init_worker(shared: _Sessions, parent: int) -> None:
     global _SHARED
     signal.signal(signal.SIGTERM, signal.SIG_DFL)  # a worker just ends; Ctrl-C is the parent's business
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # held while the parent forked (tmpnav.lifetime.signals_held), and a fork keeps the mask: a
+    # worker that blocked SIGTERM outlived the pool stopped at the time limit, and the command,
+    # its files written, waited for it at exit forever
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
     die_with_parent(parent)
     _SHARED = shared
 
