@@ -92,18 +92,20 @@ def route_edits(
     pinned = {r for step in steps if len(step) > 1 for r, _ in step}
     screen = _Screen(singles, goals, span_weight)
     legs = {r: screen.route(r, [x for _, x in route]) for r, route in routes.items()}
-    edits = list(_edits(steps, routes, pinned, goals, rules))
+    free = [r for r in routes if r not in pinned]
+    plan_routes = _Routes(steps, routes, free, goals, rules, frozenset(x for _, x in goals.ends))
+    edits = list(_edits(plan_routes))
     if span_weight:  # the makespan counts: chains of relocations from the robot that finishes last
-        free = [r for r in routes if r not in pinned]
-        movable = _Routes(steps, routes, free, goals, rules, frozenset(x for _, x in goals.ends)).movable
+        movable = plan_routes.movable
         edits += unloadings(steps, free, movable, Moves(singles, goals), span_weight, UNLOADING_DEPTH * len(robots))
     in_routes = [x for route in routes.values() for _, x in route]
     screened = Orders(singles, goals, span_weight, list(routes), in_routes).screen([changed for changed, _ in edits])
     current = {r: [x for _, x in route] for r, route in routes.items()}
-    scored = _scored(edits, screened, current, screen, legs, apart or KeptApartPrice(), least)
+    apart = apart or KeptApartPrice()
+    scored = _scored(edits, screened, current, screen, legs, apart, least)
     out: list[Steps] = []
     seen: set[tuple[tuple[tuple[str, str], ...], ...]] = set()
-    for edited in _trades(steps, routes, pinned, goals, rules, (apart or KeptApartPrice()).stuck):
+    for edited in _trades(plan_routes, apart.stuck):
         if tuple(edited) not in seen and rules.valid(with_origins(edited, rules.start_location)):
             seen.add(tuple(edited))
             out.append(edited)
@@ -217,12 +219,8 @@ class _Routes:
         return room not in self.ends and (robot, room) not in self.rules.targets and self.goals.may_visit(to, room)
 
 
-def _edits(
-    steps: Steps, routes: dict[str, list[tuple[int, str]]], pinned: set[str], goals: Goals, rules: Rules
-) -> Iterator[Edit]:
+def _edits(plan: _Routes) -> Iterator[Edit]:
     """Every relocate, exchange and 2-opt* edit."""
-    free = [r for r in routes if r not in pinned]
-    plan = _Routes(steps, routes, free, goals, rules, frozenset(x for _, x in goals.ends))
     yield from _relocations(plan)
     yield from _exchanges(plan)
     yield from _tail_swaps(plan)
@@ -272,41 +270,30 @@ def _tail_swaps(plan: _Routes) -> Iterator[Edit]:
                     tail_b = plan.routes[b][j:]
                     if (not tail_a and not tail_b) or not all(plan.movable(b, y, a) for _, y in tail_b):
                         continue
-                    changed = {
-                        a: plan.rooms(a)[:i] + [y for _, y in tail_b],
-                        b: plan.rooms(b)[:j] + [x for _, x in tail_a],
-                    }
-                    edited = list(plan.steps)
-                    for k, x in tail_a:
-                        edited[k] = ((b, x),)
-                    for k, y in tail_b:
-                        edited[k] = ((a, y),)
-                    yield changed, edited
+                    yield _swapped(plan, a, i, b, j)
 
 
-def _trades(
-    steps: Steps,
-    routes: dict[str, list[tuple[int, str]]],
-    pinned: set[str],
-    goals: Goals,
-    rules: Rules,
-    stuck: frozenset[tuple[str, str]],
-) -> Iterator[Steps]:
+def _swapped(plan: _Routes, a: str, i: int, b: str, j: int) -> tuple[dict[str, list[str]], Steps]:
+    """a's tail from i and b's tail from j swapped: the two routes, and the plan's steps."""
+    tail_a, tail_b = plan.routes[a][i:], plan.routes[b][j:]
+    changed = {a: plan.rooms(a)[:i] + [y for _, y in tail_b], b: plan.rooms(b)[:j] + [x for _, x in tail_a]}
+    edited = list(plan.steps)
+    for k, x in tail_a:
+        edited[k] = ((b, x),)
+    for k, y in tail_b:
+        edited[k] = ((a, y),)
+    return changed, edited
+
+
+def _trades(plan: _Routes, stuck: frozenset[tuple[str, str]]) -> Iterator[Steps]:
     """The plan's steps with each pair of ``stuck`` robots' whole routes swapped (module docstring:
-    a trade), where every room of each may go to the other."""
-    free = [r for r in routes if r not in pinned]
-    plan = _Routes(steps, routes, free, goals, rules, frozenset(x for _, x in goals.ends))
+    a trade: the 2-opt* from both routes' starts), where every room of each may go to the other."""
     for a, b in sorted(stuck):
-        if a not in free or b not in free:
+        if a not in plan.free or b not in plan.free:
             continue
-        if not all(plan.movable(a, x, b) for _, x in routes[a]) or not all(plan.movable(b, y, a) for _, y in routes[b]):
-            continue
-        edited = list(steps)
-        for k, x in routes[a]:
-            edited[k] = ((b, x),)
-        for k, y in routes[b]:
-            edited[k] = ((a, y),)
-        yield edited
+        movable = all(plan.movable(a, x, b) for _, x in plan.routes[a])
+        if movable and all(plan.movable(b, y, a) for _, y in plan.routes[b]):
+            yield _swapped(plan, a, 0, b, 0)[1]
 
 
 @dataclass(frozen=True)
