@@ -427,8 +427,10 @@ def calibrate(
 
     Plans the scenario, executes the plan with nav2's AMCL localising every robot (the
     optional extra tmpnav[amcl]) on a site that differs from the map, and fits the model's
-    information share so that the plan's predicted covariance holds 96% of the driving steps'
-    actual errors within 3 sigma; then plans again with it, up to --rounds times. The same
+    information share so that the driving steps' actual errors against the plan's predicted
+    covariance have a median NEES of 1-4 with at most 5% beyond 3 sigma (the middle of the
+    shares that meet both); where no share can, so that 96% lie within 3 sigma. It plans
+    again with each new share, up to --rounds times, and stops at a round that meets both. The same
     executions count the wall hits per metre driven: the scenario's failure_rate stays where
     the count agrees with it, else it becomes the count's upper 95% limit. The scenario's floor
     (floor_beams), heading spread (heading_blur) and prediction noise (prediction_noise) stay as
