@@ -131,6 +131,32 @@ _VECTORS: dict[RppParams, np.ndarray] = {}
 ) = range(21)
 
 
+@nb.njit(cache=True, inline="always")
+def reaches(dx, dy, r):  # pragma: no cover
+    """``math.hypot(dx, dy) >= r``, to the bit: the hypotenuse is taken only where the sum of the
+    squares, a few rounding errors off it, lies within a billionth of r² (the carrot's search
+    asks of a dozen path points a command, and the hypotenuse cost more than the rest of it)."""
+    q = dx * dx + dy * dy
+    rr = r * r
+    if q < rr * (1.0 - 1e-9):
+        return False
+    if q > rr * (1.0 + 1e-9):
+        return True
+    return math.hypot(dx, dy) >= r
+
+
+@nb.njit(cache=True, inline="always")
+def is_near(dx, dy, r):  # pragma: no cover
+    """``math.hypot(dx, dy) <= r``, to the bit, as :func:`reaches` decides it."""
+    q = dx * dx + dy * dy
+    rr = r * r
+    if q < rr * (1.0 - 1e-9):
+        return True
+    if q > rr * (1.0 + 1e-9):
+        return False
+    return math.hypot(dx, dy) <= r
+
+
 @nb.njit(cache=True)
 def rotate(angle, last_w, turn_rate, dt, p):  # pragma: no cover
     """omega (rad/s) of RPP's turn on the spot towards a heading ``angle`` rad away (positive: to
@@ -181,7 +207,7 @@ def command(path, left, index, x, y, th, last_v, last_w, obstacle, speed, turn_r
     for j in range(index, n):
         rx, ry = path[j, 0] - x, path[j, 1] - y
         bx, by = c * rx + s * ry, -s * rx + c * ry
-        if math.hypot(bx, by) >= lookahead:
+        if reaches(bx, by, lookahead):
             if j == index:
                 cx, cy = bx, by
             else:  # the circle of radius lookahead crosses a -> b
@@ -239,7 +265,7 @@ def step_commands(
     follower runs it at nav2's 20 Hz, the planner's rollout :data:`PLAN_SUBSTEPS` times a step."""
     n = path.shape[0]
     for k in range(out.shape[0]):
-        within = within or math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y) <= p[_GOAL_TOLERANCE]
+        within = within or is_near(path[n - 1, 0] - x, path[n - 1, 1] - y, p[_GOAL_TOLERANCE])
         if within and heading_reached(th, goal, p):
             return index, within, 0.0, 0.0
         v, w, index = command(path, left, index, x, y, th, v, w, obstacle, speed, turn_rate, h, p, goal)
@@ -323,7 +349,7 @@ def _pursue(
     while t < budget:
         x, y, th = poses[t, 0], poses[t, 1], poses[t, 2]
         # nav2's goal checker: the position once within its tolerance stays reached (stateful)
-        within = within or math.hypot(path[n - 1, 0] - x, path[n - 1, 1] - y) <= p[_GOAL_TOLERANCE]
+        within = within or is_near(path[n - 1, 0] - x, path[n - 1, 1] - y, p[_GOAL_TOLERANCE])
         if within and heading_reached(th, goal, p):
             arrived = True
             break
