@@ -46,7 +46,7 @@ import numba as nb
 import numpy as np
 
 from tmpnav.belief.controls import PathControls
-from tmpnav.belief.pursuit_path import Rounding, driven_path, length_left
+from tmpnav.belief.pursuit_path import Rounding, densified, rounded_path
 from tmpnav.world.geometry import wrap_angle_scalar
 
 #: the law's evaluations per control step in the planner's rollout (:func:`pursuit_controls`)
@@ -311,21 +311,55 @@ def pursuit_controls(
         raise ValueError("pursuit_controls needs at least one point")
     if speed <= 0 or turn_rate <= 0 or dt <= 0 or substeps < 1:
         raise ValueError("speed, turn_rate, dt and substeps must be positive")
+    rounding = None if required is None else Rounding(required, clearance, origin, resolution)
+    rounded, at = rounded_path(pts, rounding)
+    return pursuit_along(
+        rounded, at, pts.shape[0], start_theta, speed, turn_rate, dt, params, clearance, origin, resolution,
+        goal_heading, substeps,
+    )  # fmt: skip
+
+
+def pursuit_along(
+    rounded: np.ndarray,
+    at: np.ndarray,
+    points: int,
+    start_theta: float,
+    speed: float,
+    turn_rate: float,
+    dt: float,
+    params: RppParams,
+    clearance: np.ndarray,
+    origin: tuple[float, float],
+    resolution: float,
+    goal_heading: float | None = None,
+    substeps: int = PLAN_SUBSTEPS,
+) -> PathControls | None:
+    """:func:`pursuit_controls` along a polyline whose corners are rounded already: ``rounded``
+    (m, 2) and ``at`` (P,), tmpnav.belief.pursuit_path.rounded_path of the ``points`` (P of
+    them) given to it. The densified path, its lengths left and the rollout in one compiled
+    call: the oracle drives each path from every heading a robot arrives at its start with."""
     x0, y0 = origin
-    rounding = None if required is None else Rounding(required, clearance, (x0, y0), resolution)
-    path, vertices = driven_path(pts, rounding)
-    left = length_left(path)
-    slowest = min(params.min_approach_linear_velocity, params.regulated_linear_scaling_min_speed, speed)
-    # every metre at the slowest speed, a full turn at every vertex, and a margin
-    budget = int((left[0] + 1.0) / (slowest * dt) + pts.shape[0] * 2.0 * math.pi / (min(turn_rate, 0.5) * dt)) + 100
     goal = math.nan if goal_heading is None else float(goal_heading)
-    controls, poses, node_steps, arrived = _pursue(
-        path, left, vertices, float(start_theta), float(speed), float(turn_rate), float(dt), params.vector(),
-        clearance, float(x0), float(y0), float(resolution), budget, goal, int(substeps),
+    controls, poses, node_steps, arrived = _pursue_rounded(
+        rounded, at, int(points), float(start_theta), float(speed), float(turn_rate), float(dt), params.vector(),
+        clearance, float(x0), float(y0), float(resolution), goal, int(substeps),
     )  # fmt: skip
     if not arrived:
         return None
     return PathControls(controls=controls, poses=poses, node_steps=node_steps.astype(int), pursued=True)
+
+
+@nb.njit(cache=True)
+def _pursue_rounded(
+    rounded, at, points, theta0, speed, turn_rate, dt, p, clear, x0, y0, res, goal, substeps
+):  # pragma: no cover
+    """:func:`pursuit_along`, compiled: the polyline densified (tmpnav.belief.pursuit_path.densify),
+    its lengths left, the rollout's budget (every metre at the slowest speed, a full turn at every
+    one of the ``points``, and a margin) and the rollout (:func:`_pursue`)."""
+    path, vertices, left = densified(rounded, at)
+    slowest = min(p[_MIN_APPROACH_V], p[_MIN_SPEED], speed)
+    budget = int((left[0] + 1.0) / (slowest * dt) + points * 2.0 * math.pi / (min(turn_rate, 0.5) * dt)) + 100
+    return _pursue(path, left, vertices, theta0, speed, turn_rate, dt, p, clear, x0, y0, res, budget, goal, substeps)
 
 
 @nb.njit(cache=True)
@@ -336,8 +370,8 @@ def _pursue(
     (T+1, 3), the step each vertex is passed (P,), and whether the goal was reached."""
     n = path.shape[0]
     rows, cols = clear.shape
-    controls = np.zeros((budget, 2))
-    poses = np.zeros((budget + 1, 3))
+    controls = np.empty((budget, 2))
+    poses = np.empty((budget + 1, 3))
     P = vertices.shape[0]
     node_steps = np.full(P, -1, dtype=np.int64)
     node_steps[0] = 0

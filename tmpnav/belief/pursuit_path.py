@@ -69,10 +69,21 @@ def driven_path(points: np.ndarray, rounding: Rounding | None = None) -> tuple[n
     rounded corner's index is its arc's middle)."""
     if rounding is None:
         return densify(points)
-    r = rounding
-    rounded, at = round_corners(points, r.required, r.clearance, r.origin, r.resolution)
+    rounded, at = rounded_path(points, rounding)
     path, dense_at = densify(rounded)
     return path, dense_at[at]
+
+
+def rounded_path(points: np.ndarray, rounding: Rounding | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The polyline :func:`driven_path` densifies, (m, 2), and the index of each of ``points`` (k, 2)
+    in it (k,): with ``rounding`` their corners rounded, else the points themselves. A few
+    points a corner where the densified path has one every :data:`RESOLUTION` m: what a caller
+    that drives one path from many headings keeps of it."""
+    pts = np.ascontiguousarray(np.asarray(points, dtype=float).reshape(-1, 2))
+    if rounding is None:
+        return pts, np.arange(pts.shape[0], dtype=np.int64)
+    r = rounding
+    return round_corners(pts, r.required, r.clearance, r.origin, r.resolution)
 
 
 def length_left(path: np.ndarray) -> np.ndarray:
@@ -88,3 +99,12 @@ def _length_left(path):  # pragma: no cover
     for k in range(path.shape[0] - 2, -1, -1):
         left[k] = left[k + 1] + math.hypot(path[k + 1, 0] - path[k, 0], path[k + 1, 1] - path[k, 1])
     return left
+
+
+@nb.njit(cache=True)
+def densified(rounded, at):  # pragma: no cover
+    """Compiled, the densified path along the polyline ``rounded`` (m, 2) (:func:`densify`), the
+    index in it of each of its points ``at`` (k,) and its :func:`length_left`: :func:`driven_path`
+    and its lengths from :func:`rounded_path`'s polyline, within a compiled caller."""
+    path, dense_at = _densify(rounded, RESOLUTION)
+    return path, dense_at[at], _length_left(path)
