@@ -90,10 +90,13 @@ class RppParams:
 
     def vector(self) -> np.ndarray:
         """The parameters as the compiled law takes them (booleans as 0 or 1); do not write to it."""
-        found = _VECTORS.get(self)
-        if found is None:
-            found = _VECTORS[self] = np.array([float(getattr(self, f.name)) for f in fields(self)])
-            found.setflags(write=False)
+        found: np.ndarray | None = self.__dict__.get("_vector")  # kept with the parameters: hashing
+        if found is None:  # them to look it up took longer than the compiled call it goes to
+            found = _VECTORS.get(self)
+            if found is None:
+                found = _VECTORS[self] = np.array([float(getattr(self, f.name)) for f in fields(self)])
+                found.setflags(write=False)
+            object.__setattr__(self, "_vector", found)
         return found
 
     @property

@@ -207,6 +207,8 @@ class MotionLibrary:
             if j.pose is not None and roadmap.instantiations.get(j.room)
         }
         self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
+        self._seeds: dict[tuple[str, int], int] = {}  # the landmark-noise streams (_noise_seed)
+        self._unseen_rows: dict[int, np.ndarray] = {}  # no landmark seen, by poses (_unseen)
         #: the routes from a node to another by the robots' radius (None: not connected)
         self._routes: OrderedDict[tuple[int, int, float], Route | None] = OrderedDict()
         #: the order and arrays of the motion sets built from a robot's node and heading to a set
@@ -443,7 +445,7 @@ class MotionLibrary:
         else:  # no belief takes them in (the EKF reads them only where it fuses them): none seen,
             # one row of False seen at every pose (a read-only view: a fleet's thousands of
             # motions kept 100 MB of False a process at 100 rooms)
-            lm_visible = np.broadcast_to(_UNSEEN, (poses.shape[0], self.world.landmark_xy.shape[0]))
+            lm_visible = self._unseen(poses.shape[0])
         return NominalMotion(
             robot=robot,
             path=path,
@@ -453,9 +455,25 @@ class MotionLibrary:
             lm_visible=lm_visible,
             cells=self.world.reach(spec.radius).cells(poses[:, :2]),
             scan_keys=self.scans.keys(poses) if self.scans is not None else None,
-            # one stream per robot and start node, drawn step by step: a robot sees the
-            # same simulated observations at step k alone or in a pair, whatever its goal,
-            # so factorised pairs are exact and motions with a common prefix share it
-            noise_seed=stable_seed(models.seed, "landmarks", robot, start),
+            noise_seed=self._noise_seed(robot, start),
             controller="rpp" if pursued else "turn-then-drive",
         )
+
+    def _noise_seed(self, robot: str, start: int) -> int:
+        """The landmark-noise stream of ``robot``'s motions from node ``start``: one stream per
+        robot and start node, drawn step by step, so a robot sees the same simulated
+        observations at step k alone or in a pair, whatever its goal, factorised pairs are
+        exact and motions with a common prefix share it."""
+        key = (robot, start)
+        found = self._seeds.get(key)
+        if found is None:
+            found = self._seeds[key] = stable_seed(self.scenario.models.seed, "landmarks", robot, start)
+        return found
+
+    def _unseen(self, rows: int) -> np.ndarray:
+        """No landmark seen at ``rows`` poses: one row of False broadcast (read-only), the same
+        view for every motion of as many poses."""
+        found = self._unseen_rows.get(rows)
+        if found is None:
+            found = self._unseen_rows[rows] = np.broadcast_to(_UNSEEN, (rows, self.world.landmark_xy.shape[0]))
+        return found

@@ -52,7 +52,7 @@ def least_clearance(
     """The least clearance (m) of the cells of ``points`` (P, 2 or 3): along the polyline through
     them, sampled a cell apart, or, with ``polyline`` False, at the points alone (a rollout's
     poses). Off the grid: -inf."""
-    pts = np.ascontiguousarray(np.asarray(points, dtype=float)[:, :2])
+    pts = np.ascontiguousarray(points, dtype=float)  # a rollout's poses as they are: the loop reads x and y
     x0, y0 = origin
     return float(_least_along(pts, clearance, float(x0), float(y0), float(resolution), polyline))
 

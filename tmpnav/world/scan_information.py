@@ -165,6 +165,8 @@ class ScanInformation:
         self.angles = localiser_angles(sensor)
         self.params = sensor_params(sensor, grid.resolution)
         self.bins = 1 if sensor.fov >= 2.0 * math.pi - 1e-9 else HEADINGS
+        #: the grid's origin (m), resolution (m) and shape as :func:`_scan_keys` takes them
+        self._frame = (float(grid.origin[0]), float(grid.origin[1]), float(grid.resolution), *grid.shape)
         self._keys = np.zeros(0, dtype=np.int64)  # sorted
         self._rows = np.zeros(0, dtype=np.int64)  # table row of each of _keys
         self.table = np.zeros((1, 3, 3))
@@ -177,10 +179,7 @@ class ScanInformation:
         (Compiled: every nominal motion asks for the keys of its poses.)"""
         poses = np.asarray(poses, dtype=float)
         flat = np.ascontiguousarray(poses.reshape(-1, 3))
-        g = self.grid
-        rows, cols = g.shape
-        out = _scan_keys(flat, float(g.origin[0]), float(g.origin[1]), float(g.resolution), rows, cols, self.bins)
-        return out.reshape(poses.shape[:-1])
+        return _scan_keys(flat, *self._frame, self.bins).reshape(poses.shape[:-1])
 
     def rows(self, keys: np.ndarray) -> np.ndarray:
         """The :attr:`table` row (...,) of each key (...,), computing those not seen before."""
