@@ -119,24 +119,63 @@ def segment_margins(a: np.ndarray, b: np.ndarray, world: World, radius: float) -
 def _least_clearance(
     a: np.ndarray, b: np.ndarray, s: np.ndarray, x0: float, y0: float, res: float, clear: np.ndarray
 ) -> np.ndarray:  # pragma: no cover - compiled
-    """The least clearance of the cells of the points a[k] + s (b[k] - a[k]) (-inf for a point off the grid)."""
+    """The least clearance of the cells of the points a[k] + s (b[k] - a[k]) (-inf for a point off the grid).
+
+    ``s`` rising, each coordinate of a point's cell is a monotone function of s (every operation
+    that computes it is), so the points of one cell follow one another: where a segment has many
+    points a cell (the longest segment sets how many every segment has), the first point of the
+    next cell is searched for, doubling the step then halving it, and the points between are
+    not computed. The cells found, and their least clearance, are those of every point."""
     rows, cols = clear.shape
     out = np.empty(a.shape[0])
+    n = s.shape[0]
     for k in range(a.shape[0]):
-        dx = b[k, 0] - a[k, 0]
-        dy = b[k, 1] - a[k, 1]
+        ax, ay = a[k, 0], a[k, 1]
+        dx = b[k, 0] - ax
+        dy = b[k, 1] - ay
+        # a segment's points fall in about |dx| / res + |dy| / res + 1 cells: search where it has many points a cell
+        per_cell = n / ((abs(dx) + abs(dy)) / res + 1.0)
+        search = per_cell > 8.0
+        first = max(1, int(0.5 * per_cell))  # the first step of the search: half a cell's points
         least = np.inf
-        for t in s:
-            j = np.floor(((a[k, 0] + t * dx) - x0) / res)
-            i = np.floor(((a[k, 1] + t * dy) - y0) / res)
+        m = 0
+        while m < n:
+            i, j = _sample_cell(ax, ay, dx, dy, s[m], x0, y0, res)
             if i < 0 or i >= rows or j < 0 or j >= cols:
                 least = -np.inf
                 break
             c = clear[int(i), int(j)]
             if c < least:
                 least = c
+            if not search:
+                m += 1
+                continue
+            # the first point after m in another cell: gallop, then bisect (lo: same cell, hi: another)
+            lo, step = m, first
+            hi = n
+            while lo + step < n:
+                u, v = _sample_cell(ax, ay, dx, dy, s[lo + step], x0, y0, res)
+                if u != i or v != j:
+                    hi = lo + step
+                    break
+                lo += step
+                step *= 2
+            while hi - lo > 1:
+                mid = (lo + hi) // 2
+                u, v = _sample_cell(ax, ay, dx, dy, s[mid], x0, y0, res)
+                if u != i or v != j:
+                    hi = mid
+                else:
+                    lo = mid
+            m = hi
         out[k] = least
     return out
+
+
+@nb.njit(cache=True, inline="always")
+def _sample_cell(ax, ay, dx, dy, t, x0, y0, res):  # pragma: no cover - compiled
+    """The cell (row, column, as floats) of the point a + t d of a segment."""
+    return np.floor(((ay + t * dy) - y0) / res), np.floor(((ax + t * dx) - x0) / res)
 
 
 def _base_edges(roadmap: Roadmap) -> int:
