@@ -14,7 +14,7 @@ import functools
 import hashlib
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -25,7 +25,7 @@ from tmpnav.belief.sequences import NoiseStreams
 from tmpnav.roadmap import RoadmapGraph
 from tmpnav.roadmap.graph import safe_weights
 from tmpnav.roadmap.shortcut import least_clearance, required_clearance, shortcut
-from tmpnav.types import Roadmap, Scenario
+from tmpnav.types import Roadmap, RobotSpec, Scenario
 from tmpnav.world import World
 from tmpnav.world.reach import encoded
 from tmpnav.world.scan_information import ScanInformation
@@ -125,6 +125,11 @@ def _specs(scenario: Scenario) -> tuple[tuple[str, float, float, float], ...]:
     return tuple((r.name, r.radius, r.speed, r.turn_rate) for r in scenario.robots)
 
 
+def _model(robot: RobotSpec) -> tuple[float, float, float]:
+    """What a robot's nominal motions take of it, besides its name (and the noise stream named after it)."""
+    return (robot.radius, robot.speed, robot.turn_rate)
+
+
 def stable_seed(*parts: object) -> int:
     """A 63-bit seed from any printable parts (stable across processes and machines)."""
     digest = hashlib.sha256(repr(parts).encode()).digest()
@@ -208,6 +213,11 @@ class MotionLibrary:
         }
         self._along: dict[tuple[str, tuple[int, ...], float], NominalMotion] = {}
         self._seeds: dict[tuple[str, int], int] = {}  # the landmark-noise streams (_noise_seed)
+        #: the other robots of each robot's radius, speed and turn rate, whose motions are its own (_alike)
+        self._twins = {
+            r.name: tuple(o.name for o in scenario.robots if o.name != r.name and _model(o) == _model(r))
+            for r in scenario.robots
+        }
         self._unseen_rows: dict[int, np.ndarray] = {}  # no landmark seen, by poses (_unseen)
         #: the routes from a node to another by the robots' radius (None: not connected)
         self._routes: OrderedDict[tuple[int, int, float], Route | None] = OrderedDict()
@@ -246,11 +256,26 @@ class MotionLibrary:
         key = (robot, start, heading, goal)
         found = self._motions.get(key, _MISSING)
         if found is _MISSING:
-            found = self._compute(robot, start, heading, goal)
-            self._keep(key, found)
+            found = self._alike(robot, start, heading, goal)
+            if found is _MISSING:
+                found = self._compute(robot, start, heading, goal)
+            self._keep(key, found)  # type: ignore[arg-type]
         else:
             self._motions.move_to_end(key)
         return found  # type: ignore[return-value]
+
+    def _alike(self, robot: str, start: int, heading: float, goal: int) -> NominalMotion | object | None:
+        """The motion start -> goal of another robot of the same radius, speed and turn rate from
+        the same node and heading, as ``robot``'s (its arrays, and the rows kept for them, are the
+        same: a fleet's robots share a model, and drove one motion in fourteen twice); _MISSING
+        where no such robot's is kept."""
+        for other in self._twins.get(robot, ()):
+            found = self._motions.get((other, start, heading, goal), _MISSING)
+            if found is None:
+                return None
+            if found is not _MISSING:
+                return replace(found, robot=robot, noise_seed=self._noise_seed(robot, start))  # type: ignore[type-var]
+        return _MISSING
 
     def _keep(self, key: tuple[str, int, float, int], motion: NominalMotion | None) -> None:
         """Remember ``motion``, dropping the least recently used past :data:`MAX_MOTIONS` or
