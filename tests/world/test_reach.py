@@ -57,6 +57,29 @@ def test_cells_are_computed_once_and_remembered() -> None:
     assert np.array_equal(table.at(pts[::-1]), first[::-1]) and table.rows == rows
 
 
+def test_a_table_grown_in_blocks_and_learned_out_of_order_reads_as_one_asked_at_once() -> None:
+    """Keys merged into the sorted ones block by block (computed here, or learned from another
+    copy in any order) give every point the reach of a table that computed them all at once."""
+    grid, _ = PATHS["corner"]
+    rng = np.random.default_rng(3)
+    x0, y0 = grid.origin
+    pts = np.column_stack(
+        [rng.uniform(x0 - 0.5, grid.extent[2] + 0.5, 400), rng.uniform(y0 - 0.5, grid.extent[3] + 0.5, 400)]
+    )
+    whole = SectorReach(grid, clearance(grid), RADIUS).at(pts)
+    worker = SectorReach(grid, clearance(grid), RADIUS)
+    worker.take_new()
+    blocks = [worker.at(pts[k : k + 37]) for k in range(0, len(pts), 37)]
+    assert np.array_equal(np.concatenate(blocks), whole)
+    keys, codes = worker.take_new()
+    order = rng.permutation(keys.size)
+    parent = SectorReach(grid, clearance(grid), RADIUS)
+    parent.at(pts[::5])  # some known already
+    for part in np.array_split(order, 4):
+        parent.learn(keys[part], codes[part])
+    assert np.array_equal(parent.at(pts), whole) and np.all(np.diff(parent.keys) > 0)
+
+
 def test_only_a_table_asked_once_for_its_new_cells_records_them() -> None:
     """The planning process never asks (take_new): it keeps no record; a worker's copy asks when
     it starts, then hands back what it computed since, and another copy learns it."""

@@ -97,13 +97,18 @@ class SectorReach:
         as the table grows."""
         flat = np.asarray(cells, dtype=np.int64)
         on = flat >= 0
-        new = np.unique(flat[on])
-        at = np.minimum(np.searchsorted(self.keys, new), max(self.keys.size - 1, 0))
-        new = new[self.keys[at] != new] if self.keys.size else new
-        if new.size:
-            self._compute(new)
+        wanted = flat[on]
+        # looked up first: most sub-cells a motion asks for are known, and the unique of every
+        # key asked took a fleet's oracle seconds
+        at = np.searchsorted(self.keys, wanted)
+        missing = (
+            self.keys[np.minimum(at, self.keys.size - 1)] != wanted if self.keys.size else np.ones(wanted.size, bool)
+        )
+        if missing.any():
+            self._compute(np.unique(wanted[missing]))
+            at = np.searchsorted(self.keys, wanted)
         rows = np.zeros(flat.size, dtype=np.int64)
-        rows[on] = self.key_rows[np.searchsorted(self.keys, flat[on])]
+        rows[on] = self.key_rows[at]
         return rows
 
     def at(self, points: np.ndarray) -> np.ndarray:
@@ -152,9 +157,12 @@ class SectorReach:
             grown[: self.rows] = self.codes[: self.rows]
             self.codes = grown
         self.codes[self.rows : need] = codes
-        order = np.argsort(np.concatenate([self.keys, keys]), kind="stable")
-        self.keys = np.concatenate([self.keys, keys])[order]
-        self.key_rows = np.concatenate([self.key_rows, np.arange(self.rows, need)])[order]
+        # merged into the sorted keys where they belong: sorting them all again at every block a
+        # worker hands back took a fleet's parent process seconds
+        order = np.argsort(keys, kind="stable")
+        at = np.searchsorted(self.keys, keys[order])
+        self.keys = np.insert(self.keys, at, keys[order])
+        self.key_rows = np.insert(self.key_rows, at, np.arange(self.rows, need)[order])
         self.rows = need
 
 
