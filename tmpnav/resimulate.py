@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from tmpnav.attachment.carried import CarriedCosts
-from tmpnav.oracle.motions import NominalMotion
+from tmpnav.oracle.nominal import NominalMotion
 from tmpnav.results import Schedule, TaskResult
 from tmpnav.types import Belief, CostTerms, PlannedAction, TrajectoryStep
 

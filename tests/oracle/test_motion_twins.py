@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from tests.oracle.support import make_two_rooms
-from tmpnav.oracle.motions import MotionLibrary, NominalMotion
+from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.oracle.nominal import NominalMotion
 from tmpnav.types import RangeSensor
 
 LIDAR = RangeSensor(12.0, 2 * np.pi, 60, 0.05, 0.1, 1.3)

@@ -60,7 +60,8 @@ from tmpnav.attachment.record import Trace
 from tmpnav.attachment.resume import Checkpoint, Made, Resume, Resumes
 from tmpnav.attachment.team import Team
 from tmpnav.belief.sequences import EKFConstants
-from tmpnav.oracle.motions import MotionLibrary, NominalMotion, stable_seed
+from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.oracle.nominal import NominalMotion, stable_seed
 from tmpnav.oracle.oracle import Oracle
 from tmpnav.oracle.requests import Request, StartState, mutual_seed
 from tmpnav.results import Schedule, TimedMove

@@ -11,7 +11,7 @@ import numpy as np
 
 from tmpnav.attachment.team import Team
 from tmpnav.errors import TmpnavError
-from tmpnav.oracle.motions import NominalMotion
+from tmpnav.oracle.nominal import NominalMotion
 from tmpnav.results import Schedule
 from tmpnav.types import CostTerms, CostWeights, TrajectoryStep, risk_penalty
 

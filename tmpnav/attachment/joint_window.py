@@ -28,7 +28,8 @@ from tmpnav.belief.sequences import (
     StartGroups,
     propagate_sequences,
 )
-from tmpnav.oracle.motions import MotionLibrary, scan_seed, stable_seed
+from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.oracle.nominal import scan_seed, stable_seed
 from tmpnav.world.reach import SECTORS
 from tmpnav.world.visibility import MutualSensing
 

@@ -46,7 +46,8 @@ from tmpnav.belief.sequences import (
     StartGroups,
     propagate_sequences,
 )
-from tmpnav.oracle.motions import MotionLibrary, NominalMotion, scan_seed
+from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.oracle.nominal import NominalMotion, scan_seed
 from tmpnav.types import TrajectoryStep
 
 if TYPE_CHECKING:

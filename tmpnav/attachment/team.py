@@ -8,7 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tmpnav.oracle.motions import MotionLibrary, NominalMotion
+from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.oracle.nominal import NominalMotion
 from tmpnav.oracle.requests import Request, StartState, mutual_seed
 from tmpnav.task.encodings import ENCODINGS, PairFilter
 from tmpnav.types import Goals, Scenario, TrajectoryStep, cov3, vec3

@@ -39,6 +39,7 @@ CODE_FILES = (
     "oracle/keys.py",
     "oracle/motions.py",
     "oracle/motionsets.py",
+    "oracle/nominal.py",
     "oracle/pairs.py",
     "oracle/requests.py",
     "oracle/results.py",

@@ -1,20 +1,16 @@
-"""Nominal motions: what a robot does and sees when it drives a roadmap path.
+"""Nominal motions made and kept: what a robot does and sees when it drives a roadmap path.
 
-A :class:`NominalMotion` is the shortest roadmap path from a start node to a goal node,
-the turn-then-drive controls along it, the nominal poses they produce, the landmarks
-visible from each pose and, with a range sensor, the cell and heading of each pose's scan.
-Motions depend only on the robot, its start (node, heading) and the goal node, so the
-:class:`MotionLibrary` computes each once and shares it between the single-robot and joint
-evaluations that need it.
+A :class:`~tmpnav.oracle.nominal.NominalMotion` drives the shortest roadmap path from a start
+node to a goal node, turn-then-drive or as nav2's RPP drives it. Motions depend only on the
+robot's build, its start (node, heading) and the goal node, so the :class:`MotionLibrary`
+computes each once and shares it between the single-robot and joint evaluations that need it.
 """
 
 from __future__ import annotations
 
-import functools
-import hashlib
 from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import numpy as np
 
@@ -22,6 +18,7 @@ from tmpnav.belief.controls import PathControls, path_controls, turn_to
 from tmpnav.belief.pursuit import RppParams, pursuit_along
 from tmpnav.belief.pursuit_path import Rounding, rounded_path
 from tmpnav.belief.sequences import NoiseStreams
+from tmpnav.oracle.nominal import NominalMotion, footprint, stable_seed
 from tmpnav.roadmap import RoadmapGraph
 from tmpnav.roadmap.graph import safe_weights
 from tmpnav.roadmap.shortcut import least_clearance, required_clearance, shortcut
@@ -31,59 +28,6 @@ from tmpnav.world.reach import encoded
 from tmpnav.world.scan_information import ScanInformation
 from tmpnav.world.visibility import LandmarkVisibility
 
-
-@dataclass(frozen=True, eq=False)
-class NominalMotion:
-    """One robot driving one roadmap path: its controls, nominal poses and what it sees."""
-
-    robot: str
-    path: tuple[int, ...]  # roadmap node indices, start first
-    controls: np.ndarray  # (T, 2)
-    poses: np.ndarray  # (T+1, 3)
-    node_steps: np.ndarray  # (P,) step at which each path node is reached
-    lm_visible: np.ndarray  # (T+1, L)
-    noise_seed: int
-    cells: np.ndarray  # (T+1,) the sub-cell key of each pose (World.reach(radius).cells)
-    scan_keys: np.ndarray | None = None  # (T+1,) each pose's scan (World.scans(sensor).keys); None: no scans
-    #: how the robot drives it: "rpp" (nav2's Regulated Pure Pursuit) or "turn-then-drive"
-    controller: str = "turn-then-drive"
-    #: the poses' rows of a reach or scan table, by the table (MotionLibrary.reach_layout)
-    rows: dict[object, np.ndarray] = field(default_factory=dict, repr=False)
-
-    def scan_rows(self, lib: MotionLibrary) -> np.ndarray:
-        """(T+1,) the rows of ``lib.scans.table`` of the poses' scans (0: no scan)."""
-        if self.scan_keys is None or lib.scans is None:
-            return np.zeros(self.poses.shape[0], dtype=np.int64)
-        return lib.scans.rows(self.scan_keys)
-
-    @property
-    def n_steps(self) -> int:
-        return int(self.controls.shape[0])
-
-    @property
-    def final_heading(self) -> float:
-        return float(self.poses[-1, 2])
-
-    def padded(self, T: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Controls, poses and visibility extended to T steps: the robot waits at its
-        goal (u = 0) and keeps observing from there."""
-        extra = T - self.n_steps
-        return (
-            np.concatenate([self.controls, np.zeros((extra, 2))]),
-            np.concatenate([self.poses, np.repeat(self.poses[-1:], extra, axis=0)]),
-            np.concatenate([self.lm_visible, np.repeat(self.lm_visible[-1:], extra, axis=0)]),
-        )
-
-    def c_u(self, dt: float) -> float:
-        """Control usage c_u = sum_k (v_k² + omega_k²) dt (docs/models.md)."""
-        return float(self._squares * dt)
-
-    @functools.cached_property
-    def _squares(self) -> np.float64:
-        """sum_k (v_k² + omega_k²), once: the oracle lays out the same motions again and again."""
-        return np.float64((self.controls**2).sum(-1).sum())
-
-
 #: the landmarks' visibility of the last worlds, by world and sensor range: a replan's library
 #: (a new context on the same world) takes it as it is
 _VISIBILITY: dict[tuple[str, float], LandmarkVisibility] = {}
@@ -92,17 +36,6 @@ _VISIBILITY: dict[tuple[str, float], LandmarkVisibility] = {}
 #: what a motion set keeps whatever its start belief: its goals in its order, its prefix matrix,
 #: steps, c_u and final positions (tmpnav.oracle.motionsets.MotionSet)
 SetLayout = tuple[tuple[int, ...], np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-
-
-def footprint(m: NominalMotion | None) -> int:
-    """The bytes of a motion's arrays: controls, poses, the landmarks seen (none for a broadcast
-    row of unseen ones) and its cells and scan keys, twice: the rows of the reach and scan tables
-    the library keeps for them (:meth:`MotionLibrary._rows`) take as many again."""
-    if m is None:
-        return 0
-    seen = 0 if m.lm_visible.strides[0] == 0 else m.lm_visible.nbytes
-    keys = m.cells.nbytes + (0 if m.scan_keys is None else m.scan_keys.nbytes)
-    return m.controls.nbytes + m.poses.nbytes + seen + 2 * keys
 
 
 def _scan_keys(m: NominalMotion) -> np.ndarray:
@@ -128,18 +61,6 @@ def _specs(scenario: Scenario) -> tuple[tuple[str, float, float, float], ...]:
 def _model(robot: RobotSpec) -> tuple[float, float, float]:
     """What a robot's nominal motions take of it, besides its name (and the noise stream named after it)."""
     return (robot.radius, robot.speed, robot.turn_rate)
-
-
-def stable_seed(*parts: object) -> int:
-    """A 63-bit seed from any printable parts (stable across processes and machines)."""
-    digest = hashlib.sha256(repr(parts).encode()).digest()
-    return int.from_bytes(digest[:8], "little") >> 1
-
-
-@functools.lru_cache(maxsize=65536)
-def scan_seed(noise_seed: int) -> int:
-    """The seed of the range scans' draws that go with the landmark-noise stream ``noise_seed``."""
-    return stable_seed(noise_seed, "scans")
 
 
 #: the parameters of nav2's RPP the planner's motions are driven with (models.controller: rpp)

@@ -25,7 +25,8 @@ from tmpnav.belief.sequences import (
     propagate_sequences,
 )
 from tmpnav.belief.trie import common_prefix_matrix
-from tmpnav.oracle.motions import MotionLibrary, NominalMotion, scan_seed
+from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.oracle.nominal import NominalMotion, scan_seed
 from tmpnav.oracle.requests import StartState
 from tmpnav.types import ObservationMode
 

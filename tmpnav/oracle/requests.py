@@ -6,7 +6,8 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 
-from tmpnav.oracle.motions import MotionLibrary, stable_seed
+from tmpnav.oracle.motions import MotionLibrary
+from tmpnav.oracle.nominal import stable_seed
 
 
 @dataclass(frozen=True)

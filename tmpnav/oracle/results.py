@@ -6,7 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from tmpnav.oracle.motions import NominalMotion
+from tmpnav.oracle.nominal import NominalMotion
 from tmpnav.types import CostTerms, CostWeights, MotionResult, risk_penalty
 
 
