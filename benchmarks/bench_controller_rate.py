@@ -48,9 +48,11 @@ def measure(scenario: Path) -> tuple[np.ndarray, float, float]:
     rolls out, and the seconds the two rollouts took."""
     rows: list[tuple[float, float, float, float]] = []
     seconds = [0.0, 0.0]
-    rollout = motions.pursuit_controls
+    rollout = motions.pursuit_along
 
     def both(
+        rounded,
+        at,
         points,
         start_theta,
         speed,
@@ -61,12 +63,11 @@ def measure(scenario: Path) -> tuple[np.ndarray, float, float]:
         origin,
         resolution,
         goal_heading=None,
-        required=None,
     ):  # type: ignore[no-untyped-def]
         t0 = time.perf_counter()
-        planned = rollout(points, start_theta, speed, turn_rate, dt, params, clearance, origin, resolution, goal_heading, required)  # fmt: skip  # noqa: E501
+        planned = rollout(rounded, at, points, start_theta, speed, turn_rate, dt, params, clearance, origin, resolution, goal_heading)  # fmt: skip  # noqa: E501
         t1 = time.perf_counter()
-        fine = rollout(points, start_theta, speed, turn_rate, dt / SUBSTEPS, params, clearance, origin, resolution, goal_heading, required, substeps=1)  # fmt: skip  # noqa: E501
+        fine = rollout(rounded, at, points, start_theta, speed, turn_rate, dt / SUBSTEPS, params, clearance, origin, resolution, goal_heading, substeps=1)  # fmt: skip  # noqa: E501
         seconds[0] += t1 - t0
         seconds[1] += time.perf_counter() - t1
         if planned is not None and fine is not None:
@@ -74,12 +75,12 @@ def measure(scenario: Path) -> tuple[np.ndarray, float, float]:
             rows.append((planned.n_steps * dt, fine.n_steps * dt / SUBSTEPS, *length))
         return planned
 
-    motions.pursuit_controls = both
+    motions.pursuit_along = both
     try:
         with tempfile.TemporaryDirectory() as cache:
             plan(scenario, PlanOptions.of(cache_dir=cache, executor="serial", max_risk=NO_THRESHOLD))
     finally:
-        motions.pursuit_controls = rollout
+        motions.pursuit_along = rollout
     return np.array(rows), seconds[0], seconds[1]
 
 
@@ -88,8 +89,8 @@ def measure(scenario: Path) -> tuple[np.ndarray, float, float]:
 _PLAN_WITH = """
 import functools, sys
 import tmpnav.oracle.motions as motions
-from tmpnav.belief.pursuit import pursuit_controls
-motions.pursuit_controls = functools.partial(pursuit_controls, substeps=int(sys.argv.pop(1)))
+from tmpnav.belief.pursuit import pursuit_along
+motions.pursuit_along = functools.partial(pursuit_along, substeps=int(sys.argv.pop(1)))
 from tmpnav.cli import cli
 cli()
 """
