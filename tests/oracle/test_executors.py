@@ -6,6 +6,7 @@ Ray instance: tests/oracle/test_ray.py): the same costs, goal instantiations, pa
 
 from __future__ import annotations
 
+import signal
 import sys
 from pathlib import Path
 
@@ -43,6 +44,24 @@ def test_local_workers(two_rooms: OracleContext, reference, workers: int, monkey
     monkeypatch.setattr(executors, "BLOCK", 4)  # several blocks, so two workers share the work
     result = Oracle(two_rooms, NullCache(), ProcessExecutor(workers)).evaluate(actions(two_rooms))
     assert result == reference
+
+
+def test_workers_forked_while_the_parent_holds_its_signals_take_sigterm(
+    two_rooms: OracleContext, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The first blocks fork the workers under tmpnav.lifetime.signals_held, and a fork keeps the
+    signal mask: a worker that kept SIGTERM blocked ignored the terminate of a stopped wave (Ctrl-C,
+    a time limit), and the parent waited 5 s for each before it killed it."""
+    monkeypatch.setattr(executors, "BLOCK", 4)
+    executor = ProcessExecutor(2)
+    try:
+        Oracle(two_rooms, NullCache(), executor).evaluate(actions(two_rooms))
+        pool = executor._pool
+        assert pool is not None
+        masks = [pool.submit(signal.pthread_sigmask, signal.SIG_BLOCK, []).result() for _ in range(4)]
+    finally:
+        executor.close()
+    assert all(signal.SIGTERM not in mask for mask in masks)
 
 
 def test_blocks_keep_start_groups_together(two_rooms: OracleContext) -> None:

@@ -188,6 +188,9 @@ def _init_worker(ctx: OracleContext, parent: int) -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     # Ctrl-C is the parent's business (it cancels the pool); workers stay quiet
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # held while the parent forked (tmpnav.lifetime.signals_held), and a fork keeps the mask: a
+    # worker that blocked SIGTERM ignored the terminate of a stopped wave, 5 s each till killed
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
     die_with_parent(parent)
     name_process("tmpnav-oracle")
     ctx.world.take_new()  # what the parent computed before the fork, the parent has
