@@ -29,7 +29,7 @@ def test_the_reach_and_scan_rows_of_motions_are_their_poses_own() -> None:
         codes, values, rows = lib.reach_layout(batch)
         assert np.array_equal(values[codes[rows]], np.concatenate([lib.reach(m) for m in batch]))
         scans = lib.scan_rows_all(batch)
-        assert np.array_equal(scans, np.concatenate([m.scan_rows(lib) for m in batch]))
+        assert np.array_equal(scans, np.concatenate([m.scan_rows(lib.scans) for m in batch]))
 
     check(first)
     check(later)  # new cells and scans: both tables grow

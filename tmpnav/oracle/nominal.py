@@ -3,7 +3,7 @@
 A :class:`NominalMotion` is the path's node indices, the controls along it, the nominal poses
 they produce, the landmarks visible from each pose and, with a range sensor, the cell and
 heading of each pose's scan, with the seed of its noise stream (:func:`stable_seed`).
-:class:`tmpnav.oracle.motions.MotionLibrary` makes them and keeps them.
+The oracle's motion library (tmpnav.oracle.motions) makes them and keeps them.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from tmpnav.oracle.motions import MotionLibrary
+    from tmpnav.world.scan_information import ScanInformation
 
 
 @dataclass(frozen=True, eq=False)
@@ -37,11 +37,11 @@ class NominalMotion:
     #: the poses' rows of a reach or scan table, by the table (MotionLibrary.reach_layout)
     rows: dict[object, np.ndarray] = field(default_factory=dict, repr=False)
 
-    def scan_rows(self, lib: MotionLibrary) -> np.ndarray:
-        """(T+1,) the rows of ``lib.scans.table`` of the poses' scans (0: no scan)."""
-        if self.scan_keys is None or lib.scans is None:
+    def scan_rows(self, scans: ScanInformation | None) -> np.ndarray:
+        """(T+1,) the rows of ``scans.table`` (the library's scan table) of the poses' scans (0: no scan)."""
+        if self.scan_keys is None or scans is None:
             return np.zeros(self.poses.shape[0], dtype=np.int64)
-        return lib.scans.rows(self.scan_keys)
+        return scans.rows(self.scan_keys)
 
     @property
     def n_steps(self) -> int:
