@@ -56,7 +56,6 @@ from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 
 from tmpnav.task.balance import Moves, relocated_steps, unloadings
-from tmpnav.task.minimum import shortfall
 from tmpnav.task.objectives import strict_price
 from tmpnav.task.plans import Plan, Rules, targets_only, with_origins
 from tmpnav.task.route_orders import Legs, Orders
@@ -137,14 +136,15 @@ def _scored(
     minimum and the work rooms) against the plan's are priced at the search's
     :func:`~tmpnav.task.objectives.strict_price` each."""
     need, work = least
-    have = {r: sum(x in work for x in xs) for r, xs in current.items()} if need else {}
+    held = work.__contains__
+    #: each robot's shortfall of the minimum in the plan
+    short_now = {r: max(need - sum(map(held, xs)), 0) for r, xs in current.items()} if need else {}
 
     def lacking(rooms: dict[str, list[str]]) -> int:
         """The rooms the edit's robots lack of the minimum, less those they lack in the plan (the
-        same whatever the order of each route's rooms)."""
-        robots = sorted(rooms)
-        entered = {r: sum(x in work for x in rooms[r]) for r in robots}
-        return shortfall(entered, robots, need) - shortfall(have, robots, need)
+        same whatever the order of each route's rooms; :func:`~tmpnav.task.minimum.shortfall`
+        robot by robot, counted without a dict: the screen asks this of every edit)."""
+        return sum(max(need - sum(map(held, xs)), 0) - short_now.get(r, need) for r, xs in rooms.items())
 
     now = screen.value(legs.values()) + price.slack
     scored: list[tuple[float, int]] = []
