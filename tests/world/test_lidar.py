@@ -14,9 +14,9 @@ from tmpnav.pipeline import load_world
 from tmpnav.shipped import configs_dir
 from tmpnav.types import RangeSensor
 from tmpnav.world import World
-from tmpnav.world.grid import OccupancyGrid
+from tmpnav.world.grid import OccupancyGrid, among
 from tmpnav.world.lidar import cast, scan, sensor_params, signed_distance
-from tmpnav.world.scan_information import ScanInformation, _among, information_matrices
+from tmpnav.world.scan_information import ScanInformation, information_matrices
 
 LIDAR = RangeSensor(
     range=12.0,
@@ -225,7 +225,7 @@ def test_a_poses_key_is_its_cell_and_nearest_heading_bin() -> None:
 def test_a_key_is_known_by_binary_search_as_isin_says(keys: list[int], known: list[int]) -> None:
     table = np.unique(np.array(known, dtype=np.int64))
     wanted = np.array(keys, dtype=np.int64)
-    assert _among(wanted, table).tolist() == np.isin(wanted, table).tolist()
+    assert among(wanted, table).tolist() == np.isin(wanted, table).tolist()
 
 
 @pytest.mark.parametrize("blur", [0.0, 0.05, 0.2])

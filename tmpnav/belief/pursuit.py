@@ -39,6 +39,7 @@ full speed where the map leaves room (tmpnav.roadmap.shortcut).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, fields
 
@@ -90,13 +91,14 @@ class RppParams:
 
     def vector(self) -> np.ndarray:
         """The parameters as the compiled law takes them (booleans as 0 or 1); do not write to it."""
-        found: np.ndarray | None = self.__dict__.get("_vector")  # kept with the parameters: hashing
-        if found is None:  # them to look it up took longer than the compiled call it goes to
-            found = _VECTORS.get(self)
-            if found is None:
-                found = _VECTORS[self] = np.array([float(getattr(self, f.name)) for f in fields(self)])
-                found.setflags(write=False)
-            object.__setattr__(self, "_vector", found)
+        return self._vector
+
+    @functools.cached_property
+    def _vector(self) -> np.ndarray:
+        """:meth:`vector`, built once and kept with the parameters (the oracle drives thousands of
+        paths with one set)."""
+        found = np.array([float(getattr(self, f.name)) for f in fields(self)])
+        found.setflags(write=False)
         return found
 
     @property
@@ -104,9 +106,6 @@ class RppParams:
         """The longest lookahead the law can use (m)."""
         return max(self.lookahead_dist, self.max_lookahead_dist if self.use_velocity_scaled_lookahead_dist else 0.0)
 
-
-#: the parameter vectors of the parameter sets used (RppParams.vector: the oracle drives thousands of paths)
-_VECTORS: dict[RppParams, np.ndarray] = {}
 
 # the parameter vector's entries (RppParams' order)
 (
@@ -135,29 +134,31 @@ _VECTORS: dict[RppParams, np.ndarray] = {}
 
 
 @nb.njit(cache=True, inline="always")
-def reaches(dx, dy, r):  # pragma: no cover
-    """``math.hypot(dx, dy) >= r``, to the bit: the hypotenuse is taken only where the sum of the
-    squares, a few rounding errors off it, lies within a billionth of r² (the carrot's search
-    asks of a dozen path points a command, and the hypotenuse cost more than the rest of it)."""
+def _beyond(dx, dy, r):  # pragma: no cover
+    """The sign of ``math.hypot(dx, dy) - r`` (-1, 0 or 1), to the bit: the hypotenuse is taken
+    only where the sum of the squares, a few rounding errors off it, lies within a billionth of
+    r² (the carrot's search asks of a dozen path points a command, and the hypotenuse cost more
+    than the rest of it)."""
     q = dx * dx + dy * dy
     rr = r * r
     if q < rr * (1.0 - 1e-9):
-        return False
+        return -1
     if q > rr * (1.0 + 1e-9):
-        return True
-    return math.hypot(dx, dy) >= r
+        return 1
+    h = math.hypot(dx, dy)
+    return 1 if h > r else (0 if h == r else -1)
+
+
+@nb.njit(cache=True, inline="always")
+def reaches(dx, dy, r):  # pragma: no cover
+    """``math.hypot(dx, dy) >= r``, to the bit (:func:`_beyond`)."""
+    return _beyond(dx, dy, r) >= 0
 
 
 @nb.njit(cache=True, inline="always")
 def is_near(dx, dy, r):  # pragma: no cover
-    """``math.hypot(dx, dy) <= r``, to the bit, as :func:`reaches` decides it."""
-    q = dx * dx + dy * dy
-    rr = r * r
-    if q < rr * (1.0 - 1e-9):
-        return True
-    if q > rr * (1.0 + 1e-9):
-        return False
-    return math.hypot(dx, dy) <= r
+    """``math.hypot(dx, dy) <= r``, to the bit (:func:`_beyond`)."""
+    return _beyond(dx, dy, r) <= 0
 
 
 @nb.njit(cache=True)

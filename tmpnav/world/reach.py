@@ -35,7 +35,7 @@ import numba as nb
 import numpy as np
 from scipy import ndimage
 
-from tmpnav.world.grid import OccupancyGrid, cell_key
+from tmpnav.world.grid import OccupancyGrid, among, cell_key, merged
 
 #: sectors of the directional bound (5.625 degrees each)
 SECTORS = 64
@@ -128,10 +128,8 @@ class SectorReach:
         """Take the reach's codes (N, K) of sub-cells ``keys`` (N,) another copy of this table
         computed (:meth:`take_new`), for those not known yet, and return those sub-cells and codes."""
         keys, codes = np.asarray(keys, dtype=np.int64), np.asarray(codes)
-        if self.keys.size:
-            at = np.minimum(np.searchsorted(self.keys, keys), self.keys.size - 1)
-            fresh = self.keys[at] != keys
-            keys, codes = keys[fresh], codes[fresh]
+        fresh = ~among(keys, self.keys)
+        keys, codes = keys[fresh], codes[fresh]
         if keys.size:
             self._store(keys, codes)
         return keys, codes
@@ -157,12 +155,7 @@ class SectorReach:
             grown[: self.rows] = self.codes[: self.rows]
             self.codes = grown
         self.codes[self.rows : need] = codes
-        # merged into the sorted keys where they belong: sorting them all again at every block a
-        # worker hands back took a fleet's parent process seconds
-        order = np.argsort(keys, kind="stable")
-        at = np.searchsorted(self.keys, keys[order])
-        self.keys = np.insert(self.keys, at, keys[order])
-        self.key_rows = np.insert(self.key_rows, at, np.arange(self.rows, need)[order])
+        self.keys, self.key_rows = merged(self.keys, self.key_rows, keys, np.arange(self.rows, need))
         self.rows = need
 
 

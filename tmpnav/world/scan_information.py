@@ -17,7 +17,7 @@ import numba as nb
 import numpy as np
 
 from tmpnav.types import RangeSensor
-from tmpnav.world.grid import OccupancyGrid, cell_key
+from tmpnav.world.grid import OccupancyGrid, among, cell_key, merged
 from tmpnav.world.lidar import (
     MIN_STEP,
     bracketed_hit,
@@ -205,7 +205,7 @@ class ScanInformation:
             out[inside] = found
             return out.reshape(keys.shape)
         wanted = np.unique(flat[inside])
-        new = wanted[~_among(wanted, self._keys)]
+        new = wanted[~among(wanted, self._keys)]
         if new.size:
             self._compute(new)
         at = np.searchsorted(self._keys, flat[inside])
@@ -258,7 +258,7 @@ class ScanInformation:
         the keys not known yet, and return those keys and factors; unlike :meth:`preload`, they
         count as :attr:`computed`."""
         keys = np.asarray(keys, dtype=np.int64)
-        fresh = self._dense[keys] == 0 if self._dense is not None else ~_among(keys, self._keys)
+        fresh = self._dense[keys] == 0 if self._dense is not None else ~among(keys, self._keys)
         keys, factors = keys[fresh], np.asarray(factors, dtype=float)[fresh]
         self._add(keys, factors)
         return keys, factors
@@ -287,11 +287,7 @@ class ScanInformation:
         rows = np.arange(self.size, need)
         if self._dense is not None:
             self._dense[keys] = rows
-        # merged into the sorted keys where they belong: sorting them all again took a fleet's
-        # oracle processes a second each, a block's scans learned after another
-        order = np.argsort(keys, kind="stable")
-        at = np.searchsorted(self._keys, keys[order])
-        self._keys, self._rows = np.insert(self._keys, at, keys[order]), np.insert(self._rows, at, rows[order])
+        self._keys, self._rows = merged(self._keys, self._rows, keys, rows)
         self.size = need
 
 
@@ -376,13 +372,3 @@ def _scan_keys(
         b = np.int64(math.floor((poses[k, 2] % turn) * (bins / turn) + 0.5)) % bins
         out[k] = cell * bins + b
     return out
-
-
-def _among(keys: np.ndarray, known: np.ndarray) -> np.ndarray:
-    """Whether each of ``keys`` is one of ``known`` (sorted): a binary search of each, where
-    ``np.isin`` sorts both every time (a ms a call once the table holds the building's cells,
-    and every nominal motion asks)."""
-    if not known.size:
-        return np.zeros(keys.shape, dtype=bool)
-    at = np.minimum(np.searchsorted(known, keys), known.size - 1)
-    return known[at] == keys
